@@ -1,0 +1,109 @@
+// apps/bench_command.cpp — `foveal bench ao`: the first paper's Table 1 on this machine.
+#include "commands.h"
+#include "foveal/render/ao_benchmark.h"
+#include "foveal/util/error.h"
+#include "foveal/util/parallel.h"
+#include "foveal/util/parse.h"
+
+#include <fmt/core.h>
+
+#include <filesystem>
+#include <fstream>
+#include <memory>
+
+namespace foveal::app {
+
+Display resolve_display(const std::string& text, glm::ivec2 size);
+
+namespace {
+
+// The paper's setting: the dragon in a five-wall box, from the repository's scenes/ folder.
+std::string default_bench_scene() {
+  for (const std::string dir : {std::string("scenes"), std::string(FOVEAL_SOURCE_DIR) + "/scenes"})
+    if (std::filesystem::exists(dir + "/dragon-box.json")) return dir + "/dragon-box.json";
+  return "";
+}
+
+}  // namespace
+
+std::function<int()> add_bench_command(CLI::App& app) {
+  auto* bench = app.add_subcommand("bench", "benchmarks that reproduce the papers' tables");
+  bench->require_subcommand(1);
+  auto* ao = bench->add_subcommand("ao", "the first paper's Table 1: full-frame vs foveated AO for 3 cameras × 6 gaze points");
+  struct Options {
+    std::string scene, size = "840x525", display = "47.5,30,60,1680,1050", json, markdown, trace_api = "stream";
+    std::vector<std::string> cameras;
+    int max_rays = 400, threads = 0, repeats = 1;
+    double gamma = 2;
+    uint64_t seed = 1;
+    bool full = false;
+  };
+  auto o = std::make_shared<Options>();
+  ao->add_option("--scene", o->scene, "scene (default: scenes/dragon-box.json, the paper's dragon in a box; builtin:box when the dragon is absent)");
+  ao->add_option("--camera", o->cameras, "camera names to measure (default: all of the scene's)")->delimiter(',');
+  ao->add_option("--size", o->size, "render size WxH")->capture_default_str();
+  ao->add_option("--display", o->display, "display W_CM,H_CM,DIST_CM[,RES_X,RES_Y]")->capture_default_str();
+  ao->add_option("--max-rays", o->max_rays, "n_max")->capture_default_str();
+  ao->add_option("--gamma", o->gamma, "γ of the ray budget")->capture_default_str();
+  ao->add_option("--seed", o->seed, "seed")->capture_default_str();
+  ao->add_option("--repeats", o->repeats, "frames per case (median reported)")->capture_default_str()->check(CLI::Range(1, 100));
+  ao->add_flag("--full", o->full, "full run: 5 frames per case (default: 1, for a quick look)");
+  ao->add_option("--threads", o->threads, "worker threads (0 = all cores)")->capture_default_str()->check(CLI::Range(0, 4096));
+  ao->add_option("--trace-api", o->trace_api, "occlusion API of the renderer: stream, packet8 or single")->capture_default_str();
+  ao->add_option("--json", o->json, "write the table as JSON");
+  ao->add_option("--markdown", o->markdown, "write the table as Markdown");
+
+  return [o] {
+    const ThreadScope threads(o->threads);
+    // Scene: the paper's dragon box, or the built-in box when the dragon is missing
+    std::string spec = o->scene;
+    Scene scene;
+    if (spec.empty()) {
+      spec = default_bench_scene();
+      try {
+        if (spec.empty()) fail("scenes/dragon-box.json not found");
+        scene = load_scene(spec);
+      } catch (const Error& e) {
+        fmt::print("foveal bench ao: the paper's dragon scene is unavailable ({}); running on builtin:box instead\n", e.what());
+        spec = "builtin:box";
+        scene = load_scene(spec);
+      }
+    } else {
+      scene = load_scene(spec);
+    }
+    AoBenchParams p;
+    const glm::ivec2 size = parse_size("--size", o->size);
+    p.render.width = size.x;
+    p.render.height = size.y;
+    p.render.display = resolve_display(o->display, size);
+    p.render.foveation.max_rays = o->max_rays;
+    p.render.foveation.gamma = o->gamma;
+    p.render.seed = o->seed;
+    p.cameras = o->cameras;
+    p.repeats = o->full ? std::max(o->repeats, 5) : o->repeats;
+    validate(p.render);
+    const Tracer tracer(scene, parse_trace_api(o->trace_api));
+    fmt::print("foveal bench ao: {} ({} triangles), {}x{}, n_max {}, gamma {:g}, {} threads, {} frame(s) per case\n", spec,
+               tracer.triangles(), size.x, size.y, o->max_rays, o->gamma, threads.threads(), p.repeats);
+    const AoBenchResult result =
+        run_ao_benchmark(scene, tracer, p, [](const std::string& line) { fmt::print("  {}\n", line), std::fflush(stdout); });
+    const std::string table = to_markdown(result);
+    fmt::print("\n{}", table);
+    if (!o->json.empty()) {
+      std::ofstream out(o->json);
+      auto j = to_json(result);
+      j["threads"] = threads.threads();
+      j["repeats"] = p.repeats;
+      out << j.dump(2) << "\n";
+      if (!out) fail("{}: cannot write", o->json);
+    }
+    if (!o->markdown.empty()) {
+      std::ofstream out(o->markdown);
+      out << table;
+      if (!out) fail("{}: cannot write", o->markdown);
+    }
+    return 0;
+  };
+}
+
+}  // namespace foveal::app

@@ -1,0 +1,42 @@
+// apps/main.cpp — the `foveal` command line: parse, run one subcommand, report errors in one line.
+#include "commands.h"
+#include "foveal/util/error.h"
+
+#include <fmt/core.h>
+
+#include <cstdio>
+#include <exception>
+
+int main(int argc, char** argv) {
+  CLI::App app{"foveal — gaze-contingent ray tracing (foveated ambient occlusion)", "foveal"};
+  app.require_subcommand(1);
+  app.set_version_flag("--version", "foveal 0.1.0");
+  std::function<int()> run;
+  const auto render = foveal::app::add_render_command(app);
+  const auto bench = foveal::app::add_bench_command(app);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::CallForHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForAllHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForVersion& e) {
+    return app.exit(e);
+  } catch (const CLI::ParseError& e) {
+    // One clear line instead of CLI11's usage dump
+    fmt::print(stderr, "foveal: error: {} (see 'foveal --help')\n", e.what());
+    return e.get_exit_code() != 0 ? e.get_exit_code() : 2;
+  }
+  try {
+    if (app.got_subcommand("render")) return render();
+    if (app.got_subcommand("bench")) return bench();
+    return 2;
+  } catch (const foveal::Error& e) {
+    fmt::print(stderr, "foveal: error: {}\n", e.what());
+  } catch (const std::bad_alloc&) {
+    fmt::print(stderr, "foveal: error: out of memory\n");
+  } catch (const std::exception& e) {
+    fmt::print(stderr, "foveal: error: {}\n", e.what());
+  }
+  return 1;
+}

@@ -1,0 +1,148 @@
+// apps/render_command.cpp — `foveal render`: one frame of foveated (or full-frame) AO.
+#include "commands.h"
+#include "foveal/io/image_io.h"
+#include "foveal/io/outputs.h"
+#include "foveal/render/render.h"
+#include "foveal/util/error.h"
+#include "foveal/util/parallel.h"
+#include "foveal/util/parse.h"
+
+#include <fmt/core.h>
+
+#include <fstream>
+#include <memory>
+
+namespace foveal::app {
+
+// Camera from the options: a named one, explicit eye/look/up/fov, the scene's first, or a default.
+Camera resolve_camera(const Scene& scene, const ViewOptions& o) {
+  Camera cam = !o.camera.empty() ? find_camera(scene, o.camera)
+               : !scene.cameras.empty() ? scene.cameras.front() : default_camera(scene);
+  if (!o.eye.empty() != !o.look.empty()) fail("--eye and --look must be given together");
+  if (!o.eye.empty()) {
+    cam.name = "command line";
+    cam.eye = parse_vec3("--eye", o.eye);
+    cam.look = parse_vec3("--look", o.look);
+    cam.up = parse_vec3("--up", o.up);
+    if (glm::length(cam.look - cam.eye) == 0) fail("--eye and --look must differ");
+    if (glm::length(glm::cross(cam.look - cam.eye, cam.up)) == 0) fail("--up must not be parallel to the view direction");
+  }
+  if (o.fov != 0) {
+    if (!(o.fov > 0 && o.fov < 180)) fail("--fov: must be in (0, 180) degrees, got {}", o.fov);
+    cam.fov_deg = static_cast<float>(o.fov);
+  }
+  return cam;
+}
+
+void add_view_options(CLI::App& cmd, ViewOptions& o) {
+  cmd.add_option("--scene", o.scene, "mesh file (OBJ, PLY, glTF, … via Assimp), scene .json, or builtin:box|sphere-plane|plane")
+      ->capture_default_str();
+  cmd.add_option("--camera", o.camera, "named camera of the scene (default: its first, or one framing the scene)");
+  cmd.add_option("--eye", o.eye, "camera position X,Y,Z (scene units; with --look)");
+  cmd.add_option("--look", o.look, "point looked at X,Y,Z (scene units)");
+  cmd.add_option("--up", o.up, "up vector X,Y,Z")->capture_default_str();
+  cmd.add_option("--fov", o.fov, "vertical field of view, degrees (default: the camera's)");
+  cmd.add_option("--size", o.size, "image size WxH in pixels")->capture_default_str();
+  cmd.add_option("--display", o.display, "display W_CM,H_CM,DIST_CM[,RES_X,RES_Y]; without a resolution the render size is used")
+      ->capture_default_str();
+  cmd.add_option("--threads", o.threads, "worker threads (0 = all cores)")->capture_default_str()->check(CLI::Range(0, 4096));
+}
+
+// Display from the option: 3 values take the render size as the resolution.
+Display resolve_display(const std::string& text, glm::ivec2 size) {
+  Display defaults;
+  defaults.res_x = size.x;
+  defaults.res_y = size.y;
+  return parse_display(text, defaults);
+}
+
+std::function<int()> add_render_command(CLI::App& app) {
+  auto* cmd = app.add_subcommand("render", "render one frame with gaze-dependent ambient occlusion");
+  struct Options {
+    ViewOptions view;
+    std::string gaze, mode = "foveated", ao_distance, ambient = "1", output = "render.png", aov, mask, stats, plot;
+    std::string trace_api = "stream";
+    int max_rays = 400, min_rays = 0;
+    double gamma = 2, beta = 1, ellipse = 1.538;
+    uint64_t seed = 1;
+    bool shadows = false, quiet = false;
+  };
+  auto o = std::make_shared<Options>();
+  add_view_options(*cmd, o->view);
+  cmd->add_option("--gaze", o->gaze, "gaze point X,Y in render pixels, origin top-left (default: image centre; may lie off the image)");
+  cmd->add_option("--mode", o->mode, "foveated (budget follows the gaze) or full (n_max rays everywhere: the reference)")
+      ->capture_default_str();
+  cmd->add_option("--ao-distance", o->ao_distance, "AO ray length in scene units, or inf (default: scene's, else 0.2 × bounding-box diagonal)");
+  cmd->add_option("--max-rays", o->max_rays, "n_max: AO rays per pixel where q(E) = 1")->capture_default_str();
+  cmd->add_option("--min-rays", o->min_rays, "n_min: AO rays per pixel far from the gaze")->capture_default_str();
+  cmd->add_option("--gamma", o->gamma, "γ: exponent of q(E) in the ray budget n(E)")->capture_default_str();
+  cmd->add_option("--beta", o->beta, "β: exponent of q(E) in the AO blend weight b(E)")->capture_default_str();
+  cmd->add_option("--ellipse", o->ellipse, "horizontal:vertical ratio a of the elliptical ROI (1 = circle)")->capture_default_str();
+  cmd->add_option("--ambient-constant", o->ambient, "k_const, the Phong ambient factor away from the gaze: a number, or auto (mean AO visibility of the fovea)")
+      ->capture_default_str();
+  cmd->add_option("--seed", o->seed, "seed of the AO ray directions")->capture_default_str();
+  cmd->add_option("--trace-api", o->trace_api, "how occlusion rays go to Embree: stream, packet8 or single")->capture_default_str();
+  cmd->add_flag("--shadows", o->shadows, "cast shadow rays for the lights (off, as in the papers)");
+  cmd->add_option("-o,--output", o->output, "shaded image (.png; .pfm/.exr keep linear floats)")->capture_default_str();
+  cmd->add_option("--aov", o->aov, "float buffers NAME=FILE[,…] as .pfm/.exr; names: ao, depth, position, normal, albedo, budget, quality, blend, eccentricity");
+  cmd->add_option("--mask", o->mask, "ROI/budget mask of the paper's Figure 5 (PNG): grey = n(E)/n_max, red cross at the gaze");
+  cmd->add_option("--acuity-plot", o->plot, "plot of the acuity model (paper's Figure 4) for the display, .svg or .png");
+  cmd->add_option("--stats", o->stats, "write timings and ray counts as JSON");
+  cmd->add_flag("-q,--quiet", o->quiet, "print nothing on success");
+
+  return [o] {
+    const ThreadScope threads(o->view.threads);
+    // Options → params (all validated before any work)
+    RenderParams p;
+    const glm::ivec2 size = parse_size("--size", o->view.size);
+    p.width = size.x;
+    p.height = size.y;
+    p.mode = parse_render_mode(o->mode);
+    p.display = resolve_display(o->view.display, size);
+    p.foveation = {o->ellipse, o->max_rays, o->min_rays, o->gamma, o->beta};
+    if (!o->gaze.empty()) p.gaze_px = parse_vec2("--gaze", o->gaze);
+    if (!o->ao_distance.empty()) p.ao_distance = parse_length_or_inf("--ao-distance", o->ao_distance);
+    if (o->ambient == "auto") p.ambient_constant.reset();
+    else p.ambient_constant = static_cast<float>(parse_numbers("--ambient-constant", o->ambient, 1)[0]);
+    p.seed = o->seed;
+    p.shadows = o->shadows;
+    validate(p);
+    const TraceApi api = parse_trace_api(o->trace_api);
+    if (!o->plot.empty()) write_acuity_plot(p.display, p.foveation, o->plot);
+
+    // Scene, tracer, frame
+    const Scene scene = load_scene(o->view.scene);
+    const Camera camera = resolve_camera(scene, o->view);
+    const Tracer tracer(scene, api);
+    const Frame frame = render_frame(tracer, scene, camera, p);
+
+    // Outputs
+    save_image(frame.color, o->output);
+    if (!o->aov.empty()) write_aovs(frame, o->aov);
+    if (!o->mask.empty()) save_image(budget_mask(frame, p.foveation.max_rays), o->mask, false);
+    if (!o->stats.empty()) {
+      std::ofstream out(o->stats);
+      out << frame_stats_json(frame, p, scene, tracer, threads.threads()).dump(2) << "\n";
+      if (!out) fail("{}: cannot write stats", o->stats);
+    }
+    if (o->quiet) return 0;
+    const FrameStats& s = frame.stats;
+    fmt::print("foveal render: {} ({} triangles{}, BVH {:.0f} ms), camera '{}', {}x{}, {} mode, gaze ({:.0f}, {:.0f}), {} threads\n",
+               scene.source, tracer.triangles(),
+               scene.skipped_triangles ? fmt::format(", {} degenerate skipped", scene.skipped_triangles) : "",
+               tracer.build_ms(), camera.name, p.width, p.height, to_string(p.mode), frame.gaze_px.x, frame.gaze_px.y,
+               threads.threads());
+    fmt::print("  AO rays  {:.2f} M ({:.1f} per pixel, {}..{}), {:.1f} Mrays/s\n", s.ao_rays / 1e6, s.ao_rays_mean,
+               s.ao_rays_min, s.ao_rays_max, s.ao_ms > 0 ? s.ao_rays / (s.ao_ms * 1e3) : 0.0);
+    fmt::print("  time     primary {:.1f} ms, foveation {:.1f} ms, AO {:.1f} ms, shade {:.1f} ms, total {:.1f} ms\n",
+               s.primary_ms, s.foveation_ms, s.ao_ms, s.shade_ms, s.total_ms);
+    fmt::print("  wrote    {}", o->output);
+    for (const auto& extra : {o->mask, o->stats, o->plot})
+      if (!extra.empty()) fmt::print(", {}", extra);
+    if (!o->aov.empty()) fmt::print(", AOVs {}", o->aov);
+    fmt::print("\n");
+    return 0;
+  };
+}
+
+}  // namespace foveal::app

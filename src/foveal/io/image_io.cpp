@@ -1,0 +1,179 @@
+// foveal/io/image_io.cpp — PNG through OpenCV, PFM by hand, EXR through OpenEXR.
+#include "foveal/io/image_io.h"
+
+#include "foveal/util/error.h"
+
+#include <ImfArray.h>
+#include <ImfChannelList.h>
+#include <ImfFrameBuffer.h>
+#include <ImfHeader.h>
+#include <ImfInputFile.h>
+#include <ImfOutputFile.h>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include <algorithm>
+#include <bit>
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+namespace foveal {
+namespace {
+
+std::string extension(const std::string& path) {
+  std::string ext = std::filesystem::path(path).extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+  return ext;
+}
+
+}  // namespace
+
+float linear_to_srgb(float v) {
+  if (!(v > 0)) return 0.0f;
+  if (v >= 1) return 1.0f;
+  return v <= 0.0031308f ? 12.92f * v : 1.055f * std::pow(v, 1.0f / 2.4f) - 0.055f;
+}
+
+void save_image(const Image& image, const std::string& path, bool srgb) {
+  if (image.empty()) fail("{}: cannot write an empty image", path);
+  const std::string ext = extension(path);
+  if (ext == ".pfm") return save_pfm(image, path);
+  if (ext == ".exr") return save_exr(image, path);
+  if (ext != ".png" && ext != ".jpg" && ext != ".jpeg" && ext != ".bmp" && ext != ".ppm")
+    fail("{}: unknown image format '{}' (use .png, .jpg, .pfm or .exr)", path, ext);
+  // 8-bit, BGR order for OpenCV
+  const int type = image.channels == 1 ? CV_8UC1 : CV_8UC3;
+  cv::Mat mat(image.height, image.width, type);
+  for (int y = 0; y < image.height; ++y)
+    for (int x = 0; x < image.width; ++x)
+      for (int c = 0; c < std::min(3, image.channels); ++c) {
+        float v = image.at(x, y, c);
+        v = srgb ? linear_to_srgb(v) : std::clamp(std::isfinite(v) ? v : 0.0f, 0.0f, 1.0f);
+        const int channel = image.channels == 1 ? 0 : 2 - c;
+        mat.ptr<uint8_t>(y)[x * mat.channels() + channel] = static_cast<uint8_t>(std::lround(v * 255.0f));
+      }
+  bool ok = false;
+  try {
+    ok = cv::imwrite(path, mat);
+  } catch (const cv::Exception& e) {
+    fail("{}: cannot write image: {}", path, e.what());
+  }
+  if (!ok) fail("{}: cannot write image (does the folder exist?)", path);
+}
+
+Image load_image(const std::string& path) {
+  std::error_code ec;
+  if (!std::filesystem::exists(path, ec)) fail("{}: no such file", path);
+  const std::string ext = extension(path);
+  if (ext == ".pfm") return load_pfm(path);
+  if (ext == ".exr") return load_exr(path);
+  cv::Mat mat = cv::imread(path, cv::IMREAD_UNCHANGED);
+  if (mat.empty()) fail("{}: cannot read image (unknown or corrupt format)", path);
+  if (mat.channels() == 4) cv::cvtColor(mat, mat, cv::COLOR_BGRA2BGR);
+  const double scale = mat.depth() == CV_16U ? 1.0 / 65535.0 : mat.depth() == CV_8U ? 1.0 / 255.0 : 1.0;
+  mat.convertTo(mat, CV_MAKETYPE(CV_32F, mat.channels()), scale);
+  Image image(mat.cols, mat.rows, mat.channels() == 1 ? 1 : 3);
+  for (int y = 0; y < image.height; ++y)
+    for (int x = 0; x < image.width; ++x)
+      for (int c = 0; c < image.channels; ++c)
+        image.at(x, y, c) = mat.ptr<float>(y)[x * mat.channels() + (image.channels == 1 ? 0 : 2 - c)];
+  return image;
+}
+
+void save_pfm(const Image& image, const std::string& path) {
+  if (image.channels != 1 && image.channels != 3) fail("{}: PFM holds 1 or 3 channels, not {}", path, image.channels);
+  std::ofstream out(path, std::ios::binary);
+  if (!out) fail("{}: cannot open for writing", path);
+  // Header; a negative scale means little-endian. Rows are stored bottom to top.
+  out << (image.channels == 3 ? "PF" : "Pf") << "\n" << image.width << " " << image.height << "\n"
+      << (std::endian::native == std::endian::little ? "-1.0" : "1.0") << "\n";
+  for (int y = image.height - 1; y >= 0; --y)
+    out.write(reinterpret_cast<const char*>(&image.pixels[static_cast<size_t>(y) * image.width * image.channels]),
+              static_cast<std::streamsize>(sizeof(float) * image.width * image.channels));
+  if (!out) fail("{}: write failed", path);
+}
+
+Image parse_pfm(const std::string& bytes, const std::string& name) {
+  std::istringstream in(bytes);
+  std::string magic;
+  long long w = 0, h = 0;
+  double scale = 0;
+  if (!(in >> magic) || (magic != "PF" && magic != "Pf")) fail("{}: not a PFM file (expected 'PF' or 'Pf')", name);
+  if (!(in >> w >> h) || w <= 0 || h <= 0 || w > 65536 || h > 65536)
+    fail("{}: bad PFM size (width and height must be in [1, 65536])", name);
+  if (!(in >> scale) || scale == 0 || !std::isfinite(scale)) fail("{}: bad PFM scale (must be a non-zero number)", name);
+  in.get();  // the single whitespace byte before the data
+  const int channels = magic == "PF" ? 3 : 1;
+  Image image(static_cast<int>(w), static_cast<int>(h), channels);
+  const size_t row = static_cast<size_t>(w) * channels;
+  const auto offset = static_cast<size_t>(in.tellg());
+  if (bytes.size() < offset + sizeof(float) * row * h)
+    fail("{}: truncated PFM data ({} bytes, need {})", name, bytes.size() - offset, sizeof(float) * row * h);
+  const bool swap = (scale < 0) != (std::endian::native == std::endian::little);
+  for (long long y = 0; y < h; ++y) {
+    float* dst = &image.pixels[static_cast<size_t>(h - 1 - y) * row];
+    std::memcpy(dst, bytes.data() + offset + sizeof(float) * row * y, sizeof(float) * row);
+    if (swap)
+      for (size_t k = 0; k < row; ++k) {
+        uint32_t u;
+        std::memcpy(&u, &dst[k], 4);
+        u = __builtin_bswap32(u);
+        std::memcpy(&dst[k], &u, 4);
+      }
+  }
+  return image;
+}
+
+Image load_pfm(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) fail("{}: cannot open", path);
+  std::stringstream buffer;
+  buffer << in.rdbuf();
+  return parse_pfm(buffer.str(), path);
+}
+
+void save_exr(const Image& image, const std::string& path) {
+  if (image.channels != 1 && image.channels != 3) fail("{}: EXR writer takes 1 or 3 channels, not {}", path, image.channels);
+  try {
+    Imf::Header header(image.width, image.height);
+    const char* names[3] = {"R", "G", "B"};
+    const int n = image.channels;
+    for (int c = 0; c < n; ++c) header.channels().insert(n == 1 ? "Y" : names[c], Imf::Channel(Imf::FLOAT));
+    Imf::OutputFile file(path.c_str(), header);
+    Imf::FrameBuffer fb;
+    const size_t xs = sizeof(float) * n, ys = xs * image.width;
+    for (int c = 0; c < n; ++c)
+      fb.insert(n == 1 ? "Y" : names[c],
+                Imf::Slice(Imf::FLOAT, (char*)(image.pixels.data() + c), xs, ys));  // NOLINT: OpenEXR takes char*
+    file.setFrameBuffer(fb);
+    file.writePixels(image.height);
+  } catch (const std::exception& e) {
+    fail("{}: cannot write EXR: {}", path, e.what());
+  }
+}
+
+Image load_exr(const std::string& path) {
+  try {
+    Imf::InputFile file(path.c_str());
+    const Imath::Box2i dw = file.header().dataWindow();
+    const int w = dw.max.x - dw.min.x + 1, h = dw.max.y - dw.min.y + 1;
+    const bool gray = file.header().channels().findChannel("Y") != nullptr && file.header().channels().findChannel("R") == nullptr;
+    const int n = gray ? 1 : 3;
+    Image image(w, h, n);
+    Imf::FrameBuffer fb;
+    const char* names[3] = {"R", "G", "B"};
+    const size_t xs = sizeof(float) * n, ys = xs * w;
+    char* base = reinterpret_cast<char*>(image.pixels.data()) - (dw.min.x * xs + dw.min.y * ys);
+    for (int c = 0; c < n; ++c) fb.insert(gray ? "Y" : names[c], Imf::Slice(Imf::FLOAT, base + c * sizeof(float), xs, ys, 1, 1, 0.0));
+    file.setFrameBuffer(fb);
+    file.readPixels(dw.min.y, dw.max.y);
+    return image;
+  } catch (const std::exception& e) {
+    fail("{}: cannot read EXR: {}", path, e.what());
+  }
+}
+
+}  // namespace foveal

@@ -1,0 +1,30 @@
+// foveal/io/image_io.h — reading and writing images: PNG/JPEG (8-bit), PFM and EXR (float).
+#pragma once
+
+#include "foveal/util/image.h"
+
+#include <string>
+
+namespace foveal {
+
+// Linear value → sRGB-encoded value in [0, 1].
+float linear_to_srgb(float v);
+
+// Write by extension: .png (8-bit; `srgb` encodes linear values), .pfm or .exr (float, as is).
+// Throws Error naming the file on failure.
+void save_image(const Image& image, const std::string& path, bool srgb = true);
+// Read by extension: .pfm, .exr (float, as stored), or any format OpenCV reads (values in [0,1],
+// as stored: no sRGB decoding). Throws Error naming the file and the reason.
+Image load_image(const std::string& path);
+
+// Portable float map (1 or 3 channels); written by hand since it is a 3-line header and raw floats.
+void save_pfm(const Image& image, const std::string& path);
+Image load_pfm(const std::string& path);
+// Parse PFM bytes (for tests and fuzzing); `name` appears in error messages.
+Image parse_pfm(const std::string& bytes, const std::string& name);
+
+// OpenEXR, 32-bit float channels Y or R,G,B.
+void save_exr(const Image& image, const std::string& path);
+Image load_exr(const std::string& path);
+
+}  // namespace foveal

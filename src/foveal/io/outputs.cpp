@@ -1,0 +1,249 @@
+// foveal/io/outputs.cpp — AOVs, budget mask, acuity plot and stats JSON.
+#include "foveal/io/outputs.h"
+
+#include "foveal/io/image_io.h"
+#include "foveal/util/error.h"
+
+#include <fmt/format.h>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+#include <sys/resource.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <sstream>
+
+namespace foveal {
+namespace {
+
+constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
+
+// Drawing primitives shared by the SVG and PNG back ends of the plot.
+struct Stroke {
+  std::vector<glm::vec2> points;  // plot pixels, origin top-left
+  glm::vec3 colour;               // RGB in [0, 1]
+  float width = 2;
+  bool dashed = false;
+};
+struct Label {
+  glm::vec2 at;
+  std::string text;
+  float size = 14;
+  bool centred = false;
+};
+struct Plot {
+  int width = 720, height = 440;
+  std::vector<Stroke> strokes;
+  std::vector<Label> labels;
+};
+
+std::string svg_colour(glm::vec3 c) {
+  return fmt::format("#{:02x}{:02x}{:02x}", int(c.r * 255), int(c.g * 255), int(c.b * 255));
+}
+
+void save_plot(const Plot& plot, const std::string& path) {
+  const std::string ext = std::filesystem::path(path).extension().string();
+  if (ext == ".svg") {
+    std::ofstream out(path);
+    if (!out) fail("{}: cannot open for writing", path);
+    out << fmt::format("<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{}\" height=\"{}\" font-family=\"sans-serif\">\n"
+                       "<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n",
+                       plot.width, plot.height);
+    for (const auto& s : plot.strokes) {
+      std::string pts;
+      for (auto p : s.points) pts += fmt::format("{:.1f},{:.1f} ", p.x, p.y);
+      out << fmt::format("<polyline fill=\"none\" stroke=\"{}\" stroke-width=\"{}\"{} points=\"{}\"/>\n", svg_colour(s.colour),
+                         s.width, s.dashed ? " stroke-dasharray=\"6,4\"" : "", pts);
+    }
+    for (const auto& l : plot.labels)
+      out << fmt::format("<text x=\"{:.1f}\" y=\"{:.1f}\" font-size=\"{}\"{}>{}</text>\n", l.at.x, l.at.y, l.size,
+                         l.centred ? " text-anchor=\"middle\"" : "", l.text);
+    out << "</svg>\n";
+    if (!out) fail("{}: write failed", path);
+    return;
+  }
+  if (ext != ".png") fail("{}: plots are written as .svg or .png", path);
+  cv::Mat mat(plot.height, plot.width, CV_8UC3, cv::Scalar(255, 255, 255));
+  for (const auto& s : plot.strokes) {
+    const cv::Scalar c(s.colour.b * 255, s.colour.g * 255, s.colour.r * 255);
+    for (size_t k = 1; k < s.points.size(); ++k) {
+      if (s.dashed && (k / 3) % 2 == 1) continue;
+      cv::line(mat, {int(s.points[k - 1].x), int(s.points[k - 1].y)}, {int(s.points[k].x), int(s.points[k].y)}, c,
+               int(s.width), cv::LINE_AA);
+    }
+  }
+  for (const auto& l : plot.labels) {
+    const double scale = l.size / 30.0;
+    int baseline = 0;
+    const cv::Size size = cv::getTextSize(l.text, cv::FONT_HERSHEY_SIMPLEX, scale, 1, &baseline);
+    const int x = l.centred ? int(l.at.x) - size.width / 2 : int(l.at.x);
+    cv::putText(mat, l.text, {x, int(l.at.y)}, cv::FONT_HERSHEY_SIMPLEX, scale, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
+  }
+  if (!cv::imwrite(path, mat)) fail("{}: cannot write image (does the folder exist?)", path);
+}
+
+}  // namespace
+
+std::vector<std::string> aov_names() {
+  return {"ao", "depth", "position", "normal", "albedo", "budget", "quality", "blend", "eccentricity"};
+}
+
+Image aov_image(const Frame& f, const std::string& name) {
+  const GBuffer& g = f.gbuffer;
+  const bool rgb = name == "position" || name == "normal" || name == "albedo";
+  Image image(g.width, g.height, rgb ? 3 : 1);
+  for (int y = 0; y < g.height; ++y)
+    for (int x = 0; x < g.width; ++x) {
+      const size_t i = static_cast<size_t>(y) * g.width + x;
+      const bool hit = g.hit(i);
+      if (rgb) {
+        const glm::vec3 v = !hit ? glm::vec3(kNaN) : name == "position" ? g.position[i] : name == "normal" ? g.normal[i] : g.albedo[i];
+        for (int c = 0; c < 3; ++c) image.at(x, y, c) = v[c];
+        continue;
+      }
+      float v = 0;
+      if (name == "ao") v = hit ? f.visibility[i] : 1.0f;
+      else if (name == "depth") v = hit ? g.depth[i] : kNaN;
+      else if (name == "budget") v = f.maps.rays[i];
+      else if (name == "quality") v = f.maps.quality[i];
+      else if (name == "blend") v = f.maps.blend[i];
+      else if (name == "eccentricity") v = f.maps.eccentricity[i];
+      else {
+        std::string known;
+        for (const auto& n : aov_names()) known += (known.empty() ? "" : ", ") + n;
+        fail("--aov: unknown buffer '{}' (known: {})", name, known);
+      }
+      image.at(x, y) = v;
+    }
+  return image;
+}
+
+void write_aovs(const Frame& frame, const std::string& spec) {
+  std::stringstream stream(spec);
+  std::string item;
+  while (std::getline(stream, item, ',')) {
+    const auto eq = item.find('=');
+    if (eq == std::string::npos || eq == 0 || eq + 1 == item.size())
+      fail("--aov: expected NAME=FILE[,NAME=FILE…], got '{}'", item);
+    const std::string name = item.substr(0, eq), path = item.substr(eq + 1);
+    const std::string ext = std::filesystem::path(path).extension().string();
+    if (ext != ".pfm" && ext != ".exr") fail("--aov: {}: float buffers are written as .pfm or .exr", path);
+    save_image(aov_image(frame, name), path);
+  }
+}
+
+Image budget_mask(const Frame& f, int max_rays) {
+  const int w = f.maps.width, h = f.maps.height;
+  Image image(w, h, 3);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const float v = max_rays > 0 ? f.maps.rays[static_cast<size_t>(y) * w + x] / static_cast<float>(max_rays) : 0.0f;
+      for (int c = 0; c < 3; ++c) image.at(x, y, c) = v;
+    }
+  // Red cross at the gaze point
+  const int gx = static_cast<int>(std::floor(f.gaze_px.x)), gy = static_cast<int>(std::floor(f.gaze_px.y));
+  const int arm = std::max(4, std::min(w, h) / 40);
+  for (int d = -arm; d <= arm; ++d)
+    for (int t = -1; t <= 1; ++t)
+      for (auto [x, y] : {std::pair{gx + d, gy + d + t}, std::pair{gx + d, gy - d + t}})
+        if (x >= 0 && y >= 0 && x < w && y < h) {
+          image.at(x, y, 0) = 1.0f;
+          image.at(x, y, 1) = 0.0f;
+          image.at(x, y, 2) = 0.0f;
+        }
+  return image;
+}
+
+void write_acuity_plot(const Display& display, const FoveationParams& params, const std::string& path) {
+  Plot plot;
+  const float left = 70, right = 650, top = 40, bottom = 380;
+  const double e_max = 60.0, cpd_max = 45.0;
+  auto px = [&](double e, double cpd) {
+    return glm::vec2(left + (right - left) * e / e_max, bottom - (bottom - top) * cpd / cpd_max);
+  };
+  const double max_cpd = max_display_cpd(display);
+  // Axes and ticks
+  plot.strokes.push_back({{px(0, cpd_max), px(0, 0), px(e_max, 0)}, glm::vec3(0), 1.5f});
+  for (int e = 0; e <= 60; e += 10) {
+    plot.strokes.push_back({{px(e, 0), px(e, 0) + glm::vec2(0, 6)}, glm::vec3(0), 1});
+    plot.labels.push_back({px(e, 0) + glm::vec2(0, 22), std::to_string(e), 13, true});
+  }
+  for (int c = 0; c <= 40; c += 10) {
+    plot.strokes.push_back({{px(0, c), px(0, c) - glm::vec2(6, 0)}, glm::vec3(0), 1});
+    plot.labels.push_back({px(0, c) - glm::vec2(34, -5), std::to_string(c), 13});
+  }
+  // Eq. 4 without and with the display's limit, and the AO budget on the right axis
+  Stroke raw{{}, glm::vec3(0.2f, 0.4f, 0.9f), 1.5f, true}, clamped{{}, glm::vec3(0.1f), 2.5f}, budget{{}, glm::vec3(0.9f, 0.5f, 0.1f), 2};
+  for (int i = 0; i <= 600; ++i) {
+    const double e = e_max * i / 600.0;
+    raw.points.push_back(px(e, kAcuityFovealCpd * kAcuityE2Deg / (kAcuityE2Deg + e)));
+    const double fc = acuity_cutoff_cpd(e, max_cpd);
+    clamped.points.push_back(px(e, fc));
+    const double q = fc / acuity_cutoff_cpd(0, max_cpd);
+    budget.points.push_back(px(e, cpd_max * ao_ray_budget(q, params) / std::max(1, params.max_rays)));
+  }
+  plot.strokes.push_back(raw);
+  plot.strokes.push_back(clamped);
+  plot.strokes.push_back(budget);
+  plot.strokes.push_back({{px(0, max_cpd), px(e_max, max_cpd)}, glm::vec3(0.9f, 0.0f, 0.9f), 2});
+  // Labels
+  plot.labels.push_back({{(left + right) / 2, bottom + 48}, "eccentricity E [deg]", 15, true});
+  plot.labels.push_back({{left - 60, top - 16}, "cut-off frequency f_c [cpd]", 15});
+  plot.labels.push_back({{right - 230, top + 8}, fmt::format("display limit {:.1f} cpd", max_cpd), 13});
+  plot.labels.push_back({{right - 230, top + 28}, "eq. 4: 43.1 E2/(E2+E)", 13});
+  plot.labels.push_back({{right - 230, top + 48}, fmt::format("AO rays n(E)/{} (gamma {:g})", params.max_rays, params.gamma), 13});
+  plot.labels.push_back({{left + 10, bottom + 64},
+                         fmt::format("display {:g}x{:g} cm at {:g} cm, {}x{} px: {:.1f} x {:.1f} deg, {:.1f} px/deg",
+                                     display.width_cm, display.height_cm, display.distance_cm, display.res_x, display.res_y,
+                                     field_of_view_x_deg(display), field_of_view_y_deg(display), pixels_per_degree(display)),
+                         12});
+  plot.height = 460;
+  save_plot(plot, path);
+}
+
+nlohmann::json frame_stats_json(const Frame& f, const RenderParams& p, const Scene& scene, const Tracer& tracer, int threads) {
+  const FrameStats& s = f.stats;
+  nlohmann::json j;
+  j["mode"] = to_string(p.mode);
+  j["width"] = p.width;
+  j["height"] = p.height;
+  j["gaze_px"] = {f.gaze_px.x, f.gaze_px.y};
+  j["seed"] = p.seed;
+  j["threads"] = threads;
+  j["scene"] = {{"source", scene.source},
+                {"triangles", tracer.triangles()},
+                {"skipped_triangles", scene.skipped_triangles},
+                {"build_ms", tracer.build_ms()}};
+  j["rays"] = {{"primary", s.primary_rays}, {"ao", s.ao_rays}, {"shadow", s.shadow_rays},
+               {"total", s.primary_rays + s.ao_rays + s.shadow_rays}};
+  j["ao_rays_per_pixel"] = {{"mean", s.ao_rays_mean}, {"min", s.ao_rays_min}, {"max", s.ao_rays_max}};
+  j["time_ms"] = {{"primary", s.primary_ms}, {"foveation", s.foveation_ms}, {"ao", s.ao_ms}, {"shade", s.shade_ms},
+                  {"total", s.total_ms}};
+  j["ao_rays_per_second"] = s.ao_ms > 0 ? s.ao_rays / (s.ao_ms / 1000.0) : 0.0;
+  j["model"] = {{"display_cm", {p.display.width_cm, p.display.height_cm}},
+                {"distance_cm", p.display.distance_cm},
+                {"display_px", {p.display.res_x, p.display.res_y}},
+                {"pixels_per_degree", pixels_per_degree(p.display)},
+                {"max_display_cpd", max_display_cpd(p.display)},
+                {"ellipse_ratio", p.foveation.ellipse_ratio},
+                {"max_rays", p.foveation.max_rays},
+                {"min_rays", p.foveation.min_rays},
+                {"gamma", p.foveation.gamma},
+                {"beta", p.foveation.beta},
+                {"ambient_constant", s.ambient_constant},
+                {"ambient_constant_auto", !p.ambient_constant.has_value()}};
+  j["ao_distance"] = std::isfinite(s.ao_distance) ? nlohmann::json(s.ao_distance) : nlohmann::json("inf");
+  j["trace_api"] = to_string(tracer.occlusion_api());
+  j["peak_rss_mib"] = peak_rss_mib();
+  return j;
+}
+
+double peak_rss_mib() {
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);
+  return usage.ru_maxrss / 1024.0;  // Linux reports KiB
+}
+
+}  // namespace foveal

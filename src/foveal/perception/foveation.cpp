@@ -1,0 +1,114 @@
+// foveal/perception/foveation.cpp — display geometry, eccentricity, acuity and the AO budget.
+#include "foveal/perception/foveation.h"
+
+#include "foveal/util/error.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <sstream>
+#include <vector>
+
+namespace foveal {
+namespace {
+constexpr double kDeg = 180.0 / std::numbers::pi;
+}
+
+Display parse_display(const std::string& text, Display defaults) {
+  std::vector<double> values;
+  std::stringstream stream(text);
+  std::string item;
+  while (std::getline(stream, item, ',')) {
+    try {
+      size_t used = 0;
+      values.push_back(std::stod(item, &used));
+      if (used != item.size()) throw std::invalid_argument(item);
+    } catch (const std::exception&) {
+      fail("--display: '{}' is not a number (expected W_CM,H_CM,DIST_CM[,RES_X,RES_Y])", item);
+    }
+  }
+  if (values.size() != 3 && values.size() != 5)
+    fail("--display: expected 3 or 5 comma-separated values W_CM,H_CM,DIST_CM[,RES_X,RES_Y], got {}",
+         values.size());
+  Display d = defaults;
+  d.width_cm = values[0];
+  d.height_cm = values[1];
+  d.distance_cm = values[2];
+  if (values.size() == 5) {
+    if (values[3] != std::floor(values[3]) || values[4] != std::floor(values[4]) || values[3] > 1e6 ||
+        values[4] > 1e6 || values[3] < 1 || values[4] < 1)
+      fail("--display: resolution {}x{} must be whole pixels between 1 and 1000000", values[3], values[4]);
+    d.res_x = static_cast<int>(values[3]);
+    d.res_y = static_cast<int>(values[4]);
+  }
+  validate(d);
+  return d;
+}
+
+void validate(const Display& d) {
+  if (!(d.width_cm > 0) || !std::isfinite(d.width_cm)) fail("display width must be > 0 cm, got {}", d.width_cm);
+  if (!(d.height_cm > 0) || !std::isfinite(d.height_cm)) fail("display height must be > 0 cm, got {}", d.height_cm);
+  if (!(d.distance_cm > 0) || !std::isfinite(d.distance_cm))
+    fail("viewing distance must be > 0 cm, got {}", d.distance_cm);
+  if (d.res_x < 1 || d.res_y < 1) fail("display resolution must be at least 1x1, got {}x{}", d.res_x, d.res_y);
+}
+
+double field_of_view_x_deg(const Display& d) { return 2.0 * std::atan(d.width_cm / (2.0 * d.distance_cm)) * kDeg; }
+double field_of_view_y_deg(const Display& d) { return 2.0 * std::atan(d.height_cm / (2.0 * d.distance_cm)) * kDeg; }
+double pixels_per_degree(const Display& d) { return d.res_x / field_of_view_x_deg(d); }
+double max_display_cpd(const Display& d) { return pixels_per_degree(d) / 2.0; }
+
+double acuity_cutoff_cpd(double e_deg, double max_cpd) {
+  return std::min(max_cpd, kAcuityFovealCpd * kAcuityE2Deg / (kAcuityE2Deg + std::max(0.0, e_deg)));
+}
+
+int ao_ray_budget(double q, const FoveationParams& p) {
+  const double span = static_cast<double>(p.max_rays - p.min_rays);
+  return p.min_rays + static_cast<int>(std::lround(span * std::pow(std::clamp(q, 0.0, 1.0), p.gamma)));
+}
+
+double blend_weight(double q, int rays, const FoveationParams& p) {
+  if (rays <= 0) return 0.0;
+  return std::pow(std::clamp(q, 0.0, 1.0), p.beta);
+}
+
+FoveationModel::FoveationModel(const Display& display, int w, int h, glm::dvec2 gaze_px, const FoveationParams& params)
+    : display_(display), width_(w), height_(h), params_(params) {
+  validate(display_);
+  if (w < 1 || h < 1) fail("render size must be at least 1x1, got {}x{}", w, h);
+  max_cpd_ = max_display_cpd(display_);
+  foveal_cpd_ = acuity_cutoff_cpd(0.0, max_cpd_);
+  // Gaze ray and the axes of its tangent plane: horizontal (no y), vertical (screen down)
+  gaze_dir_ = glm::normalize(eye_ray(gaze_px.x, gaze_px.y));
+  horiz_ = glm::normalize(glm::cross(glm::dvec3(0, 1, 0), gaze_dir_));
+  vert_ = glm::cross(gaze_dir_, horiz_);
+}
+
+glm::dvec3 FoveationModel::eye_ray(double x_px, double y_px) const {
+  return {(x_px / width_ - 0.5) * display_.width_cm, (y_px / height_ - 0.5) * display_.height_cm,
+          display_.distance_cm};
+}
+
+FoveaSample FoveationModel::evaluate(int x, int y) const { return evaluate_at(x + 0.5, y + 0.5); }
+
+FoveaSample FoveationModel::evaluate_at(double x_px, double y_px) const {
+  FoveaSample s;
+  const glm::dvec3 p = glm::normalize(eye_ray(x_px, y_px));
+  // Exact angle between the two eye rays, split along the gaze's tangent-plane axes
+  const double angle = std::atan2(glm::length(glm::cross(gaze_dir_, p)), glm::dot(gaze_dir_, p));
+  const double ph = glm::dot(p, horiz_), pv = glm::dot(p, vert_);
+  const double len = std::hypot(ph, pv);
+  const double c = len > 0 ? ph / len : 1.0, sn = len > 0 ? pv / len : 0.0;
+  s.angle_deg = angle * kDeg;
+  s.ex_deg = s.angle_deg * c;
+  s.ey_deg = s.angle_deg * sn;
+  // Elliptical region of interest, acuity, budget and blend
+  const double a = params_.ellipse_ratio;
+  s.effective_deg = std::sqrt((s.ex_deg / a) * (s.ex_deg / a) + s.ey_deg * s.ey_deg);
+  s.quality = acuity_cutoff_cpd(s.effective_deg, max_cpd_) / foveal_cpd_;
+  s.rays = ao_ray_budget(s.quality, params_);
+  s.blend = blend_weight(s.quality, s.rays, params_);
+  return s;
+}
+
+}  // namespace foveal

@@ -1,0 +1,94 @@
+// foveal/perception/foveation.h — display geometry, eccentricity, acuity and the AO budget.
+//
+// The models of DESIGN.md, "The models, exactly": the render fills a display of W×H cm viewed
+// from d cm by an eye in front of the screen centre; a pixel's eccentricity is the exact angle
+// between the eye rays through it and through the gaze point, made elliptical by the ratio a;
+// the cut-off frequency f_c(E) of eq. 4 gives the quality q(E) = f_c(E)/f_c(0), which sets the
+// AO ray count n(E) and the blend weight b(E).
+#pragma once
+
+#include <glm/glm.hpp>
+
+#include <string>
+
+namespace foveal {
+
+// A physical display; the rendered image is scaled to fill it.
+struct Display {
+  double width_cm = 47.5;     // visible width, cm
+  double height_cm = 30.0;    // visible height, cm
+  double distance_cm = 60.0;  // eye to screen centre, cm
+  int res_x = 1680;           // display pixels across
+  int res_y = 1050;           // display pixels down
+};
+
+// Parse "W_CM,H_CM,DIST_CM[,RES_X,RES_Y]"; without a resolution, the given default is kept.
+Display parse_display(const std::string& text, Display defaults = {});
+
+// Check a display for zero or negative sizes; throws Error naming the field.
+void validate(const Display& display);
+
+// Horizontal field of view of the display, degrees.
+double field_of_view_x_deg(const Display& display);
+// Vertical field of view of the display, degrees.
+double field_of_view_y_deg(const Display& display);
+// Display pixels per degree at the screen centre: res_x / (2·atan(W/2d)).
+double pixels_per_degree(const Display& display);
+// Highest frequency the display can show, cycles/degree (= ppd / 2).
+double max_display_cpd(const Display& display);
+
+// Acuity cut-off of eq. 4, cycles/degree: min(max_cpd, 43.1·E2/(E2+E)), E in degrees.
+double acuity_cutoff_cpd(double eccentricity_deg, double max_cpd);
+inline constexpr double kAcuityE2Deg = 3.118;     // eccentricity of half resolution, degrees
+inline constexpr double kAcuityFovealCpd = 43.1;  // foveal cut-off, cycles/degree
+
+// Parameters of the foveation model (DESIGN.md defaults).
+struct FoveationParams {
+  double ellipse_ratio = 1.538;  // horizontal : vertical extent of the region of interest
+  int max_rays = 400;            // n_max, AO rays per pixel at q = 1
+  int min_rays = 0;              // n_min, AO rays per pixel far from the gaze
+  double gamma = 2.0;            // exponent of q in the ray budget
+  double beta = 1.0;             // exponent of q in the blend weight
+};
+
+// AO rays for a quality q: n_min + round((n_max − n_min)·q^γ).
+int ao_ray_budget(double q, const FoveationParams& params);
+// Blend weight of AO against the constant ambient: q^β, and 0 where no ray is cast.
+double blend_weight(double q, int rays, const FoveationParams& params);
+
+// Per-pixel result of the foveation model.
+struct FoveaSample {
+  double ex_deg = 0;  // horizontal angular offset from the gaze, degrees
+  double ey_deg = 0;  // vertical angular offset from the gaze, degrees
+  double angle_deg = 0;  // exact angle between pixel and gaze eye rays, degrees
+  double effective_deg = 0;  // elliptical eccentricity sqrt((Ex/a)² + Ey²), degrees
+  double quality = 1;  // q(E) in [0, 1]
+  int rays = 0;        // AO rays n(E)
+  double blend = 1;    // b(E) in [0, 1]
+};
+
+// The model for one frame: display, render size and gaze; evaluate() is a pure per-pixel function.
+class FoveationModel {
+ public:
+  FoveationModel(const Display& display, int render_width, int render_height, glm::dvec2 gaze_px,
+                 const FoveationParams& params);
+
+  // Eye ray (cm, eye at origin, +z towards the screen, +y down) through a render position.
+  glm::dvec3 eye_ray(double x_px, double y_px) const;
+  // The model at the centre of pixel (x, y).
+  FoveaSample evaluate(int x, int y) const;
+  // The model at a render position (pixel centres are at +0.5).
+  FoveaSample evaluate_at(double x_px, double y_px) const;
+
+  double max_cpd() const { return max_cpd_; }
+  const FoveationParams& params() const { return params_; }
+
+ private:
+  Display display_;
+  int width_, height_;
+  FoveationParams params_;
+  double max_cpd_, foveal_cpd_;
+  glm::dvec3 gaze_dir_, horiz_, vert_;  // unit gaze ray and its tangent-plane axes
+};
+
+}  // namespace foveal

@@ -1,0 +1,65 @@
+// foveal/render/ao_benchmark.h — the first paper's Table 1: full-frame vs foveated AO speed for
+// several cameras and gaze points, with the renderer's AO rate against raw Embree throughput.
+#pragma once
+
+#include "foveal/render/render.h"
+
+#include <nlohmann/json.hpp>
+
+#include <functional>
+#include <string>
+#include <vector>
+
+namespace foveal {
+
+// What to measure.
+struct AoBenchParams {
+  RenderParams render;                  // size, display, n_max, γ, … (mode and gaze are set per case)
+  std::vector<std::string> cameras;     // empty → every camera of the scene (or the default one)
+  int repeats = 1;                      // frames per case; the median time is reported
+  size_t raw_stride = 32;               // every k-th pixel's AO rays form the raw-throughput sample
+};
+
+// One gaze point of one camera.
+struct AoBenchCase {
+  std::string camera, gaze_label;
+  glm::dvec2 gaze_px{0.0};
+  double foveated_ms = 0, foveated_fps = 0;
+  double speedup_pct = 0;        // (fps − full fps) / full fps × 100, the paper's definition
+  double speedup = 0;            // full time / foveated time
+  double ao_rays_per_pixel = 0;  // mean over all pixels
+  double ao_rays_per_second = 0;
+  double ao_ray_ratio = 0;       // full-frame AO rays / foveated AO rays
+  double efficiency = 0;         // speedup / ao_ray_ratio (1 = time saved exactly as rays saved)
+  bool fovea_identical = false;  // q = 1 pixels bit-identical to the full-frame reference
+  size_t fovea_pixels = 0;
+};
+
+// One camera: the full-frame reference, its gaze cases and the raw Embree baseline.
+struct AoBenchCamera {
+  std::string name;
+  double full_ms = 0, full_fps = 0, full_ao_rays_per_pixel = 0, full_ao_rays_per_second = 0;
+  double raw_rays_per_second[3] = {0, 0, 0};  // indexed by TraceApi: single, packet8, stream
+  double renderer_vs_raw = 0;   // renderer's full-frame AO rate / raw rate with the same API
+  std::vector<AoBenchCase> cases;
+};
+
+// The whole table.
+struct AoBenchResult {
+  std::string scene;
+  size_t triangles = 0;
+  double build_ms = 0;
+  int threads = 0;
+  std::string trace_api;
+  std::vector<AoBenchCamera> cameras;
+};
+
+// Run the benchmark; `progress` receives one line per finished measurement.
+AoBenchResult run_ao_benchmark(const Scene& scene, const Tracer& tracer, const AoBenchParams& params,
+                               const std::function<void(const std::string&)>& progress = {});
+
+// The result as JSON and as a Markdown table.
+nlohmann::json to_json(const AoBenchResult& result);
+std::string to_markdown(const AoBenchResult& result);
+
+}  // namespace foveal

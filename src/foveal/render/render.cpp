@@ -1,0 +1,361 @@
+// foveal/render/render.cpp — primary rays, foveation maps, foveated AO and Phong shading.
+#include "foveal/render/render.h"
+
+#include "foveal/util/error.h"
+#include "foveal/util/sampling.h"
+#include "foveal/util/timer.h"
+
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace foveal {
+namespace {
+
+constexpr int kTile = 16;            // pixels per tile side
+constexpr size_t kAoBatch = 1024;    // occlusion rays handed to the tracer at once
+constexpr int kMaxRaysLimit = 65535; // n is stored in 16 bits
+
+const glm::vec3 kBackground(0.06f, 0.06f, 0.08f);
+
+// Run body(x0, x1, y0, y1) over fixed 16×16 tiles in parallel; the result never depends on the order.
+template <class Body>
+void for_each_tile(int width, int height, Body&& body) {
+  const int tiles_x = (width + kTile - 1) / kTile, tiles_y = (height + kTile - 1) / kTile;
+  tbb::parallel_for(0, tiles_x * tiles_y, [&](int t) {
+    const int x0 = (t % tiles_x) * kTile, y0 = (t / tiles_x) * kTile;
+    body(x0, std::min(x0 + kTile, width), y0, std::min(y0 + kTile, height));
+  });
+}
+
+// Cosine-weighted AO ray k of a pixel's scrambled Sobol sequence.
+inline Ray ao_ray(const Frame3& frame, glm::vec3 origin, uint32_t k, uint32_t pixel_hash, float distance) {
+  Ray r;
+  r.org = origin;
+  r.tnear = 0.0f;
+  r.dir = frame.to_world(cosine_hemisphere(scrambled_sobol_2d(k, pixel_hash)));
+  r.tfar = distance;
+  return r;
+}
+
+}  // namespace
+
+const char* to_string(RenderMode mode) { return mode == RenderMode::full ? "full" : "foveated"; }
+
+RenderMode parse_render_mode(const std::string& name) {
+  if (name == "foveated") return RenderMode::foveated;
+  if (name == "full") return RenderMode::full;
+  fail("--mode: unknown mode '{}' (known: foveated, full)", name);
+}
+
+void validate(const RenderParams& p) {
+  if (p.width < 1 || p.height < 1) fail("--size: image must be at least 1x1, got {}x{}", p.width, p.height);
+  if (p.width > 16384 || p.height > 16384) fail("--size: {}x{} is larger than 16384x16384", p.width, p.height);
+  validate(p.display);
+  const auto& f = p.foveation;
+  if (f.max_rays < 0 || f.max_rays > kMaxRaysLimit) fail("--max-rays: must be in [0, {}], got {}", kMaxRaysLimit, f.max_rays);
+  if (f.min_rays < 0 || f.min_rays > f.max_rays) fail("--min-rays: must be in [0, max-rays = {}], got {}", f.max_rays, f.min_rays);
+  if (!(f.gamma > 0) || !std::isfinite(f.gamma)) fail("--gamma: must be > 0, got {}", f.gamma);
+  if (!(f.beta >= 0) || !std::isfinite(f.beta)) fail("--beta: must be >= 0, got {}", f.beta);
+  if (!(f.ellipse_ratio > 0) || !std::isfinite(f.ellipse_ratio)) fail("--ellipse: must be > 0, got {}", f.ellipse_ratio);
+  if (p.ao_distance && !(*p.ao_distance > 0)) fail("--ao-distance: must be > 0 or inf, got {}", *p.ao_distance);
+  if (p.ambient_constant && !(*p.ambient_constant >= 0 && std::isfinite(*p.ambient_constant)))
+    fail("--ambient-constant: must be a number >= 0 or 'auto', got {}", *p.ambient_constant);
+  if (p.gaze_px && !(std::isfinite(p.gaze_px->x) && std::isfinite(p.gaze_px->y)))
+    fail("--gaze: must be finite render pixels");
+}
+
+Ray camera_ray(const Camera& camera, int width, int height, double x_px, double y_px) {
+  const glm::vec3 forward = glm::normalize(camera.look - camera.eye);
+  const glm::vec3 right = glm::normalize(glm::cross(forward, camera.up));
+  const glm::vec3 up = glm::cross(right, forward);
+  const float tan_half = std::tan(glm::radians(camera.fov_deg) * 0.5f);
+  const float aspect = static_cast<float>(width) / static_cast<float>(height);
+  const float sx = static_cast<float>((2.0 * x_px / width - 1.0)) * tan_half * aspect;
+  const float sy = static_cast<float>((1.0 - 2.0 * y_px / height)) * tan_half;
+  Ray r;
+  r.org = camera.eye;
+  r.dir = glm::normalize(forward + sx * right + sy * up);
+  r.tnear = 0.0f;
+  r.tfar = std::numeric_limits<float>::infinity();
+  return r;
+}
+
+float resolve_ao_distance(const Scene& scene, std::optional<float> requested) {
+  if (requested) return *requested;
+  if (scene.ao_distance) return *scene.ao_distance;
+  return 0.2f * scene.bounds().diagonal();
+}
+
+float surface_epsilon(const Scene& scene) {
+  const Bounds b = scene.bounds();
+  const float extent = std::max({std::abs(b.lo.x), std::abs(b.lo.y), std::abs(b.lo.z), std::abs(b.hi.x),
+                                 std::abs(b.hi.y), std::abs(b.hi.z), b.diagonal()});
+  return std::max(1e-6f, 2e-5f * extent);
+}
+
+GBuffer trace_primary(const Tracer& tracer, const Scene& scene, const Camera& camera, int width, int height) {
+  GBuffer g;
+  g.width = width;
+  g.height = height;
+  const size_t n = static_cast<size_t>(width) * height;
+  g.prim.assign(n, Hit::kNoHit);
+  g.position.assign(n, glm::vec3(0.0f));
+  g.normal.assign(n, glm::vec3(0.0f));
+  g.geo_normal.assign(n, glm::vec3(0.0f));
+  g.albedo.assign(n, glm::vec3(0.0f));
+  g.depth.assign(n, std::numeric_limits<float>::infinity());
+  g.view.assign(n, glm::vec3(0.0f));
+  for_each_tile(width, height, [&](int x0, int x1, int y0, int y1) {
+    Ray rays[kTile * kTile];
+    Hit hits[kTile * kTile];
+    for (int y = y0; y < y1; ++y) {
+      // One row of the tile at a time: coherent rays, one tracer call
+      const int count = x1 - x0;
+      for (int x = x0; x < x1; ++x) rays[x - x0] = camera_ray(camera, width, height, x + 0.5, y + 0.5);
+      tracer.intersect({rays, static_cast<size_t>(count)}, {hits, static_cast<size_t>(count)});
+      for (int x = x0; x < x1; ++x) {
+        const size_t i = static_cast<size_t>(y) * width + x;
+        const Hit& h = hits[x - x0];
+        g.view[i] = rays[x - x0].dir;
+        if (!h.valid()) continue;
+        // Surface point from barycentrics (more precise than org + t·dir)
+        const glm::uvec3 tri = scene.triangles[h.prim];
+        const float w = 1.0f - h.u - h.v;
+        g.prim[i] = h.prim;
+        g.depth[i] = h.t;
+        g.position[i] = w * scene.positions[tri.x] + h.u * scene.positions[tri.y] + h.v * scene.positions[tri.z];
+        // Normals facing the camera; the shading normal never on the far side of the surface
+        glm::vec3 ng = glm::normalize(h.ng);
+        if (glm::dot(ng, rays[x - x0].dir) > 0) ng = -ng;
+        glm::vec3 ns = w * scene.normals[tri.x] + h.u * scene.normals[tri.y] + h.v * scene.normals[tri.z];
+        const float len = glm::length(ns);
+        ns = len > 0 && std::isfinite(len) ? ns / len : ng;
+        if (glm::dot(ns, ng) < 0) ns = -ns;
+        g.geo_normal[i] = ng;
+        g.normal[i] = ns;
+        // Albedo: material colour times the diffuse texture
+        const Material& m = scene.materials[scene.material_ids[h.prim]];
+        glm::vec3 albedo = m.diffuse;
+        if (m.diffuse_texture >= 0) {
+          const glm::vec2 uv = w * scene.uvs[tri.x] + h.u * scene.uvs[tri.y] + h.v * scene.uvs[tri.z];
+          albedo *= scene.textures[m.diffuse_texture].sample(uv);
+        }
+        g.albedo[i] = albedo;
+      }
+    }
+  });
+  return g;
+}
+
+FoveationMaps foveation_maps(const RenderParams& params, glm::dvec2 gaze_px) {
+  FoveationMaps m;
+  m.width = params.width;
+  m.height = params.height;
+  const size_t n = static_cast<size_t>(params.width) * params.height;
+  m.quality.assign(n, 1.0f);
+  m.eccentricity.assign(n, 0.0f);
+  m.rays.assign(n, static_cast<uint16_t>(params.foveation.max_rays));
+  m.blend.assign(n, params.foveation.max_rays > 0 ? 1.0f : 0.0f);
+  const FoveationModel model(params.display, params.width, params.height, gaze_px, params.foveation);
+  const bool foveated = params.mode == RenderMode::foveated;
+  for_each_tile(params.width, params.height, [&](int x0, int x1, int y0, int y1) {
+    for (int y = y0; y < y1; ++y)
+      for (int x = x0; x < x1; ++x) {
+        const size_t i = static_cast<size_t>(y) * params.width + x;
+        const FoveaSample s = model.evaluate(x, y);
+        m.eccentricity[i] = static_cast<float>(s.effective_deg);
+        if (!foveated) continue;
+        m.quality[i] = static_cast<float>(s.quality);
+        m.rays[i] = static_cast<uint16_t>(s.rays);
+        m.blend[i] = static_cast<float>(s.blend);
+      }
+  });
+  return m;
+}
+
+float estimate_visibility(const Tracer& tracer, glm::vec3 position, glm::vec3 normal, int rays, float ao_distance,
+                          float epsilon, uint64_t seed, uint32_t x, uint32_t y) {
+  if (rays <= 0) return 1.0f;
+  const Frame3 frame = make_frame(normal);
+  const glm::vec3 origin = position + epsilon * normal;
+  const uint32_t hash = pixel_seed(seed, x, y);
+  std::vector<Ray> batch(static_cast<size_t>(rays));
+  std::vector<uint8_t> occluded(batch.size());
+  for (int k = 0; k < rays; ++k) batch[k] = ao_ray(frame, origin, static_cast<uint32_t>(k), hash, ao_distance);
+  tracer.occluded(batch, occluded);
+  int open = 0;
+  for (uint8_t o : occluded) open += o ? 0 : 1;
+  return static_cast<float>(open) / static_cast<float>(rays);
+}
+
+uint64_t trace_ao(const Tracer& tracer, const GBuffer& g, const FoveationMaps& maps, float ao_distance, float epsilon,
+                  uint64_t seed, std::vector<float>& visibility) {
+  visibility.assign(static_cast<size_t>(g.width) * g.height, 1.0f);
+  // Per-thread batch of rays from several pixels, with the tile-local pixel each belongs to
+  struct Batch {
+    std::vector<Ray> rays = std::vector<Ray>(kAoBatch);
+    std::vector<uint16_t> owner = std::vector<uint16_t>(kAoBatch);
+    std::vector<uint8_t> occluded = std::vector<uint8_t>(kAoBatch);
+  };
+  tbb::enumerable_thread_specific<Batch> batches;
+  tbb::enumerable_thread_specific<uint64_t> traced(0);
+  for_each_tile(g.width, g.height, [&](int x0, int x1, int y0, int y1) {
+    Batch& b = batches.local();
+    int open[kTile * kTile] = {};
+    size_t fill = 0;
+    auto flush = [&] {
+      tracer.occluded({b.rays.data(), fill}, {b.occluded.data(), fill});
+      for (size_t k = 0; k < fill; ++k) open[b.owner[k]] += b.occluded[k] ? 0 : 1;
+      traced.local() += fill;
+      fill = 0;
+    };
+    for (int y = y0; y < y1; ++y)
+      for (int x = x0; x < x1; ++x) {
+        const size_t i = static_cast<size_t>(y) * g.width + x;
+        const int n = maps.rays[i];
+        if (!g.hit(i) || n == 0) continue;
+        const auto local = static_cast<uint16_t>((y - y0) * kTile + (x - x0));
+        const Frame3 frame = make_frame(g.geo_normal[i]);
+        const glm::vec3 origin = g.position[i] + epsilon * g.geo_normal[i];
+        const uint32_t hash = pixel_seed(seed, static_cast<uint32_t>(x), static_cast<uint32_t>(y));
+        for (int k = 0; k < n; ++k) {
+          b.rays[fill] = ao_ray(frame, origin, static_cast<uint32_t>(k), hash, ao_distance);
+          b.owner[fill] = local;
+          if (++fill == kAoBatch) flush();
+        }
+      }
+    if (fill > 0) flush();
+    // Visibility = unoccluded / n: an exact integer ratio, the same in every mode and thread count
+    for (int y = y0; y < y1; ++y)
+      for (int x = x0; x < x1; ++x) {
+        const size_t i = static_cast<size_t>(y) * g.width + x;
+        const int n = maps.rays[i];
+        if (g.hit(i) && n > 0) visibility[i] = static_cast<float>(open[(y - y0) * kTile + (x - x0)]) / static_cast<float>(n);
+      }
+  });
+  uint64_t total = 0;
+  for (uint64_t t : traced) total += t;
+  return total;
+}
+
+void collect_ao_rays(const GBuffer& g, const FoveationMaps& maps, float ao_distance, float epsilon, uint64_t seed,
+                     size_t stride, std::vector<Ray>& rays) {
+  for (size_t i = 0; i < g.prim.size(); i += std::max<size_t>(1, stride)) {
+    if (!g.hit(i) || maps.rays[i] == 0) continue;
+    const auto x = static_cast<uint32_t>(i % g.width), y = static_cast<uint32_t>(i / g.width);
+    const Frame3 frame = make_frame(g.geo_normal[i]);
+    const glm::vec3 origin = g.position[i] + epsilon * g.geo_normal[i];
+    const uint32_t hash = pixel_seed(seed, x, y);
+    for (uint32_t k = 0; k < maps.rays[i]; ++k) rays.push_back(ao_ray(frame, origin, k, hash, ao_distance));
+  }
+}
+
+float foveal_mean_visibility(const GBuffer& g, const FoveationMaps& maps, const std::vector<float>& visibility) {
+  // Sequential sum in pixel order: deterministic
+  double sum = 0;
+  size_t count = 0;
+  for (size_t i = 0; i < visibility.size(); ++i)
+    if (g.hit(i) && maps.quality[i] >= 1.0f && maps.rays[i] > 0) {
+      sum += visibility[i];
+      ++count;
+    }
+  return count > 0 ? static_cast<float>(sum / count) : 1.0f;
+}
+
+Image shade(const Tracer& tracer, const Scene& scene, const Camera& camera, const GBuffer& g, const FoveationMaps& maps,
+            const std::vector<float>& visibility, float ambient_constant, bool shadows, float epsilon,
+            uint64_t* shadow_rays) {
+  Image image(g.width, g.height, 3);
+  // Lights: the scene's, else a head light at the camera
+  std::vector<Light> lights = scene.lights;
+  if (lights.empty()) lights.push_back({Light::Type::point, camera.eye, glm::vec3(0.5f), glm::vec3(0.3f)});
+  tbb::enumerable_thread_specific<uint64_t> shadow_count(0);
+  for_each_tile(g.width, g.height, [&](int x0, int x1, int y0, int y1) {
+    for (int y = y0; y < y1; ++y)
+      for (int x = x0; x < x1; ++x) {
+        const size_t i = static_cast<size_t>(y) * g.width + x;
+        glm::vec3 c = kBackground;
+        if (g.hit(i)) {
+          const Material& m = scene.materials[scene.material_ids[g.prim[i]]];
+          const glm::vec3 n = g.normal[i], v = -g.view[i], p = g.position[i];
+          // Blended ambient factor: k_a = b·V + (1 − b)·k_const
+          const float b = maps.blend[i];
+          const float ka = b * visibility[i] + (1.0f - b) * ambient_constant;
+          c = ka * scene.ambient * g.albedo[i];
+          for (const Light& light : lights) {
+            glm::vec3 l = light.type == Light::Type::point ? light.vector - p : -light.vector;
+            const float dist = glm::length(l);
+            if (!(dist > 0)) continue;
+            l /= dist;
+            const float ndotl = glm::dot(n, l);
+            if (ndotl <= 0) continue;
+            if (shadows) {
+              Ray s{p + epsilon * g.geo_normal[i], 0.0f, l, light.type == Light::Type::point ? dist : 1e30f};
+              uint8_t blocked = 0;
+              tracer.occluded({&s, 1}, {&blocked, 1});
+              ++shadow_count.local();
+              if (blocked) continue;
+            }
+            const glm::vec3 r = glm::reflect(-l, n);
+            const float rdotv = std::max(0.0f, glm::dot(r, v));
+            c += g.albedo[i] * ndotl * light.diffuse + m.specular * std::pow(rdotv, m.shininess) * light.specular;
+          }
+        }
+        for (int k = 0; k < 3; ++k) image.at(x, y, k) = c[k];
+      }
+  });
+  if (shadow_rays) {
+    *shadow_rays = 0;
+    for (uint64_t s : shadow_count) *shadow_rays += s;
+  }
+  return image;
+}
+
+Frame render_frame(const Tracer& tracer, const Scene& scene, const Camera& camera, const RenderParams& params) {
+  validate(params);
+  Frame f;
+  Timer total;
+  f.gaze_px = params.gaze_px.value_or(glm::dvec2(params.width * 0.5, params.height * 0.5));
+  const float ao_distance = resolve_ao_distance(scene, params.ao_distance);
+  const float epsilon = surface_epsilon(scene);
+  // Primary rays → G-buffer
+  Timer t;
+  f.gbuffer = trace_primary(tracer, scene, camera, params.width, params.height);
+  f.stats.primary_ms = t.ms();
+  // Foveation model → per-pixel q, n, b
+  t.reset();
+  f.maps = foveation_maps(params, f.gaze_px);
+  f.stats.foveation_ms = t.ms();
+  // Foveated AO
+  t.reset();
+  f.stats.ao_rays = trace_ao(tracer, f.gbuffer, f.maps, ao_distance, epsilon, params.seed, f.visibility);
+  f.stats.ao_ms = t.ms();
+  // Phong shading with the blended ambient term
+  t.reset();
+  const float k_const = params.ambient_constant.value_or(foveal_mean_visibility(f.gbuffer, f.maps, f.visibility));
+  f.color = shade(tracer, scene, camera, f.gbuffer, f.maps, f.visibility, k_const, params.shadows, epsilon,
+                  &f.stats.shadow_rays);
+  f.stats.shade_ms = t.ms();
+  f.stats.total_ms = total.ms();
+  // Counts
+  const size_t pixels = static_cast<size_t>(params.width) * params.height;
+  f.stats.primary_rays = pixels;
+  f.stats.ao_rays_mean = static_cast<double>(f.stats.ao_rays) / static_cast<double>(pixels);
+  int lo = std::numeric_limits<int>::max(), hi = 0;
+  for (size_t i = 0; i < pixels; ++i)
+    if (f.gbuffer.hit(i)) {
+      lo = std::min<int>(lo, f.maps.rays[i]);
+      hi = std::max<int>(hi, f.maps.rays[i]);
+    }
+  f.stats.ao_rays_min = hi == 0 && lo == std::numeric_limits<int>::max() ? 0 : lo;
+  f.stats.ao_rays_max = hi;
+  f.stats.ambient_constant = k_const;
+  f.stats.ao_distance = ao_distance;
+  return f;
+}
+
+}  // namespace foveal

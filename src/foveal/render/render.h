@@ -1,0 +1,124 @@
+// foveal/render/render.h — one frame of gaze-dependent ambient occlusion, pass by pass.
+//
+// render_frame() runs the passes in order; each is a free function over plain buffers:
+//   trace_primary  → GBuffer            (camera rays, one per pixel centre)
+//   foveation_maps → FoveationMaps      (q(E), n(E), b(E) per pixel; full mode: n_max, b = 1)
+//   trace_ao       → visibility V       (cosine-weighted occlusion rays, eq. 1)
+//   shade          → linear RGB image   (Phong, eq. 2, with k_a = b·V + (1 − b)·k_const)
+#pragma once
+
+#include "foveal/perception/foveation.h"
+#include "foveal/scene/scene.h"
+#include "foveal/trace/tracer.h"
+#include "foveal/util/image.h"
+
+#include <glm/glm.hpp>
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace foveal {
+
+// Foveated: the AO budget follows the gaze. Full: n_max rays everywhere (the reference).
+enum class RenderMode { foveated, full };
+const char* to_string(RenderMode mode);
+RenderMode parse_render_mode(const std::string& name);  // throws Error for an unknown name
+
+// Everything that decides one frame besides the scene and camera.
+struct RenderParams {
+  int width = 840;                      // render pixels
+  int height = 525;                     // render pixels
+  RenderMode mode = RenderMode::foveated;
+  std::optional<glm::dvec2> gaze_px;    // render pixels, origin top-left; unset → image centre
+  Display display;                      // the screen the render fills
+  FoveationParams foveation;            // n_max, n_min, γ, β, ellipse ratio
+  std::optional<float> ao_distance;     // scene units, may be infinite; unset → scene's or 0.2 × diagonal
+  std::optional<float> ambient_constant = 1.0f;  // k_const; unset → mean visibility of the fovea
+  uint64_t seed = 1;                    // scrambles every pixel's AO directions
+  bool shadows = false;                 // shadow rays for the lights (off, as in the papers)
+};
+
+// Check sizes and model parameters; throws Error naming the option.
+void validate(const RenderParams& params);
+
+// Per-pixel surface data from the primary rays. Pixels that hit nothing have prim == Hit::kNoHit.
+struct GBuffer {
+  int width = 0, height = 0;
+  std::vector<uint32_t> prim;          // triangle index or Hit::kNoHit
+  std::vector<glm::vec3> position;     // world position, scene units
+  std::vector<glm::vec3> normal;       // shading normal, unit, facing the camera
+  std::vector<glm::vec3> geo_normal;   // geometric normal, unit, facing the camera (AO hemisphere)
+  std::vector<glm::vec3> albedo;       // diffuse reflectance k_d, linear RGB (texture applied)
+  std::vector<float> depth;            // distance along the primary ray, scene units
+  std::vector<glm::vec3> view;         // unit direction of the primary ray
+  bool hit(size_t i) const { return prim[i] != Hit::kNoHit; }
+};
+
+// Per-pixel foveation model output.
+struct FoveationMaps {
+  int width = 0, height = 0;
+  std::vector<float> quality;     // q(E) in [0, 1]
+  std::vector<float> eccentricity;// elliptical eccentricity E, degrees
+  std::vector<uint16_t> rays;     // n(E), AO rays for the pixel
+  std::vector<float> blend;       // b(E) in [0, 1]
+};
+
+// Counts and times of one frame (the `--stats` JSON).
+struct FrameStats {
+  uint64_t primary_rays = 0;
+  uint64_t ao_rays = 0;
+  uint64_t shadow_rays = 0;
+  double ao_rays_mean = 0;   // AO rays traced / pixels
+  int ao_rays_min = 0;       // smallest budget among pixels that hit the scene
+  int ao_rays_max = 0;       // largest budget among pixels that hit the scene
+  double primary_ms = 0, foveation_ms = 0, ao_ms = 0, shade_ms = 0, total_ms = 0;
+  float ambient_constant = 1; // k_const used
+  float ao_distance = 0;      // scene units (may be infinite)
+};
+
+// A rendered frame with every intermediate buffer.
+struct Frame {
+  Image color;                    // linear RGB
+  GBuffer gbuffer;
+  FoveationMaps maps;
+  std::vector<float> visibility;  // AO visibility V per pixel (1 where nothing was hit or no ray cast)
+  glm::dvec2 gaze_px{0.0};
+  FrameStats stats;
+};
+
+// Camera ray through a render position (pixel centres at +0.5), unit direction.
+Ray camera_ray(const Camera& camera, int width, int height, double x_px, double y_px);
+
+// AO ray length for a scene: the explicit value, else the scene's, else 0.2 × bounding-box diagonal.
+float resolve_ao_distance(const Scene& scene, std::optional<float> requested);
+// Offset that lifts ray origins off a surface, scene units.
+float surface_epsilon(const Scene& scene);
+
+// Primary rays through every pixel centre.
+GBuffer trace_primary(const Tracer& tracer, const Scene& scene, const Camera& camera, int width, int height);
+// The foveation model evaluated at every pixel (full mode: q = 1, n = n_max, b = 1).
+FoveationMaps foveation_maps(const RenderParams& params, glm::dvec2 gaze_px);
+// AO visibility per pixel with maps.rays[i] rays; returns the number of rays traced.
+uint64_t trace_ao(const Tracer& tracer, const GBuffer& gbuffer, const FoveationMaps& maps, float ao_distance,
+                  float epsilon, uint64_t seed, std::vector<float>& visibility);
+// Visibility at one point from `rays` cosine-weighted directions of pixel (x, y)'s sequence:
+// the per-pixel function the AO pass runs, exposed for analytic tests.
+float estimate_visibility(const Tracer& tracer, glm::vec3 position, glm::vec3 normal, int rays, float ao_distance,
+                          float epsilon, uint64_t seed, uint32_t x, uint32_t y);
+// The AO rays the pass would trace for every `stride`-th pixel (in pixel order), appended to
+// `rays`: the same distribution the renderer traces, for raw-throughput baselines.
+void collect_ao_rays(const GBuffer& gbuffer, const FoveationMaps& maps, float ao_distance, float epsilon, uint64_t seed,
+                     size_t stride, std::vector<Ray>& rays);
+// Mean visibility of the pixels with q = 1 (the `auto` ambient constant); 1 when there are none.
+float foveal_mean_visibility(const GBuffer& gbuffer, const FoveationMaps& maps, const std::vector<float>& visibility);
+// Phong shading of eq. 2 with the blended ambient factor; returns linear RGB.
+Image shade(const Tracer& tracer, const Scene& scene, const Camera& camera, const GBuffer& gbuffer,
+            const FoveationMaps& maps, const std::vector<float>& visibility, float ambient_constant, bool shadows,
+            float epsilon, uint64_t* shadow_rays = nullptr);
+
+// All passes for one frame.
+Frame render_frame(const Tracer& tracer, const Scene& scene, const Camera& camera, const RenderParams& params);
+
+}  // namespace foveal

@@ -1,0 +1,182 @@
+// foveal/scene/scene.cpp — scene assembly: triangles, normals, shapes, cameras, dispatch.
+#include "foveal/scene/scene.h"
+
+#include "foveal/util/error.h"
+
+#include <glm/gtc/matrix_inverse.hpp>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <numbers>
+#include <sstream>
+
+namespace foveal {
+namespace {
+
+// sRGB 8-bit → linear float, built once.
+const std::array<float, 256>& srgb_to_linear_table() {
+  static const std::array<float, 256> table = [] {
+    std::array<float, 256> t{};
+    for (int i = 0; i < 256; ++i) {
+      const float c = i / 255.0f;
+      t[i] = c <= 0.04045f ? c / 12.92f : std::pow((c + 0.055f) / 1.055f, 2.4f);
+    }
+    return t;
+  }();
+  return table;
+}
+
+bool finite(glm::vec3 v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
+
+}  // namespace
+
+glm::vec3 Texture::sample(glm::vec2 uv) const {
+  if (width <= 0 || height <= 0 || !std::isfinite(uv.x) || !std::isfinite(uv.y)) return glm::vec3(1.0f);
+  const auto& lut = srgb_to_linear_table();
+  // Texel coordinates with wrap-around; v flipped since rows run top to bottom
+  const float fx = (uv.x - std::floor(uv.x)) * width - 0.5f;
+  const float fy = (1.0f - (uv.y - std::floor(uv.y))) * height - 0.5f;
+  const int x0 = static_cast<int>(std::floor(fx)), y0 = static_cast<int>(std::floor(fy));
+  const float tx = fx - x0, ty = fy - y0;
+  auto texel = [&](int x, int y) {
+    x = ((x % width) + width) % width;
+    y = ((y % height) + height) % height;
+    const uint8_t* p = &rgb[(static_cast<size_t>(y) * width + x) * 3];
+    return glm::vec3(lut[p[0]], lut[p[1]], lut[p[2]]);
+  };
+  return glm::mix(glm::mix(texel(x0, y0), texel(x0 + 1, y0), tx), glm::mix(texel(x0, y0 + 1), texel(x0 + 1, y0 + 1), tx),
+                  ty);
+}
+
+Bounds Scene::bounds() const {
+  Bounds b;
+  for (const auto& t : triangles)
+    for (int k = 0; k < 3; ++k) b.extend(positions[t[k]]);
+  return b;
+}
+
+void append_triangles(Scene& scene, const std::vector<glm::vec3>& positions, const std::vector<glm::uvec3>& triangles,
+                      const Material& material, const glm::mat4& transform) {
+  const auto base = static_cast<uint32_t>(scene.positions.size());
+  const auto material_id = static_cast<uint32_t>(scene.materials.size());
+  scene.materials.push_back(material);
+  for (const auto& p : positions) scene.positions.push_back(glm::vec3(transform * glm::vec4(p, 1.0f)));
+  // Area-weighted vertex normals; degenerate or non-finite triangles are dropped
+  std::vector<glm::vec3> normals(positions.size(), glm::vec3(0.0f));
+  for (const auto& t : triangles) {
+    if (t.x >= positions.size() || t.y >= positions.size() || t.z >= positions.size())
+      fail("triangle index {} out of range ({} vertices)", std::max({t.x, t.y, t.z}), positions.size());
+    const glm::vec3 a = scene.positions[base + t.x], b = scene.positions[base + t.y], c = scene.positions[base + t.z];
+    const glm::vec3 n = glm::cross(b - a, c - a);
+    if (!finite(a) || !finite(b) || !finite(c) || !finite(n) || glm::dot(n, n) <= 0.0f) {
+      ++scene.skipped_triangles;
+      continue;
+    }
+    normals[t.x] += n;
+    normals[t.y] += n;
+    normals[t.z] += n;
+    scene.triangles.push_back(t + glm::uvec3(base));
+    scene.material_ids.push_back(material_id);
+  }
+  for (auto& n : normals) {
+    const float len = glm::length(n);
+    scene.normals.push_back(len > 0 && std::isfinite(len) ? n / len : glm::vec3(0, 1, 0));
+  }
+  scene.uvs.resize(scene.positions.size(), glm::vec2(0.0f));
+}
+
+void append_sphere(Scene& scene, glm::vec3 centre, float radius, int segments, const Material& material) {
+  const int rings = std::max(2, segments / 2), slices = std::max(3, segments);
+  std::vector<glm::vec3> p;
+  std::vector<glm::uvec3> t;
+  for (int i = 0; i <= rings; ++i) {
+    const float theta = std::numbers::pi_v<float> * i / rings;
+    for (int j = 0; j <= slices; ++j) {
+      const float phi = 2.0f * std::numbers::pi_v<float> * j / slices;
+      p.push_back(centre + radius * glm::vec3(std::sin(theta) * std::cos(phi), std::cos(theta),
+                                              std::sin(theta) * std::sin(phi)));
+    }
+  }
+  for (int i = 0; i < rings; ++i)
+    for (int j = 0; j < slices; ++j) {
+      const uint32_t a = i * (slices + 1) + j, b = a + 1, c = a + slices + 1, d = c + 1;
+      t.push_back({a, b, c});  // degenerate at the poles: dropped by append_triangles
+      t.push_back({b, d, c});
+    }
+  const size_t first = scene.positions.size();
+  append_triangles(scene, p, t, material);
+  // Exact sphere normals instead of the averaged ones
+  for (size_t v = first; v < scene.positions.size(); ++v)
+    scene.normals[v] = glm::normalize(scene.positions[v] - centre);
+}
+
+void append_plane(Scene& scene, glm::vec3 c, float h, const Material& material) {
+  append_triangles(scene, {c + glm::vec3(-h, 0, -h), c + glm::vec3(h, 0, -h), c + glm::vec3(h, 0, h), c + glm::vec3(-h, 0, h)},
+                   {{0, 2, 1}, {0, 3, 2}}, material);
+}
+
+void append_open_box(Scene& scene, glm::vec3 lo, glm::vec3 hi, const Material& material) {
+  // Each wall gets its own four vertices so that normals are not smoothed across the edges
+  auto wall = [&](glm::vec3 a, glm::vec3 b, glm::vec3 c, glm::vec3 d) {
+    append_triangles(scene, {a, b, c, d}, {{0, 1, 2}, {0, 2, 3}}, material);
+  };
+  const glm::vec3 l = lo, h = hi;
+  wall({l.x, l.y, l.z}, {l.x, l.y, h.z}, {h.x, l.y, h.z}, {h.x, l.y, l.z});  // floor
+  wall({l.x, h.y, l.z}, {h.x, h.y, l.z}, {h.x, h.y, h.z}, {l.x, h.y, h.z});  // ceiling
+  wall({l.x, l.y, l.z}, {h.x, l.y, l.z}, {h.x, h.y, l.z}, {l.x, h.y, l.z});  // back (−z)
+  wall({l.x, l.y, l.z}, {l.x, h.y, l.z}, {l.x, h.y, h.z}, {l.x, l.y, h.z});  // left (−x)
+  wall({h.x, l.y, l.z}, {h.x, l.y, h.z}, {h.x, h.y, h.z}, {h.x, h.y, l.z});  // right (+x)
+}
+
+Camera default_camera(const Scene& scene) {
+  const Bounds b = scene.bounds();
+  Camera cam;
+  cam.name = "default";
+  if (!b.valid()) return cam;
+  const float radius = 0.5f * b.diagonal();
+  cam.fov_deg = 45.0f;
+  cam.look = b.centre();
+  cam.eye = b.centre() + glm::vec3(0.0f, 0.15f * radius, radius / std::tan(glm::radians(cam.fov_deg) * 0.5f) * 1.05f);
+  return cam;
+}
+
+const Camera& find_camera(const Scene& scene, const std::string& name) {
+  std::string known;
+  for (const auto& c : scene.cameras) {
+    if (c.name == name) return c;
+    known += (known.empty() ? "" : ", ") + c.name;
+  }
+  fail("scene '{}' has no camera named '{}' (known: {})", scene.source, name, known.empty() ? "none" : known);
+}
+
+Scene load_scene(const std::string& spec) {
+  namespace fs = std::filesystem;
+  Scene scene;
+  if (spec.rfind("builtin:", 0) == 0) {
+    scene = make_builtin_scene(spec.substr(8));
+  } else {
+    std::error_code ec;
+    if (!fs::exists(spec, ec)) fail("{}: no such file", spec);
+    if (fs::is_directory(spec, ec)) fail("{}: is a directory, not a scene file", spec);
+    if (fs::file_size(spec, ec) == 0) fail("{}: file is empty", spec);
+    std::string ext = fs::path(spec).extension().string();
+    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+    if (ext == ".json") {
+      std::ifstream in(spec, std::ios::binary);
+      if (!in) fail("{}: cannot open", spec);
+      std::stringstream text;
+      text << in.rdbuf();
+      scene = parse_scene_json(text.str(), spec, fs::path(spec).parent_path().string());
+    } else {
+      append_mesh_file(scene, spec, glm::mat4(1.0f));
+    }
+  }
+  if (scene.source.empty()) scene.source = spec;
+  if (scene.triangles.empty()) fail("{}: contains no usable triangles", spec);
+  return scene;
+}
+
+}  // namespace foveal

@@ -1,0 +1,58 @@
+// foveal/util/parse.cpp — option value parsing.
+#include "foveal/util/parse.h"
+
+#include "foveal/util/error.h"
+
+#include <cmath>
+#include <limits>
+#include <sstream>
+
+namespace foveal {
+
+std::vector<double> parse_numbers(const std::string& option, const std::string& text, size_t count) {
+  std::vector<double> values;
+  std::stringstream stream(text);
+  std::string item;
+  while (std::getline(stream, item, ',')) {
+    size_t used = 0;
+    double v = 0;
+    try {
+      v = std::stod(item, &used);
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    if (used == 0 || used != item.size() || !std::isfinite(v)) fail("{}: '{}' is not a finite number", option, item);
+    values.push_back(v);
+  }
+  if (count != 0 && values.size() != count)
+    fail("{}: expected {} comma-separated numbers, got '{}'", option, count, text);
+  return values;
+}
+
+glm::ivec2 parse_size(const std::string& option, const std::string& text) {
+  const auto x = text.find_first_of("xX");
+  if (x == std::string::npos) fail("{}: expected WIDTHxHEIGHT, got '{}'", option, text);
+  const auto w = parse_numbers(option, text.substr(0, x), 1)[0], h = parse_numbers(option, text.substr(x + 1), 1)[0];
+  if (w != std::floor(w) || h != std::floor(h) || w < 1 || h < 1 || w > 16384 || h > 16384)
+    fail("{}: size must be whole pixels between 1x1 and 16384x16384, got '{}'", option, text);
+  return {static_cast<int>(w), static_cast<int>(h)};
+}
+
+glm::dvec2 parse_vec2(const std::string& option, const std::string& text) {
+  const auto v = parse_numbers(option, text, 2);
+  return {v[0], v[1]};
+}
+
+glm::vec3 parse_vec3(const std::string& option, const std::string& text) {
+  const auto v = parse_numbers(option, text, 3);
+  return {static_cast<float>(v[0]), static_cast<float>(v[1]), static_cast<float>(v[2])};
+}
+
+float parse_length_or_inf(const std::string& option, const std::string& text) {
+  if (text == "inf" || text == "infinity") return std::numeric_limits<float>::infinity();
+  const double v = parse_numbers(option, text, 1)[0];
+  if (!(v > 0)) fail("{}: must be > 0 or 'inf', got '{}'", option, text);
+  return static_cast<float>(v);
+}
+
+}  // namespace foveal
