@@ -90,11 +90,11 @@ float resolve_ao_distance(const Scene& scene, std::optional<float> requested) {
   return 0.2f * scene.bounds().diagonal();
 }
 
-float surface_epsilon(const Scene& scene) {
-  const Bounds b = scene.bounds();
-  const float extent = std::max({std::abs(b.lo.x), std::abs(b.lo.y), std::abs(b.lo.z), std::abs(b.hi.x),
-                                 std::abs(b.hi.y), std::abs(b.hi.z), b.diagonal()});
-  return std::max(1e-6f, 2e-5f * extent);
+float surface_epsilon(const Scene& scene) { return std::max(1e-9f, 1e-6f * scene.bounds().diagonal()); }
+
+float ray_offset(glm::vec3 p, float scene_epsilon) {
+  // A few hundred float ulps of the point's magnitude, plus a floor tied to the scene's size
+  return scene_epsilon + 1e-5f * std::max({std::abs(p.x), std::abs(p.y), std::abs(p.z)});
 }
 
 GBuffer trace_primary(const Tracer& tracer, const Scene& scene, const Camera& camera, int width, int height) {
@@ -181,7 +181,7 @@ float estimate_visibility(const Tracer& tracer, glm::vec3 position, glm::vec3 no
                           float epsilon, uint64_t seed, uint32_t x, uint32_t y) {
   if (rays <= 0) return 1.0f;
   const Frame3 frame = make_frame(normal);
-  const glm::vec3 origin = position + epsilon * normal;
+  const glm::vec3 origin = position + ray_offset(position, epsilon) * normal;
   const uint32_t hash = pixel_seed(seed, x, y);
   std::vector<Ray> batch(static_cast<size_t>(rays));
   std::vector<uint8_t> occluded(batch.size());
@@ -220,7 +220,7 @@ uint64_t trace_ao(const Tracer& tracer, const GBuffer& g, const FoveationMaps& m
         if (!g.hit(i) || n == 0) continue;
         const auto local = static_cast<uint16_t>((y - y0) * kTile + (x - x0));
         const Frame3 frame = make_frame(g.geo_normal[i]);
-        const glm::vec3 origin = g.position[i] + epsilon * g.geo_normal[i];
+        const glm::vec3 origin = g.position[i] + ray_offset(g.position[i], epsilon) * g.geo_normal[i];
         const uint32_t hash = pixel_seed(seed, static_cast<uint32_t>(x), static_cast<uint32_t>(y));
         for (int k = 0; k < n; ++k) {
           b.rays[fill] = ao_ray(frame, origin, static_cast<uint32_t>(k), hash, ao_distance);
@@ -248,7 +248,7 @@ void collect_ao_rays(const GBuffer& g, const FoveationMaps& maps, float ao_dista
     if (!g.hit(i) || maps.rays[i] == 0) continue;
     const auto x = static_cast<uint32_t>(i % g.width), y = static_cast<uint32_t>(i / g.width);
     const Frame3 frame = make_frame(g.geo_normal[i]);
-    const glm::vec3 origin = g.position[i] + epsilon * g.geo_normal[i];
+    const glm::vec3 origin = g.position[i] + ray_offset(g.position[i], epsilon) * g.geo_normal[i];
     const uint32_t hash = pixel_seed(seed, x, y);
     for (uint32_t k = 0; k < maps.rays[i]; ++k) rays.push_back(ao_ray(frame, origin, k, hash, ao_distance));
   }
@@ -294,7 +294,7 @@ Image shade(const Tracer& tracer, const Scene& scene, const Camera& camera, cons
             const float ndotl = glm::dot(n, l);
             if (ndotl <= 0) continue;
             if (shadows) {
-              Ray s{p + epsilon * g.geo_normal[i], 0.0f, l, light.type == Light::Type::point ? dist : 1e30f};
+              Ray s{p + ray_offset(p, epsilon) * g.geo_normal[i], 0.0f, l, light.type == Light::Type::point ? dist : 1e30f};
               uint8_t blocked = 0;
               tracer.occluded({&s, 1}, {&blocked, 1});
               ++shadow_count.local();

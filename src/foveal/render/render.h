@@ -93,8 +93,10 @@ Ray camera_ray(const Camera& camera, int width, int height, double x_px, double 
 
 // AO ray length for a scene: the explicit value, else the scene's, else 0.2 × bounding-box diagonal.
 float resolve_ao_distance(const Scene& scene, std::optional<float> requested);
-// Offset that lifts ray origins off a surface, scene units.
+// Smallest offset that lifts ray origins off a surface, scene units (10⁻⁶ × scene diagonal).
 float surface_epsilon(const Scene& scene);
+// Offset along the normal for a ray leaving point p: the scene's epsilon plus 10⁻⁵ × |p|∞.
+float ray_offset(glm::vec3 p, float scene_epsilon);
 
 // Primary rays through every pixel centre.
 GBuffer trace_primary(const Tracer& tracer, const Scene& scene, const Camera& camera, int width, int height);

@@ -1,0 +1,99 @@
+// Tests of image and AOV files: PFM, EXR and PNG round trips, bad files, the contract's NaN/1 rule.
+#include "foveal/io/image_io.h"
+#include "foveal/io/outputs.h"
+#include "foveal/util/error.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+
+using namespace foveal;
+namespace fs = std::filesystem;
+
+namespace {
+Image ramp(int w, int h, int c) {
+  Image im(w, h, c);
+  for (size_t i = 0; i < im.pixels.size(); ++i) im.pixels[i] = static_cast<float>(i) * 0.01f - 0.3f;
+  return im;
+}
+std::string temp(const std::string& name) {
+  return (fs::temp_directory_path() / ("foveal_io_" + std::to_string(::getpid()) + "_" + name)).string();
+}
+}  // namespace
+
+TEST(ImageIO, FloatFormatsRoundTripExactly) {
+  for (const char* ext : {".pfm", ".exr"})
+    for (int channels : {1, 3}) {
+      const Image im = ramp(7, 5, channels);
+      const std::string path = temp(std::string("rt") + std::to_string(channels) + ext);
+      save_image(im, path);
+      const Image back = load_image(path);
+      fs::remove(path);
+      ASSERT_EQ(back.width, 7);
+      ASSERT_EQ(back.height, 5);
+      ASSERT_EQ(back.channels, channels);
+      EXPECT_EQ(back.pixels, im.pixels) << ext;  // top row stays on top
+    }
+}
+
+TEST(ImageIO, PngIsEightBitSrgb) {
+  Image im(4, 2, 3, 0.0f);
+  im.at(0, 0, 0) = 1.0f;
+  im.at(1, 0, 1) = 0.5f;  // linear 0.5 → sRGB 0.735
+  const std::string path = temp("x.png");
+  save_image(im, path);
+  const Image back = load_image(path);
+  fs::remove(path);
+  EXPECT_FLOAT_EQ(back.at(0, 0, 0), 1.0f);
+  EXPECT_NEAR(back.at(1, 0, 1), linear_to_srgb(0.5f), 1.0 / 255);
+  EXPECT_FLOAT_EQ(back.at(1, 0, 0), 0.0f);
+}
+
+TEST(ImageIO, MalformedFilesGiveErrors) {
+  EXPECT_THROW(parse_pfm("", "a.pfm"), Error);
+  EXPECT_THROW(parse_pfm("P6\n1 1\n255\n", "a.pfm"), Error);
+  EXPECT_THROW(parse_pfm("PF\n-3 2\n-1.0\n", "a.pfm"), Error);
+  EXPECT_THROW(parse_pfm("Pf\n2 2\n-1.0\n\x01\x02", "a.pfm"), Error);  // truncated
+  EXPECT_THROW(parse_pfm("Pf\n1 1\n0\n\x01\x02\x03\x04", "a.pfm"), Error);  // zero scale
+  EXPECT_THROW(load_image(temp("missing.exr")), Error);
+  const std::string bad = temp("bad.exr");
+  std::ofstream(bad) << "not an exr";
+  EXPECT_THROW(load_image(bad), Error);
+  fs::remove(bad);
+  EXPECT_THROW(save_image(Image(2, 2, 3), temp("x.tiffy")), Error);
+}
+
+TEST(ImageIO, BigEndianPfmIsSwapped) {
+  // One grey pixel 1.0f stored big-endian (scale > 0)
+  const std::string bytes = std::string("Pf\n1 1\n1.0\n") + std::string("\x3f\x80\x00\x00", 4);
+  EXPECT_EQ(parse_pfm(bytes, "be.pfm").pixels.at(0), 1.0f);
+}
+
+TEST(Outputs, AovsHoldNanOrOneWhereNothingWasHit) {
+  Frame f;
+  f.gbuffer.width = 2;
+  f.gbuffer.height = 1;
+  f.gbuffer.prim = {Hit::kNoHit, 5};
+  f.gbuffer.position = {glm::vec3(0), glm::vec3(1, 2, 3)};
+  f.gbuffer.normal = {glm::vec3(0), glm::vec3(0, 1, 0)};
+  f.gbuffer.albedo = {glm::vec3(0), glm::vec3(0.5f)};
+  f.gbuffer.depth = {INFINITY, 4.5f};
+  f.visibility = {1.0f, 0.25f};
+  f.maps.width = 2;
+  f.maps.height = 1;
+  f.maps.rays = {0, 10};
+  f.maps.quality = {0.1f, 1.0f};
+  f.maps.blend = {0, 1};
+  f.maps.eccentricity = {9, 0};
+  EXPECT_EQ(aov_image(f, "ao").pixels, (std::vector<float>{1.0f, 0.25f}));
+  EXPECT_TRUE(std::isnan(aov_image(f, "depth").pixels[0]));
+  EXPECT_EQ(aov_image(f, "depth").pixels[1], 4.5f);
+  EXPECT_TRUE(std::isnan(aov_image(f, "position").pixels[0]));
+  EXPECT_EQ(aov_image(f, "position").pixels[5], 3.0f);
+  EXPECT_EQ(aov_image(f, "budget").pixels[1], 10.0f);
+  EXPECT_THROW(aov_image(f, "colour"), Error);
+  EXPECT_THROW(write_aovs(f, "ao"), Error);
+  EXPECT_THROW(write_aovs(f, "ao=x.png"), Error);
+}

@@ -1,0 +1,133 @@
+// Tests of scene loading: Assimp meshes, scene JSON, built-ins and bad input.
+#include "foveal/scene/scene.h"
+#include "foveal/util/error.h"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+
+using namespace foveal;
+namespace fs = std::filesystem;
+
+namespace {
+
+// A file in a fresh temporary folder, removed with the test.
+struct TempDir {
+  fs::path dir;
+  TempDir() : dir(fs::temp_directory_path() / fs::path("foveal_test_" + std::to_string(::testing::UnitTest::GetInstance()->random_seed()) +
+                                                      "_" + ::testing::UnitTest::GetInstance()->current_test_info()->name())) {
+    fs::create_directories(dir);
+  }
+  ~TempDir() { fs::remove_all(dir); }
+  std::string write(const std::string& name, const std::string& text) const {
+    std::ofstream(dir / name, std::ios::binary) << text;
+    return (dir / name).string();
+  }
+};
+
+std::string error_of(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const Error& e) {
+    return e.what();
+  }
+  return "";
+}
+
+const char* kQuadObj = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3\nf 1 3 4\n";
+
+}  // namespace
+
+TEST(Scene, LoadsObjAndComputesMissingNormals) {
+  TempDir t;
+  const Scene s = load_scene(t.write("quad.obj", kQuadObj));
+  ASSERT_EQ(s.triangles.size(), 2u);
+  for (const auto& n : s.normals) EXPECT_NEAR(std::abs(n.z), 1.0f, 1e-6f);
+  EXPECT_EQ(s.bounds().hi, glm::vec3(1, 1, 0));
+}
+
+TEST(Scene, SkipsDegenerateTriangles) {
+  TempDir t;
+  const Scene s = load_scene(t.write("degenerate.obj", std::string(kQuadObj) + "v 2 0 0\nf 1 2 5\nf 2 2 3\n"));
+  EXPECT_EQ(s.triangles.size(), 2u);
+  EXPECT_EQ(s.skipped_triangles, 2u);
+  for (const auto& n : s.normals) EXPECT_TRUE(std::isfinite(n.x) && std::isfinite(n.y) && std::isfinite(n.z));
+}
+
+TEST(Scene, LoadsPlyWithCrlfAndObjMaterials) {
+  TempDir t;
+  const std::string ply = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+                          "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
+  EXPECT_EQ(load_scene(t.write("tri.ply", ply)).triangles.size(), 1u);
+  t.write("m.mtl", "newmtl red\nKd 0.9 0.1 0.1\n");
+  const Scene s = load_scene(t.write("crlf.obj", "mtllib m.mtl\r\nusemtl red\r\nv 0 0 0\r\nv 1 0 0\r\nv 0 1 0\r\nf 1 2 3 \r\n"));
+  ASSERT_EQ(s.triangles.size(), 1u);
+  EXPECT_NEAR(s.materials[s.material_ids[0]].diffuse.r, 0.9f, 1e-6f);
+}
+
+TEST(Scene, BadMeshesGiveClearErrors) {
+  TempDir t;
+  EXPECT_NE(error_of([&] { load_scene((t.dir / "missing.obj").string()); }).find("no such file"), std::string::npos);
+  EXPECT_NE(error_of([&] { load_scene(t.write("empty.obj", "")); }).find("empty"), std::string::npos);
+  EXPECT_NE(error_of([&] { load_scene(t.write("nothing.obj", "# only a comment\nv 0 0 0\n")); }), "");
+  EXPECT_NE(error_of([&] { load_scene(t.write("garbage.ply", "ply\nformat ascii 1.0\nelement vertex 3\nend_header\nxx\n")); }), "");
+  EXPECT_NE(error_of([&] { load_scene(t.write("flat.obj", "v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\n")); }).find("no usable triangles"),
+            std::string::npos);
+  EXPECT_NE(error_of([&] { load_scene("builtin:teapot"); }).find("known: box"), std::string::npos);
+}
+
+TEST(Scene, JsonWithTransformsCamerasAndLights) {
+  TempDir t;
+  t.write("quad.obj", kQuadObj);
+  const std::string json = R"({
+    "meters_per_unit": 0.01, "ao_distance": 3,
+    "meshes": [ {"file": "quad.obj", "translate": [10, 0, 0], "scale": 2},
+                {"shape": "sphere", "centre": [0, 5, 0], "radius": 1, "segments": 16} ],
+    "cameras": [ {"name": "a", "eye": [0, 0, 10], "look": [0, 0, 0], "fov": 30} ],
+    "lights": [ {"type": "directional", "direction": [0, -2, 0]} ] })";
+  const Scene s = load_scene(t.write("scene.json", json));
+  EXPECT_NEAR(s.meters_per_unit, 0.01, 1e-9);
+  EXPECT_FLOAT_EQ(*s.ao_distance, 3.0f);
+  EXPECT_EQ(s.positions[2], glm::vec3(12, 2, 0));  // scaled, then translated
+  EXPECT_EQ(find_camera(s, "a").fov_deg, 30.0f);
+  EXPECT_EQ(s.lights.at(0).vector, glm::vec3(0, -1, 0));
+  EXPECT_GT(s.triangles.size(), 100u);
+  EXPECT_THROW(find_camera(s, "b"), Error);
+}
+
+TEST(Scene, JsonErrorsNameTheFileAndField) {
+  TempDir t;
+  auto err = [&](const std::string& json) { return error_of([&] { load_scene(t.write("bad.json", json)); }); };
+  EXPECT_NE(err("{ \"meshes\": [ }").find("line 1"), std::string::npos);
+  EXPECT_NE(err(R"({"meshes": [{"shape": "box", "min": [0,0,0], "max": [1,1,1]}], "camras": []})").find("unknown key 'camras'"),
+            std::string::npos);
+  EXPECT_NE(err(R"({"meshes": [{"shape": "sphere", "centre": [0,0,0], "radius": -1}]})").find("meshes[0].radius"), std::string::npos);
+  EXPECT_NE(err(R"({"meshes": [{"file": "nope.obj"}]})").find("nope.obj: no such file"), std::string::npos);
+  EXPECT_NE(err(R"({"meshes": []})").find("non-empty"), std::string::npos);
+  EXPECT_NE(err(R"({"meshes": [{"shape": "box", "min": [0,0], "max": [1,1,1]}]})").find("meshes[0].min"), std::string::npos);
+  EXPECT_NE(err(R"({"meshes": [{"shape": "box", "min": [0,0,0], "max": [1,1,1]}], "cameras": [{"eye": [0,0,0], "look": [0,0,0]}]})")
+                .find("eye and look"),
+            std::string::npos);
+}
+
+TEST(Scene, BuiltinsAreThePapersSetting) {
+  const Scene box = make_builtin_scene("box");
+  EXPECT_GE(box.triangles.size(), 100000u);
+  EXPECT_EQ(box.cameras.size(), 3u);
+  const Scene sp = make_builtin_scene("sphere-plane");
+  EXPECT_TRUE(std::isinf(*sp.ao_distance));
+  for (const auto& n : box.normals) ASSERT_NEAR(glm::length(n), 1.0f, 1e-4f);
+}
+
+TEST(Scene, RealScenesLoadWhenPresent) {
+  const std::string data = FOVEAL_DATA_DIR;
+  const std::string dragon = data + "/scenes/dragon/dragon.obj";
+  if (!fs::exists(dragon)) GTEST_SKIP() << "skipped: " << dragon << " absent";
+  const Scene s = load_scene(dragon);
+  EXPECT_EQ(s.triangles.size(), 100000u);  // counts from the data README
+  EXPECT_NEAR(s.bounds().hi.y, 9.9399f, 1e-3f);
+  const Scene box = load_scene(std::string(FOVEAL_SOURCE_DIR) + "/scenes/dragon-box.json");
+  EXPECT_EQ(box.triangles.size(), 100010u);
+  EXPECT_EQ(box.cameras.size(), 3u);
+}

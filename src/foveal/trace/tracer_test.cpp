@@ -1,0 +1,48 @@
+// Tests of the Embree tracer: hits at known distances and agreement of the occlusion APIs.
+#include "foveal/trace/tracer.h"
+#include "foveal/scene/scene.h"
+#include "foveal/util/error.h"
+#include "foveal/util/sampling.h"
+
+#include <gtest/gtest.h>
+
+using namespace foveal;
+
+TEST(Tracer, HitsThePlaneAtTheRightDistance) {
+  const Scene plane = make_builtin_scene("plane");
+  const Tracer tracer(plane);
+  EXPECT_EQ(tracer.triangles(), 2u);
+  const Ray rays[2] = {{{1, 5, 2}, 0, {0, -1, 0}, 1e30f}, {{1, 5, 2}, 0, {0, 1, 0}, 1e30f}};
+  Hit hits[2];
+  tracer.intersect(rays, hits);
+  ASSERT_TRUE(hits[0].valid());
+  EXPECT_NEAR(hits[0].t, 5.0f, 1e-5f);
+  EXPECT_FALSE(hits[1].valid());
+}
+
+TEST(Tracer, OcclusionApisAgree) {
+  const Scene scene = make_builtin_scene("box");
+  Tracer tracer(scene);
+  // Rays from points in the box in scrambled directions, some short, some long
+  std::vector<Ray> rays;
+  for (uint32_t i = 0; i < 3000; ++i) {
+    const glm::vec2 u = scrambled_sobol_2d(i, 17), v = scrambled_sobol_2d(i, 99);
+    const glm::vec3 dir = make_frame(glm::normalize(glm::vec3(v.x - 0.5f, v.y - 0.5f, 0.3f))).to_world(cosine_hemisphere(u));
+    rays.push_back({{(v.x - 0.5f) * 3.5f, 0.05f + 2.4f * u.y, (u.x - 0.5f) * 3.5f}, 0.0f, dir, (i % 3 == 0) ? 0.3f : 1e30f});
+  }
+  std::vector<uint8_t> reference(rays.size());
+  tracer.set_occlusion_api(TraceApi::single);
+  tracer.occluded(rays, reference);
+  size_t blocked = 0;
+  for (uint8_t b : reference) blocked += b;
+  EXPECT_GT(blocked, 100u);
+  EXPECT_LT(blocked, rays.size() - 100);
+  for (TraceApi api : {TraceApi::packet8, TraceApi::stream}) {
+    tracer.set_occlusion_api(api);
+    std::vector<uint8_t> out(rays.size());
+    tracer.occluded(rays, out);
+    EXPECT_EQ(out, reference) << to_string(api);
+    EXPECT_EQ(measure_raw_occlusion(tracer, rays, api).occluded, blocked);
+  }
+  EXPECT_THROW(parse_trace_api("simd"), Error);
+}

@@ -1,0 +1,141 @@
+// Tests of the `foveal` command line as a user runs it: outputs, the stats contract, bad input.
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <sys/wait.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+namespace fs = std::filesystem;
+
+namespace {
+
+struct CliRun {
+  int status = -1;
+  std::string out, err;
+};
+
+// CliRun the executable with arguments in a scratch folder; capture exit status and both streams.
+CliRun foveal(const std::string& args) {
+  static const fs::path dir = fs::temp_directory_path() / ("foveal_cli_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  const std::string cmd = "cd '" + dir.string() + "' && '" FOVEAL_EXE "' " + args + " > out.txt 2> err.txt";
+  CliRun r;
+  const int raw = std::system(cmd.c_str());
+  r.status = WIFEXITED(raw) ? WEXITSTATUS(raw) : 128 + WTERMSIG(raw);
+  auto slurp = [&](const char* name) {
+    std::stringstream s;
+    s << std::ifstream(dir / name).rdbuf();
+    return s.str();
+  };
+  r.out = slurp("out.txt");
+  r.err = slurp("err.txt");
+  return r;
+}
+
+fs::path scratch(const std::string& name) { return fs::temp_directory_path() / ("foveal_cli_" + std::to_string(::getpid())) / name; }
+
+size_t lines(const std::string& s) {
+  size_t n = 0;
+  for (char c : s) n += c == '\n';
+  return n;
+}
+
+}  // namespace
+
+TEST(Cli, RenderWritesImageMaskPlotAovsAndContractStats) {
+  const CliRun r = foveal("render --size 96x60 --max-rays 8 --gaze 10,10 -o img.png --mask mask.png --acuity-plot fig4.svg "
+                       "--aov ao=ao.pfm,depth=depth.exr,position=p.pfm,normal=n.exr --stats stats.json");
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_NE(r.out.find("AO rays"), std::string::npos);
+  for (const char* f : {"img.png", "mask.png", "ao.pfm", "depth.exr", "p.pfm", "n.exr"}) EXPECT_GT(fs::file_size(scratch(f)), 100u) << f;
+  std::stringstream svg;
+  svg << std::ifstream(scratch("fig4.svg")).rdbuf();
+  EXPECT_NE(svg.str().find("<polyline"), std::string::npos);
+  const auto j = nlohmann::json::parse(std::ifstream(scratch("stats.json")));
+  EXPECT_EQ(j["mode"], "foveated");
+  EXPECT_EQ(j["width"], 96);
+  EXPECT_EQ(j["height"], 60);
+  EXPECT_EQ(j["gaze_px"][0], 10.0);
+  EXPECT_EQ(j["seed"], 1);
+  EXPECT_GE(j["threads"].get<int>(), 1);
+  EXPECT_GE(j["scene"]["triangles"].get<int>(), 100000);
+  EXPECT_GT(j["scene"]["build_ms"].get<double>(), 0);
+  EXPECT_EQ(j["rays"]["primary"], 96 * 60);
+  EXPECT_EQ(j["rays"]["total"].get<uint64_t>(), j["rays"]["primary"].get<uint64_t>() + j["rays"]["ao"].get<uint64_t>());
+  EXPECT_EQ(j["ao_rays_per_pixel"]["max"], 8);
+  EXPECT_LE(j["ao_rays_per_pixel"]["mean"].get<double>(), 8.0);
+  for (const char* k : {"primary", "ao", "shade", "total"}) EXPECT_GE(j["time_ms"][k].get<double>(), 0) << k;
+}
+
+TEST(Cli, FullModeCastsMaxRaysEverywhere) {
+  const CliRun r = foveal("render --scene builtin:plane --size 32x20 --mode full --max-rays 5 -o f.png --stats full.json -q");
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_EQ(r.out, "");
+  const auto j = nlohmann::json::parse(std::ifstream(scratch("full.json")));
+  EXPECT_EQ(j["ao_rays_per_pixel"]["min"], 5);
+  EXPECT_EQ(j["mode"], "full");
+}
+
+TEST(Cli, BadInputGivesOneClearLineAndNonZeroExit) {
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"render --size 0x10", "--size"},
+      {"render --size abc", "--size"},
+      {"render --display 0,30,60", "display width"},
+      {"render --display 47.5,30", "--display"},
+      {"render --mode half", "unknown mode"},
+      {"render --max-rays -3", "--max-rays"},
+      {"render --min-rays 10 --max-rays 5", "--min-rays"},
+      {"render --gamma 0", "--gamma"},
+      {"render --ao-distance -1", "--ao-distance"},
+      {"render --gaze 1", "--gaze"},
+      {"render --scene missing.obj", "missing.obj: no such file"},
+      {"render --scene builtin:nothing", "unknown built-in"},
+      {"render --camera nope", "no camera named 'nope'"},
+      {"render --eye 0,0,1", "--eye and --look"},
+      {"render --fov 200", "--fov"},
+      {"render --threads -1", "threads"},
+      {"render --bogus", "bogus"},
+      {"render --aov colour=x.pfm --size 8x8 --max-rays 1", "unknown buffer"},
+      {"render -o /nonexistent/dir/x.png --size 8x8 --max-rays 1", "/nonexistent/dir/x.png"},
+      {"bench nothing", "subcommand"},
+      {"bench", "subcommand"},
+  };
+  for (const auto& [args, needle] : cases) {
+    const CliRun r = foveal(args);
+    EXPECT_NE(r.status, 0) << args;
+    EXPECT_LT(r.status, 128) << args << " crashed";
+    EXPECT_EQ(lines(r.err), 1u) << args << ": " << r.err;
+    EXPECT_NE(r.err.find(needle), std::string::npos) << args << ": " << r.err;
+    EXPECT_EQ(r.err.rfind("foveal: error: ", 0), 0u) << args << ": " << r.err;
+  }
+}
+
+TEST(Cli, MalformedAndEmptyMeshesAreErrorsNotCrashes) {
+  std::ofstream(scratch("empty.obj"));
+  std::ofstream(scratch("junk.obj")) << "v 1 2\nf 1 2 3 4 5\nthis is not obj\n";
+  std::ofstream(scratch("junk.ply")) << "ply\nformat binary_little_endian 1.0\nelement vertex 100\nproperty float x\nend_header\n\x01";
+  std::ofstream(scratch("bad.json")) << "{\"meshes\": [ {\"file\": 3} ]}";
+  for (const char* f : {"empty.obj", "junk.obj", "junk.ply", "bad.json"}) {
+    const CliRun r = foveal(std::string("render --size 8x8 --scene ") + f);
+    EXPECT_NE(r.status, 0) << f;
+    EXPECT_LT(r.status, 128) << f << " crashed";
+    EXPECT_EQ(lines(r.err), 1u) << f << ": " << r.err;
+    EXPECT_NE(r.err.find(f), std::string::npos) << f << ": " << r.err;
+  }
+}
+
+TEST(Cli, SameSeedSameImageWhateverTheThreads) {
+  ASSERT_EQ(foveal("render --size 48x32 --max-rays 6 --threads 1 --aov ao=t1.pfm -o t1.png -q").status, 0);
+  ASSERT_EQ(foveal("render --size 48x32 --max-rays 6 --threads 2 --aov ao=t2.pfm -o t2.png -q").status, 0);
+  auto bytes = [](const char* f) {
+    std::stringstream s;
+    s << std::ifstream(scratch(f), std::ios::binary).rdbuf();
+    return s.str();
+  };
+  EXPECT_EQ(bytes("t1.pfm"), bytes("t2.pfm"));
+  EXPECT_EQ(bytes("t1.png"), bytes("t2.png"));
+}
