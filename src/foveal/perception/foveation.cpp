@@ -64,12 +64,15 @@ double acuity_cutoff_cpd(double e_deg, double max_cpd) {
 
 int ao_ray_budget(double q, const FoveationParams& p) {
   const double span = static_cast<double>(p.max_rays - p.min_rays);
-  return p.min_rays + static_cast<int>(std::lround(span * std::pow(std::clamp(q, 0.0, 1.0), p.gamma)));
+  q = std::clamp(q, 0.0, 1.0);
+  const double qg = p.gamma == 2.0 ? q * q : std::pow(q, p.gamma);  // the default γ without pow()
+  return p.min_rays + static_cast<int>(std::lround(span * qg));
 }
 
 double blend_weight(double q, int rays, const FoveationParams& p) {
   if (rays <= 0) return 0.0;
-  return std::pow(std::clamp(q, 0.0, 1.0), p.beta);
+  q = std::clamp(q, 0.0, 1.0);
+  return p.beta == 1.0 ? q : std::pow(q, p.beta);
 }
 
 FoveationModel::FoveationModel(const Display& display, int w, int h, glm::dvec2 gaze_px, const FoveationParams& params)

@@ -11,6 +11,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstddef>
 #include <cstring>
 #include <mutex>
 #include <vector>
@@ -30,6 +31,14 @@ void on_error(void* user, RTCError code, const char* str) {
   std::lock_guard lock(sink->mutex);
   if (sink->message.empty()) sink->message = fmt::format("Embree error {}: {}", static_cast<int>(code), str ? str : "");
 }
+
+// foveal::Ray is laid out as RTCRay, so spans of rays go to Embree without a copy
+static_assert(sizeof(Ray) == sizeof(RTCRay) && alignof(Ray) == alignof(RTCRay));
+static_assert(offsetof(Ray, org) == offsetof(RTCRay, org_x) && offsetof(Ray, tnear) == offsetof(RTCRay, tnear) &&
+              offsetof(Ray, dir) == offsetof(RTCRay, dir_x) && offsetof(Ray, time) == offsetof(RTCRay, time) &&
+              offsetof(Ray, tfar) == offsetof(RTCRay, tfar) && offsetof(Ray, mask) == offsetof(RTCRay, mask) &&
+              offsetof(Ray, id) == offsetof(RTCRay, id) && offsetof(Ray, flags) == offsetof(RTCRay, flags));
+inline RTCRay* as_embree(Ray* rays) { return reinterpret_cast<RTCRay*>(rays); }
 
 inline void to_embree(const Ray& r, RTCRay& e) {
   e.org_x = r.org.x;
@@ -103,7 +112,6 @@ struct Tracer::Impl {
   ErrorSink errors;
   // Per-thread conversion buffers, so no allocation happens per call
   struct Scratch {
-    std::vector<RTCRay> rays = std::vector<RTCRay>(kBatch);
     std::vector<RTCRayHit> hits = std::vector<RTCRayHit>(kBatch);
   };
   mutable tbb::enumerable_thread_specific<Scratch> scratch;
@@ -195,13 +203,8 @@ void Tracer::intersect(std::span<const Ray> rays, std::span<Hit> hits) const {
   }
 }
 
-void Tracer::occluded(std::span<const Ray> rays, std::span<uint8_t> occluded) const {
-  auto& scratch = impl_->scratch.local();
-  for (size_t start = 0; start < rays.size(); start += kBatch) {
-    const size_t n = std::min(kBatch, rays.size() - start);
-    for (size_t i = 0; i < n; ++i) to_embree(rays[start + i], scratch.rays[i]);
-    occluded_embree(impl_->scene, impl_->api, scratch.rays.data(), n, occluded.data() + start);
-  }
+void Tracer::occluded(std::span<Ray> rays, std::span<uint8_t> occluded) const {
+  occluded_embree(impl_->scene, impl_->api, as_embree(rays.data()), rays.size(), occluded.data());
 }
 
 TraceApi Tracer::occlusion_api() const { return impl_->api; }
@@ -210,7 +213,7 @@ double Tracer::build_ms() const { return impl_->build_ms; }
 size_t Tracer::triangles() const { return impl_->triangles; }
 
 RawOcclusionResult measure_raw_occlusion(const Tracer& tracer, std::span<const Ray> rays, TraceApi api) {
-  // Convert once, before timing
+  // Copy once, before timing
   std::vector<RTCRay> converted(rays.size());
   for (size_t i = 0; i < rays.size(); ++i) to_embree(rays[i], converted[i]);
   std::vector<uint8_t> out(rays.size());

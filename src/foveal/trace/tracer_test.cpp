@@ -30,9 +30,11 @@ TEST(Tracer, OcclusionApisAgree) {
     const glm::vec3 dir = make_frame(glm::normalize(glm::vec3(v.x - 0.5f, v.y - 0.5f, 0.3f))).to_world(cosine_hemisphere(u));
     rays.push_back({{(v.x - 0.5f) * 3.5f, 0.05f + 2.4f * u.y, (u.x - 0.5f) * 3.5f}, 0.0f, dir, (i % 3 == 0) ? 0.3f : 1e30f});
   }
+  // occluded() traces in place, so each API gets a fresh copy of the rays
   std::vector<uint8_t> reference(rays.size());
   tracer.set_occlusion_api(TraceApi::single);
-  tracer.occluded(rays, reference);
+  std::vector<Ray> copy = rays;
+  tracer.occluded(copy, reference);
   size_t blocked = 0;
   for (uint8_t b : reference) blocked += b;
   EXPECT_GT(blocked, 100u);
@@ -40,7 +42,8 @@ TEST(Tracer, OcclusionApisAgree) {
   for (TraceApi api : {TraceApi::packet8, TraceApi::stream}) {
     tracer.set_occlusion_api(api);
     std::vector<uint8_t> out(rays.size());
-    tracer.occluded(rays, out);
+    copy = rays;
+    tracer.occluded(copy, out);
     EXPECT_EQ(out, reference) << to_string(api);
     EXPECT_EQ(measure_raw_occlusion(tracer, rays, api).occluded, blocked);
   }

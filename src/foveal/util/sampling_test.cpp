@@ -3,13 +3,15 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <numbers>
 #include <set>
 
 using namespace foveal;
 
 TEST(Sampling, SobolPrefixesAreStratified) {
   // (0,2)-sequence: every power-of-two prefix puts one point in each elementary interval,
-  // also after Owen scrambling
+  // also after the per-pixel XOR scrambling
   for (uint32_t pixel : {0U, 12345U, 0xdeadbeefU}) {
     for (int log_n = 2; log_n <= 8; log_n += 2) {
       const uint32_t n = 1U << log_n, side = 1U << (log_n / 2);
@@ -54,5 +56,14 @@ TEST(Sampling, FrameIsOrthonormal) {
     EXPECT_NEAR(glm::dot(f.b, n), 0.0f, 1e-6f);
     EXPECT_NEAR(glm::length(f.t), 1.0f, 1e-6f);
     EXPECT_NEAR(glm::dot(f.to_world({0, 0, 1}), n), 1.0f, 1e-6f);
+  }
+}
+
+TEST(Sampling, FastCosSinMatchesLibm) {
+  for (int i = 0; i < 100000; ++i) {
+    const float t = i / 100000.0f;
+    const glm::vec2 cs = cos_sin_2pi(t);
+    ASSERT_NEAR(cs.x, std::cos(2.0 * std::numbers::pi * t), 4e-6) << t;
+    ASSERT_NEAR(cs.y, std::sin(2.0 * std::numbers::pi * t), 4e-6) << t;
   }
 }

@@ -1,0 +1,32 @@
+#!/usr/bin/env bash
+# Build and run the whole test suite: a Release build, then the same tests under AddressSanitizer
+# and UndefinedBehaviorSanitizer, then each fuzz target for a bounded time.
+# Usage: scripts/test.sh   (FUZZ_SECONDS=N to change the fuzzing time; 0 skips fuzzing)
+set -euo pipefail
+cd "$(dirname "$0")/.."
+jobs="$(nproc)"
+
+echo "== Release build and tests"
+cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release >/dev/null
+cmake --build build --parallel "$jobs"
+ctest --test-dir build --output-on-failure --parallel "$jobs"
+
+echo "== AddressSanitizer + UndefinedBehaviorSanitizer build and tests"
+cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DFOVEAL_SANITIZE=ON -DFOVEAL_BUILD_BENCH=OFF >/dev/null
+cmake --build build-asan --parallel "$jobs"
+ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
+  ctest --test-dir build-asan --output-on-failure --parallel "$jobs"
+
+seconds="${FUZZ_SECONDS:-30}"
+if [ "$seconds" != 0 ]; then
+  echo "== libFuzzer targets, ${seconds}s each"
+  cmake -S . -B build-fuzz -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_COMPILER=clang++ \
+    -DFOVEAL_FUZZ=ON -DFOVEAL_BUILD_TESTS=OFF -DFOVEAL_BUILD_BENCH=OFF >/dev/null
+  cmake --build build-fuzz --parallel "$jobs" --target fuzz_scene_json fuzz_pfm
+  for target in fuzz_scene_json fuzz_pfm; do
+    mkdir -p "build-fuzz/corpus/$target"
+    cp fuzz/corpus/"$target"/* "build-fuzz/corpus/$target/" 2>/dev/null || true
+    "build-fuzz/fuzz/$target" -max_total_time="$seconds" -rss_limit_mb=2048 "build-fuzz/corpus/$target" 2>&1 | tail -n 2
+  done
+fi
+echo "all tests passed"
