@@ -26,7 +26,13 @@ if [ "$seconds" != 0 ]; then
   for target in fuzz_scene_json fuzz_pfm; do
     mkdir -p "build-fuzz/corpus/$target"
     cp fuzz/corpus/"$target"/* "build-fuzz/corpus/$target/" 2>/dev/null || true
-    "build-fuzz/fuzz/$target" -max_total_time="$seconds" -rss_limit_mb=2048 "build-fuzz/corpus/$target" 2>&1 | tail -n 2
+    if ! "build-fuzz/fuzz/$target" -max_total_time="$seconds" -rss_limit_mb=2048 -artifact_prefix=build-fuzz/ \
+        "build-fuzz/corpus/$target" > "build-fuzz/$target.log" 2>&1; then
+      tail -n 40 "build-fuzz/$target.log"
+      echo "fuzz target $target failed (input saved under build-fuzz/)"
+      exit 1
+    fi
+    tail -n 1 "build-fuzz/$target.log"
   done
 fi
 echo "all tests passed"

@@ -105,13 +105,15 @@ Image parse_pfm(const std::string& bytes, const std::string& name) {
   if (!(in >> w >> h) || w <= 0 || h <= 0 || w > 65536 || h > 65536)
     fail("{}: bad PFM size (width and height must be in [1, 65536])", name);
   if (!(in >> scale) || scale == 0 || !std::isfinite(scale)) fail("{}: bad PFM scale (must be a non-zero number)", name);
-  in.get();  // the single whitespace byte before the data
-  const int channels = magic == "PF" ? 3 : 1;
-  Image image(static_cast<int>(w), static_cast<int>(h), channels);
-  const size_t row = static_cast<size_t>(w) * channels;
+  // The single whitespace byte before the data; then the data must fit in what is left
+  if (in.get() == std::char_traits<char>::eof() || in.tellg() < 0) fail("{}: truncated PFM header (no pixel data)", name);
   const auto offset = static_cast<size_t>(in.tellg());
-  if (bytes.size() < offset + sizeof(float) * row * h)
-    fail("{}: truncated PFM data ({} bytes, need {})", name, bytes.size() - offset, sizeof(float) * row * h);
+  const int channels = magic == "PF" ? 3 : 1;
+  const size_t row = static_cast<size_t>(w) * channels;
+  const size_t need = sizeof(float) * row * static_cast<size_t>(h);
+  if (offset > bytes.size() || bytes.size() - offset < need)
+    fail("{}: truncated PFM data ({} bytes, need {})", name, bytes.size() - std::min(offset, bytes.size()), need);
+  Image image(static_cast<int>(w), static_cast<int>(h), channels);
   const bool swap = (scale < 0) != (std::endian::native == std::endian::little);
   for (long long y = 0; y < h; ++y) {
     float* dst = &image.pixels[static_cast<size_t>(h - 1 - y) * row];
