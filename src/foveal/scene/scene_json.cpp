@@ -138,8 +138,8 @@ Scene parse_scene_json(const std::string& text, const std::string& path, const s
   json root;
   try {
     root = json::parse(text);
-  } catch (const json::parse_error& e) {
-    // nlohmann's message names the line and column
+  } catch (const json::exception& e) {
+    // nlohmann's message names the line and column (also for numbers out of range, e.g. 1e999)
     fail("{}: invalid JSON: {}", path, e.what());
   }
   Scene scene;

@@ -100,6 +100,7 @@ TEST(Scene, JsonErrorsNameTheFileAndField) {
   TempDir t;
   auto err = [&](const std::string& json) { return error_of([&] { load_scene(t.write("bad.json", json)); }); };
   EXPECT_NE(err("{ \"meshes\": [ }").find("line 1"), std::string::npos);
+  EXPECT_NE(err(R"({"ao_distance": 1e999})").find("invalid JSON"), std::string::npos);  // found by fuzzing
   EXPECT_NE(err(R"({"meshes": [{"shape": "box", "min": [0,0,0], "max": [1,1,1]}], "camras": []})").find("unknown key 'camras'"),
             std::string::npos);
   EXPECT_NE(err(R"({"meshes": [{"shape": "sphere", "centre": [0,0,0], "radius": -1}]})").find("meshes[0].radius"), std::string::npos);
