@@ -2,6 +2,7 @@
 #include "foveal/render/ao_benchmark.h"
 
 #include "foveal/util/error.h"
+#include "foveal/util/timer.h"
 
 #include <fmt/format.h>
 #include <tbb/info.h>
@@ -90,19 +91,32 @@ AoBenchResult run_ao_benchmark(const Scene& scene, const Tracer& tracer, const A
     say(fmt::format("{}: full frame {:.0f} ms ({:.2f} fps), {:.1f} Mrays/s", camera.name, cam.full_ms, cam.full_fps,
                     cam.full_ao_rays_per_second / 1e6));
 
-    // Raw Embree throughput on the same rays (a sample of the reference's pixels)
+    // Raw Embree throughput on the same rays (a sample of the reference's pixels), interleaved
+    // with the renderer's AO pass on the reference frame so both see the same machine load
     std::vector<Ray> sample;
-    collect_ao_rays(reference.gbuffer, reference.maps, reference.stats.ao_distance, surface_epsilon(scene), base.seed,
-                    params.raw_stride, sample);
-    for (TraceApi api : {TraceApi::single, TraceApi::packet8, TraceApi::stream}) {
-      measure_raw_occlusion(tracer, {sample.data(), std::min<size_t>(sample.size(), 100000)}, api);  // warm-up
-      cam.raw_rays_per_second[static_cast<int>(api)] = measure_raw_occlusion(tracer, sample, api).rays_per_second;
+    const float ao_distance = reference.stats.ao_distance, epsilon = surface_epsilon(scene);
+    collect_ao_rays(reference.gbuffer, reference.maps, ao_distance, epsilon, base.seed, params.raw_stride, sample);
+    std::vector<double> raw[3], pass;
+    std::vector<float> visibility;
+    for (int round = 0; round < std::max(3, params.repeats); ++round) {
+      for (TraceApi api : {TraceApi::single, TraceApi::packet8, TraceApi::stream})
+        raw[static_cast<int>(api)].push_back(measure_raw_occlusion(tracer, sample, api).rays_per_second);
+      const Timer timer;
+      const uint64_t rays = trace_ao(tracer, reference.gbuffer, reference.maps, ao_distance, epsilon, base.seed, visibility);
+      pass.push_back(rays / (timer.ms() / 1000.0));
     }
+    auto median = [](std::vector<double> v) {
+      std::sort(v.begin(), v.end());
+      return v[v.size() / 2];
+    };
+    for (int api = 0; api < 3; ++api) cam.raw_rays_per_second[api] = median(raw[api]);
+    cam.ao_pass_rays_per_second = median(pass);
     const double raw_same_api = cam.raw_rays_per_second[static_cast<int>(tracer.occlusion_api())];
-    cam.renderer_vs_raw = raw_same_api > 0 ? cam.full_ao_rays_per_second / raw_same_api : 0;
-    say(fmt::format("{}: raw Embree occlusion on {} rays: single {:.1f}, packet8 {:.1f}, stream {:.1f} Mrays/s; renderer/raw {:.3f}",
+    cam.renderer_vs_raw = raw_same_api > 0 ? cam.ao_pass_rays_per_second / raw_same_api : 0;
+    say(fmt::format("{}: raw Embree occlusion on {} rays: single {:.1f}, packet8 {:.1f}, stream {:.1f} Mrays/s; "
+                    "renderer AO pass {:.1f} Mrays/s, renderer/raw {:.3f}",
                     camera.name, sample.size(), cam.raw_rays_per_second[0] / 1e6, cam.raw_rays_per_second[1] / 1e6,
-                    cam.raw_rays_per_second[2] / 1e6, cam.renderer_vs_raw));
+                    cam.raw_rays_per_second[2] / 1e6, cam.ao_pass_rays_per_second / 1e6, cam.renderer_vs_raw));
 
     // Gaze points: centre, the four corners, and on the object
     const std::vector<std::pair<std::string, glm::dvec2>> gazes = {
@@ -155,6 +169,7 @@ nlohmann::json to_json(const AoBenchResult& r) {
                  {"ao_rays_per_second", cam.full_ao_rays_per_second}};
     c["raw_embree_rays_per_second"] = {{"single", cam.raw_rays_per_second[0]}, {"packet8", cam.raw_rays_per_second[1]},
                                        {"stream", cam.raw_rays_per_second[2]}};
+    c["renderer_ao_pass_rays_per_second"] = cam.ao_pass_rays_per_second;
     c["renderer_vs_raw"] = cam.renderer_vs_raw;
     for (const auto& k : cam.cases)
       c["gaze"].push_back({{"label", k.gaze_label},
@@ -188,11 +203,11 @@ std::string to_markdown(const AoBenchResult& r) {
                        k.ao_rays_per_pixel, k.ao_rays_per_second / 1e6, k.ao_ray_ratio, k.efficiency,
                        k.fovea_identical ? "yes" : "NO", k.fovea_pixels);
   }
-  s += "\n| camera | raw Embree single Mrays/s | packet8 | stream | renderer full-frame AO Mrays/s | renderer / raw (same API) |\n";
+  s += "\n| camera | raw Embree single Mrays/s | packet8 | stream | renderer AO pass Mrays/s | renderer / raw (same API) |\n";
   s += "|---|---:|---:|---:|---:|---:|\n";
   for (const auto& cam : r.cameras)
     s += fmt::format("| {} | {:.2f} | {:.2f} | {:.2f} | {:.2f} | {:.3f} |\n", cam.name, cam.raw_rays_per_second[0] / 1e6,
-                     cam.raw_rays_per_second[1] / 1e6, cam.raw_rays_per_second[2] / 1e6, cam.full_ao_rays_per_second / 1e6,
+                     cam.raw_rays_per_second[1] / 1e6, cam.raw_rays_per_second[2] / 1e6, cam.ao_pass_rays_per_second / 1e6,
                      cam.renderer_vs_raw);
   return s;
 }

@@ -32,11 +32,11 @@ void for_each_tile(int width, int height, Body&& body) {
 }
 
 // Cosine-weighted AO ray k of a pixel's scrambled Sobol sequence.
-inline Ray ao_ray(const Frame3& frame, glm::vec3 origin, uint32_t k, uint32_t pixel_hash, float distance) {
+inline Ray ao_ray(const Frame3& frame, glm::vec3 origin, uint32_t k, SobolScramble scramble, float distance) {
   Ray r;
   r.org = origin;
   r.tnear = 0.0f;
-  r.dir = frame.to_world(cosine_hemisphere(scrambled_sobol_2d(k, pixel_hash)));
+  r.dir = frame.to_world(cosine_hemisphere(sobol_2d(k, scramble)));
   r.tfar = distance;
   return r;
 }
@@ -182,10 +182,10 @@ float estimate_visibility(const Tracer& tracer, glm::vec3 position, glm::vec3 no
   if (rays <= 0) return 1.0f;
   const Frame3 frame = make_frame(normal);
   const glm::vec3 origin = position + ray_offset(position, epsilon) * normal;
-  const uint32_t hash = pixel_seed(seed, x, y);
+  const SobolScramble scramble = sobol_scramble(pixel_seed(seed, x, y));
   std::vector<Ray> batch(static_cast<size_t>(rays));
   std::vector<uint8_t> occluded(batch.size());
-  for (int k = 0; k < rays; ++k) batch[k] = ao_ray(frame, origin, static_cast<uint32_t>(k), hash, ao_distance);
+  for (int k = 0; k < rays; ++k) batch[k] = ao_ray(frame, origin, static_cast<uint32_t>(k), scramble, ao_distance);
   tracer.occluded(batch, occluded);
   int open = 0;
   for (uint8_t o : occluded) open += o ? 0 : 1;
@@ -195,47 +195,64 @@ float estimate_visibility(const Tracer& tracer, glm::vec3 position, glm::vec3 no
 uint64_t trace_ao(const Tracer& tracer, const GBuffer& g, const FoveationMaps& maps, float ao_distance, float epsilon,
                   uint64_t seed, std::vector<float>& visibility) {
   visibility.assign(static_cast<size_t>(g.width) * g.height, 1.0f);
-  // Per-thread batch of rays from several pixels, with the tile-local pixel each belongs to
+  // Per-thread batch of rays from several pixels; each pixel's rays are one contiguous segment
+  struct Segment {
+    size_t pixel;        // index into visibility
+    uint32_t begin, end; // ray range in the batch
+    int rays;            // the pixel's budget n
+  };
   struct Batch {
     std::vector<Ray> rays = std::vector<Ray>(kAoBatch);
-    std::vector<uint16_t> owner = std::vector<uint16_t>(kAoBatch);
     std::vector<uint8_t> occluded = std::vector<uint8_t>(kAoBatch);
+    std::vector<Segment> segments;
+    std::vector<int> open;  // unoccluded rays so far of the segments' pixels
   };
   tbb::enumerable_thread_specific<Batch> batches;
   tbb::enumerable_thread_specific<uint64_t> traced(0);
   for_each_tile(g.width, g.height, [&](int x0, int x1, int y0, int y1) {
     Batch& b = batches.local();
-    int open[kTile * kTile] = {};
     size_t fill = 0;
+    // Trace the batch; count each segment's open rays (a plain sum over a contiguous range)
     auto flush = [&] {
       tracer.occluded({b.rays.data(), fill}, {b.occluded.data(), fill});
-      for (size_t k = 0; k < fill; ++k) open[b.owner[k]] += b.occluded[k] ? 0 : 1;
+      for (Segment& s : b.segments) {
+        int blocked = 0;
+        for (uint32_t k = s.begin; k < s.end; ++k) blocked += b.occluded[k];
+        s.rays -= blocked;  // rays left open so far (budget minus blocked)
+      }
       traced.local() += fill;
       fill = 0;
+    };
+    // Pixels whose segments are all traced get V = open / n, an exact ratio in any mode or thread count
+    auto finish = [&](bool keep_last) {
+      const size_t done = keep_last && !b.segments.empty() ? b.segments.size() - 1 : b.segments.size();
+      for (size_t k = 0; k < done; ++k) {
+        const Segment& s = b.segments[k];
+        visibility[s.pixel] = static_cast<float>(s.rays) / static_cast<float>(maps.rays[s.pixel]);
+      }
+      b.segments.erase(b.segments.begin(), b.segments.begin() + static_cast<std::ptrdiff_t>(done));
+      if (!b.segments.empty()) b.segments.back().begin = b.segments.back().end = 0;
     };
     for (int y = y0; y < y1; ++y)
       for (int x = x0; x < x1; ++x) {
         const size_t i = static_cast<size_t>(y) * g.width + x;
         const int n = maps.rays[i];
         if (!g.hit(i) || n == 0) continue;
-        const auto local = static_cast<uint16_t>((y - y0) * kTile + (x - x0));
         const Frame3 frame = make_frame(g.geo_normal[i]);
         const glm::vec3 origin = g.position[i] + ray_offset(g.position[i], epsilon) * g.geo_normal[i];
-        const uint32_t hash = pixel_seed(seed, static_cast<uint32_t>(x), static_cast<uint32_t>(y));
+        const SobolScramble scramble = sobol_scramble(pixel_seed(seed, static_cast<uint32_t>(x), static_cast<uint32_t>(y)));
+        b.segments.push_back({i, static_cast<uint32_t>(fill), static_cast<uint32_t>(fill), n});
         for (int k = 0; k < n; ++k) {
-          b.rays[fill] = ao_ray(frame, origin, static_cast<uint32_t>(k), hash, ao_distance);
-          b.owner[fill] = local;
-          if (++fill == kAoBatch) flush();
+          b.rays[fill++] = ao_ray(frame, origin, static_cast<uint32_t>(k), scramble, ao_distance);
+          b.segments.back().end = static_cast<uint32_t>(fill);
+          if (fill == kAoBatch) {
+            flush();
+            finish(k + 1 < n);  // a pixel cut by the batch end continues in the next batch
+          }
         }
       }
     if (fill > 0) flush();
-    // Visibility = unoccluded / n: an exact integer ratio, the same in every mode and thread count
-    for (int y = y0; y < y1; ++y)
-      for (int x = x0; x < x1; ++x) {
-        const size_t i = static_cast<size_t>(y) * g.width + x;
-        const int n = maps.rays[i];
-        if (g.hit(i) && n > 0) visibility[i] = static_cast<float>(open[(y - y0) * kTile + (x - x0)]) / static_cast<float>(n);
-      }
+    finish(false);
   });
   uint64_t total = 0;
   for (uint64_t t : traced) total += t;
@@ -249,8 +266,8 @@ void collect_ao_rays(const GBuffer& g, const FoveationMaps& maps, float ao_dista
     const auto x = static_cast<uint32_t>(i % g.width), y = static_cast<uint32_t>(i / g.width);
     const Frame3 frame = make_frame(g.geo_normal[i]);
     const glm::vec3 origin = g.position[i] + ray_offset(g.position[i], epsilon) * g.geo_normal[i];
-    const uint32_t hash = pixel_seed(seed, x, y);
-    for (uint32_t k = 0; k < maps.rays[i]; ++k) rays.push_back(ao_ray(frame, origin, k, hash, ao_distance));
+    const SobolScramble scramble = sobol_scramble(pixel_seed(seed, x, y));
+    for (uint32_t k = 0; k < maps.rays[i]; ++k) rays.push_back(ao_ray(frame, origin, k, scramble, ao_distance));
   }
 }
 

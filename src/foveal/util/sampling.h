@@ -60,22 +60,33 @@ inline float to_unit_float(uint32_t bits) {
 const uint32_t* sobol_table_2d();
 inline constexpr uint32_t kSobolTableSize = 1U << 16;
 
-// The k-th point of a 2-D Sobol sequence scrambled by one pixel's seed; values in [0,1).
+// One pixel's scramble of the 2-D Sobol sequence: an XOR mask per dimension.
+struct SobolScramble {
+  uint32_t x = 0, y = 0;
+  const uint32_t* table = nullptr;  // sobol_table_2d(), looked up once per pixel, not per ray
+};
+inline SobolScramble sobol_scramble(uint32_t pixel_hash) {
+  return {hash32(pixel_hash ^ 0xa511e9b3U), hash32(pixel_hash ^ 0x63d83595U), sobol_table_2d()};
+}
+
+// The k-th point of a 2-D Sobol sequence under a pixel's scramble; values in [0,1).
 // Random digit scrambling (an XOR per dimension) keeps the (0,2) stratification of every
 // power-of-two prefix, so any ray count n gets well-spread directions, and costs one
 // instruction per ray where hash-based Owen scrambling cost about ten per ray (measured).
-inline glm::vec2 scrambled_sobol_2d(uint32_t k, uint32_t pixel_hash) {
+inline glm::vec2 sobol_2d(uint32_t k, SobolScramble scramble) {
   uint32_t s0, s1;
   if (k < kSobolTableSize) {
-    const uint32_t* t = sobol_table_2d();
-    s0 = t[2 * k];
-    s1 = t[2 * k + 1];
+    s0 = scramble.table[2 * k];
+    s1 = scramble.table[2 * k + 1];
   } else {
     s0 = sobol_dim0(k);
     s1 = sobol_dim1(k);
   }
-  return {to_unit_float(s0 ^ hash32(pixel_hash ^ 0xa511e9b3U)), to_unit_float(s1 ^ hash32(pixel_hash ^ 0x63d83595U))};
+  return {to_unit_float(s0 ^ scramble.x), to_unit_float(s1 ^ scramble.y)};
 }
+
+// The k-th point of the 2-D Sobol sequence scrambled by one pixel's hash.
+inline glm::vec2 scrambled_sobol_2d(uint32_t k, uint32_t pixel_hash) { return sobol_2d(k, sobol_scramble(pixel_hash)); }
 
 // (cos 2πt, sin 2πt) for t in [0, 1): quadrant reduction and odd/even Taylor polynomials on
 // [0, π/2), absolute error below 4e-6. Written here because libm's sincos was a tenth of the
