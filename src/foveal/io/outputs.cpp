@@ -158,6 +158,7 @@ Image budget_mask(const Frame& f, int max_rays) {
 
 void write_acuity_plot(const Display& display, const FoveationParams& params, const std::string& path) {
   Plot plot;
+  plot.width = 740;
   const float left = 70, right = 650, top = 40, bottom = 380;
   const double e_max = 60.0, cpd_max = 45.0;
   auto px = [&](double e, double cpd) {
@@ -188,12 +189,28 @@ void write_acuity_plot(const Display& display, const FoveationParams& params, co
   plot.strokes.push_back(clamped);
   plot.strokes.push_back(budget);
   plot.strokes.push_back({{px(0, max_cpd), px(e_max, max_cpd)}, glm::vec3(0.9f, 0.0f, 0.9f), 2});
+  // Right axis: the AO budget, 0 … n_max
+  plot.strokes.push_back({{px(e_max, cpd_max), px(e_max, 0)}, glm::vec3(0.9f, 0.5f, 0.1f), 1});
+  plot.labels.push_back({px(e_max, cpd_max) + glm::vec2(6, 5), fmt::format("{} rays", params.max_rays), 12});
+  plot.labels.push_back({px(e_max, 0) + glm::vec2(6, 5), "0 rays", 12});
   // Labels
   plot.labels.push_back({{(left + right) / 2, bottom + 48}, "eccentricity E [deg]", 15, true});
   plot.labels.push_back({{left - 60, top - 16}, "cut-off frequency f_c [cpd]", 15});
-  plot.labels.push_back({{right - 230, top + 8}, fmt::format("display limit {:.1f} cpd", max_cpd), 13});
-  plot.labels.push_back({{right - 230, top + 28}, "eq. 4: 43.1 E2/(E2+E)", 13});
-  plot.labels.push_back({{right - 230, top + 48}, fmt::format("AO rays n(E)/{} (gamma {:g})", params.max_rays, params.gamma), 13});
+  // Legend: a swatch of each curve beside its label
+  const float lx = right - 250;
+  const std::pair<Stroke, std::string> legend[] = {
+      {{{}, glm::vec3(0.9f, 0.0f, 0.9f), 2}, fmt::format("display limit {:.1f} cpd", max_cpd)},
+      {{{}, glm::vec3(0.2f, 0.4f, 0.9f), 1.5f, true}, "eq. 4 without the limit"},
+      {{{}, glm::vec3(0.1f), 2.5f}, "f_c(E), eq. 4 with the limit"},
+      {{{}, glm::vec3(0.9f, 0.5f, 0.1f), 2}, fmt::format("AO rays n(E), right axis (gamma {:g})", params.gamma)}};
+  float ly = top + 4;
+  for (auto [stroke, text] : legend) {
+    stroke.points = {{lx, ly - 4}, {lx + 12, ly - 4}, {lx + 24, ly - 4}};
+    stroke.dashed = false;
+    plot.strokes.push_back(stroke);
+    plot.labels.push_back({{lx + 32, ly}, text, 13});
+    ly += 20;
+  }
   plot.labels.push_back({{left + 10, bottom + 64},
                          fmt::format("display {:g}x{:g} cm at {:g} cm, {}x{} px: {:.1f} x {:.1f} deg, {:.1f} px/deg",
                                      display.width_cm, display.height_cm, display.distance_cm, display.res_x, display.res_y,

@@ -66,6 +66,38 @@ TEST(Scene, LoadsPlyWithCrlfAndObjMaterials) {
   EXPECT_NEAR(s.materials[s.material_ids[0]].diffuse.r, 0.9f, 1e-6f);
 }
 
+TEST(Scene, LoadsGltf) {
+  TempDir t;
+  // One triangle: positions (3 × vec3) and uint16 indices in an embedded base64 buffer
+  const std::string gltf = R"({"asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": [0]}],
+    "nodes": [{"mesh": 0, "translation": [0, 0, 5]}],
+    "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "indices": 1}]}],
+    "buffers": [{"byteLength": 44, "uri": "data:application/octet-stream;base64,AAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAAAAAAAAgD8AAAAAAAABAAIAAAA="}],
+    "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": 36}, {"buffer": 0, "byteOffset": 36, "byteLength": 6}],
+    "accessors": [{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3", "min": [0, 0, 0], "max": [1, 1, 0]},
+                  {"bufferView": 1, "componentType": 5123, "count": 3, "type": "SCALAR"}]})";
+  const Scene s = load_scene(t.write("tri.gltf", gltf));
+  ASSERT_EQ(s.triangles.size(), 1u);
+  EXPECT_EQ(s.bounds().lo.z, 5.0f);  // the node's transform is applied
+  EXPECT_NEAR(std::abs(s.normals[0].z), 1.0f, 1e-6f);
+}
+
+TEST(Scene, ObjTexturesAreSampledInLinearColour) {
+  TempDir t;
+  // A 2×2 texture, all texels sRGB (255, 128, 0), bound with map_Kd
+  const std::string ppm = std::string("P6\n2 2\n255\n") + std::string("\xff\x80\x00\xff\x80\x00\xff\x80\x00\xff\x80\x00", 12);
+  t.write("tex.ppm", ppm);
+  t.write("m.mtl", "newmtl t\nKd 1 1 1\nmap_Kd tex.ppm\n");
+  const Scene s = load_scene(t.write("tex.obj", "mtllib m.mtl\nusemtl t\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\nf 1/1 2/2 3/3\n"));
+  ASSERT_EQ(s.textures.size(), 1u);
+  const Material& m = s.materials[s.material_ids[0]];
+  ASSERT_GE(m.diffuse_texture, 0);
+  const glm::vec3 c = s.textures[m.diffuse_texture].sample({0.3f, 0.3f});
+  EXPECT_NEAR(c.r, 1.0f, 1e-6f);
+  EXPECT_NEAR(c.g, 0.2158605f, 1e-5f);  // sRGB 128/255 decoded
+  EXPECT_NEAR(c.b, 0.0f, 1e-6f);
+}
+
 TEST(Scene, BadMeshesGiveClearErrors) {
   TempDir t;
   EXPECT_NE(error_of([&] { load_scene((t.dir / "missing.obj").string()); }).find("no such file"), std::string::npos);
