@@ -6,11 +6,9 @@
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
 #include <fmt/core.h>
-#include <glm/gtc/matrix_inverse.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include <cmath>
 #include <filesystem>
 #include <map>
 
@@ -83,55 +81,28 @@ void append_mesh_file(Scene& scene, const std::string& path, const glm::mat4& tr
   }
   if (ai->mNumMaterials == 0) scene.materials.push_back(Material{});
 
-  // Geometry: positions and uvs transformed to world space; degenerate triangles dropped
-  const glm::mat3 normal_matrix = glm::inverseTranspose(glm::mat3(transform));
+  // Geometry: one MeshData per Assimp mesh; append_mesh transforms it and drops degenerate triangles
   size_t added = 0;
   for (unsigned mi = 0; mi < ai->mNumMeshes; ++mi) {
     const aiMesh* mesh = ai->mMeshes[mi];
     if (!(mesh->mPrimitiveTypes & aiPrimitiveType_TRIANGLE)) continue;
-    const auto base = static_cast<uint32_t>(scene.positions.size());
-    const size_t first_triangle = scene.triangles.size();
+    MeshData data;
     for (unsigned v = 0; v < mesh->mNumVertices; ++v) {
-      const aiVector3D& p = mesh->mVertices[v];
-      scene.positions.push_back(glm::vec3(transform * glm::vec4(p.x, p.y, p.z, 1.0f)));
-      glm::vec3 n(0.0f);
-      if (mesh->HasNormals()) n = normal_matrix * glm::vec3(mesh->mNormals[v].x, mesh->mNormals[v].y, mesh->mNormals[v].z);
-      scene.normals.push_back(n);
-      scene.uvs.push_back(mesh->HasTextureCoords(0) ? glm::vec2(mesh->mTextureCoords[0][v].x, mesh->mTextureCoords[0][v].y)
-                                                    : glm::vec2(0.0f));
+      data.positions.emplace_back(mesh->mVertices[v].x, mesh->mVertices[v].y, mesh->mVertices[v].z);
+      if (mesh->HasNormals()) data.normals.emplace_back(mesh->mNormals[v].x, mesh->mNormals[v].y, mesh->mNormals[v].z);
+      if (mesh->HasTextureCoords(0)) data.uvs.emplace_back(mesh->mTextureCoords[0][v].x, mesh->mTextureCoords[0][v].y);
     }
-    const uint32_t material_id =
-        material_base + (mesh->mMaterialIndex < ai->mNumMaterials ? mesh->mMaterialIndex : 0);
-    std::vector<glm::vec3> accumulated(mesh->mNumVertices, glm::vec3(0.0f));
-    for (unsigned f = 0; f < mesh->mNumFaces; ++f) {
-      const aiFace& face = mesh->mFaces[f];
-      if (face.mNumIndices != 3) continue;
-      const glm::uvec3 t(face.mIndices[0], face.mIndices[1], face.mIndices[2]);
-      if (t.x >= mesh->mNumVertices || t.y >= mesh->mNumVertices || t.z >= mesh->mNumVertices)
-        fail("{}: mesh '{}' face {} has a vertex index out of range", path, mesh->mName.C_Str(), f);
-      const glm::vec3 a = scene.positions[base + t.x], b = scene.positions[base + t.y], c = scene.positions[base + t.z];
-      const glm::vec3 n = glm::cross(b - a, c - a);
-      const float area2 = glm::dot(n, n);
-      if (!std::isfinite(area2) || area2 <= 0.0f || !std::isfinite(a.x + a.y + a.z + b.x + b.y + b.z + c.x + c.y + c.z)) {
-        ++scene.skipped_triangles;
-        continue;
-      }
-      for (int k = 0; k < 3; ++k) accumulated[t[k]] += n;
-      scene.triangles.push_back(t + glm::uvec3(base));
-      scene.material_ids.push_back(material_id);
+    for (unsigned f = 0; f < mesh->mNumFaces; ++f)
+      if (mesh->mFaces[f].mNumIndices == 3)
+        data.triangles.emplace_back(mesh->mFaces[f].mIndices[0], mesh->mFaces[f].mIndices[1], mesh->mFaces[f].mIndices[2]);
+    const uint32_t material_id = material_base + (mesh->mMaterialIndex < ai->mNumMaterials ? mesh->mMaterialIndex : 0);
+    const size_t before = scene.triangles.size();
+    try {
+      append_mesh(scene, data, material_id, transform);
+    } catch (const Error& e) {
+      fail("{}: mesh '{}': {}", path, mesh->mName.C_Str(), e.what());
     }
-    // Missing or broken normals: area-weighted average of the adjacent faces
-    for (unsigned v = 0; v < mesh->mNumVertices; ++v) {
-      glm::vec3& n = scene.normals[base + v];
-      const float len = glm::length(n);
-      if (len > 0 && std::isfinite(len)) {
-        n /= len;
-      } else {
-        const float alen = glm::length(accumulated[v]);
-        n = alen > 0 && std::isfinite(alen) ? accumulated[v] / alen : glm::vec3(0, 1, 0);
-      }
-    }
-    added += scene.triangles.size() - first_triangle;
+    added += scene.triangles.size() - before;
   }
   if (added == 0) fail("{}: contains no usable triangles", path);
 }

@@ -58,34 +58,42 @@ Bounds Scene::bounds() const {
   return b;
 }
 
-void append_triangles(Scene& scene, const std::vector<glm::vec3>& positions, const std::vector<glm::uvec3>& triangles,
-                      const Material& material, const glm::mat4& transform) {
+void append_mesh(Scene& scene, const MeshData& mesh, uint32_t material_id, const glm::mat4& transform) {
   const auto base = static_cast<uint32_t>(scene.positions.size());
-  const auto material_id = static_cast<uint32_t>(scene.materials.size());
-  scene.materials.push_back(material);
-  for (const auto& p : positions) scene.positions.push_back(glm::vec3(transform * glm::vec4(p, 1.0f)));
-  // Area-weighted vertex normals; degenerate or non-finite triangles are dropped
-  std::vector<glm::vec3> normals(positions.size(), glm::vec3(0.0f));
-  for (const auto& t : triangles) {
-    if (t.x >= positions.size() || t.y >= positions.size() || t.z >= positions.size())
-      fail("triangle index {} out of range ({} vertices)", std::max({t.x, t.y, t.z}), positions.size());
+  const glm::mat3 normal_matrix = glm::inverseTranspose(glm::mat3(transform));
+  for (const auto& p : mesh.positions) scene.positions.push_back(glm::vec3(transform * glm::vec4(p, 1.0f)));
+  // Triangles with zero area or non-finite vertices are dropped; the rest add area-weighted face normals
+  std::vector<glm::vec3> face_normals(mesh.positions.size(), glm::vec3(0.0f));
+  for (const auto& t : mesh.triangles) {
+    if (t.x >= mesh.positions.size() || t.y >= mesh.positions.size() || t.z >= mesh.positions.size())
+      fail("triangle index {} out of range ({} vertices)", std::max({t.x, t.y, t.z}), mesh.positions.size());
     const glm::vec3 a = scene.positions[base + t.x], b = scene.positions[base + t.y], c = scene.positions[base + t.z];
     const glm::vec3 n = glm::cross(b - a, c - a);
     if (!finite(a) || !finite(b) || !finite(c) || !finite(n) || glm::dot(n, n) <= 0.0f) {
       ++scene.skipped_triangles;
       continue;
     }
-    normals[t.x] += n;
-    normals[t.y] += n;
-    normals[t.z] += n;
+    for (int k = 0; k < 3; ++k) face_normals[t[k]] += n;
     scene.triangles.push_back(t + glm::uvec3(base));
     scene.material_ids.push_back(material_id);
   }
-  for (auto& n : normals) {
-    const float len = glm::length(n);
+  // Vertex normals: the mesh's own where usable, else the faces' average
+  for (size_t v = 0; v < mesh.positions.size(); ++v) {
+    glm::vec3 n = v < mesh.normals.size() ? normal_matrix * mesh.normals[v] : glm::vec3(0.0f);
+    float len = glm::length(n);
+    if (!(len > 0) || !std::isfinite(len)) {
+      n = face_normals[v];
+      len = glm::length(n);
+    }
     scene.normals.push_back(len > 0 && std::isfinite(len) ? n / len : glm::vec3(0, 1, 0));
+    scene.uvs.push_back(v < mesh.uvs.size() ? mesh.uvs[v] : glm::vec2(0.0f));
   }
-  scene.uvs.resize(scene.positions.size(), glm::vec2(0.0f));
+}
+
+void append_triangles(Scene& scene, const std::vector<glm::vec3>& positions, const std::vector<glm::uvec3>& triangles,
+                      const Material& material, const glm::mat4& transform) {
+  scene.materials.push_back(material);
+  append_mesh(scene, MeshData{positions, {}, {}, triangles}, static_cast<uint32_t>(scene.materials.size() - 1), transform);
 }
 
 void append_sphere(Scene& scene, glm::vec3 centre, float radius, int segments, const Material& material) {

@@ -91,6 +91,19 @@ Scene make_builtin_scene(const std::string& name);
 void append_mesh_file(Scene& scene, const std::string& path, const glm::mat4& transform,
                       std::optional<glm::vec3> diffuse_override = std::nullopt);
 
+// One mesh's vertex data before it joins a scene (normals and uvs may be empty).
+struct MeshData {
+  std::vector<glm::vec3> positions;
+  std::vector<glm::vec3> normals;   // per vertex, or empty: computed from the faces
+  std::vector<glm::vec2> uvs;       // per vertex, or empty
+  std::vector<glm::uvec3> triangles;
+};
+
+// Append a mesh with an existing material, transformed to world space: degenerate or
+// non-finite triangles are dropped (counted in skipped_triangles), missing or broken normals
+// are the area-weighted average of the adjacent faces. Throws Error for an index out of range.
+void append_mesh(Scene& scene, const MeshData& mesh, uint32_t material_id, const glm::mat4& transform);
+
 // Append raw triangles with one material; drops degenerate triangles; computes missing normals.
 void append_triangles(Scene& scene, const std::vector<glm::vec3>& positions,
                       const std::vector<glm::uvec3>& triangles, const Material& material,
