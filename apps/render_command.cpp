@@ -6,10 +6,13 @@
 #include "foveal/util/error.h"
 #include "foveal/util/parallel.h"
 #include "foveal/util/parse.h"
+#include "foveal/util/timer.h"
 
 #include <fmt/core.h>
 
+#include <cstdio>
 #include <fstream>
+#include <unistd.h>
 #include <memory>
 
 namespace foveal::app {
@@ -114,7 +117,17 @@ std::function<int()> add_render_command(CLI::App& app) {
     const Scene scene = load_scene(o->view.scene);
     const Camera camera = resolve_camera(scene, o->view);
     const Tracer tracer(scene, api);
-    const Frame frame = render_frame(tracer, scene, camera, p);
+    // A progress line on a terminal, for renders long enough to wait for
+    const bool show_progress = !o->quiet && isatty(fileno(stderr));
+    const Timer clock;
+    int shown = -1;
+    const Frame frame = render_frame(tracer, scene, camera, p, [&](double fraction) {
+      const int percent = static_cast<int>(fraction * 100);
+      if (!show_progress || percent == shown || clock.ms() < 1000) return;
+      shown = percent;
+      fmt::print(stderr, "\r  AO {:3d}%  {:.1f} s", percent, clock.ms() / 1000);
+    });
+    if (shown >= 0) fmt::print(stderr, "\r{:40}\r", "");
 
     // Outputs
     save_image(frame.color, o->output);

@@ -9,6 +9,8 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <atomic>
+#include <mutex>
 #include <cmath>
 #include <limits>
 
@@ -193,7 +195,7 @@ float estimate_visibility(const Tracer& tracer, glm::vec3 position, glm::vec3 no
 }
 
 uint64_t trace_ao(const Tracer& tracer, const GBuffer& g, const FoveationMaps& maps, float ao_distance, float epsilon,
-                  uint64_t seed, std::vector<float>& visibility) {
+                  uint64_t seed, std::vector<float>& visibility, const std::function<void(double)>& progress) {
   visibility.assign(static_cast<size_t>(g.width) * g.height, 1.0f);
   // Per-thread batch of rays from several pixels; each pixel's rays are one contiguous segment
   struct Segment {
@@ -209,6 +211,10 @@ uint64_t trace_ao(const Tracer& tracer, const GBuffer& g, const FoveationMaps& m
   };
   tbb::enumerable_thread_specific<Batch> batches;
   tbb::enumerable_thread_specific<uint64_t> traced(0);
+  const int tiles = ((g.width + kTile - 1) / kTile) * ((g.height + kTile - 1) / kTile);
+  std::atomic<int> tiles_done{0};
+  std::mutex progress_mutex;
+  int tiles_reported = 0;  // guarded by progress_mutex
   for_each_tile(g.width, g.height, [&](int x0, int x1, int y0, int y1) {
     Batch& b = batches.local();
     size_t fill = 0;
@@ -253,6 +259,17 @@ uint64_t trace_ao(const Tracer& tracer, const GBuffer& g, const FoveationMaps& m
       }
     if (fill > 0) flush();
     finish(false);
+    // Progress: whichever thread finishes a tile reports, one at a time
+    if (progress) {
+      const int done = ++tiles_done;
+      std::unique_lock lock(progress_mutex, std::defer_lock);
+      if (done == tiles) lock.lock();  // the last tile always reports
+      else if (!lock.try_lock()) return;
+      if (done > tiles_reported) {  // never backwards
+        tiles_reported = done;
+        progress(static_cast<double>(done) / tiles);
+      }
+    }
   });
   uint64_t total = 0;
   for (uint64_t t : traced) total += t;
@@ -332,7 +349,8 @@ Image shade(const Tracer& tracer, const Scene& scene, const Camera& camera, cons
   return image;
 }
 
-Frame render_frame(const Tracer& tracer, const Scene& scene, const Camera& camera, const RenderParams& params) {
+Frame render_frame(const Tracer& tracer, const Scene& scene, const Camera& camera, const RenderParams& params,
+                   const std::function<void(double)>& progress) {
   validate(params);
   Frame f;
   Timer total;
@@ -349,7 +367,7 @@ Frame render_frame(const Tracer& tracer, const Scene& scene, const Camera& camer
   f.stats.foveation_ms = t.ms();
   // Foveated AO
   t.reset();
-  f.stats.ao_rays = trace_ao(tracer, f.gbuffer, f.maps, ao_distance, epsilon, params.seed, f.visibility);
+  f.stats.ao_rays = trace_ao(tracer, f.gbuffer, f.maps, ao_distance, epsilon, params.seed, f.visibility, progress);
   f.stats.ao_ms = t.ms();
   // Phong shading with the blended ambient term
   t.reset();

@@ -15,6 +15,7 @@
 #include <glm/glm.hpp>
 
 #include <cstdint>
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -103,8 +104,10 @@ GBuffer trace_primary(const Tracer& tracer, const Scene& scene, const Camera& ca
 // The foveation model evaluated at every pixel (full mode: q = 1, n = n_max, b = 1).
 FoveationMaps foveation_maps(const RenderParams& params, glm::dvec2 gaze_px);
 // AO visibility per pixel with maps.rays[i] rays; returns the number of rays traced.
+// `progress`, when given, is called with the finished fraction in (0, 1] from one thread at a time.
 uint64_t trace_ao(const Tracer& tracer, const GBuffer& gbuffer, const FoveationMaps& maps, float ao_distance,
-                  float epsilon, uint64_t seed, std::vector<float>& visibility);
+                  float epsilon, uint64_t seed, std::vector<float>& visibility,
+                  const std::function<void(double)>& progress = {});
 // Visibility at one point from `rays` cosine-weighted directions of pixel (x, y)'s sequence:
 // the per-pixel function the AO pass runs, exposed for analytic tests.
 float estimate_visibility(const Tracer& tracer, glm::vec3 position, glm::vec3 normal, int rays, float ao_distance,
@@ -121,6 +124,8 @@ Image shade(const Tracer& tracer, const Scene& scene, const Camera& camera, cons
             float epsilon, uint64_t* shadow_rays = nullptr);
 
 // All passes for one frame.
-Frame render_frame(const Tracer& tracer, const Scene& scene, const Camera& camera, const RenderParams& params);
+// `progress` reports the AO pass, the long one (see trace_ao).
+Frame render_frame(const Tracer& tracer, const Scene& scene, const Camera& camera, const RenderParams& params,
+                   const std::function<void(double)>& progress = {});
 
 }  // namespace foveal

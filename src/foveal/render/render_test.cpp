@@ -183,3 +183,25 @@ TEST(Render, RejectsBadParameters) {
   EXPECT_THROW(validate(p), Error);
   EXPECT_THROW(parse_render_mode("half"), Error);
 }
+
+TEST(Render, AutoAmbientConstantIsTheFovealMeanVisibility) {
+  const Tracer tracer(box());
+  RenderParams p = small_params(RenderMode::foveated);
+  p.ambient_constant.reset();
+  double last = 0;
+  int calls = 0;
+  const Frame f = render_frame(tracer, box(), box().cameras.front(), p, [&](double fraction) {
+    EXPECT_GE(fraction, last);  // progress never goes back
+    last = fraction;
+    ++calls;
+  });
+  EXPECT_EQ(last, 1.0);
+  EXPECT_GT(calls, 0);
+  double sum = 0;
+  size_t n = 0;
+  for (size_t i = 0; i < f.visibility.size(); ++i)
+    if (f.gbuffer.hit(i) && f.maps.quality[i] == 1.0f) sum += f.visibility[i], ++n;
+  ASSERT_GT(n, 0u);
+  EXPECT_FLOAT_EQ(f.stats.ambient_constant, static_cast<float>(sum / n));
+  EXPECT_LT(f.stats.ambient_constant, 1.0f);  // the box occludes: the fovea is not fully open
+}
