@@ -33,15 +33,29 @@ void for_each_tile(int width, int height, Body&& body) {
   });
 }
 
-// Cosine-weighted AO ray k of a pixel's scrambled Sobol sequence.
-inline Ray ao_ray(const Frame3& frame, glm::vec3 origin, uint32_t k, SobolScramble scramble, float distance) {
-  Ray r;
-  r.org = origin;
-  r.tnear = 0.0f;
-  r.dir = frame.to_world(cosine_hemisphere(sobol_2d(k, scramble)));
-  r.tfar = distance;
-  return r;
-}
+// The AO rays of one pixel: the hemisphere frame, the lifted origin and the pixel's scramble.
+struct PixelRays {
+  Frame3 frame;
+  glm::vec3 origin;
+  SobolScramble scramble;
+  float distance;
+
+  PixelRays(glm::vec3 position, glm::vec3 normal, float epsilon, float ao_distance, uint64_t seed, uint32_t x, uint32_t y)
+      : frame(make_frame(normal)),
+        origin(position + ray_offset(position, epsilon) * normal),
+        scramble(sobol_scramble(pixel_seed(seed, x, y))),
+        distance(ao_distance) {}
+
+  // Cosine-weighted ray k of the pixel's scrambled Sobol sequence.
+  Ray operator()(uint32_t k) const {
+    Ray r;
+    r.org = origin;
+    r.tnear = 0.0f;
+    r.dir = frame.to_world(cosine_hemisphere(sobol_2d(k, scramble)));
+    r.tfar = distance;
+    return r;
+  }
+};
 
 }  // namespace
 
@@ -182,12 +196,10 @@ FoveationMaps foveation_maps(const RenderParams& params, glm::dvec2 gaze_px) {
 float estimate_visibility(const Tracer& tracer, glm::vec3 position, glm::vec3 normal, int rays, float ao_distance,
                           float epsilon, uint64_t seed, uint32_t x, uint32_t y) {
   if (rays <= 0) return 1.0f;
-  const Frame3 frame = make_frame(normal);
-  const glm::vec3 origin = position + ray_offset(position, epsilon) * normal;
-  const SobolScramble scramble = sobol_scramble(pixel_seed(seed, x, y));
+  const PixelRays pixel(position, normal, epsilon, ao_distance, seed, x, y);
   std::vector<Ray> batch(static_cast<size_t>(rays));
   std::vector<uint8_t> occluded(batch.size());
-  for (int k = 0; k < rays; ++k) batch[k] = ao_ray(frame, origin, static_cast<uint32_t>(k), scramble, ao_distance);
+  for (int k = 0; k < rays; ++k) batch[k] = pixel(static_cast<uint32_t>(k));
   tracer.occluded(batch, occluded);
   int open = 0;
   for (uint8_t o : occluded) open += o ? 0 : 1;
@@ -200,14 +212,13 @@ uint64_t trace_ao(const Tracer& tracer, const GBuffer& g, const FoveationMaps& m
   // Per-thread batch of rays from several pixels; each pixel's rays are one contiguous segment
   struct Segment {
     size_t pixel;        // index into visibility
-    uint32_t begin, end; // ray range in the batch
-    int rays;            // the pixel's budget n
+    uint32_t begin, end; // ray range in the current batch
+    int open;            // the pixel's budget n, minus the rays found blocked so far
   };
   struct Batch {
     std::vector<Ray> rays = std::vector<Ray>(kAoBatch);
     std::vector<uint8_t> occluded = std::vector<uint8_t>(kAoBatch);
-    std::vector<Segment> segments;
-    std::vector<int> open;  // unoccluded rays so far of the segments' pixels
+    std::vector<Segment> segments;  // pixels with rays in the batch, in order
   };
   tbb::enumerable_thread_specific<Batch> batches;
   tbb::enumerable_thread_specific<uint64_t> traced(0);
@@ -224,7 +235,7 @@ uint64_t trace_ao(const Tracer& tracer, const GBuffer& g, const FoveationMaps& m
       for (Segment& s : b.segments) {
         int blocked = 0;
         for (uint32_t k = s.begin; k < s.end; ++k) blocked += b.occluded[k];
-        s.rays -= blocked;  // rays left open so far (budget minus blocked)
+        s.open -= blocked;
       }
       traced.local() += fill;
       fill = 0;
@@ -234,7 +245,7 @@ uint64_t trace_ao(const Tracer& tracer, const GBuffer& g, const FoveationMaps& m
       const size_t done = keep_last && !b.segments.empty() ? b.segments.size() - 1 : b.segments.size();
       for (size_t k = 0; k < done; ++k) {
         const Segment& s = b.segments[k];
-        visibility[s.pixel] = static_cast<float>(s.rays) / static_cast<float>(maps.rays[s.pixel]);
+        visibility[s.pixel] = static_cast<float>(s.open) / static_cast<float>(maps.rays[s.pixel]);
       }
       b.segments.erase(b.segments.begin(), b.segments.begin() + static_cast<std::ptrdiff_t>(done));
       if (!b.segments.empty()) b.segments.back().begin = b.segments.back().end = 0;
@@ -244,12 +255,11 @@ uint64_t trace_ao(const Tracer& tracer, const GBuffer& g, const FoveationMaps& m
         const size_t i = static_cast<size_t>(y) * g.width + x;
         const int n = maps.rays[i];
         if (!g.hit(i) || n == 0) continue;
-        const Frame3 frame = make_frame(g.geo_normal[i]);
-        const glm::vec3 origin = g.position[i] + ray_offset(g.position[i], epsilon) * g.geo_normal[i];
-        const SobolScramble scramble = sobol_scramble(pixel_seed(seed, static_cast<uint32_t>(x), static_cast<uint32_t>(y)));
+        const PixelRays pixel(g.position[i], g.geo_normal[i], epsilon, ao_distance, seed, static_cast<uint32_t>(x),
+                              static_cast<uint32_t>(y));
         b.segments.push_back({i, static_cast<uint32_t>(fill), static_cast<uint32_t>(fill), n});
         for (int k = 0; k < n; ++k) {
-          b.rays[fill++] = ao_ray(frame, origin, static_cast<uint32_t>(k), scramble, ao_distance);
+          b.rays[fill++] = pixel(static_cast<uint32_t>(k));
           b.segments.back().end = static_cast<uint32_t>(fill);
           if (fill == kAoBatch) {
             flush();
@@ -280,11 +290,9 @@ void collect_ao_rays(const GBuffer& g, const FoveationMaps& maps, float ao_dista
                      size_t stride, std::vector<Ray>& rays) {
   for (size_t i = 0; i < g.prim.size(); i += std::max<size_t>(1, stride)) {
     if (!g.hit(i) || maps.rays[i] == 0) continue;
-    const auto x = static_cast<uint32_t>(i % g.width), y = static_cast<uint32_t>(i / g.width);
-    const Frame3 frame = make_frame(g.geo_normal[i]);
-    const glm::vec3 origin = g.position[i] + ray_offset(g.position[i], epsilon) * g.geo_normal[i];
-    const SobolScramble scramble = sobol_scramble(pixel_seed(seed, x, y));
-    for (uint32_t k = 0; k < maps.rays[i]; ++k) rays.push_back(ao_ray(frame, origin, k, scramble, ao_distance));
+    const PixelRays pixel(g.position[i], g.geo_normal[i], epsilon, ao_distance, seed, static_cast<uint32_t>(i % g.width),
+                          static_cast<uint32_t>(i / g.width));
+    for (uint32_t k = 0; k < maps.rays[i]; ++k) rays.push_back(pixel(k));
   }
 }
 
@@ -328,7 +336,8 @@ Image shade(const Tracer& tracer, const Scene& scene, const Camera& camera, cons
             const float ndotl = glm::dot(n, l);
             if (ndotl <= 0) continue;
             if (shadows) {
-              Ray s{p + ray_offset(p, epsilon) * g.geo_normal[i], 0.0f, l, light.type == Light::Type::point ? dist : 1e30f};
+              Ray s{.org = p + ray_offset(p, epsilon) * g.geo_normal[i], .dir = l,
+                    .tfar = light.type == Light::Type::point ? dist : 1e30f};
               uint8_t blocked = 0;
               tracer.occluded({&s, 1}, {&blocked, 1});
               ++shadow_count.local();

@@ -205,3 +205,40 @@ TEST(Render, AutoAmbientConstantIsTheFovealMeanVisibility) {
   EXPECT_FLOAT_EQ(f.stats.ambient_constant, static_cast<float>(sum / n));
   EXPECT_LT(f.stats.ambient_constant, 1.0f);  // the box occludes: the fovea is not fully open
 }
+
+TEST(Render, ShadowRaysDarkenOnlyWhatTheLightCannotSee) {
+  // A light straight above the sphere: with shadows, the plane under it loses the light's term
+  Scene scene = make_builtin_scene("sphere-plane");
+  scene.lights = {{Light::Type::point, {0, 10, 0}, glm::vec3(0.5f), glm::vec3(0.0f)}};
+  const Tracer tracer(scene);
+  RenderParams p = small_params(RenderMode::full);
+  p.foveation.max_rays = 4;
+  const Frame lit = render_frame(tracer, scene, scene.cameras.front(), p);
+  p.shadows = true;
+  const Frame shadowed = render_frame(tracer, scene, scene.cameras.front(), p);
+  EXPECT_GT(shadowed.stats.shadow_rays, 0u);
+  size_t under = 0, far = 0;
+  for (size_t i = 0; i < lit.visibility.size(); ++i) {
+    if (!lit.gbuffer.hit(i)) continue;
+    const glm::vec3 x = lit.gbuffer.position[i];
+    if (std::abs(x.y) < 1e-3f && glm::length(glm::vec2(x.x, x.z)) < 0.5f) {
+      ++under;
+      EXPECT_LT(shadowed.color.pixels[3 * i], lit.color.pixels[3 * i] - 0.1f);
+    } else if (std::abs(x.y) < 1e-3f && glm::length(glm::vec2(x.x, x.z)) > 3.0f) {
+      ++far;
+      EXPECT_EQ(shadowed.color.pixels[3 * i], lit.color.pixels[3 * i]);
+    }
+  }
+  EXPECT_GT(under, 10u);
+  EXPECT_GT(far, 100u);
+  // A light between the plane and the sphere: shadow rays stop at the light, the sphere beyond it casts nothing
+  scene.lights = {{Light::Type::point, {0, 0.5f, 0}, glm::vec3(0.5f), glm::vec3(0.0f)}};
+  p.shadows = false;
+  const Frame low_lit = render_frame(tracer, scene, scene.cameras.front(), p);
+  p.shadows = true;
+  const Frame low_shadowed = render_frame(tracer, scene, scene.cameras.front(), p);
+  for (size_t i = 0; i < low_lit.visibility.size(); ++i)
+    if (low_lit.gbuffer.hit(i) && std::abs(low_lit.gbuffer.position[i].y) < 1e-3f &&
+        glm::length(low_lit.gbuffer.position[i]) < 0.5f)
+      EXPECT_EQ(low_shadowed.color.pixels[3 * i], low_lit.color.pixels[3 * i]);
+}

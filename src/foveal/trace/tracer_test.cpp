@@ -12,12 +12,22 @@ TEST(Tracer, HitsThePlaneAtTheRightDistance) {
   const Scene plane = make_builtin_scene("plane");
   const Tracer tracer(plane);
   EXPECT_EQ(tracer.triangles(), 2u);
-  const Ray rays[2] = {{{1, 5, 2}, 0, {0, -1, 0}, 1e30f}, {{1, 5, 2}, 0, {0, 1, 0}, 1e30f}};
+  const Ray rays[2] = {{.org = {1, 5, 2}, .dir = {0, -1, 0}}, {.org = {1, 5, 2}, .dir = {0, 1, 0}}};
   Hit hits[2];
   tracer.intersect(rays, hits);
   ASSERT_TRUE(hits[0].valid());
   EXPECT_NEAR(hits[0].t, 5.0f, 1e-5f);
   EXPECT_FALSE(hits[1].valid());
+}
+
+TEST(Tracer, OcclusionStopsAtTfar) {
+  const Scene plane = make_builtin_scene("plane");
+  const Tracer tracer(plane);
+  Ray rays[2] = {{.org = {0, 1, 0}, .dir = {0, -1, 0}, .tfar = 0.99f}, {.org = {0, 1, 0}, .dir = {0, -1, 0}, .tfar = 1.01f}};
+  uint8_t blocked[2] = {7, 7};
+  tracer.occluded(rays, blocked);
+  EXPECT_EQ(blocked[0], 0);
+  EXPECT_EQ(blocked[1], 1);
 }
 
 TEST(Tracer, OcclusionApisAgree) {
@@ -28,7 +38,8 @@ TEST(Tracer, OcclusionApisAgree) {
   for (uint32_t i = 0; i < 3000; ++i) {
     const glm::vec2 u = scrambled_sobol_2d(i, 17), v = scrambled_sobol_2d(i, 99);
     const glm::vec3 dir = make_frame(glm::normalize(glm::vec3(v.x - 0.5f, v.y - 0.5f, 0.3f))).to_world(cosine_hemisphere(u));
-    rays.push_back({{(v.x - 0.5f) * 3.5f, 0.05f + 2.4f * u.y, (u.x - 0.5f) * 3.5f}, 0.0f, dir, (i % 3 == 0) ? 0.3f : 1e30f});
+    rays.push_back({.org = {(v.x - 0.5f) * 3.5f, 0.05f + 2.4f * u.y, (u.x - 0.5f) * 3.5f}, .dir = dir,
+                    .tfar = (i % 3 == 0) ? 0.3f : 1e30f});
   }
   // occluded() traces in place, so each API gets a fresh copy of the rays
   std::vector<uint8_t> reference(rays.size());
