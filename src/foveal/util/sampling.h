@@ -6,6 +6,7 @@
 
 #include <glm/glm.hpp>
 
+#include <bit>
 #include <cmath>
 #include <cstdint>
 #include <numbers>
@@ -88,22 +89,23 @@ inline glm::vec2 sobol_2d(uint32_t k, SobolScramble scramble) {
 // The k-th point of the 2-D Sobol sequence scrambled by one pixel's hash.
 inline glm::vec2 scrambled_sobol_2d(uint32_t k, uint32_t pixel_hash) { return sobol_2d(k, sobol_scramble(pixel_hash)); }
 
-// (cos 2πt, sin 2πt) for t in [0, 1): quadrant reduction and odd/even Taylor polynomials on
-// [0, π/2), absolute error below 4e-6. Written here because libm's sincos was a tenth of the
-// cost of an AO ray (measured), and directions need no more precision than this.
+// (cos 2πt, sin 2πt) for t in [0, 1) (t ≥ 0 required): quadrant reduction and odd/even Taylor polynomials on
+// [0, π/2), absolute error below 4e-6, without branches (the quadrant of a Sobol point is
+// unpredictable). Written here because libm's sincos was a tenth of the cost of an AO ray
+// (measured), and directions need no more precision than this.
 inline glm::vec2 cos_sin_2pi(float t) {
-  const float q4 = t * 4.0f;
-  const int quadrant = static_cast<int>(q4) & 3;
-  const float a = (q4 - std::floor(q4)) * (std::numbers::pi_v<float> * 0.5f);
+  const float q4 = t * 4.0f;  // t ≥ 0: truncation is floor, and cheaper than floorf without SSE4.1
+  const int whole = static_cast<int>(q4);
+  const auto quadrant = static_cast<uint32_t>(whole) & 3U;
+  const float a = (q4 - static_cast<float>(whole)) * (std::numbers::pi_v<float> * 0.5f);
   const float a2 = a * a;
   const float s = a * (1.0f + a2 * (-1.0f / 6 + a2 * (1.0f / 120 + a2 * (-1.0f / 5040 + a2 * (1.0f / 362880)))));
   const float c = 1.0f + a2 * (-0.5f + a2 * (1.0f / 24 + a2 * (-1.0f / 720 + a2 * (1.0f / 40320 + a2 * (-1.0f / 3628800)))));
-  switch (quadrant) {
-    case 0: return {c, s};
-    case 1: return {-s, c};
-    case 2: return {-c, -s};
-    default: return {s, -c};
-  }
+  // Rotate by quadrant·90°: odd quadrants swap the pair, then flip signs (q 1, 2: x; q 2, 3: y)
+  const bool odd = (quadrant & 1U) != 0;
+  const float x = odd ? s : c, y = odd ? c : s;
+  const uint32_t flip_x = ((quadrant + 1U) & 2U) << 30, flip_y = (quadrant & 2U) << 30;
+  return {std::bit_cast<float>(std::bit_cast<uint32_t>(x) ^ flip_x), std::bit_cast<float>(std::bit_cast<uint32_t>(y) ^ flip_y)};
 }
 
 // Cosine-weighted direction on the +z hemisphere from a point of the unit square (pdf cos/pi).
