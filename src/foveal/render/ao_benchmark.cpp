@@ -58,6 +58,23 @@ glm::dvec2 object_gaze(const Scene& scene, const Frame& frame) {
   return pick;
 }
 
+double median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  return v[v.size() / 2];
+}
+
+// AO rays of each 16×16 tile of a frame (the tiles of trace_ao).
+std::vector<uint64_t> tile_rays(const Frame& f) {
+  const int w = f.gbuffer.width, h = f.gbuffer.height, tiles_x = ao_tiles_x(w);
+  std::vector<uint64_t> rays(static_cast<size_t>(ao_tile_count(w, h)), 0);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const size_t i = static_cast<size_t>(y) * w + x;
+      if (f.gbuffer.hit(i)) rays[static_cast<size_t>((y / 16) * tiles_x + x / 16)] += f.maps.rays[i];
+    }
+  return rays;
+}
+
 }  // namespace
 
 AoBenchResult run_ao_benchmark(const Scene& scene, const Tracer& tracer, const AoBenchParams& params,
@@ -96,21 +113,33 @@ AoBenchResult run_ao_benchmark(const Scene& scene, const Tracer& tracer, const A
     std::vector<Ray> sample;
     const float ao_distance = reference.stats.ao_distance, epsilon = surface_epsilon(scene);
     collect_ao_rays(reference.gbuffer, reference.maps, ao_distance, epsilon, base.seed, params.raw_stride, sample);
-    std::vector<double> raw[3], pass;
+    std::vector<double> raw[3], pass_ms;
+    std::vector<std::vector<double>> tile_ms;  // per round, per tile
     std::vector<float> visibility;
+    uint64_t pass_rays = 0;
     for (int round = 0; round < std::max(3, params.repeats); ++round) {
       for (TraceApi api : {TraceApi::single, TraceApi::packet8, TraceApi::stream})
         raw[static_cast<int>(api)].push_back(measure_raw_occlusion(tracer, sample, api).rays_per_second);
       const Timer timer;
-      const uint64_t rays = trace_ao(tracer, reference.gbuffer, reference.maps, ao_distance, epsilon, base.seed, visibility);
-      pass.push_back(rays / (timer.ms() / 1000.0));
+      AoPassHooks hooks;
+      hooks.tile_ms = &tile_ms.emplace_back();
+      pass_rays = trace_ao(tracer, reference.gbuffer, reference.maps, ao_distance, epsilon, base.seed, visibility, hooks);
+      pass_ms.push_back(timer.ms());
     }
-    auto median = [](std::vector<double> v) {
-      std::sort(v.begin(), v.end());
-      return v[v.size() / 2];
-    };
     for (int api = 0; api < 3; ++api) cam.raw_rays_per_second[api] = median(raw[api]);
-    cam.ao_pass_rays_per_second = median(pass);
+    cam.ao_pass_rays_per_second = pass_rays / (median(pass_ms) / 1000.0);
+    // Cost of each tile's rays in the reference: median over rounds, scaled so tiles add up to the pass's wall time
+    const size_t tiles = tile_ms.front().size();
+    std::vector<double> tile_cost(tiles);
+    for (size_t t = 0; t < tiles; ++t) {
+      std::vector<double> v;
+      for (const auto& round : tile_ms) v.push_back(round[t]);
+      tile_cost[t] = median(v);
+    }
+    double cost_sum = 0;
+    for (double c : tile_cost) cost_sum += c;
+    for (double& c : tile_cost) c *= median(pass_ms) / cost_sum;
+    const std::vector<uint64_t> reference_tile_rays = tile_rays(reference);
     const double raw_same_api = cam.raw_rays_per_second[static_cast<int>(tracer.occlusion_api())];
     cam.renderer_vs_raw = raw_same_api > 0 ? cam.ao_pass_rays_per_second / raw_same_api : 0;
     say(fmt::format("{}: raw Embree occlusion on {} rays: single {:.1f}, packet8 {:.1f}, stream {:.1f} Mrays/s; "
@@ -138,6 +167,14 @@ AoBenchResult run_ao_benchmark(const Scene& scene, const Tracer& tracer, const A
       c.ao_rays_per_second = frame.stats.ao_ms > 0 ? frame.stats.ao_rays / (frame.stats.ao_ms / 1000.0) : 0;
       c.ao_ray_ratio = frame.stats.ao_rays > 0 ? static_cast<double>(reference.stats.ao_rays) / frame.stats.ao_rays : 0;
       c.efficiency = c.ao_ray_ratio > 0 ? c.speedup / c.ao_ray_ratio : 0;
+      // Expected foveated time if each kept ray cost what it cost in the reference's tile
+      const std::vector<uint64_t> rays = tile_rays(frame);
+      double expected_ao_ms = 0;
+      for (size_t t = 0; t < tile_cost.size(); ++t)
+        if (reference_tile_rays[t] > 0) expected_ao_ms += tile_cost[t] * rays[t] / static_cast<double>(reference_tile_rays[t]);
+      const double fixed_ms = frame.stats.total_ms - frame.stats.ao_ms;
+      c.cost_ratio = cam.full_ms / (expected_ao_ms + fixed_ms);
+      c.cost_efficiency = c.speedup / c.cost_ratio;
       // Fovea check: every q = 1 pixel equal, bit for bit, to the reference
       c.fovea_identical = true;
       for (size_t i = 0; i < frame.maps.quality.size(); ++i)
@@ -182,6 +219,8 @@ nlohmann::json to_json(const AoBenchResult& r) {
                            {"ao_rays_per_second", k.ao_rays_per_second},
                            {"ao_ray_ratio", k.ao_ray_ratio},
                            {"efficiency", k.efficiency},
+                           {"cost_weighted_ratio", k.cost_ratio},
+                           {"cost_efficiency", k.cost_efficiency},
                            {"fovea_identical", k.fovea_identical},
                            {"fovea_pixels", k.fovea_pixels}});
     j["cameras"].push_back(c);
@@ -192,16 +231,18 @@ nlohmann::json to_json(const AoBenchResult& r) {
 std::string to_markdown(const AoBenchResult& r) {
   std::string s = fmt::format("Scene `{}` ({} triangles, BVH {:.0f} ms), {} threads, occlusion API `{}`\n\n", r.scene, r.triangles,
                               r.build_ms, r.threads, r.trace_api);
-  s += "| camera | gaze | full fps | foveated fps | speed-up | speed-up % | AO rays/px | AO Mrays/s | ray ratio | time/rays | fovea identical |\n";
-  s += "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---|\n";
+  s += "| camera | gaze | full fps | foveated fps | speed-up | speed-up % | AO rays/px | AO Mrays/s | ray ratio | time/rays | "
+       "cost ratio | time/cost | fovea identical |\n";
+  s += "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|\n";
   for (const auto& cam : r.cameras) {
-    s += fmt::format("| {} | (full frame) | {:.3f} | | | | {:.1f} | {:.2f} | | | |\n", cam.name, cam.full_fps,
+    s += fmt::format("| {} | (full frame) | {:.3f} | | | | {:.1f} | {:.2f} | | | | | |\n", cam.name, cam.full_fps,
                      cam.full_ao_rays_per_pixel, cam.full_ao_rays_per_second / 1e6);
     for (const auto& k : cam.cases)
-      s += fmt::format("| {} | {} ({:.0f}, {:.0f}) | | {:.3f} | {:.2f}x | {:.0f}% | {:.1f} | {:.2f} | {:.2f} | {:.2f} | {} ({} px) |\n",
-                       cam.name, k.gaze_label, k.gaze_px.x, k.gaze_px.y, k.foveated_fps, k.speedup, k.speedup_pct,
-                       k.ao_rays_per_pixel, k.ao_rays_per_second / 1e6, k.ao_ray_ratio, k.efficiency,
-                       k.fovea_identical ? "yes" : "NO", k.fovea_pixels);
+      s += fmt::format(
+          "| {} | {} ({:.0f}, {:.0f}) | | {:.3f} | {:.2f}x | {:.0f}% | {:.1f} | {:.2f} | {:.2f} | {:.2f} | {:.2f} | {:.2f} | {} ({} px) |\n",
+          cam.name, k.gaze_label, k.gaze_px.x, k.gaze_px.y, k.foveated_fps, k.speedup, k.speedup_pct, k.ao_rays_per_pixel,
+          k.ao_rays_per_second / 1e6, k.ao_ray_ratio, k.efficiency, k.cost_ratio, k.cost_efficiency,
+          k.fovea_identical ? "yes" : "NO", k.fovea_pixels);
   }
   s += "\n| camera | raw Embree single Mrays/s | packet8 | stream | renderer AO pass Mrays/s | renderer / raw (same API) |\n";
   s += "|---|---:|---:|---:|---:|---:|\n";

@@ -31,6 +31,9 @@ struct AoBenchCase {
   double ao_rays_per_second = 0;
   double ao_ray_ratio = 0;       // full-frame AO rays / foveated AO rays
   double efficiency = 0;         // speedup / ao_ray_ratio (1 = time saved exactly as rays saved)
+  double cost_ratio = 0;         // full time / expected foveated time, each kept ray costing what it cost
+                                 // in its 16×16 tile of the reference
+  double cost_efficiency = 0;    // speedup / cost_ratio (1 = foveation itself costs nothing)
   bool fovea_identical = false;  // q = 1 pixels bit-identical to the full-frame reference
   size_t fovea_pixels = 0;
 };

@@ -11,6 +11,7 @@
 #include <algorithm>
 #include <atomic>
 #include <mutex>
+#include <type_traits>
 #include <cmath>
 #include <limits>
 
@@ -23,13 +24,16 @@ constexpr int kMaxRaysLimit = 65535; // n is stored in 16 bits
 
 const glm::vec3 kBackground(0.06f, 0.06f, 0.08f);
 
-// Run body(x0, x1, y0, y1) over fixed 16×16 tiles in parallel; the result never depends on the order.
+// Run body(x0, x1, y0, y1, tile) over fixed 16×16 tiles in parallel; the result never depends on the order.
 template <class Body>
 void for_each_tile(int width, int height, Body&& body) {
   const int tiles_x = (width + kTile - 1) / kTile, tiles_y = (height + kTile - 1) / kTile;
   tbb::parallel_for(0, tiles_x * tiles_y, [&](int t) {
     const int x0 = (t % tiles_x) * kTile, y0 = (t / tiles_x) * kTile;
-    body(x0, std::min(x0 + kTile, width), y0, std::min(y0 + kTile, height));
+    if constexpr (std::is_invocable_v<Body, int, int, int, int, int>)
+      body(x0, std::min(x0 + kTile, width), y0, std::min(y0 + kTile, height), t);
+    else
+      body(x0, std::min(x0 + kTile, width), y0, std::min(y0 + kTile, height));
   });
 }
 
@@ -206,8 +210,11 @@ float estimate_visibility(const Tracer& tracer, glm::vec3 position, glm::vec3 no
   return static_cast<float>(open) / static_cast<float>(rays);
 }
 
+int ao_tiles_x(int width) { return (width + kTile - 1) / kTile; }
+int ao_tile_count(int width, int height) { return ao_tiles_x(width) * ((height + kTile - 1) / kTile); }
+
 uint64_t trace_ao(const Tracer& tracer, const GBuffer& g, const FoveationMaps& maps, float ao_distance, float epsilon,
-                  uint64_t seed, std::vector<float>& visibility, const std::function<void(double)>& progress) {
+                  uint64_t seed, std::vector<float>& visibility, const AoPassHooks& hooks) {
   visibility.assign(static_cast<size_t>(g.width) * g.height, 1.0f);
   // Per-thread batch of rays from several pixels; each pixel's rays are one contiguous segment
   struct Segment {
@@ -222,11 +229,13 @@ uint64_t trace_ao(const Tracer& tracer, const GBuffer& g, const FoveationMaps& m
   };
   tbb::enumerable_thread_specific<Batch> batches;
   tbb::enumerable_thread_specific<uint64_t> traced(0);
-  const int tiles = ((g.width + kTile - 1) / kTile) * ((g.height + kTile - 1) / kTile);
+  const int tiles = ao_tile_count(g.width, g.height);
+  if (hooks.tile_ms) hooks.tile_ms->assign(static_cast<size_t>(tiles), 0.0);
   std::atomic<int> tiles_done{0};
   std::mutex progress_mutex;
   int tiles_reported = 0;  // guarded by progress_mutex
-  for_each_tile(g.width, g.height, [&](int x0, int x1, int y0, int y1) {
+  for_each_tile(g.width, g.height, [&](int x0, int x1, int y0, int y1, int tile) {
+    const Timer tile_timer;
     Batch& b = batches.local();
     size_t fill = 0;
     // Trace the batch; count each segment's open rays (a plain sum over a contiguous range)
@@ -269,15 +278,16 @@ uint64_t trace_ao(const Tracer& tracer, const GBuffer& g, const FoveationMaps& m
       }
     if (fill > 0) flush();
     finish(false);
+    if (hooks.tile_ms) (*hooks.tile_ms)[static_cast<size_t>(tile)] = tile_timer.ms();
     // Progress: whichever thread finishes a tile reports, one at a time
-    if (progress) {
+    if (hooks.progress) {
       const int done = ++tiles_done;
       std::unique_lock lock(progress_mutex, std::defer_lock);
       if (done == tiles) lock.lock();  // the last tile always reports
       else if (!lock.try_lock()) return;
       if (done > tiles_reported) {  // never backwards
         tiles_reported = done;
-        progress(static_cast<double>(done) / tiles);
+        hooks.progress(static_cast<double>(done) / tiles);
       }
     }
   });
@@ -376,7 +386,7 @@ Frame render_frame(const Tracer& tracer, const Scene& scene, const Camera& camer
   f.stats.foveation_ms = t.ms();
   // Foveated AO
   t.reset();
-  f.stats.ao_rays = trace_ao(tracer, f.gbuffer, f.maps, ao_distance, epsilon, params.seed, f.visibility, progress);
+  f.stats.ao_rays = trace_ao(tracer, f.gbuffer, f.maps, ao_distance, epsilon, params.seed, f.visibility, {progress});
   f.stats.ao_ms = t.ms();
   // Phong shading with the blended ambient term
   t.reset();

@@ -103,11 +103,17 @@ float ray_offset(glm::vec3 p, float scene_epsilon);
 GBuffer trace_primary(const Tracer& tracer, const Scene& scene, const Camera& camera, int width, int height);
 // The foveation model evaluated at every pixel (full mode: q = 1, n = n_max, b = 1).
 FoveationMaps foveation_maps(const RenderParams& params, glm::dvec2 gaze_px);
+// Optional observers of the AO pass.
+struct AoPassHooks {
+  std::function<void(double)> progress;  // finished fraction in (0, 1], called from one thread at a time
+  std::vector<double>* tile_ms = nullptr; // if set: each 16×16 tile's time on its thread, ms, in tile order
+};
+// Tiles of the AO pass, row by row: tile t covers pixels from ((t % tiles_x)·16, (t / tiles_x)·16).
+int ao_tiles_x(int width);
+int ao_tile_count(int width, int height);
 // AO visibility per pixel with maps.rays[i] rays; returns the number of rays traced.
-// `progress`, when given, is called with the finished fraction in (0, 1] from one thread at a time.
 uint64_t trace_ao(const Tracer& tracer, const GBuffer& gbuffer, const FoveationMaps& maps, float ao_distance,
-                  float epsilon, uint64_t seed, std::vector<float>& visibility,
-                  const std::function<void(double)>& progress = {});
+                  float epsilon, uint64_t seed, std::vector<float>& visibility, const AoPassHooks& hooks = {});
 // Visibility at one point from `rays` cosine-weighted directions of pixel (x, y)'s sequence:
 // the per-pixel function the AO pass runs, exposed for analytic tests.
 float estimate_visibility(const Tracer& tracer, glm::vec3 position, glm::vec3 normal, int rays, float ao_distance,
