@@ -117,7 +117,7 @@ AoBenchResult run_ao_benchmark(const Scene& scene, const Tracer& tracer, const A
     std::vector<std::vector<double>> tile_ms;  // per round, per tile
     std::vector<float> visibility;
     uint64_t pass_rays = 0;
-    for (int round = 0; round < std::max(3, params.repeats); ++round) {
+    for (int round = 0; round < std::max(5, params.repeats); ++round) {
       for (TraceApi api : {TraceApi::single, TraceApi::packet8, TraceApi::stream})
         raw[static_cast<int>(api)].push_back(measure_raw_occlusion(tracer, sample, api).rays_per_second);
       const Timer timer;
@@ -140,8 +140,11 @@ AoBenchResult run_ao_benchmark(const Scene& scene, const Tracer& tracer, const A
     for (double c : tile_cost) cost_sum += c;
     for (double& c : tile_cost) c *= median(pass_ms) / cost_sum;
     const std::vector<uint64_t> reference_tile_rays = tile_rays(reference);
-    const double raw_same_api = cam.raw_rays_per_second[static_cast<int>(tracer.occlusion_api())];
-    cam.renderer_vs_raw = raw_same_api > 0 ? cam.ao_pass_rays_per_second / raw_same_api : 0;
+    // The ratio of each round, then the median: load that drifts between rounds cancels out
+    std::vector<double> ratios;
+    const auto& raw_same_api = raw[static_cast<int>(tracer.occlusion_api())];
+    for (size_t r = 0; r < pass_ms.size(); ++r) ratios.push_back(pass_rays / (pass_ms[r] / 1000.0) / raw_same_api[r]);
+    cam.renderer_vs_raw = median(ratios);
     say(fmt::format("{}: raw Embree occlusion on {} rays: single {:.1f}, packet8 {:.1f}, stream {:.1f} Mrays/s; "
                     "renderer AO pass {:.1f} Mrays/s, renderer/raw {:.3f}",
                     camera.name, sample.size(), cam.raw_rays_per_second[0] / 1e6, cam.raw_rays_per_second[1] / 1e6,

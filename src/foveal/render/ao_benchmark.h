@@ -44,7 +44,7 @@ struct AoBenchCamera {
   double full_ms = 0, full_fps = 0, full_ao_rays_per_pixel = 0, full_ao_rays_per_second = 0;
   double raw_rays_per_second[3] = {0, 0, 0};  // indexed by TraceApi: single, packet8, stream
   double ao_pass_rays_per_second = 0;  // the renderer's AO pass on the reference frame (median)
-  double renderer_vs_raw = 0;   // renderer's AO pass rate / raw rate with the same API (medians, interleaved)
+  double renderer_vs_raw = 0;   // renderer's AO pass rate / raw rate with the same API: median over interleaved rounds
   std::vector<AoBenchCase> cases;
 };
 
