@@ -153,16 +153,26 @@ TEST(Render, GazeAnywhereIncludingOffTheImage) {
 }
 
 TEST(Render, BlendUsesTheAmbientConstantAwayFromTheGaze) {
-  // With β large the periphery uses k_const only: its ambient term is exactly k_const·i_a·albedo
+  // k_a = b·V + (1 − b)·k_const: changing k_const changes a pixel by (1 − b)·Δk·i_a·albedo exactly
   const Scene plane = make_builtin_scene("plane");
   const Tracer tracer(plane);
   RenderParams p = small_params(RenderMode::foveated);
+  p.foveation.beta = 4;
   p.ambient_constant = 0.0f;
-  p.foveation.beta = 1000;
-  const Frame f = render_frame(tracer, plane, plane.cameras.front(), p);
-  // Fully AO-weighted at the gaze, fully constant far away
-  EXPECT_EQ(f.maps.blend[40 * 160 + 50], 1.0f);
-  EXPECT_LT(f.maps.blend[99 * 160 + 159], 1e-6f);
+  const Frame dark = render_frame(tracer, plane, plane.cameras.front(), p);
+  p.ambient_constant = 0.5f;
+  const Frame bright = render_frame(tracer, plane, plane.cameras.front(), p);
+  const size_t gaze = 40 * 160 + 50, far = 99 * 160 + 159;
+  ASSERT_TRUE(dark.gbuffer.hit(gaze));
+  ASSERT_TRUE(dark.gbuffer.hit(far));
+  EXPECT_EQ(dark.maps.blend[gaze], 1.0f);
+  EXPECT_EQ(bright.color.pixels[3 * gaze], dark.color.pixels[3 * gaze]);  // b = 1: k_const unused
+  const float b = dark.maps.blend[far];
+  EXPECT_GT(b, 0.0f);
+  EXPECT_LT(b, 0.5f);
+  for (int c = 0; c < 3; ++c)
+    EXPECT_NEAR(bright.color.pixels[3 * far + c] - dark.color.pixels[3 * far + c],
+                (1 - b) * 0.5f * plane.ambient[c] * dark.gbuffer.albedo[far][c], 1e-5f);
 }
 
 TEST(Render, RejectsBadParameters) {
