@@ -13,8 +13,6 @@
 
 namespace foveal::app {
 
-Display resolve_display(const std::string& text, glm::ivec2 size);
-
 namespace {
 
 // The paper's setting: the dragon in a five-wall box, from the repository's scenes/ folder.
@@ -92,7 +90,6 @@ std::function<int()> add_bench_command(CLI::App& app) {
     if (!o->json.empty()) {
       std::ofstream out(o->json);
       auto j = to_json(result);
-      j["threads"] = threads.threads();
       j["repeats"] = p.repeats;
       out << j.dump(2) << "\n";
       if (!out) fail("{}: cannot write", o->json);

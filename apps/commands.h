@@ -1,6 +1,9 @@
 // apps/commands.h — the subcommands of the `foveal` executable.
 #pragma once
 
+#include "foveal/perception/foveation.h"
+#include "foveal/scene/scene.h"
+
 #include <CLI/CLI.hpp>
 
 #include <functional>
@@ -21,5 +24,12 @@ struct ViewOptions {
   std::string display = "47.5,30,60,1680,1050";
   int threads = 0;
 };
+
+// Camera from the options: a named one, explicit eye/look/up/fov, the scene's first, or a default.
+Camera resolve_camera(const Scene& scene, const ViewOptions& options);
+// Display from "W_CM,H_CM,DIST_CM[,RES_X,RES_Y]"; without a resolution the render size is used.
+Display resolve_display(const std::string& text, glm::ivec2 render_size);
+// Add the --scene/--camera/--eye/…/--threads options to a subcommand.
+void add_view_options(CLI::App& command, ViewOptions& options);
 
 }  // namespace foveal::app

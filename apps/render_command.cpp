@@ -17,7 +17,6 @@
 
 namespace foveal::app {
 
-// Camera from the options: a named one, explicit eye/look/up/fov, the scene's first, or a default.
 Camera resolve_camera(const Scene& scene, const ViewOptions& o) {
   Camera cam = !o.camera.empty() ? find_camera(scene, o.camera)
                : !scene.cameras.empty() ? scene.cameras.front() : default_camera(scene);
@@ -51,7 +50,6 @@ void add_view_options(CLI::App& cmd, ViewOptions& o) {
   cmd.add_option("--threads", o.threads, "worker threads (0 = all cores)")->capture_default_str()->check(CLI::Range(0, 4096));
 }
 
-// Display from the option: 3 values take the render size as the resolution.
 Display resolve_display(const std::string& text, glm::ivec2 size) {
   Display defaults;
   defaults.res_x = size.x;

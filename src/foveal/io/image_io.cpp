@@ -3,7 +3,6 @@
 
 #include "foveal/util/error.h"
 
-#include <ImfArray.h>
 #include <ImfChannelList.h>
 #include <ImfFrameBuffer.h>
 #include <ImfHeader.h>

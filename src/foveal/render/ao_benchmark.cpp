@@ -5,7 +5,7 @@
 #include "foveal/util/timer.h"
 
 #include <fmt/format.h>
-#include <tbb/info.h>
+#include <tbb/global_control.h>
 
 #include <algorithm>
 #include <cstring>
@@ -14,7 +14,12 @@
 namespace foveal {
 namespace {
 
-// Median frame of `repeats` renders (the frame itself is the same every time).
+double median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  return v[v.size() / 2];
+}
+
+// Median frame time of `repeats` renders (the frame itself is the same every time).
 Frame timed_frame(const Tracer& tracer, const Scene& scene, const Camera& camera, const RenderParams& p, int repeats,
                   double& median_ms) {
   std::vector<double> times;
@@ -23,8 +28,7 @@ Frame timed_frame(const Tracer& tracer, const Scene& scene, const Camera& camera
     frame = render_frame(tracer, scene, camera, p);
     times.push_back(frame.stats.total_ms);
   }
-  std::sort(times.begin(), times.end());
-  median_ms = times[times.size() / 2];
+  median_ms = median(times);
   return frame;
 }
 
@@ -58,19 +62,14 @@ glm::dvec2 object_gaze(const Scene& scene, const Frame& frame) {
   return pick;
 }
 
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  return v[v.size() / 2];
-}
-
-// AO rays of each 16×16 tile of a frame (the tiles of trace_ao).
+// AO rays of each tile of a frame (the tiles of trace_ao).
 std::vector<uint64_t> tile_rays(const Frame& f) {
   const int w = f.gbuffer.width, h = f.gbuffer.height, tiles_x = ao_tiles_x(w);
   std::vector<uint64_t> rays(static_cast<size_t>(ao_tile_count(w, h)), 0);
   for (int y = 0; y < h; ++y)
     for (int x = 0; x < w; ++x) {
       const size_t i = static_cast<size_t>(y) * w + x;
-      if (f.gbuffer.hit(i)) rays[static_cast<size_t>((y / 16) * tiles_x + x / 16)] += f.maps.rays[i];
+      if (f.gbuffer.hit(i)) rays[static_cast<size_t>((y / kTileSize) * tiles_x + x / kTileSize)] += f.maps.rays[i];
     }
   return rays;
 }
@@ -86,7 +85,7 @@ AoBenchResult run_ao_benchmark(const Scene& scene, const Tracer& tracer, const A
   result.scene = scene.source;
   result.triangles = tracer.triangles();
   result.build_ms = tracer.build_ms();
-  result.threads = tbb::info::default_concurrency();
+  result.threads = static_cast<int>(tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism));
   result.trace_api = to_string(tracer.occlusion_api());
   std::vector<Camera> cameras;
   if (params.cameras.empty()) cameras = scene.cameras.empty() ? std::vector<Camera>{default_camera(scene)} : scene.cameras;
@@ -111,7 +110,7 @@ AoBenchResult run_ao_benchmark(const Scene& scene, const Tracer& tracer, const A
     // Raw Embree throughput on the same rays (a sample of the reference's pixels), interleaved
     // with the renderer's AO pass on the reference frame so both see the same machine load
     std::vector<Ray> sample;
-    const float ao_distance = reference.stats.ao_distance, epsilon = surface_epsilon(scene);
+    const float ao_distance = reference.stats.ao_distance, epsilon = surface_epsilon(scene.bounds());
     collect_ao_rays(reference.gbuffer, reference.maps, ao_distance, epsilon, base.seed, params.raw_stride, sample);
     std::vector<double> raw[3], pass_ms;
     std::vector<std::vector<double>> tile_ms;  // per round, per tile

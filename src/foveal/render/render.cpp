@@ -10,15 +10,15 @@
 
 #include <algorithm>
 #include <atomic>
-#include <mutex>
-#include <type_traits>
 #include <cmath>
 #include <limits>
+#include <mutex>
+#include <type_traits>
 
 namespace foveal {
 namespace {
 
-constexpr int kTile = 16;            // pixels per tile side
+constexpr int kTile = kTileSize;     // pixels per tile side
 constexpr size_t kAoBatch = 1024;    // occlusion rays handed to the tracer at once
 constexpr int kMaxRaysLimit = 65535; // n is stored in 16 bits
 
@@ -88,32 +88,35 @@ void validate(const RenderParams& p) {
     fail("--gaze: must be finite render pixels");
 }
 
-Ray camera_ray(const Camera& camera, int width, int height, double x_px, double y_px) {
-  const glm::vec3 forward = glm::normalize(camera.look - camera.eye);
-  const glm::vec3 right = glm::normalize(glm::cross(forward, camera.up));
-  const glm::vec3 up = glm::cross(right, forward);
+CameraRays::CameraRays(const Camera& camera, int width, int height)
+    : eye_(camera.eye), forward_(glm::normalize(camera.look - camera.eye)), width_(width), height_(height) {
   const float tan_half = std::tan(glm::radians(camera.fov_deg) * 0.5f);
   const float aspect = static_cast<float>(width) / static_cast<float>(height);
-  const float sx = static_cast<float>((2.0 * x_px / width - 1.0)) * tan_half * aspect;
-  const float sy = static_cast<float>((1.0 - 2.0 * y_px / height)) * tan_half;
+  const glm::vec3 right = glm::normalize(glm::cross(forward_, camera.up));
+  right_ = right * tan_half * aspect;
+  up_ = glm::cross(right, forward_) * tan_half;
+}
+
+Ray CameraRays::operator()(double x_px, double y_px) const {
+  const auto sx = static_cast<float>(2.0 * x_px / width_ - 1.0), sy = static_cast<float>(1.0 - 2.0 * y_px / height_);
   Ray r;
-  r.org = camera.eye;
-  r.dir = glm::normalize(forward + sx * right + sy * up);
+  r.org = eye_;
+  r.dir = glm::normalize(forward_ + sx * right_ + sy * up_);
   r.tnear = 0.0f;
   r.tfar = std::numeric_limits<float>::infinity();
   return r;
 }
 
-float resolve_ao_distance(const Scene& scene, std::optional<float> requested) {
+float resolve_ao_distance(const Scene& scene, const Bounds& bounds, std::optional<float> requested) {
   if (requested) return *requested;
   if (scene.ao_distance) return *scene.ao_distance;
-  return 0.2f * scene.bounds().diagonal();
+  return 0.2f * bounds.diagonal();
 }
 
-float surface_epsilon(const Scene& scene) { return std::max(1e-9f, 1e-6f * scene.bounds().diagonal()); }
+float surface_epsilon(const Bounds& bounds) { return std::max(1e-9f, 1e-6f * bounds.diagonal()); }
 
 float ray_offset(glm::vec3 p, float scene_epsilon) {
-  // A few hundred float ulps of the point's magnitude, plus a floor tied to the scene's size
+  // About 80 float ulps of the point's magnitude, plus a floor tied to the scene's size
   return scene_epsilon + 1e-5f * std::max({std::abs(p.x), std::abs(p.y), std::abs(p.z)});
 }
 
@@ -129,13 +132,14 @@ GBuffer trace_primary(const Tracer& tracer, const Scene& scene, const Camera& ca
   g.albedo.assign(n, glm::vec3(0.0f));
   g.depth.assign(n, std::numeric_limits<float>::infinity());
   g.view.assign(n, glm::vec3(0.0f));
+  const CameraRays camera_ray(camera, width, height);
   for_each_tile(width, height, [&](int x0, int x1, int y0, int y1) {
     Ray rays[kTile * kTile];
     Hit hits[kTile * kTile];
     for (int y = y0; y < y1; ++y) {
       // One row of the tile at a time: coherent rays, one tracer call
       const int count = x1 - x0;
-      for (int x = x0; x < x1; ++x) rays[x - x0] = camera_ray(camera, width, height, x + 0.5, y + 0.5);
+      for (int x = x0; x < x1; ++x) rays[x - x0] = camera_ray(x + 0.5, y + 0.5);
       tracer.intersect({rays, static_cast<size_t>(count)}, {hits, static_cast<size_t>(count)});
       for (int x = x0; x < x1; ++x) {
         const size_t i = static_cast<size_t>(y) * width + x;
@@ -374,8 +378,9 @@ Frame render_frame(const Tracer& tracer, const Scene& scene, const Camera& camer
   Frame f;
   Timer total;
   f.gaze_px = params.gaze_px.value_or(glm::dvec2(params.width * 0.5, params.height * 0.5));
-  const float ao_distance = resolve_ao_distance(scene, params.ao_distance);
-  const float epsilon = surface_epsilon(scene);
+  const Bounds bounds = scene.bounds();
+  const float ao_distance = resolve_ao_distance(scene, bounds, params.ao_distance);
+  const float epsilon = surface_epsilon(bounds);
   // Primary rays → G-buffer
   Timer t;
   f.gbuffer = trace_primary(tracer, scene, camera, params.width, params.height);
@@ -390,7 +395,8 @@ Frame render_frame(const Tracer& tracer, const Scene& scene, const Camera& camer
   f.stats.ao_ms = t.ms();
   // Phong shading with the blended ambient term
   t.reset();
-  const float k_const = params.ambient_constant.value_or(foveal_mean_visibility(f.gbuffer, f.maps, f.visibility));
+  const float k_const = params.ambient_constant ? *params.ambient_constant
+                                                : foveal_mean_visibility(f.gbuffer, f.maps, f.visibility);
   f.color = shade(tracer, scene, camera, f.gbuffer, f.maps, f.visibility, k_const, params.shadows, epsilon,
                   &f.stats.shadow_rays);
   f.stats.shade_ms = t.ms();
@@ -405,7 +411,7 @@ Frame render_frame(const Tracer& tracer, const Scene& scene, const Camera& camer
       lo = std::min<int>(lo, f.maps.rays[i]);
       hi = std::max<int>(hi, f.maps.rays[i]);
     }
-  f.stats.ao_rays_min = hi == 0 && lo == std::numeric_limits<int>::max() ? 0 : lo;
+  f.stats.ao_rays_min = lo == std::numeric_limits<int>::max() ? 0 : lo;  // 0 when nothing was hit
   f.stats.ao_rays_max = hi;
   f.stats.ambient_constant = k_const;
   f.stats.ao_distance = ao_distance;

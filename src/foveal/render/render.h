@@ -89,13 +89,22 @@ struct Frame {
   FrameStats stats;
 };
 
-// Camera ray through a render position (pixel centres at +0.5), unit direction.
-Ray camera_ray(const Camera& camera, int width, int height, double x_px, double y_px);
+// Primary rays of a pinhole camera for one image size; the basis is computed once.
+class CameraRays {
+ public:
+  CameraRays(const Camera& camera, int width, int height);
+  // Ray through a render position (pixel centres at +0.5), unit direction.
+  Ray operator()(double x_px, double y_px) const;
+
+ private:
+  glm::vec3 eye_, forward_, right_, up_;  // right_ and up_ scaled to the image plane at distance 1
+  int width_, height_;
+};
 
 // AO ray length for a scene: the explicit value, else the scene's, else 0.2 × bounding-box diagonal.
-float resolve_ao_distance(const Scene& scene, std::optional<float> requested);
+float resolve_ao_distance(const Scene& scene, const Bounds& bounds, std::optional<float> requested);
 // Smallest offset that lifts ray origins off a surface, scene units (10⁻⁶ × scene diagonal).
-float surface_epsilon(const Scene& scene);
+float surface_epsilon(const Bounds& bounds);
 // Offset along the normal for a ray leaving point p: the scene's epsilon plus 10⁻⁵ × |p|∞.
 float ray_offset(glm::vec3 p, float scene_epsilon);
 
@@ -106,9 +115,11 @@ FoveationMaps foveation_maps(const RenderParams& params, glm::dvec2 gaze_px);
 // Optional observers of the AO pass.
 struct AoPassHooks {
   std::function<void(double)> progress;  // finished fraction in (0, 1], called from one thread at a time
-  std::vector<double>* tile_ms = nullptr; // if set: each 16×16 tile's time on its thread, ms, in tile order
+  std::vector<double>* tile_ms = nullptr; // if set: each tile's time on its thread, ms, in tile order
 };
-// Tiles of the AO pass, row by row: tile t covers pixels from ((t % tiles_x)·16, (t / tiles_x)·16).
+// Every pass runs over square tiles of this many pixels a side, row by row: tile t covers
+// pixels from ((t % tiles_x)·kTileSize, (t / tiles_x)·kTileSize).
+inline constexpr int kTileSize = 16;
 int ao_tiles_x(int width);
 int ao_tile_count(int width, int height);
 // AO visibility per pixel with maps.rays[i] rays; returns the number of rays traced.

@@ -40,7 +40,7 @@ bool same_bits(const std::vector<float>& a, const std::vector<float>& b) {
 TEST(AmbientOcclusion, SphereOverPlaneMatchesOneMinusRSquaredOverHSquared) {
   // R = 1 at height H = 2 over an infinite plane, infinite AO distance: V = 1 − (R/H)² = 0.75
   const Tracer tracer(sphere_plane());
-  const float eps = surface_epsilon(sphere_plane());
+  const float eps = surface_epsilon(sphere_plane().bounds());
   const int rays = 400, pixels = 64;
   double sum = 0;
   for (int i = 0; i < pixels; ++i)
@@ -56,7 +56,7 @@ TEST(AmbientOcclusion, SphereOverPlaneMatchesOneMinusRSquaredOverHSquared) {
 
 TEST(AmbientOcclusion, ConvergesAsRaysGrow) {
   const Tracer tracer(sphere_plane());
-  const float eps = surface_epsilon(sphere_plane());
+  const float eps = surface_epsilon(sphere_plane().bounds());
   double previous_error = 1;
   for (int rays : {7, 97, 4001}) {
     double err = 0;
@@ -72,7 +72,7 @@ TEST(AmbientOcclusion, ConvergesAsRaysGrow) {
 TEST(AmbientOcclusion, OpenPlaneIsFullyVisible) {
   const Scene plane = make_builtin_scene("plane");
   const Tracer tracer(plane);
-  EXPECT_EQ(estimate_visibility(tracer, {3, 0, -2}, {0, 1, 0}, 400, INFINITY, surface_epsilon(plane), 1, 0, 0), 1.0f);
+  EXPECT_EQ(estimate_visibility(tracer, {3, 0, -2}, {0, 1, 0}, 400, INFINITY, surface_epsilon(plane.bounds()), 1, 0, 0), 1.0f);
   // Through the renderer: every hit pixel's V is exactly 1
   RenderParams p = small_params(RenderMode::full);
   const Frame f = render_frame(tracer, plane, plane.cameras.front(), p);
@@ -88,7 +88,7 @@ TEST(AmbientOcclusion, OpenPlaneIsFullyVisible) {
 TEST(AmbientOcclusion, MaximumDistanceCutsOcclusion) {
   // The sphere's lowest point is 1 above the plane: rays shorter than that see nothing
   const Tracer tracer(sphere_plane());
-  const float eps = surface_epsilon(sphere_plane());
+  const float eps = surface_epsilon(sphere_plane().bounds());
   EXPECT_EQ(estimate_visibility(tracer, {0, 0, 0}, {0, 1, 0}, 256, 0.9f, eps, 1, 0, 0), 1.0f);
   EXPECT_LT(estimate_visibility(tracer, {0, 0, 0}, {0, 1, 0}, 256, 10.0f, eps, 1, 0, 0), 0.9f);
 }

@@ -48,7 +48,7 @@ void append_mesh_file(Scene& scene, const std::string& path, const glm::mat4& tr
   std::error_code ec;
   if (!fs::exists(path, ec)) fail("{}: no such file", path);
   if (fs::file_size(path, ec) == 0) fail("{}: file is empty", path);
-  // Triangulate, bake node transforms, drop points and lines; normals are ours (see below)
+  // Triangulate, bake node transforms, drop points and lines; append_mesh fills in missing normals
   Assimp::Importer importer;
   importer.SetPropertyInteger(AI_CONFIG_PP_SBP_REMOVE, aiPrimitiveType_POINT | aiPrimitiveType_LINE);
   const unsigned flags = aiProcess_Triangulate | aiProcess_PreTransformVertices | aiProcess_SortByPType |
