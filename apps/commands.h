@@ -1,6 +1,7 @@
 // apps/commands.h — the subcommands of the `foveal` executable.
 #pragma once
 
+#include "foveal/gaze/fixation.h"
 #include "foveal/perception/foveation.h"
 #include "foveal/scene/scene.h"
 
@@ -13,6 +14,8 @@ namespace foveal::app {
 // Each adds its subcommand to the app and returns the function that runs it after parsing.
 std::function<int()> add_render_command(CLI::App& app);
 std::function<int()> add_bench_command(CLI::App& app);
+std::function<int()> add_gaze_command(CLI::App& app);
+std::function<int()> add_replay_command(CLI::App& app);
 
 // Options shared by the commands that render: parsed text, turned into params by each command.
 struct ViewOptions {
@@ -31,5 +34,19 @@ Camera resolve_camera(const Scene& scene, const ViewOptions& options);
 Display resolve_display(const std::string& text, glm::ivec2 render_size);
 // Add the --scene/--camera/--eye/…/--threads options to a subcommand.
 void add_view_options(CLI::App& command, ViewOptions& options);
+
+// Options that say how to read a recording and filter its fixations (gaze, replay).
+struct GazeOptions {
+  std::string format = "auto", screen, eye = "average", time_unit = "s", coords = "px", origin = "top-left";
+  std::string fixations_file, blinks_file;
+  double min_confidence = 0.6;
+  std::string fixation = "ivt";
+  double ivt_threshold = 30, velocity_window_ms = 20, gap_fill_ms = 75, merge_gap_ms = 75, merge_angle = 0.5,
+         min_fixation_ms = 60, idt_dispersion = 1.0, idt_duration_ms = 100;
+};
+void add_gaze_options(CLI::App& command, GazeOptions& options);
+// Reader options (screen for normalised coordinates defaults to the display's resolution).
+ReadOptions resolve_read_options(const GazeOptions& options, const Display& display);
+FixationParams resolve_fixation_params(const GazeOptions& options);
 
 }  // namespace foveal::app

@@ -14,6 +14,7 @@ int main(int argc, char** argv) {
   std::function<int()> run;
   const auto render = foveal::app::add_render_command(app);
   const auto bench = foveal::app::add_bench_command(app);
+  const auto gaze = foveal::app::add_gaze_command(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
@@ -30,6 +31,7 @@ int main(int argc, char** argv) {
   try {
     if (app.got_subcommand("render")) return render();
     if (app.got_subcommand("bench")) return bench();
+    if (app.got_subcommand("gaze")) return gaze();
     return 2;
   } catch (const foveal::Error& e) {
     fmt::print(stderr, "foveal: error: {}\n", e.what());

@@ -7,6 +7,7 @@ packages=(
   libembree-dev libtbb-dev libassimp-dev libglm-dev libcli11-dev nlohmann-json3-dev libfmt-dev
   libopenexr-dev libopencv-core-dev libopencv-imgproc-dev libopencv-imgcodecs-dev
   libgtest-dev libgmock-dev libbenchmark-dev
+  cppzmq-dev libmsgpack-cxx-dev ffmpeg
 )
 missing=()
 for p in "${packages[@]}"; do

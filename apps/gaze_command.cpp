@@ -1,0 +1,128 @@
+// apps/gaze_command.cpp — `foveal gaze`: read a recording, summarise it, filter its fixations,
+// compare them with the tracker's own, draw the scan path.
+#include "commands.h"
+#include "foveal/gaze/summary.h"
+#include "foveal/io/scanpath.h"
+#include "foveal/util/error.h"
+#include "foveal/util/parse.h"
+
+#include <fmt/core.h>
+
+#include <filesystem>
+#include <fstream>
+#include <memory>
+
+namespace foveal::app {
+
+void add_gaze_options(CLI::App& cmd, GazeOptions& o) {
+  cmd.add_option("--format", o.format, "recording format: auto, asc (EyeLink), pupil (Pupil Player gaze_positions.csv), tobii (SDK or Pro Lab TSV), csv (t,x,y[,confidence])")
+      ->capture_default_str();
+  cmd.add_option("--screen", o.screen, "screen WxH in pixels for normalised coordinates (Pupil, Tobii SDK, --coords norm) or to override the file's (default: the display's resolution)");
+  cmd.add_option("--eye", o.eye, "binocular recordings: average (of the valid eyes), left or right")->capture_default_str();
+  cmd.add_option("--min-confidence", o.min_confidence, "samples with lower tracker confidence are invalid (Pupil's default)")
+      ->capture_default_str()->check(CLI::Range(0.0, 1.0));
+  cmd.add_option("--time-unit", o.time_unit, "csv: unit of the t column: s, ms or us")->capture_default_str();
+  cmd.add_option("--coords", o.coords, "csv: x, y in px (screen pixels) or norm ([0,1] of the screen)")->capture_default_str();
+  cmd.add_option("--origin", o.origin, "csv: top-left or bottom-left")->capture_default_str();
+  cmd.add_option("--fixations", o.fixations_file, "Pupil: the tracker's fixations.csv (default: the one beside the recording)");
+  cmd.add_option("--blinks", o.blinks_file, "Pupil: the tracker's blinks.csv (default: the one beside the recording)");
+  cmd.add_option("--fixation", o.fixation, "fixation filter: mean (the paper's per-frame mean), ivt (velocity threshold) or idt (dispersion threshold)")
+      ->capture_default_str();
+  cmd.add_option("--ivt-threshold", o.ivt_threshold, "I-VT velocity threshold, deg/s")->capture_default_str();
+  cmd.add_option("--velocity-window-ms", o.velocity_window_ms, "I-VT velocity window, ms")->capture_default_str();
+  cmd.add_option("--gap-fill-ms", o.gap_fill_ms, "invalid gaps up to this long are interpolated, ms")->capture_default_str();
+  cmd.add_option("--merge-gap-ms", o.merge_gap_ms, "I-VT: merge fixations less than this apart in time, ms …")->capture_default_str();
+  cmd.add_option("--merge-angle", o.merge_angle, "… and this apart in angle, deg")->capture_default_str();
+  cmd.add_option("--min-fixation-ms", o.min_fixation_ms, "I-VT: discard shorter fixations, ms")->capture_default_str();
+  cmd.add_option("--idt-dispersion", o.idt_dispersion, "I-DT dispersion limit (x range + y range), deg")->capture_default_str();
+  cmd.add_option("--idt-duration-ms", o.idt_duration_ms, "I-DT minimum fixation duration, ms")->capture_default_str();
+}
+
+ReadOptions resolve_read_options(const GazeOptions& o, const Display& display) {
+  ReadOptions r;
+  r.format = parse_gaze_format(o.format);
+  r.screen_px = {display.res_x, display.res_y};
+  if (!o.screen.empty()) {
+    r.screen_px = parse_size("--screen", o.screen);
+    r.screen_from_user = true;
+  }
+  r.eye = parse_eye_selection(o.eye);
+  r.min_confidence = static_cast<float>(o.min_confidence);
+  if (o.time_unit == "s") r.csv_time_scale = 1;
+  else if (o.time_unit == "ms") r.csv_time_scale = 1e-3;
+  else if (o.time_unit == "us") r.csv_time_scale = 1e-6;
+  else fail("--time-unit: unknown unit '{}' (expected s, ms or us)", o.time_unit);
+  if (o.coords != "px" && o.coords != "norm") fail("--coords: expected px or norm, got '{}'", o.coords);
+  r.csv_normalised = o.coords == "norm";
+  if (o.origin != "top-left" && o.origin != "bottom-left") fail("--origin: expected top-left or bottom-left, got '{}'", o.origin);
+  r.csv_origin_bottom_left = o.origin == "bottom-left";
+  r.fixations_file = o.fixations_file;
+  r.blinks_file = o.blinks_file;
+  return r;
+}
+
+FixationParams resolve_fixation_params(const GazeOptions& o) {
+  FixationParams p;
+  p.velocity_threshold_deg_s = o.ivt_threshold;
+  p.velocity_window_s = o.velocity_window_ms / 1000;
+  p.gap_fill_s = o.gap_fill_ms / 1000;
+  p.merge_gap_s = o.merge_gap_ms / 1000;
+  p.merge_angle_deg = o.merge_angle;
+  p.min_fixation_s = o.min_fixation_ms / 1000;
+  p.dispersion_deg = o.idt_dispersion;
+  p.min_duration_s = o.idt_duration_ms / 1000;
+  validate(p);
+  return p;
+}
+
+std::function<int()> add_gaze_command(CLI::App& app) {
+  auto* cmd = app.add_subcommand("gaze", "summarise an eye-tracker recording: samples, fixations (I-VT, I-DT), agreement with the tracker, scan path");
+  struct Options {
+    std::string recording, json, scanpath = "scanpath.png", display = "47.5,30,60";
+    GazeOptions gaze;
+    bool no_scanpath = false, quiet = false;
+  };
+  auto o = std::make_shared<Options>();
+  cmd->add_option("RECORDING", o->recording, "EyeLink .asc, Pupil gaze_positions.csv, Tobii .tsv or a t,x,y CSV")->required();
+  add_gaze_options(*cmd, o->gaze);
+  cmd->add_option("--display", o->display, "the recording's screen W_CM,H_CM,DIST_CM[,RES_X,RES_Y] (angles for the filters); the resolution defaults to the recording's screen")
+      ->capture_default_str();
+  cmd->add_option("--json", o->json, "write the summary as JSON");
+  cmd->add_option("--scanpath", o->scanpath, "scan-path picture (PNG) of the --fixation filter's fixations")->capture_default_str();
+  cmd->add_flag("--no-scanpath", o->no_scanpath, "do not draw the scan path");
+  cmd->add_flag("-q,--quiet", o->quiet, "print nothing on success");
+
+  return [o] {
+    Display display = parse_display(o->display, Display{});
+    const bool display_has_resolution = parse_numbers("--display", o->display).size() == 5;
+    const ReadOptions read = resolve_read_options(o->gaze, display);
+    const FixationParams params = resolve_fixation_params(o->gaze);
+    const FixationMethod method = parse_fixation_method(o->gaze.fixation);
+    const Recording recording = read_recording(o->recording, read);
+    if (!display_has_resolution) {
+      display.res_x = recording.screen_px.x;
+      display.res_y = recording.screen_px.y;
+    }
+    const GazeSummary summary = summarize_recording(recording, display, params);
+    if (!o->json.empty()) {
+      std::ofstream out(o->json);
+      out << summary.json.dump(2) << "\n";
+      if (!out) fail("{}: cannot write JSON", o->json);
+    }
+    if (!o->no_scanpath) {
+      const FixationResult& shown = method == FixationMethod::idt ? summary.filters[1].result : summary.filters[0].result;
+      ScanpathStyle style;
+      style.title = fmt::format("{} - {} fixations ({})", std::filesystem::path(recording.source).filename().string(),
+                                shown.fixations.size(), method == FixationMethod::idt ? "I-DT" : "I-VT");
+      write_scanpath(recording, shown, o->scanpath, style);
+    }
+    if (o->quiet) return 0;
+    fmt::print("{}", format_summary(recording, summary));
+    if (method == FixationMethod::mean) fmt::print("  (mean is a per-frame average, not a fixation detector: the scan path shows I-VT)\n");
+    if (!o->json.empty()) fmt::print("  wrote     {}\n", o->json);
+    if (!o->no_scanpath) fmt::print("  wrote     {}\n", o->scanpath);
+    return 0;
+  };
+}
+
+}  // namespace foveal::app

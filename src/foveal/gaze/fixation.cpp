@@ -1,0 +1,425 @@
+// foveal/gaze/fixation.cpp — I-VT, I-DT, agreement, the causal tracker and the screen mapping.
+#include "foveal/gaze/fixation.h"
+
+#include "foveal/util/error.h"
+#include "foveal/util/parse.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace foveal {
+
+// ---------------------------------------------------------------------------------------------
+// Geometry
+
+GazeGeometry::GazeGeometry(const Display& display, glm::ivec2 screen_px)
+    : screen_(screen_px),
+      cm_per_px_(display.width_cm / screen_px.x, display.height_cm / screen_px.y),
+      distance_cm_(display.distance_cm) {
+  if (screen_px.x < 1 || screen_px.y < 1) fail("gaze screen must be at least 1x1 pixels");
+}
+
+glm::dvec3 GazeGeometry::direction(glm::dvec2 px) const {
+  const glm::dvec2 cm = (px - 0.5 * glm::dvec2(screen_)) * cm_per_px_;
+  return glm::normalize(glm::dvec3(cm.x, cm.y, distance_cm_));
+}
+
+glm::dvec3 GazeGeometry::direction(const GazeSample& s) const { return s.direction ? *s.direction : direction(s.px); }
+
+glm::dvec2 GazeGeometry::angles_deg(glm::dvec3 d) {
+  return glm::degrees(glm::dvec2(std::atan2(d.x, d.z), std::atan2(d.y, d.z)));
+}
+
+double GazeGeometry::pixels_per_degree() const {
+  return screen_.x / glm::degrees(2 * std::atan(0.5 * screen_.x * cm_per_px_.x / distance_cm_));
+}
+
+double angle_between_deg(glm::dvec3 a, glm::dvec3 b) {
+  // atan2 of |a×b| and a·b keeps precision where acos would not
+  return glm::degrees(std::atan2(glm::length(glm::cross(a, b)), glm::dot(a, b)));
+}
+
+const char* to_string(FixationMethod m) {
+  switch (m) {
+    case FixationMethod::mean: return "mean";
+    case FixationMethod::ivt: return "ivt";
+    case FixationMethod::idt: return "idt";
+  }
+  return "?";
+}
+
+FixationMethod parse_fixation_method(const std::string& name) {
+  for (FixationMethod m : {FixationMethod::mean, FixationMethod::ivt, FixationMethod::idt})
+    if (name == to_string(m)) return m;
+  fail("--fixation: unknown filter '{}' (expected mean, ivt or idt)", name);
+}
+
+void validate(const FixationParams& p) {
+  auto positive = [](double v, const char* option) {
+    if (!(v > 0) || !std::isfinite(v)) fail("{}: must be a positive number, got {}", option, v);
+  };
+  auto non_negative = [](double v, const char* option) {
+    if (!(v >= 0) || !std::isfinite(v)) fail("{}: must be zero or positive, got {}", option, v);
+  };
+  positive(p.velocity_threshold_deg_s, "--ivt-threshold");
+  positive(p.velocity_window_s, "--velocity-window-ms");
+  non_negative(p.gap_fill_s, "--gap-fill-ms");
+  non_negative(p.merge_gap_s, "--merge-gap-ms");
+  non_negative(p.merge_angle_deg, "--merge-angle");
+  non_negative(p.min_fixation_s, "--min-fixation-ms");
+  positive(p.dispersion_deg, "--idt-dispersion");
+  non_negative(p.min_duration_s, "--idt-duration-ms");
+}
+
+// ---------------------------------------------------------------------------------------------
+// Preparation shared by the offline filters: directions, gap fill, runs
+
+namespace {
+
+struct Prepared {
+  std::vector<glm::dvec3> dir;
+  std::vector<glm::dvec2> angles;  // degrees
+  std::vector<bool> usable;        // valid, or inside a filled gap
+  std::vector<int> run;            // samples of one run have no unusable sample or long gap between them
+};
+
+Prepared prepare(const Recording& r, const GazeGeometry& g, const FixationParams& p) {
+  const auto& s = r.samples;
+  const size_t n = s.size();
+  Prepared out;
+  out.dir.assign(n, glm::dvec3(0, 0, 1));
+  out.usable.assign(n, false);
+  for (size_t i = 0; i < n; ++i)
+    if (s[i].valid) {
+      out.dir[i] = g.direction(s[i]);
+      out.usable[i] = true;
+    }
+  // Gap fill: invalid stretches between valid samples at most gap_fill_s apart are interpolated
+  size_t last_valid = n;
+  for (size_t i = 0; i < n; ++i) {
+    if (!s[i].valid) continue;
+    if (last_valid != n && i > last_valid + 1 && s[i].t_s - s[last_valid].t_s <= p.gap_fill_s) {
+      const double t0 = s[last_valid].t_s, span = s[i].t_s - t0;
+      for (size_t k = last_valid + 1; k < i; ++k) {
+        const double w = span > 0 ? (s[k].t_s - t0) / span : 0.5;
+        out.dir[k] = glm::normalize(glm::mix(out.dir[last_valid], out.dir[i], w));
+        out.usable[k] = true;
+      }
+    }
+    last_valid = i;
+  }
+  out.angles.resize(n);
+  for (size_t i = 0; i < n; ++i) out.angles[i] = GazeGeometry::angles_deg(out.dir[i]);
+  // Runs: broken by unusable samples and by time gaps longer than the gap fill (block breaks)
+  out.run.assign(n, -1);
+  int run = -1;
+  for (size_t i = 0; i < n; ++i) {
+    if (!out.usable[i]) continue;
+    const bool continues = i > 0 && out.usable[i - 1] && s[i].t_s - s[i - 1].t_s <= std::max(p.gap_fill_s, 1e-9);
+    if (!continues) ++run;
+    out.run[i] = run;
+  }
+  return out;
+}
+
+// Fixation centre: mean of the valid samples in [first, last] (of the filled ones if none is valid).
+glm::dvec2 centre(const Recording& r, size_t first, size_t last) {
+  glm::dvec2 sum{0};
+  size_t count = 0;
+  for (size_t i = first; i <= last; ++i)
+    if (r.samples[i].valid) {
+      sum += r.samples[i].px;
+      ++count;
+    }
+  return count ? sum / static_cast<double>(count) : glm::dvec2(NAN);
+}
+
+Fixation make_fixation(const Recording& r, size_t first, size_t last) {
+  Fixation f;
+  f.first = first;
+  f.last = last;
+  f.start_s = r.samples[first].t_s;
+  f.end_s = r.samples[last].t_s;
+  f.px = centre(r, first, last);
+  return f;
+}
+
+FixationResult with_labels(std::vector<Fixation> fixations, size_t n) {
+  FixationResult out;
+  out.label.assign(n, -1);
+  for (const Fixation& f : fixations) {
+    for (size_t i = f.first; i <= f.last; ++i) out.label[i] = static_cast<int>(out.fixations.size());
+    out.fixations.push_back(f);
+  }
+  return out;
+}
+
+}  // namespace
+
+FixationResult detect_ivt(const Recording& r, const GazeGeometry& g, const FixationParams& p) {
+  validate(p);
+  const auto& s = r.samples;
+  const size_t n = s.size();
+  const Prepared prep = prepare(r, g, p);
+  // Velocity over the window centred on each sample, within its run
+  std::vector<bool> slow(n, false);
+  const double half = 0.5 * p.velocity_window_s;
+  size_t lo = 0, hi = 0;
+  for (size_t i = 0; i < n; ++i) {
+    if (prep.run[i] < 0) continue;
+    if (lo > i) lo = i;
+    while (lo < i && (prep.run[lo] != prep.run[i] || s[i].t_s - s[lo].t_s > half)) ++lo;
+    hi = std::max(hi, i);
+    while (hi + 1 < n && prep.run[hi + 1] == prep.run[i] && s[hi + 1].t_s - s[i].t_s <= half) ++hi;
+    size_t a = lo, b = hi;
+    if (a == b) {  // the window holds this sample only: use its neighbours in the run
+      if (i + 1 < n && prep.run[i + 1] == prep.run[i]) b = i + 1;
+      else if (i > 0 && prep.run[i - 1] == prep.run[i]) a = i - 1;
+      else continue;
+    }
+    const double dt = s[b].t_s - s[a].t_s;
+    if (dt <= 0) continue;
+    slow[i] = angle_between_deg(prep.dir[a], prep.dir[b]) / dt < p.velocity_threshold_deg_s;
+  }
+  // Runs of slow samples become fixations
+  std::vector<Fixation> fixations;
+  for (size_t i = 0; i < n;) {
+    if (!slow[i]) {
+      ++i;
+      continue;
+    }
+    size_t j = i;
+    while (j + 1 < n && slow[j + 1] && prep.run[j + 1] == prep.run[i]) ++j;
+    fixations.push_back(make_fixation(r, i, j));
+    i = j + 1;
+  }
+  // Merge neighbours close in time and angle
+  std::vector<Fixation> merged;
+  for (const Fixation& f : fixations) {
+    if (!merged.empty()) {
+      Fixation& m = merged.back();
+      const bool close_in_time = f.start_s - m.end_s <= p.merge_gap_s;
+      const bool close_in_angle =
+          std::isfinite(m.px.x) && std::isfinite(f.px.x) && angle_between_deg(g.direction(m.px), g.direction(f.px)) <= p.merge_angle_deg;
+      if (close_in_time && close_in_angle) {
+        m = make_fixation(r, m.first, f.last);
+        continue;
+      }
+    }
+    merged.push_back(f);
+  }
+  // Discard short ones
+  std::erase_if(merged, [&](const Fixation& f) { return f.duration_s() < p.min_fixation_s || !std::isfinite(f.px.x); });
+  return with_labels(std::move(merged), n);
+}
+
+FixationResult detect_idt(const Recording& r, const GazeGeometry& g, const FixationParams& p) {
+  validate(p);
+  const auto& s = r.samples;
+  const size_t n = s.size();
+  const Prepared prep = prepare(r, g, p);
+  std::vector<Fixation> fixations;
+  size_t i = 0;
+  while (i < n) {
+    if (prep.run[i] < 0) {
+      ++i;
+      continue;
+    }
+    // The smallest window from i that spans the minimum duration
+    size_t j = i;
+    while (j + 1 < n && prep.run[j + 1] == prep.run[i] && s[j].t_s - s[i].t_s < p.min_duration_s) ++j;
+    if (s[j].t_s - s[i].t_s < p.min_duration_s) {  // the run ends first
+      i = j + 1;
+      continue;
+    }
+    glm::dvec2 lo = prep.angles[i], hi = prep.angles[i];
+    for (size_t k = i + 1; k <= j; ++k) {
+      lo = glm::min(lo, prep.angles[k]);
+      hi = glm::max(hi, prep.angles[k]);
+    }
+    auto dispersion = [](glm::dvec2 a, glm::dvec2 b) { return (b.x - a.x) + (b.y - a.y); };
+    if (dispersion(lo, hi) > p.dispersion_deg) {
+      ++i;
+      continue;
+    }
+    // Grow the window while the dispersion stays within the limit
+    while (j + 1 < n && prep.run[j + 1] == prep.run[i]) {
+      const glm::dvec2 lo2 = glm::min(lo, prep.angles[j + 1]), hi2 = glm::max(hi, prep.angles[j + 1]);
+      if (dispersion(lo2, hi2) > p.dispersion_deg) break;
+      lo = lo2;
+      hi = hi2;
+      ++j;
+    }
+    Fixation f = make_fixation(r, i, j);
+    if (std::isfinite(f.px.x)) fixations.push_back(f);
+    i = j + 1;
+  }
+  return with_labels(std::move(fixations), n);
+}
+
+std::vector<bool> fixation_mask(const FixationResult& result) {
+  std::vector<bool> mask(result.label.size());
+  for (size_t i = 0; i < mask.size(); ++i) mask[i] = result.label[i] >= 0;
+  return mask;
+}
+
+Agreement agreement_with_events(const Recording& r, const std::vector<bool>& is_fixation, const std::vector<GazeEvent>& events) {
+  if (is_fixation.size() != r.samples.size()) fail("agreement: {} labels for {} samples", is_fixation.size(), r.samples.size());
+  std::vector<GazeEvent> sorted = events;
+  std::sort(sorted.begin(), sorted.end(), [](const GazeEvent& a, const GazeEvent& b) { return a.start_s < b.start_s; });
+  // Sweep: an event may overlap the next; track the furthest end seen among started events
+  size_t next = 0, n_valid = 0, both = 0, filter_only = 0, reference_only = 0;
+  double open_until = -INFINITY;
+  for (size_t i = 0; i < r.samples.size(); ++i) {
+    const double t = r.samples[i].t_s;
+    while (next < sorted.size() && sorted[next].start_s <= t) open_until = std::max(open_until, sorted[next++].end_s);
+    if (!r.samples[i].valid) continue;
+    const bool reference = t <= open_until, filter = is_fixation[i];
+    ++n_valid;
+    both += reference && filter;
+    filter_only += filter && !reference;
+    reference_only += reference && !filter;
+  }
+  Agreement a;
+  a.samples = n_valid;
+  if (n_valid == 0) return a;
+  const double n = static_cast<double>(n_valid);
+  const double neither = n - both - filter_only - reference_only;
+  a.agreement = (both + neither) / n;
+  a.filter_fraction = (both + filter_only) / n;
+  a.reference_fraction = (both + reference_only) / n;
+  const double expected = a.filter_fraction * a.reference_fraction + (1 - a.filter_fraction) * (1 - a.reference_fraction);
+  a.kappa = expected < 1 ? (a.agreement - expected) / (1 - expected) : (a.agreement == 1 ? 1.0 : 0.0);
+  return a;
+}
+
+// ---------------------------------------------------------------------------------------------
+// The causal tracker
+
+FixationTracker::FixationTracker(FixationMethod method, const FixationParams& params, const GazeGeometry& geometry)
+    : method_(method), params_(params), geometry_(geometry) {
+  validate(params_);
+}
+
+void FixationTracker::reset_candidate() {
+  window_.clear();
+  candidate_sum_ = glm::dvec2(0);
+  candidate_count_ = 0;
+  in_fixation_ = false;
+}
+
+void FixationTracker::push(const GazeSample& s) {
+  if (!s.valid) {
+    // A gap longer than the gap fill ends any candidate; the output is held either way
+    if (s.t_s - last_valid_t_ > params_.gap_fill_s && method_ != FixationMethod::mean) reset_candidate();
+    if (method_ == FixationMethod::mean) in_fixation_ = false;
+    return;
+  }
+  if (s.t_s - last_valid_t_ > params_.gap_fill_s && method_ != FixationMethod::mean) reset_candidate();
+  last_valid_t_ = s.t_s;
+  const glm::dvec3 dir = geometry_.direction(s);
+  const Entry e{s.t_s, dir, s.px, GazeGeometry::angles_deg(dir)};
+  switch (method_) {
+    case FixationMethod::mean:
+      frame_sum_ += s.px;
+      ++frame_count_;
+      in_fixation_ = true;
+      break;
+    case FixationMethod::ivt: push_ivt(e); break;
+    case FixationMethod::idt: push_idt(e); break;
+  }
+}
+
+void FixationTracker::push_ivt(const Entry& e) {
+  // Velocity from the oldest sample within the window behind this one
+  window_.push_back(e);
+  while (window_.size() > 2 && e.t - window_[1].t >= params_.velocity_window_s) window_.pop_front();
+  if (window_.size() < 2) return;
+  const Entry& a = window_.front();
+  const double dt = e.t - a.t;
+  if (dt <= 0) return;
+  const double velocity = angle_between_deg(a.dir, e.dir) / dt;
+  if (velocity >= params_.velocity_threshold_deg_s) {  // saccade: hold the last fixation
+    candidate_sum_ = glm::dvec2(0);
+    candidate_count_ = 0;
+    in_fixation_ = false;
+    return;
+  }
+  if (candidate_count_ == 0) candidate_start_ = e.t;
+  candidate_sum_ += e.px;
+  ++candidate_count_;
+  if (e.t - candidate_start_ >= params_.min_fixation_s) {
+    in_fixation_ = true;
+    output_ = candidate_sum_ / static_cast<double>(candidate_count_);
+  }
+}
+
+void FixationTracker::push_idt(const Entry& e) {
+  auto dispersion = [](glm::dvec2 lo, glm::dvec2 hi) { return (hi.x - lo.x) + (hi.y - lo.y); };
+  if (in_fixation_) {
+    const glm::dvec2 lo = glm::min(lo_, e.angles), hi = glm::max(hi_, e.angles);
+    if (dispersion(lo, hi) <= params_.dispersion_deg) {  // the fixation goes on
+      lo_ = lo;
+      hi_ = hi;
+      candidate_sum_ += e.px;
+      ++candidate_count_;
+      output_ = candidate_sum_ / static_cast<double>(candidate_count_);
+      return;
+    }
+    reset_candidate();  // it ended; this sample starts the next window
+  }
+  window_.push_back(e);
+  // Drop the oldest samples until the window is within the limit
+  for (;;) {
+    glm::dvec2 lo = window_.front().angles, hi = lo;
+    for (const Entry& w : window_) {
+      lo = glm::min(lo, w.angles);
+      hi = glm::max(hi, w.angles);
+    }
+    if (dispersion(lo, hi) <= params_.dispersion_deg) {
+      lo_ = lo;
+      hi_ = hi;
+      break;
+    }
+    window_.pop_front();
+  }
+  if (window_.back().t - window_.front().t >= params_.min_duration_s) {
+    in_fixation_ = true;
+    candidate_sum_ = glm::dvec2(0);
+    for (const Entry& w : window_) candidate_sum_ += w.px;
+    candidate_count_ = window_.size();
+    window_.clear();
+    output_ = candidate_sum_ / static_cast<double>(candidate_count_);
+  }
+}
+
+std::optional<glm::dvec2> FixationTracker::frame_gaze() {
+  if (method_ == FixationMethod::mean && frame_count_ > 0) {
+    output_ = frame_sum_ / static_cast<double>(frame_count_);
+    frame_sum_ = glm::dvec2(0);
+    frame_count_ = 0;
+  }
+  return output_;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Screen → render
+
+glm::dvec2 ScreenMapping::to_render(glm::dvec2 p) const {
+  return (p - glm::dvec2(rect.x, rect.y)) / glm::dvec2(rect.z, rect.w) * glm::dvec2(render_px);
+}
+
+ScreenMapping make_screen_mapping(glm::ivec2 screen_px, glm::ivec2 render_px, const std::string& rect) {
+  ScreenMapping m;
+  m.screen_px = screen_px;
+  m.render_px = render_px;
+  m.rect = {0, 0, screen_px.x, screen_px.y};
+  if (!rect.empty()) {
+    const auto v = parse_numbers("--stimulus", rect, 4);
+    if (!(v[2] > 0 && v[3] > 0)) fail("--stimulus: width and height must be positive, got '{}'", rect);
+    m.rect = {v[0], v[1], v[2], v[3]};
+  }
+  return m;
+}
+
+}  // namespace foveal

@@ -1,0 +1,152 @@
+// foveal/gaze/fixation.h — fixation filters (I-VT, I-DT, the paper's per-frame mean), their
+// agreement with a tracker's own events, a causal filter for live gaze, and the screen → render map.
+//
+// Angles come from the display geometry: a screen pixel is a point on a W×H cm screen seen from
+// d cm by an eye in front of its centre (the recording's screen fills the display), so a gaze
+// sample is a direction and the distance between two samples is the exact angle between them.
+// Where the tracker gives a 3-D gaze direction (Pupil's gaze_point_3d) that is used instead.
+#pragma once
+
+#include "foveal/gaze/recording.h"
+#include "foveal/perception/foveation.h"
+
+#include <deque>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace foveal {
+
+// Screen pixels ↔ gaze directions for one screen.
+class GazeGeometry {
+ public:
+  // The display's physical size and distance; the screen's pixels span its full width and height.
+  GazeGeometry(const Display& display, glm::ivec2 screen_px);
+  // Unit direction from the eye through a screen point (+z towards the screen, +y down).
+  glm::dvec3 direction(glm::dvec2 px) const;
+  // Direction of a sample: the tracker's own where it has one, else through its screen point.
+  glm::dvec3 direction(const GazeSample& sample) const;
+  // Horizontal and vertical angles of a direction from straight ahead, degrees.
+  static glm::dvec2 angles_deg(glm::dvec3 direction);
+  // Pixels per degree at the screen centre (horizontal).
+  double pixels_per_degree() const;
+  glm::ivec2 screen_px() const { return screen_; }
+
+ private:
+  glm::ivec2 screen_;
+  glm::dvec2 cm_per_px_;
+  double distance_cm_;
+};
+
+// Angle between two unit directions, degrees (exact also for tiny angles).
+double angle_between_deg(glm::dvec3 a, glm::dvec3 b);
+
+enum class FixationMethod { mean, ivt, idt };
+const char* to_string(FixationMethod method);
+FixationMethod parse_fixation_method(const std::string& name);  // throws Error
+
+// Filter parameters. I-VT defaults are Tobii Pro's I-VT (fixation) filter (Olsen 2012) without
+// its optional noise reduction; I-DT defaults follow Salvucci & Goldberg (2000).
+struct FixationParams {
+  double velocity_threshold_deg_s = 30;  // I-VT: slower samples are fixation samples
+  double velocity_window_s = 0.020;      // I-VT: velocity over the samples within ±10 ms
+  double gap_fill_s = 0.075;             // both: invalid gaps up to this long are interpolated
+  double merge_gap_s = 0.075;            // I-VT: fixations closer in time than this …
+  double merge_angle_deg = 0.5;          // … and in angle than this are merged
+  double min_fixation_s = 0.060;         // I-VT: shorter fixations are discarded
+  double dispersion_deg = 1.0;           // I-DT: (max−min) x + (max−min) y of a fixation, degrees
+  double min_duration_s = 0.100;         // I-DT: minimum fixation duration
+};
+// Check parameters; throws Error naming the option.
+void validate(const FixationParams& params);
+
+struct Fixation {
+  double start_s = 0, end_s = 0;  // first and last sample's time
+  glm::dvec2 px{0};               // mean of its valid samples, screen pixels
+  size_t first = 0, last = 0;     // sample indices, inclusive
+  double duration_s() const { return end_s - start_s; }
+};
+
+struct FixationResult {
+  std::vector<Fixation> fixations;
+  std::vector<int> label;  // per sample: its fixation's index, or −1 (saccade, gap, unclassified)
+};
+
+// Offline filters over a whole recording.
+FixationResult detect_ivt(const Recording& recording, const GazeGeometry& geometry, const FixationParams& params);
+FixationResult detect_idt(const Recording& recording, const GazeGeometry& geometry, const FixationParams& params);
+
+// Sample-by-sample agreement of fixation/non-fixation labels over the recording's valid samples.
+struct Agreement {
+  size_t samples = 0;             // valid samples compared
+  double agreement = 0;           // fraction classified alike
+  double kappa = 0;               // Cohen's kappa
+  double filter_fraction = 0;     // fraction the filter calls fixation
+  double reference_fraction = 0;  // fraction the reference calls fixation
+};
+// `is_fixation[i]` for each sample against "sample i lies inside one of `events`".
+Agreement agreement_with_events(const Recording& recording, const std::vector<bool>& is_fixation,
+                                const std::vector<GazeEvent>& events);
+std::vector<bool> fixation_mask(const FixationResult& result);
+
+// A causal filter: samples go in, in time order, as they would arrive from a tracker; the output
+// is the gaze point to render with. Invalid samples (lost eye, low confidence, blink) never move it.
+//   mean: the mean of the valid samples since the last frame (the paper's method);
+//   ivt:  the running mean of the current fixation once its samples have stayed below the velocity
+//         threshold for the minimum fixation time;
+//   idt:  the centroid of the current window once it has stayed within the dispersion limit for
+//         the minimum duration.
+// Between fixations (saccades, gaps) the last fixation is held.
+class FixationTracker {
+ public:
+  FixationTracker(FixationMethod method, const FixationParams& params, const GazeGeometry& geometry);
+  void push(const GazeSample& sample);
+  // The gaze point for a frame that starts now (after pushing the samples up to its start time);
+  // nullopt until the first fixation (or valid sample, for mean).
+  std::optional<glm::dvec2> frame_gaze();
+  // Whether the latest sample belongs to an established fixation (mean: whether it was valid).
+  bool in_fixation() const { return in_fixation_; }
+  // The last output without consuming the frame's samples.
+  std::optional<glm::dvec2> current() const { return output_; }
+
+ private:
+  struct Entry {
+    double t;
+    glm::dvec3 dir;
+    glm::dvec2 px;
+    glm::dvec2 angles;
+  };
+  void reset_candidate();
+  void push_ivt(const Entry& e);
+  void push_idt(const Entry& e);
+
+  FixationMethod method_;
+  FixationParams params_;
+  GazeGeometry geometry_;
+  std::optional<glm::dvec2> output_;
+  bool in_fixation_ = false;
+  double last_valid_t_ = -INFINITY;
+  // mean
+  glm::dvec2 frame_sum_{0};
+  int frame_count_ = 0;
+  // ivt / idt
+  std::deque<Entry> window_;  // ivt: the velocity window; idt: the candidate fixation
+  glm::dvec2 candidate_sum_{0};
+  size_t candidate_count_ = 0;
+  double candidate_start_ = 0;
+  glm::dvec2 lo_{0}, hi_{0};  // idt: angular bounds of an established fixation
+};
+
+// Where the render sits on the recording's screen: a rectangle (default: the whole screen, the
+// render stretched to fill it). Screen points map linearly into render pixels; points outside
+// the rectangle map outside the render (gaze off the image is allowed).
+struct ScreenMapping {
+  glm::dvec2 screen_px{1680, 1050};
+  glm::dvec4 rect{0, 0, 1680, 1050};  // x, y, width, height on the screen, pixels
+  glm::ivec2 render_px{840, 525};
+  glm::dvec2 to_render(glm::dvec2 screen) const;
+};
+// From "X,Y,W,H" (empty: the whole screen); throws Error naming the option.
+ScreenMapping make_screen_mapping(glm::ivec2 screen_px, glm::ivec2 render_px, const std::string& rect = {});
+
+}  // namespace foveal

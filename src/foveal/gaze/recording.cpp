@@ -1,0 +1,351 @@
+// foveal/gaze/recording.cpp — format names, detection, statistics, Pupil and plain-CSV readers.
+#include "foveal/gaze/recording.h"
+
+#include "foveal/gaze/text.h"
+#include "foveal/util/error.h"
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <map>
+
+namespace foveal {
+
+const char* to_string(GazeFormat format) {
+  switch (format) {
+    case GazeFormat::automatic: return "auto";
+    case GazeFormat::asc: return "asc";
+    case GazeFormat::pupil: return "pupil";
+    case GazeFormat::tobii: return "tobii";
+    case GazeFormat::csv: return "csv";
+  }
+  return "?";
+}
+
+GazeFormat parse_gaze_format(const std::string& name) {
+  for (GazeFormat f : {GazeFormat::automatic, GazeFormat::asc, GazeFormat::pupil, GazeFormat::tobii, GazeFormat::csv})
+    if (name == to_string(f)) return f;
+  fail("--format: unknown recording format '{}' (expected auto, asc, pupil, tobii or csv)", name);
+}
+
+EyeSelection parse_eye_selection(const std::string& name) {
+  if (name == "average") return EyeSelection::average;
+  if (name == "left") return EyeSelection::left;
+  if (name == "right") return EyeSelection::right;
+  fail("--eye: unknown eye '{}' (expected average, left or right)", name);
+}
+
+size_t Recording::valid_count() const {
+  return static_cast<size_t>(std::count_if(samples.begin(), samples.end(), [](const GazeSample& s) { return s.valid; }));
+}
+
+double Recording::duration_s() const {
+  return samples.size() < 2 ? 0.0 : samples.back().t_s - samples.front().t_s;
+}
+
+namespace {
+
+// Calls f(first, last) for each block's index range [first, last).
+template <class F>
+void for_each_block(const Recording& r, F&& f) {
+  std::vector<size_t> starts = r.block_starts;
+  if (starts.empty() || starts.front() != 0) starts.insert(starts.begin(), 0);
+  for (size_t b = 0; b < starts.size(); ++b) {
+    const size_t first = starts[b], last = b + 1 < starts.size() ? starts[b + 1] : r.samples.size();
+    if (last > first) f(first, last);
+  }
+}
+
+}  // namespace
+
+double Recording::recorded_s() const {
+  double total = 0;
+  for_each_block(*this, [&](size_t first, size_t last) { total += samples[last - 1].t_s - samples[first].t_s; });
+  return total;
+}
+
+double Recording::rate_hz() const {
+  double span = 0;
+  size_t intervals = 0;
+  for_each_block(*this, [&](size_t first, size_t last) {
+    span += samples[last - 1].t_s - samples[first].t_s;
+    intervals += last - first - 1;
+  });
+  return span > 0 ? static_cast<double>(intervals) / span : 0.0;
+}
+
+void apply_validity(Recording& r, float min_confidence) {
+  size_t blink = 0;
+  for (GazeSample& s : r.samples) {
+    while (blink < r.blinks.size() && r.blinks[blink].end_s < s.t_s) ++blink;
+    const bool in_blink = blink < r.blinks.size() && r.blinks[blink].start_s <= s.t_s;
+    s.valid = std::isfinite(s.px.x) && std::isfinite(s.px.y) && s.confidence >= min_confidence && !in_blink;
+  }
+}
+
+GazeFormat detect_gaze_format(const std::string& text, const std::string& name) {
+  const std::string_view head = std::string_view(text).substr(0, std::min<size_t>(text.size(), 1 << 16));
+  const std::string_view first = head.substr(0, head.find('\n'));
+  auto has = [](std::string_view s, std::string_view what) { return s.find(what) != std::string_view::npos; };
+  if (has(first, "gaze_timestamp") && has(first, "norm_pos_x")) return GazeFormat::pupil;
+  if (has(first, "start_timestamp") && has(first, "dispersion"))
+    fail("{}: this is Pupil's fixations.csv; give the gaze_positions.csv beside it (its fixations.csv and blinks.csv are read too)", name);
+  if (has(first, "start_timestamp") && has(first, "filter_response"))
+    fail("{}: this is Pupil's blinks.csv; give the gaze_positions.csv beside it", name);
+  if (has(first, "LGazePos2dx") || has(first, "Recording timestamp") || has(first, "Gaze point X")) return GazeFormat::tobii;
+  if (head.rfind("**", 0) == 0 || has(head, "\nMSG\t") || has(head, "\nSTART\t") || head.rfind("MSG\t", 0) == 0)
+    return GazeFormat::asc;
+  const auto ext = std::filesystem::path(name).extension().string();
+  if (ext == ".asc" || ext == ".ASC") return GazeFormat::asc;
+  return GazeFormat::csv;
+}
+
+Recording parse_recording(const std::string& text, const std::string& name, const ReadOptions& options) {
+  if (text.find_first_not_of(" \t\r\n") == std::string::npos) fail("{}: empty recording", name);
+  const GazeFormat format = options.format == GazeFormat::automatic ? detect_gaze_format(text, name) : options.format;
+  Recording r;
+  switch (format) {
+    case GazeFormat::asc: r = parse_eyelink_asc(text, name, options); break;
+    case GazeFormat::pupil: r = parse_pupil_gaze(text, name, options); break;
+    case GazeFormat::tobii: r = parse_tobii(text, name, options); break;
+    default: r = parse_gaze_csv(text, name, options); break;
+  }
+  r.source = name;
+  r.format = format;
+  if (r.samples.empty()) fail("{}: no gaze samples", name);
+  return r;
+}
+
+Recording read_recording(const std::string& path, const ReadOptions& options) {
+  if (std::filesystem::is_directory(path)) fail("{}: is a folder; give the recording file", path);
+  const std::string text = text::read_file(path);
+  ReadOptions o = options;
+  Recording r = parse_recording(text, path, o);
+  if (r.format != GazeFormat::pupil) return r;
+  // Pupil exports its fixations and blinks beside gaze_positions.csv
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::path(path).parent_path();
+  auto side = [&](const std::string& given, const char* default_name) -> std::string {
+    if (!given.empty()) return given;
+    if (!o.find_side_files) return {};
+    const fs::path p = dir / default_name;
+    return fs::exists(p) ? p.string() : std::string();
+  };
+  if (const std::string f = side(o.fixations_file, "fixations.csv"); !f.empty()) {
+    r.fixations = parse_pupil_fixations(text::read_file(f), f, r.screen_px);
+    r.has_tracker_fixations = true;
+    r.notes.push_back(fmt::format("tracker fixations from {} ({})", f, r.fixations.size()));
+  }
+  if (const std::string f = side(o.blinks_file, "blinks.csv"); !f.empty()) {
+    r.blinks = parse_pupil_blinks(text::read_file(f), f);
+    r.notes.push_back(fmt::format("blinks from {} ({})", f, r.blinks.size()));
+    apply_validity(r, o.min_confidence);
+  }
+  return r;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Comma-separated tables with a header (Pupil exports)
+
+namespace {
+
+struct Table {
+  std::string name;
+  std::vector<std::string> header;
+  std::map<std::string, size_t, std::less<>> column;
+
+  // Column index of a required column; throws naming the file.
+  size_t require(std::string_view col) const {
+    const auto it = column.find(col);
+    if (it == column.end()) fail("{}:1: missing column '{}'", name, col);
+    return it->second;
+  }
+  std::optional<size_t> find(std::string_view col) const {
+    const auto it = column.find(col);
+    return it == column.end() ? std::nullopt : std::optional<size_t>(it->second);
+  }
+};
+
+Table read_header(text::Lines& lines, const std::string& name, char separator) {
+  std::string_view line;
+  if (!lines.next(line)) fail("{}: empty file", name);
+  Table t;
+  t.name = name;
+  for (std::string_view f : text::split(line, separator)) {
+    std::string col(text::trim(f));
+    if (!col.empty() && col.front() == '"' && col.back() == '"' && col.size() >= 2) col = col.substr(1, col.size() - 2);
+    t.column.emplace(col, t.header.size());
+    t.header.push_back(col);
+  }
+  return t;
+}
+
+std::vector<std::string_view> row_fields(std::string_view line, const Table& t, int number, char separator) {
+  auto fields = text::split(line, separator);
+  if (fields.size() != t.header.size())
+    fail("{}:{}: {} fields, but the header has {} (truncated or malformed line)", t.name, number, fields.size(), t.header.size());
+  return fields;
+}
+
+// A number, or NaN for an empty cell / "nan" where `allow_missing`; anything else is an error.
+double number(std::string_view field, const Table& t, size_t col, int line, bool allow_missing) {
+  if (const auto v = text::to_number(field)) return *v;
+  const std::string_view f = text::trim(field);
+  if (allow_missing && (f.empty() || f == "nan" || f == "NaN" || f == "NAN")) return NAN;
+  fail("{}:{}: column '{}': '{}' is not a number", t.name, line, t.header[col], f);
+}
+
+void check_time_order(double t, double previous, const std::string& name, int line) {
+  if (t < previous) fail("{}:{}: time {} is before the previous sample's {} (time must not go backwards)", name, line, t, previous);
+}
+
+}  // namespace
+
+Recording parse_pupil_gaze(const std::string& content, const std::string& name, const ReadOptions& o) {
+  text::Lines lines(content);
+  const Table t = read_header(lines, name, ',');
+  const size_t c_time = t.require("gaze_timestamp"), c_conf = t.require("confidence"), c_x = t.require("norm_pos_x"),
+               c_y = t.require("norm_pos_y");
+  const auto c_dx = t.find("gaze_point_3d_x"), c_dy = t.find("gaze_point_3d_y"), c_dz = t.find("gaze_point_3d_z");
+  Recording r;
+  r.tracker = "Pupil Player export (gaze_positions.csv)";
+  r.eyes = "binocular (Pupil's gaze mapping)";
+  r.screen_px = o.screen_px;
+  r.has_tracker_fixations = false;
+  std::string_view line;
+  double previous = -INFINITY;
+  while (lines.next(line)) {
+    if (text::trim(line).empty()) continue;
+    const auto f = row_fields(line, t, lines.number(), ',');
+    GazeSample s;
+    s.t_s = number(f[c_time], t, c_time, lines.number(), false);
+    check_time_order(s.t_s, previous, name, lines.number());
+    previous = s.t_s;
+    const double conf = number(f[c_conf], t, c_conf, lines.number(), false);
+    if (conf < 0 || conf > 1) fail("{}:{}: confidence {} is outside [0, 1]", name, lines.number(), conf);
+    s.confidence = static_cast<float>(conf);
+    const double nx = number(f[c_x], t, c_x, lines.number(), true), ny = number(f[c_y], t, c_y, lines.number(), true);
+    s.px = {nx * r.screen_px.x, (1.0 - ny) * r.screen_px.y};  // Pupil: origin bottom-left
+    if (c_dx && c_dy && c_dz) {
+      const glm::dvec3 d{number(f[*c_dx], t, *c_dx, lines.number(), true), number(f[*c_dy], t, *c_dy, lines.number(), true),
+                         number(f[*c_dz], t, *c_dz, lines.number(), true)};
+      if (std::isfinite(d.x) && std::isfinite(d.y) && std::isfinite(d.z) && glm::length(d) > 0)
+        s.direction = glm::normalize(d);  // Pupil's world camera: x right, y down, z forward, as ours
+    }
+    r.samples.push_back(s);
+  }
+  apply_validity(r, o.min_confidence);
+  return r;
+}
+
+std::vector<GazeEvent> parse_pupil_fixations(const std::string& content, const std::string& name, glm::ivec2 screen_px) {
+  text::Lines lines(content);
+  const Table t = read_header(lines, name, ',');
+  const size_t c_start = t.require("start_timestamp"), c_dur = t.require("duration");
+  const auto c_x = t.find("norm_pos_x"), c_y = t.find("norm_pos_y");
+  std::vector<GazeEvent> events;
+  std::string_view line;
+  while (lines.next(line)) {
+    if (text::trim(line).empty()) continue;
+    const auto f = row_fields(line, t, lines.number(), ',');
+    GazeEvent e;
+    e.start_s = number(f[c_start], t, c_start, lines.number(), false);
+    const double ms = number(f[c_dur], t, c_dur, lines.number(), false);
+    if (ms < 0) fail("{}:{}: negative duration {}", name, lines.number(), ms);
+    e.end_s = e.start_s + ms / 1000.0;  // Pupil writes fixation durations in milliseconds
+    if (c_x && c_y)
+      e.px = {number(f[*c_x], t, *c_x, lines.number(), true) * screen_px.x,
+              (1.0 - number(f[*c_y], t, *c_y, lines.number(), true)) * screen_px.y};
+    if (!events.empty()) check_time_order(e.start_s, events.back().start_s, name, lines.number());
+    events.push_back(e);
+  }
+  return events;
+}
+
+std::vector<GazeEvent> parse_pupil_blinks(const std::string& content, const std::string& name) {
+  text::Lines lines(content);
+  const Table t = read_header(lines, name, ',');
+  const size_t c_start = t.require("start_timestamp"), c_end = t.require("end_timestamp");
+  std::vector<GazeEvent> events;
+  std::string_view line;
+  while (lines.next(line)) {
+    if (text::trim(line).empty()) continue;
+    const auto f = row_fields(line, t, lines.number(), ',');
+    GazeEvent e;
+    e.start_s = number(f[c_start], t, c_start, lines.number(), false);
+    e.end_s = number(f[c_end], t, c_end, lines.number(), false);
+    if (e.end_s < e.start_s) fail("{}:{}: blink ends before it starts", name, lines.number());
+    if (!events.empty()) check_time_order(e.start_s, events.back().start_s, name, lines.number());
+    events.push_back(e);
+  }
+  return events;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Plain CSV: t,x,y[,confidence] with or without a header
+
+Recording parse_gaze_csv(const std::string& content, const std::string& name, const ReadOptions& o) {
+  text::Lines lines(content);
+  Recording r;
+  r.tracker = "plain CSV";
+  r.eyes = "as recorded";
+  r.screen_px = o.screen_px;
+  // Column order: from a header of known names, or t,x,y[,confidence]
+  int c_t = 0, c_x = 1, c_y = 2, c_conf = -1;
+  size_t columns = 0;
+  std::string_view line;
+  double previous = -INFINITY;
+  bool first = true;
+  while (lines.next(line)) {
+    if (text::trim(line).empty() || text::trim(line).front() == '#') continue;
+    const auto f = text::split(line, ',');
+    if (first) {
+      first = false;
+      if (!text::to_number(f[0])) {  // a header
+        c_t = c_x = c_y = c_conf = -1;
+        for (size_t i = 0; i < f.size(); ++i) {
+          const std::string_view col = text::trim(f[i]);
+          int* slot = col == "t" || col == "time" || col == "t_s" ? &c_t
+                      : col == "x"                                ? &c_x
+                      : col == "y"                                ? &c_y
+                      : col == "confidence"                       ? &c_conf
+                                                                  : nullptr;
+          if (!slot) fail("{}:{}: unknown column '{}' (expected t, x, y and optionally confidence)", name, lines.number(), col);
+          if (*slot >= 0) fail("{}:{}: column '{}' appears twice", name, lines.number(), col);
+          *slot = static_cast<int>(i);
+        }
+        if (c_t < 0 || c_x < 0 || c_y < 0) fail("{}:{}: the header needs columns t, x and y", name, lines.number());
+        columns = f.size();
+        continue;
+      }
+      columns = f.size();
+      if (columns != 3 && columns != 4) fail("{}:{}: expected t,x,y[,confidence], got {} fields", name, lines.number(), columns);
+      if (columns == 4) c_conf = 3;
+    }
+    if (f.size() != columns) fail("{}:{}: {} fields, expected {} (truncated or malformed line)", name, lines.number(), f.size(), columns);
+    auto value = [&](int c, bool allow_missing, const char* what) {
+      if (const auto v = text::to_number(f[c])) return *v;
+      const std::string_view s = text::trim(f[c]);
+      if (allow_missing && (s.empty() || s == "nan" || s == "NaN" || s == "NAN")) return static_cast<double>(NAN);
+      fail("{}:{}: {} '{}' is not a number", name, lines.number(), what, s);
+    };
+    GazeSample s;
+    s.t_s = value(c_t, false, "time") * o.csv_time_scale;
+    check_time_order(s.t_s, previous, name, lines.number());
+    previous = s.t_s;
+    glm::dvec2 p{value(c_x, true, "x"), value(c_y, true, "y")};
+    if (o.csv_normalised) p *= glm::dvec2(r.screen_px);
+    if (o.csv_origin_bottom_left) p.y = r.screen_px.y - p.y;
+    s.px = p;
+    if (c_conf >= 0) {
+      const double c = value(c_conf, false, "confidence");
+      if (c < 0 || c > 1) fail("{}:{}: confidence {} is outside [0, 1]", name, lines.number(), c);
+      s.confidence = static_cast<float>(c);
+    }
+    r.samples.push_back(s);
+  }
+  apply_validity(r, o.min_confidence);
+  return r;
+}
+
+}  // namespace foveal

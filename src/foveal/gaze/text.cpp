@@ -1,0 +1,82 @@
+// foveal/gaze/text.cpp — line and field splitting.
+#include "foveal/gaze/text.h"
+
+#include "foveal/util/error.h"
+
+#include <charconv>
+#include <cmath>
+#include <fstream>
+#include <sstream>
+
+namespace foveal::text {
+
+bool Lines::next(std::string_view& line) {
+  if (pos_ >= text_.size()) return false;
+  size_t end = text_.find('\n', pos_);
+  if (end == std::string_view::npos) end = text_.size();
+  line = text_.substr(pos_, end - pos_);
+  if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
+  pos_ = end + 1;
+  ++number_;
+  return true;
+}
+
+std::string_view trim(std::string_view s) {
+  const auto first = s.find_first_not_of(" \t\r");
+  if (first == std::string_view::npos) return {};
+  const auto last = s.find_last_not_of(" \t\r");
+  return s.substr(first, last - first + 1);
+}
+
+std::vector<std::string_view> split(std::string_view line, char separator) {
+  std::vector<std::string_view> fields;
+  if (separator == ' ') {
+    size_t i = 0;
+    while (i < line.size()) {
+      while (i < line.size() && (line[i] == ' ' || line[i] == '\t')) ++i;
+      if (i >= line.size()) break;
+      const size_t start = i;
+      while (i < line.size() && line[i] != ' ' && line[i] != '\t') ++i;
+      fields.push_back(line.substr(start, i - start));
+    }
+    return fields;
+  }
+  size_t start = 0;
+  for (;;) {
+    const size_t end = line.find(separator, start);
+    if (end == std::string_view::npos) {
+      fields.push_back(line.substr(start));
+      return fields;
+    }
+    fields.push_back(line.substr(start, end - start));
+    start = end + 1;
+  }
+}
+
+std::optional<double> to_number(std::string_view field, bool decimal_comma) {
+  field = trim(field);
+  if (field.empty()) return std::nullopt;
+  std::string buffer;
+  if (field.front() == '+') field.remove_prefix(1);
+  if (decimal_comma && field.find(',') != std::string_view::npos && field.find('.') == std::string_view::npos) {
+    buffer.assign(field);
+    for (char& c : buffer)
+      if (c == ',') c = '.';
+    field = buffer;
+  }
+  double value = 0;
+  const auto [end, error] = std::from_chars(field.data(), field.data() + field.size(), value);
+  if (error != std::errc() || end != field.data() + field.size() || !std::isfinite(value)) return std::nullopt;
+  return value;
+}
+
+std::string read_file(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) fail("{}: cannot open file", path);
+  std::ostringstream buffer;
+  buffer << in.rdbuf();
+  if (in.bad()) fail("{}: read error", path);
+  return buffer.str();
+}
+
+}  // namespace foveal::text

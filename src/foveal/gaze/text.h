@@ -1,0 +1,36 @@
+// foveal/gaze/text.h — line and field splitting for the recording readers, with exact numbers.
+#pragma once
+
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace foveal::text {
+
+// Walks the lines of a text (LF or CRLF), counting from 1.
+class Lines {
+ public:
+  explicit Lines(std::string_view text) : text_(text) {}
+  // The next line without its end; false at the end of the text.
+  bool next(std::string_view& line);
+  int number() const { return number_; }
+
+ private:
+  std::string_view text_;
+  size_t pos_ = 0;
+  int number_ = 0;
+};
+
+// Fields separated by `separator` (kept empty between two separators); whitespace-separated when ' '.
+std::vector<std::string_view> split(std::string_view line, char separator);
+std::string_view trim(std::string_view s);
+
+// A whole field as a finite number ("1.5", "-3", "1e-3"); nullopt for anything else.
+// With decimal_comma, "1,5" reads as 1.5 (Tobii Pro Lab in some locales).
+std::optional<double> to_number(std::string_view field, bool decimal_comma = false);
+
+// Read a whole file; throws Error naming the file.
+std::string read_file(const std::string& path);
+
+}  // namespace foveal::text

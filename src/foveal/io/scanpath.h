@@ -1,0 +1,21 @@
+// foveal/io/scanpath.h — the scan-path picture of a recording: fixations as circles sized by
+// duration over the screen, joined in order, on the faint trace of the raw gaze.
+#pragma once
+
+#include "foveal/gaze/fixation.h"
+
+#include <string>
+
+namespace foveal {
+
+struct ScanpathStyle {
+  int max_width = 1280;     // the picture is the screen scaled down to at most this width
+  std::string title;        // drawn in the top-left corner
+  bool numbers = true;      // number the fixations (the first 99)
+};
+
+// Draw and write a PNG (or anything OpenCV writes); throws Error if it cannot be written.
+void write_scanpath(const Recording& recording, const FixationResult& fixations, const std::string& path,
+                    const ScanpathStyle& style = {});
+
+}  // namespace foveal
