@@ -1,0 +1,244 @@
+// Recording readers: every real recording against its data README, hand-made files of each
+// format, and malformed input that must fail with file, line and reason (or read as invalid).
+#include "foveal/gaze/recording.h"
+#include "foveal/util/error.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+
+namespace fs = std::filesystem;
+using namespace foveal;
+
+namespace {
+
+const std::string kGaze = std::string(FOVEAL_DATA_DIR) + "/gaze";
+
+// The error message of parse_recording, or "" if it succeeded.
+std::string error_of(const std::string& text, const std::string& name, ReadOptions o = {}) {
+  try {
+    parse_recording(text, name, o);
+  } catch (const Error& e) {
+    return e.what();
+  }
+  return "";
+}
+
+const char* kAsc =
+    "** CONVERTED FROM test.edf\n"
+    "MSG\t1000 DISPLAY_COORDS 0 0 799 599\n"
+    "START\t1000 \tLEFT\tSAMPLES\tEVENTS\n"
+    "SAMPLES\tGAZE\tLEFT\tRATE\t 500.00\tTRACKING\tCR\tFILTER\t2\n"
+    "1000\t  100.0\t  200.0\t 1000.0\t...\n"
+    "1002\t  101.0\t  201.0\t 1000.0\t...\n"
+    "1004\t   .\t   .\t    0.0\t...\n"
+    "1006\t  103.0\t  203.0\t 1000.0\t...\n"
+    "EFIX L   1000\t1006\t8\t  101.3\t  201.3\t   1000\n"
+    "END\t1007 \tSAMPLES\tEVENTS\tRES\t  36.39\t  36.07\n"
+    "   3820.2  273.52  324.43\n";  // a calibration line outside a block: not a sample
+
+}  // namespace
+
+TEST(Recording, EyeLinkAscHandMade) {
+  const Recording r = parse_recording(kAsc, "test.asc");
+  EXPECT_EQ(r.format, GazeFormat::asc);
+  ASSERT_EQ(r.samples.size(), 4u);
+  EXPECT_EQ(r.screen_px, glm::ivec2(800, 600));
+  EXPECT_TRUE(r.screen_from_file);
+  EXPECT_DOUBLE_EQ(r.samples[1].t_s, 1.002);
+  EXPECT_EQ(r.samples[1].px, glm::dvec2(101, 201));
+  // "." is a missing sample: invalid with a NaN point, never (0, 0)
+  EXPECT_FALSE(r.samples[2].valid);
+  EXPECT_TRUE(std::isnan(r.samples[2].px.x));
+  EXPECT_EQ(r.valid_count(), 3u);
+  EXPECT_DOUBLE_EQ(r.nominal_rate_hz, 500);
+  EXPECT_NEAR(r.rate_hz(), 500, 1e-6);
+  ASSERT_EQ(r.fixations.size(), 1u);
+  EXPECT_DOUBLE_EQ(r.fixations[0].end_s, 1.006);
+}
+
+TEST(Recording, EyeLinkBinocularAverageAndSingleEye) {
+  const std::string asc =
+      "MSG\t1 GAZE_COORDS 0.00 0.00 1023.00 767.00\n"
+      "START\t10 \tLEFT\tRIGHT\tSAMPLES\tEVENTS\n"
+      "SAMPLES\tGAZE\tLEFT\tRIGHT\tRATE\t1000.00\n"
+      "10\t 100.0\t 200.0\t 1000.0\t 110.0\t 210.0\t 1000.0\t.....\n"
+      "11\t   .\t   .\t    0.0\t 120.0\t 220.0\t 1000.0\t.....\n"
+      "END\t12\n";
+  ReadOptions o;
+  Recording r = parse_recording(asc, "bino.asc", o);
+  EXPECT_EQ(r.screen_px, glm::ivec2(1024, 768));
+  EXPECT_EQ(r.samples[0].px, glm::dvec2(105, 205));  // average of both eyes
+  EXPECT_EQ(r.samples[1].px, glm::dvec2(120, 220));  // the valid eye only
+  o.eye = EyeSelection::left;
+  r = parse_recording(asc, "bino.asc", o);
+  EXPECT_EQ(r.samples[0].px, glm::dvec2(100, 200));
+  EXPECT_FALSE(r.samples[1].valid);
+}
+
+TEST(Recording, PupilTobiiAndCsvHandMade) {
+  ReadOptions o;
+  o.screen_px = {1000, 500};
+  // Pupil: normalised, origin bottom-left; low confidence → invalid
+  const Recording p = parse_recording(
+      "gaze_timestamp,world_index,confidence,norm_pos_x,norm_pos_y\n"
+      "10.0,1,0.9,0.25,0.75\n"
+      "10.004,1,0.2,0.5,0.5\n",
+      "gaze_positions.csv", o);
+  EXPECT_EQ(p.format, GazeFormat::pupil);
+  EXPECT_EQ(p.samples[0].px, glm::dvec2(250, 125));
+  EXPECT_TRUE(p.samples[0].valid);
+  EXPECT_FALSE(p.samples[1].valid);
+  // Tobii SDK: µs, normalised, validity > 1 means missing
+  const Recording t = parse_recording(
+      "Time\tLGazePos2dx\tLGazePos2dy\tLValidity\tRGazePos2dx\tRGazePos2dy\tRValidity\n"
+      "1000000\t0.4\t0.5\t0\t0.6\t0.5\t0\n"
+      "1003333\t-1.0\t-1.0\t4\t0.6\t0.4\t0\n"
+      "1006666\t-1.0\t-1.0\t4\t-1.0\t-1.0\t4\n",
+      "tobii.tsv", o);
+  EXPECT_EQ(t.format, GazeFormat::tobii);
+  EXPECT_NEAR(t.samples[0].px.x, 500, 1e-9);
+  EXPECT_NEAR(t.samples[1].px.x, 600, 1e-9);
+  EXPECT_NEAR(t.samples[1].px.y, 200, 1e-9);
+  EXPECT_FALSE(t.samples[2].valid);
+  EXPECT_NEAR(t.samples[1].t_s - t.samples[0].t_s, 0.003333, 1e-9);
+  // Tobii Pro Lab: pixels, ms without a unit, its own fixations, other sensors' rows skipped
+  const Recording pl = parse_recording(
+      "Recording timestamp [μs]\tSensor\tRecording resolution width\tRecording resolution height\tGaze point X\tGaze point Y\t"
+      "Validity left\tValidity right\tEye movement type\tEye movement type index\tFixation point X\tFixation point Y\n"
+      "0\tEye Tracker\t1920\t1080\t960\t540\tValid\tValid\tFixation\t1\t961\t541\n"
+      "8333\tEye Tracker\t1920\t1080\t962,5\t542\tValid\tValid\tFixation\t1\t961\t541\n"
+      "10000\tMouse\t\t\t\t\t\t\t\t\t\t\n"
+      "16666\tEye Tracker\t1920\t1080\t\t\tInvalid\tInvalid\tEyesNotFound\t1\t\t\n"
+      "25000\tEye Tracker\t1920\t1080\t100\t100\tValid\tValid\tSaccade\t1\t\t\n",
+      "prolab.tsv", o);
+  EXPECT_EQ(pl.samples.size(), 4u);
+  EXPECT_EQ(pl.screen_px, glm::ivec2(1920, 1080));
+  EXPECT_DOUBLE_EQ(pl.samples[1].px.x, 962.5);  // decimal comma
+  EXPECT_NEAR(pl.samples[1].t_s, 0.008333, 1e-12);
+  EXPECT_FALSE(pl.samples[2].valid);
+  ASSERT_EQ(pl.fixations.size(), 1u);
+  EXPECT_NEAR(pl.fixations[0].end_s, 0.008333, 1e-12);
+  // Plain CSV with a header, ms, normalised bottom-left
+  o.csv_time_scale = 1e-3;
+  o.csv_normalised = true;
+  o.csv_origin_bottom_left = true;
+  const Recording c = parse_recording("time,x,y,confidence\n0,0.5,0.25,1\n4,,,0\n8,nan,0.5,1\n", "plain.csv", o);
+  EXPECT_EQ(c.format, GazeFormat::csv);
+  EXPECT_EQ(c.samples[0].px, glm::dvec2(500, 375));
+  EXPECT_FALSE(c.samples[1].valid);
+  EXPECT_FALSE(c.samples[2].valid);
+  EXPECT_DOUBLE_EQ(c.samples[2].t_s, 0.008);
+}
+
+TEST(Recording, MalformedInputNamesFileLineAndReason) {
+  struct Case {
+    const char* text;
+    const char* name;
+    const char* expected;  // must appear in the message
+  };
+  const Case cases[] = {
+      {"", "empty.csv", "empty.csv: empty recording"},
+      {"t,x,y\n0,1,2\n1,abc,3\n", "text.csv", "text.csv:3: x 'abc' is not a number"},
+      {"t,x,y\n0,1,2\n1,2\n", "short.csv", "short.csv:3: 2 fields, expected 3"},
+      {"t,x,y,pupil\n0,1,2,3\n", "cols.csv", "cols.csv:1: unknown column 'pupil'"},
+      {"t,x,y\n0,1,2\n-1,2,3\n", "back.csv", "back.csv:3: time -1 is before the previous sample's 0"},
+      {"START\t1\tLEFT\tSAMPLES\nSAMPLES\tGAZE\tLEFT\n1\t10.0\n", "trunc.asc", "trunc.asc:3: sample has 2 fields"},
+      {"START\t1\tLEFT\tSAMPLES\nSAMPLES\tGAZE\tLEFT\n1\t10.0\tfoo\t100\n", "word.asc", "word.asc:3: gaze y 'foo' is not a number"},
+      {"START\t1\tLEFT\tSAMPLES\n5\t1\t1\t1\n3\t1\t1\t1\n", "order.asc", "order.asc:3: time 3 ms is before"},
+      {"MSG\t1 nothing\n", "nosamples.asc", "nosamples.asc: no samples inside START"},
+      {"gaze_timestamp,confidence,norm_pos_x,norm_pos_y\n1,0.9,0.5\n", "p.csv", "p.csv:2: 3 fields, but the header has 4"},
+      {"gaze_timestamp,confidence,norm_pos_x\n1,0.9,0.5\n", "p2.csv", "p2.csv:1: missing column 'norm_pos_y'"},
+      {"gaze_timestamp,confidence,norm_pos_x,norm_pos_y\n1,high,0.5,0.5\n", "p3.csv", "p3.csv:2: column 'confidence': 'high' is not a number"},
+      {"Time\tLGazePos2dx\tLGazePos2dy\tLValidity\tRGazePos2dx\tRGazePos2dy\tRValidity\n1\t0.5\t0.5\t0\t0.5\n", "t.tsv",
+       "t.tsv:2: 5 fields, but the header has 7"},
+      {"id,start_timestamp,duration,dispersion\n", "fixations.csv", "this is Pupil's fixations.csv"},
+  };
+  for (const Case& c : cases) {
+    const std::string message = error_of(c.text, c.name);
+    EXPECT_NE(message.find(c.expected), std::string::npos) << "for " << c.name << " got: '" << message << "'";
+  }
+}
+
+// The real recordings of ../shared/data/gaze, checked against the counts in its README.
+TEST(Recording, RealEyeLinkMonocular) {
+  const std::string path = kGaze + "/eyelink/monoRemote500.asc";
+  if (!fs::exists(path)) GTEST_SKIP() << "skipped: " << path << " absent";
+  const Recording r = read_recording(path);
+  EXPECT_EQ(r.format, GazeFormat::asc);
+  EXPECT_EQ(r.samples.size(), 41582u);
+  EXPECT_EQ(r.samples.size() - r.valid_count(), 51u);  // "51 with missing gaze"
+  EXPECT_EQ(r.block_starts.size(), 4u);
+  EXPECT_EQ(r.fixations.size(), 300u);
+  EXPECT_EQ(r.blinks.size(), 3u);
+  EXPECT_EQ(r.screen_px, glm::ivec2(1024, 768));
+  EXPECT_NEAR(r.rate_hz(), 500, 0.5);
+  EXPECT_DOUBLE_EQ(r.samples.front().t_s, 12134.094);
+  EXPECT_DOUBLE_EQ(r.samples.back().t_s, 12223.216);
+  EXPECT_EQ(r.eyes, "left");
+}
+
+TEST(Recording, RealEyeLinkBinocular) {
+  const std::string path = kGaze + "/eyelink/bino1000.asc";
+  if (!fs::exists(path)) GTEST_SKIP() << "skipped: " << path << " absent";
+  ReadOptions o;
+  o.eye = EyeSelection::left;
+  const Recording r = read_recording(path, o);
+  EXPECT_EQ(r.samples.size(), 3467u);
+  EXPECT_EQ(r.valid_count(), 3467u);  // "no missing"
+  EXPECT_EQ(r.fixations.size(), 12u);  // 24 EFIX, for the two eyes
+  EXPECT_EQ(r.screen_px, glm::ivec2(1024, 768));
+  EXPECT_NEAR(r.rate_hz(), 1000, 1);
+  EXPECT_EQ(r.block_starts.size(), 4u);
+}
+
+TEST(Recording, RealPupilExports) {
+  const std::string path = kGaze + "/pupil_labs/gaze_positions.csv";
+  if (!fs::exists(path)) GTEST_SKIP() << "skipped: " << path << " absent";
+  const Recording r = read_recording(path);
+  EXPECT_EQ(r.format, GazeFormat::pupil);
+  EXPECT_EQ(r.samples.size(), 9302u);
+  EXPECT_NEAR(r.duration_s(), 39.20, 0.01);
+  EXPECT_NEAR(r.rate_hz(), 237, 1);
+  // "69 % of rows have confidence ≥ 0.8": the fraction at or above 0.8
+  size_t high = 0;
+  for (const GazeSample& s : r.samples) high += s.confidence >= 0.8f;
+  EXPECT_NEAR(static_cast<double>(high) / r.samples.size(), 0.69, 0.01);
+  EXPECT_FALSE(r.has_tracker_fixations);  // no fixations.csv beside it
+
+  const std::string t10 = kGaze + "/pupil_labs/tutorial10/gaze_positions.csv";
+  const Recording t = read_recording(t10);
+  EXPECT_EQ(t.samples.size(), 2054u);
+  EXPECT_NEAR(t.duration_s(), 6.93, 0.01);
+  EXPECT_NEAR(t.rate_hz(), 296, 1);
+  EXPECT_TRUE(t.has_tracker_fixations);
+  EXPECT_EQ(t.fixations.size(), 36u);
+  EXPECT_EQ(t.blinks.size(), 3u);
+  for (const GazeEvent& f : t.fixations) {  // durations "~170–200" ms, read as milliseconds
+    EXPECT_GT(f.end_s - f.start_s, 0.05);
+    EXPECT_LT(f.end_s - f.start_s, 0.3);
+  }
+  for (const GazeEvent& b : t.blinks) EXPECT_NEAR(b.end_s - b.start_s, 0.4, 0.3);  // "~0.4 s"
+}
+
+TEST(Recording, RealTobii) {
+  const std::string path = kGaze + "/tobii/tx300_participant1_trial2.tsv";
+  if (!fs::exists(path)) GTEST_SKIP() << "skipped: " << path << " absent";
+  ReadOptions o;
+  o.screen_px = {1920, 1080};
+  const Recording r = read_recording(path, o);
+  EXPECT_EQ(r.format, GazeFormat::tobii);
+  EXPECT_EQ(r.samples.size(), 1206u);
+  EXPECT_NEAR(r.duration_s(), 4.016, 0.005);
+  EXPECT_NEAR(r.rate_hz(), 300, 1);
+  EXPECT_LT(r.valid_count(), r.samples.size());  // some samples are lost
+  for (const GazeSample& s : r.samples) {
+    if (!s.valid) {
+      EXPECT_TRUE(std::isnan(s.px.x));  // never the −1 filler scaled into the screen
+      continue;
+    }
+    EXPECT_GE(s.px.x, -0.1 * 1920);
+    EXPECT_LE(s.px.x, 1920);
+  }
+}
