@@ -1,0 +1,260 @@
+// Live gaze over a loopback Pupil Remote + publisher that speaks Pupil's documented wire format
+// (REQ "SUB_PORT" → port; multipart [topic, msgpack dict]), including a disconnect mid-stream
+// and a tracker that never answers; real-time playback on a fake clock.
+#include "foveal/gaze/source.h"
+#include "foveal/util/error.h"
+
+#include <gtest/gtest.h>
+#include <msgpack.hpp>
+#include <zmq.hpp>
+#include <zmq_addon.hpp>
+
+#include <chrono>
+#include <thread>
+
+using namespace foveal;
+using Clock = std::chrono::steady_clock;
+
+namespace {
+
+int bound_port(zmq::socket_t& s) {
+  const std::string endpoint = s.get(zmq::sockopt::last_endpoint);
+  return std::stoi(endpoint.substr(endpoint.rfind(':') + 1));
+}
+
+std::string world_gaze(double x, double y, double confidence, double t) {
+  msgpack::sbuffer buffer;
+  msgpack::packer<msgpack::sbuffer> pk(&buffer);
+  pk.pack_map(4);
+  pk.pack(std::string("topic"));
+  pk.pack(std::string("gaze.3d.01."));
+  pk.pack(std::string("norm_pos"));
+  pk.pack_array(2);
+  pk.pack(x);
+  pk.pack(y);
+  pk.pack(std::string("confidence"));
+  pk.pack(confidence);
+  pk.pack(std::string("timestamp"));
+  pk.pack(t);
+  return {buffer.data(), buffer.size()};
+}
+
+std::string surface_gaze(double x, double y, bool on_surf, double t) {
+  msgpack::sbuffer buffer;
+  msgpack::packer<msgpack::sbuffer> pk(&buffer);
+  pk.pack_map(3);
+  pk.pack(std::string("name"));
+  pk.pack(std::string("screen"));
+  pk.pack(std::string("timestamp"));
+  pk.pack(t);
+  pk.pack(std::string("gaze_on_surfaces"));
+  pk.pack_array(1);
+  pk.pack_map(4);
+  pk.pack(std::string("norm_pos"));
+  pk.pack_array(2);
+  pk.pack(x);
+  pk.pack(y);
+  pk.pack(std::string("on_surf"));
+  pk.pack(on_surf);
+  pk.pack(std::string("confidence"));
+  pk.pack(0.95);
+  pk.pack(std::string("timestamp"));
+  pk.pack(t);
+  return {buffer.data(), buffer.size()};
+}
+
+// Pupil Remote (REP) and the IPC backbone's publisher (XPUB, to see the subscription arrive).
+struct FakePupil {
+  zmq::context_t context{1};
+  zmq::socket_t remote{context, zmq::socket_type::rep};
+  zmq::socket_t pub{context, zmq::socket_type::xpub};
+  int remote_port = 0, pub_port = 0;
+  std::thread thread;
+
+  FakePupil() {
+    for (zmq::socket_t* s : {&remote, &pub}) {
+      s->set(zmq::sockopt::linger, 0);
+      s->set(zmq::sockopt::rcvtimeo, 5000);
+    }
+    remote.bind("tcp://127.0.0.1:*");
+    pub.bind("tcp://127.0.0.1:*");
+    remote_port = bound_port(remote);
+    pub_port = bound_port(pub);
+  }
+  ~FakePupil() {
+    if (thread.joinable()) thread.join();
+  }
+  std::string url(const std::string& query = "") const {
+    return "pupil://127.0.0.1:" + std::to_string(remote_port) + (query.empty() ? "" : "?" + query);
+  }
+  // Answer SUB_PORT, wait for the subscription, publish the messages, then optionally hang up.
+  void serve(std::vector<std::pair<std::string, std::string>> messages, bool hang_up, std::string* subscription) {
+    thread = std::thread([this, messages = std::move(messages), hang_up, subscription] {
+      zmq::message_t request;
+      if (!remote.recv(request)) return;
+      remote.send(zmq::buffer(std::to_string(pub_port)), zmq::send_flags::none);
+      zmq::message_t sub;
+      if (!pub.recv(sub)) return;  // "\x01" + topic
+      if (subscription) *subscription = sub.to_string().substr(1);
+      for (const auto& [topic, payload] : messages) {
+        pub.send(zmq::buffer(topic), zmq::send_flags::sndmore);
+        pub.send(zmq::buffer(payload), zmq::send_flags::none);
+        std::this_thread::sleep_for(std::chrono::milliseconds(1));
+      }
+      if (hang_up) {
+        pub.close();
+        remote.close();
+      }
+    });
+  }
+};
+
+// Poll until `count` samples arrived or the deadline passed.
+std::vector<GazeSample> collect(GazeSource& source, size_t count, double seconds = 5) {
+  std::vector<GazeSample> out;
+  const auto deadline = Clock::now() + std::chrono::duration<double>(seconds);
+  while (out.size() < count && Clock::now() < deadline) {
+    source.poll(out);
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  }
+  return out;
+}
+
+template <class F>
+bool eventually(F&& condition, double seconds = 5) {
+  const auto deadline = Clock::now() + std::chrono::duration<double>(seconds);
+  while (Clock::now() < deadline) {
+    if (condition()) return true;
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  return condition();
+}
+
+}  // namespace
+
+TEST(Source, PupilUrls) {
+  const PupilUrl u = parse_pupil_url("pupil://10.0.0.2:50021?surface=screen&timeout=0.5&stale=0.25");
+  EXPECT_EQ(u.host, "10.0.0.2");
+  EXPECT_EQ(u.port, 50021);
+  EXPECT_EQ(u.topic(), "surfaces.screen");
+  EXPECT_DOUBLE_EQ(u.timeout_s, 0.5);
+  EXPECT_DOUBLE_EQ(u.stale_s, 0.25);
+  EXPECT_EQ(parse_pupil_url("pupil://localhost").port, 50020);
+  EXPECT_EQ(parse_pupil_url("pupil://localhost").topic(), "gaze.");
+  for (const char* bad : {"http://x:1", "pupil://:50020", "pupil://h:99999", "pupil://h:12?colour=red", "pupil://h:1?timeout=-1",
+                          "pupil://h:1?surface="})
+    EXPECT_THROW(parse_pupil_url(bad), Error) << bad;
+}
+
+TEST(Source, DecodesPupilMessages) {
+  std::vector<GazeSample> out;
+  ASSERT_TRUE(decode_pupil_message("gaze.3d.01.", world_gaze(0.25, 0.75, 0.9, 12.5).data(), world_gaze(0.25, 0.75, 0.9, 12.5).size(),
+                                   {1000, 500}, 0.6f, out));
+  ASSERT_EQ(out.size(), 1u);
+  EXPECT_EQ(out[0].px, glm::dvec2(250, 125));  // origin bottom-left → top-left
+  EXPECT_DOUBLE_EQ(out[0].t_s, 12.5);
+  EXPECT_TRUE(out[0].valid);
+  const std::string off = surface_gaze(0.5, 0.5, false, 1);
+  ASSERT_TRUE(decode_pupil_message("surfaces.screen", off.data(), off.size(), {1000, 500}, 0.6f, out));
+  EXPECT_FALSE(out.back().valid);  // off the surface: held, not followed
+  const std::string junk = "\x93\x01\x02";  // a msgpack array, not a dict
+  EXPECT_FALSE(decode_pupil_message("gaze.", junk.data(), junk.size(), {1000, 500}, 0.6f, out));
+  EXPECT_FALSE(decode_pupil_message("gaze.", "\xc1", 1, {1000, 500}, 0.6f, out));  // never-used byte
+  EXPECT_FALSE(decode_pupil_message("gaze.", "", 0, {1000, 500}, 0.6f, out));
+}
+
+TEST(Source, SurfaceGazeThenDisconnect) {
+  FakePupil fake;
+  std::vector<std::pair<std::string, std::string>> messages;
+  for (int i = 0; i < 20; ++i) messages.emplace_back("surfaces.screen", surface_gaze(0.25, 0.75, i != 10, 100 + 0.004 * i));
+  std::string subscription;
+  fake.serve(messages, true, &subscription);
+  PupilSource source(fake.url("surface=screen&timeout=3"), {1680, 1050});
+  const std::vector<GazeSample> samples = collect(source, 20);
+  ASSERT_EQ(samples.size(), 20u);
+  EXPECT_EQ(subscription, "surfaces.screen");
+  for (size_t i = 0; i < samples.size(); ++i) {
+    EXPECT_EQ(samples[i].px, glm::dvec2(420, 262.5));
+    EXPECT_EQ(samples[i].valid, i != 10);
+    EXPECT_DOUBLE_EQ(samples[i].t_s, 100 + 0.004 * i);
+  }
+  // The publisher hangs up mid-stream: reported within a bounded time, and polling never blocks
+  EXPECT_TRUE(eventually([&] { return source.state() == SourceState::disconnected; }));
+  const auto start = Clock::now();
+  std::vector<GazeSample> more;
+  source.poll(more);
+  EXPECT_TRUE(more.empty());
+  EXPECT_LT(std::chrono::duration<double>(Clock::now() - start).count(), 0.1);
+}
+
+TEST(Source, WorldGazeSkipsMalformedAndTurnsStale) {
+  FakePupil fake;
+  fake.serve({{"gaze.3d.01.", world_gaze(0.5, 0.5, 0.9, 1.0)},
+              {"gaze.3d.01.", "not msgpack at all"},
+              {"gaze.3d.01.", world_gaze(0.1, 0.9, 0.3, 1.004)},
+              {"gaze.3d.01.", "\x92\x01\x02"}},
+             false, nullptr);
+  PupilSource source(fake.url("stale=0.2"), {1000, 1000});
+  const std::vector<GazeSample> samples = collect(source, 2);
+  ASSERT_EQ(samples.size(), 2u);
+  EXPECT_TRUE(samples[0].valid);
+  EXPECT_FALSE(samples[1].valid);  // confidence 0.3 < 0.6
+  EXPECT_TRUE(eventually([&] { return source.malformed() == 2; }));
+  // Connected but silent: stale, not disconnected
+  EXPECT_TRUE(eventually([&] { return source.state() == SourceState::stale; }));
+  EXPECT_GT(source.silent_s(), 0.2);
+}
+
+TEST(Source, TrackerThatNeverAnswersFailsInBoundedTime) {
+  zmq::context_t context;
+  zmq::socket_t mute(context, zmq::socket_type::rep);  // accepts, never replies
+  mute.set(zmq::sockopt::linger, 0);
+  mute.bind("tcp://127.0.0.1:*");
+  const auto start = Clock::now();
+  try {
+    PupilSource source("pupil://127.0.0.1:" + std::to_string(bound_port(mute)) + "?timeout=0.3", {100, 100});
+    FAIL() << "expected an error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("did not answer SUB_PORT within 0.3 s"), std::string::npos) << e.what();
+  }
+  EXPECT_LT(std::chrono::duration<double>(Clock::now() - start).count(), 2.0);
+  // Nobody listening at all: the same bounded failure
+  int free_port = 0;
+  {
+    zmq::socket_t probe(context, zmq::socket_type::rep);
+    probe.set(zmq::sockopt::linger, 0);
+    probe.bind("tcp://127.0.0.1:*");
+    free_port = bound_port(probe);
+  }
+  const auto start2 = Clock::now();
+  EXPECT_THROW(PupilSource("pupil://127.0.0.1:" + std::to_string(free_port) + "?timeout=0.3", {100, 100}), Error);
+  EXPECT_LT(std::chrono::duration<double>(Clock::now() - start2).count(), 2.0);
+}
+
+TEST(Source, RecordingPlaysBackInRealTime) {
+  Recording r;
+  r.screen_px = {100, 100};
+  for (int i = 0; i < 10; ++i) r.samples.push_back(GazeSample{50.0 + 0.1 * i, glm::dvec2(i, i), 1, true, {}});
+  double now = 0;
+  RecordingPlayback playback(r, 2.0, [&] { return now; });
+  std::vector<GazeSample> out;
+  playback.poll(out);
+  EXPECT_EQ(out.size(), 1u);  // the first sample is due at once
+  now = 0.2;                  // 0.4 s of recording at double speed
+  playback.poll(out);
+  EXPECT_EQ(out.size(), 5u);
+  EXPECT_EQ(playback.state(), SourceState::live);
+  now = 10;
+  playback.poll(out);
+  EXPECT_EQ(out.size(), 10u);
+  EXPECT_EQ(playback.state(), SourceState::ended);
+  MouseSource mouse({640, 480});
+  EXPECT_EQ(mouse.state(), SourceState::waiting);
+  mouse.move({10, 20}, 0.5);
+  mouse.move({-1, -1}, 0.6, false);
+  out.clear();
+  mouse.poll(out);
+  ASSERT_EQ(out.size(), 2u);
+  EXPECT_TRUE(out[0].valid);
+  EXPECT_FALSE(out[1].valid);
+}
