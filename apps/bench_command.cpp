@@ -17,7 +17,7 @@ namespace {
 
 // The paper's setting: the dragon in a five-wall box, from the repository's scenes/ folder.
 std::string default_bench_scene() {
-  for (const std::string dir : {std::string("scenes"), std::string(FOVEAL_SOURCE_DIR) + "/scenes"})
+  for (const std::string& dir : {std::string("scenes"), std::string(FOVEAL_SOURCE_DIR) + "/scenes"})
     if (std::filesystem::exists(dir + "/dragon-box.json")) return dir + "/dragon-box.json";
   return "";
 }

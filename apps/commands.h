@@ -3,6 +3,7 @@
 
 #include "foveal/gaze/fixation.h"
 #include "foveal/perception/foveation.h"
+#include "foveal/render/render.h"
 #include "foveal/scene/scene.h"
 
 #include <CLI/CLI.hpp>
@@ -27,6 +28,18 @@ struct ViewOptions {
   std::string display = "47.5,30,60,1680,1050";
   int threads = 0;
 };
+
+// Options of the foveated-AO renderer shared by render and replay.
+struct RenderOptions {
+  std::string mode = "foveated", ao_distance, ambient = "1", trace_api = "stream";
+  int max_rays = 400, min_rays = 0;
+  double gamma = 2, beta = 1, ellipse = 1.538;
+  uint64_t seed = 1;
+  bool shadows = false;
+};
+void add_render_options(CLI::App& command, RenderOptions& options);
+// Size, display and renderer options → validated params (gaze unset).
+RenderParams resolve_render_params(const ViewOptions& view, const RenderOptions& options);
 
 // Camera from the options: a named one, explicit eye/look/up/fov, the scene's first, or a default.
 Camera resolve_camera(const Scene& scene, const ViewOptions& options);

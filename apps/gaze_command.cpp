@@ -18,7 +18,7 @@ void add_gaze_options(CLI::App& cmd, GazeOptions& o) {
   cmd.add_option("--format", o.format, "recording format: auto, asc (EyeLink), pupil (Pupil Player gaze_positions.csv), tobii (SDK or Pro Lab TSV), csv (t,x,y[,confidence])")
       ->capture_default_str();
   cmd.add_option("--screen", o.screen, "screen WxH in pixels for normalised coordinates (Pupil, Tobii SDK, --coords norm) or to override the file's (default: the display's resolution)");
-  cmd.add_option("--eye", o.eye, "binocular recordings: average (of the valid eyes), left or right")->capture_default_str();
+  cmd.add_option("--gaze-eye", o.eye, "binocular recordings: average (of the valid eyes), left or right")->capture_default_str();
   cmd.add_option("--min-confidence", o.min_confidence, "samples with lower tracker confidence are invalid (Pupil's default)")
       ->capture_default_str()->check(CLI::Range(0.0, 1.0));
   cmd.add_option("--time-unit", o.time_unit, "csv: unit of the t column: s, ms or us")->capture_default_str();

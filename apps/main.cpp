@@ -15,6 +15,7 @@ int main(int argc, char** argv) {
   const auto render = foveal::app::add_render_command(app);
   const auto bench = foveal::app::add_bench_command(app);
   const auto gaze = foveal::app::add_gaze_command(app);
+  const auto replay = foveal::app::add_replay_command(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
@@ -32,6 +33,7 @@ int main(int argc, char** argv) {
     if (app.got_subcommand("render")) return render();
     if (app.got_subcommand("bench")) return bench();
     if (app.got_subcommand("gaze")) return gaze();
+    if (app.got_subcommand("replay")) return replay();
     return 2;
   } catch (const foveal::Error& e) {
     fmt::print(stderr, "foveal: error: {}\n", e.what());

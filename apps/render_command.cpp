@@ -50,6 +50,39 @@ void add_view_options(CLI::App& cmd, ViewOptions& o) {
   cmd.add_option("--threads", o.threads, "worker threads (0 = all cores)")->capture_default_str()->check(CLI::Range(0, 4096));
 }
 
+void add_render_options(CLI::App& cmd, RenderOptions& o) {
+  cmd.add_option("--mode", o.mode, "foveated (budget follows the gaze) or full (n_max rays everywhere: the reference)")
+      ->capture_default_str();
+  cmd.add_option("--ao-distance", o.ao_distance, "AO ray length in scene units, or inf (default: scene's, else 0.2 × bounding-box diagonal)");
+  cmd.add_option("--max-rays", o.max_rays, "n_max: AO rays per pixel where q(E) = 1")->capture_default_str();
+  cmd.add_option("--min-rays", o.min_rays, "n_min: AO rays per pixel far from the gaze")->capture_default_str();
+  cmd.add_option("--gamma", o.gamma, "γ: exponent of q(E) in the ray budget n(E)")->capture_default_str();
+  cmd.add_option("--beta", o.beta, "β: exponent of q(E) in the AO blend weight b(E)")->capture_default_str();
+  cmd.add_option("--ellipse", o.ellipse, "horizontal:vertical ratio a of the elliptical ROI (1 = circle)")->capture_default_str();
+  cmd.add_option("--ambient-constant", o.ambient, "k_const, the Phong ambient factor away from the gaze: a number, or auto (mean AO visibility of the fovea)")
+      ->capture_default_str();
+  cmd.add_option("--seed", o.seed, "seed of the AO ray directions")->capture_default_str();
+  cmd.add_option("--trace-api", o.trace_api, "how occlusion rays go to Embree: stream, packet8 or single")->capture_default_str();
+  cmd.add_flag("--shadows", o.shadows, "cast shadow rays for the lights (off, as in the papers)");
+}
+
+RenderParams resolve_render_params(const ViewOptions& view, const RenderOptions& o) {
+  RenderParams p;
+  const glm::ivec2 size = parse_size("--size", view.size);
+  p.width = size.x;
+  p.height = size.y;
+  p.mode = parse_render_mode(o.mode);
+  p.display = resolve_display(view.display, size);
+  p.foveation = {o.ellipse, o.max_rays, o.min_rays, o.gamma, o.beta};
+  if (!o.ao_distance.empty()) p.ao_distance = parse_length_or_inf("--ao-distance", o.ao_distance);
+  if (o.ambient == "auto") p.ambient_constant.reset();
+  else p.ambient_constant = static_cast<float>(parse_numbers("--ambient-constant", o.ambient, 1)[0]);
+  p.seed = o.seed;
+  p.shadows = o.shadows;
+  validate(p);
+  return p;
+}
+
 Display resolve_display(const std::string& text, glm::ivec2 size) {
   Display defaults;
   defaults.res_x = size.x;
@@ -61,29 +94,14 @@ std::function<int()> add_render_command(CLI::App& app) {
   auto* cmd = app.add_subcommand("render", "render one frame with gaze-dependent ambient occlusion");
   struct Options {
     ViewOptions view;
-    std::string gaze, mode = "foveated", ao_distance, ambient = "1", output = "render.png", aov, mask, stats, plot;
-    std::string trace_api = "stream";
-    int max_rays = 400, min_rays = 0;
-    double gamma = 2, beta = 1, ellipse = 1.538;
-    uint64_t seed = 1;
-    bool shadows = false, quiet = false;
+    RenderOptions render;
+    std::string gaze, output = "render.png", aov, mask, stats, plot;
+    bool quiet = false;
   };
   auto o = std::make_shared<Options>();
   add_view_options(*cmd, o->view);
   cmd->add_option("--gaze", o->gaze, "gaze point X,Y in render pixels, origin top-left (default: image centre; may lie off the image)");
-  cmd->add_option("--mode", o->mode, "foveated (budget follows the gaze) or full (n_max rays everywhere: the reference)")
-      ->capture_default_str();
-  cmd->add_option("--ao-distance", o->ao_distance, "AO ray length in scene units, or inf (default: scene's, else 0.2 × bounding-box diagonal)");
-  cmd->add_option("--max-rays", o->max_rays, "n_max: AO rays per pixel where q(E) = 1")->capture_default_str();
-  cmd->add_option("--min-rays", o->min_rays, "n_min: AO rays per pixel far from the gaze")->capture_default_str();
-  cmd->add_option("--gamma", o->gamma, "γ: exponent of q(E) in the ray budget n(E)")->capture_default_str();
-  cmd->add_option("--beta", o->beta, "β: exponent of q(E) in the AO blend weight b(E)")->capture_default_str();
-  cmd->add_option("--ellipse", o->ellipse, "horizontal:vertical ratio a of the elliptical ROI (1 = circle)")->capture_default_str();
-  cmd->add_option("--ambient-constant", o->ambient, "k_const, the Phong ambient factor away from the gaze: a number, or auto (mean AO visibility of the fovea)")
-      ->capture_default_str();
-  cmd->add_option("--seed", o->seed, "seed of the AO ray directions")->capture_default_str();
-  cmd->add_option("--trace-api", o->trace_api, "how occlusion rays go to Embree: stream, packet8 or single")->capture_default_str();
-  cmd->add_flag("--shadows", o->shadows, "cast shadow rays for the lights (off, as in the papers)");
+  add_render_options(*cmd, o->render);
   cmd->add_option("-o,--output", o->output, "shaded image (.png; .pfm/.exr keep linear floats)")->capture_default_str();
   cmd->add_option("--aov", o->aov, "float buffers NAME=FILE[,…] as .pfm/.exr; names: ao, depth, position, normal, albedo, budget, quality, blend, eccentricity");
   cmd->add_option("--mask", o->mask, "ROI/budget mask of the paper's Figure 5 (PNG): grey = n(E)/n_max, red cross at the gaze");
@@ -94,21 +112,9 @@ std::function<int()> add_render_command(CLI::App& app) {
   return [o] {
     const ThreadScope threads(o->view.threads);
     // Options → params (all validated before any work)
-    RenderParams p;
-    const glm::ivec2 size = parse_size("--size", o->view.size);
-    p.width = size.x;
-    p.height = size.y;
-    p.mode = parse_render_mode(o->mode);
-    p.display = resolve_display(o->view.display, size);
-    p.foveation = {o->ellipse, o->max_rays, o->min_rays, o->gamma, o->beta};
+    RenderParams p = resolve_render_params(o->view, o->render);
     if (!o->gaze.empty()) p.gaze_px = parse_vec2("--gaze", o->gaze);
-    if (!o->ao_distance.empty()) p.ao_distance = parse_length_or_inf("--ao-distance", o->ao_distance);
-    if (o->ambient == "auto") p.ambient_constant.reset();
-    else p.ambient_constant = static_cast<float>(parse_numbers("--ambient-constant", o->ambient, 1)[0]);
-    p.seed = o->seed;
-    p.shadows = o->shadows;
-    validate(p);
-    const TraceApi api = parse_trace_api(o->trace_api);
+    const TraceApi api = parse_trace_api(o->render.trace_api);
     if (!o->plot.empty()) write_acuity_plot(p.display, p.foveation, o->plot);
 
     // Scene, tracer, frame

@@ -32,7 +32,7 @@ EyeSelection parse_eye_selection(const std::string& name) {
   if (name == "average") return EyeSelection::average;
   if (name == "left") return EyeSelection::left;
   if (name == "right") return EyeSelection::right;
-  fail("--eye: unknown eye '{}' (expected average, left or right)", name);
+  fail("--gaze-eye: unknown eye '{}' (expected average, left or right)", name);
 }
 
 size_t Recording::valid_count() const {

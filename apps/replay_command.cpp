@@ -1,0 +1,166 @@
+// apps/replay_command.cpp — `foveal replay`: a foveated-AO sequence that follows a recording or
+// a live tracker; frames (PNG), frames.csv, optionally a video and stats JSON.
+#include "commands.h"
+#include "foveal/io/image_io.h"
+#include "foveal/io/outputs.h"
+#include "foveal/io/video.h"
+#include "foveal/render/replay.h"
+#include "foveal/util/error.h"
+#include "foveal/util/parallel.h"
+#include "foveal/util/parse.h"
+#include "foveal/util/timer.h"
+
+#include <fmt/core.h>
+#include <nlohmann/json.hpp>
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+#include <unistd.h>
+
+namespace foveal::app {
+
+namespace {
+
+std::string cell(const std::optional<glm::dvec2>& p, int axis) {
+  return p ? fmt::format("{:.2f}", (*p)[axis]) : std::string();
+}
+
+}  // namespace
+
+std::function<int()> add_replay_command(CLI::App& app) {
+  auto* cmd = app.add_subcommand("replay", "render a foveated-AO sequence that follows a gaze recording or a live tracker");
+  struct Options {
+    ViewOptions view;
+    RenderOptions render;
+    GazeOptions gaze;
+    std::string source, output, video, stats, stimulus;
+    double fps = 30, start = 0, duration = 0, live_timeout = 5;
+    int frames = 0;
+    bool no_reuse = false, quiet = false;
+  };
+  auto o = std::make_shared<Options>();
+  cmd->add_option("--gaze", o->source, "a recording (EyeLink .asc, Pupil gaze_positions.csv, Tobii .tsv, t,x,y CSV) or a live tracker: pupil://HOST:PORT[?surface=NAME]")
+      ->required();
+  add_view_options(*cmd, o->view);
+  add_render_options(*cmd, o->render);
+  add_gaze_options(*cmd, o->gaze);
+  cmd->add_option("-o,--output", o->output, "folder for frame_NNNNN.png and frames.csv (created)")->required();
+  cmd->add_option("--fps", o->fps, "frames per second of gaze time")->capture_default_str();
+  cmd->add_option("--frames", o->frames, "number of frames (0: to the end of the recording; live: 10 s)")->capture_default_str();
+  cmd->add_option("--start", o->start, "recordings: start this many seconds after the first sample")->capture_default_str();
+  cmd->add_option("--duration", o->duration, "seconds of gaze to render (0: all)")->capture_default_str();
+  cmd->add_option("--stimulus", o->stimulus, "where the render was shown on the recording's screen, X,Y,W,H in screen pixels (default: the whole screen)");
+  cmd->add_option("--live-timeout", o->live_timeout, "live: stop when the tracker sends nothing for this many seconds")->capture_default_str();
+  cmd->add_flag("--no-reuse", o->no_reuse, "render every frame, even when the gaze has not moved since the previous one");
+  cmd->add_option("--video", o->video, "also encode the frames into a video with ffmpeg (.mp4, .mkv, .webm, …)");
+  cmd->add_option("--stats", o->stats, "write a summary of the sequence as JSON");
+  cmd->add_flag("-q,--quiet", o->quiet, "print nothing on success");
+
+  return [o] {
+    const ThreadScope threads(o->view.threads);
+    const RenderParams params = resolve_render_params(o->view, o->render);
+    // The gaze screen's physical size: --display without its resolution (which is for the render)
+    const Display gaze_display = params.display;
+    ReplaySettings settings;
+    settings.fps = o->fps;
+    settings.frames = o->frames;
+    settings.start_s = o->start;
+    settings.duration_s = o->duration;
+    settings.method = parse_fixation_method(o->gaze.fixation);
+    settings.fixation = resolve_fixation_params(o->gaze);
+    settings.stimulus = o->stimulus;
+    settings.live_timeout_s = o->live_timeout;
+    settings.reuse = !o->no_reuse;
+    validate(settings);
+    const ReadOptions read = resolve_read_options(o->gaze, gaze_display);
+    const bool live = o->source.rfind("pupil://", 0) == 0;
+    if (!live && o->source.find("://") != std::string::npos)
+      fail("--gaze: unknown live source '{}' (live trackers: pupil://HOST:PORT[?surface=NAME])", o->source);
+    std::optional<Recording> recording;
+    if (!live) recording = read_recording(o->source, read);
+
+    const Scene scene = load_scene(o->view.scene);
+    const Camera camera = resolve_camera(scene, o->view);
+    const Tracer tracer(scene, parse_trace_api(o->render.trace_api));
+
+    namespace fs = std::filesystem;
+    std::error_code ec;
+    fs::create_directories(o->output, ec);
+    if (ec) fail("{}: cannot create the output folder: {}", o->output, ec.message());
+    const std::string csv_path = (fs::path(o->output) / "frames.csv").string();
+    std::ofstream csv(csv_path);
+    if (!csv) fail("{}: cannot write", csv_path);
+    csv << "frame,t_s,gaze_x,gaze_y,fix_x,fix_y,ao_rays,ms,reused,source_state\n";
+    const std::string pattern = (fs::path(o->output) / "frame_%05d.png").string();
+    auto sink = [&](const ReplayFrame& f, const Frame& frame) {
+      save_image(frame.color, (fs::path(o->output) / fmt::format("frame_{:05d}.png", f.index)).string());
+      csv << fmt::format("{},{:.6f},{},{},{},{},{},{:.3f},{},{}\n", f.index, f.t_s, cell(f.gaze, 0), cell(f.gaze, 1), cell(f.fixation, 0),
+                         cell(f.fixation, 1), f.ao_rays, f.ms, f.reused ? 1 : 0, to_string(f.state));
+      csv.flush();
+    };
+    // A progress bar on a terminal for sequences that take a while
+    const bool show = !o->quiet && isatty(fileno(stderr));
+    const Timer clock;
+    bool shown = false;
+    auto progress = [&](int done, int total) {
+      if (!show || clock.ms() < 1000) return;
+      shown = true;
+      const double rate = done / (clock.ms() / 1000);
+      const int width = 30, filled = total > 0 ? width * done / total : 0;
+      fmt::print(stderr, "\r  [{:<{}}] {}/{} frames  {:.1f} frames/s  ETA {:.0f} s ", std::string(filled, '#'), width, done, total,
+                 rate, rate > 0 ? (total - done) / rate : 0.0);
+    };
+
+    ReplaySummary summary;
+    std::string source_name = o->source;
+    if (live) {
+      PupilSource source(o->source, read.screen_px, read.min_confidence);
+      summary = replay_live(source, gaze_display, tracer, scene, camera, params, settings, sink, progress);
+    } else {
+      summary = replay_recording(*recording, gaze_display, tracer, scene, camera, params, settings, sink, progress);
+    }
+    if (shown) fmt::print(stderr, "\r{:80}\r", "");
+    csv.close();
+    if (!o->video.empty() && summary.frames > 0) encode_video(pattern, o->fps, o->video);
+    if (!o->stats.empty()) {
+      nlohmann::json j = {{"gaze_source", source_name},
+                          {"live", live},
+                          {"fixation", o->gaze.fixation},
+                          {"fps", o->fps},
+                          {"frames", summary.frames},
+                          {"reused_frames", summary.reused},
+                          {"width", params.width},
+                          {"height", params.height},
+                          {"mode", to_string(params.mode)},
+                          {"seed", params.seed},
+                          {"threads", threads.threads()},
+                          {"scene", {{"source", scene.source}, {"triangles", tracer.triangles()}, {"build_ms", tracer.build_ms()}}},
+                          {"rays", {{"ao", summary.ao_rays}}},
+                          {"time_ms", {{"frames", summary.render_ms}, {"total", summary.wall_ms},
+                                       {"per_rendered_frame", summary.frames > summary.reused ? summary.render_ms / (summary.frames - summary.reused) : 0.0}}},
+                          {"stopped", summary.stopped},
+                          {"peak_rss_mib", peak_rss_mib()}};
+      if (recording) j["recording"] = {{"format", to_string(recording->format)}, {"screen_px", {recording->screen_px.x, recording->screen_px.y}},
+                                       {"samples", recording->samples.size()}};
+      std::ofstream out(o->stats);
+      out << j.dump(2) << "\n";
+      if (!out) fail("{}: cannot write stats", o->stats);
+    }
+    if (!summary.stopped.empty()) fail("{}", summary.stopped);
+    if (o->quiet) return 0;
+    fmt::print("foveal replay: {} → {} frames at {:g} fps ({} rendered, {} reused: gaze unchanged), {}x{}, {} filter, {} threads\n",
+               source_name, summary.frames, o->fps, summary.frames - summary.reused, summary.reused, params.width, params.height,
+               o->gaze.fixation, threads.threads());
+    fmt::print("  time     {:.1f} s ({:.0f} ms per rendered frame), {:.1f} M AO rays\n", summary.wall_ms / 1000,
+               summary.frames > summary.reused ? summary.render_ms / (summary.frames - summary.reused) : 0.0, summary.ao_rays / 1e6);
+    fmt::print("  wrote    {}/frame_00000.png … , {}", o->output, csv_path);
+    if (!o->video.empty()) fmt::print(", {}", o->video);
+    if (!o->stats.empty()) fmt::print(", {}", o->stats);
+    fmt::print("\n");
+    return 0;
+  };
+}
+
+}  // namespace foveal::app

@@ -1,0 +1,151 @@
+// foveal/render/replay.cpp — gaze-following frame sequences.
+#include "foveal/render/replay.h"
+
+#include "foveal/util/error.h"
+#include "foveal/util/timer.h"
+
+#include <chrono>
+#include <cmath>
+#include <thread>
+
+namespace foveal {
+
+void validate(const ReplaySettings& s) {
+  if (!(s.fps > 0 && s.fps <= 1000)) fail("--fps: must be in (0, 1000], got {}", s.fps);
+  if (s.frames < 0) fail("--frames: must be zero (all) or positive, got {}", s.frames);
+  if (!(s.start_s >= 0) || !std::isfinite(s.start_s)) fail("--start: must be zero or positive seconds, got {}", s.start_s);
+  if (!(s.duration_s >= 0) || !std::isfinite(s.duration_s)) fail("--duration: must be zero (all) or positive seconds, got {}", s.duration_s);
+  if (!(s.live_timeout_s > 0)) fail("--live-timeout: must be positive seconds, got {}", s.live_timeout_s);
+  validate(s.fixation);
+}
+
+namespace {
+
+// Renders frames, reusing the last one when the gaze has not moved.
+class FrameMaker {
+ public:
+  FrameMaker(const Tracer& tracer, const Scene& scene, const Camera& camera, const RenderParams& params, bool reuse)
+      : tracer_(tracer), scene_(scene), camera_(camera), params_(params), reuse_(reuse) {}
+
+  const Frame& make(glm::dvec2 gaze, ReplayFrame& info) {
+    const Timer clock;
+    info.render_gaze = gaze;
+    info.reused = reuse_ && last_gaze_ && *last_gaze_ == gaze;
+    if (!info.reused) {
+      RenderParams p = params_;
+      p.gaze_px = gaze;
+      frame_ = render_frame(tracer_, scene_, camera_, p);
+      last_gaze_ = gaze;
+    }
+    info.ao_rays = frame_.stats.ao_rays;
+    info.ms = clock.ms();
+    return frame_;
+  }
+
+ private:
+  const Tracer& tracer_;
+  const Scene& scene_;
+  const Camera& camera_;
+  const RenderParams& params_;
+  bool reuse_;
+  std::optional<glm::dvec2> last_gaze_;
+  Frame frame_;
+};
+
+void account(ReplaySummary& summary, const ReplayFrame& f) {
+  ++summary.frames;
+  summary.reused += f.reused;
+  if (!f.reused) summary.ao_rays += f.ao_rays;
+  summary.render_ms += f.ms;
+}
+
+}  // namespace
+
+int replay_frame_count(const Recording& r, const ReplaySettings& s) {
+  if (s.frames > 0) return s.frames;
+  double span = r.duration_s() - s.start_s;
+  if (s.duration_s > 0) span = std::min(span, s.duration_s);
+  if (span < 0) fail("--start: {} s is past the end of the recording ({:.3f} s long)", s.start_s, r.duration_s());
+  return static_cast<int>(std::floor(span * s.fps + 1e-9)) + 1;
+}
+
+ReplaySummary replay_recording(const Recording& r, const Display& display, const Tracer& tracer, const Scene& scene,
+                               const Camera& camera, const RenderParams& params, const ReplaySettings& s,
+                               const ReplaySink& sink, const ReplayProgress& progress) {
+  validate(s);
+  if (r.samples.empty()) fail("{}: no samples to replay", r.source);
+  const Timer wall;
+  const GazeGeometry geometry(display, r.screen_px);
+  const ScreenMapping mapping = make_screen_mapping(r.screen_px, {params.width, params.height}, s.stimulus);
+  FixationTracker tracker(s.method, s.fixation, geometry);
+  FrameMaker maker(tracer, scene, camera, params, s.reuse);
+  const int count = replay_frame_count(r, s);
+  const double first = r.samples.front().t_s, t0 = first + s.start_s;
+  const glm::dvec2 centre(0.5 * params.width, 0.5 * params.height);
+  ReplaySummary summary;
+  size_t next = 0;
+  for (int k = 0; k < count; ++k) {
+    const double t = t0 + k / s.fps;
+    const GazeSample* latest = nullptr;
+    while (next < r.samples.size() && r.samples[next].t_s <= t) {
+      tracker.push(r.samples[next]);
+      latest = &r.samples[next++];
+    }
+    ReplayFrame info;
+    info.index = k;
+    info.t_s = t - first;
+    info.state = next >= r.samples.size() ? SourceState::ended : next == 0 ? SourceState::waiting : SourceState::live;
+    if (latest && latest->valid) info.gaze = mapping.to_render(latest->px);
+    if (const auto f = tracker.frame_gaze()) info.fixation = mapping.to_render(*f);
+    const Frame& frame = maker.make(info.fixation.value_or(centre), info);
+    account(summary, info);
+    sink(info, frame);
+    if (progress) progress(k + 1, count);
+  }
+  summary.wall_ms = wall.ms();
+  return summary;
+}
+
+ReplaySummary replay_live(GazeSource& source, const Display& display, const Tracer& tracer, const Scene& scene,
+                          const Camera& camera, const RenderParams& params, const ReplaySettings& s,
+                          const ReplaySink& sink, const ReplayProgress& progress) {
+  validate(s);
+  const Timer wall;
+  const glm::ivec2 screen = source.screen_px();
+  const GazeGeometry geometry(display, screen);
+  const ScreenMapping mapping = make_screen_mapping(screen, {params.width, params.height}, s.stimulus);
+  FixationTracker tracker(s.method, s.fixation, geometry);
+  FrameMaker maker(tracer, scene, camera, params, s.reuse);
+  const int count = s.frames > 0 ? s.frames : static_cast<int>(std::ceil((s.duration_s > 0 ? s.duration_s : 10.0) * s.fps));
+  const glm::dvec2 centre(0.5 * params.width, 0.5 * params.height);
+  ReplaySummary summary;
+  std::vector<GazeSample> samples;
+  for (int k = 0; k < count; ++k) {
+    // Pace: frame k is due k/fps after the start (late frames are not skipped, just late)
+    const double due_ms = 1000.0 * k / s.fps, now_ms = wall.ms();
+    if (due_ms > now_ms) std::this_thread::sleep_for(std::chrono::duration<double, std::milli>(due_ms - now_ms));
+    samples.clear();
+    source.poll(samples);
+    for (const GazeSample& g : samples) tracker.push(g);
+    ReplayFrame info;
+    info.index = k;
+    info.t_s = wall.ms() / 1000.0;
+    info.state = source.state();
+    if (!samples.empty() && samples.back().valid) info.gaze = mapping.to_render(samples.back().px);
+    if (const auto f = tracker.frame_gaze()) info.fixation = mapping.to_render(*f);
+    const Frame& frame = maker.make(info.fixation.value_or(centre), info);
+    account(summary, info);
+    sink(info, frame);
+    if (progress) progress(k + 1, count);
+    const bool gone = info.state == SourceState::disconnected || info.state == SourceState::ended;
+    if ((gone || info.state == SourceState::stale || info.state == SourceState::waiting) && source.silent_s() > s.live_timeout_s) {
+      summary.stopped = fmt::format("{}: no gaze for {:.1f} s ({}); stopped after {} frames", source.name(), source.silent_s(),
+                                    gone ? to_string(info.state) : "tracker silent", summary.frames);
+      break;
+    }
+  }
+  summary.wall_ms = wall.ms();
+  return summary;
+}
+
+}  // namespace foveal

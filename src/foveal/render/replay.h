@@ -1,0 +1,70 @@
+// foveal/render/replay.h — foveated-AO sequences that follow recorded or live gaze.
+//
+// Frame k starts at t_k = t_0 + k / fps. The gaze samples up to t_k go through the causal
+// fixation filter (exactly as they would arrive from a tracker), and the filter's output at t_k,
+// mapped from the recording's screen into render pixels, is the frame's gaze point. Until the
+// first fixation the image centre is used. A recording is replayed on its own clock (as fast as
+// frames render); a live source is paced on the wall clock.
+#pragma once
+
+#include "foveal/gaze/fixation.h"
+#include "foveal/gaze/source.h"
+#include "foveal/render/render.h"
+
+#include <functional>
+#include <optional>
+#include <string>
+
+namespace foveal {
+
+struct ReplaySettings {
+  double fps = 30;
+  int frames = 0;              // 0: to the end of the recording (live: 10 s)
+  double start_s = 0;          // recordings: seconds after the first sample
+  double duration_s = 0;       // 0: everything from the start
+  FixationMethod method = FixationMethod::ivt;
+  FixationParams fixation;
+  std::string stimulus;        // where the render sits on the screen, "X,Y,W,H" (empty: the whole screen)
+  double live_timeout_s = 5;   // live: stop when the tracker stays silent this long
+  bool reuse = true;           // a frame whose gaze equals the previous one's reuses its (identical) image
+};
+void validate(const ReplaySettings& settings);
+
+struct ReplayFrame {
+  int index = 0;
+  double t_s = 0;                         // recording: since its first sample; live: since the start
+  std::optional<glm::dvec2> gaze;         // latest raw sample at t_k, render pixels (unset: invalid)
+  std::optional<glm::dvec2> fixation;     // filter output at t_k, render pixels (unset: none yet)
+  glm::dvec2 render_gaze{0};              // the gaze the frame was rendered with
+  uint64_t ao_rays = 0;                   // AO rays of the image
+  double ms = 0;                          // time to produce the frame (render or reuse)
+  bool reused = false;
+  SourceState state = SourceState::live;  // the source's state at t_k
+};
+
+struct ReplaySummary {
+  int frames = 0, reused = 0;
+  uint64_t ao_rays = 0;
+  double render_ms = 0;       // sum of the frames' ms
+  double wall_ms = 0;
+  std::string stopped;        // why it stopped early ("" when it ran to the end)
+};
+
+using ReplaySink = std::function<void(const ReplayFrame&, const Frame&)>;
+using ReplayProgress = std::function<void(int done, int total)>;
+
+// Frames at which a recording replay renders (t_0 and count) for the settings.
+int replay_frame_count(const Recording& recording, const ReplaySettings& settings);
+
+// Replay a recording. `display` gives the angles for the filter (its physical size; the recording's screen pixels).
+ReplaySummary replay_recording(const Recording& recording, const Display& display, const Tracer& tracer, const Scene& scene,
+                               const Camera& camera, const RenderParams& params, const ReplaySettings& settings,
+                               const ReplaySink& sink, const ReplayProgress& progress = {});
+
+// Follow a live source in real time. Stops after the frames (or 10 s), or — with `stopped` set —
+// when the source has been silent or disconnected for live_timeout_s.
+ReplaySummary replay_live(GazeSource& source, const Display& display, const Tracer& tracer, const Scene& scene,
+                          const Camera& camera, const RenderParams& params, const ReplaySettings& settings,
+                          const ReplaySink& sink, const ReplayProgress& progress = {});
+
+}  // namespace foveal
