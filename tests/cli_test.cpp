@@ -1,4 +1,6 @@
 // Tests of the `foveal` command line as a user runs it: outputs, the stats contract, bad input.
+#include "cli_helpers.h"
+
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
@@ -9,42 +11,8 @@
 #include <fstream>
 #include <sstream>
 
+using namespace foveal_test;
 namespace fs = std::filesystem;
-
-namespace {
-
-struct CliRun {
-  int status = -1;
-  std::string out, err;
-};
-
-// CliRun the executable with arguments in a scratch folder; capture exit status and both streams.
-CliRun foveal(const std::string& args) {
-  static const fs::path dir = fs::temp_directory_path() / ("foveal_cli_" + std::to_string(::getpid()));
-  fs::create_directories(dir);
-  const std::string cmd = "cd '" + dir.string() + "' && '" FOVEAL_EXE "' " + args + " > out.txt 2> err.txt";
-  CliRun r;
-  const int raw = std::system(cmd.c_str());
-  r.status = WIFEXITED(raw) ? WEXITSTATUS(raw) : 128 + WTERMSIG(raw);
-  auto slurp = [&](const char* name) {
-    std::stringstream s;
-    s << std::ifstream(dir / name).rdbuf();
-    return s.str();
-  };
-  r.out = slurp("out.txt");
-  r.err = slurp("err.txt");
-  return r;
-}
-
-fs::path scratch(const std::string& name) { return fs::temp_directory_path() / ("foveal_cli_" + std::to_string(::getpid())) / name; }
-
-size_t lines(const std::string& s) {
-  size_t n = 0;
-  for (char c : s) n += c == '\n';
-  return n;
-}
-
-}  // namespace
 
 TEST(Cli, RenderWritesImageMaskPlotAovsAndContractStats) {
   const CliRun r = foveal("render --size 96x60 --max-rays 8 --gaze 10,10 -o img.png --mask mask.png --acuity-plot fig4.svg "

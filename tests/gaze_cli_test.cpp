@@ -1,0 +1,183 @@
+// `foveal gaze` and `foveal replay` as a user runs them: the JSON and CSV contracts, the scan
+// path, a live replay against a loopback Pupil Capture that hangs up, and bad input.
+#include "cli_helpers.h"
+#include "fake_pupil.h"
+#include "foveal/io/image_io.h"
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <cmath>
+#include <fstream>
+
+using namespace foveal_test;
+namespace fs = std::filesystem;
+
+namespace {
+
+// A 500 Hz t,x,y recording on a 480×300 screen: three 300 ms fixations joined by 30 ms saccades.
+std::string write_recording(const std::string& name) {
+  const fs::path path = scratch(name);
+  fs::create_directories(path.parent_path());
+  std::ofstream out(path);
+  out << "t,x,y,confidence\n";
+  const double points[3][2] = {{100, 100}, {400, 200}, {240, 150}};
+  double t = 0;
+  for (int f = 0; f < 3; ++f) {
+    for (int i = 0; i < 150; ++i, t += 0.002)
+      out << t << "," << points[f][0] + 0.3 * std::sin(i) << "," << points[f][1] + 0.3 * std::cos(i) << ",0.9\n";
+    if (f == 2) break;
+    for (int i = 1; i < 15; ++i, t += 0.002)
+      out << t << "," << points[f][0] + (points[f + 1][0] - points[f][0]) * i / 15.0 << ","
+          << points[f][1] + (points[f + 1][1] - points[f][1]) * i / 15.0 << ",0.9\n";
+  }
+  return path.string();
+}
+
+std::vector<std::vector<std::string>> read_csv(const fs::path& path) {
+  std::vector<std::vector<std::string>> rows;
+  std::ifstream in(path);
+  std::string line;
+  while (std::getline(in, line)) {
+    std::vector<std::string> row;
+    size_t start = 0;
+    for (;;) {
+      const size_t comma = line.find(',', start);
+      row.push_back(line.substr(start, comma == std::string::npos ? std::string::npos : comma - start));
+      if (comma == std::string::npos) break;
+      start = comma + 1;
+    }
+    rows.push_back(row);
+  }
+  return rows;
+}
+
+}  // namespace
+
+TEST(GazeCli, SummaryJsonAndScanPath) {
+  const std::string rec = write_recording("three.csv");
+  const CliRun r = foveal_test::foveal("gaze " + rec + " --screen 480x300 --json gaze.json --scanpath scan.png");
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_NE(r.out.find("ivt"), std::string::npos);
+  const auto j = nlohmann::json::parse(std::ifstream(scratch("gaze.json")));
+  EXPECT_EQ(j["format"], "csv");
+  EXPECT_EQ(j["samples"], 3 * 150 + 2 * 14);
+  EXPECT_DOUBLE_EQ(j["valid_fraction"].get<double>(), 1.0);
+  EXPECT_NEAR(j["rate_hz"].get<double>(), 500, 0.5);
+  EXPECT_NEAR(j["duration_s"].get<double>(), (3 * 150 + 2 * 14 - 1) * 0.002, 1e-6);
+  EXPECT_EQ(j["screen_px"], nlohmann::json({480, 300}));
+  EXPECT_EQ(j["fixations"]["ivt"]["count"], 3);
+  EXPECT_EQ(j["fixations"]["idt"]["count"], 3);
+  EXPECT_FALSE(j["fixations"]["ivt"].contains("agreement"));  // a plain CSV has no tracker events
+  const foveal::Image scan = foveal::load_image(scratch("scan.png").string());
+  EXPECT_EQ(scan.width, 480 + 48);  // the screen plus a 24 px margin each side
+  EXPECT_EQ(scan.height, 300 + 48);
+}
+
+TEST(GazeCli, RealEyeLinkAgreementInJson) {
+  const std::string rec = std::string(FOVEAL_DATA_DIR) + "/gaze/eyelink/monoRemote500.asc";
+  if (!fs::exists(rec)) GTEST_SKIP() << "skipped: " << rec << " absent";
+  const CliRun r = foveal_test::foveal("gaze " + rec + " --json eyelink.json --no-scanpath -q");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const auto j = nlohmann::json::parse(std::ifstream(scratch("eyelink.json")));
+  EXPECT_EQ(j["format"], "asc");
+  EXPECT_EQ(j["samples"], 41582);
+  EXPECT_EQ(j["screen_px"], nlohmann::json({1024, 768}));
+  EXPECT_EQ(j["fixations"]["tracker"]["count"], 300);
+  for (const char* f : {"ivt", "idt"}) {
+    EXPECT_GE(j["fixations"][f]["agreement"].get<double>(), 0.85) << f;
+    EXPECT_GT(j["fixations"][f]["kappa"].get<double>(), 0.4) << f;
+  }
+}
+
+TEST(GazeCli, ReplayFollowsTheRecording) {
+  const std::string rec = write_recording("replay.csv");
+  const CliRun r = foveal_test::foveal("replay --gaze " + rec + " --screen 480x300 --scene builtin:sphere-plane --size 48x30 --max-rays 4 "
+                          "--fps 10 -o seq --stats seq.json");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const auto rows = read_csv(scratch("seq/frames.csv"));
+  ASSERT_GE(rows.size(), 2u);
+  const std::vector<std::string> contract{"frame", "t_s", "gaze_x", "gaze_y", "fix_x", "fix_y", "ao_rays", "ms"};
+  for (size_t c = 0; c < contract.size(); ++c) EXPECT_EQ(rows[0][c], contract[c]);
+  // 0.952 s of gaze at 10 fps: frames at 0, 0.1, …, 0.9 s
+  ASSERT_EQ(rows.size(), 1u + 10u);
+  EXPECT_EQ(rows[1][4], "");  // no fixation at t = 0 yet (I-VT needs 60 ms)
+  // At 0.2 s the first fixation (100, 100) on the 480×300 screen is (10, 10) in the 48×30 render
+  EXPECT_NEAR(std::stod(rows[3][4]), 10.0, 0.1);
+  EXPECT_NEAR(std::stod(rows[3][5]), 10.0, 0.1);
+  // At 0.9 s: the third fixation (240, 150) → (24, 15)
+  EXPECT_NEAR(std::stod(rows[10][4]), 24.0, 0.1);
+  EXPECT_NEAR(std::stod(rows[10][5]), 15.0, 0.1);
+  for (int k = 0; k < 10; ++k) EXPECT_TRUE(fs::exists(scratch("seq/frame_0000" + std::to_string(k) + ".png")));
+  const auto j = nlohmann::json::parse(std::ifstream(scratch("seq.json")));
+  EXPECT_EQ(j["frames"], 10);
+  EXPECT_GT(j["rays"]["ao"].get<uint64_t>(), 0u);
+}
+
+TEST(GazeCli, ReplayWritesAVideo) {
+  if (std::system("ffmpeg -version > /dev/null 2>&1") != 0) GTEST_SKIP() << "skipped: ffmpeg absent";
+  const std::string rec = write_recording("video.csv");
+  const CliRun r = foveal_test::foveal("replay --gaze " + rec + " --screen 480x300 --scene builtin:plane --size 33x21 --max-rays 2 --fps 10 "
+                          "-o vid --video vid/out.mp4 -q");
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_GT(fs::file_size(scratch("vid/out.mp4")), 500u);
+}
+
+TEST(GazeCli, LiveReplayHoldsTheFixationAndStopsWhenTheTrackerHangsUp) {
+  FakePupil fake;
+  std::vector<std::pair<std::string, std::string>> messages;
+  for (int i = 0; i < 150; ++i) messages.emplace_back("surfaces.screen", surface_gaze(0.25, 0.75, true, 10 + 0.004 * i));
+  fake.serve(messages, true, nullptr);
+  const CliRun r = foveal_test::foveal("replay --gaze '" + fake.url("surface=screen") + "' --screen 400x200 --scene builtin:plane --size 40x20 "
+                          "--max-rays 2 --fps 20 --frames 400 --live-timeout 1 -o live");
+  // The tracker hung up: a clear message and a non-zero exit after a bounded wait
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.err.find("no gaze for"), std::string::npos) << r.err;
+  EXPECT_EQ(lines(r.err), 1u) << r.err;
+  const auto rows = read_csv(scratch("live/frames.csv"));
+  ASSERT_GT(rows.size(), 5u);
+  EXPECT_LT(rows.size(), 400u);
+  // Once fixated, every later frame holds (10, 5): norm (0.25, 0.75) of 400×200 → (100, 50) → render /10
+  bool fixated = false;
+  for (size_t i = 1; i < rows.size(); ++i) {
+    if (rows[i][4].empty()) {
+      EXPECT_FALSE(fixated) << "frame " << i - 1 << " lost the fixation";
+      continue;
+    }
+    fixated = true;
+    EXPECT_NEAR(std::stod(rows[i][4]), 10.0, 1e-6);
+    EXPECT_NEAR(std::stod(rows[i][5]), 5.0, 1e-6);
+  }
+  EXPECT_TRUE(fixated);
+}
+
+TEST(GazeCli, BadInputGivesOneClearLine) {
+  const std::string rec = write_recording("ok.csv");
+  {
+    std::ofstream bad(scratch("bad.csv"));
+    bad << "t,x,y\n0,1,2\n0.002,1,two\n";
+  }
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"gaze missing.csv", "missing.csv: cannot open"},
+      {"gaze bad.csv", "bad.csv:3: y 'two' is not a number"},
+      {"gaze " + rec + " --format xyz", "unknown recording format"},
+      {"gaze " + rec + " --fixation fast", "unknown filter"},
+      {"gaze " + rec + " --ivt-threshold 0", "--ivt-threshold"},
+      {"gaze " + rec + " --time-unit h", "--time-unit"},
+      {"gaze " + rec + " --gaze-eye middle", "--gaze-eye"},
+      {"gaze " + rec + " --scanpath /nonexistent/dir/s.png", "cannot write image"},
+      {"replay --gaze " + rec + " -o r --fps 0", "--fps"},
+      {"replay --gaze " + rec + " -o r --start 99", "past the end"},
+      {"replay --gaze " + rec + " -o r --stimulus 0,0,0,1", "--stimulus"},
+      {"replay --gaze tobii://host -o r", "unknown live source"},
+      {"replay --gaze 'pupil://127.0.0.1:9?timeout=0.2' -o r --scene builtin:plane --size 8x8", "did not answer SUB_PORT"},
+      {"replay -o r", "--gaze"},
+  };
+  for (const auto& [args, expected] : cases) {
+    const CliRun r = foveal_test::foveal(args);
+    EXPECT_NE(r.status, 0) << args;
+    EXPECT_EQ(lines(r.err), 1u) << args << "\n" << r.err;
+    EXPECT_NE(r.err.find("foveal: error:"), std::string::npos) << args << "\n" << r.err;
+    EXPECT_NE(r.err.find(expected), std::string::npos) << args << "\n" << r.err;
+  }
+}
