@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Build and run the whole test suite: a Release build, then the same tests under AddressSanitizer
 # and UndefinedBehaviorSanitizer, then each fuzz target for a bounded time.
-# Usage: scripts/test.sh   (FUZZ_SECONDS=N to change the fuzzing time; 0 skips fuzzing)
+# Usage: scripts/test.sh   (FUZZ_SECONDS=N to change each target's fuzzing time, default 20; 0 skips fuzzing)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 jobs="$(nproc)"
@@ -17,13 +17,15 @@ cmake --build build-asan --parallel "$jobs"
 ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
   ctest --test-dir build-asan --output-on-failure --parallel "$jobs"
 
-seconds="${FUZZ_SECONDS:-30}"
+seconds="${FUZZ_SECONDS:-20}"
 if [ "$seconds" != 0 ]; then
   echo "== libFuzzer targets, ${seconds}s each"
   cmake -S . -B build-fuzz -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_COMPILER=clang++ \
     -DFOVEAL_FUZZ=ON -DFOVEAL_BUILD_TESTS=OFF -DFOVEAL_BUILD_BENCH=OFF >/dev/null
-  cmake --build build-fuzz --parallel "$jobs" --target fuzz_scene_json fuzz_pfm
-  for target in fuzz_scene_json fuzz_pfm; do
+  targets=$(cd fuzz && ls fuzz_*.cpp | sed 's/\.cpp$//')
+  # shellcheck disable=SC2086
+  cmake --build build-fuzz --parallel "$jobs" --target $targets
+  for target in $targets; do
     mkdir -p "build-fuzz/corpus/$target"
     cp fuzz/corpus/"$target"/* "build-fuzz/corpus/$target/" 2>/dev/null || true
     if ! "build-fuzz/fuzz/$target" -max_total_time="$seconds" -rss_limit_mb=2048 -artifact_prefix=build-fuzz/ \

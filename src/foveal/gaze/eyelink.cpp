@@ -96,6 +96,7 @@ Recording parse_eyelink_asc(const std::string& content, const std::string& name,
       continue;
     }
     const auto f = text::split(line, ' ');
+    if (f.empty()) continue;  // only blanks
     const std::string_view key = f.front();
     if (key == "START") {
       if (in_block) fail("{}: START inside a recording block (missing END)", where());

@@ -34,6 +34,7 @@ const char* kAsc =
     "1002\t  101.0\t  201.0\t 1000.0\t...\n"
     "1004\t   .\t   .\t    0.0\t...\n"
     "1006\t  103.0\t  203.0\t 1000.0\t...\n"
+    " \t \n"  // blanks only (found by fuzzing)
     "EFIX L   1000\t1006\t8\t  101.3\t  201.3\t   1000\n"
     "END\t1007 \tSAMPLES\tEVENTS\tRES\t  36.39\t  36.07\n"
     "   3820.2  273.52  324.43\n";  // a calibration line outside a block: not a sample

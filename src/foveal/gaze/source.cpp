@@ -134,7 +134,10 @@ bool decode_datum(const msgpack::object& d, glm::ivec2 screen, float min_confide
 bool decode_pupil_message(const std::string& topic, const void* payload, size_t size, glm::ivec2 screen, float min_confidence,
                           std::vector<GazeSample>& out) {
   try {
-    const msgpack::object_handle handle = msgpack::unpack(static_cast<const char*>(payload), size);
+    // No container can hold more elements than the payload has bytes: a corrupt length must not
+    // make the unpacker reserve gigabytes before it finds out.
+    const msgpack::unpack_limit limit(size, size, size, size, size, 32);
+    const msgpack::object_handle handle = msgpack::unpack(static_cast<const char*>(payload), size, nullptr, nullptr, limit);
     const msgpack::object& root = handle.get();
     if (root.type != msgpack::type::MAP) return false;
     if (topic.rfind("surfaces.", 0) == 0) {

@@ -71,6 +71,9 @@ TEST(Source, DecodesPupilMessages) {
   EXPECT_FALSE(decode_pupil_message("gaze.", junk.data(), junk.size(), {1000, 500}, 0.6f, out));
   EXPECT_FALSE(decode_pupil_message("gaze.", "\xc1", 1, {1000, 500}, 0.6f, out));  // never-used byte
   EXPECT_FALSE(decode_pupil_message("gaze.", "", 0, {1000, 500}, 0.6f, out));
+  // Found by fuzzing: an array header claiming 2^32 − 1 elements must not reserve memory for them
+  const std::string huge = "\x81\xa3pos\xdd\xff\xff\xff\xff";
+  EXPECT_FALSE(decode_pupil_message("gaze.", huge.data(), huge.size(), {1000, 500}, 0.6f, out));
 }
 
 TEST(Source, SurfaceGazeThenDisconnect) {

@@ -1,0 +1,8 @@
+// libFuzzer target: the asc reader must turn any bytes into a recording or an Error, and the
+// fixation filters must cope with whatever it reads.
+#include "fuzz_recording.h"
+
+extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
+  fuzz_recording(data, size, foveal::GazeFormat::asc, "fuzz.asc");
+  return 0;
+}

@@ -1,0 +1,24 @@
+// fuzz/fuzz_recording.h — shared body of the recording fuzz targets: parse with one reader, and
+// when that succeeds, run every fixation filter and the summary over what it read.
+#pragma once
+
+#include "foveal/gaze/summary.h"
+#include "foveal/util/error.h"
+
+#include <cstddef>
+#include <cstdint>
+#include <string>
+
+inline void fuzz_recording(const uint8_t* data, size_t size, foveal::GazeFormat format, const char* name) {
+  foveal::ReadOptions options;
+  options.format = format;
+  options.screen_px = {640, 480};
+  try {
+    const foveal::Recording r = foveal::parse_recording(std::string(reinterpret_cast<const char*>(data), size), name, options);
+    if (r.screen_px.x < 1 || r.screen_px.y < 1) return;
+    const foveal::Display display{47.5, 30, 60, r.screen_px.x, r.screen_px.y};
+    const foveal::GazeSummary s = foveal::summarize_recording(r, display, {});
+    (void)foveal::format_summary(r, s);
+  } catch (const foveal::Error&) {
+  }
+}
