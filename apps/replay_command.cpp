@@ -38,7 +38,7 @@ std::function<int()> add_replay_command(CLI::App& app) {
     std::string source, output, video, stats, stimulus;
     double fps = 30, start = 0, duration = 0, live_timeout = 5;
     int frames = 0;
-    bool no_reuse = false, quiet = false;
+    bool no_reuse = false, mark = false, quiet = false;
   };
   auto o = std::make_shared<Options>();
   cmd->add_option("--gaze", o->source, "a recording (EyeLink .asc, Pupil gaze_positions.csv, Tobii .tsv, t,x,y CSV) or a live tracker: pupil://HOST:PORT[?surface=NAME]")
@@ -53,6 +53,7 @@ std::function<int()> add_replay_command(CLI::App& app) {
   cmd->add_option("--duration", o->duration, "seconds of gaze to render (0: all)")->capture_default_str();
   cmd->add_option("--stimulus", o->stimulus, "where the render was shown on the recording's screen, X,Y,W,H in screen pixels (default: the whole screen)");
   cmd->add_option("--live-timeout", o->live_timeout, "live: stop when the tracker sends nothing for this many seconds")->capture_default_str();
+  cmd->add_flag("--mark", o->mark, "draw a red cross at each frame's gaze point on the saved frames");
   cmd->add_flag("--no-reuse", o->no_reuse, "render every frame, even when the gaze has not moved since the previous one");
   cmd->add_option("--video", o->video, "also encode the frames into a video with ffmpeg (.mp4, .mkv, .webm, …)");
   cmd->add_option("--stats", o->stats, "write a summary of the sequence as JSON");
@@ -95,7 +96,14 @@ std::function<int()> add_replay_command(CLI::App& app) {
     csv << "frame,t_s,gaze_x,gaze_y,fix_x,fix_y,ao_rays,ms,reused,source_state\n";
     const std::string pattern = (fs::path(o->output) / "frame_%05d.png").string();
     auto sink = [&](const ReplayFrame& f, const Frame& frame) {
-      save_image(frame.color, (fs::path(o->output) / fmt::format("frame_{:05d}.png", f.index)).string());
+      const std::string path = (fs::path(o->output) / fmt::format("frame_{:05d}.png", f.index)).string();
+      if (o->mark) {
+        Image marked = frame.color;
+        mark_gaze(marked, f.render_gaze);
+        save_image(marked, path);
+      } else {
+        save_image(frame.color, path);
+      }
       csv << fmt::format("{},{:.6f},{},{},{},{},{},{:.3f},{},{}\n", f.index, f.t_s, cell(f.gaze, 0), cell(f.gaze, 1), cell(f.fixation, 0),
                          cell(f.fixation, 1), f.ao_rays, f.ms, f.reused ? 1 : 0, to_string(f.state));
       csv.flush();

@@ -46,7 +46,8 @@ const char* to_string(FixationMethod method);
 FixationMethod parse_fixation_method(const std::string& name);  // throws Error
 
 // Filter parameters. I-VT defaults are Tobii Pro's I-VT (fixation) filter (Olsen 2012) without
-// its optional noise reduction; I-DT defaults follow Salvucci & Goldberg (2000).
+// its optional noise reduction; I-DT follows Salvucci & Goldberg (2000), with a 1° dispersion and
+// Pupil Labs' 80 ms minimum duration.
 struct FixationParams {
   double velocity_threshold_deg_s = 30;  // I-VT: slower samples are fixation samples
   double velocity_window_s = 0.020;      // I-VT: velocity over the samples within ±10 ms
@@ -55,7 +56,7 @@ struct FixationParams {
   double merge_angle_deg = 0.5;          // … and in angle than this are merged
   double min_fixation_s = 0.060;         // I-VT: shorter fixations are discarded
   double dispersion_deg = 1.0;           // I-DT: (max−min) x + (max−min) y of a fixation, degrees
-  double min_duration_s = 0.100;         // I-DT: minimum fixation duration
+  double min_duration_s = 0.080;         // I-DT: minimum fixation duration (Pupil Labs' default)
 };
 // Check parameters; throws Error naming the option.
 void validate(const FixationParams& params);

@@ -142,17 +142,7 @@ Image budget_mask(const Frame& f, int max_rays) {
       const float v = max_rays > 0 ? f.maps.rays[static_cast<size_t>(y) * w + x] / static_cast<float>(max_rays) : 0.0f;
       for (int c = 0; c < 3; ++c) image.at(x, y, c) = v;
     }
-  // Red cross at the gaze point
-  const int gx = static_cast<int>(std::floor(f.gaze_px.x)), gy = static_cast<int>(std::floor(f.gaze_px.y));
-  const int arm = std::max(4, std::min(w, h) / 40);
-  for (int d = -arm; d <= arm; ++d)
-    for (int t = -1; t <= 1; ++t)
-      for (auto [x, y] : {std::pair{gx + d, gy + d + t}, std::pair{gx + d, gy - d + t}})
-        if (x >= 0 && y >= 0 && x < w && y < h) {
-          image.at(x, y, 0) = 1.0f;
-          image.at(x, y, 1) = 0.0f;
-          image.at(x, y, 2) = 0.0f;
-        }
+  mark_gaze(image, f.gaze_px);
   return image;
 }
 
@@ -255,6 +245,20 @@ nlohmann::json frame_stats_json(const Frame& f, const RenderParams& p, const Sce
   j["trace_api"] = to_string(tracer.occlusion_api());
   j["peak_rss_mib"] = peak_rss_mib();
   return j;
+}
+
+void mark_gaze(Image& image, glm::dvec2 gaze_px) {
+  const int w = image.width, h = image.height;
+  const int gx = static_cast<int>(std::floor(gaze_px.x)), gy = static_cast<int>(std::floor(gaze_px.y));
+  const int arm = std::max(4, std::min(w, h) / 40);
+  for (int d = -arm; d <= arm; ++d)
+    for (int t = -1; t <= 1; ++t)
+      for (auto [x, y] : {std::pair{gx + d, gy + d + t}, std::pair{gx + d, gy - d + t}})
+        if (x >= 0 && y >= 0 && x < w && y < h) {
+          image.at(x, y, 0) = 1.0f;
+          image.at(x, y, 1) = 0.0f;
+          image.at(x, y, 2) = 0.0f;
+        }
 }
 
 double peak_rss_mib() {

@@ -24,6 +24,9 @@ void write_aovs(const Frame& frame, const std::string& spec);
 // gaze marked by a red cross when it is on the image.
 Image budget_mask(const Frame& frame, int max_rays);
 
+// Draw a red diagonal cross at a render position (nothing where it falls off the image).
+void mark_gaze(Image& image, glm::dvec2 gaze_px);
+
 // Plot of the acuity model (Figure 4) for a display: f_c(E) of eq. 4, the display's limit
 // (magenta), and the resulting AO budget n(E). Written as .svg or .png.
 void write_acuity_plot(const Display& display, const FoveationParams& params, const std::string& path);
