@@ -63,7 +63,7 @@ GazeSummary summarize_recording(const Recording& r, const Display& display, cons
     fixations[to_string(m)] = j;
     out.filters.push_back(std::move(f));
   }
-  fixations["parameters"] = {{"ivt_threshold_deg_s", params.velocity_threshold_deg_s},
+  const nlohmann::json parameters = {{"ivt_threshold_deg_s", params.velocity_threshold_deg_s},
                              {"velocity_window_ms", params.velocity_window_s * 1000},
                              {"gap_fill_ms", params.gap_fill_s * 1000},
                              {"merge_gap_ms", params.merge_gap_s * 1000},
@@ -71,7 +71,6 @@ GazeSummary summarize_recording(const Recording& r, const Display& display, cons
                              {"min_fixation_ms", params.min_fixation_s * 1000},
                              {"idt_dispersion_deg", params.dispersion_deg},
                              {"idt_min_duration_ms", params.min_duration_s * 1000}};
-  if (r.has_tracker_fixations) fixations["tracker"] = {{"count", r.fixations.size()}};
   const size_t valid = r.valid_count();
   out.json = {{"format", to_string(r.format)},
               {"source", r.source},
@@ -92,6 +91,8 @@ GazeSummary summarize_recording(const Recording& r, const Display& display, cons
               {"pixels_per_degree", geometry.pixels_per_degree()},
               {"tracker_blinks", r.blinks.size()},
               {"fixations", fixations},
+              {"fixation_parameters", parameters},
+              {"tracker_fixations", r.has_tracker_fixations ? nlohmann::json(r.fixations.size()) : nlohmann::json()},
               {"notes", r.notes}};
   return out;
 }
