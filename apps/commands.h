@@ -56,6 +56,7 @@ struct GazeOptions {
   std::string fixation = "ivt";
   double ivt_threshold = 30, velocity_window_ms = 20, gap_fill_ms = 75, merge_gap_ms = 75, merge_angle = 0.5,
          min_fixation_ms = 60, idt_dispersion = 1.0, idt_duration_ms = 80;
+  int median_window = 1;
 };
 void add_gaze_options(CLI::App& command, GazeOptions& options);
 // Reader options (screen for normalised coordinates defaults to the display's resolution).

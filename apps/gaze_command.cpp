@@ -34,6 +34,8 @@ void add_gaze_options(CLI::App& cmd, GazeOptions& o) {
   cmd.add_option("--merge-gap-ms", o.merge_gap_ms, "I-VT: merge fixations less than this apart in time, ms …")->capture_default_str();
   cmd.add_option("--merge-angle", o.merge_angle, "… and this apart in angle, deg")->capture_default_str();
   cmd.add_option("--min-fixation-ms", o.min_fixation_ms, "I-VT: discard shorter fixations, ms")->capture_default_str();
+  cmd.add_option("--median-window", o.median_window, "noise reduction: moving median over this many samples before filtering (odd; 1 = off)")
+      ->capture_default_str();
   cmd.add_option("--idt-dispersion", o.idt_dispersion, "I-DT dispersion limit (x range + y range), deg")->capture_default_str();
   cmd.add_option("--idt-duration-ms", o.idt_duration_ms, "I-DT minimum fixation duration, ms")->capture_default_str();
 }
@@ -71,6 +73,7 @@ FixationParams resolve_fixation_params(const GazeOptions& o) {
   p.min_fixation_s = o.min_fixation_ms / 1000;
   p.dispersion_deg = o.idt_dispersion;
   p.min_duration_s = o.idt_duration_ms / 1000;
+  p.median_window = o.median_window;
   validate(p);
   return p;
 }

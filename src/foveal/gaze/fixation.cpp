@@ -67,6 +67,8 @@ void validate(const FixationParams& p) {
   non_negative(p.merge_gap_s, "--merge-gap-ms");
   non_negative(p.merge_angle_deg, "--merge-angle");
   non_negative(p.min_fixation_s, "--min-fixation-ms");
+  if (p.median_window < 1 || p.median_window > 99 || p.median_window % 2 == 0)
+    fail("--median-window: must be an odd number of samples from 1 (off) to 99, got {}", p.median_window);
   positive(p.dispersion_deg, "--idt-dispersion");
   non_negative(p.min_duration_s, "--idt-duration-ms");
 }
@@ -118,6 +120,28 @@ Prepared prepare(const Recording& r, const GazeGeometry& g, const FixationParams
     const bool continues = i > 0 && out.usable[i - 1] && s[i].t_s - s[i - 1].t_s <= std::max(p.gap_fill_s, 1e-9);
     if (!continues) ++run;
     out.run[i] = run;
+  }
+  // Noise reduction (Tobii's optional moving median): each angle → the median of its window in the run
+  if (p.median_window > 1) {
+    const int half = p.median_window / 2;
+    std::vector<glm::dvec2> smoothed = out.angles;
+    std::vector<double> xs, ys;
+    for (size_t i = 0; i < n; ++i) {
+      if (out.run[i] < 0) continue;
+      xs.clear();
+      ys.clear();
+      for (size_t k = i >= static_cast<size_t>(half) ? i - half : 0; k < n && k <= i + half; ++k)
+        if (out.run[k] == out.run[i]) {
+          xs.push_back(out.angles[k].x);
+          ys.push_back(out.angles[k].y);
+        }
+      std::nth_element(xs.begin(), xs.begin() + xs.size() / 2, xs.end());
+      std::nth_element(ys.begin(), ys.begin() + ys.size() / 2, ys.end());
+      smoothed[i] = {xs[xs.size() / 2], ys[ys.size() / 2]};
+      const glm::dvec2 t = glm::tan(glm::radians(smoothed[i]));
+      out.dir[i] = glm::normalize(glm::dvec3(t.x, t.y, 1.0));
+    }
+    out.angles = smoothed;
   }
   return out;
 }
@@ -303,6 +327,7 @@ FixationTracker::FixationTracker(FixationMethod method, const FixationParams& pa
 
 void FixationTracker::reset_candidate() {
   window_.clear();
+  recent_.clear();
   candidate_sum_ = glm::dvec2(0);
   candidate_count_ = 0;
   in_fixation_ = false;
@@ -318,7 +343,21 @@ void FixationTracker::push(const GazeSample& s) {
   if (s.t_s - last_valid_t_ > params_.gap_fill_s && method_ != FixationMethod::mean) reset_candidate();
   last_valid_t_ = s.t_s;
   const glm::dvec3 dir = geometry_.direction(s);
-  const Entry e{s.t_s, dir, s.px, GazeGeometry::angles_deg(dir)};
+  Entry e{s.t_s, dir, s.px, GazeGeometry::angles_deg(dir)};
+  if (params_.median_window > 1) {  // causal moving median over the last samples
+    recent_.push_back(e);
+    if (recent_.size() > static_cast<size_t>(params_.median_window)) recent_.pop_front();
+    auto median = [&](auto get) {
+      std::vector<double> v;
+      for (const Entry& r : recent_) v.push_back(get(r));
+      std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+      return v[v.size() / 2];
+    };
+    e.angles = {median([](const Entry& r) { return r.angles.x; }), median([](const Entry& r) { return r.angles.y; })};
+    e.px = {median([](const Entry& r) { return r.px.x; }), median([](const Entry& r) { return r.px.y; })};
+    const glm::dvec2 t = glm::tan(glm::radians(e.angles));
+    e.dir = glm::normalize(glm::dvec3(t.x, t.y, 1.0));
+  }
   switch (method_) {
     case FixationMethod::mean:
       frame_sum_ += s.px;

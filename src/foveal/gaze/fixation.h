@@ -55,6 +55,7 @@ struct FixationParams {
   double merge_gap_s = 0.075;            // I-VT: fixations closer in time than this …
   double merge_angle_deg = 0.5;          // … and in angle than this are merged
   double min_fixation_s = 0.060;         // I-VT: shorter fixations are discarded
+  int median_window = 1;                 // both: moving median over this many samples (odd; 1 = off)
   double dispersion_deg = 1.0;           // I-DT: (max−min) x + (max−min) y of a fixation, degrees
   double min_duration_s = 0.080;         // I-DT: minimum fixation duration (Pupil Labs' default)
 };
@@ -132,6 +133,7 @@ class FixationTracker {
   int frame_count_ = 0;
   // ivt / idt
   std::deque<Entry> window_;  // ivt: the velocity window; idt: the candidate fixation
+  std::deque<Entry> recent_;  // the last samples, for the moving median
   glm::dvec2 candidate_sum_{0};
   size_t candidate_count_ = 0;
   double candidate_start_ = 0;

@@ -106,6 +106,32 @@ TEST(Fixation, IvtGapFillMergeAndDiscard) {
   EXPECT_EQ(detect_ivt(brief, g, {}).fixations.size(), 2u);
 }
 
+TEST(Fixation, MedianWindowRemovesASingleSampleSpike) {
+  const GazeGeometry g(kDisplay, {1680, 1050});
+  Recording r = synthetic({{800, 500}}, {0.400}, nullptr);
+  r.samples[100].px += glm::dvec2(120, 0);  // one 3° outlier in the middle of the fixation
+  EXPECT_EQ(detect_idt(r, g, {}).fixations.size(), 2u);  // the dispersion breaks at the spike
+  FixationParams median;
+  median.median_window = 3;
+  EXPECT_EQ(detect_idt(r, g, median).fixations.size(), 1u);
+  // The causal filter too: without the median the fixation ends at the spike, with it it does not
+  for (int window : {1, 3}) {
+    FixationParams p;
+    p.median_window = window;
+    FixationTracker tracker(FixationMethod::idt, p, g);
+    int ends = 0;
+    bool was = false;
+    for (const GazeSample& s : r.samples) {
+      tracker.push(s);
+      ends += was && !tracker.in_fixation();
+      was = tracker.in_fixation();
+    }
+    EXPECT_EQ(ends, window == 1 ? 1 : 0) << "median window " << window;
+  }
+  median.median_window = 4;
+  EXPECT_THROW(detect_idt(r, g, median), Error);  // even windows have no middle sample
+}
+
 TEST(Fixation, AgreementAndKappaAtKnownValues) {
   Recording r;
   for (int i = 0; i < 10; ++i) {
