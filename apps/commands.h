@@ -17,12 +17,14 @@ std::function<int()> add_render_command(CLI::App& app);
 std::function<int()> add_bench_command(CLI::App& app);
 std::function<int()> add_gaze_command(CLI::App& app);
 std::function<int()> add_replay_command(CLI::App& app);
+std::function<int()> add_simulate_command(CLI::App& app);
 
 // Options shared by the commands that render: parsed text, turned into params by each command.
 struct ViewOptions {
   std::string scene = "builtin:box";
   std::string camera;
   std::string eye, look, up = "0,1,0";
+  std::string eye_option = "--eye";  // simulate calls the camera position --from (--eye is the eye model there)
   double fov = 0;
   std::string size = "840x525";
   std::string display = "47.5,30,60,1680,1050";

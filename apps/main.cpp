@@ -16,6 +16,7 @@ int main(int argc, char** argv) {
   const auto bench = foveal::app::add_bench_command(app);
   const auto gaze = foveal::app::add_gaze_command(app);
   const auto replay = foveal::app::add_replay_command(app);
+  const auto simulate = foveal::app::add_simulate_command(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
@@ -34,6 +35,7 @@ int main(int argc, char** argv) {
     if (app.got_subcommand("bench")) return bench();
     if (app.got_subcommand("gaze")) return gaze();
     if (app.got_subcommand("replay")) return replay();
+    if (app.got_subcommand("simulate")) return simulate();
     return 2;
   } catch (const foveal::Error& e) {
     fmt::print(stderr, "foveal: error: {}\n", e.what());

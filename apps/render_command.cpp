@@ -20,13 +20,13 @@ namespace foveal::app {
 Camera resolve_camera(const Scene& scene, const ViewOptions& o) {
   Camera cam = !o.camera.empty() ? find_camera(scene, o.camera)
                : !scene.cameras.empty() ? scene.cameras.front() : default_camera(scene);
-  if (!o.eye.empty() != !o.look.empty()) fail("--eye and --look must be given together");
+  if (!o.eye.empty() != !o.look.empty()) fail("{} and --look must be given together", o.eye_option);
   if (!o.eye.empty()) {
     cam.name = "command line";
-    cam.eye = parse_vec3("--eye", o.eye);
+    cam.eye = parse_vec3(o.eye_option, o.eye);
     cam.look = parse_vec3("--look", o.look);
     cam.up = parse_vec3("--up", o.up);
-    if (glm::length(cam.look - cam.eye) == 0) fail("--eye and --look must differ");
+    if (glm::length(cam.look - cam.eye) == 0) fail("{} and --look must differ", o.eye_option);
     if (glm::length(glm::cross(cam.look - cam.eye, cam.up)) == 0) fail("--up must not be parallel to the view direction");
   }
   if (o.fov != 0) {
@@ -40,7 +40,7 @@ void add_view_options(CLI::App& cmd, ViewOptions& o) {
   cmd.add_option("--scene", o.scene, "mesh file (OBJ, PLY, glTF, … via Assimp), scene .json, or builtin:box|sphere-plane|plane")
       ->capture_default_str();
   cmd.add_option("--camera", o.camera, "named camera of the scene (default: its first, or one framing the scene)");
-  cmd.add_option("--eye", o.eye, "camera position X,Y,Z (scene units; with --look)");
+  cmd.add_option(o.eye_option, o.eye, "camera position X,Y,Z (scene units; with --look)");
   cmd.add_option("--look", o.look, "point looked at X,Y,Z (scene units)");
   cmd.add_option("--up", o.up, "up vector X,Y,Z")->capture_default_str();
   cmd.add_option("--fov", o.fov, "vertical field of view, degrees (default: the camera's)");

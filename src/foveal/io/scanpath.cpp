@@ -1,6 +1,7 @@
 // foveal/io/scanpath.cpp — scan-path pictures with OpenCV's drawing functions.
 #include "foveal/io/scanpath.h"
 
+#include "foveal/io/image_io.h"
 #include "foveal/util/error.h"
 
 #include <opencv2/core.hpp>
@@ -64,6 +65,27 @@ void write_scanpath(const Recording& r, const FixationResult& result, const std:
     written = cv::imwrite(path, canvas);
   } catch (const cv::Exception&) {
     written = false;
+  }
+  if (!written) fail("{}: cannot write image (does the folder exist, and is the extension .png?)", path);
+}
+
+void write_fixation_picture(const Image& img, const std::vector<glm::vec2>& fixations, const std::vector<glm::vec2>& corners,
+                            const std::string& path) {
+  cv::Mat canvas(img.height, img.width, CV_8UC3);
+  for (int y = 0; y < img.height; ++y)
+    for (int x = 0; x < img.width; ++x)
+      for (int c = 0; c < 3; ++c)
+        canvas.at<cv::Vec3b>(y, x)[2 - c] = static_cast<uint8_t>(std::lround(255.0f * linear_to_srgb(img.at(x, y, std::min(c, img.channels - 1)))));
+  auto at = [](glm::vec2 p) { return cv::Point(int(std::lround(p.x)), int(std::lround(p.y))); };
+  for (const glm::vec2& c : corners) cv::circle(canvas, at(c), 1, cv::Scalar(0, 215, 255), cv::FILLED);
+  const int radius = std::max(4, std::min(img.width, img.height) / 60);
+  for (size_t k = 1; k < fixations.size(); ++k) cv::line(canvas, at(fixations[k - 1]), at(fixations[k]), cv::Scalar(40, 200, 40), 1, cv::LINE_AA);
+  for (size_t k = 0; k < fixations.size(); ++k)
+    cv::circle(canvas, at(fixations[k]), k == 0 ? radius + 3 : radius, cv::Scalar(40, 220, 40), k == 0 ? 3 : 2, cv::LINE_AA);
+  bool written = false;
+  try {
+    written = cv::imwrite(path, canvas);
+  } catch (const cv::Exception&) {
   }
   if (!written) fail("{}: cannot write image (does the folder exist, and is the extension .png?)", path);
 }

@@ -3,6 +3,7 @@
 #pragma once
 
 #include "foveal/gaze/fixation.h"
+#include "foveal/util/image.h"
 
 #include <string>
 
@@ -17,5 +18,10 @@ struct ScanpathStyle {
 // Draw and write a PNG (or anything OpenCV writes); throws Error if it cannot be written.
 void write_scanpath(const Recording& recording, const FixationResult& fixations, const std::string& path,
                     const ScanpathStyle& style = {});
+
+// The simulated eye's scan path over the image it looked at (the paper's Figure 2): FAST corners
+// as small dots, fixations as green circles joined in order, the first one marked.
+void write_fixation_picture(const Image& linear_rgb, const std::vector<glm::vec2>& fixations,
+                            const std::vector<glm::vec2>& corners, const std::string& path);
 
 }  // namespace foveal

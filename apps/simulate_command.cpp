@@ -1,0 +1,187 @@
+// apps/simulate_command.cpp — `foveal simulate`: the second paper's temporal simulation of vision.
+#include "commands.h"
+#include "foveal/io/image_io.h"
+#include "foveal/io/outputs.h"
+#include "foveal/io/scanpath.h"
+#include "foveal/io/video.h"
+#include "foveal/util/error.h"
+#include "foveal/util/parallel.h"
+#include "foveal/util/parse.h"
+#include "foveal/util/timer.h"
+#include "foveal/vision/simulate.h"
+
+#include <fmt/core.h>
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+#include <set>
+#include <unistd.h>
+
+namespace foveal::app {
+
+namespace {
+
+double median(std::vector<double> v) {
+  if (v.empty()) return 0;
+  std::sort(v.begin(), v.end());
+  return v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]);
+}
+
+}  // namespace
+
+std::function<int()> add_simulate_command(CLI::App& app) {
+  auto* cmd = app.add_subcommand("simulate", "simulate human vision over time: fixations, accommodation, a sharpness field that remembers, variable blur");
+  struct Options {
+    ViewOptions view;
+    std::string eye = "healthy", save_steps = "1,4,20", output, stats, video;
+    int steps = 20, fast_threshold = 20, blink_every = 0, taps = 96;
+    double pupil = 3.5, image_distance = 25, starvation = 0.015, voxel = 0, saccade_max = 15, saccade_min = 2, ambient = 0.3;
+    uint64_t seed = 1;
+    bool quiet = false;
+  };
+  auto o = std::make_shared<Options>();
+  o->view.size = "1024x768";
+  o->view.eye_option = "--from";
+  add_view_options(*cmd, o->view);
+  cmd->add_option("--steps", o->steps, "time steps (one fixation each)")->capture_default_str()->check(CLI::Range(1, 100000));
+  cmd->add_option("--eye", o->eye, "eye: healthy, glaucoma[:SEVERITY 0..1], myopia:-D, hyperopia:D, presbyopia:AGE; join with '+'")
+      ->capture_default_str();
+  cmd->add_option("--pupil", o->pupil, "pupil diameter A, mm")->capture_default_str();
+  cmd->add_option("--image-distance", o->image_distance, "lens-to-retina distance I, mm")->capture_default_str();
+  cmd->add_option("--starvation", o->starvation, "s: remembered CoCs grow by this fraction per step")->capture_default_str();
+  cmd->add_option("--voxel", o->voxel, "sharpness-field cell edge, scene units (0: scene diagonal / 256)")->capture_default_str();
+  cmd->add_option("--blink-every", o->blink_every, "a blink (the field forgets) every N steps; 0 = never")->capture_default_str();
+  cmd->add_option("--fast-threshold", o->fast_threshold, "FAST-9 threshold (OpenCV's cv::FAST)")->capture_default_str();
+  cmd->add_option("--saccade-max", o->saccade_max, "largest saccade, degrees (glaucoma shortens it)")->capture_default_str();
+  cmd->add_option("--saccade-min", o->saccade_min, "smallest distance to the recent fixations, degrees")->capture_default_str();
+  cmd->add_option("--blur-taps", o->taps, "taps of the variable blur per pixel")->capture_default_str();
+  cmd->add_option("--ambient", o->ambient, "constant Phong ambient factor of the ray-cast colour")->capture_default_str();
+  cmd->add_option("--seed", o->seed, "seed of the saccades")->capture_default_str();
+  cmd->add_option("--save-steps", o->save_steps, "steps whose perceived image is saved (step_NNNN.png), e.g. 1,4,20,69; 'all' for every step")
+      ->capture_default_str();
+  cmd->add_option("-o,--output", o->output, "output folder (created)")->required();
+  cmd->add_option("--video", o->video, "also a video of every step's perceived image (ffmpeg)");
+  cmd->add_option("--stats", o->stats, "per-stage timings and per-step records as JSON");
+  cmd->add_flag("-q,--quiet", o->quiet, "print nothing on success");
+
+  return [o] {
+    const ThreadScope threads(o->view.threads);
+    SimulateParams p;
+    const glm::ivec2 size = parse_size("--size", o->view.size);
+    p.width = size.x;
+    p.height = size.y;
+    p.display = resolve_display(o->view.display, size);
+    p.eye = parse_eye_preset(o->eye);
+    p.eye.pupil_diameter_mm = o->pupil;
+    p.eye.image_distance_mm = o->image_distance;
+    p.starvation = o->starvation;
+    p.voxel = static_cast<float>(o->voxel);
+    if (o->voxel < 0) fail("--voxel: must be zero (automatic) or positive, got {}", o->voxel);
+    p.blink_every = o->blink_every;
+    p.fast_threshold = o->fast_threshold;
+    p.saccades.max_amplitude_deg = o->saccade_max;
+    p.saccades.min_distance_deg = o->saccade_min;
+    p.blur.taps = o->taps;
+    p.ambient = static_cast<float>(o->ambient);
+    p.seed = o->seed;
+    validate(p);
+    std::set<int> save;
+    const bool save_all = o->save_steps == "all";
+    if (!save_all && !o->save_steps.empty())
+      for (double v : parse_numbers("--save-steps", o->save_steps)) {
+        if (v < 1 || v != std::floor(v)) fail("--save-steps: steps are whole numbers from 1, got {}", v);
+        save.insert(static_cast<int>(v));
+      }
+
+    const Scene scene = load_scene(o->view.scene);
+    const Camera camera = resolve_camera(scene, o->view);
+    const Tracer tracer(scene);
+    VisionSimulation sim(tracer, scene, p);
+
+    namespace fs = std::filesystem;
+    std::error_code ec;
+    fs::create_directories(o->output, ec);
+    if (ec) fail("{}: cannot create the output folder: {}", o->output, ec.message());
+    const fs::path dir(o->output);
+    const bool show = !o->quiet && isatty(fileno(stderr));
+    const Timer clock;
+    std::vector<StepStats> steps;
+    std::vector<glm::vec2> fixations;
+    for (int k = 1; k <= o->steps; ++k) {
+      const StepStats s = sim.step(camera);
+      steps.push_back(s);
+      fixations.push_back(s.focus_px);
+      if (save_all || save.count(k)) save_image(sim.perceived(), (dir / fmt::format("step_{:04d}.png", k)).string());
+      if (!o->video.empty()) save_image(sim.perceived(), (dir / fmt::format("frame_{:05d}.png", k - 1)).string());
+      if (show && clock.ms() > 1000)
+        fmt::print(stderr, "\r  step {}/{}  sharp {:.1f}%  {:.0f} ms/step ", k, o->steps, 100 * s.sharp_fraction, s.total_ms);
+    }
+    if (show && clock.ms() > 1000) fmt::print(stderr, "\r{:70}\r", "");
+    save_image(sim.color(), (dir / "sharp.png").string());
+    save_image(sim.perceived(), (dir / "perceived.png").string());
+    std::vector<glm::vec2> corner_points;
+    for (const Corner& c : sim.corners()) corner_points.push_back(c.px);
+    write_fixation_picture(sim.color(), fixations, corner_points, (dir / "scanpath.png").string());
+    if (!o->video.empty()) encode_video((dir / "frame_%05d.png").string(), 10, o->video);
+
+    auto stage = [&](double StepStats::*field) {
+      std::vector<double> v;
+      for (const StepStats& s : steps) v.push_back(s.*field);
+      return median(v);
+    };
+    double path_px = 0;
+    for (size_t k = 1; k < fixations.size(); ++k) path_px += glm::length(fixations[k] - fixations[k - 1]);
+    if (!o->stats.empty()) {
+      nlohmann::json j;
+      j["width"] = p.width;
+      j["height"] = p.height;
+      j["eye"] = o->eye;
+      j["seed"] = p.seed;
+      j["threads"] = threads.threads();
+      j["scene"] = {{"source", scene.source}, {"triangles", tracer.triangles()}, {"build_ms", tracer.build_ms()}};
+      j["pixels_per_degree"] = sim.pixels_per_degree();
+      j["field"] = {{"voxel", sim.field().voxel()}, {"cells", sim.field().cells()}, {"starvation", p.starvation}};
+      j["time_ms"] = {{"trace", stage(&StepStats::trace_ms)},
+                      {"features", stage(&StepStats::features_ms)},
+                      {"sharpness", stage(&StepStats::sharpness_ms)},
+                      {"blur", stage(&StepStats::blur_ms)},
+                      {"total", stage(&StepStats::total_ms)},
+                      {"statistic", "median over steps"}};
+      j["scan_path_px"] = path_px;
+      for (const StepStats& s : steps)
+        j["steps"].push_back({{"step", s.step},
+                              {"focus_px", {s.focus_px.x, s.focus_px.y}},
+                              {"focus_depth_m", std::isfinite(s.focus_depth_m) ? nlohmann::json(s.focus_depth_m) : nlohmann::json("inf")},
+                              {"focus_vergence_d", s.focus_vergence},
+                              {"sharp_fraction", s.sharp_fraction},
+                              {"blink", s.blink},
+                              {"skipped", s.skipped},
+                              {"corners", s.corners},
+                              {"time_ms", {{"trace", s.trace_ms}, {"features", s.features_ms}, {"sharpness", s.sharpness_ms},
+                                           {"blur", s.blur_ms}, {"total", s.total_ms}}}});
+      std::ofstream out(o->stats);
+      out << j.dump(2) << "\n";
+      if (!out) fail("{}: cannot write stats", o->stats);
+    }
+    if (o->quiet) return 0;
+    const FocusRange range = focus_range(p.eye);
+    fmt::print("foveal simulate: {} ({} triangles), camera '{}', {}x{}, eye {} (focus {:.2f} m … {}), {} steps, {} threads\n",
+               scene.source, tracer.triangles(), camera.name, p.width, p.height, o->eye, range.near_point_m(),
+               std::isfinite(range.far_point_m()) ? fmt::format("{:.2f} m", range.far_point_m()) : "infinity", o->steps,
+               threads.threads());
+    fmt::print("  sharp    {:.1f}% of the image after the last step; scan path {:.0f} px over {} fixations\n",
+               100 * steps.back().sharp_fraction, path_px, fixations.size());
+    fmt::print("  time     per step (median): trace {:.1f} ms, features {:.1f} ms, sharpness {:.1f} ms, blur {:.1f} ms, total {:.1f} ms\n",
+               stage(&StepStats::trace_ms), stage(&StepStats::features_ms), stage(&StepStats::sharpness_ms),
+               stage(&StepStats::blur_ms), stage(&StepStats::total_ms));
+    fmt::print("  wrote    {}/perceived.png, sharp.png, scanpath.png{}{}\n", o->output, save.empty() && !save_all ? "" : ", step_NNNN.png",
+               o->stats.empty() ? "" : ", " + o->stats);
+    return 0;
+  };
+}
+
+}  // namespace foveal::app

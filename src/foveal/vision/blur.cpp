@@ -1,0 +1,90 @@
+// foveal/vision/blur.cpp — the gather blur, parallel over rows.
+#include "foveal/vision/blur.h"
+
+#include "foveal/util/error.h"
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+namespace foveal {
+
+TapPattern make_tap_pattern(int taps) {
+  if (taps < 1 || taps > 4096) fail("--blur-taps: must be in [1, 4096], got {}", taps);
+  TapPattern t;
+  t.offset.push_back({0, 0});
+  const double golden = std::numbers::pi * (3.0 - std::sqrt(5.0));
+  for (int k = 0; k < taps; ++k) {
+    const double r = std::sqrt((k + 0.5) / taps), a = k * golden;
+    t.offset.push_back(glm::vec2(r * std::cos(a), r * std::sin(a)));
+  }
+  // Each spiral point stands for an equal area of the disc; the centre for a tiny one
+  for (size_t i = 0; i < t.offset.size(); ++i) {
+    const float r2 = glm::dot(t.offset[i], t.offset[i]);
+    t.weight.push_back(std::exp(-4.5f * r2) * (i == 0 ? 1.0f / taps : 1.0f));
+  }
+  return t;
+}
+
+int taps_for_diameter(float d, int max_taps) {
+  if (!(d >= 0.25f)) return 0;
+  const int area = static_cast<int>(std::ceil(0.785f * d * d));
+  return std::clamp(area, std::min(8, max_taps), max_taps);
+}
+
+Image variable_blur(const Image& img, const std::vector<float>& coc, const BlurParams& params) {
+  if (coc.size() != size_t(img.width) * img.height) fail("blur: {} CoC values for a {}x{} image", coc.size(), img.width, img.height);
+  // One pattern per tap count in use: counts are rounded up to a power of two (8 … taps) and the
+  // full count
+  std::vector<int> counts;
+  for (int c = std::min(8, params.taps); c < params.taps; c *= 2) counts.push_back(c);
+  counts.push_back(params.taps);
+  std::vector<TapPattern> patterns;
+  for (int c : counts) patterns.push_back(make_tap_pattern(c));
+  auto pattern_for = [&](int taps) -> const TapPattern& {
+    for (size_t k = 0; k < counts.size(); ++k)
+      if (counts[k] >= taps) return patterns[k];
+    return patterns.back();
+  };
+  const int w = img.width, h = img.height, ch = img.channels;
+  if (ch < 1 || ch > 4) fail("blur: images of 1 to 4 channels, got {}", ch);
+  Image out(w, h, ch);
+  tbb::parallel_for(tbb::blocked_range<int>(0, h, 4), [&](const tbb::blocked_range<int>& rows) {
+    float sum[4] = {0, 0, 0, 0};
+    for (int y = rows.begin(); y < rows.end(); ++y)
+      for (int x = 0; x < w; ++x) {
+        const size_t i = size_t(y) * w + x;
+        const float d = std::min(std::isfinite(coc[i]) ? coc[i] : params.max_diameter_px, params.max_diameter_px);
+        const int n = taps_for_diameter(d, params.taps);
+        if (n == 0) {  // sharp (also NaN): the pixel as it is
+          for (int c = 0; c < ch; ++c) out.pixels[i * ch + c] = img.pixels[i * ch + c];
+          continue;
+        }
+        const TapPattern& taps = pattern_for(n);
+        const float radius = 0.5f * d;
+        for (int c = 0; c < ch && c < 4; ++c) sum[c] = 0;
+        float total = 0;
+        for (size_t k = 0; k < taps.offset.size(); ++k) {
+          // Bilinear read at the tap, clamped to the image
+          const float sx = std::clamp(x + radius * taps.offset[k].x, 0.0f, float(w - 1));
+          const float sy = std::clamp(y + radius * taps.offset[k].y, 0.0f, float(h - 1));
+          const int x0 = std::min(int(sx), std::max(w - 2, 0)), y0 = std::min(int(sy), std::max(h - 2, 0));
+          const int x1 = std::min(x0 + 1, w - 1), y1 = std::min(y0 + 1, h - 1);
+          const float fx = sx - x0, fy = sy - y0, wk = taps.weight[k];
+          const float w00 = (1 - fx) * (1 - fy) * wk, w10 = fx * (1 - fy) * wk, w01 = (1 - fx) * fy * wk, w11 = fx * fy * wk;
+          const float* p00 = &img.pixels[(size_t(y0) * w + x0) * ch];
+          const float* p10 = &img.pixels[(size_t(y0) * w + x1) * ch];
+          const float* p01 = &img.pixels[(size_t(y1) * w + x0) * ch];
+          const float* p11 = &img.pixels[(size_t(y1) * w + x1) * ch];
+          for (int c = 0; c < ch && c < 4; ++c) sum[c] += w00 * p00[c] + w10 * p10[c] + w01 * p01[c] + w11 * p11[c];
+          total += wk;
+        }
+        for (int c = 0; c < ch && c < 4; ++c) out.pixels[i * ch + c] = sum[c] / total;
+      }
+  });
+  return out;
+}
+
+}  // namespace foveal

@@ -1,0 +1,37 @@
+// foveal/vision/blur.h — per-pixel variable Gaussian blur (the paper's depth-of-field filter).
+//
+// Each pixel gathers taps distributed over its own circle of confusion (a fixed pattern of
+// points in the unit disc, scaled by the pixel's CoC radius, read with bilinear filtering),
+// weighted by a bivariate Gaussian whose σ is a third of the CoC radius (σ = diameter / 6, so
+// the disc holds ±3σ). The kernel differs per pixel, so it is not separable. Weights are
+// normalised: a constant image stays constant.
+#pragma once
+
+#include "foveal/util/image.h"
+
+#include <glm/glm.hpp>
+
+#include <vector>
+
+namespace foveal {
+
+struct BlurParams {
+  int taps = 96;                 // most points of a disc pattern (plus the centre), for large CoCs
+  float max_diameter_px = 96;    // CoCs are clamped to this diameter (unseen cells, far defocus)
+};
+
+// Taps for a CoC diameter d (pixels): about one per pixel of the disc's area, at least 8, at most
+// `max_taps`; 0 below a quarter pixel (the pixel is copied).
+int taps_for_diameter(float d, int max_taps);
+
+// The unit-disc tap pattern (Vogel spiral) with its Gaussian weights (σ = 1/3 of the radius).
+struct TapPattern {
+  std::vector<glm::vec2> offset;  // in the unit disc; offset[0] is the centre
+  std::vector<float> weight;      // exp(−|o|²·9/2), not normalised
+};
+TapPattern make_tap_pattern(int taps);
+
+// Blur `image` with a CoC diameter per pixel (render pixels; 0 = sharp).
+Image variable_blur(const Image& image, const std::vector<float>& coc_diameter_px, const BlurParams& params = {});
+
+}  // namespace foveal

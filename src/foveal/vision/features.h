@@ -1,0 +1,57 @@
+// foveal/vision/features.h — fixation candidates: FAST-9 corners of the rendered image (OpenCV),
+// and the simulated saccades that choose among them.
+#pragma once
+
+#include "foveal/util/image.h"
+
+#include <glm/glm.hpp>
+
+#include <cstdint>
+#include <deque>
+#include <random>
+#include <vector>
+
+namespace foveal {
+
+struct Corner {
+  glm::vec2 px{0};  // pixel centre, render pixels
+  float score = 0;  // FAST response
+};
+
+// The 8-bit luma OpenCV's FAST sees: linear RGB → sRGB → BT.601 grey (cv::cvtColor).
+std::vector<uint8_t> grey_8bit(const Image& linear_rgb);
+// FAST-9 corners (cv::FAST, TYPE_9_16) of a linear RGB image.
+std::vector<Corner> detect_corners(const Image& linear_rgb, int threshold = 20, bool nonmax_suppression = true);
+
+// Simulated saccades (DESIGN.md "Focus selection"): the first fixation ∝ score × a bivariate
+// Gaussian around the image centre; each next one ∝ score among corners within the maximum
+// amplitude of the current fixation and at least the minimum distance from the recent ones.
+struct SaccadeParams {
+  double centre_sigma = 0.25;       // first fixation: Gaussian σ as a fraction of the image size
+  double max_amplitude_deg = 15;    // furthest next fixation, degrees of visual angle
+  double min_distance_deg = 2;      // nearest allowed to the recent fixations, degrees
+  int recent = 8;                   // how many recent fixations keep their distance
+  double skip_probability = 0;      // chance to keep the last fixation (glaucoma)
+};
+
+class SaccadeModel {
+ public:
+  SaccadeModel(const SaccadeParams& params, double pixels_per_degree, uint64_t seed);
+  // The next fixation among `corners` (image `size`); reuses the last one when skipping or when
+  // no corner qualifies. `skipped` says whether this step kept the last fixation on purpose.
+  glm::vec2 next(const std::vector<Corner>& corners, glm::ivec2 size, bool* skipped = nullptr);
+  // Forget the recent fixations (e.g. when the camera moved).
+  void reset();
+  const std::deque<glm::vec2>& recent() const { return recent_; }
+
+ private:
+  SaccadeParams params_;
+  double ppd_;
+  std::mt19937_64 rng_;
+  std::deque<glm::vec2> recent_;
+  bool has_last_ = false;
+  glm::vec2 last_{0};
+  double uniform();
+};
+
+}  // namespace foveal

@@ -1,0 +1,136 @@
+// foveal/vision/simulate.cpp — one time step of the vision simulation.
+#include "foveal/vision/simulate.h"
+
+#include "foveal/util/error.h"
+#include "foveal/util/timer.h"
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+
+namespace foveal {
+
+void validate(const SimulateParams& p) {
+  if (p.width < 8 || p.height < 8 || p.width > 16384 || p.height > 16384)
+    fail("--size: the simulation needs at least 8x8 pixels, got {}x{}", p.width, p.height);
+  validate(p.eye);
+  validate(p.display);
+  if (p.fast_threshold < 1 || p.fast_threshold > 255) fail("--fast-threshold: must be in [1, 255], got {}", p.fast_threshold);
+  if (p.blink_every < 0) fail("--blink-every: must be zero (never) or positive, got {}", p.blink_every);
+  if (!(p.sharp_px > 0)) fail("--sharp-px: must be positive, got {}", p.sharp_px);
+  if (!(p.saccades.max_amplitude_deg > 0)) fail("--saccade-max: must be positive degrees, got {}", p.saccades.max_amplitude_deg);
+  if (!(p.saccades.min_distance_deg >= 0)) fail("--saccade-min: must be zero or positive degrees, got {}", p.saccades.min_distance_deg);
+}
+
+SaccadeParams saccade_params_for(const EyeParams& eye, SaccadeParams base) {
+  base.max_amplitude_deg *= 1.0 - 0.7 * eye.glaucoma;
+  base.min_distance_deg *= 1.0 - 0.7 * eye.glaucoma;
+  base.skip_probability = std::max(base.skip_probability, 0.5 * eye.glaucoma);
+  return base;
+}
+
+namespace {
+
+Display render_display(const SimulateParams& p) {
+  Display d = p.display;
+  d.res_x = p.width;
+  d.res_y = p.height;
+  return d;
+}
+
+bool same_camera(const Camera& a, const Camera& b) {
+  return a.eye == b.eye && a.look == b.look && a.up == b.up && a.fov_deg == b.fov_deg;
+}
+
+}  // namespace
+
+VisionSimulation::VisionSimulation(const Tracer& tracer, const Scene& scene, const SimulateParams& params)
+    : tracer_(tracer),
+      scene_(scene),
+      params_((validate(params), params)),
+      ppd_(foveal::pixels_per_degree(render_display(params))),
+      epsilon_(surface_epsilon(scene.bounds())),
+      field_(scene.bounds(), params.voxel > 0 ? params.voxel : default_voxel_size(scene.bounds()), params.starvation),
+      saccades_(saccade_params_for(params.eye, params.saccades), ppd_, params.seed) {}
+
+StepStats VisionSimulation::step(const Camera& camera, std::optional<glm::vec2> fixation) {
+  const Timer total;
+  StepStats s;
+  s.step = static_cast<int>(++step_);
+  const int w = params_.width, h = params_.height;
+  const size_t n = size_t(w) * h;
+
+  // 1. Ray-cast colour and depth (Phong with a constant ambient term, textures where present)
+  Timer t;
+  gbuffer_ = trace_primary(tracer_, scene_, camera, w, h);
+  FoveationMaps flat;
+  flat.width = w;
+  flat.height = h;
+  flat.blend.assign(n, 0.0f);
+  const std::vector<float> visible(n, 1.0f);
+  color_ = shade(tracer_, scene_, camera, gbuffer_, flat, visible, params_.ambient, false, epsilon_);
+  s.trace_ms = t.ms();
+
+  // 2. Corners, recomputed when the camera moved; the next fixation
+  t.reset();
+  s.camera_moved = !last_camera_ || !same_camera(*last_camera_, camera);
+  if (s.camera_moved) {
+    corners_ = detect_corners(color_, params_.fast_threshold, true);
+    if (last_camera_) saccades_.reset();
+    last_camera_ = camera;
+  }
+  s.corners = corners_.size();
+  bool skipped = false;
+  s.focus_px = fixation ? *fixation : saccades_.next(corners_, {w, h}, &skipped);
+  s.skipped = skipped && !fixation;
+  s.features_ms = t.ms();
+
+  // 3. Accommodate to the fixated depth, CoC per pixel, update the field
+  t.reset();
+  const int fx = std::clamp(int(s.focus_px.x), 0, w - 1), fy = std::clamp(int(s.focus_px.y), 0, h - 1);
+  const size_t fi = size_t(fy) * w + fx;
+  s.focus_depth_m = gbuffer_.hit(fi) ? gbuffer_.depth[fi] * scene_.meters_per_unit : INFINITY;
+  s.focus_vergence = accommodate(params_.eye, s.focus_depth_m);
+  if (params_.blink_every > 0 && s.step > 1 && (s.step - 1) % params_.blink_every == 0) {
+    field_.blink();
+    s.blink = true;
+  }
+  const double penalty = peripheral_penalty_per_deg(params_.eye);
+  const FoveationModel eccentricity(render_display(params_), w, h, glm::dvec2(s.focus_px), FoveationParams{1.0});
+  std::vector<float> now_deg(n);  // this step's CoC, degrees
+  tbb::parallel_for(tbb::blocked_range<int>(0, h, 8), [&](const tbb::blocked_range<int>& rows) {
+    for (int y = rows.begin(); y < rows.end(); ++y)
+      for (int x = 0; x < w; ++x) {
+        const size_t i = size_t(y) * w + x;
+        const double d = gbuffer_.hit(i) ? gbuffer_.depth[i] * scene_.meters_per_unit : INFINITY;
+        const double ecc = eccentricity.evaluate(x, y).angle_deg;
+        now_deg[i] = static_cast<float>(glm::degrees(coc_angle_rad(params_.eye, d, s.focus_vergence)) + penalty * ecc);
+      }
+  });
+  std::vector<int64_t> cells(n, -1);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 4096), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t i = r.begin(); i < r.end(); ++i)
+      if (gbuffer_.hit(i)) cells[i] = field_.cell(gbuffer_.position[i]);
+  });
+  // Pixels share cells, so the update runs in pixel order on one thread (deterministic)
+  if (!s.skipped)  // glaucoma's skipped steps do not update the field
+    for (size_t i = 0; i < n; ++i) field_.update(cells[i], now_deg[i], step_);
+  // The blur's CoC: the field's memory where there is geometry, this step's CoC for the background
+  coc_.resize(n);
+  const float ppd = static_cast<float>(ppd_);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 4096), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t i = r.begin(); i < r.end(); ++i) coc_[i] = (cells[i] >= 0 ? field_.effective(cells[i], step_) : now_deg[i]) * ppd;
+  });
+  s.sharp_fraction = double(std::count_if(coc_.begin(), coc_.end(), [&](float c) { return c < params_.sharp_px; })) / n;
+  s.sharpness_ms = t.ms();
+
+  // 4. Variable blur
+  t.reset();
+  perceived_ = variable_blur(color_, coc_, params_.blur);
+  s.blur_ms = t.ms();
+  s.total_ms = total.ms();
+  return s;
+}
+
+}  // namespace foveal

@@ -1,0 +1,80 @@
+// foveal/vision/simulate.h — the second paper's loop: ray-cast colour and depth → FAST corners →
+// the next fixation → accommodation → per-pixel CoC → sharpness field → variable blur.
+#pragma once
+
+#include "foveal/perception/eye.h"
+#include "foveal/perception/foveation.h"
+#include "foveal/render/render.h"
+#include "foveal/vision/blur.h"
+#include "foveal/vision/features.h"
+#include "foveal/vision/sharpness.h"
+
+#include <memory>
+#include <optional>
+
+namespace foveal {
+
+struct SimulateParams {
+  int width = 1024, height = 768;
+  EyeParams eye;
+  Display display;                // the render fills it: its size and distance give the pixels per degree
+  SaccadeParams saccades;         // glaucoma shortens and skips (see saccade_params_for)
+  int fast_threshold = 20;        // cv::FAST threshold
+  double starvation = 0.015;      // s: effective CoC grows by this fraction per step
+  float voxel = 0;                // cell edge, scene units; 0 = scene diagonal / 256
+  int blink_every = 0;            // a blink (field reset) every this many steps; 0 = never
+  float sharp_px = 1.0f;          // a pixel counts as sharp when its CoC is below this many pixels
+  float ambient = 0.3f;           // constant Phong ambient factor of the colour image
+  BlurParams blur;
+  uint64_t seed = 1;
+};
+void validate(const SimulateParams& params);
+
+// The saccade model's parameters for an eye: glaucoma of severity g shortens the maximum
+// amplitude by up to 70 % and skips a step with probability 0.5·g.
+SaccadeParams saccade_params_for(const EyeParams& eye, SaccadeParams base = {});
+
+struct StepStats {
+  int step = 0;                   // 1-based
+  glm::vec2 focus_px{0};          // fixation, render pixels
+  double focus_depth_m = 0;       // distance of the fixated point (inf for the background)
+  double focus_vergence = 0;      // what the eye accommodated to, dioptres
+  bool skipped = false;           // glaucoma kept the last fixation (the field was not updated)
+  bool blink = false;             // the field was reset before this step
+  bool camera_moved = false;      // the corners were recomputed
+  size_t corners = 0;
+  double sharp_fraction = 0;      // pixels whose remembered CoC is below sharp_px
+  double trace_ms = 0, features_ms = 0, sharpness_ms = 0, blur_ms = 0, total_ms = 0;
+};
+
+class VisionSimulation {
+ public:
+  VisionSimulation(const Tracer& tracer, const Scene& scene, const SimulateParams& params);
+  // One step with this camera (the corners are recomputed when it differs from the last one's).
+  // `fixation` replaces the simulated saccade (tracked gaze), in render pixels.
+  StepStats step(const Camera& camera, std::optional<glm::vec2> fixation = std::nullopt);
+
+  const Image& color() const { return color_; }          // the sharp ray-cast image
+  const Image& perceived() const { return perceived_; }  // the blurred result
+  const std::vector<float>& coc_px() const { return coc_; }  // per-pixel CoC diameter used for the blur
+  const std::vector<Corner>& corners() const { return corners_; }
+  const SharpnessField& field() const { return field_; }
+  double pixels_per_degree() const { return ppd_; }
+
+ private:
+  const Tracer& tracer_;
+  const Scene& scene_;
+  SimulateParams params_;
+  double ppd_;
+  float epsilon_;
+  SharpnessField field_;
+  SaccadeModel saccades_;
+  std::optional<Camera> last_camera_;
+  std::vector<Corner> corners_;
+  GBuffer gbuffer_;
+  Image color_, perceived_;
+  std::vector<float> coc_;
+  uint32_t step_ = 0;
+};
+
+}  // namespace foveal

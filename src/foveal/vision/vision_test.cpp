@@ -1,0 +1,218 @@
+// The vision simulation's parts: FAST is OpenCV's, saccades are reproducible and glaucoma's are
+// shorter, the sharpness field keeps minima and starves lazily exactly as step by step, blinks
+// reset it, the blur leaves sharp pixels alone, matches a Gaussian and preserves energy.
+#include "foveal/io/image_io.h"
+#include "foveal/scene/scene.h"
+#include "foveal/trace/tracer.h"
+#include "foveal/vision/blur.h"
+#include "foveal/vision/features.h"
+#include "foveal/vision/sharpness.h"
+#include "foveal/vision/simulate.h"
+
+#include <gtest/gtest.h>
+#include <opencv2/features2d.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include <cmath>
+#include <filesystem>
+
+using namespace foveal;
+
+namespace {
+
+// A smooth-ish test picture: gradients, a bright square and a dark disc.
+Image test_picture(int w, int h) {
+  Image img(w, h, 3);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      float v = 0.2f + 0.5f * x / w;
+      if (x > w / 4 && x < w / 2 && y > h / 4 && y < h / 2) v = 0.9f;
+      if ((x - 3 * w / 4) * (x - 3 * w / 4) + (y - h / 2) * (y - h / 2) < (h / 6) * (h / 6)) v = 0.05f;
+      for (int c = 0; c < 3; ++c) img.at(x, y, c) = v * (0.8f + 0.1f * c);
+    }
+  return img;
+}
+
+}  // namespace
+
+TEST(Vision, FastIsOpenCvs) {
+  const std::string dir = std::string(FOVEAL_DATA_DIR) + "/images";
+  bool any = false;
+  for (const char* name : {"building.jpg", "graf1.png", "baboon.jpg"}) {
+    const std::string path = dir + "/" + name;
+    if (!std::filesystem::exists(path)) continue;
+    any = true;
+    Image img = load_image(path);  // 8-bit sRGB values in [0, 1]: made linear, as a render is
+    for (float& v : img.pixels) v = v <= 0.04045f ? v / 12.92f : std::pow((v + 0.055f) / 1.055f, 2.4f);
+    // The grey image FAST sees is OpenCV's own greyscale of the file (±1 level from the linear round trip)
+    const cv::Mat reference = cv::imread(path, cv::IMREAD_GRAYSCALE);
+    const std::vector<uint8_t> grey = grey_8bit(img);
+    size_t close = 0;
+    for (size_t i = 0; i < grey.size(); ++i) close += std::abs(int(grey[i]) - int(reference.data[i])) <= 1;
+    EXPECT_GT(double(close) / grey.size(), 0.99) << name;
+    // Every corner is cv::FAST's on that grey image, with its score
+    std::vector<cv::KeyPoint> points;
+    cv::FAST(cv::Mat(img.height, img.width, CV_8UC1, const_cast<uint8_t*>(grey.data())), points, 20, true,
+             cv::FastFeatureDetector::TYPE_9_16);
+    const std::vector<Corner> corners = detect_corners(img, 20, true);
+    ASSERT_EQ(corners.size(), points.size()) << name;
+    ASSERT_GT(corners.size(), 100u) << name;
+    std::multiset<std::tuple<float, float, float>> a, b;
+    for (const Corner& c : corners) a.insert({c.px.x - 0.5f, c.px.y - 0.5f, c.score});
+    for (const cv::KeyPoint& k : points) b.insert({k.pt.x, k.pt.y, k.response});
+    EXPECT_EQ(a, b) << name;
+  }
+  if (!any) GTEST_SKIP() << "skipped: no images under " << dir;
+}
+
+TEST(Vision, SaccadesAreReproducibleAndGlaucomaShortensThem) {
+  // Corners on a grid over a 640×400 image
+  std::vector<Corner> corners;
+  for (int y = 10; y < 400; y += 23)
+    for (int x = 10; x < 640; x += 29) corners.push_back({{float(x), float(y)}, float(20 + (x * 7 + y * 13) % 50)});
+  auto path = [&](const EyeParams& eye, uint64_t seed, std::vector<glm::vec2>* out) {
+    SaccadeModel m(saccade_params_for(eye), 15.0, seed);
+    double length = 0;
+    glm::vec2 last{0};
+    for (int k = 0; k < 60; ++k) {
+      const glm::vec2 p = m.next(corners, {640, 400});
+      if (k > 0) length += glm::length(p - last);
+      last = p;
+      if (out) out->push_back(p);
+    }
+    return length;
+  };
+  std::vector<glm::vec2> a, b, c;
+  path(EyeParams{}, 7, &a);
+  path(EyeParams{}, 7, &b);
+  path(EyeParams{}, 8, &c);
+  EXPECT_EQ(a, b);  // same seed, same fixations
+  EXPECT_NE(a, c);
+  // The first fixation is drawn around the centre
+  EXPECT_LT(glm::length(a[0] - glm::vec2(320, 200)), 250.0f);
+  double healthy = 0, glaucoma = 0;
+  for (uint64_t seed = 1; seed <= 5; ++seed) {
+    healthy += path(parse_eye_preset("healthy"), seed, nullptr);
+    glaucoma += path(parse_eye_preset("glaucoma:0.8"), seed, nullptr);
+  }
+  EXPECT_LT(glaucoma, 0.6 * healthy);
+}
+
+TEST(Vision, SharpnessFieldKeepsMinimaStarvesLazilyAndBlinks) {
+  Bounds bounds;
+  bounds.lo = glm::vec3(0);
+  bounds.hi = glm::vec3(1);
+  SharpnessField field(bounds, 0.25f, 0.015);
+  const int64_t c = field.cell({0.6f, 0.6f, 0.6f});
+  ASSERT_GE(c, 0);
+  EXPECT_EQ(field.cell({5, 5, 5}), -1);
+  EXPECT_EQ(field.cell(glm::vec3(NAN)), -1);
+  EXPECT_TRUE(std::isinf(field.effective(c, 1)));
+  EXPECT_TRUE(field.update(c, 2.0f, 1));
+  EXPECT_FALSE(field.update(c, 3.0f, 1));  // larger: kept the smaller
+  EXPECT_TRUE(field.update(c, 1.0f, 1));
+  EXPECT_FLOAT_EQ(field.effective(c, 1), 1.0f);
+  // Lazy starvation equals multiplying by (1 + s) every step
+  double naive = 1.0;
+  for (uint32_t t = 2; t <= 200; ++t) {
+    naive *= 1.015;
+    EXPECT_NEAR(field.effective(c, t), naive, 1e-4 * naive) << "step " << t;
+  }
+  // A starved cell accepts a CoC that is smaller than the starved value, not the stored one
+  EXPECT_TRUE(field.update(c, 1.5f, 100));
+  EXPECT_FLOAT_EQ(field.effective(c, 100), 1.5f);
+  // A blink forgets everything at once
+  field.blink();
+  EXPECT_TRUE(std::isinf(field.effective(c, 100)));
+  EXPECT_TRUE(field.update(c, 4.0f, 101));
+}
+
+TEST(Vision, BlurLeavesSharpPixelsMatchesAGaussianAndPreservesEnergy) {
+  const Image img = test_picture(160, 120);
+  const size_t n = size_t(img.width) * img.height;
+  // Zero CoC: unchanged, bit for bit
+  const Image same = variable_blur(img, std::vector<float>(n, 0.0f));
+  EXPECT_EQ(same.pixels, img.pixels);
+  // Constant CoC d: a Gaussian of σ = d/6 (OpenCV), within 0.02 everywhere away from the border
+  const float d = 12;
+  const Image blurred = variable_blur(img, std::vector<float>(n, d));
+  cv::Mat src(img.height, img.width, CV_32FC3, const_cast<float*>(img.pixels.data())), ref;
+  cv::GaussianBlur(src, ref, cv::Size(0, 0), d / 6.0, d / 6.0, cv::BORDER_REPLICATE);
+  double max_error = 0, mean_error = 0;
+  size_t count = 0;
+  for (int y = 8; y < img.height - 8; ++y)
+    for (int x = 8; x < img.width - 8; ++x)
+      for (int c = 0; c < 3; ++c) {
+        const double e = std::abs(blurred.at(x, y, c) - ref.at<cv::Vec3f>(y, x)[c]);
+        max_error = std::max(max_error, e);
+        mean_error += e;
+        ++count;
+      }
+  EXPECT_LT(max_error, 0.02);
+  EXPECT_LT(mean_error / count, 0.002);
+  // Energy: a constant image stays constant; the mean is kept where the border plays no part
+  Image flat(64, 64, 3, 0.37f);
+  for (float v : variable_blur(flat, std::vector<float>(64 * 64, 9.0f)).pixels) EXPECT_NEAR(v, 0.37f, 1e-5f);
+  Image spot(64, 64, 1, 0.0f);
+  for (int y = 28; y < 36; ++y)
+    for (int x = 28; x < 36; ++x) spot.at(x, y) = 1.0f;
+  double before = 0, after = 0;
+  for (float v : spot.pixels) before += v;
+  for (float v : variable_blur(spot, std::vector<float>(64 * 64, 10.0f)).pixels) after += v;
+  EXPECT_NEAR(after, before, 0.02 * before);
+}
+
+TEST(Vision, BlurKernelDiffersPerPixelAndIsNotSeparable) {
+  // The response to a single bright pixel, gathered by its neighbours: the kernel of each pixel
+  const int size = 41;
+  Image impulse(size, size, 1, 0.0f);
+  impulse.at(20, 20) = 1.0f;
+  std::vector<float> coc(size * size, 14.0f);
+  const Image k = variable_blur(impulse, coc);
+  // Not separable: the kernel differs from the outer product of its row and column sums
+  double total = 0, error = 0, mass = 0;
+  std::vector<double> rows(size, 0), cols(size, 0);
+  for (int y = 0; y < size; ++y)
+    for (int x = 0; x < size; ++x) {
+      rows[y] += k.at(x, y);
+      cols[x] += k.at(x, y);
+      total += k.at(x, y);
+    }
+  for (int y = 0; y < size; ++y)
+    for (int x = 0; x < size; ++x) {
+      error += std::abs(k.at(x, y) - rows[y] * cols[x] / total);
+      mass += k.at(x, y);
+    }
+  EXPECT_GT(error / mass, 0.05);
+  // Per pixel: a pixel with a small CoC next to one with a large CoC gathers from a smaller area
+  coc.assign(size * size, 2.0f);
+  coc[20 * size + 26] = 14.0f;  // 6 px right of the impulse
+  const Image mixed = variable_blur(impulse, coc);
+  EXPECT_GT(mixed.at(26, 20), 0.0f);    // reaches the impulse
+  EXPECT_EQ(mixed.at(24, 20), 0.0f);    // small CoC, 4 px away: does not
+}
+
+TEST(Vision, SimulationSharpensOverStepsAndForgetsAtABlink) {
+  const Scene scene = load_scene("builtin:box");
+  const Tracer tracer(scene);
+  SimulateParams p;
+  p.width = 160;
+  p.height = 100;
+  p.blink_every = 12;
+  p.seed = 3;
+  VisionSimulation sim(tracer, scene, p);
+  const Camera camera = scene.cameras.front();
+  std::vector<StepStats> steps;
+  for (int k = 0; k < 14; ++k) steps.push_back(sim.step(camera));
+  EXPECT_TRUE(steps[0].camera_moved);
+  EXPECT_FALSE(steps[1].camera_moved);
+  EXPECT_GT(steps[0].corners, 10u);
+  EXPECT_GT(steps[10].sharp_fraction, steps[0].sharp_fraction);  // sharp regions grow
+  EXPECT_TRUE(steps[12].blink);
+  EXPECT_LT(steps[12].sharp_fraction, steps[11].sharp_fraction);  // and are forgotten at a blink
+  // Reproducible: the same seed gives the same fixations and the same image
+  VisionSimulation again(tracer, scene, p);
+  for (int k = 0; k < 14; ++k) EXPECT_EQ(again.step(camera).focus_px, steps[k].focus_px);
+  EXPECT_EQ(again.perceived().pixels, sim.perceived().pixels);
+}
