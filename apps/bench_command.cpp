@@ -51,7 +51,8 @@ std::function<int()> add_bench_command(CLI::App& app) {
   ao->add_option("--json", o->json, "write the table as JSON");
   ao->add_option("--markdown", o->markdown, "write the table as Markdown");
 
-  return [o] {
+  auto vision = add_bench_vision_command(*bench);
+  auto run_ao = [o] {
     const ThreadScope threads(o->threads);
     // Scene: the paper's dragon box, or the built-in box when the dragon is missing
     std::string spec = o->scene;
@@ -101,6 +102,7 @@ std::function<int()> add_bench_command(CLI::App& app) {
     }
     return 0;
   };
+  return [run_ao, vision, ao] { return ao->parsed() ? run_ao() : vision(); };
 }
 
 }  // namespace foveal::app

@@ -18,6 +18,7 @@ std::function<int()> add_bench_command(CLI::App& app);
 std::function<int()> add_gaze_command(CLI::App& app);
 std::function<int()> add_replay_command(CLI::App& app);
 std::function<int()> add_simulate_command(CLI::App& app);
+std::function<int()> add_bench_vision_command(CLI::App& bench);
 
 // Options shared by the commands that render: parsed text, turned into params by each command.
 struct ViewOptions {

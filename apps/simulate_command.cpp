@@ -38,7 +38,7 @@ std::function<int()> add_simulate_command(CLI::App& app) {
   struct Options {
     ViewOptions view;
     std::string eye = "healthy", save_steps = "1,4,20", output, stats, video;
-    int steps = 20, fast_threshold = 20, blink_every = 0, taps = 96;
+    int steps = 20, fast_threshold = 20, blink_every = 0, taps = 64;
     double pupil = 3.5, image_distance = 25, starvation = 0.015, voxel = 0, saccade_max = 15, saccade_min = 2, ambient = 0.3;
     uint64_t seed = 1;
     bool quiet = false;
@@ -58,7 +58,7 @@ std::function<int()> add_simulate_command(CLI::App& app) {
   cmd->add_option("--fast-threshold", o->fast_threshold, "FAST-9 threshold (OpenCV's cv::FAST)")->capture_default_str();
   cmd->add_option("--saccade-max", o->saccade_max, "largest saccade, degrees (glaucoma shortens it)")->capture_default_str();
   cmd->add_option("--saccade-min", o->saccade_min, "smallest distance to the recent fixations, degrees")->capture_default_str();
-  cmd->add_option("--blur-taps", o->taps, "taps of the variable blur per pixel")->capture_default_str();
+  cmd->add_option("--blur-taps", o->taps, "most taps of the variable blur per pixel (large CoCs)")->capture_default_str();
   cmd->add_option("--ambient", o->ambient, "constant Phong ambient factor of the ray-cast colour")->capture_default_str();
   cmd->add_option("--seed", o->seed, "seed of the saccades")->capture_default_str();
   cmd->add_option("--save-steps", o->save_steps, "steps whose perceived image is saved (step_NNNN.png), e.g. 1,4,20,69; 'all' for every step")

@@ -30,9 +30,33 @@ TapPattern make_tap_pattern(int taps) {
 
 int taps_for_diameter(float d, int max_taps) {
   if (!(d >= 0.25f)) return 0;
-  const int area = static_cast<int>(std::ceil(0.785f * d * d));
+  // About one tap per pixel inside 2σ = d/3 of the centre, where the Gaussian's weight lies
+  const int area = static_cast<int>(std::ceil(0.35f * d * d));
   return std::clamp(area, std::min(8, max_taps), max_taps);
 }
+
+namespace {
+
+// Half-resolution copies (2×2 box), so that a large CoC's taps, spaced several pixels apart,
+// read pre-averaged pixels instead of aliasing.
+std::vector<Image> pyramid(const Image& img, int levels) {
+  std::vector<Image> out{img};
+  for (int l = 1; l < levels; ++l) {
+    const Image& src = out.back();
+    if (src.width < 4 || src.height < 4) break;
+    Image dst((src.width + 1) / 2, (src.height + 1) / 2, src.channels);
+    for (int y = 0; y < dst.height; ++y)
+      for (int x = 0; x < dst.width; ++x) {
+        const int x0 = 2 * x, y0 = 2 * y, x1 = std::min(x0 + 1, src.width - 1), y1 = std::min(y0 + 1, src.height - 1);
+        for (int c = 0; c < src.channels; ++c)
+          dst.at(x, y, c) = 0.25f * (src.at(x0, y0, c) + src.at(x1, y0, c) + src.at(x0, y1, c) + src.at(x1, y1, c));
+      }
+    out.push_back(std::move(dst));
+  }
+  return out;
+}
+
+}  // namespace
 
 Image variable_blur(const Image& img, const std::vector<float>& coc, const BlurParams& params) {
   if (coc.size() != size_t(img.width) * img.height) fail("blur: {} CoC values for a {}x{} image", coc.size(), img.width, img.height);
@@ -50,6 +74,7 @@ Image variable_blur(const Image& img, const std::vector<float>& coc, const BlurP
   };
   const int w = img.width, h = img.height, ch = img.channels;
   if (ch < 1 || ch > 4) fail("blur: images of 1 to 4 channels, got {}", ch);
+  const std::vector<Image> levels = pyramid(img, 5);
   Image out(w, h, ch);
   tbb::parallel_for(tbb::blocked_range<int>(0, h, 4), [&](const tbb::blocked_range<int>& rows) {
     float sum[4] = {0, 0, 0, 0};
@@ -63,25 +88,32 @@ Image variable_blur(const Image& img, const std::vector<float>& coc, const BlurP
           continue;
         }
         const TapPattern& taps = pattern_for(n);
-        const float radius = 0.5f * d;
-        for (int c = 0; c < ch && c < 4; ++c) sum[c] = 0;
+        // Taps are about `spacing` pixels apart (within 2σ); read the level whose pixels are that large
+        const float spacing = d / 3.0f * std::sqrt(3.14159f / float(taps.offset.size()));
+        int level = 0;
+        while (level + 1 < int(levels.size()) && spacing >= 2.0f * float(1 << level)) ++level;
+        const Image& src = levels[level];
+        const float scale = 1.0f / float(1 << level), radius = 0.5f * d * scale;
+        const float cx = (x + 0.5f) * scale - 0.5f, cy = (y + 0.5f) * scale - 0.5f;
+        const int sw = src.width, sh = src.height;
+        for (int c = 0; c < ch; ++c) sum[c] = 0;
         float total = 0;
         for (size_t k = 0; k < taps.offset.size(); ++k) {
           // Bilinear read at the tap, clamped to the image
-          const float sx = std::clamp(x + radius * taps.offset[k].x, 0.0f, float(w - 1));
-          const float sy = std::clamp(y + radius * taps.offset[k].y, 0.0f, float(h - 1));
-          const int x0 = std::min(int(sx), std::max(w - 2, 0)), y0 = std::min(int(sy), std::max(h - 2, 0));
-          const int x1 = std::min(x0 + 1, w - 1), y1 = std::min(y0 + 1, h - 1);
+          const float sx = std::clamp(cx + radius * taps.offset[k].x, 0.0f, float(sw - 1));
+          const float sy = std::clamp(cy + radius * taps.offset[k].y, 0.0f, float(sh - 1));
+          const int x0 = std::min(int(sx), std::max(sw - 2, 0)), y0 = std::min(int(sy), std::max(sh - 2, 0));
+          const int x1 = std::min(x0 + 1, sw - 1), y1 = std::min(y0 + 1, sh - 1);
           const float fx = sx - x0, fy = sy - y0, wk = taps.weight[k];
           const float w00 = (1 - fx) * (1 - fy) * wk, w10 = fx * (1 - fy) * wk, w01 = (1 - fx) * fy * wk, w11 = fx * fy * wk;
-          const float* p00 = &img.pixels[(size_t(y0) * w + x0) * ch];
-          const float* p10 = &img.pixels[(size_t(y0) * w + x1) * ch];
-          const float* p01 = &img.pixels[(size_t(y1) * w + x0) * ch];
-          const float* p11 = &img.pixels[(size_t(y1) * w + x1) * ch];
-          for (int c = 0; c < ch && c < 4; ++c) sum[c] += w00 * p00[c] + w10 * p10[c] + w01 * p01[c] + w11 * p11[c];
+          const float* p00 = &src.pixels[(size_t(y0) * sw + x0) * ch];
+          const float* p10 = &src.pixels[(size_t(y0) * sw + x1) * ch];
+          const float* p01 = &src.pixels[(size_t(y1) * sw + x0) * ch];
+          const float* p11 = &src.pixels[(size_t(y1) * sw + x1) * ch];
+          for (int c = 0; c < ch; ++c) sum[c] += w00 * p00[c] + w10 * p10[c] + w01 * p01[c] + w11 * p11[c];
           total += wk;
         }
-        for (int c = 0; c < ch && c < 4; ++c) out.pixels[i * ch + c] = sum[c] / total;
+        for (int c = 0; c < ch; ++c) out.pixels[i * ch + c] = sum[c] / total;
       }
   });
   return out;

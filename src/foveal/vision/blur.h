@@ -1,7 +1,8 @@
 // foveal/vision/blur.h — per-pixel variable Gaussian blur (the paper's depth-of-field filter).
 //
 // Each pixel gathers taps distributed over its own circle of confusion (a fixed pattern of
-// points in the unit disc, scaled by the pixel's CoC radius, read with bilinear filtering),
+// points in the unit disc, scaled by the pixel's CoC radius, read with bilinear filtering from
+// the image or, for widely spaced taps, a pre-averaged lower-resolution copy),
 // weighted by a bivariate Gaussian whose σ is a third of the CoC radius (σ = diameter / 6, so
 // the disc holds ±3σ). The kernel differs per pixel, so it is not separable. Weights are
 // normalised: a constant image stays constant.
@@ -16,12 +17,13 @@
 namespace foveal {
 
 struct BlurParams {
-  int taps = 96;                 // most points of a disc pattern (plus the centre), for large CoCs
+  int taps = 64;                 // most points of a disc pattern (plus the centre), for large CoCs
   float max_diameter_px = 96;    // CoCs are clamped to this diameter (unseen cells, far defocus)
 };
 
-// Taps for a CoC diameter d (pixels): about one per pixel of the disc's area, at least 8, at most
-// `max_taps`; 0 below a quarter pixel (the pixel is copied).
+// Taps for a CoC diameter d (pixels): about one per pixel within 2σ (0.35·d²), at least 8, at
+// most `max_taps`; 0 below a quarter pixel (the pixel is copied). Taps spaced wider than two
+// pixels read a half-, quarter-, … resolution copy of the image (2×2 box averages).
 int taps_for_diameter(float d, int max_taps);
 
 // The unit-disc tap pattern (Vogel spiral) with its Gaussian weights (σ = 1/3 of the radius).

@@ -75,7 +75,7 @@ StepStats VisionSimulation::step(const Camera& camera, std::optional<glm::vec2> 
   // 2. Corners, recomputed when the camera moved; the next fixation
   t.reset();
   s.camera_moved = !last_camera_ || !same_camera(*last_camera_, camera);
-  if (s.camera_moved) {
+  if (s.camera_moved || params_.features_every_step) {
     corners_ = detect_corners(color_, params_.fast_threshold, true);
     if (last_camera_) saccades_.reset();
     last_camera_ = camera;
@@ -97,15 +97,20 @@ StepStats VisionSimulation::step(const Camera& camera, std::optional<glm::vec2> 
     s.blink = true;
   }
   const double penalty = peripheral_penalty_per_deg(params_.eye);
-  const FoveationModel eccentricity(render_display(params_), w, h, glm::dvec2(s.focus_px), FoveationParams{1.0});
+  // Eccentricity: the angle between the eye rays through the pixel and through the fixation
+  const FoveationModel screen(render_display(params_), w, h, glm::dvec2(s.focus_px), FoveationParams{1.0});
+  const glm::dvec3 gaze_ray = glm::normalize(screen.eye_ray(s.focus_px.x, s.focus_px.y));
+  const double pupil_m = params_.eye.pupil_diameter_mm * 1e-3;
   std::vector<float> now_deg(n);  // this step's CoC, degrees
   tbb::parallel_for(tbb::blocked_range<int>(0, h, 8), [&](const tbb::blocked_range<int>& rows) {
     for (int y = rows.begin(); y < rows.end(); ++y)
       for (int x = 0; x < w; ++x) {
         const size_t i = size_t(y) * w + x;
-        const double d = gbuffer_.hit(i) ? gbuffer_.depth[i] * scene_.meters_per_unit : INFINITY;
-        const double ecc = eccentricity.evaluate(x, y).angle_deg;
-        now_deg[i] = static_cast<float>(glm::degrees(coc_angle_rad(params_.eye, d, s.focus_vergence)) + penalty * ecc);
+        const double object_vergence = gbuffer_.hit(i) ? 1.0 / (gbuffer_.depth[i] * scene_.meters_per_unit) : 0.0;
+        const glm::dvec3 ray = glm::normalize(screen.eye_ray(x + 0.5, y + 0.5));
+        const double ecc = glm::degrees(std::atan2(glm::length(glm::cross(ray, gaze_ray)), glm::dot(ray, gaze_ray)));
+        // coc_angle_rad(), inlined: A·|1/D − v|
+        now_deg[i] = static_cast<float>(glm::degrees(pupil_m * std::abs(object_vergence - s.focus_vergence)) + penalty * ecc);
       }
   });
   std::vector<int64_t> cells(n, -1);

@@ -20,6 +20,7 @@ struct SimulateParams {
   Display display;                // the render fills it: its size and distance give the pixels per degree
   SaccadeParams saccades;         // glaucoma shortens and skips (see saccade_params_for)
   int fast_threshold = 20;        // cv::FAST threshold
+  bool features_every_step = false; // recompute the corners every step (the paper's timing), not only when the camera moves
   double starvation = 0.015;      // s: effective CoC grows by this fraction per step
   float voxel = 0;                // cell edge, scene units; 0 = scene diagonal / 256
   int blink_every = 0;            // a blink (field reset) every this many steps; 0 = never
