@@ -52,6 +52,8 @@ std::function<int()> add_bench_command(CLI::App& app) {
   ao->add_option("--markdown", o->markdown, "write the table as Markdown");
 
   auto vision = add_bench_vision_command(*bench);
+  auto blur = add_bench_blur_command(*bench);
+  auto* blur_cmd = bench->get_subcommand("blur");
   auto run_ao = [o] {
     const ThreadScope threads(o->threads);
     // Scene: the paper's dragon box, or the built-in box when the dragon is missing
@@ -102,7 +104,7 @@ std::function<int()> add_bench_command(CLI::App& app) {
     }
     return 0;
   };
-  return [run_ao, vision, ao] { return ao->parsed() ? run_ao() : vision(); };
+  return [run_ao, vision, blur, ao, blur_cmd] { return ao->parsed() ? run_ao() : blur_cmd->parsed() ? blur() : vision(); };
 }
 
 }  // namespace foveal::app

@@ -120,7 +120,11 @@ float ray_offset(glm::vec3 p, float scene_epsilon) {
   return scene_epsilon + 1e-5f * std::max({std::abs(p.x), std::abs(p.y), std::abs(p.z)});
 }
 
-GBuffer trace_primary(const Tracer& tracer, const Scene& scene, const Camera& camera, int width, int height) {
+namespace {
+
+// Trace one ray per pixel, made by `ray_for(x, y)`, into a G-buffer.
+template <class RayFor>
+GBuffer trace_into_gbuffer(const Tracer& tracer, const Scene& scene, int width, int height, const RayFor& ray_for) {
   GBuffer g;
   g.width = width;
   g.height = height;
@@ -132,14 +136,13 @@ GBuffer trace_primary(const Tracer& tracer, const Scene& scene, const Camera& ca
   g.albedo.assign(n, glm::vec3(0.0f));
   g.depth.assign(n, std::numeric_limits<float>::infinity());
   g.view.assign(n, glm::vec3(0.0f));
-  const CameraRays camera_ray(camera, width, height);
   for_each_tile(width, height, [&](int x0, int x1, int y0, int y1) {
     Ray rays[kTile * kTile];
     Hit hits[kTile * kTile];
     for (int y = y0; y < y1; ++y) {
       // One row of the tile at a time: coherent rays, one tracer call
       const int count = x1 - x0;
-      for (int x = x0; x < x1; ++x) rays[x - x0] = camera_ray(x + 0.5, y + 0.5);
+      for (int x = x0; x < x1; ++x) rays[x - x0] = ray_for(x, y);
       tracer.intersect({rays, static_cast<size_t>(count)}, {hits, static_cast<size_t>(count)});
       for (int x = x0; x < x1; ++x) {
         const size_t i = static_cast<size_t>(y) * width + x;
@@ -173,6 +176,17 @@ GBuffer trace_primary(const Tracer& tracer, const Scene& scene, const Camera& ca
     }
   });
   return g;
+}
+
+}  // namespace
+
+GBuffer trace_primary(const Tracer& tracer, const Scene& scene, const Camera& camera, int width, int height) {
+  const CameraRays camera_ray(camera, width, height);
+  return trace_into_gbuffer(tracer, scene, width, height, [&](int x, int y) { return camera_ray(x + 0.5, y + 0.5); });
+}
+
+GBuffer trace_gbuffer(const Tracer& tracer, const Scene& scene, int width, int height, const std::function<Ray(int, int)>& ray_for) {
+  return trace_into_gbuffer(tracer, scene, width, height, ray_for);
 }
 
 FoveationMaps foveation_maps(const RenderParams& params, glm::dvec2 gaze_px) {

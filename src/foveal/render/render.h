@@ -110,6 +110,8 @@ float ray_offset(glm::vec3 p, float scene_epsilon);
 
 // Primary rays through every pixel centre.
 GBuffer trace_primary(const Tracer& tracer, const Scene& scene, const Camera& camera, int width, int height);
+// One ray per pixel from `ray_for(x, y)` (unit direction) into a G-buffer (depth = distance along that ray).
+GBuffer trace_gbuffer(const Tracer& tracer, const Scene& scene, int width, int height, const std::function<Ray(int, int)>& ray_for);
 // The foveation model evaluated at every pixel (full mode: q = 1, n = n_max, b = 1).
 FoveationMaps foveation_maps(const RenderParams& params, glm::dvec2 gaze_px);
 // Optional observers of the AO pass.

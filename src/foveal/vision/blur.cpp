@@ -98,6 +98,16 @@ Image variable_blur(const Image& img, const std::vector<float>& coc, const BlurP
         const int sw = src.width, sh = src.height;
         for (int c = 0; c < ch; ++c) sum[c] = 0;
         float total = 0;
+        // A texel contributes only if its own CoC reaches this pixel (scatter-aware): a sharp
+        // point does not spread. At level 0 each bilinear texel is checked; coarser levels check
+        // the full-resolution pixel nearest to the tap.
+        auto reaches = [&](int px, int py) {
+          if (!params.scatter_aware) return true;
+          const float r = coc[size_t(py) * w + px];
+          const float reach = 0.5f * (std::isfinite(r) ? std::min(r, params.max_diameter_px) : params.max_diameter_px);
+          const float dx = float(px - x), dy = float(py - y);
+          return reach + 0.5f >= std::sqrt(dx * dx + dy * dy);
+        };
         for (size_t k = 0; k < taps.offset.size(); ++k) {
           // Bilinear read at the tap, clamped to the image
           const float sx = std::clamp(cx + radius * taps.offset[k].x, 0.0f, float(sw - 1));
@@ -105,13 +115,26 @@ Image variable_blur(const Image& img, const std::vector<float>& coc, const BlurP
           const int x0 = std::min(int(sx), std::max(sw - 2, 0)), y0 = std::min(int(sy), std::max(sh - 2, 0));
           const int x1 = std::min(x0 + 1, sw - 1), y1 = std::min(y0 + 1, sh - 1);
           const float fx = sx - x0, fy = sy - y0, wk = taps.weight[k];
-          const float w00 = (1 - fx) * (1 - fy) * wk, w10 = fx * (1 - fy) * wk, w01 = (1 - fx) * fy * wk, w11 = fx * fy * wk;
+          float w00 = (1 - fx) * (1 - fy) * wk, w10 = fx * (1 - fy) * wk, w01 = (1 - fx) * fy * wk, w11 = fx * fy * wk;
+          if (level == 0) {
+            if (!reaches(x0, y0)) w00 = 0;
+            if (!reaches(x1, y0)) w10 = 0;
+            if (!reaches(x0, y1)) w01 = 0;
+            if (!reaches(x1, y1)) w11 = 0;
+          } else if (!reaches(std::clamp(int(x + 0.5f * d * taps.offset[k].x + 0.5f), 0, w - 1),
+                              std::clamp(int(y + 0.5f * d * taps.offset[k].y + 0.5f), 0, h - 1))) {
+            continue;
+          }
           const float* p00 = &src.pixels[(size_t(y0) * sw + x0) * ch];
           const float* p10 = &src.pixels[(size_t(y0) * sw + x1) * ch];
           const float* p01 = &src.pixels[(size_t(y1) * sw + x0) * ch];
           const float* p11 = &src.pixels[(size_t(y1) * sw + x1) * ch];
           for (int c = 0; c < ch; ++c) sum[c] += w00 * p00[c] + w10 * p10[c] + w01 * p01[c] + w11 * p11[c];
-          total += wk;
+          total += w00 + w10 + w01 + w11;
+        }
+        if (!(total > 0)) {  // nothing reached (cannot happen with the centre tap, kept for safety)
+          for (int c = 0; c < ch; ++c) out.pixels[i * ch + c] = img.pixels[i * ch + c];
+          continue;
         }
         for (int c = 0; c < ch; ++c) out.pixels[i * ch + c] = sum[c] / total;
       }

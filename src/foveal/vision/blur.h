@@ -5,7 +5,9 @@
 // the image or, for widely spaced taps, a pre-averaged lower-resolution copy),
 // weighted by a bivariate Gaussian whose σ is a third of the CoC radius (σ = diameter / 6, so
 // the disc holds ±3σ). The kernel differs per pixel, so it is not separable. Weights are
-// normalised: a constant image stays constant.
+// normalised: a constant image stays constant. Scatter-aware (default): a tap whose own CoC does
+// not reach the pixel is left out, so a sharp object does not bleed into a blurred background
+// around it — what the thin-lens reference shows (`bench blur` measures both).
 #pragma once
 
 #include "foveal/util/image.h"
@@ -19,6 +21,7 @@ namespace foveal {
 struct BlurParams {
   int taps = 64;                 // most points of a disc pattern (plus the centre), for large CoCs
   float max_diameter_px = 96;    // CoCs are clamped to this diameter (unseen cells, far defocus)
+  bool scatter_aware = true;     // a tap counts only if its own CoC reaches the pixel (no sharp-edge bleeding)
 };
 
 // Taps for a CoC diameter d (pixels): about one per pixel within 2σ (0.35·d²), at least 8, at

@@ -58,6 +58,11 @@ double SaccadeModel::uniform() {
   return static_cast<double>(rng_() >> 11) * 0x1.0p-53;
 }
 
+void SaccadeModel::set_pixels_per_degree(double ppd) {
+  if (!(ppd > 0)) fail("saccades: pixels per degree must be positive");
+  ppd_ = ppd;
+}
+
 void SaccadeModel::reset() {
   recent_.clear();
   has_last_ = false;

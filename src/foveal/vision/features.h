@@ -42,6 +42,8 @@ class SaccadeModel {
   glm::vec2 next(const std::vector<Corner>& corners, glm::ivec2 size, bool* skipped = nullptr);
   // Forget the recent fixations (e.g. when the camera moved).
   void reset();
+  // The image's pixels per degree (the amplitude limits are in degrees).
+  void set_pixels_per_degree(double ppd);
   const std::deque<glm::vec2>& recent() const { return recent_; }
 
  private:

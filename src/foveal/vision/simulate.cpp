@@ -1,6 +1,8 @@
 // foveal/vision/simulate.cpp — one time step of the vision simulation.
 #include "foveal/vision/simulate.h"
 
+#include "foveal/vision/thin_lens.h"
+
 #include "foveal/util/error.h"
 #include "foveal/util/timer.h"
 
@@ -32,13 +34,6 @@ SaccadeParams saccade_params_for(const EyeParams& eye, SaccadeParams base) {
 
 namespace {
 
-Display render_display(const SimulateParams& p) {
-  Display d = p.display;
-  d.res_x = p.width;
-  d.res_y = p.height;
-  return d;
-}
-
 bool same_camera(const Camera& a, const Camera& b) {
   return a.eye == b.eye && a.look == b.look && a.up == b.up && a.fov_deg == b.fov_deg;
 }
@@ -49,10 +44,10 @@ VisionSimulation::VisionSimulation(const Tracer& tracer, const Scene& scene, con
     : tracer_(tracer),
       scene_(scene),
       params_((validate(params), params)),
-      ppd_(foveal::pixels_per_degree(render_display(params))),
+      ppd_(0),
       epsilon_(surface_epsilon(scene.bounds())),
       field_(scene.bounds(), params.voxel > 0 ? params.voxel : default_voxel_size(scene.bounds()), params.starvation),
-      saccades_(saccade_params_for(params.eye, params.saccades), ppd_, params.seed) {}
+      saccades_(saccade_params_for(params.eye, params.saccades), params.height / 40.0, params.seed) {}
 
 StepStats VisionSimulation::step(const Camera& camera, std::optional<glm::vec2> fixation) {
   const Timer total;
@@ -74,6 +69,8 @@ StepStats VisionSimulation::step(const Camera& camera, std::optional<glm::vec2> 
 
   // 2. Corners, recomputed when the camera moved; the next fixation
   t.reset();
+  ppd_ = camera_pixels_per_degree(camera, h);
+  saccades_.set_pixels_per_degree(ppd_);
   s.camera_moved = !last_camera_ || !same_camera(*last_camera_, camera);
   if (s.camera_moved || params_.features_every_step) {
     corners_ = detect_corners(color_, params_.fast_threshold, true);
@@ -90,24 +87,28 @@ StepStats VisionSimulation::step(const Camera& camera, std::optional<glm::vec2> 
   t.reset();
   const int fx = std::clamp(int(s.focus_px.x), 0, w - 1), fy = std::clamp(int(s.focus_px.y), 0, h - 1);
   const size_t fi = size_t(fy) * w + fx;
-  s.focus_depth_m = gbuffer_.hit(fi) ? gbuffer_.depth[fi] * scene_.meters_per_unit : INFINITY;
+  const glm::vec3 axis = glm::normalize(camera.look - camera.eye);
+  s.focus_depth_m = gbuffer_.hit(fi) ? gbuffer_.depth[fi] * glm::dot(gbuffer_.view[fi], axis) * scene_.meters_per_unit : INFINITY;
   s.focus_vergence = accommodate(params_.eye, s.focus_depth_m);
   if (params_.blink_every > 0 && s.step > 1 && (s.step - 1) % params_.blink_every == 0) {
     field_.blink();
     s.blink = true;
   }
   const double penalty = peripheral_penalty_per_deg(params_.eye);
-  // Eccentricity: the angle between the eye rays through the pixel and through the fixation
-  const FoveationModel screen(render_display(params_), w, h, glm::dvec2(s.focus_px), FoveationParams{1.0});
-  const glm::dvec3 gaze_ray = glm::normalize(screen.eye_ray(s.focus_px.x, s.focus_px.y));
+  // The eye sits at the camera: eccentricity is the angle between the camera rays through the
+  // pixel and through the fixation; distances are along the optical axis (a thin lens focuses planes)
+  const CameraRays rays(camera, w, h);
+  const glm::dvec3 gaze_ray = rays(s.focus_px.x, s.focus_px.y).dir;
+  const glm::vec3 forward = glm::normalize(camera.look - camera.eye);
   const double pupil_m = params_.eye.pupil_diameter_mm * 1e-3;
   std::vector<float> now_deg(n);  // this step's CoC, degrees
   tbb::parallel_for(tbb::blocked_range<int>(0, h, 8), [&](const tbb::blocked_range<int>& rows) {
     for (int y = rows.begin(); y < rows.end(); ++y)
       for (int x = 0; x < w; ++x) {
         const size_t i = size_t(y) * w + x;
-        const double object_vergence = gbuffer_.hit(i) ? 1.0 / (gbuffer_.depth[i] * scene_.meters_per_unit) : 0.0;
-        const glm::dvec3 ray = glm::normalize(screen.eye_ray(x + 0.5, y + 0.5));
+        const glm::dvec3 ray = gbuffer_.view[i];
+        const double axial_m = gbuffer_.hit(i) ? gbuffer_.depth[i] * glm::dot(gbuffer_.view[i], forward) * scene_.meters_per_unit : 0.0;
+        const double object_vergence = axial_m > 0 ? 1.0 / axial_m : 0.0;
         const double ecc = glm::degrees(std::atan2(glm::length(glm::cross(ray, gaze_ray)), glm::dot(ray, gaze_ray)));
         // coc_angle_rad(), inlined: A·|1/D − v|
         now_deg[i] = static_cast<float>(glm::degrees(pupil_m * std::abs(object_vergence - s.focus_vergence)) + penalty * ecc);

@@ -17,7 +17,7 @@ namespace foveal {
 struct SimulateParams {
   int width = 1024, height = 768;
   EyeParams eye;
-  Display display;                // the render fills it: its size and distance give the pixels per degree
+  Display display;                // checked only: the eye sits at the camera, whose field of view sets the angles
   SaccadeParams saccades;         // glaucoma shortens and skips (see saccade_params_for)
   int fast_threshold = 20;        // cv::FAST threshold
   bool features_every_step = false; // recompute the corners every step (the paper's timing), not only when the camera moves
@@ -60,7 +60,7 @@ class VisionSimulation {
   const std::vector<float>& coc_px() const { return coc_; }  // per-pixel CoC diameter used for the blur
   const std::vector<Corner>& corners() const { return corners_; }
   const SharpnessField& field() const { return field_; }
-  double pixels_per_degree() const { return ppd_; }
+  double pixels_per_degree() const { return ppd_; }  // the camera's, at the image centre (after a step)
 
  private:
   const Tracer& tracer_;

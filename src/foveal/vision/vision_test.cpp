@@ -8,6 +8,7 @@
 #include "foveal/vision/features.h"
 #include "foveal/vision/sharpness.h"
 #include "foveal/vision/simulate.h"
+#include "foveal/vision/thin_lens.h"
 
 #include <gtest/gtest.h>
 #include <opencv2/features2d.hpp>
@@ -185,12 +186,20 @@ TEST(Vision, BlurKernelDiffersPerPixelAndIsNotSeparable) {
       mass += k.at(x, y);
     }
   EXPECT_GT(error / mass, 0.05);
-  // Per pixel: a pixel with a small CoC next to one with a large CoC gathers from a smaller area
-  coc.assign(size * size, 2.0f);
-  coc[20 * size + 26] = 14.0f;  // 6 px right of the impulse
+  // Per pixel: next to a pixel with a large CoC, one with a small CoC gathers from a smaller area
+  coc.assign(size * size, 14.0f);
+  coc[20 * size + 24] = 2.0f;  // 4 px right of the impulse
   const Image mixed = variable_blur(impulse, coc);
-  EXPECT_GT(mixed.at(26, 20), 0.0f);    // reaches the impulse
-  EXPECT_EQ(mixed.at(24, 20), 0.0f);    // small CoC, 4 px away: does not
+  EXPECT_GT(mixed.at(26, 20), 0.0f);  // CoC 14, 6 px away: reaches the impulse
+  EXPECT_EQ(mixed.at(24, 20), 0.0f);  // CoC 2, 4 px away: does not
+  // Scatter-aware: a sharp impulse does not spread into blurred neighbours; without it, it does
+  coc.assign(size * size, 14.0f);
+  coc[20 * size + 20] = 0.0f;
+  BlurParams plain;
+  plain.scatter_aware = false;
+  const float spread = variable_blur(impulse, coc, plain).at(23, 20), kept = variable_blur(impulse, coc).at(23, 20);
+  EXPECT_GT(spread, 0.0f);
+  EXPECT_LT(kept, 0.25f * spread);  // only what bilinear reads next to the impulse still carry
 }
 
 TEST(Vision, SimulationSharpensOverStepsAndForgetsAtABlink) {
@@ -215,4 +224,34 @@ TEST(Vision, SimulationSharpensOverStepsAndForgetsAtABlink) {
   VisionSimulation again(tracer, scene, p);
   for (int k = 0; k < 14; ++k) EXPECT_EQ(again.step(camera).focus_px, steps[k].focus_px);
   EXPECT_EQ(again.perceived().pixels, sim.perceived().pixels);
+}
+
+TEST(Vision, BlurApproximatesTheThinLensReference) {
+  // A large pupil (150 mm) makes the box's depth range blur by several pixels at this size
+  const Scene scene = load_scene("builtin:box");
+  const Tracer tracer(scene);
+  const Camera camera = scene.cameras.front();
+  ThinLensParams p;
+  p.width = 256;
+  p.height = 160;
+  p.samples = 64;
+  p.pupil_diameter_mm = 150;
+  ThinLensParams pinhole = p;
+  pinhole.samples = 1;
+  pinhole.pupil_diameter_mm = 1e-6;
+  const Image sharp = thin_lens_reference(tracer, scene, camera, pinhole);
+  auto mean_error = [](const Image& a, const Image& b) {  // on the sRGB values a viewer sees
+    double e = 0;
+    for (size_t i = 0; i < a.pixels.size(); ++i) e += std::abs(linear_to_srgb(a.pixels[i]) - linear_to_srgb(b.pixels[i]));
+    return e / a.pixels.size();
+  };
+  EXPECT_LT(mean_error(sharp, thin_lens_approximation(tracer, scene, camera, pinhole)), 1e-4);  // no CoC: the pinhole image
+  for (double focus_m : {4.3, 8.2}) {  // near wall, far wall
+    p.focus_vergence = 1.0 / focus_m;
+    const Image reference = thin_lens_reference(tracer, scene, camera, p);
+    const double blurred = mean_error(thin_lens_approximation(tracer, scene, camera, p), reference);
+    const double unblurred = mean_error(sharp, reference);
+    EXPECT_LT(blurred, 0.8 * unblurred) << "focus " << focus_m << " m";
+  }
+  EXPECT_NEAR(camera_pixels_per_degree(camera, 100), 50.0 / std::tan(glm::radians(0.5 * camera.fov_deg)) * M_PI / 180, 1e-9);
 }
