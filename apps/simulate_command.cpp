@@ -37,7 +37,7 @@ std::function<int()> add_simulate_command(CLI::App& app) {
   auto* cmd = app.add_subcommand("simulate", "simulate human vision over time: fixations, accommodation, a sharpness field that remembers, variable blur");
   struct Options {
     ViewOptions view;
-    std::string eye = "healthy", save_steps = "1,4,20", output, stats, video;
+    std::string eye = "healthy", save_steps = "1,4,20", output, stats, video, path;
     int steps = 20, fast_threshold = 20, blink_every = 0, taps = 64;
     double pupil = 3.5, image_distance = 25, starvation = 0.015, voxel = 0, saccade_max = 15, saccade_min = 2, ambient = 0.3;
     uint64_t seed = 1;
@@ -47,6 +47,7 @@ std::function<int()> add_simulate_command(CLI::App& app) {
   o->view.size = "1024x768";
   o->view.eye_option = "--from";
   add_view_options(*cmd, o->view);
+  cmd->add_option("--path", o->path, "a camera path of the scene JSON (camera_paths): the camera moves between steps");
   cmd->add_option("--steps", o->steps, "time steps (one fixation each)")->capture_default_str()->check(CLI::Range(1, 100000));
   cmd->add_option("--eye", o->eye, "eye: healthy, glaucoma[:SEVERITY 0..1], myopia:-D, hyperopia:D, presbyopia:AGE; join with '+'")
       ->capture_default_str();
@@ -99,6 +100,7 @@ std::function<int()> add_simulate_command(CLI::App& app) {
 
     const Scene scene = load_scene(o->view.scene);
     const Camera camera = resolve_camera(scene, o->view);
+    const CameraPath* path = o->path.empty() ? nullptr : &find_camera_path(scene, o->path);
     const Tracer tracer(scene);
     VisionSimulation sim(tracer, scene, p);
 
@@ -112,7 +114,7 @@ std::function<int()> add_simulate_command(CLI::App& app) {
     std::vector<StepStats> steps;
     std::vector<glm::vec2> fixations;
     for (int k = 1; k <= o->steps; ++k) {
-      const StepStats s = sim.step(camera);
+      const StepStats s = sim.step(path ? path->at(k) : camera);
       steps.push_back(s);
       fixations.push_back(s.focus_px);
       if (save_all || save.count(k)) save_image(sim.perceived(), (dir / fmt::format("step_{:04d}.png", k)).string());
@@ -160,6 +162,7 @@ std::function<int()> add_simulate_command(CLI::App& app) {
                               {"sharp_fraction", s.sharp_fraction},
                               {"blink", s.blink},
                               {"skipped", s.skipped},
+                              {"camera_moved", s.camera_moved},
                               {"corners", s.corners},
                               {"time_ms", {{"trace", s.trace_ms}, {"features", s.features_ms}, {"sharpness", s.sharpness_ms},
                                            {"blur", s.blur_ms}, {"total", s.total_ms}}}});
@@ -170,7 +173,7 @@ std::function<int()> add_simulate_command(CLI::App& app) {
     if (o->quiet) return 0;
     const FocusRange range = focus_range(p.eye);
     fmt::print("foveal simulate: {} ({} triangles), camera '{}', {}x{}, eye {} (focus {:.2f} m … {}), {} steps, {} threads\n",
-               scene.source, tracer.triangles(), camera.name, p.width, p.height, o->eye, range.near_point_m(),
+               scene.source, tracer.triangles(), path ? "path " + path->name : camera.name, p.width, p.height, o->eye, range.near_point_m(),
                std::isfinite(range.far_point_m()) ? fmt::format("{:.2f} m", range.far_point_m()) : "infinity", o->steps,
                threads.threads());
     fmt::print("  sharp    {:.1f}% of the image after the last step; scan path {:.0f} px over {} fixations\n",

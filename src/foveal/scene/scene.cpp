@@ -160,6 +160,36 @@ const Camera& find_camera(const Scene& scene, const std::string& name) {
   fail("scene '{}' has no camera named '{}' (known: {})", scene.source, name, known.empty() ? "none" : known);
 }
 
+const CameraPath& find_camera_path(const Scene& scene, const std::string& name) {
+  std::string known;
+  for (const auto& p : scene.camera_paths) {
+    if (p.name == name) return p;
+    known += (known.empty() ? "" : ", ") + p.name;
+  }
+  fail("scene '{}' has no camera path named '{}' (known: {})", scene.source, name, known.empty() ? "none" : known);
+}
+
+Camera CameraPath::at(int step) const {
+  if (keys.empty()) return Camera{};
+  if (keys.size() == 1 || step <= 1) return keys.front();
+  if (step >= steps) return keys.back();
+  // Position along the path in segments: steps 1…steps span keys 0…n−1
+  const double s = double(step - 1) / double(steps - 1) * double(keys.size() - 1);
+  const size_t k = std::min(size_t(s), keys.size() - 2);
+  const float t = static_cast<float>(s - double(k));
+  const Camera& a = keys[k];
+  const Camera& b = keys[k + 1];
+  Camera c;
+  c.name = fmt::format("{} step {}", name, step);
+  c.eye = glm::mix(a.eye, b.eye, t);
+  c.look = glm::mix(a.look, b.look, t);
+  c.up = glm::mix(a.up, b.up, t);
+  if (glm::length(glm::cross(c.look - c.eye, c.up)) < 1e-6f) c.up = a.up;
+  if (glm::length(c.look - c.eye) < 1e-6f) c.look = b.look;
+  c.fov_deg = a.fov_deg + (b.fov_deg - a.fov_deg) * t;
+  return c;
+}
+
 Scene load_scene(const std::string& spec) {
   namespace fs = std::filesystem;
   Scene scene;

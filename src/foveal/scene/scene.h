@@ -42,6 +42,15 @@ struct Camera {
   float fov_deg = 45.0f;
 };
 
+// A camera that moves: linear interpolation through key cameras (eye, look, up, fov), from the
+// first key at step 1 to the last at step `steps`, held there afterwards.
+struct CameraPath {
+  std::string name;
+  std::vector<Camera> keys;  // at least two
+  int steps = 2;             // steps from the first key to the last (≥ 2)
+  Camera at(int step) const;
+};
+
 // Point light (position) or directional light (direction the light travels).
 struct Light {
   enum class Type { point, directional } type = Type::point;
@@ -70,6 +79,7 @@ struct Scene {
   std::vector<Material> materials;
   std::vector<Texture> textures;
   std::vector<Camera> cameras;           // named viewpoints (may be empty)
+  std::vector<CameraPath> camera_paths;  // named camera paths through the cameras (may be empty)
   std::vector<Light> lights;             // empty → a head light at the camera
   glm::vec3 ambient{0.6f};               // i_a of eq. 2
   double meters_per_unit = 1.0;          // scene unit in metres
@@ -119,6 +129,8 @@ void append_open_box(Scene& scene, glm::vec3 lo, glm::vec3 hi, const Material& m
 Camera default_camera(const Scene& scene);
 // Find a camera by name; throws Error listing the known names.
 const Camera& find_camera(const Scene& scene, const std::string& name);
+// The named camera path; throws Error listing the known ones.
+const CameraPath& find_camera_path(const Scene& scene, const std::string& name);
 
 // Scene file parsers, exposed for tests and fuzzing.
 Scene parse_scene_json(const std::string& text, const std::string& path, const std::string& base_dir);

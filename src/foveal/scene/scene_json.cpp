@@ -6,6 +6,7 @@
 #include <glm/gtc/matrix_transform.hpp>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <initializer_list>
@@ -145,7 +146,8 @@ Scene parse_scene_json(const std::string& text, const std::string& path, const s
   Scene scene;
   scene.source = path;
   const Ctx ctx{path, ""};
-  check_keys({path, "top level"}, root, {"meshes", "cameras", "lights", "meters_per_unit", "ao_distance", "ambient", "comment"});
+  check_keys({path, "top level"}, root,
+             {"meshes", "cameras", "camera_paths", "lights", "meters_per_unit", "ao_distance", "ambient", "comment"});
   if (root.contains("meters_per_unit")) scene.meters_per_unit = positive(ctx.at("meters_per_unit"), root["meters_per_unit"]);
   if (root.contains("ao_distance")) {
     const json& d = root["ao_distance"];
@@ -174,6 +176,30 @@ Scene parse_scene_json(const std::string& text, const std::string& path, const s
       if (glm::length(cam.look - cam.eye) == 0) ci.error("eye and look must differ");
       if (glm::length(glm::cross(cam.look - cam.eye, cam.up)) == 0) ci.error("up must not be parallel to the view");
       scene.cameras.push_back(cam);
+    }
+  }
+  if (root.contains("camera_paths")) {
+    // [{"name": "walk", "cameras": ["door", "table"], "steps": 20}]: through named cameras
+    const Ctx pc = ctx.at("camera_paths");
+    if (!root["camera_paths"].is_array()) pc.error("expected an array");
+    for (size_t i = 0; i < root["camera_paths"].size(); ++i) {
+      const json& p = root["camera_paths"][i];
+      const Ctx pi = pc.at(i);
+      check_keys(pi, p, {"name", "cameras", "steps"});
+      CameraPath path;
+      path.name = p.contains("name") ? string(pi.at("name"), p["name"]) : fmt::format("path{}", i + 1);
+      if (!p.contains("cameras") || !p["cameras"].is_array() || p["cameras"].size() < 2)
+        pi.at("cameras").error("expected an array of at least two camera names");
+      for (size_t k = 0; k < p["cameras"].size(); ++k) {
+        const std::string name = string(pi.at("cameras").at(k), p["cameras"][k]);
+        const auto it = std::find_if(scene.cameras.begin(), scene.cameras.end(), [&](const Camera& c) { return c.name == name; });
+        if (it == scene.cameras.end()) pi.at("cameras").at(k).error(fmt::format("no camera named '{}' in \"cameras\"", name));
+        path.keys.push_back(*it);
+      }
+      const float steps = p.contains("steps") ? positive(pi.at("steps"), p["steps"]) : 2.0f;
+      if (steps < 2 || steps != std::floor(steps) || steps > 1e6) pi.at("steps").error("expected a whole number of steps from 2");
+      path.steps = static_cast<int>(steps);
+      scene.camera_paths.push_back(path);
     }
   }
   if (root.contains("lights")) {

@@ -164,3 +164,32 @@ TEST(Scene, RealScenesLoadWhenPresent) {
   EXPECT_EQ(box.triangles.size(), 100010u);
   EXPECT_EQ(box.cameras.size(), 3u);
 }
+
+TEST(Scene, CameraPathsInterpolateThroughNamedCameras) {
+  const std::string text = R"({"meshes": [{"shape": "sphere", "radius": 1, "centre": [0, 0, 0]}],
+    "cameras": [{"name": "a", "eye": [0, 0, 10], "look": [0, 0, 0], "fov": 40},
+                {"name": "b", "eye": [10, 0, 10], "look": [10, 0, 0], "fov": 60},
+                {"name": "c", "eye": [10, 10, 10], "look": [10, 10, 0], "fov": 60}],
+    "camera_paths": [{"name": "walk", "cameras": ["a", "b", "c"], "steps": 5}]})";
+  const Scene s = parse_scene_json(text, "path.json", ".");
+  const CameraPath& p = find_camera_path(s, "walk");
+  ASSERT_EQ(p.keys.size(), 3u);
+  EXPECT_EQ(p.at(1).eye, glm::vec3(0, 0, 10));    // first key at step 1
+  EXPECT_EQ(p.at(2).eye, glm::vec3(5, 0, 10));    // halfway to b
+  EXPECT_FLOAT_EQ(p.at(2).fov_deg, 50.0f);
+  EXPECT_EQ(p.at(3).eye, glm::vec3(10, 0, 10));   // b at the middle step
+  EXPECT_EQ(p.at(5).eye, glm::vec3(10, 10, 10));  // last key at the last step
+  EXPECT_EQ(p.at(99).eye, glm::vec3(10, 10, 10)); // held afterwards
+  EXPECT_THROW(find_camera_path(s, "run"), Error);
+  for (const char* bad : {R"("camera_paths": [{"cameras": ["a", "x"]}])", R"("camera_paths": [{"cameras": ["a"]}])",
+                          R"("camera_paths": [{"cameras": ["a", "b"], "steps": 1.5}])", R"("camera_paths": [{"cameras": ["a", "b"], "speed": 2}])"}) {
+    const std::string doc = std::string(R"({"meshes": [{"shape": "sphere", "radius": 1, "centre": [0, 0, 0]}], "cameras": [{"name": "a", "eye": [0, 0, 10], "look": [0, 0, 0]},
+      {"name": "b", "eye": [1, 0, 10], "look": [0, 0, 0]}], )") + bad + "}";
+    try {
+      parse_scene_json(doc, "bad.json", ".");
+      ADD_FAILURE() << "accepted " << bad;
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find("bad.json: camera_paths[0]"), std::string::npos) << e.what();
+    }
+  }
+}

@@ -220,6 +220,13 @@ TEST(Vision, SimulationSharpensOverStepsAndForgetsAtABlink) {
   EXPECT_GT(steps[10].sharp_fraction, steps[0].sharp_fraction);  // sharp regions grow
   EXPECT_TRUE(steps[12].blink);
   EXPECT_LT(steps[12].sharp_fraction, steps[11].sharp_fraction);  // and are forgotten at a blink
+  // A moving camera: corners recomputed at every step that moved
+  VisionSimulation moving(tracer, scene, p);
+  Camera c = camera;
+  EXPECT_TRUE(moving.step(c).camera_moved);
+  EXPECT_FALSE(moving.step(c).camera_moved);
+  c.eye += glm::vec3(0.05f, 0, 0);
+  EXPECT_TRUE(moving.step(c).camera_moved);
   // Reproducible: the same seed gives the same fixations and the same image
   VisionSimulation again(tracer, scene, p);
   for (int k = 0; k < 14; ++k) EXPECT_EQ(again.step(camera).focus_px, steps[k].focus_px);
