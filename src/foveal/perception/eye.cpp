@@ -92,13 +92,20 @@ FocusRange focus_range(const EyeParams& e) {
 
 double accommodate(const EyeParams& e, double distance_m) {
   const FocusRange r = focus_range(e);
-  const double wanted = distance_m > 0 && std::isfinite(distance_m) ? 1.0 / distance_m : 0.0;
+  // With astigmatism the eye puts the circle of least confusion (between the two line foci) on the target
+  const double wanted = (distance_m > 0 && std::isfinite(distance_m) ? 1.0 / distance_m : 0.0) - 0.5 * e.cylinder_d;
   return std::clamp(wanted, r.far_vergence, r.near_vergence);
 }
 
 double coc_angle_rad(const EyeParams& e, double distance_m, double focus_vergence) {
   const double object_vergence = distance_m > 0 && std::isfinite(distance_m) ? 1.0 / distance_m : 0.0;
   return e.pupil_diameter_mm * 1e-3 * std::abs(object_vergence - focus_vergence);
+}
+
+glm::dvec2 coc_axes_rad(const EyeParams& e, double distance_m, double focus_vergence) {
+  const double object_vergence = distance_m > 0 && std::isfinite(distance_m) ? 1.0 / distance_m : 0.0;
+  const double a = e.pupil_diameter_mm * 1e-3;
+  return {a * std::abs(object_vergence - focus_vergence), a * std::abs(object_vergence - focus_vergence - e.cylinder_d)};
 }
 
 double coc_retina_mm(const EyeParams& e, double distance_m, double focus_vergence) {

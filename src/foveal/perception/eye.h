@@ -9,6 +9,8 @@
 // lens with the image distance cancelled).
 #pragma once
 
+#include <glm/glm.hpp>
+
 #include <string>
 
 namespace foveal {
@@ -42,12 +44,16 @@ struct FocusRange {
 };
 FocusRange focus_range(const EyeParams& eye);
 
-// The vergence the eye accommodates to when it wants to focus at `distance_m` (clamped).
+// The vergence the eye accommodates to when it wants to focus at `distance_m` (clamped); with a
+// cylinder C, at 1/distance − C/2, which puts the circle of least confusion on the target.
 double accommodate(const EyeParams& eye, double distance_m);
 
 // Circle of confusion of a point at `distance_m` with the eye focused at vergence `focus_vergence`,
 // as a visual angle in radians: A·|1/D − v|.
 double coc_angle_rad(const EyeParams& eye, double distance_m, double focus_vergence);
+// Astigmatism: the blur ellipse's diameters (radians) along the cylinder axis, A·|1/D − v|, and
+// across it, A·|1/D − v − C|; the two are equal without a cylinder.
+glm::dvec2 coc_axes_rad(const EyeParams& eye, double distance_m, double focus_vergence);
 // The same on the retina, mm: A·I·|1/D − v|.
 double coc_retina_mm(const EyeParams& eye, double distance_m, double focus_vergence);
 

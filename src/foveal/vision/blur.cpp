@@ -58,8 +58,12 @@ std::vector<Image> pyramid(const Image& img, int levels) {
 
 }  // namespace
 
-Image variable_blur(const Image& img, const std::vector<float>& coc, const BlurParams& params) {
+Image variable_blur(const Image& img, const std::vector<float>& coc, const BlurParams& params, const CocShape* shape) {
   if (coc.size() != size_t(img.width) * img.height) fail("blur: {} CoC values for a {}x{} image", coc.size(), img.width, img.height);
+  if (shape && shape->scale.size() != coc.size()) fail("blur: {} CoC shapes for {} pixels", shape->scale.size(), coc.size());
+  // The ellipse's axes in image coordinates (y down)
+  const float axis_rad = shape ? glm::radians(shape->axis_deg) : 0.0f;
+  const glm::vec2 along(std::cos(axis_rad), -std::sin(axis_rad)), across(std::sin(axis_rad), std::cos(axis_rad));
   // One pattern per tap count in use: counts are rounded up to a power of two (8 … taps) and the
   // full count
   std::vector<int> counts;
@@ -108,10 +112,13 @@ Image variable_blur(const Image& img, const std::vector<float>& coc, const BlurP
           const float dx = float(px - x), dy = float(py - y);
           return reach + 0.5f >= std::sqrt(dx * dx + dy * dy);
         };
+        const glm::vec2 sc = shape ? shape->scale[i] : glm::vec2(1.0f);
         for (size_t k = 0; k < taps.offset.size(); ++k) {
+          // The tap's offset: the unit-disc point, stretched into the pixel's ellipse
+          const glm::vec2 o = shape ? taps.offset[k].x * sc.x * along + taps.offset[k].y * sc.y * across : taps.offset[k];
           // Bilinear read at the tap, clamped to the image
-          const float sx = std::clamp(cx + radius * taps.offset[k].x, 0.0f, float(sw - 1));
-          const float sy = std::clamp(cy + radius * taps.offset[k].y, 0.0f, float(sh - 1));
+          const float sx = std::clamp(cx + radius * o.x, 0.0f, float(sw - 1));
+          const float sy = std::clamp(cy + radius * o.y, 0.0f, float(sh - 1));
           const int x0 = std::min(int(sx), std::max(sw - 2, 0)), y0 = std::min(int(sy), std::max(sh - 2, 0));
           const int x1 = std::min(x0 + 1, sw - 1), y1 = std::min(y0 + 1, sh - 1);
           const float fx = sx - x0, fy = sy - y0, wk = taps.weight[k];
@@ -121,8 +128,8 @@ Image variable_blur(const Image& img, const std::vector<float>& coc, const BlurP
             if (!reaches(x1, y0)) w10 = 0;
             if (!reaches(x0, y1)) w01 = 0;
             if (!reaches(x1, y1)) w11 = 0;
-          } else if (!reaches(std::clamp(int(x + 0.5f * d * taps.offset[k].x + 0.5f), 0, w - 1),
-                              std::clamp(int(y + 0.5f * d * taps.offset[k].y + 0.5f), 0, h - 1))) {
+          } else if (!reaches(std::clamp(int(x + 0.5f * d * o.x + 0.5f), 0, w - 1),
+                              std::clamp(int(y + 0.5f * d * o.y + 0.5f), 0, h - 1))) {
             continue;
           }
           const float* p00 = &src.pixels[(size_t(y0) * sw + x0) * ch];

@@ -36,7 +36,16 @@ struct TapPattern {
 };
 TapPattern make_tap_pattern(int taps);
 
-// Blur `image` with a CoC diameter per pixel (render pixels; 0 = sharp).
-Image variable_blur(const Image& image, const std::vector<float>& coc_diameter_px, const BlurParams& params = {});
+// Elliptical CoCs (astigmatism): per pixel, the diameters along and across an axis as fractions
+// of the pixel's CoC diameter (the larger is 1), and the axis angle in degrees (0 = horizontal,
+// counter-clockwise as the viewer sees the image).
+struct CocShape {
+  std::vector<glm::vec2> scale;  // (along, across) ≤ 1
+  float axis_deg = 0;
+};
+
+// Blur `image` with a CoC diameter per pixel (render pixels; 0 = sharp), round or elliptical.
+Image variable_blur(const Image& image, const std::vector<float>& coc_diameter_px, const BlurParams& params = {},
+                    const CocShape* shape = nullptr);
 
 }  // namespace foveal

@@ -101,7 +101,13 @@ StepStats VisionSimulation::step(const Camera& camera, std::optional<glm::vec2> 
   const glm::dvec3 gaze_ray = rays(s.focus_px.x, s.focus_px.y).dir;
   const glm::vec3 forward = glm::normalize(camera.look - camera.eye);
   const double pupil_m = params_.eye.pupil_diameter_mm * 1e-3;
-  std::vector<float> now_deg(n);  // this step's CoC, degrees
+  std::vector<float> now_deg(n);  // this step's CoC (the ellipse's larger diameter), degrees
+  const bool astigmatic = params_.eye.cylinder_d > 0;
+  const double cylinder = params_.eye.cylinder_d;
+  if (astigmatic) {
+    shape_.scale.resize(n);
+    shape_.axis_deg = static_cast<float>(params_.eye.cylinder_axis_deg);
+  }
   tbb::parallel_for(tbb::blocked_range<int>(0, h, 8), [&](const tbb::blocked_range<int>& rows) {
     for (int y = rows.begin(); y < rows.end(); ++y)
       for (int x = 0; x < w; ++x) {
@@ -110,8 +116,16 @@ StepStats VisionSimulation::step(const Camera& camera, std::optional<glm::vec2> 
         const double axial_m = gbuffer_.hit(i) ? gbuffer_.depth[i] * glm::dot(gbuffer_.view[i], forward) * scene_.meters_per_unit : 0.0;
         const double object_vergence = axial_m > 0 ? 1.0 / axial_m : 0.0;
         const double ecc = glm::degrees(std::atan2(glm::length(glm::cross(ray, gaze_ray)), glm::dot(ray, gaze_ray)));
-        // coc_angle_rad(), inlined: A·|1/D − v|
-        now_deg[i] = static_cast<float>(glm::degrees(pupil_m * std::abs(object_vergence - s.focus_vergence)) + penalty * ecc);
+        // coc_axes_rad(), inlined: A·|1/D − v| along the cylinder axis, A·|1/D − v − C| across it
+        const double along = glm::degrees(pupil_m * std::abs(object_vergence - s.focus_vergence)) + penalty * ecc;
+        if (!astigmatic) {
+          now_deg[i] = static_cast<float>(along);
+          continue;
+        }
+        const double across = glm::degrees(pupil_m * std::abs(object_vergence - s.focus_vergence - cylinder)) + penalty * ecc;
+        const double major = std::max(along, across);
+        now_deg[i] = static_cast<float>(major);
+        shape_.scale[i] = major > 0 ? glm::vec2(float(along / major), float(across / major)) : glm::vec2(1.0f);
       }
   });
   std::vector<int64_t> cells(n, -1);
@@ -133,7 +147,7 @@ StepStats VisionSimulation::step(const Camera& camera, std::optional<glm::vec2> 
 
   // 4. Variable blur
   t.reset();
-  perceived_ = variable_blur(color_, coc_, params_.blur);
+  perceived_ = variable_blur(color_, coc_, params_.blur, astigmatic ? &shape_ : nullptr);
   s.blur_ms = t.ms();
   s.total_ms = total.ms();
   return s;

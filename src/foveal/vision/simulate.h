@@ -75,6 +75,7 @@ class VisionSimulation {
   GBuffer gbuffer_;
   Image color_, perceived_;
   std::vector<float> coc_;
+  CocShape shape_;  // astigmatism: this step's ellipse per pixel
   uint32_t step_ = 0;
 };
 

@@ -2,6 +2,7 @@
 // shorter, the sharpness field keeps minima and starves lazily exactly as step by step, blinks
 // reset it, the blur leaves sharp pixels alone, matches a Gaussian and preserves energy.
 #include "foveal/io/image_io.h"
+#include "foveal/perception/eye.h"
 #include "foveal/scene/scene.h"
 #include "foveal/trace/tracer.h"
 #include "foveal/vision/blur.h"
@@ -261,4 +262,35 @@ TEST(Vision, BlurApproximatesTheThinLensReference) {
     EXPECT_LT(blurred, 0.8 * unblurred) << "focus " << focus_m << " m";
   }
   EXPECT_NEAR(camera_pixels_per_degree(camera, 100), 50.0 / std::tan(glm::radians(0.5 * camera.fov_deg)) * M_PI / 180, 1e-9);
+}
+
+TEST(Vision, AstigmatismBlursAlongItsAxis) {
+  // The eye: the circle of least confusion at the fixation, a line blur elsewhere
+  const EyeParams eye = parse_eye_preset("astigmatism:2@0");
+  const double v = accommodate(eye, 0.5);  // wants 2 D, aims at 2 − C/2 = 1 D
+  EXPECT_NEAR(v, 1.0, 1e-12);
+  const glm::dvec2 at_fixation = coc_axes_rad(eye, 0.5, v);
+  EXPECT_NEAR(at_fixation.x, at_fixation.y, 1e-12);  // round
+  const glm::dvec2 at_1m = coc_axes_rad(eye, 1.0, v);
+  EXPECT_NEAR(at_1m.x, 0.0, 1e-12);                   // sharp along the axis …
+  EXPECT_NEAR(at_1m.y, 3.5e-3 * 2, 1e-12);            // … blurred across it
+  // The blur: an impulse spreads along the ellipse's long axis only
+  const int size = 41;
+  Image impulse(size, size, 1, 0.0f);
+  impulse.at(20, 20) = 1.0f;
+  const std::vector<float> coc(size * size, 14.0f);
+  CocShape shape;
+  shape.scale.assign(size * size, glm::vec2(1.0f, 0.15f));  // long along the axis
+  for (float axis : {0.0f, 90.0f}) {
+    shape.axis_deg = axis;
+    const Image k = variable_blur(impulse, coc, {}, &shape);
+    const float horizontal = k.at(25, 20), vertical = k.at(20, 25);
+    if (axis == 0.0f) {
+      EXPECT_GT(horizontal, 0.0f);
+      EXPECT_EQ(vertical, 0.0f);
+    } else {
+      EXPECT_EQ(horizontal, 0.0f);
+      EXPECT_GT(vertical, 0.0f);
+    }
+  }
 }
