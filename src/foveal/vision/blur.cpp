@@ -79,6 +79,36 @@ Image variable_blur(const Image& img, const std::vector<float>& coc, const BlurP
   const int w = img.width, h = img.height, ch = img.channels;
   if (ch < 1 || ch > 4) fail("blur: images of 1 to 4 channels, got {}", ch);
   const std::vector<Image> levels = pyramid(img, 5);
+  // Smallest (clamped) CoC of each 16×16 tile: where every CoC within a pixel's reach is at least
+  // as large as its own, every tap reaches it and the scatter-aware test can be skipped
+  constexpr int kTile = 16;
+  const int tiles_x = (w + kTile - 1) / kTile, tiles_y = (h + kTile - 1) / kTile;
+  std::vector<float> tile_min(size_t(tiles_x) * tiles_y, INFINITY);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const float c = coc[size_t(y) * w + x];
+      float& m = tile_min[size_t(y / kTile) * tiles_x + x / kTile];
+      m = std::min(m, std::isfinite(c) ? std::min(c, params.max_diameter_px) : params.max_diameter_px);
+    }
+  // Smallest (clamped) CoC of each pixel's 2×2 bilinear footprint (x, x+1) × (y, y+1)
+  std::vector<float> min_quad(size_t(w) * h);
+  auto clamped = [&](size_t i) { return std::isfinite(coc[i]) ? std::min(coc[i], params.max_diameter_px) : params.max_diameter_px; };
+  tbb::parallel_for(tbb::blocked_range<int>(0, h, 16), [&](const tbb::blocked_range<int>& rows) {
+    for (int y = rows.begin(); y < rows.end(); ++y)
+      for (int x = 0; x < w; ++x) {
+        const int x1 = std::min(x + 1, w - 1), y1 = std::min(y + 1, h - 1);
+        min_quad[size_t(y) * w + x] = std::min(std::min(clamped(size_t(y) * w + x), clamped(size_t(y) * w + x1)),
+                                               std::min(clamped(size_t(y1) * w + x), clamped(size_t(y1) * w + x1)));
+      }
+  });
+  auto min_coc_around = [&](int x, int y, float r) {
+    const int tx0 = std::max(0, int(x - r - 2) / kTile), tx1 = std::min(tiles_x - 1, int(x + r + 2) / kTile);
+    const int ty0 = std::max(0, int(y - r - 2) / kTile), ty1 = std::min(tiles_y - 1, int(y + r + 2) / kTile);
+    float m = INFINITY;
+    for (int ty = ty0; ty <= ty1; ++ty)
+      for (int tx = tx0; tx <= tx1; ++tx) m = std::min(m, tile_min[size_t(ty) * tiles_x + tx]);
+    return m;
+  };
   Image out(w, h, ch);
   tbb::parallel_for(tbb::blocked_range<int>(0, h, 4), [&](const tbb::blocked_range<int>& rows) {
     float sum[4] = {0, 0, 0, 0};
@@ -105,12 +135,13 @@ Image variable_blur(const Image& img, const std::vector<float>& coc, const BlurP
         // A texel contributes only if its own CoC reaches this pixel (scatter-aware): a sharp
         // point does not spread. At level 0 each bilinear texel is checked; coarser levels check
         // the full-resolution pixel nearest to the tap.
+        const bool check = params.scatter_aware && 0.5f * min_coc_around(x, y, 0.5f * d) + 0.5f < 0.5f * d + 1.5f;
         auto reaches = [&](int px, int py) {
-          if (!params.scatter_aware) return true;
+          if (!check) return true;
           const float r = coc[size_t(py) * w + px];
-          const float reach = 0.5f * (std::isfinite(r) ? std::min(r, params.max_diameter_px) : params.max_diameter_px);
+          const float reach = 0.5f * (std::isfinite(r) ? std::min(r, params.max_diameter_px) : params.max_diameter_px) + 0.5f;
           const float dx = float(px - x), dy = float(py - y);
-          return reach + 0.5f >= std::sqrt(dx * dx + dy * dy);
+          return reach * reach >= dx * dx + dy * dy;
         };
         const glm::vec2 sc = shape ? shape->scale[i] : glm::vec2(1.0f);
         for (size_t k = 0; k < taps.offset.size(); ++k) {
@@ -122,15 +153,18 @@ Image variable_blur(const Image& img, const std::vector<float>& coc, const BlurP
           const int x0 = std::min(int(sx), std::max(sw - 2, 0)), y0 = std::min(int(sy), std::max(sh - 2, 0));
           const int x1 = std::min(x0 + 1, sw - 1), y1 = std::min(y0 + 1, sh - 1);
           const float fx = sx - x0, fy = sy - y0, wk = taps.weight[k];
-          float w00 = (1 - fx) * (1 - fy) * wk, w10 = fx * (1 - fy) * wk, w01 = (1 - fx) * fy * wk, w11 = fx * fy * wk;
-          if (level == 0) {
-            if (!reaches(x0, y0)) w00 = 0;
-            if (!reaches(x1, y0)) w10 = 0;
-            if (!reaches(x0, y1)) w01 = 0;
-            if (!reaches(x1, y1)) w11 = 0;
-          } else if (!reaches(std::clamp(int(x + 0.5f * d * o.x + 0.5f), 0, w - 1),
-                              std::clamp(int(y + 0.5f * d * o.y + 0.5f), 0, h - 1))) {
-            continue;
+          const float w00 = (1 - fx) * (1 - fy) * wk, w10 = fx * (1 - fy) * wk, w01 = (1 - fx) * fy * wk, w11 = fx * fy * wk;
+          if (check) {
+            if (level == 0) {
+              // One read: the smallest CoC of the 2×2 texels; a tap any of whose texels does not
+              // reach is left out whole (conservative, and no sharp texel leaks in bilinearly)
+              const float r = min_quad[size_t(y0) * w + x0];
+              const float dx = sx - float(x), dy = sy - float(y), reach = 0.5f * r + 0.5f;
+              if (reach * reach < dx * dx + dy * dy) continue;
+            } else if (!reaches(std::clamp(int(x + 0.5f * d * o.x + 0.5f), 0, w - 1),
+                                std::clamp(int(y + 0.5f * d * o.y + 0.5f), 0, h - 1))) {
+              continue;
+            }
           }
           const float* p00 = &src.pixels[(size_t(y0) * sw + x0) * ch];
           const float* p10 = &src.pixels[(size_t(y0) * sw + x1) * ch];
