@@ -8,7 +8,7 @@
 #include <exception>
 
 int main(int argc, char** argv) {
-  CLI::App app{"foveal — gaze-contingent ray tracing (foveated ambient occlusion)", "foveal"};
+  CLI::App app{"foveal — gaze-contingent ray tracing: foveated ambient occlusion, eye-tracker gaze, simulated human vision", "foveal"};
   app.require_subcommand(1);
   app.set_version_flag("--version", "foveal 0.1.0");
   std::function<int()> run;
