@@ -13,16 +13,13 @@
 
 namespace foveal::app {
 
-namespace {
-
-// The paper's setting: the dragon in a five-wall box, from the repository's scenes/ folder.
-std::string default_bench_scene() {
+std::string repository_scene(const std::string& file, const std::string& data_file) {
+  const std::string data = std::string(FOVEAL_SOURCE_DIR) + "/../shared/data/";
+  if (!data_file.empty() && !std::filesystem::exists(data + data_file)) return "";
   for (const std::string& dir : {std::string("scenes"), std::string(FOVEAL_SOURCE_DIR) + "/scenes"})
-    if (std::filesystem::exists(dir + "/dragon-box.json")) return dir + "/dragon-box.json";
+    if (std::filesystem::exists(dir + "/" + file)) return dir + "/" + file;
   return "";
 }
-
-}  // namespace
 
 std::function<int()> add_bench_command(CLI::App& app) {
   auto* bench = app.add_subcommand("bench", "benchmarks that reproduce the papers' tables");
@@ -60,7 +57,7 @@ std::function<int()> add_bench_command(CLI::App& app) {
     std::string spec = o->scene;
     Scene scene;
     if (spec.empty()) {
-      spec = default_bench_scene();
+      spec = repository_scene("dragon-box.json");
       try {
         if (spec.empty()) fail("scenes/dragon-box.json not found");
         scene = load_scene(spec);

@@ -4,6 +4,7 @@
 #include "foveal/util/error.h"
 #include "foveal/util/parallel.h"
 #include "foveal/util/parse.h"
+#include "foveal/util/stats.h"
 #include "foveal/io/image_io.h"
 #include "foveal/vision/simulate.h"
 #include "foveal/vision/thin_lens.h"
@@ -20,10 +21,7 @@ namespace foveal::app {
 
 namespace {
 
-double median_of(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  return v.empty() ? 0 : v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]);
-}
+constexpr const char* kConferenceObj = "scenes/conference/conference.obj";
 
 struct ImageError {
   double mean = 0, p95 = 0, psnr = 0;
@@ -67,15 +65,8 @@ std::function<int()> add_bench_blur_command(CLI::App& bench) {
   return [o] {
     const ThreadScope threads(o->threads);
     std::string spec = o->scene;
-    if (spec.empty()) {
-      spec = "builtin:box";
-      for (const std::string& dir : {std::string("scenes"), std::string(FOVEAL_SOURCE_DIR) + "/scenes"})
-        if (std::filesystem::exists(dir + "/conference.json") &&
-            std::filesystem::exists(std::string(FOVEAL_SOURCE_DIR) + "/../shared/data/scenes/conference/conference.obj")) {
-          spec = dir + "/conference.json";
-          break;
-        }
-    }
+    if (spec.empty()) spec = repository_scene("conference.json", kConferenceObj);
+    if (spec.empty()) spec = "builtin:box";
     const Scene scene = load_scene(spec);
     const Tracer tracer(scene);
     const Camera camera = !scene.cameras.empty() ? scene.cameras.front() : default_camera(scene);
@@ -149,13 +140,8 @@ std::function<int()> add_bench_vision_command(CLI::App& bench) {
     const ThreadScope threads(o->threads);
     std::vector<std::string> scenes = o->scenes;
     if (scenes.empty()) {
-      for (const std::string& dir : {std::string("scenes"), std::string(FOVEAL_SOURCE_DIR) + "/scenes"}) {
-        const std::string conference = dir + "/conference.json";
-        if (std::filesystem::exists(conference) && std::filesystem::exists(std::string(FOVEAL_SOURCE_DIR) + "/../shared/data/scenes/conference/conference.obj")) {
-          scenes.push_back(conference);
-          break;
-        }
-      }
+      if (const std::string conference = repository_scene("conference.json", kConferenceObj); !conference.empty())
+        scenes.push_back(conference);
       scenes.push_back("builtin:box");
     }
     const EyeParams eye = parse_eye_preset(o->eye);
@@ -173,8 +159,6 @@ std::function<int()> add_bench_vision_command(CLI::App& bench) {
         SimulateParams p;
         p.width = size.x;
         p.height = size.y;
-        p.display.res_x = size.x;
-        p.display.res_y = size.y;
         p.eye = eye;
         p.seed = o->seed;
         p.features_every_step = true;  // the paper's timing: corners every step
@@ -189,8 +173,8 @@ std::function<int()> add_bench_vision_command(CLI::App& bench) {
           blur.push_back(s.blur_ms);
           total.push_back(s.total_ms);
         }
-        const double t = median_of(trace), f = median_of(features), sh = median_of(sharpness), b = median_of(blur),
-                     all = median_of(total);
+        const double t = median(trace), f = median(features), sh = median(sharpness), b = median(blur),
+                     all = median(total);
         const double ratio = t > 0 ? (f + sh + b) / t : 0;
         fmt::print("  {:<28} {:>9}  trace {:6.1f}  features {:6.1f}  sharpness {:6.1f}  blur {:6.1f}  total {:6.1f} ms  (rest/trace {:.2f})\n",
                    scene.source, size_text, t, f, sh, b, all, ratio);

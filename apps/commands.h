@@ -27,6 +27,7 @@ struct ViewOptions {
   std::string camera;
   std::string eye, look, up = "0,1,0";
   std::string eye_option = "--eye";  // simulate calls the camera position --from (--eye is the eye model there)
+  bool display_option = true;        // simulate has no display: the eye sits at the camera
   double fov = 0;
   std::string size = "840x525";
   std::string display = "47.5,30,60,1680,1050";
@@ -51,6 +52,10 @@ Camera resolve_camera(const Scene& scene, const ViewOptions& options);
 Display resolve_display(const std::string& text, glm::ivec2 render_size);
 // Add the --scene/--camera/--eye/…/--threads options to a subcommand.
 void add_view_options(CLI::App& command, ViewOptions& options);
+
+// A scene JSON of the repository's scenes/ folder (from the working folder or the source tree),
+// or "" when it is missing or the ../shared/data file it needs (`data_file`, relative) is absent.
+std::string repository_scene(const std::string& file, const std::string& data_file = "");
 
 // Options that say how to read a recording and filter its fixations (gaze, replay).
 struct GazeOptions {

@@ -45,7 +45,8 @@ void add_view_options(CLI::App& cmd, ViewOptions& o) {
   cmd.add_option("--up", o.up, "up vector X,Y,Z")->capture_default_str();
   cmd.add_option("--fov", o.fov, "vertical field of view, degrees (default: the camera's)");
   cmd.add_option("--size", o.size, "image size WxH in pixels")->capture_default_str();
-  cmd.add_option("--display", o.display, "display W_CM,H_CM,DIST_CM[,RES_X,RES_Y]; without a resolution the render size is used")
+  if (o.display_option)
+    cmd.add_option("--display", o.display, "display W_CM,H_CM,DIST_CM[,RES_X,RES_Y]; without a resolution the render size is used")
       ->capture_default_str();
   cmd.add_option("--threads", o.threads, "worker threads (0 = all cores)")->capture_default_str()->check(CLI::Range(0, 4096));
 }

@@ -7,6 +7,7 @@
 #include "foveal/util/error.h"
 #include "foveal/util/parallel.h"
 #include "foveal/util/parse.h"
+#include "foveal/util/stats.h"
 #include "foveal/util/timer.h"
 #include "foveal/vision/simulate.h"
 
@@ -23,16 +24,6 @@
 
 namespace foveal::app {
 
-namespace {
-
-double median(std::vector<double> v) {
-  if (v.empty()) return 0;
-  std::sort(v.begin(), v.end());
-  return v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]);
-}
-
-}  // namespace
-
 std::function<int()> add_simulate_command(CLI::App& app) {
   auto* cmd = app.add_subcommand("simulate", "simulate human vision over time: fixations, accommodation, a sharpness field that remembers, variable blur");
   struct Options {
@@ -46,6 +37,7 @@ std::function<int()> add_simulate_command(CLI::App& app) {
   auto o = std::make_shared<Options>();
   o->view.size = "1024x768";
   o->view.eye_option = "--from";
+  o->view.display_option = false;
   add_view_options(*cmd, o->view);
   cmd->add_option("--path", o->path, "a camera path of the scene JSON (camera_paths): the camera moves between steps");
   cmd->add_option("--steps", o->steps, "time steps (one fixation each)")->capture_default_str()->check(CLI::Range(1, 100000));
@@ -75,7 +67,6 @@ std::function<int()> add_simulate_command(CLI::App& app) {
     const glm::ivec2 size = parse_size("--size", o->view.size);
     p.width = size.x;
     p.height = size.y;
-    p.display = resolve_display(o->view.display, size);
     p.eye = parse_eye_preset(o->eye);
     p.eye.pupil_diameter_mm = o->pupil;
     p.eye.image_distance_mm = o->image_distance;

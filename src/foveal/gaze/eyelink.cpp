@@ -17,7 +17,6 @@ namespace {
 
 struct BlockLayout {
   bool left = false, right = false;
-  int columns = 0;  // numeric columns after the time that precede the flags, at least
 };
 
 bool is_missing(std::string_view f) { return f == "."; }

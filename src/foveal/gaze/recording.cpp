@@ -119,7 +119,7 @@ Recording parse_recording(const std::string& text, const std::string& name, cons
 Recording read_recording(const std::string& path, const ReadOptions& options) {
   if (std::filesystem::is_directory(path)) fail("{}: is a folder; give the recording file", path);
   const std::string text = text::read_file(path);
-  ReadOptions o = options;
+  const ReadOptions& o = options;
   Recording r = parse_recording(text, path, o);
   if (r.format != GazeFormat::pupil) return r;
   // Pupil exports its fixations and blinks beside gaze_positions.csv
@@ -238,47 +238,56 @@ Recording parse_pupil_gaze(const std::string& content, const std::string& name, 
   return r;
 }
 
-std::vector<GazeEvent> parse_pupil_fixations(const std::string& content, const std::string& name, glm::ivec2 screen_px) {
+namespace {
+
+// Pupil's event exports: one event per non-empty row, in start order. `columns(table)` looks its
+// columns up once (missing ones are errors) and returns the row reader.
+template <class Columns>
+std::vector<GazeEvent> read_events(const std::string& content, const std::string& name, Columns&& columns) {
   text::Lines lines(content);
   const Table t = read_header(lines, name, ',');
-  const size_t c_start = t.require("start_timestamp"), c_dur = t.require("duration");
-  const auto c_x = t.find("norm_pos_x"), c_y = t.find("norm_pos_y");
+  const auto read = columns(t);
   std::vector<GazeEvent> events;
   std::string_view line;
   while (lines.next(line)) {
     if (text::trim(line).empty()) continue;
-    const auto f = row_fields(line, t, lines.number(), ',');
-    GazeEvent e;
-    e.start_s = number(f[c_start], t, c_start, lines.number(), false);
-    const double ms = number(f[c_dur], t, c_dur, lines.number(), false);
-    if (ms < 0) fail("{}:{}: negative duration {}", name, lines.number(), ms);
-    e.end_s = e.start_s + ms / 1000.0;  // Pupil writes fixation durations in milliseconds
-    if (c_x && c_y)
-      e.px = {number(f[*c_x], t, *c_x, lines.number(), true) * screen_px.x,
-              (1.0 - number(f[*c_y], t, *c_y, lines.number(), true)) * screen_px.y};
+    const GazeEvent e = read(row_fields(line, t, lines.number(), ','), lines.number());
     if (!events.empty()) check_time_order(e.start_s, events.back().start_s, name, lines.number());
     events.push_back(e);
   }
   return events;
 }
 
+}  // namespace
+
+std::vector<GazeEvent> parse_pupil_fixations(const std::string& content, const std::string& name, glm::ivec2 screen_px) {
+  return read_events(content, name, [&](const Table& t) {
+    const size_t c_start = t.require("start_timestamp"), c_dur = t.require("duration");
+    const auto c_x = t.find("norm_pos_x"), c_y = t.find("norm_pos_y");
+    return [&t, &name, screen_px, c_start, c_dur, c_x, c_y](const std::vector<std::string_view>& f, int line) {
+      GazeEvent e;
+      e.start_s = number(f[c_start], t, c_start, line, false);
+      const double ms = number(f[c_dur], t, c_dur, line, false);
+      if (ms < 0) fail("{}:{}: negative duration {}", name, line, ms);
+      e.end_s = e.start_s + ms / 1000.0;  // Pupil writes fixation durations in milliseconds
+      if (c_x && c_y)
+        e.px = {number(f[*c_x], t, *c_x, line, true) * screen_px.x, (1.0 - number(f[*c_y], t, *c_y, line, true)) * screen_px.y};
+      return e;
+    };
+  });
+}
+
 std::vector<GazeEvent> parse_pupil_blinks(const std::string& content, const std::string& name) {
-  text::Lines lines(content);
-  const Table t = read_header(lines, name, ',');
-  const size_t c_start = t.require("start_timestamp"), c_end = t.require("end_timestamp");
-  std::vector<GazeEvent> events;
-  std::string_view line;
-  while (lines.next(line)) {
-    if (text::trim(line).empty()) continue;
-    const auto f = row_fields(line, t, lines.number(), ',');
-    GazeEvent e;
-    e.start_s = number(f[c_start], t, c_start, lines.number(), false);
-    e.end_s = number(f[c_end], t, c_end, lines.number(), false);
-    if (e.end_s < e.start_s) fail("{}:{}: blink ends before it starts", name, lines.number());
-    if (!events.empty()) check_time_order(e.start_s, events.back().start_s, name, lines.number());
-    events.push_back(e);
-  }
-  return events;
+  return read_events(content, name, [&](const Table& t) {
+    const size_t c_start = t.require("start_timestamp"), c_end = t.require("end_timestamp");
+    return [&t, &name, c_start, c_end](const std::vector<std::string_view>& f, int line) {
+      GazeEvent e;
+      e.start_s = number(f[c_start], t, c_start, line, false);
+      e.end_s = number(f[c_end], t, c_end, line, false);
+      if (e.end_s < e.start_s) fail("{}:{}: blink ends before it starts", name, line);
+      return e;
+    };
+  });
 }
 
 // ---------------------------------------------------------------------------------------------

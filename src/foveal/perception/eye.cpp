@@ -2,6 +2,7 @@
 #include "foveal/perception/eye.h"
 
 #include "foveal/util/error.h"
+#include "foveal/util/parse.h"
 
 #include <algorithm>
 #include <cmath>
@@ -13,15 +14,7 @@ namespace foveal {
 namespace {
 
 double number(const std::string& preset, const std::string& text) {
-  size_t used = 0;
-  double v = 0;
-  try {
-    v = std::stod(text, &used);
-  } catch (const std::exception&) {
-    used = 0;
-  }
-  if (used == 0 || used != text.size() || !std::isfinite(v)) fail("--eye: '{}': '{}' is not a number", preset, text);
-  return v;
+  return parse_numbers(fmt::format("--eye '{}'", preset), text, 1)[0];
 }
 
 }  // namespace

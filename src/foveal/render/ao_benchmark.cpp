@@ -11,13 +11,10 @@
 #include <cstring>
 #include <map>
 
+#include "foveal/util/stats.h"
+
 namespace foveal {
 namespace {
-
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  return v[v.size() / 2];
-}
 
 // Median frame time of `repeats` renders (the frame itself is the same every time).
 Frame timed_frame(const Tracer& tracer, const Scene& scene, const Camera& camera, const RenderParams& p, int repeats,

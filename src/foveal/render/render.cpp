@@ -386,6 +386,16 @@ Image shade(const Tracer& tracer, const Scene& scene, const Camera& camera, cons
   return image;
 }
 
+Image shade_constant_ambient(const Tracer& tracer, const Scene& scene, const Camera& camera, const GBuffer& g,
+                             float ambient_constant, float epsilon) {
+  const size_t n = size_t(g.width) * g.height;
+  FoveationMaps none;  // blend 0 everywhere: k_a = k_const
+  none.width = g.width;
+  none.height = g.height;
+  none.blend.assign(n, 0.0f);
+  return shade(tracer, scene, camera, g, none, std::vector<float>(n, 1.0f), ambient_constant, false, epsilon);
+}
+
 Frame render_frame(const Tracer& tracer, const Scene& scene, const Camera& camera, const RenderParams& params,
                    const std::function<void(double)>& progress) {
   validate(params);

@@ -142,6 +142,10 @@ Image shade(const Tracer& tracer, const Scene& scene, const Camera& camera, cons
             const FoveationMaps& maps, const std::vector<float>& visibility, float ambient_constant, bool shadows,
             float epsilon, uint64_t* shadow_rays = nullptr);
 
+// Phong shading with the constant ambient factor everywhere (no AO): the vision simulation's colour.
+Image shade_constant_ambient(const Tracer& tracer, const Scene& scene, const Camera& camera, const GBuffer& gbuffer,
+                             float ambient_constant, float epsilon);
+
 // All passes for one frame.
 // `progress` reports the AO pass, the long one (see trace_ao).
 Frame render_frame(const Tracer& tracer, const Scene& scene, const Camera& camera, const RenderParams& params,

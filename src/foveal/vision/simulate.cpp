@@ -17,7 +17,6 @@ void validate(const SimulateParams& p) {
   if (p.width < 8 || p.height < 8 || p.width > 16384 || p.height > 16384)
     fail("--size: the simulation needs at least 8x8 pixels, got {}x{}", p.width, p.height);
   validate(p.eye);
-  validate(p.display);
   if (p.fast_threshold < 1 || p.fast_threshold > 255) fail("--fast-threshold: must be in [1, 255], got {}", p.fast_threshold);
   if (p.blink_every < 0) fail("--blink-every: must be zero (never) or positive, got {}", p.blink_every);
   if (!(p.sharp_px > 0)) fail("--sharp-px: must be positive, got {}", p.sharp_px);
@@ -59,12 +58,7 @@ StepStats VisionSimulation::step(const Camera& camera, std::optional<glm::vec2> 
   // 1. Ray-cast colour and depth (Phong with a constant ambient term, textures where present)
   Timer t;
   gbuffer_ = trace_primary(tracer_, scene_, camera, w, h);
-  FoveationMaps flat;
-  flat.width = w;
-  flat.height = h;
-  flat.blend.assign(n, 0.0f);
-  const std::vector<float> visible(n, 1.0f);
-  color_ = shade(tracer_, scene_, camera, gbuffer_, flat, visible, params_.ambient, false, epsilon_);
+  color_ = shade_constant_ambient(tracer_, scene_, camera, gbuffer_, params_.ambient, epsilon_);
   s.trace_ms = t.ms();
 
   // 2. Corners, recomputed when the camera moved; the next fixation

@@ -3,7 +3,6 @@
 #pragma once
 
 #include "foveal/perception/eye.h"
-#include "foveal/perception/foveation.h"
 #include "foveal/render/render.h"
 #include "foveal/vision/blur.h"
 #include "foveal/vision/features.h"
@@ -14,10 +13,10 @@
 
 namespace foveal {
 
+// The eye sits at the camera: the camera's field of view, not a display, sets the visual angles.
 struct SimulateParams {
   int width = 1024, height = 768;
   EyeParams eye;
-  Display display;                // checked only: the eye sits at the camera, whose field of view sets the angles
   SaccadeParams saccades;         // glaucoma shortens and skips (see saccade_params_for)
   int fast_threshold = 20;        // cv::FAST threshold
   bool features_every_step = false; // recompute the corners every step (the paper's timing), not only when the camera moves

@@ -15,15 +15,6 @@ double camera_pixels_per_degree(const Camera& camera, int height) {
 
 namespace {
 
-Image shade_flat(const Tracer& tracer, const Scene& scene, const Camera& camera, const GBuffer& g, float ambient) {
-  const size_t n = size_t(g.width) * g.height;
-  FoveationMaps flat;
-  flat.width = g.width;
-  flat.height = g.height;
-  flat.blend.assign(n, 0.0f);
-  return shade(tracer, scene, camera, g, flat, std::vector<float>(n, 1.0f), ambient, false, surface_epsilon(scene.bounds()));
-}
-
 void check(const ThinLensParams& p) {
   if (p.width < 1 || p.height < 1) fail("thin lens: empty image");
   if (p.samples < 1 || p.samples > 65536) fail("--lens-samples: must be in [1, 65536], got {}", p.samples);
@@ -39,6 +30,7 @@ Image thin_lens_reference(const Tracer& tracer, const Scene& scene, const Camera
   const glm::vec3 right = glm::normalize(glm::cross(forward, camera.up)), up = glm::cross(right, forward);
   const double radius = 0.5 * p.pupil_diameter_mm * 1e-3 / scene.meters_per_unit;  // scene units
   const double v = p.focus_vergence * scene.meters_per_unit;                          // per scene unit
+  const float epsilon = surface_epsilon(scene.bounds());
   Image sum(p.width, p.height, 3, 0.0f);
   for (int s = 0; s < p.samples; ++s) {
     // Sobol point → uniform point on the disc (polar map)
@@ -54,7 +46,7 @@ Image thin_lens_reference(const Tracer& tracer, const Scene& scene, const Camera
       ray.dir = glm::normalize(d - float(v) * lens);
       return ray;
     });
-    const Image c = shade_flat(tracer, scene, camera, g, p.ambient);
+    const Image c = shade_constant_ambient(tracer, scene, camera, g, p.ambient, epsilon);
     for (size_t i = 0; i < sum.pixels.size(); ++i) sum.pixels[i] += c.pixels[i];
   }
   for (float& x : sum.pixels) x /= float(p.samples);
@@ -65,7 +57,7 @@ Image thin_lens_approximation(const Tracer& tracer, const Scene& scene, const Ca
                               const BlurParams& blur) {
   check(p);
   const GBuffer g = trace_primary(tracer, scene, camera, p.width, p.height);
-  const Image color = shade_flat(tracer, scene, camera, g, p.ambient);
+  const Image color = shade_constant_ambient(tracer, scene, camera, g, p.ambient, surface_epsilon(scene.bounds()));
   const double ppd = camera_pixels_per_degree(camera, p.height);
   const double a = p.pupil_diameter_mm * 1e-3;
   const glm::vec3 forward = glm::normalize(camera.look - camera.eye);
