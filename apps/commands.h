@@ -67,7 +67,8 @@ struct GazeOptions {
          min_fixation_ms = 60, idt_dispersion = 1.0, idt_duration_ms = 80;
   int median_window = 1;
 };
-void add_gaze_options(CLI::App& command, GazeOptions& options);
+// `fixation_help` replaces the --fixation description (simulate accepts other values).
+void add_gaze_options(CLI::App& command, GazeOptions& options, const std::string& fixation_help = "");
 // Reader options (screen for normalised coordinates defaults to the display's resolution).
 ReadOptions resolve_read_options(const GazeOptions& options, const Display& display);
 FixationParams resolve_fixation_params(const GazeOptions& options);

@@ -14,7 +14,7 @@
 
 namespace foveal::app {
 
-void add_gaze_options(CLI::App& cmd, GazeOptions& o) {
+void add_gaze_options(CLI::App& cmd, GazeOptions& o, const std::string& fixation_help) {
   cmd.add_option("--format", o.format, "recording format: auto, asc (EyeLink), pupil (Pupil Player gaze_positions.csv), tobii (SDK or Pro Lab TSV), csv (t,x,y[,confidence])")
       ->capture_default_str();
   cmd.add_option("--screen", o.screen, "screen WxH in pixels for normalised coordinates (Pupil, Tobii SDK, --coords norm) or to override the file's (default: the display's resolution)");
@@ -26,7 +26,8 @@ void add_gaze_options(CLI::App& cmd, GazeOptions& o) {
   cmd.add_option("--origin", o.origin, "csv: top-left or bottom-left")->capture_default_str();
   cmd.add_option("--fixations", o.fixations_file, "Pupil: the tracker's fixations.csv (default: the one beside the recording)");
   cmd.add_option("--blinks", o.blinks_file, "Pupil: the tracker's blinks.csv (default: the one beside the recording)");
-  cmd.add_option("--fixation", o.fixation, "fixation filter: mean (the paper's per-frame mean), ivt (velocity threshold) or idt (dispersion threshold)")
+  cmd.add_option("--fixation", o.fixation,
+                 fixation_help.empty() ? "fixation filter: mean (the paper's per-frame mean), ivt (velocity threshold) or idt (dispersion threshold)" : fixation_help)
       ->capture_default_str();
   cmd.add_option("--ivt-threshold", o.ivt_threshold, "I-VT velocity threshold, deg/s")->capture_default_str();
   cmd.add_option("--velocity-window-ms", o.velocity_window_ms, "I-VT velocity window, ms")->capture_default_str();

@@ -1,5 +1,6 @@
 // apps/simulate_command.cpp — `foveal simulate`: the second paper's temporal simulation of vision.
 #include "commands.h"
+#include "foveal/gaze/steps.h"
 #include "foveal/io/image_io.h"
 #include "foveal/io/outputs.h"
 #include "foveal/io/scanpath.h"
@@ -28,6 +29,10 @@ std::function<int()> add_simulate_command(CLI::App& app) {
   auto* cmd = app.add_subcommand("simulate", "simulate human vision over time: fixations, accommodation, a sharpness field that remembers, variable blur");
   struct Options {
     ViewOptions view;
+    GazeOptions gaze;
+    std::string gaze_source, gaze_display = "47.5,30,60", stimulus;
+    double start = 0, live_timeout = 5;
+    bool no_gaze_blinks = false;
     std::string eye = "healthy", save_steps = "1,4,20", output, stats, video, path;
     int steps = 20, fast_threshold = 20, blink_every = 0, taps = 64;
     double pupil = 3.5, image_distance = 25, starvation = 0.015, voxel = 0, saccade_max = 15, saccade_min = 2, ambient = 0.3;
@@ -40,7 +45,7 @@ std::function<int()> add_simulate_command(CLI::App& app) {
   o->view.display_option = false;
   add_view_options(*cmd, o->view);
   cmd->add_option("--path", o->path, "a camera path of the scene JSON (camera_paths): the camera moves between steps");
-  cmd->add_option("--steps", o->steps, "time steps (one fixation each)")->capture_default_str()->check(CLI::Range(1, 100000));
+  auto* steps_option = cmd->add_option("--steps", o->steps, "time steps (one fixation each); with a --gaze recording: at most this many (default: all its fixations)")->capture_default_str()->check(CLI::Range(1, 100000));
   cmd->add_option("--eye", o->eye, "eye: healthy, glaucoma[:SEVERITY 0..1], myopia:-D, hyperopia:D, presbyopia:AGE; join with '+'")
       ->capture_default_str();
   cmd->add_option("--pupil", o->pupil, "pupil diameter A, mm")->capture_default_str();
@@ -54,6 +59,16 @@ std::function<int()> add_simulate_command(CLI::App& app) {
   cmd->add_option("--blur-taps", o->taps, "most taps of the variable blur per pixel (large CoCs)")->capture_default_str();
   cmd->add_option("--ambient", o->ambient, "constant Phong ambient factor of the ray-cast colour")->capture_default_str();
   cmd->add_option("--seed", o->seed, "seed of the saccades")->capture_default_str();
+  cmd->add_option("--gaze", o->gaze_source,
+                  "real eye movements instead of simulated saccades: a recording (EyeLink .asc, Pupil gaze_positions.csv, Tobii .tsv, t,x,y CSV; "
+                  "one step per fixation, every fixation unless --steps) or a live tracker pupil://HOST:PORT[?surface=NAME] (a step per new fixation)");
+  add_gaze_options(*cmd, o->gaze, "--gaze: where the steps' fixations come from: ivt (velocity threshold), idt (dispersion threshold) or tracker (the recording's own fixation events)");
+  cmd->add_option("--display", o->gaze_display, "--gaze: the recording's screen W_CM,H_CM,DIST_CM (angles for the fixation filter)")->capture_default_str();
+  cmd->add_option("--stimulus", o->stimulus, "--gaze: where the render was shown on the recording's screen, X,Y,W,H in screen pixels (default: the whole screen)");
+  cmd->add_option("--start", o->start, "--gaze recordings: skip the fixations that begin earlier than this many seconds after the first sample")
+      ->capture_default_str();
+  cmd->add_option("--live-timeout", o->live_timeout, "--gaze live: stop when the tracker sends nothing for this many seconds")->capture_default_str();
+  cmd->add_flag("--no-gaze-blinks", o->no_gaze_blinks, "--gaze: ignore the recording's blinks (by default a blink between fixations resets the field)");
   cmd->add_option("--save-steps", o->save_steps, "steps whose perceived image is saved (step_NNNN.png), e.g. 1,4,20,69; 'all' for every step")
       ->capture_default_str();
   cmd->add_option("-o,--output", o->output, "output folder (created)")->required();
@@ -61,7 +76,7 @@ std::function<int()> add_simulate_command(CLI::App& app) {
   cmd->add_option("--stats", o->stats, "per-stage timings and per-step records as JSON");
   cmd->add_flag("-q,--quiet", o->quiet, "print nothing on success");
 
-  return [o] {
+  return [o, steps_option] {
     const ThreadScope threads(o->view.threads);
     SimulateParams p;
     const glm::ivec2 size = parse_size("--size", o->view.size);
@@ -89,6 +104,50 @@ std::function<int()> add_simulate_command(CLI::App& app) {
         save.insert(static_cast<int>(v));
       }
 
+    // Real gaze: the fixations of a recording, or a live tracker's
+    const bool gaze = !o->gaze_source.empty();
+    const bool live = o->gaze_source.rfind("pupil://", 0) == 0;
+    std::optional<GazeGeometry> geometry;
+    std::optional<ScreenMapping> mapping;
+    std::vector<GazeStep> recorded;
+    std::unique_ptr<PupilSource> tracker;
+    std::unique_ptr<LiveSteps> live_steps;
+    std::string gaze_summary;
+    if (gaze) {
+      if (!live && o->gaze_source.find("://") != std::string::npos)
+        fail("--gaze: unknown live source '{}' (live trackers: pupil://HOST:PORT[?surface=NAME])", o->gaze_source);
+      const StepFixations from = parse_step_fixations(o->gaze.fixation);
+      if (live && from == StepFixations::tracker) fail("--fixation: a live tracker sends gaze, not fixation events: use ivt or idt");
+      if (!(o->start >= 0) || !std::isfinite(o->start)) fail("--start: must be zero or positive seconds, got {}", o->start);
+      if (!(o->live_timeout > 0)) fail("--live-timeout: must be positive seconds, got {}", o->live_timeout);
+      const Display display = parse_display(o->gaze_display, Display{});
+      const ReadOptions read = resolve_read_options(o->gaze, display);
+      const FixationParams fixation = resolve_fixation_params(o->gaze);
+      if (live) {
+        tracker = std::make_unique<PupilSource>(o->gaze_source, read.screen_px, read.min_confidence);
+        geometry.emplace(display, tracker->screen_px());
+        live_steps = std::make_unique<LiveSteps>(*tracker, from == StepFixations::idt ? FixationMethod::idt : FixationMethod::ivt,
+                                                 fixation, *geometry);
+        gaze_summary = fmt::format("live {} ({} filter)", o->gaze_source, to_string(from));
+      } else {
+        const Recording recording = read_recording(o->gaze_source, read);
+        if (recording.samples.empty()) fail("{}: no samples", recording.source);
+        geometry.emplace(display, recording.screen_px);
+        const double t0 = recording.samples.front().t_s + o->start;
+        for (const GazeStep& g : recording_steps(recording, *geometry, from, fixation))
+          if (g.start_s >= t0) recorded.push_back(g);
+        if (recorded.empty())
+          fail("{}: no fixations{} ({} filter)", recording.source, o->start > 0 ? fmt::format(" after --start {} s", o->start) : "",
+               to_string(from));
+        if (steps_option->count() == 0) o->steps = static_cast<int>(recorded.size());
+        o->steps = std::min<int>(o->steps, static_cast<int>(recorded.size()));
+        const auto blinks = std::count_if(recorded.begin(), recorded.begin() + o->steps, [](const GazeStep& g) { return g.blink_before; });
+        gaze_summary = fmt::format("{} ({} fixations by {}, {} blinks{})", recording.source, recorded.size(), to_string(from),
+                                   o->no_gaze_blinks ? 0 : blinks, o->no_gaze_blinks ? " ignored" : "");
+      }
+      mapping = make_screen_mapping(geometry->screen_px(), {p.width, p.height}, o->stimulus);
+    }
+
     const Scene scene = load_scene(o->view.scene);
     const Camera camera = resolve_camera(scene, o->view);
     const CameraPath* path = o->path.empty() ? nullptr : &find_camera_path(scene, o->path);
@@ -104,8 +163,23 @@ std::function<int()> add_simulate_command(CLI::App& app) {
     const Timer clock;
     std::vector<StepStats> steps;
     std::vector<glm::vec2> fixations;
+    std::vector<GazeStep> gaze_steps;
+    std::string stopped;
     for (int k = 1; k <= o->steps; ++k) {
-      const StepStats s = sim.step(path ? path->at(k) : camera);
+      std::optional<glm::vec2> fixation;
+      if (gaze) {
+        std::optional<GazeStep> g;
+        if (live_steps) g = live_steps->next(o->live_timeout);
+        else g = recorded[k - 1];
+        if (!g) {
+          stopped = live_steps->why();
+          break;
+        }
+        if (g->blink_before && !o->no_gaze_blinks) sim.blink_before_next_step();
+        fixation = glm::vec2(mapping->to_render(g->screen_px));
+        gaze_steps.push_back(*g);
+      }
+      const StepStats s = sim.step(path ? path->at(k) : camera, fixation);
       steps.push_back(s);
       fixations.push_back(s.focus_px);
       if (save_all || save.count(k)) save_image(sim.perceived(), (dir / fmt::format("step_{:04d}.png", k)).string());
@@ -114,6 +188,7 @@ std::function<int()> add_simulate_command(CLI::App& app) {
         fmt::print(stderr, "\r  step {}/{}  sharp {:.1f}%  {:.0f} ms/step ", k, o->steps, 100 * s.sharp_fraction, s.total_ms);
     }
     if (show && clock.ms() > 1000) fmt::print(stderr, "\r{:70}\r", "");
+    if (steps.empty()) fail("{}", stopped);
     save_image(sim.color(), (dir / "sharp.png").string());
     save_image(sim.perceived(), (dir / "perceived.png").string());
     std::vector<glm::vec2> corner_points;
@@ -145,7 +220,8 @@ std::function<int()> add_simulate_command(CLI::App& app) {
                       {"total", stage(&StepStats::total_ms)},
                       {"statistic", "median over steps"}};
       j["scan_path_px"] = path_px;
-      for (const StepStats& s : steps)
+      if (gaze) j["gaze"] = {{"source", o->gaze_source}, {"live", live}, {"fixation", o->gaze.fixation}, {"stopped", stopped}};
+      for (const StepStats& s : steps) {
         j["steps"].push_back({{"step", s.step},
                               {"focus_px", {s.focus_px.x, s.focus_px.y}},
                               {"focus_depth_m", std::isfinite(s.focus_depth_m) ? nlohmann::json(s.focus_depth_m) : nlohmann::json("inf")},
@@ -157,16 +233,25 @@ std::function<int()> add_simulate_command(CLI::App& app) {
                               {"corners", s.corners},
                               {"time_ms", {{"trace", s.trace_ms}, {"features", s.features_ms}, {"sharpness", s.sharpness_ms},
                                            {"blur", s.blur_ms}, {"total", s.total_ms}}}});
+        if (gaze) {
+          const GazeStep& g = gaze_steps[size_t(s.step - 1)];
+          j["steps"].back()["gaze"] = {{"t_s", g.start_s}, {"duration_s", g.duration_s}, {"screen_px", {g.screen_px.x, g.screen_px.y}},
+                                       {"blink_before", g.blink_before}};
+        }
+      }
       std::ofstream out(o->stats);
       out << j.dump(2) << "\n";
       if (!out) fail("{}: cannot write stats", o->stats);
     }
+    // A live tracker that went away: everything so far is written; say why it stopped
+    if (!stopped.empty()) fail("{} (stopped after {} steps; the outputs so far are written)", stopped, steps.size());
     if (o->quiet) return 0;
     const FocusRange range = focus_range(p.eye);
     fmt::print("foveal simulate: {} ({} triangles), camera '{}', {}x{}, eye {} (focus {:.2f} m … {}), {} steps, {} threads\n",
                scene.source, tracer.triangles(), path ? "path " + path->name : camera.name, p.width, p.height, o->eye, range.near_point_m(),
-               std::isfinite(range.far_point_m()) ? fmt::format("{:.2f} m", range.far_point_m()) : "infinity", o->steps,
+               std::isfinite(range.far_point_m()) ? fmt::format("{:.2f} m", range.far_point_m()) : "infinity", steps.size(),
                threads.threads());
+    if (gaze) fmt::print("  gaze     {}\n", gaze_summary);
     fmt::print("  sharp    {:.1f}% of the image after the last step; scan path {:.0f} px over {} fixations\n",
                100 * steps.back().sharp_fraction, path_px, fixations.size());
     fmt::print("  time     per step (median): trace {:.1f} ms, features {:.1f} ms, sharpness {:.1f} ms, blur {:.1f} ms, total {:.1f} ms\n",

@@ -1,9 +1,11 @@
 // `foveal simulate` and `foveal bench vision` as a user runs them.
 #include "cli_helpers.h"
+#include "fake_pupil.h"
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <cmath>
 #include <fstream>
 
 using namespace foveal_test;
@@ -32,6 +34,92 @@ TEST(SimulateCli, StepsStatsAndPictures) {
   for (size_t k = 0; k < 6; ++k) EXPECT_EQ(j2["steps"][k]["focus_px"], j["steps"][k]["focus_px"]);
 }
 
+namespace {
+
+// A 500 Hz t,x,y,confidence recording on a 480×300 screen: three 300 ms fixations; a 30 ms
+// saccade after the first, a 150 ms blink (confidence 0) after the second.
+std::string write_blink_recording(const std::string& name) {
+  const fs::path path = scratch(name);
+  fs::create_directories(path.parent_path());
+  std::ofstream out(path);
+  out << "t,x,y,confidence\n";
+  const double points[3][2] = {{100, 100}, {400, 200}, {240, 150}};
+  double t = 0;
+  for (int f = 0; f < 3; ++f) {
+    for (int i = 0; i < 150; ++i, t += 0.002)
+      out << t << "," << points[f][0] + 0.3 * std::sin(i) << "," << points[f][1] + 0.3 * std::cos(i) << ",0.9\n";
+    if (f == 0)
+      for (int i = 1; i < 15; ++i, t += 0.002)
+        out << t << "," << points[f][0] + (points[f + 1][0] - points[f][0]) * i / 15.0 << ","
+            << points[f][1] + (points[f + 1][1] - points[f][1]) * i / 15.0 << ",0.9\n";
+    if (f == 1)
+      for (int i = 0; i < 75; ++i, t += 0.002) out << t << ",0,0,0\n";
+  }
+  return path.string();
+}
+
+}  // namespace
+
+TEST(SimulateCli, RecordedFixationsDriveTheSteps) {
+  const std::string rec = write_blink_recording("blink.csv");
+  const std::string common = "simulate --gaze " + rec + " --screen 480x300 --size 160x100 --save-steps '' ";
+  for (const char* filter : {"ivt", "idt"}) {
+    const CliRun r = foveal_test::foveal(common + "--fixation " + filter + " -o gz --stats gz.json");
+    ASSERT_EQ(r.status, 0) << r.err;
+    EXPECT_NE(r.out.find("3 fixations"), std::string::npos) << r.out;
+    const auto j = nlohmann::json::parse(std::ifstream(scratch("gz.json")));
+    ASSERT_EQ(j["steps"].size(), 3u) << filter;  // every fixation, as --steps was not given
+    // The fixations on the 480×300 screen, in the 160×100 render
+    const double expected[3][2] = {{100 / 3.0, 100 / 3.0}, {400 / 3.0, 200 / 3.0}, {80, 50}};
+    for (int k = 0; k < 3; ++k) {
+      EXPECT_NEAR(j["steps"][k]["focus_px"][0].get<double>(), expected[k][0], 0.3) << filter << " step " << k + 1;
+      EXPECT_NEAR(j["steps"][k]["focus_px"][1].get<double>(), expected[k][1], 0.3) << filter << " step " << k + 1;
+      EXPECT_EQ(j["steps"][k]["blink"].get<bool>(), k == 2) << filter << " step " << k + 1;
+      EXPECT_GT(j["steps"][k]["gaze"]["duration_s"].get<double>(), 0.2);
+    }
+  }
+  // The blink made the field forget: without it, the third step remembers more sharp surface
+  ASSERT_EQ(foveal_test::foveal(common + "--no-gaze-blinks -o gz2 --stats gz2.json -q").status, 0);
+  const auto blink = nlohmann::json::parse(std::ifstream(scratch("gz.json")));
+  const auto no_blink = nlohmann::json::parse(std::ifstream(scratch("gz2.json")));
+  EXPECT_FALSE(no_blink["steps"][2]["blink"].get<bool>());
+  EXPECT_LT(blink["steps"][2]["sharp_fraction"].get<double>(), no_blink["steps"][2]["sharp_fraction"].get<double>());
+  // --steps caps the fixations used
+  ASSERT_EQ(foveal_test::foveal(common + "--steps 2 -o gz3 --stats gz3.json -q").status, 0);
+  EXPECT_EQ(nlohmann::json::parse(std::ifstream(scratch("gz3.json")))["steps"].size(), 2u);
+  // What cannot drive the steps says why, in one line
+  for (const auto& [args, expected] : std::vector<std::pair<std::string, std::string>>{
+           {"--fixation mean", "'mean' gives a gaze point per frame"},
+           {"--fixation tracker", "no fixation events of its tracker"},
+           {"--start 5", "no fixations after --start 5 s"}}) {
+    const CliRun bad = foveal_test::foveal(common + args + " -o gz4");
+    EXPECT_EQ(bad.status, 1) << args;
+    EXPECT_EQ(lines(bad.err), 1u) << args << "\n" << bad.err;
+    EXPECT_NE(bad.err.find(expected), std::string::npos) << args << "\n" << bad.err;
+  }
+}
+
+TEST(SimulateCli, LiveTrackerDrivesTheStepsAndItsHangUpIsOneLine) {
+  FakePupil fake;
+  std::vector<std::pair<std::string, std::string>> messages;
+  for (int i = 0; i < 60; ++i) messages.emplace_back("surfaces.screen", surface_gaze(0.25, 0.75, true, 10 + 0.004 * i));
+  for (int i = 0; i < 60; ++i) messages.emplace_back("surfaces.screen", surface_gaze(0.75, 0.25, true, 10.3 + 0.004 * i));
+  fake.serve(messages, true, nullptr);
+  const CliRun r = foveal_test::foveal("simulate --gaze '" + fake.url("surface=screen") + "' --screen 400x200 --size 40x20 --steps 5 "
+                                       "--live-timeout 2 --save-steps '' -o live --stats live.json");
+  EXPECT_EQ(r.status, 1);
+  EXPECT_EQ(lines(r.err), 1u) << r.err;
+  EXPECT_NE(r.err.find("stopped after 2 steps"), std::string::npos) << r.err;
+  const auto j = nlohmann::json::parse(std::ifstream(scratch("live.json")));
+  ASSERT_EQ(j["steps"].size(), 2u);
+  // norm (0.25, 0.75) of 400×200 (origin bottom-left) → (100, 50) → render ÷10; then (30, 15)
+  EXPECT_NEAR(j["steps"][0]["focus_px"][0].get<double>(), 10.0, 1e-3);
+  EXPECT_NEAR(j["steps"][0]["focus_px"][1].get<double>(), 5.0, 1e-3);
+  EXPECT_NEAR(j["steps"][1]["focus_px"][0].get<double>(), 30.0, 1e-3);
+  EXPECT_NEAR(j["steps"][1]["focus_px"][1].get<double>(), 15.0, 1e-3);
+  EXPECT_TRUE(fs::exists(scratch("live/perceived.png")));
+}
+
 TEST(SimulateCli, BenchVisionReportsEveryStage) {
   const CliRun r = foveal_test::foveal("bench vision --scene builtin:plane --size 64x40 --steps 3 --json bv.json");
   ASSERT_EQ(r.status, 0) << r.err;
@@ -51,6 +139,9 @@ TEST(SimulateCli, BadInputGivesOneClearLine) {
       {"simulate -o s --voxel -1", "--voxel"},
       {"simulate -o s --from 0,0,1", "--from and --look"},
       {"simulate --steps 2", "--output"},
+      {"simulate -o s --gaze nowhere.asc", "nowhere.asc"},
+      {"simulate -o s --gaze tcp://host:1", "unknown live source"},
+      {"simulate -o s --gaze pupil://127.0.0.1:1 --fixation tracker", "fixation events"},
   };
   for (const auto& [args, expected] : cases) {
     const CliRun r = foveal_test::foveal(args);

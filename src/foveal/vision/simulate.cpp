@@ -84,9 +84,10 @@ StepStats VisionSimulation::step(const Camera& camera, std::optional<glm::vec2> 
   const glm::vec3 axis = glm::normalize(camera.look - camera.eye);
   s.focus_depth_m = gbuffer_.hit(fi) ? gbuffer_.depth[fi] * glm::dot(gbuffer_.view[fi], axis) * scene_.meters_per_unit : INFINITY;
   s.focus_vergence = accommodate(params_.eye, s.focus_depth_m);
-  if (params_.blink_every > 0 && s.step > 1 && (s.step - 1) % params_.blink_every == 0) {
+  if ((params_.blink_every > 0 && s.step > 1 && (s.step - 1) % params_.blink_every == 0) || blink_requested_) {
     field_.blink();
     s.blink = true;
+    blink_requested_ = false;
   }
   const double penalty = peripheral_penalty_per_deg(params_.eye);
   // The eye sits at the camera: eccentricity is the angle between the camera rays through the

@@ -53,6 +53,8 @@ class VisionSimulation {
   // One step with this camera (the corners are recomputed when it differs from the last one's).
   // `fixation` replaces the simulated saccade (tracked gaze), in render pixels.
   StepStats step(const Camera& camera, std::optional<glm::vec2> fixation = std::nullopt);
+  // The eye blinks before the next step (the field forgets), e.g. a tracker's blink.
+  void blink_before_next_step() { blink_requested_ = true; }
 
   const Image& color() const { return color_; }          // the sharp ray-cast image
   const Image& perceived() const { return perceived_; }  // the blurred result
@@ -76,6 +78,7 @@ class VisionSimulation {
   std::vector<float> coc_;
   CocShape shape_;  // astigmatism: this step's ellipse per pixel
   uint32_t step_ = 0;
+  bool blink_requested_ = false;
 };
 
 }  // namespace foveal
