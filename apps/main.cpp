@@ -1,6 +1,7 @@
 // apps/main.cpp — the `foveal` command line: parse, run one subcommand, report errors in one line.
 #include "commands.h"
 #include "foveal/util/error.h"
+#include "foveal/util/memory.h"
 
 #include <fmt/core.h>
 
@@ -8,6 +9,7 @@
 #include <exception>
 
 int main(int argc, char** argv) {
+  foveal::keep_freed_memory();
   CLI::App app{"foveal — gaze-contingent ray tracing: foveated ambient occlusion, eye-tracker gaze, simulated human vision", "foveal"};
   app.require_subcommand(1);
   app.set_version_flag("--version", "foveal 0.1.0");

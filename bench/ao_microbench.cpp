@@ -63,4 +63,3 @@ void BM_RawEmbreeOcclusion(benchmark::State& state) {
 
 BENCHMARK(BM_RendererAoPass)->DenseRange(0, 2)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_RawEmbreeOcclusion)->DenseRange(0, 2)->Unit(benchmark::kMillisecond)->UseManualTime();
-BENCHMARK_MAIN();

@@ -108,6 +108,19 @@ inline glm::vec2 cos_sin_2pi(float t) {
   return {std::bit_cast<float>(std::bit_cast<uint32_t>(x) ^ flip_x), std::bit_cast<float>(std::bit_cast<uint32_t>(y) ^ flip_y)};
 }
 
+// atan2(y, x) for y ≥ 0 (an angle in [0, π], e.g. between unit vectors from |a × b| and a·b):
+// reduction to [0, 1] and Abramowitz & Stegun's polynomial 4.4.47 (absolute error 1.2e-5 rad,
+// 0.0007°). Written here
+// because libm's atan2 was three quarters of the vision simulation's per-pixel CoC pass (measured).
+inline float angle_atan2(float y, float x) {
+  const float ax = std::abs(x), lo = std::min(ax, y), hi = std::max(ax, y);
+  const float a = hi > 0 ? lo / hi : 0.0f, s = a * a;
+  float r = a * (0.9998660f + s * (-0.3302995f + s * (0.1801410f + s * (-0.0851330f + s * 0.0208351f))));
+  if (y > ax) r = std::numbers::pi_v<float> * 0.5f - r;
+  if (x < 0) r = std::numbers::pi_v<float> - r;
+  return r;
+}
+
 // Cosine-weighted direction on the +z hemisphere from a point of the unit square (pdf cos/pi).
 inline glm::vec3 cosine_hemisphere(glm::vec2 u) {
   const float r = std::sqrt(u.x);

@@ -67,3 +67,17 @@ TEST(Sampling, FastCosSinMatchesLibm) {
     ASSERT_NEAR(cs.y, std::sin(2.0 * std::numbers::pi * t), 4e-6) << t;
   }
 }
+
+TEST(Sampling, AngleAtan2MatchesLibm) {
+  double worst = 0;
+  for (int k = 0; k <= 100000; ++k) {
+    const double theta = std::numbers::pi * k / 100000.0;
+    for (double length : {1.0, 0.37, 12.5}) {
+      const float y = static_cast<float>(length * std::sin(theta)), x = static_cast<float>(length * std::cos(theta));
+      worst = std::max(worst, std::abs(double(angle_atan2(y, x)) - std::atan2(double(y), double(x))));
+    }
+  }
+  EXPECT_LT(worst, 1.3e-5);
+  EXPECT_EQ(angle_atan2(0.0f, 0.0f), 0.0f);
+  EXPECT_NEAR(angle_atan2(0.0f, -1.0f), std::numbers::pi, 1e-6);
+}

@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <type_traits>
 
 namespace foveal {
 
@@ -31,29 +32,216 @@ TapPattern make_tap_pattern(int taps) {
 int taps_for_diameter(float d, int max_taps) {
   if (!(d >= 0.25f)) return 0;
   // About one tap per pixel inside 2σ = d/3 of the centre, where the Gaussian's weight lies
-  const int area = static_cast<int>(std::ceil(0.35f * d * d));
+  const int area = static_cast<int>(std::ceil(0.45f * d * d));
   return std::clamp(area, std::min(8, max_taps), max_taps);
 }
 
 namespace {
 
-// Half-resolution copies (2×2 box), so that a large CoC's taps, spaced several pixels apart,
-// read pre-averaged pixels instead of aliasing.
-std::vector<Image> pyramid(const Image& img, int levels) {
-  std::vector<Image> out{img};
+// Texels of up to four channels, padded to four so that a bilinear read is four vector loads.
+typedef float v4 __attribute__((vector_size(16)));
+
+struct Level {
+  int width = 0, height = 0;
+  std::vector<v4> texels;
+};
+
+// The image (padded to four channels) and half-resolution copies (2×2 box), so that a large
+// CoC's taps, spaced several texels apart, read pre-averaged pixels instead of aliasing.
+std::vector<Level> pyramid(const Image& img, int levels) {
+  std::vector<Level> out(1);
+  out[0].width = img.width;
+  out[0].height = img.height;
+  out[0].texels.resize(size_t(img.width) * img.height);
+  const int ch = img.channels;
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, out[0].texels.size(), 4096), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t i = r.begin(); i < r.end(); ++i) {
+      v4 t = {0, 0, 0, 0};
+      for (int c = 0; c < ch; ++c) t[c] = img.pixels[i * ch + c];
+      out[0].texels[i] = t;
+    }
+  });
   for (int l = 1; l < levels; ++l) {
-    const Image& src = out.back();
+    const Level& src = out.back();
     if (src.width < 4 || src.height < 4) break;
-    Image dst((src.width + 1) / 2, (src.height + 1) / 2, src.channels);
-    for (int y = 0; y < dst.height; ++y)
-      for (int x = 0; x < dst.width; ++x) {
-        const int x0 = 2 * x, y0 = 2 * y, x1 = std::min(x0 + 1, src.width - 1), y1 = std::min(y0 + 1, src.height - 1);
-        for (int c = 0; c < src.channels; ++c)
-          dst.at(x, y, c) = 0.25f * (src.at(x0, y0, c) + src.at(x1, y0, c) + src.at(x0, y1, c) + src.at(x1, y1, c));
-      }
+    Level dst;
+    dst.width = (src.width + 1) / 2;
+    dst.height = (src.height + 1) / 2;
+    dst.texels.resize(size_t(dst.width) * dst.height);
+    tbb::parallel_for(tbb::blocked_range<int>(0, dst.height, 16), [&](const tbb::blocked_range<int>& rows) {
+      for (int y = rows.begin(); y < rows.end(); ++y)
+        for (int x = 0; x < dst.width; ++x) {
+          const int x0 = 2 * x, y0 = 2 * y, x1 = std::min(x0 + 1, src.width - 1), y1 = std::min(y0 + 1, src.height - 1);
+          const v4* row0 = &src.texels[size_t(y0) * src.width];
+          const v4* row1 = &src.texels[size_t(y1) * src.width];
+          dst.texels[size_t(y) * dst.width + x] = 0.25f * (row0[x0] + row0[x1] + row1[x0] + row1[x1]);
+        }
+    });
     out.push_back(std::move(dst));
   }
   return out;
+}
+
+// Taps spaced wider than this many texels read the next coarser level
+constexpr float kLevelSpacing = 2.0f;
+// Tiles of the smallest CoC, to skip the scatter-aware test where every tap passes it
+constexpr int kTile = 16;
+
+// What every pixel's gather reads.
+struct GatherContext {
+  const Image& img;
+  const std::vector<float>& coc;
+  const BlurParams& params;
+  const CocShape* shape;
+  const std::vector<Level>& levels;
+  const std::vector<std::vector<float>>& min_quad;  // per level: smallest CoC under each texel's 2×2 bilinear footprint
+  glm::vec2 along, across;             // the ellipse's axes in image coordinates
+  const std::vector<TapPattern>& patterns;  // patterns[n − first_count]: the pattern of n taps
+  int first_count;
+  const std::vector<float>& tile_min;  // smallest CoC of each kTile × kTile tile
+  int tiles_x, tiles_y;
+  Image& out;
+
+  // The smallest CoC of the tiles within r pixels of (x, y)
+  float min_coc_around(int x, int y, float r) const {
+    const int tx0 = std::max(0, int(x - r) / kTile), tx1 = std::min(tiles_x - 1, int(x + r) / kTile);
+    const int ty0 = std::max(0, int(y - r) / kTile), ty1 = std::min(tiles_y - 1, int(y + r) / kTile);
+    float m = INFINITY;
+    for (int ty = ty0; ty <= ty1; ++ty)
+      for (int tx = tx0; tx <= tx1; ++tx) m = std::min(m, tile_min[size_t(ty) * tiles_x + tx]);
+    return m;
+  }
+
+  const TapPattern& pattern_for(int taps) const {
+    return patterns[size_t(std::clamp(taps - first_count, 0, int(patterns.size()) - 1))];
+  }
+};
+
+// One pixel of the gather: taps over its own CoC (diameter d, clamped), Gaussian-weighted,
+// bilinear reads; with `check`, a tap counts only where its own CoC reaches the pixel.
+template <int CH>
+inline __attribute__((always_inline)) void gather_pixel(const GatherContext& g, int x, int y, float d) {
+  const int w = g.img.width;
+  const size_t i = size_t(y) * w + x;
+  const int n = taps_for_diameter(d, g.params.taps);
+  float* dst = &g.out.pixels[i * CH];
+  if (n == 0) {  // sharp (also NaN): the pixel as it is
+    for (int c = 0; c < CH; ++c) dst[c] = g.img.pixels[i * CH + c];
+    return;
+  }
+  const TapPattern& taps = g.pattern_for(n);
+  // Taps are about `spacing` pixels apart (within 2σ); read the level whose pixels are that large
+  const float spacing = d / 3.0f * std::sqrt(3.14159f / float(taps.offset.size()));
+  int level = 0;
+  while (level + 1 < int(g.levels.size()) && spacing >= kLevelSpacing * float(1 << level)) ++level;
+  const Level& src = g.levels[level];
+  // A level-L texel is a 2^L box average, which has already blurred by a variance of
+  // (4^L − 1)/12 px² per axis: the taps add only what is missing to σ² = (d/6)²
+  const float sigma2 = d * d / 36.0f, prefilter = (float(1 << (2 * level)) - 1.0f) / 12.0f;
+  const float reach_px = 3.0f * std::sqrt(std::max(sigma2 - prefilter, 0.25f * sigma2));  // the taps' disc radius, pixels
+  const float scale = 1.0f / float(1 << level), radius = reach_px * scale;
+  // The scatter-aware test can fail only where some pixel under a tap's footprint (within the
+  // taps' reach plus a texel pair) has a CoC below d − 1: taps lie within d/2 of the pixel, and a
+  // footprint whose smallest CoC is r passes when r/2 + 1/2 reaches the tap
+  const bool check = g.params.scatter_aware && g.min_coc_around(x, y, reach_px + 2.0f * float(1 << level)) < d - 1.0f;
+  const float cx = (x + 0.5f) * scale - 0.5f, cy = (y + 0.5f) * scale - 0.5f;
+  const int sw = src.width, sh = src.height;
+  v4 sum = {0, 0, 0, 0};
+  float total = 0;
+  const glm::vec2 sc = g.shape ? g.shape->scale[i] : glm::vec2(1.0f);
+  // Every tap's 2×2 footprint inside the image: no clamping needed
+  const bool interior = cx - radius >= 0 && cy - radius >= 0 && cx + radius < float(sw - 2) && cy + radius < float(sh - 2);
+  const v4* texels = src.texels.data();
+  if (interior && !g.shape) {
+    // The common case, kept lean: no clamping, a round disc, bilinear reads as two horizontal
+    // lerps and a vertical one, the scatter-aware test (below) as a weight of zero
+    const float* quad = g.min_quad[level].data();
+    const float texel_px = float(1 << level);
+    auto taps_loop = [&](auto checked) {
+      for (size_t k = 0; k < taps.offset.size(); ++k) {
+        const float sx = cx + radius * taps.offset[k].x, sy = cy + radius * taps.offset[k].y;
+        const int x0 = int(sx), y0 = int(sy);
+        float wk = taps.weight[k];
+        if constexpr (decltype(checked)::value) {
+          const float ex = (sx + 0.5f) * texel_px - 0.5f - float(x), ey = (sy + 0.5f) * texel_px - 0.5f - float(y);
+          const float reach = 0.5f * quad[size_t(y0) * sw + x0] + 0.5f * texel_px;
+          wk = reach * reach >= ex * ex + ey * ey ? wk : 0.0f;
+        }
+        const float fx = sx - float(x0), fy = sy - float(y0);
+        const v4* p = texels + size_t(y0) * sw + x0;
+        const v4 top = p[0] + fx * (p[1] - p[0]), bottom = p[sw] + fx * (p[sw + 1] - p[sw]);
+        sum += wk * (top + fy * (bottom - top));
+        total += wk;
+      }
+    };
+    if (check) taps_loop(std::true_type{});
+    else taps_loop(std::false_type{});
+  } else {
+  for (size_t k = 0; k < taps.offset.size(); ++k) {
+    // The tap's offset: the unit-disc point, stretched into the pixel's ellipse
+    const glm::vec2 o = g.shape ? taps.offset[k].x * sc.x * g.along + taps.offset[k].y * sc.y * g.across : taps.offset[k];
+    float sx = cx + radius * o.x, sy = cy + radius * o.y;
+    int x0, y0, dx1, dy1;
+    if (interior) {
+      x0 = int(sx);
+      y0 = int(sy);
+      dx1 = 1;
+      dy1 = sw;
+    } else {  // bilinear read at the tap, clamped to the image
+      sx = std::clamp(sx, 0.0f, float(sw - 1));
+      sy = std::clamp(sy, 0.0f, float(sh - 1));
+      x0 = std::min(int(sx), std::max(sw - 2, 0));
+      y0 = std::min(int(sy), std::max(sh - 2, 0));
+      dx1 = std::min(x0 + 1, sw - 1) > x0 ? 1 : 0;
+      dy1 = std::min(y0 + 1, sh - 1) > y0 ? sw : 0;
+    }
+    if (check) {
+      // A tap counts only if the CoC of every pixel under its bilinear footprint reaches this
+      // pixel (scatter-aware: a sharp point does not spread, and no sharp texel leaks in
+      // bilinearly or through a coarse level's averages). One read: the footprint's smallest CoC.
+      const float r = g.min_quad[level][size_t(y0) * sw + x0];
+      const float ex = (sx + 0.5f) / scale - 0.5f - float(x), ey = (sy + 0.5f) / scale - 0.5f - float(y);
+      const float reach = 0.5f * r + 0.5f / scale;
+      if (reach * reach < ex * ex + ey * ey) continue;
+    }
+    const float fx = sx - x0, fy = sy - y0, wk = taps.weight[k];
+    const float w00 = (1 - fx) * (1 - fy) * wk, w10 = fx * (1 - fy) * wk, w01 = (1 - fx) * fy * wk, w11 = fx * fy * wk;
+    const v4* p00 = texels + size_t(y0) * sw + x0;
+    sum += w00 * p00[0] + w10 * p00[dx1] + w01 * p00[dy1] + w11 * p00[dy1 + dx1];
+    total += w00 + w10 + w01 + w11;
+  }
+  }
+  if (!(total > 0)) {  // nothing reached (cannot happen with the centre tap, kept for safety)
+    for (int c = 0; c < CH; ++c) dst[c] = g.img.pixels[i * CH + c];
+    return;
+  }
+  for (int c = 0; c < CH; ++c) dst[c] = sum[c] / total;
+}
+
+// Rows [y0, y1) of the output. Built twice where the compiler can: for x86-64-v3 (AVX2 and fused
+// multiply-adds; 20–25 % faster, measured with bench/foveal_microbench) and for the baseline,
+// chosen at load time by the CPU. The two round differently in the last bits, so a CPU without
+// AVX2 may give an image a few 1e-7 apart; on one machine the image never depends on threads.
+template <int CH>
+inline __attribute__((always_inline)) void gather_rows_of(const GatherContext& g, int y0, int y1) {
+  const int w = g.img.width;
+  for (int y = y0; y < y1; ++y)
+    for (int x = 0; x < w; ++x) {
+      const float c = g.coc[size_t(y) * w + x];
+      gather_pixel<CH>(g, x, y, std::min(std::isfinite(c) ? c : g.params.max_diameter_px, g.params.max_diameter_px));
+    }
+}
+
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && !defined(__SANITIZE_ADDRESS__)
+__attribute__((target_clones("arch=x86-64-v3", "default")))
+#endif
+void gather_rows(const GatherContext& g, int y0, int y1) {
+  switch (g.img.channels) {
+    case 1: gather_rows_of<1>(g, y0, y1); break;
+    case 2: gather_rows_of<2>(g, y0, y1); break;
+    case 3: gather_rows_of<3>(g, y0, y1); break;
+    default: gather_rows_of<4>(g, y0, y1); break;
+  }
 }
 
 }  // namespace
@@ -64,24 +252,14 @@ Image variable_blur(const Image& img, const std::vector<float>& coc, const BlurP
   // The ellipse's axes in image coordinates (y down)
   const float axis_rad = shape ? glm::radians(shape->axis_deg) : 0.0f;
   const glm::vec2 along(std::cos(axis_rad), -std::sin(axis_rad)), across(std::sin(axis_rad), std::cos(axis_rad));
-  // One pattern per tap count in use: counts are rounded up to a power of two (8 … taps) and the
-  // full count
-  std::vector<int> counts;
-  for (int c = std::min(8, params.taps); c < params.taps; c *= 2) counts.push_back(c);
-  counts.push_back(params.taps);
+  // A pattern for every tap count in use (8 … taps)
+  const int first_count = std::min(8, params.taps);
   std::vector<TapPattern> patterns;
-  for (int c : counts) patterns.push_back(make_tap_pattern(c));
-  auto pattern_for = [&](int taps) -> const TapPattern& {
-    for (size_t k = 0; k < counts.size(); ++k)
-      if (counts[k] >= taps) return patterns[k];
-    return patterns.back();
-  };
+  for (int n = first_count; n <= params.taps; ++n) patterns.push_back(make_tap_pattern(n));
   const int w = img.width, h = img.height, ch = img.channels;
   if (ch < 1 || ch > 4) fail("blur: images of 1 to 4 channels, got {}", ch);
-  const std::vector<Image> levels = pyramid(img, 5);
-  // Smallest (clamped) CoC of each 16×16 tile: where every CoC within a pixel's reach is at least
-  // as large as its own, every tap reaches it and the scatter-aware test can be skipped
-  constexpr int kTile = 16;
+  const std::vector<Level> levels = pyramid(img, 5);
+  // Smallest (clamped) CoC of each tile
   const int tiles_x = (w + kTile - 1) / kTile, tiles_y = (h + kTile - 1) / kTile;
   std::vector<float> tile_min(size_t(tiles_x) * tiles_y, INFINITY);
   for (int y = 0; y < h; ++y)
@@ -90,95 +268,40 @@ Image variable_blur(const Image& img, const std::vector<float>& coc, const BlurP
       float& m = tile_min[size_t(y / kTile) * tiles_x + x / kTile];
       m = std::min(m, std::isfinite(c) ? std::min(c, params.max_diameter_px) : params.max_diameter_px);
     }
-  // Smallest (clamped) CoC of each pixel's 2×2 bilinear footprint (x, x+1) × (y, y+1)
-  std::vector<float> min_quad(size_t(w) * h);
-  auto clamped = [&](size_t i) { return std::isfinite(coc[i]) ? std::min(coc[i], params.max_diameter_px) : params.max_diameter_px; };
-  tbb::parallel_for(tbb::blocked_range<int>(0, h, 16), [&](const tbb::blocked_range<int>& rows) {
-    for (int y = rows.begin(); y < rows.end(); ++y)
-      for (int x = 0; x < w; ++x) {
-        const int x1 = std::min(x + 1, w - 1), y1 = std::min(y + 1, h - 1);
-        min_quad[size_t(y) * w + x] = std::min(std::min(clamped(size_t(y) * w + x), clamped(size_t(y) * w + x1)),
-                                               std::min(clamped(size_t(y1) * w + x), clamped(size_t(y1) * w + x1)));
-      }
-  });
-  auto min_coc_around = [&](int x, int y, float r) {
-    const int tx0 = std::max(0, int(x - r - 2) / kTile), tx1 = std::min(tiles_x - 1, int(x + r + 2) / kTile);
-    const int ty0 = std::max(0, int(y - r - 2) / kTile), ty1 = std::min(tiles_y - 1, int(y + r + 2) / kTile);
-    float m = INFINITY;
-    for (int ty = ty0; ty <= ty1; ++ty)
-      for (int tx = tx0; tx <= tx1; ++tx) m = std::min(m, tile_min[size_t(ty) * tiles_x + tx]);
-    return m;
-  };
+  // Smallest (clamped) CoC under each texel of each level (a min pyramid), then under each
+  // texel's 2×2 bilinear footprint (x, x+1) × (y, y+1)
+  auto clamped = [&](float c) { return std::isfinite(c) ? std::min(c, params.max_diameter_px) : params.max_diameter_px; };
+  std::vector<std::vector<float>> min_quad(levels.size());
+  std::vector<float> below(coc.size()), above;
+  for (size_t i = 0; i < coc.size(); ++i) below[i] = clamped(coc[i]);
+  for (size_t l = 0; l < levels.size(); ++l) {
+    const int lw = levels[l].width, lh = levels[l].height;
+    if (l > 0) {  // min over the 2×2 texels of the level below
+      const int bw = levels[l - 1].width, bh = levels[l - 1].height;
+      above.resize(size_t(lw) * lh);
+      for (int y = 0; y < lh; ++y)
+        for (int x = 0; x < lw; ++x) {
+          const int x0 = 2 * x, y0 = 2 * y, x1 = std::min(x0 + 1, bw - 1), y1 = std::min(y0 + 1, bh - 1);
+          above[size_t(y) * lw + x] = std::min(std::min(below[size_t(y0) * bw + x0], below[size_t(y0) * bw + x1]),
+                                               std::min(below[size_t(y1) * bw + x0], below[size_t(y1) * bw + x1]));
+        }
+      std::swap(below, above);
+    }
+    std::vector<float>& quad = min_quad[l];
+    quad.resize(size_t(lw) * lh);
+    tbb::parallel_for(tbb::blocked_range<int>(0, lh, 16), [&](const tbb::blocked_range<int>& rows) {
+      for (int y = rows.begin(); y < rows.end(); ++y)
+        for (int x = 0; x < lw; ++x) {
+          const int x1 = std::min(x + 1, lw - 1), y1 = std::min(y + 1, lh - 1);
+          quad[size_t(y) * lw + x] = std::min(std::min(below[size_t(y) * lw + x], below[size_t(y) * lw + x1]),
+                                              std::min(below[size_t(y1) * lw + x], below[size_t(y1) * lw + x1]));
+        }
+    });
+  }
   Image out(w, h, ch);
+  const GatherContext context{img, coc, params, shape, levels, min_quad, along, across, patterns, first_count, tile_min, tiles_x, tiles_y, out};
   tbb::parallel_for(tbb::blocked_range<int>(0, h, 4), [&](const tbb::blocked_range<int>& rows) {
-    float sum[4] = {0, 0, 0, 0};
-    for (int y = rows.begin(); y < rows.end(); ++y)
-      for (int x = 0; x < w; ++x) {
-        const size_t i = size_t(y) * w + x;
-        const float d = std::min(std::isfinite(coc[i]) ? coc[i] : params.max_diameter_px, params.max_diameter_px);
-        const int n = taps_for_diameter(d, params.taps);
-        if (n == 0) {  // sharp (also NaN): the pixel as it is
-          for (int c = 0; c < ch; ++c) out.pixels[i * ch + c] = img.pixels[i * ch + c];
-          continue;
-        }
-        const TapPattern& taps = pattern_for(n);
-        // Taps are about `spacing` pixels apart (within 2σ); read the level whose pixels are that large
-        const float spacing = d / 3.0f * std::sqrt(3.14159f / float(taps.offset.size()));
-        int level = 0;
-        while (level + 1 < int(levels.size()) && spacing >= 2.0f * float(1 << level)) ++level;
-        const Image& src = levels[level];
-        const float scale = 1.0f / float(1 << level), radius = 0.5f * d * scale;
-        const float cx = (x + 0.5f) * scale - 0.5f, cy = (y + 0.5f) * scale - 0.5f;
-        const int sw = src.width, sh = src.height;
-        for (int c = 0; c < ch; ++c) sum[c] = 0;
-        float total = 0;
-        // A texel contributes only if its own CoC reaches this pixel (scatter-aware): a sharp
-        // point does not spread. At level 0 each bilinear texel is checked; coarser levels check
-        // the full-resolution pixel nearest to the tap.
-        const bool check = params.scatter_aware && 0.5f * min_coc_around(x, y, 0.5f * d) + 0.5f < 0.5f * d + 1.5f;
-        auto reaches = [&](int px, int py) {
-          if (!check) return true;
-          const float r = coc[size_t(py) * w + px];
-          const float reach = 0.5f * (std::isfinite(r) ? std::min(r, params.max_diameter_px) : params.max_diameter_px) + 0.5f;
-          const float dx = float(px - x), dy = float(py - y);
-          return reach * reach >= dx * dx + dy * dy;
-        };
-        const glm::vec2 sc = shape ? shape->scale[i] : glm::vec2(1.0f);
-        for (size_t k = 0; k < taps.offset.size(); ++k) {
-          // The tap's offset: the unit-disc point, stretched into the pixel's ellipse
-          const glm::vec2 o = shape ? taps.offset[k].x * sc.x * along + taps.offset[k].y * sc.y * across : taps.offset[k];
-          // Bilinear read at the tap, clamped to the image
-          const float sx = std::clamp(cx + radius * o.x, 0.0f, float(sw - 1));
-          const float sy = std::clamp(cy + radius * o.y, 0.0f, float(sh - 1));
-          const int x0 = std::min(int(sx), std::max(sw - 2, 0)), y0 = std::min(int(sy), std::max(sh - 2, 0));
-          const int x1 = std::min(x0 + 1, sw - 1), y1 = std::min(y0 + 1, sh - 1);
-          const float fx = sx - x0, fy = sy - y0, wk = taps.weight[k];
-          const float w00 = (1 - fx) * (1 - fy) * wk, w10 = fx * (1 - fy) * wk, w01 = (1 - fx) * fy * wk, w11 = fx * fy * wk;
-          if (check) {
-            if (level == 0) {
-              // One read: the smallest CoC of the 2×2 texels; a tap any of whose texels does not
-              // reach is left out whole (conservative, and no sharp texel leaks in bilinearly)
-              const float r = min_quad[size_t(y0) * w + x0];
-              const float dx = sx - float(x), dy = sy - float(y), reach = 0.5f * r + 0.5f;
-              if (reach * reach < dx * dx + dy * dy) continue;
-            } else if (!reaches(std::clamp(int(x + 0.5f * d * o.x + 0.5f), 0, w - 1),
-                                std::clamp(int(y + 0.5f * d * o.y + 0.5f), 0, h - 1))) {
-              continue;
-            }
-          }
-          const float* p00 = &src.pixels[(size_t(y0) * sw + x0) * ch];
-          const float* p10 = &src.pixels[(size_t(y0) * sw + x1) * ch];
-          const float* p01 = &src.pixels[(size_t(y1) * sw + x0) * ch];
-          const float* p11 = &src.pixels[(size_t(y1) * sw + x1) * ch];
-          for (int c = 0; c < ch; ++c) sum[c] += w00 * p00[c] + w10 * p10[c] + w01 * p01[c] + w11 * p11[c];
-          total += w00 + w10 + w01 + w11;
-        }
-        if (!(total > 0)) {  // nothing reached (cannot happen with the centre tap, kept for safety)
-          for (int c = 0; c < ch; ++c) out.pixels[i * ch + c] = img.pixels[i * ch + c];
-          continue;
-        }
-        for (int c = 0; c < ch; ++c) out.pixels[i * ch + c] = sum[c] / total;
-      }
+    gather_rows(context, rows.begin(), rows.end());
   });
   return out;
 }

@@ -24,7 +24,7 @@ struct BlurParams {
   bool scatter_aware = true;     // a tap counts only if its own CoC reaches the pixel (no sharp-edge bleeding)
 };
 
-// Taps for a CoC diameter d (pixels): about one per pixel within 2σ (0.35·d²), at least 8, at
+// Taps for a CoC diameter d (pixels): about one per pixel within 2.1σ (0.4·d²), at least 8, at
 // most `max_taps`; 0 below a quarter pixel (the pixel is copied). Taps spaced wider than two
 // pixels read a half-, quarter-, … resolution copy of the image (2×2 box averages).
 int taps_for_diameter(float d, int max_taps);

@@ -4,6 +4,7 @@
 #include "foveal/vision/thin_lens.h"
 
 #include "foveal/util/error.h"
+#include "foveal/util/sampling.h"
 #include "foveal/util/timer.h"
 
 #include <tbb/parallel_for.h>
@@ -103,30 +104,31 @@ StepStats VisionSimulation::step(const Camera& camera, std::optional<glm::vec2> 
     shape_.scale.resize(n);
     shape_.axis_deg = static_cast<float>(params_.eye.cylinder_axis_deg);
   }
+  std::vector<int64_t> cells(n);  // each pixel's field cell (−1: background)
+  // Per pixel in single precision (vergences of at most a few dioptres, angles of degrees)
+  const glm::vec3 gaze_dir(gaze_ray), axis_dir(forward);
+  const float metres = scene_.meters_per_unit, focus = static_cast<float>(s.focus_vergence);
+  const float pupil_deg = static_cast<float>(glm::degrees(pupil_m)), penalty_f = static_cast<float>(penalty), cyl = static_cast<float>(cylinder);
   tbb::parallel_for(tbb::blocked_range<int>(0, h, 8), [&](const tbb::blocked_range<int>& rows) {
     for (int y = rows.begin(); y < rows.end(); ++y)
       for (int x = 0; x < w; ++x) {
         const size_t i = size_t(y) * w + x;
-        const glm::dvec3 ray = gbuffer_.view[i];
-        const double axial_m = gbuffer_.hit(i) ? gbuffer_.depth[i] * glm::dot(gbuffer_.view[i], forward) * scene_.meters_per_unit : 0.0;
-        const double object_vergence = axial_m > 0 ? 1.0 / axial_m : 0.0;
-        const double ecc = glm::degrees(std::atan2(glm::length(glm::cross(ray, gaze_ray)), glm::dot(ray, gaze_ray)));
+        cells[i] = gbuffer_.hit(i) ? field_.cell(gbuffer_.position[i]) : -1;
+        const glm::vec3 ray = gbuffer_.view[i];
+        const float axial_m = gbuffer_.hit(i) ? gbuffer_.depth[i] * glm::dot(ray, axis_dir) * metres : 0.0f;
+        const float object_vergence = axial_m > 0 ? 1.0f / axial_m : 0.0f;
+        const float ecc = glm::degrees(angle_atan2(glm::length(glm::cross(ray, gaze_dir)), glm::dot(ray, gaze_dir)));
         // coc_axes_rad(), inlined: A·|1/D − v| along the cylinder axis, A·|1/D − v − C| across it
-        const double along = glm::degrees(pupil_m * std::abs(object_vergence - s.focus_vergence)) + penalty * ecc;
+        const float along = pupil_deg * std::abs(object_vergence - focus) + penalty_f * ecc;
         if (!astigmatic) {
-          now_deg[i] = static_cast<float>(along);
+          now_deg[i] = along;
           continue;
         }
-        const double across = glm::degrees(pupil_m * std::abs(object_vergence - s.focus_vergence - cylinder)) + penalty * ecc;
-        const double major = std::max(along, across);
-        now_deg[i] = static_cast<float>(major);
-        shape_.scale[i] = major > 0 ? glm::vec2(float(along / major), float(across / major)) : glm::vec2(1.0f);
+        const float across = pupil_deg * std::abs(object_vergence - focus - cyl) + penalty_f * ecc;
+        const float major = std::max(along, across);
+        now_deg[i] = major;
+        shape_.scale[i] = major > 0 ? glm::vec2(along / major, across / major) : glm::vec2(1.0f);
       }
-  });
-  std::vector<int64_t> cells(n, -1);
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 4096), [&](const tbb::blocked_range<size_t>& r) {
-    for (size_t i = r.begin(); i < r.end(); ++i)
-      if (gbuffer_.hit(i)) cells[i] = field_.cell(gbuffer_.position[i]);
   });
   // Pixels share cells, so the update runs in pixel order on one thread (deterministic)
   if (!s.skipped)  // glaucoma's skipped steps do not update the field
