@@ -82,6 +82,14 @@ std::function<int()> add_bench_blur_command(CLI::App& bench) {
     if (!o->images.empty()) std::filesystem::create_directories(o->images);
     fmt::print("foveal bench blur: {} ({} triangles), {}x{}, pupil {:g} mm, {} lens samples, {} threads\n", scene.source,
                tracer.triangles(), size.x, size.y, o->pupil, o->samples, threads.threads());
+    // The pinhole image (how much blur there is to get right), the same for every focus
+    ThinLensParams pinhole;
+    pinhole.width = size.x;
+    pinhole.height = size.y;
+    pinhole.samples = 1;
+    pinhole.pupil_diameter_mm = 1e-6;
+    const Image sharp = thin_lens_reference(tracer, scene, camera, pinhole);
+    if (!o->images.empty()) save_image(sharp, (std::filesystem::path(o->images) / "pinhole.png").string());
     nlohmann::json rows = nlohmann::json::array();
     for (const auto& [name, q] : {std::pair{"near", 0.05}, std::pair{"middle", 0.5}, std::pair{"far", 0.95}}) {
       const double d = depths[size_t(q * (depths.size() - 1))];
@@ -93,10 +101,6 @@ std::function<int()> add_bench_blur_command(CLI::App& bench) {
       p.focus_vergence = 1.0 / d;
       const Image reference = thin_lens_reference(tracer, scene, camera, p);
       const Image approximation = thin_lens_approximation(tracer, scene, camera, p);
-      p.samples = 1;  // the pinhole image: how much blur there is to get right
-      ThinLensParams pinhole = p;
-      pinhole.pupil_diameter_mm = 1e-6;
-      const Image sharp = thin_lens_reference(tracer, scene, camera, pinhole);
       const ImageError e = compare_images(approximation, reference), none = compare_images(sharp, reference);
       fmt::print("  {:<6} focus {:6.2f} m: approximation vs reference mean {:.4f}, p95 {:.4f}, PSNR {:.1f} dB   (pinhole vs reference: mean {:.4f}, PSNR {:.1f} dB)\n",
                  name, d, e.mean, e.p95, e.psnr, none.mean, none.psnr);

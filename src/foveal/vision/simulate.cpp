@@ -69,7 +69,7 @@ StepStats VisionSimulation::step(const Camera& camera, std::optional<glm::vec2> 
   s.camera_moved = !last_camera_ || !same_camera(*last_camera_, camera);
   if (s.camera_moved || params_.features_every_step) {
     corners_ = detect_corners(color_, params_.fast_threshold, true);
-    if (last_camera_) saccades_.reset();
+    if (s.camera_moved && last_camera_) saccades_.reset();  // a new view: no recent fixations in it
     last_camera_ = camera;
   }
   s.corners = corners_.size();
