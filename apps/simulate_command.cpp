@@ -46,7 +46,7 @@ std::function<int()> add_simulate_command(CLI::App& app) {
   add_view_options(*cmd, o->view);
   cmd->add_option("--path", o->path, "a camera path of the scene JSON (camera_paths): the camera moves between steps");
   auto* steps_option = cmd->add_option("--steps", o->steps, "time steps (one fixation each); with a --gaze recording: at most this many (default: all its fixations)")->capture_default_str()->check(CLI::Range(1, 100000));
-  cmd->add_option("--eye", o->eye, "eye: healthy, glaucoma[:SEVERITY 0..1], myopia:-D, hyperopia:D, presbyopia:AGE; join with '+'")
+  cmd->add_option("--eye", o->eye, "eye: healthy, glaucoma[:SEVERITY 0..1], myopia:-D, hyperopia:D, presbyopia:AGE, astigmatism:CYL[@AXIS]; join with '+'")
       ->capture_default_str();
   cmd->add_option("--pupil", o->pupil, "pupil diameter A, mm")->capture_default_str();
   cmd->add_option("--image-distance", o->image_distance, "lens-to-retina distance I, mm")->capture_default_str();
@@ -59,16 +59,16 @@ std::function<int()> add_simulate_command(CLI::App& app) {
   cmd->add_option("--blur-taps", o->taps, "most taps of the variable blur per pixel (large CoCs)")->capture_default_str();
   cmd->add_option("--ambient", o->ambient, "constant Phong ambient factor of the ray-cast colour")->capture_default_str();
   cmd->add_option("--seed", o->seed, "seed of the saccades")->capture_default_str();
-  cmd->add_option("--gaze", o->gaze_source,
+  auto* gaze_option = cmd->add_option("--gaze", o->gaze_source,
                   "real eye movements instead of simulated saccades: a recording (EyeLink .asc, Pupil gaze_positions.csv, Tobii .tsv, t,x,y CSV; "
                   "one step per fixation, every fixation unless --steps) or a live tracker pupil://HOST:PORT[?surface=NAME] (a step per new fixation)");
   add_gaze_options(*cmd, o->gaze, "--gaze: where the steps' fixations come from: ivt (velocity threshold), idt (dispersion threshold) or tracker (the recording's own fixation events)");
-  cmd->add_option("--display", o->gaze_display, "--gaze: the recording's screen W_CM,H_CM,DIST_CM (angles for the fixation filter)")->capture_default_str();
-  cmd->add_option("--stimulus", o->stimulus, "--gaze: where the render was shown on the recording's screen, X,Y,W,H in screen pixels (default: the whole screen)");
+  cmd->add_option("--display", o->gaze_display, "--gaze: the recording's screen W_CM,H_CM,DIST_CM (angles for the fixation filter)")->capture_default_str()->needs(gaze_option);
+  cmd->add_option("--stimulus", o->stimulus, "--gaze: where the render was shown on the recording's screen, X,Y,W,H in screen pixels (default: the whole screen)")->needs(gaze_option);
   cmd->add_option("--start", o->start, "--gaze recordings: skip the fixations that begin earlier than this many seconds after the first sample")
-      ->capture_default_str();
-  cmd->add_option("--live-timeout", o->live_timeout, "--gaze live: stop when the tracker sends nothing for this many seconds")->capture_default_str();
-  cmd->add_flag("--no-gaze-blinks", o->no_gaze_blinks, "--gaze: ignore the recording's blinks (by default a blink between fixations resets the field)");
+      ->capture_default_str()->needs(gaze_option);
+  cmd->add_option("--live-timeout", o->live_timeout, "--gaze live: stop when the tracker sends nothing for this many seconds")->capture_default_str()->needs(gaze_option);
+  cmd->add_flag("--no-gaze-blinks", o->no_gaze_blinks, "--gaze: ignore the recording's blinks (by default a blink between fixations resets the field)")->needs(gaze_option);
   cmd->add_option("--save-steps", o->save_steps, "steps whose perceived image is saved (step_NNNN.png), e.g. 1,4,20,69; 'all' for every step")
       ->capture_default_str();
   cmd->add_option("-o,--output", o->output, "output folder (created)")->required();

@@ -142,6 +142,7 @@ TEST(SimulateCli, BadInputGivesOneClearLine) {
       {"simulate -o s --gaze nowhere.asc", "nowhere.asc"},
       {"simulate -o s --gaze tcp://host:1", "unknown live source"},
       {"simulate -o s --gaze pupil://127.0.0.1:1 --fixation tracker", "fixation events"},
+      {"simulate -o s --stimulus 0,0,10,10", "--stimulus requires --gaze"},
   };
   for (const auto& [args, expected] : cases) {
     const CliRun r = foveal_test::foveal(args);
