@@ -1,5 +1,6 @@
 // apps/bench_command.cpp — `foveal bench ao`: the first paper's Table 1 on this machine.
 #include "commands.h"
+#include "foveal/io/outputs.h"
 #include "foveal/render/ao_benchmark.h"
 #include "foveal/util/error.h"
 #include "foveal/util/parallel.h"
@@ -8,7 +9,6 @@
 #include <fmt/core.h>
 
 #include <filesystem>
-#include <fstream>
 #include <memory>
 
 namespace foveal::app {
@@ -88,17 +88,11 @@ std::function<int()> add_bench_command(CLI::App& app) {
     const std::string table = to_markdown(result);
     fmt::print("\n{}", table);
     if (!o->json.empty()) {
-      std::ofstream out(o->json);
       auto j = to_json(result);
       j["repeats"] = p.repeats;
-      out << j.dump(2) << "\n";
-      if (!out) fail("{}: cannot write", o->json);
+      write_json_file(o->json, j);
     }
-    if (!o->markdown.empty()) {
-      std::ofstream out(o->markdown);
-      out << table;
-      if (!out) fail("{}: cannot write", o->markdown);
-    }
+    if (!o->markdown.empty()) write_text_file(o->markdown, table);
     return 0;
   };
   return [run_ao, vision, blur, ao, blur_cmd] { return ao->parsed() ? run_ao() : blur_cmd->parsed() ? blur() : vision(); };

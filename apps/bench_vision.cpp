@@ -1,6 +1,7 @@
 // apps/bench_vision.cpp — `foveal bench vision`: the second paper's Table 1 (per-stage times of
 // one simulation step) on this machine.
 #include "commands.h"
+#include "foveal/io/outputs.h"
 #include "foveal/util/error.h"
 #include "foveal/util/parallel.h"
 #include "foveal/util/parse.h"
@@ -14,7 +15,6 @@
 
 #include <algorithm>
 #include <filesystem>
-#include <fstream>
 #include <memory>
 
 namespace foveal::app {
@@ -112,10 +112,8 @@ std::function<int()> add_bench_blur_command(CLI::App& bench) {
       }
     }
     if (!o->json.empty()) {
-      std::ofstream out(o->json);
-      out << nlohmann::json({{"scene", scene.source}, {"size", o->size}, {"pupil_mm", o->pupil}, {"lens_samples", o->samples},
-                             {"threads", threads.threads()}, {"rows", rows}}).dump(2) << "\n";
-      if (!out) fail("{}: cannot write", o->json);
+      write_json_file(o->json, {{"scene", scene.source}, {"size", o->size}, {"pupil_mm", o->pupil}, {"lens_samples", o->samples},
+                                {"threads", threads.threads()}, {"rows", rows}});
     }
     return 0;
   };
@@ -188,16 +186,8 @@ std::function<int()> add_bench_vision_command(CLI::App& bench) {
                         {"non_tracing_over_trace", ratio}});
       }
     }
-    if (!o->json.empty()) {
-      std::ofstream out(o->json);
-      out << nlohmann::json({{"threads", threads.threads()}, {"eye", o->eye}, {"rows", rows}}).dump(2) << "\n";
-      if (!out) fail("{}: cannot write", o->json);
-    }
-    if (!o->markdown.empty()) {
-      std::ofstream out(o->markdown);
-      out << md;
-      if (!out) fail("{}: cannot write", o->markdown);
-    }
+    if (!o->json.empty()) write_json_file(o->json, {{"threads", threads.threads()}, {"eye", o->eye}, {"rows", rows}});
+    if (!o->markdown.empty()) write_text_file(o->markdown, md);
     return 0;
   };
 }

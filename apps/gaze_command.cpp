@@ -2,6 +2,7 @@
 // compare them with the tracker's own, draw the scan path.
 #include "commands.h"
 #include "foveal/gaze/summary.h"
+#include "foveal/io/outputs.h"
 #include "foveal/io/scanpath.h"
 #include "foveal/util/error.h"
 #include "foveal/util/parse.h"
@@ -9,7 +10,6 @@
 #include <fmt/core.h>
 
 #include <filesystem>
-#include <fstream>
 #include <memory>
 
 namespace foveal::app {
@@ -108,11 +108,7 @@ std::function<int()> add_gaze_command(CLI::App& app) {
       display.res_y = recording.screen_px.y;
     }
     const GazeSummary summary = summarize_recording(recording, display, params);
-    if (!o->json.empty()) {
-      std::ofstream out(o->json);
-      out << summary.json.dump(2) << "\n";
-      if (!out) fail("{}: cannot write JSON", o->json);
-    }
+    if (!o->json.empty()) write_json_file(o->json, summary.json);
     if (!o->no_scanpath) {
       const FixationResult& shown = method == FixationMethod::idt ? summary.filters[1].result : summary.filters[0].result;
       ScanpathStyle style;

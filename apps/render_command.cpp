@@ -11,7 +11,6 @@
 #include <fmt/core.h>
 
 #include <cstdio>
-#include <fstream>
 #include <unistd.h>
 #include <memory>
 
@@ -138,11 +137,7 @@ std::function<int()> add_render_command(CLI::App& app) {
     save_image(frame.color, o->output);
     if (!o->aov.empty()) write_aovs(frame, o->aov);
     if (!o->mask.empty()) save_image(budget_mask(frame, p.foveation.max_rays), o->mask, false);
-    if (!o->stats.empty()) {
-      std::ofstream out(o->stats);
-      out << frame_stats_json(frame, p, scene, tracer, threads.threads()).dump(2) << "\n";
-      if (!out) fail("{}: cannot write stats", o->stats);
-    }
+    if (!o->stats.empty()) write_json_file(o->stats, frame_stats_json(frame, p, scene, tracer, threads.threads()));
     if (o->quiet) return 0;
     const FrameStats& s = frame.stats;
     fmt::print("foveal render: {} ({} triangles{}, BVH {:.0f} ms), camera '{}', {}x{}, {} mode, gaze ({:.0f}, {:.0f}), {} threads\n",

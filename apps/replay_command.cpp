@@ -152,9 +152,7 @@ std::function<int()> add_replay_command(CLI::App& app) {
                           {"peak_rss_mib", peak_rss_mib()}};
       if (recording) j["recording"] = {{"format", to_string(recording->format)}, {"screen_px", {recording->screen_px.x, recording->screen_px.y}},
                                        {"samples", recording->samples.size()}};
-      std::ofstream out(o->stats);
-      out << j.dump(2) << "\n";
-      if (!out) fail("{}: cannot write stats", o->stats);
+      write_json_file(o->stats, j);
     }
     if (!summary.stopped.empty()) fail("{}", summary.stopped);
     if (o->quiet) return 0;

@@ -18,7 +18,6 @@
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
 #include <memory>
 #include <set>
 #include <unistd.h>
@@ -104,6 +103,7 @@ std::function<int()> add_simulate_command(CLI::App& app) {
         save.insert(static_cast<int>(v));
       }
 
+    int step_count = o->steps;
     // Real gaze: the fixations of a recording, or a live tracker's
     const bool gaze = !o->gaze_source.empty();
     const bool live = o->gaze_source.rfind("pupil://", 0) == 0;
@@ -139,9 +139,9 @@ std::function<int()> add_simulate_command(CLI::App& app) {
         if (recorded.empty())
           fail("{}: no fixations{} ({} filter)", recording.source, o->start > 0 ? fmt::format(" after --start {} s", o->start) : "",
                to_string(from));
-        if (steps_option->count() == 0) o->steps = static_cast<int>(recorded.size());
-        o->steps = std::min<int>(o->steps, static_cast<int>(recorded.size()));
-        const auto blinks = std::count_if(recorded.begin(), recorded.begin() + o->steps, [](const GazeStep& g) { return g.blink_before; });
+        // Every fixation unless --steps asks for fewer
+        if (steps_option->count() == 0 || step_count > int(recorded.size())) step_count = static_cast<int>(recorded.size());
+        const auto blinks = std::count_if(recorded.begin(), recorded.begin() + step_count, [](const GazeStep& g) { return g.blink_before; });
         gaze_summary = fmt::format("{} ({} fixations by {}, {} blinks{})", recording.source, recorded.size(), to_string(from),
                                    o->no_gaze_blinks ? 0 : blinks, o->no_gaze_blinks ? " ignored" : "");
       }
@@ -165,7 +165,7 @@ std::function<int()> add_simulate_command(CLI::App& app) {
     std::vector<glm::vec2> fixations;
     std::vector<GazeStep> gaze_steps;
     std::string stopped;
-    for (int k = 1; k <= o->steps; ++k) {
+    for (int k = 1; k <= step_count; ++k) {
       std::optional<glm::vec2> fixation;
       if (gaze) {
         std::optional<GazeStep> g;
@@ -185,7 +185,7 @@ std::function<int()> add_simulate_command(CLI::App& app) {
       if (save_all || save.count(k)) save_image(sim.perceived(), (dir / fmt::format("step_{:04d}.png", k)).string());
       if (!o->video.empty()) save_image(sim.perceived(), (dir / fmt::format("frame_{:05d}.png", k - 1)).string());
       if (show && clock.ms() > 1000)
-        fmt::print(stderr, "\r  step {}/{}  sharp {:.1f}%  {:.0f} ms/step ", k, o->steps, 100 * s.sharp_fraction, s.total_ms);
+        fmt::print(stderr, "\r  step {}/{}  sharp {:.1f}%  {:.0f} ms/step ", k, step_count, 100 * s.sharp_fraction, s.total_ms);
     }
     if (show && clock.ms() > 1000) fmt::print(stderr, "\r{:70}\r", "");
     if (steps.empty()) fail("{}", stopped);
@@ -239,9 +239,7 @@ std::function<int()> add_simulate_command(CLI::App& app) {
                                        {"blink_before", g.blink_before}};
         }
       }
-      std::ofstream out(o->stats);
-      out << j.dump(2) << "\n";
-      if (!out) fail("{}: cannot write stats", o->stats);
+      write_json_file(o->stats, j);
     }
     // A live tracker that went away: everything so far is written; say why it stopped
     if (!stopped.empty()) fail("{} (stopped after {} steps; the outputs so far are written)", stopped, steps.size());

@@ -4,6 +4,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -43,6 +44,31 @@ inline size_t lines(const std::string& s) {
   size_t n = 0;
   for (char c : s) n += c == '\n';
   return n;
+}
+
+// A 500 Hz t,x,y,confidence recording on a 480×300 screen: 300 ms fixations at (100, 100),
+// (400, 200) and (240, 150), joined by 28 ms saccades — or, with `blink_before_third`, the
+// second and third by a 150 ms blink (confidence 0) instead. Returns its path.
+inline std::string write_three_fixations(const std::string& name, bool blink_before_third = false) {
+  const fs::path path = scratch(name);
+  fs::create_directories(path.parent_path());
+  std::ofstream out(path);
+  out << "t,x,y,confidence\n";
+  const double points[3][2] = {{100, 100}, {400, 200}, {240, 150}};
+  double t = 0;
+  for (int f = 0; f < 3; ++f) {
+    for (int i = 0; i < 150; ++i, t += 0.002)
+      out << t << "," << points[f][0] + 0.3 * std::sin(i) << "," << points[f][1] + 0.3 * std::cos(i) << ",0.9\n";
+    if (f == 2) break;
+    if (f == 1 && blink_before_third) {
+      for (int i = 0; i < 75; ++i, t += 0.002) out << t << ",0,0,0\n";
+      continue;
+    }
+    for (int i = 1; i < 15; ++i, t += 0.002)
+      out << t << "," << points[f][0] + (points[f + 1][0] - points[f][0]) * i / 15.0 << ","
+          << points[f][1] + (points[f + 1][1] - points[f][1]) * i / 15.0 << ",0.9\n";
+  }
+  return path.string();
 }
 
 }  // namespace foveal_test

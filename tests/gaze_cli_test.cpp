@@ -7,32 +7,12 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
-#include <cmath>
 #include <fstream>
 
 using namespace foveal_test;
 namespace fs = std::filesystem;
 
 namespace {
-
-// A 500 Hz t,x,y recording on a 480×300 screen: three 300 ms fixations joined by 30 ms saccades.
-std::string write_recording(const std::string& name) {
-  const fs::path path = scratch(name);
-  fs::create_directories(path.parent_path());
-  std::ofstream out(path);
-  out << "t,x,y,confidence\n";
-  const double points[3][2] = {{100, 100}, {400, 200}, {240, 150}};
-  double t = 0;
-  for (int f = 0; f < 3; ++f) {
-    for (int i = 0; i < 150; ++i, t += 0.002)
-      out << t << "," << points[f][0] + 0.3 * std::sin(i) << "," << points[f][1] + 0.3 * std::cos(i) << ",0.9\n";
-    if (f == 2) break;
-    for (int i = 1; i < 15; ++i, t += 0.002)
-      out << t << "," << points[f][0] + (points[f + 1][0] - points[f][0]) * i / 15.0 << ","
-          << points[f][1] + (points[f + 1][1] - points[f][1]) * i / 15.0 << ",0.9\n";
-  }
-  return path.string();
-}
 
 std::vector<std::vector<std::string>> read_csv(const fs::path& path) {
   std::vector<std::vector<std::string>> rows;
@@ -55,7 +35,7 @@ std::vector<std::vector<std::string>> read_csv(const fs::path& path) {
 }  // namespace
 
 TEST(GazeCli, SummaryJsonAndScanPath) {
-  const std::string rec = write_recording("three.csv");
+  const std::string rec = write_three_fixations("three.csv");
   const CliRun r = foveal_test::foveal("gaze " + rec + " --screen 480x300 --json gaze.json --scanpath scan.png");
   ASSERT_EQ(r.status, 0) << r.err;
   EXPECT_NE(r.out.find("ivt"), std::string::npos);
@@ -93,7 +73,7 @@ TEST(GazeCli, RealEyeLinkAgreementInJson) {
 }
 
 TEST(GazeCli, ReplayFollowsTheRecording) {
-  const std::string rec = write_recording("replay.csv");
+  const std::string rec = write_three_fixations("replay.csv");
   const CliRun r = foveal_test::foveal("replay --gaze " + rec + " --screen 480x300 --scene builtin:sphere-plane --size 48x30 --max-rays 4 "
                           "--fps 10 -o seq --stats seq.json");
   ASSERT_EQ(r.status, 0) << r.err;
@@ -118,7 +98,7 @@ TEST(GazeCli, ReplayFollowsTheRecording) {
 
 TEST(GazeCli, ReplayWritesAVideo) {
   if (std::system("ffmpeg -version > /dev/null 2>&1") != 0) GTEST_SKIP() << "skipped: ffmpeg absent";
-  const std::string rec = write_recording("video.csv");
+  const std::string rec = write_three_fixations("video.csv");
   const CliRun r = foveal_test::foveal("replay --gaze " + rec + " --screen 480x300 --scene builtin:plane --size 33x21 --max-rays 2 --fps 10 "
                           "-o vid --video vid/out.mp4 -q");
   ASSERT_EQ(r.status, 0) << r.err;
@@ -154,7 +134,7 @@ TEST(GazeCli, LiveReplayHoldsTheFixationAndStopsWhenTheTrackerHangsUp) {
 }
 
 TEST(GazeCli, BadInputGivesOneClearLine) {
-  const std::string rec = write_recording("ok.csv");
+  const std::string rec = write_three_fixations("ok.csv");
   {
     std::ofstream bad(scratch("bad.csv"));
     bad << "t,x,y\n0,1,2\n0.002,1,two\n";

@@ -5,7 +5,6 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
-#include <cmath>
 #include <fstream>
 
 using namespace foveal_test;
@@ -34,34 +33,8 @@ TEST(SimulateCli, StepsStatsAndPictures) {
   for (size_t k = 0; k < 6; ++k) EXPECT_EQ(j2["steps"][k]["focus_px"], j["steps"][k]["focus_px"]);
 }
 
-namespace {
-
-// A 500 Hz t,x,y,confidence recording on a 480×300 screen: three 300 ms fixations; a 30 ms
-// saccade after the first, a 150 ms blink (confidence 0) after the second.
-std::string write_blink_recording(const std::string& name) {
-  const fs::path path = scratch(name);
-  fs::create_directories(path.parent_path());
-  std::ofstream out(path);
-  out << "t,x,y,confidence\n";
-  const double points[3][2] = {{100, 100}, {400, 200}, {240, 150}};
-  double t = 0;
-  for (int f = 0; f < 3; ++f) {
-    for (int i = 0; i < 150; ++i, t += 0.002)
-      out << t << "," << points[f][0] + 0.3 * std::sin(i) << "," << points[f][1] + 0.3 * std::cos(i) << ",0.9\n";
-    if (f == 0)
-      for (int i = 1; i < 15; ++i, t += 0.002)
-        out << t << "," << points[f][0] + (points[f + 1][0] - points[f][0]) * i / 15.0 << ","
-            << points[f][1] + (points[f + 1][1] - points[f][1]) * i / 15.0 << ",0.9\n";
-    if (f == 1)
-      for (int i = 0; i < 75; ++i, t += 0.002) out << t << ",0,0,0\n";
-  }
-  return path.string();
-}
-
-}  // namespace
-
 TEST(SimulateCli, RecordedFixationsDriveTheSteps) {
-  const std::string rec = write_blink_recording("blink.csv");
+  const std::string rec = write_three_fixations("blink.csv", true);
   const std::string common = "simulate --gaze " + rec + " --screen 480x300 --size 160x100 --save-steps '' ";
   for (const char* filter : {"ivt", "idt"}) {
     const CliRun r = foveal_test::foveal(common + "--fixation " + filter + " -o gz --stats gz.json");

@@ -36,10 +36,7 @@ std::vector<GazeEvent> invalid_gap_blinks(const std::vector<GazeSample>& samples
       gap = true;
       continue;
     }
-    if (gap && std::isfinite(last_valid)) {
-      const double length = s.t_s - last_valid;
-      if (length >= min_blink_s && length <= max_blink_s) blinks.push_back({last_valid, s.t_s, glm::dvec2(NAN)});
-    }
+    if (gap && std::isfinite(last_valid) && blink_gap(last_valid, s.t_s)) blinks.push_back({last_valid, s.t_s, glm::dvec2(NAN)});
     gap = false;
     last_valid = s.t_s;
   }
@@ -94,8 +91,7 @@ std::optional<GazeStep> LiveSteps::next(double timeout_s) {
         if (std::isnan(invalid_since_)) invalid_since_ = std::isfinite(last_valid_t_) ? last_valid_t_ : s.t_s;
       } else {
         if (!std::isnan(invalid_since_)) {
-          const double gap = s.t_s - invalid_since_;
-          if (gap >= min_blink_s && gap <= max_blink_s) blink_ = true;
+          blink_ = blink_ || blink_gap(invalid_since_, s.t_s);
           invalid_since_ = NAN;
         }
         last_valid_t_ = s.t_s;

@@ -31,6 +31,8 @@ struct GazeStep {
 
 // Blink durations: a run of invalid samples within these bounds is a blink.
 inline constexpr double min_blink_s = 0.070, max_blink_s = 0.500;
+// Whether a run of invalid samples from the last valid sample at `from_s` to the next at `to_s` is a blink.
+inline bool blink_gap(double from_s, double to_s) { return to_s - from_s >= min_blink_s && to_s - from_s <= max_blink_s; }
 
 // The fixations of a recording as steps, in time order (fixations without a finite centre are
 // dropped). `tracker` needs the recording's own fixation events; throws Error when it has none.

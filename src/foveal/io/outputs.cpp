@@ -267,4 +267,13 @@ double peak_rss_mib() {
   return usage.ru_maxrss / 1024.0;  // Linux reports KiB
 }
 
+void write_text_file(const std::string& path, const std::string& text) {
+  std::ofstream out(path);
+  out << text;
+  out.close();
+  if (!out) fail("{}: cannot write", path);
+}
+
+void write_json_file(const std::string& path, const nlohmann::json& json) { write_text_file(path, json.dump(2) + "\n"); }
+
 }  // namespace foveal

@@ -38,4 +38,9 @@ nlohmann::json frame_stats_json(const Frame& frame, const RenderParams& params, 
 // Peak resident memory of this process so far, MiB.
 double peak_rss_mib();
 
+// Write text to a file, replacing it; throws Error naming the file when it cannot.
+void write_text_file(const std::string& path, const std::string& text);
+// The same for JSON (indented by two, a final newline).
+void write_json_file(const std::string& path, const nlohmann::json& json);
+
 }  // namespace foveal

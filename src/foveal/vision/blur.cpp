@@ -83,6 +83,9 @@ std::vector<Level> pyramid(const Image& img, int levels) {
   return out;
 }
 
+// Inlined into the per-CPU builds of gather_rows (a call would run the baseline build)
+#define FOVEAL_INLINE __attribute__((always_inline))
+
 // Taps spaced wider than this many texels read the next coarser level
 constexpr float kLevelSpacing = 2.0f;
 // Tiles of the smallest CoC, to skip the scatter-aware test where every tap passes it
@@ -91,7 +94,7 @@ constexpr int kTile = 16;
 // What every pixel's gather reads.
 struct GatherContext {
   const Image& img;
-  const std::vector<float>& coc;
+  const std::vector<float>& coc;  // per pixel, at most max_diameter_px (NaN and infinity: that)
   const BlurParams& params;
   const CocShape* shape;
   const std::vector<Level>& levels;
@@ -121,12 +124,12 @@ struct GatherContext {
 // One pixel of the gather: taps over its own CoC (diameter d, clamped), Gaussian-weighted,
 // bilinear reads; with `check`, a tap counts only where its own CoC reaches the pixel.
 template <int CH>
-inline __attribute__((always_inline)) void gather_pixel(const GatherContext& g, int x, int y, float d) {
+inline FOVEAL_INLINE void gather_pixel(const GatherContext& g, int x, int y, float d) {
   const int w = g.img.width;
   const size_t i = size_t(y) * w + x;
   const int n = taps_for_diameter(d, g.params.taps);
   float* dst = &g.out.pixels[i * CH];
-  if (n == 0) {  // sharp (also NaN): the pixel as it is
+  if (n == 0) {  // sharp: the pixel as it is
     for (int c = 0; c < CH; ++c) dst[c] = g.img.pixels[i * CH + c];
     return;
   }
@@ -149,69 +152,58 @@ inline __attribute__((always_inline)) void gather_pixel(const GatherContext& g, 
   const int sw = src.width, sh = src.height;
   v4 sum = {0, 0, 0, 0};
   float total = 0;
-  const glm::vec2 sc = g.shape ? g.shape->scale[i] : glm::vec2(1.0f);
   // Every tap's 2×2 footprint inside the image: no clamping needed
   const bool interior = cx - radius >= 0 && cy - radius >= 0 && cx + radius < float(sw - 2) && cy + radius < float(sh - 2);
   const v4* texels = src.texels.data();
-  if (interior && !g.shape) {
-    // The common case, kept lean: no clamping, a round disc, bilinear reads as two horizontal
-    // lerps and a vertical one, the scatter-aware test (below) as a weight of zero
-    const float* quad = g.min_quad[level].data();
-    const float texel_px = float(1 << level);
-    auto taps_loop = [&](auto checked) {
-      for (size_t k = 0; k < taps.offset.size(); ++k) {
-        const float sx = cx + radius * taps.offset[k].x, sy = cy + radius * taps.offset[k].y;
-        const int x0 = int(sx), y0 = int(sy);
-        float wk = taps.weight[k];
-        if constexpr (decltype(checked)::value) {
-          const float ex = (sx + 0.5f) * texel_px - 0.5f - float(x), ey = (sy + 0.5f) * texel_px - 0.5f - float(y);
-          const float reach = 0.5f * quad[size_t(y0) * sw + x0] + 0.5f * texel_px;
-          wk = reach * reach >= ex * ex + ey * ey ? wk : 0.0f;
-        }
-        const float fx = sx - float(x0), fy = sy - float(y0);
-        const v4* p = texels + size_t(y0) * sw + x0;
-        const v4 top = p[0] + fx * (p[1] - p[0]), bottom = p[sw] + fx * (p[sw + 1] - p[sw]);
-        sum += wk * (top + fy * (bottom - top));
-        total += wk;
+  const float* quad = g.min_quad[level].data();
+  const float texel_px = float(1 << level);
+  const glm::vec2 sc = g.shape ? g.shape->scale[i] : glm::vec2(1.0f);
+  // The taps, with what is known per pixel (scatter-aware test, clamping at the border, an
+  // elliptical CoC) decided outside the loop so that the common case runs without branches
+  auto taps_loop = [&](auto checked, auto clamped, auto elliptical) FOVEAL_INLINE {
+    for (size_t k = 0; k < taps.offset.size(); ++k) {
+      glm::vec2 o = taps.offset[k];
+      if constexpr (decltype(elliptical)::value) o = o.x * sc.x * g.along + o.y * sc.y * g.across;  // stretched into the ellipse
+      float sx = cx + radius * o.x, sy = cy + radius * o.y;
+      int dx1 = 1, dy1 = sw;
+      if constexpr (decltype(clamped)::value) {
+        sx = std::clamp(sx, 0.0f, float(sw - 1));
+        sy = std::clamp(sy, 0.0f, float(sh - 1));
+        if (sw < 2) dx1 = 0;
+        if (sh < 2) dy1 = 0;
       }
-    };
-    if (check) taps_loop(std::true_type{});
-    else taps_loop(std::false_type{});
-  } else {
-  for (size_t k = 0; k < taps.offset.size(); ++k) {
-    // The tap's offset: the unit-disc point, stretched into the pixel's ellipse
-    const glm::vec2 o = g.shape ? taps.offset[k].x * sc.x * g.along + taps.offset[k].y * sc.y * g.across : taps.offset[k];
-    float sx = cx + radius * o.x, sy = cy + radius * o.y;
-    int x0, y0, dx1, dy1;
-    if (interior) {
-      x0 = int(sx);
-      y0 = int(sy);
-      dx1 = 1;
-      dy1 = sw;
-    } else {  // bilinear read at the tap, clamped to the image
-      sx = std::clamp(sx, 0.0f, float(sw - 1));
-      sy = std::clamp(sy, 0.0f, float(sh - 1));
-      x0 = std::min(int(sx), std::max(sw - 2, 0));
-      y0 = std::min(int(sy), std::max(sh - 2, 0));
-      dx1 = std::min(x0 + 1, sw - 1) > x0 ? 1 : 0;
-      dy1 = std::min(y0 + 1, sh - 1) > y0 ? sw : 0;
+      int x0 = int(sx), y0 = int(sy);
+      if constexpr (decltype(clamped)::value) {
+        x0 = std::min(x0, std::max(sw - 2, 0));
+        y0 = std::min(y0, std::max(sh - 2, 0));
+      }
+      float wk = taps.weight[k];
+      if constexpr (decltype(checked)::value) {
+        // A tap counts only if the CoC of every pixel under its bilinear footprint reaches this
+        // pixel (scatter-aware: a sharp point does not spread, and no sharp texel leaks in
+        // bilinearly or through a coarse level's averages). One read: the footprint's smallest CoC.
+        const float ex = (sx + 0.5f) * texel_px - 0.5f - float(x), ey = (sy + 0.5f) * texel_px - 0.5f - float(y);
+        const float reach = 0.5f * quad[size_t(y0) * sw + x0] + 0.5f * texel_px;
+        wk = reach * reach >= ex * ex + ey * ey ? wk : 0.0f;
+      }
+      // Bilinear read as two horizontal lerps and a vertical one
+      const float fx = sx - float(x0), fy = sy - float(y0);
+      const v4* p = texels + size_t(y0) * sw + x0;
+      const v4 top = p[0] + fx * (p[dx1] - p[0]), bottom = p[dy1] + fx * (p[dy1 + dx1] - p[dy1]);
+      sum += wk * (top + fy * (bottom - top));
+      total += wk;
     }
-    if (check) {
-      // A tap counts only if the CoC of every pixel under its bilinear footprint reaches this
-      // pixel (scatter-aware: a sharp point does not spread, and no sharp texel leaks in
-      // bilinearly or through a coarse level's averages). One read: the footprint's smallest CoC.
-      const float r = g.min_quad[level][size_t(y0) * sw + x0];
-      const float ex = (sx + 0.5f) / scale - 0.5f - float(x), ey = (sy + 0.5f) / scale - 0.5f - float(y);
-      const float reach = 0.5f * r + 0.5f / scale;
-      if (reach * reach < ex * ex + ey * ey) continue;
-    }
-    const float fx = sx - x0, fy = sy - y0, wk = taps.weight[k];
-    const float w00 = (1 - fx) * (1 - fy) * wk, w10 = fx * (1 - fy) * wk, w01 = (1 - fx) * fy * wk, w11 = fx * fy * wk;
-    const v4* p00 = texels + size_t(y0) * sw + x0;
-    sum += w00 * p00[0] + w10 * p00[dx1] + w01 * p00[dy1] + w11 * p00[dy1 + dx1];
-    total += w00 + w10 + w01 + w11;
-  }
-  }
+  };
+  // Each combination of the three is its own instantiation of the loop
+  auto when = [](bool b, auto next) FOVEAL_INLINE {
+    if (b) next(std::true_type{});
+    else next(std::false_type{});
+  };
+  when(check, [&](auto checked) FOVEAL_INLINE {
+    when(!interior, [&](auto clamped) FOVEAL_INLINE {
+      when(g.shape != nullptr, [&](auto elliptical) FOVEAL_INLINE { taps_loop(checked, clamped, elliptical); });
+    });
+  });
   if (!(total > 0)) {  // nothing reached (cannot happen with the centre tap, kept for safety)
     for (int c = 0; c < CH; ++c) dst[c] = g.img.pixels[i * CH + c];
     return;
@@ -224,13 +216,10 @@ inline __attribute__((always_inline)) void gather_pixel(const GatherContext& g, 
 // chosen at load time by the CPU. The two round differently in the last bits, so a CPU without
 // AVX2 may give an image a few 1e-7 apart; on one machine the image never depends on threads.
 template <int CH>
-inline __attribute__((always_inline)) void gather_rows_of(const GatherContext& g, int y0, int y1) {
+inline FOVEAL_INLINE void gather_rows_of(const GatherContext& g, int y0, int y1) {
   const int w = g.img.width;
   for (int y = y0; y < y1; ++y)
-    for (int x = 0; x < w; ++x) {
-      const float c = g.coc[size_t(y) * w + x];
-      gather_pixel<CH>(g, x, y, std::min(std::isfinite(c) ? c : g.params.max_diameter_px, g.params.max_diameter_px));
-    }
+    for (int x = 0; x < w; ++x) gather_pixel<CH>(g, x, y, g.coc[size_t(y) * w + x]);
 }
 
 #if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && !defined(__SANITIZE_ADDRESS__)
@@ -260,21 +249,23 @@ Image variable_blur(const Image& img, const std::vector<float>& coc, const BlurP
   const int w = img.width, h = img.height, ch = img.channels;
   if (ch < 1 || ch > 4) fail("blur: images of 1 to 4 channels, got {}", ch);
   const std::vector<Level> levels = pyramid(img, 5);
-  // Smallest (clamped) CoC of each tile
+  // The CoCs clamped once (NaN and infinity: the largest), then the smallest of each tile
+  std::vector<float> clamped(coc.size());
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, coc.size(), 4096), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t i = r.begin(); i < r.end(); ++i)
+      clamped[i] = std::isfinite(coc[i]) ? std::min(coc[i], params.max_diameter_px) : params.max_diameter_px;
+  });
   const int tiles_x = (w + kTile - 1) / kTile, tiles_y = (h + kTile - 1) / kTile;
   std::vector<float> tile_min(size_t(tiles_x) * tiles_y, INFINITY);
   for (int y = 0; y < h; ++y)
     for (int x = 0; x < w; ++x) {
-      const float c = coc[size_t(y) * w + x];
       float& m = tile_min[size_t(y / kTile) * tiles_x + x / kTile];
-      m = std::min(m, std::isfinite(c) ? std::min(c, params.max_diameter_px) : params.max_diameter_px);
+      m = std::min(m, clamped[size_t(y) * w + x]);
     }
-  // Smallest (clamped) CoC under each texel of each level (a min pyramid), then under each
-  // texel's 2×2 bilinear footprint (x, x+1) × (y, y+1)
-  auto clamped = [&](float c) { return std::isfinite(c) ? std::min(c, params.max_diameter_px) : params.max_diameter_px; };
+  // Smallest CoC under each texel of each level (a min pyramid), then under each texel's 2×2
+  // bilinear footprint (x, x+1) × (y, y+1)
   std::vector<std::vector<float>> min_quad(levels.size());
-  std::vector<float> below(coc.size()), above;
-  for (size_t i = 0; i < coc.size(); ++i) below[i] = clamped(coc[i]);
+  std::vector<float> below = clamped, above;
   for (size_t l = 0; l < levels.size(); ++l) {
     const int lw = levels[l].width, lh = levels[l].height;
     if (l > 0) {  // min over the 2×2 texels of the level below
@@ -300,7 +291,7 @@ Image variable_blur(const Image& img, const std::vector<float>& coc, const BlurP
     });
   }
   Image out(w, h, ch);
-  const GatherContext context{img, coc, params, shape, levels, min_quad, along, across, patterns, first_count, tile_min, tiles_x, tiles_y, out};
+  const GatherContext context{img, clamped, params, shape, levels, min_quad, along, across, patterns, first_count, tile_min, tiles_x, tiles_y, out};
   tbb::parallel_for(tbb::blocked_range<int>(0, h, 4), [&](const tbb::blocked_range<int>& rows) {
     gather_rows(context, rows.begin(), rows.end());
   });

@@ -94,8 +94,7 @@ StepStats VisionSimulation::step(const Camera& camera, std::optional<glm::vec2> 
   // The eye sits at the camera: eccentricity is the angle between the camera rays through the
   // pixel and through the fixation; distances are along the optical axis (a thin lens focuses planes)
   const CameraRays rays(camera, w, h);
-  const glm::dvec3 gaze_ray = rays(s.focus_px.x, s.focus_px.y).dir;
-  const glm::vec3 forward = glm::normalize(camera.look - camera.eye);
+  const glm::vec3 gaze_dir(rays(s.focus_px.x, s.focus_px.y).dir);
   const double pupil_m = params_.eye.pupil_diameter_mm * 1e-3;
   std::vector<float> now_deg(n);  // this step's CoC (the ellipse's larger diameter), degrees
   const bool astigmatic = params_.eye.cylinder_d > 0;
@@ -106,7 +105,6 @@ StepStats VisionSimulation::step(const Camera& camera, std::optional<glm::vec2> 
   }
   std::vector<int64_t> cells(n);  // each pixel's field cell (−1: background)
   // Per pixel in single precision (vergences of at most a few dioptres, angles of degrees)
-  const glm::vec3 gaze_dir(gaze_ray), axis_dir(forward);
   const float metres = scene_.meters_per_unit, focus = static_cast<float>(s.focus_vergence);
   const float pupil_deg = static_cast<float>(glm::degrees(pupil_m)), penalty_f = static_cast<float>(penalty), cyl = static_cast<float>(cylinder);
   tbb::parallel_for(tbb::blocked_range<int>(0, h, 8), [&](const tbb::blocked_range<int>& rows) {
@@ -115,7 +113,7 @@ StepStats VisionSimulation::step(const Camera& camera, std::optional<glm::vec2> 
         const size_t i = size_t(y) * w + x;
         cells[i] = gbuffer_.hit(i) ? field_.cell(gbuffer_.position[i]) : -1;
         const glm::vec3 ray = gbuffer_.view[i];
-        const float axial_m = gbuffer_.hit(i) ? gbuffer_.depth[i] * glm::dot(ray, axis_dir) * metres : 0.0f;
+        const float axial_m = gbuffer_.hit(i) ? gbuffer_.depth[i] * glm::dot(ray, axis) * metres : 0.0f;
         const float object_vergence = axial_m > 0 ? 1.0f / axial_m : 0.0f;
         const float ecc = glm::degrees(angle_atan2(glm::length(glm::cross(ray, gaze_dir)), glm::dot(ray, gaze_dir)));
         // coc_axes_rad(), inlined: A·|1/D − v| along the cylinder axis, A·|1/D − v − C| across it
