@@ -18,6 +18,7 @@ std::function<int()> add_bench_command(CLI::App& app);
 std::function<int()> add_gaze_command(CLI::App& app);
 std::function<int()> add_replay_command(CLI::App& app);
 std::function<int()> add_simulate_command(CLI::App& app);
+std::function<int()> add_view_command(CLI::App& app);
 std::function<int()> add_bench_vision_command(CLI::App& bench);
 std::function<int()> add_bench_blur_command(CLI::App& bench);
 
@@ -41,6 +42,7 @@ struct RenderOptions {
   double gamma = 2, beta = 1, ellipse = 1.538;
   uint64_t seed = 1;
   bool shadows = false;
+  bool mode_option = true;  // view has its own --mode (foveated, reference, side-by-side, vision)
 };
 void add_render_options(CLI::App& command, RenderOptions& options);
 // Size, display and renderer options → validated params (gaze unset).

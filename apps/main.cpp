@@ -19,6 +19,7 @@ int main(int argc, char** argv) {
   const auto gaze = foveal::app::add_gaze_command(app);
   const auto replay = foveal::app::add_replay_command(app);
   const auto simulate = foveal::app::add_simulate_command(app);
+  const auto view = foveal::app::add_view_command(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
@@ -38,6 +39,7 @@ int main(int argc, char** argv) {
     if (app.got_subcommand("gaze")) return gaze();
     if (app.got_subcommand("replay")) return replay();
     if (app.got_subcommand("simulate")) return simulate();
+    if (app.got_subcommand("view")) return view();
     return 2;
   } catch (const foveal::Error& e) {
     fmt::print(stderr, "foveal: error: {}\n", e.what());

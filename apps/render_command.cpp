@@ -51,7 +51,8 @@ void add_view_options(CLI::App& cmd, ViewOptions& o) {
 }
 
 void add_render_options(CLI::App& cmd, RenderOptions& o) {
-  cmd.add_option("--mode", o.mode, "foveated (budget follows the gaze) or full (n_max rays everywhere: the reference)")
+  if (o.mode_option)
+    cmd.add_option("--mode", o.mode, "foveated (budget follows the gaze) or full (n_max rays everywhere: the reference)")
       ->capture_default_str();
   cmd.add_option("--ao-distance", o.ao_distance, "AO ray length in scene units, or inf (default: scene's, else 0.2 × bounding-box diagonal)");
   cmd.add_option("--max-rays", o.max_rays, "n_max: AO rays per pixel where q(E) = 1")->capture_default_str();

@@ -8,6 +8,7 @@ packages=(
   libopenexr-dev libopencv-core-dev libopencv-imgproc-dev libopencv-imgcodecs-dev libopencv-features2d-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   cppzmq-dev libmsgpack-cxx-dev ffmpeg
+  libglfw3-dev libimgui-dev libgl-dev xvfb xauth libgl1-mesa-dri
 )
 missing=()
 for p in "${packages[@]}"; do

@@ -1,0 +1,127 @@
+// apps/view_command.cpp — `foveal view`: the interactive viewer (GLFW + Dear ImGui).
+#include "commands.h"
+#include "foveal/ui/session.h"
+#include "foveal/ui/window.h"
+#include "foveal/util/error.h"
+#include "foveal/util/parallel.h"
+#include "foveal/util/parse.h"
+
+#include <fmt/core.h>
+
+#include <filesystem>
+#include <memory>
+#include <regex>
+
+namespace foveal::app {
+
+std::function<int()> add_view_command(CLI::App& app) {
+  auto* cmd = app.add_subcommand("view", "interactive viewer: foveated AO, the reference, both side by side, or the simulated eye, following the mouse, a recording or a live tracker");
+  struct Options {
+    ViewOptions view;
+    RenderOptions render;
+    GazeOptions gaze;
+    std::string mode = "foveated", source = "mouse", stimulus, overlays = "gaze", screenshot, window_screenshot, eye = "healthy";
+    double speed = 1, pupil = 3.5, starvation = 0.015, timeout = 600;
+    float diff_gain = 8;
+    int frames = 0, blink_every = 0;
+    bool no_panel = false, no_progressive = false;
+  };
+  auto o = std::make_shared<Options>();
+  o->view.eye_option = "--from";
+  o->render.mode_option = false;
+  o->gaze.fixation = "ivt";
+  add_view_options(*cmd, o->view);
+  cmd->add_option("--mode", o->mode, "foveated, reference (n_max rays everywhere), side-by-side (foveated | reference | difference) or vision (the simulated eye)")
+      ->capture_default_str();
+  cmd->add_option("--gaze", o->source,
+                  "mouse (the cursor over the image), X,Y (a fixed point, render pixels), a recording (EyeLink .asc, Pupil gaze_positions.csv, "
+                  "Tobii .tsv, t,x,y CSV; played in real time) or a live tracker pupil://HOST:PORT[?surface=NAME]")
+      ->capture_default_str();
+  add_render_options(*cmd, o->render);
+  add_gaze_options(*cmd, o->gaze, "how raw gaze becomes the fixation the render follows: ivt (velocity threshold), idt (dispersion threshold), mean, or none (every sample)");
+  cmd->add_option("--stimulus", o->stimulus, "recordings and trackers: where the render is on their screen, X,Y,W,H in screen pixels (default: the whole screen)");
+  cmd->add_option("--speed", o->speed, "recordings: playback speed (1 = real time)")->capture_default_str();
+  cmd->add_option("--eye", o->eye, "vision mode: healthy, glaucoma[:SEVERITY 0..1], myopia:-D, hyperopia:D, presbyopia:AGE, astigmatism:CYL[@AXIS]; join with '+'")
+      ->capture_default_str();
+  cmd->add_option("--pupil", o->pupil, "vision mode: pupil diameter, mm")->capture_default_str();
+  cmd->add_option("--starvation", o->starvation, "vision mode: remembered CoCs grow by this fraction per step")->capture_default_str();
+  cmd->add_option("--blink-every", o->blink_every, "vision mode: a blink (the field forgets) every N steps; 0 = never")->capture_default_str();
+  cmd->add_option("--overlays", o->overlays, "drawn over the image: gaze, contours (q = 1, 0.5, 0.25), budget (AO heat map), scanpath, sharp (vision); comma-separated, all or none")
+      ->capture_default_str();
+  cmd->add_option("--diff-gain", o->diff_gain, "side-by-side: the difference pane shows |foveated − reference| × this")->capture_default_str();
+  cmd->add_flag("--no-progressive", o->no_progressive, "no quarter-resolution preview before each full frame");
+  cmd->add_option("--frames", o->frames, "show this many frames, wait for the finished image, write --screenshot, and exit (scripts, tests)")
+      ->check(CLI::Range(0, 1000000));
+  cmd->add_option("--screenshot", o->screenshot, "screenshot path (.png; its stats go beside it as .json); key P writes it (numbered when it exists)");
+  cmd->add_option("--window-screenshot", o->window_screenshot, "with --frames: also a PNG of the whole window, panel included");
+  cmd->add_option("--timeout", o->timeout, "--frames: longest wait for the finished image, seconds")->capture_default_str();
+  cmd->add_flag("--no-panel", o->no_panel, "start with the parameter panel hidden (Tab toggles it)");
+
+  return [o] {
+    const ThreadScope threads(o->view.threads);
+    ViewSettings s;
+    s.render = resolve_render_params(o->view, o->render);
+    s.mode = parse_view_mode(o->mode);
+    s.eye = o->eye;
+    s.vision.eye.pupil_diameter_mm = o->pupil;
+    s.vision.starvation = o->starvation;
+    s.vision.blink_every = o->blink_every;
+    s.diff_gain = o->diff_gain;
+    s.progressive = !o->no_progressive;
+    resolve(s);
+    WindowOptions w;
+    w.overlays = parse_overlays(o->overlays);
+    w.frames = o->frames;
+    w.screenshot = o->screenshot;
+    w.window_screenshot = o->window_screenshot;
+    w.panel = !o->no_panel;
+    w.converge_timeout_s = o->timeout;
+    if (o->frames > 0 && o->screenshot.empty() && o->window_screenshot.empty()) fail("--frames: give --screenshot or --window-screenshot too (what the run is for)");
+    if (o->frames == 0 && !o->window_screenshot.empty()) fail("--window-screenshot: needs --frames");
+    if (!(o->speed > 0)) fail("--speed: must be positive, got {}", o->speed);
+    if (!(o->timeout > 0)) fail("--timeout: must be positive seconds, got {}", o->timeout);
+
+    // The gaze: the mouse, a fixed point, a recording or a tracker
+    GazeInput gaze;
+    const glm::ivec2 render_px(s.render.width, s.render.height);
+    gaze.display = s.render.display;
+    if (o->gaze.fixation == "none") gaze.filter.reset();
+    else gaze.filter = parse_fixation_method(o->gaze.fixation);
+    gaze.fixation = resolve_fixation_params(o->gaze);
+    std::string source_name = o->source;
+    if (o->source == "mouse") {
+      gaze.source = std::make_unique<MouseSource>(render_px);
+      gaze.mapping = make_screen_mapping(render_px, render_px);
+    } else if (o->source.find("://") != std::string::npos) {
+      if (o->source.rfind("pupil://", 0) != 0)
+        fail("--gaze: unknown live source '{}' (live trackers: pupil://HOST:PORT[?surface=NAME])", o->source);
+      const ReadOptions read = resolve_read_options(o->gaze, s.render.display);
+      gaze.source = std::make_unique<PupilSource>(o->source, read.screen_px, read.min_confidence);
+      gaze.mapping = make_screen_mapping(gaze.source->screen_px(), render_px, o->stimulus);
+    } else if (std::regex_match(o->source, std::regex(R"(\s*[-+0-9.eE]+\s*,\s*[-+0-9.eE]+\s*)")) && !std::filesystem::exists(o->source)) {
+      gaze.fixed_px = parse_vec2("--gaze", o->source);
+    } else {
+      const ReadOptions read = resolve_read_options(o->gaze, s.render.display);
+      Recording recording = read_recording(o->source, read);
+      if (recording.samples.empty()) fail("{}: no samples", recording.source);
+      const glm::ivec2 screen = recording.screen_px;
+      gaze.source = std::make_unique<RecordingPlayback>(std::move(recording), o->speed);
+      gaze.mapping = make_screen_mapping(screen, render_px, o->stimulus);
+    }
+
+    const Scene scene = load_scene(o->view.scene);
+    const Camera camera = resolve_camera(scene, o->view);
+    const Tracer tracer(scene, parse_trace_api(o->render.trace_api));
+    ViewSession session(scene, tracer, camera, s, std::move(gaze));
+    w.title = fmt::format("foveal view — {} ({} triangles)", scene.source, tracer.triangles());
+    run_window(session, w);
+    if (!o->screenshot.empty() && o->frames > 0) {
+      const ViewStatus st = session.status();
+      fmt::print("foveal view: {} mode, {}x{}, gaze {}, {} → {} ({}, {:.0f} ms)\n", to_string(s.mode), s.render.width,
+                 s.render.height, source_name, st.stage, o->screenshot, st.converged ? "converged" : "not converged", st.render_ms);
+    }
+    return 0;
+  };
+}
+
+}  // namespace foveal::app

@@ -1,0 +1,250 @@
+// The viewer's session and overlays, without a window: every shown pixel comes from the library's
+// render and simulation functions, the gaze pipeline follows the mouse, overlays sit where the
+// foveation model says.
+#include "foveal/ui/overlays.h"
+#include "foveal/ui/session.h"
+#include "foveal/io/image_io.h"
+#include "foveal/util/error.h"
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <filesystem>
+#include <fstream>
+#include <unistd.h>
+
+namespace foveal {
+namespace {
+
+const Scene& box() {
+  static const Scene scene = make_builtin_scene("box");
+  return scene;
+}
+const Tracer& box_tracer() {
+  static const Tracer tracer(box());
+  return tracer;
+}
+
+ViewSettings small_settings(ViewMode mode) {
+  ViewSettings s;
+  s.mode = mode;
+  s.render.width = 160;
+  s.render.height = 100;  // filling the default 1680×1050 display: q(E) falls over the image
+  s.render.foveation.max_rays = 24;
+  return s;
+}
+
+GazeInput fixed(glm::dvec2 p) {
+  GazeInput g;
+  g.fixed_px = p;
+  return g;
+}
+
+size_t differing(const Rgba8& a, int x0, const Rgba8& b) {
+  size_t n = 0;
+  for (int y = 0; y < b.height; ++y)
+    for (int x = 0; x < b.width; ++x)
+      for (int c = 0; c < 3; ++c) n += a.at(x0 + x, y)[c] != b.at(x, y)[c];
+  return n;
+}
+
+const Overlays kNone = parse_overlays("none");
+
+TEST(ViewSession, FinishedFrameIsTheRenderersFrame) {
+  const Camera camera = default_camera(box());
+  ViewSettings s = small_settings(ViewMode::foveated);
+  ViewSession session(box(), box_tracer(), camera, s, fixed({50, 40}));
+  ASSERT_TRUE(session.wait_until_converged(120, kNone));
+  RenderParams p = s.render;
+  p.gaze_px = glm::dvec2(50, 40);
+  const Frame frame = render_frame(box_tracer(), box(), camera, p);
+  const Rgba8 expected = to_rgba8(frame.color);
+  ASSERT_EQ(session.image().width, expected.width);
+  EXPECT_EQ(differing(session.image(), 0, expected), 0u);
+  EXPECT_EQ(session.status().ao_rays, frame.stats.ao_rays);
+  EXPECT_EQ(session.status().render_gaze, glm::dvec2(50, 40));
+
+  // A changed parameter restarts the render, which finishes at the new parameters' frame
+  s.render.foveation.gamma = 1.0;
+  session.set_settings(s);
+  session.update(kNone);
+  EXPECT_FALSE(session.status().converged);
+  ASSERT_TRUE(session.wait_until_converged(120, kNone));
+  p.foveation.gamma = 1.0;
+  const Frame second = render_frame(box_tracer(), box(), camera, p);
+  EXPECT_GT(second.stats.ao_rays, frame.stats.ao_rays);  // γ = 1 spends more rays off the fovea
+  EXPECT_EQ(session.status().ao_rays, second.stats.ao_rays);
+  EXPECT_EQ(differing(session.image(), 0, to_rgba8(second.color)), 0u);
+}
+
+TEST(ViewSession, SideBySideShowsFoveatedReferenceAndTheirDifference) {
+  const Camera camera = default_camera(box());
+  const ViewSettings s = small_settings(ViewMode::side_by_side);
+  ViewSession session(box(), box_tracer(), camera, s, fixed({120, 30}));
+  EXPECT_EQ(session.panes(), 3);
+  ASSERT_TRUE(session.wait_until_converged(120, kNone));
+  RenderParams p = s.render;
+  p.gaze_px = glm::dvec2(120, 30);
+  const Frame foveated = render_frame(box_tracer(), box(), camera, p);
+  p.mode = RenderMode::full;
+  const Frame reference = render_frame(box_tracer(), box(), camera, p);
+  ASSERT_EQ(session.image().width, 3 * s.render.width);
+  EXPECT_EQ(differing(session.image(), 0, to_rgba8(foveated.color)), 0u);
+  EXPECT_EQ(differing(session.image(), s.render.width, to_rgba8(reference.color)), 0u);
+  // The third pane: black where the two agree, brighter where they differ (near the gaze they agree best)
+  Image diff(s.render.width, s.render.height, 3);
+  for (size_t i = 0; i < diff.pixels.size(); ++i)
+    diff.pixels[i] = std::min(1.0f, std::abs(foveated.color.pixels[i] - reference.color.pixels[i]) * s.diff_gain);
+  EXPECT_EQ(differing(session.image(), 2 * s.render.width, to_rgba8(diff)), 0u);
+}
+
+TEST(ViewSession, VisionModeIsTheSimulationsStep) {
+  const Camera camera = default_camera(box());
+  ViewSettings s = small_settings(ViewMode::vision);
+  s.vision.eye.pupil_diameter_mm = 8;
+  ViewSession session(box(), box_tracer(), camera, s, fixed({40, 50}));
+  ASSERT_TRUE(session.wait_until_converged(120, kNone));
+  ViewSettings resolved = s;
+  resolve(resolved);
+  VisionSimulation sim(box_tracer(), box(), resolved.vision);
+  const StepStats step = sim.step(camera, glm::vec2(40, 50));
+  EXPECT_EQ(differing(session.image(), 0, to_rgba8(sim.perceived())), 0u);
+  ASSERT_TRUE(session.status().step.has_value());
+  EXPECT_EQ(session.status().step->step, 1);
+  EXPECT_DOUBLE_EQ(session.status().step->sharp_fraction, step.sharp_fraction);
+  // The sharp-region overlay tints exactly the pixels the field remembers sharp
+  Overlays sharp = kNone;
+  sharp.sharp = true;
+  session.update(sharp);
+  const Rgba8& tinted = session.image();
+  size_t tinted_px = 0, sharp_px = 0;
+  const Rgba8 plain = to_rgba8(sim.perceived());
+  for (int y = 0; y < plain.height; ++y)
+    for (int x = 0; x < plain.width; ++x) {
+      const bool is_sharp = sim.coc_px()[static_cast<size_t>(y) * plain.width + x] < resolved.vision.sharp_px;
+      const bool changed = tinted.at(x, y)[1] != plain.at(x, y)[1] || tinted.at(x, y)[0] != plain.at(x, y)[0];
+      sharp_px += is_sharp;
+      tinted_px += changed;
+      if (!is_sharp) EXPECT_FALSE(changed) << x << "," << y;
+    }
+  EXPECT_GT(sharp_px, 0u);
+  EXPECT_GE(tinted_px, sharp_px * 95 / 100);  // a green tint changes almost every sharp pixel
+}
+
+TEST(ViewSession, MouseRestingBecomesTheFixationTheRenderFollows) {
+  const Camera camera = default_camera(box());
+  const ViewSettings s = small_settings(ViewMode::foveated);
+  GazeInput g;
+  const glm::ivec2 size(s.render.width, s.render.height);
+  g.source = std::make_unique<MouseSource>(size);
+  g.mapping = make_screen_mapping(size, size);
+  g.display = s.render.display;
+  ViewSession session(box(), box_tracer(), camera, s, std::move(g));
+  ASSERT_NE(session.mouse(), nullptr);
+  // 60 Hz cursor samples: resting at (30, 30), a quick move, resting at (120, 70)
+  double t = 0;
+  for (int i = 0; i < 20; ++i, t += 1.0 / 60) session.mouse()->move({30, 30}, t);
+  for (int i = 1; i <= 3; ++i, t += 1.0 / 60) session.mouse()->move({30 + 30.0 * i, 30 + 13.3 * i}, t);
+  session.update(kNone);
+  const auto first = session.status().fixation;
+  ASSERT_TRUE(first.has_value());
+  EXPECT_NEAR(first->x, 30, 0.5);
+  EXPECT_NEAR(first->y, 30, 0.5);
+  for (int i = 0; i < 20; ++i, t += 1.0 / 60) session.mouse()->move({120, 70}, t);
+  ASSERT_TRUE(session.wait_until_converged(120, kNone));
+  EXPECT_NEAR(session.status().render_gaze.x, 120, 0.5);
+  EXPECT_NEAR(session.status().render_gaze.y, 70, 0.5);
+  // The cursor off the image is a lost sample: the fixation holds
+  session.mouse()->move({0, 0}, t, false);
+  session.update(kNone);
+  EXPECT_FALSE(session.status().gaze.has_value());
+  EXPECT_NEAR(session.status().fixation->x, 120, 0.5);
+}
+
+TEST(ViewSession, ScreenshotWritesTheShownImageAndItsStats) {
+  const ViewSettings s = small_settings(ViewMode::foveated);
+  ViewSession session(box(), box_tracer(), default_camera(box()), s, fixed({80, 50}));
+  ASSERT_TRUE(session.wait_until_converged(120, parse_overlays("gaze")));
+  const auto dir = std::filesystem::temp_directory_path() / ("foveal_view_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  const std::string png = (dir / "shot.png").string();
+  session.save_screenshot(png, {{"ui_frame_ms", 16.5}});
+  const Image written = load_image(png);
+  ASSERT_EQ(written.width, s.render.width);
+  const uint8_t* red = session.image().at(80, 50);
+  EXPECT_EQ(red[0], 255);  // the gaze cross is in the screenshot
+  EXPECT_EQ(red[1], 0);
+  EXPECT_NEAR(written.at(80, 50, 0), 1.0f, 1e-6f);
+  std::ifstream in((dir / "shot.json").string());
+  const nlohmann::json j = nlohmann::json::parse(in);
+  EXPECT_EQ(j["settings"]["foveation"]["max_rays"], 24);
+  EXPECT_EQ(j["converged"], true);
+  EXPECT_EQ(j["ui_frame_ms"], 16.5);
+  EXPECT_GT(j["frame"]["ao_rays"].get<uint64_t>(), 0u);
+  std::filesystem::remove_all(dir);
+}
+
+TEST(ViewSession, BadSettingsAreRefusedWithTheReason) {
+  ViewSettings s = small_settings(ViewMode::vision);
+  s.eye = "glaucoma:2";  // severity is 0..1
+  EXPECT_THROW(resolve(s), Error);
+  s = small_settings(ViewMode::foveated);
+  s.render.foveation.gamma = 0;
+  EXPECT_THROW(resolve(s), Error);
+  EXPECT_THROW(parse_view_mode("fullscreen"), Error);
+  try {
+    parse_overlays("gaze,heat");
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("heat"), std::string::npos);
+  }
+  EXPECT_EQ(to_string(parse_overlays("all")), "gaze,contours,budget,scanpath,sharp");
+  EXPECT_EQ(to_string(parse_overlays("none")), "none");
+}
+
+TEST(Overlays, ContoursLieOnTheirQualityLevels) {
+  const int w = 320, h = 200;
+  const FoveationModel model(Display{}, w, h, {10, 10}, FoveationParams{});
+  Rgba8 image(w, h);
+  std::fill(image.px.begin(), image.px.end(), uint8_t(0));
+  Overlays o = parse_overlays("contours");
+  OverlayInputs in;
+  in.model = &model;
+  draw_overlays(image, 0, 0, w, h, o, in);
+  int half = 0, quarter = 0;
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const uint8_t* p = image.at(x, y);
+      const double q = model.evaluate(x, y).quality;
+      if (p[0] == 255 && p[1] == 140) {  // q = 0.5 (orange); a contour is two pixels wide
+        ++half;
+        EXPECT_NEAR(q, 0.5, 0.05) << x << "," << y;
+      } else if (p[0] == 230 && p[1] == 30) {  // q = 0.25 (red)
+        ++quarter;
+        EXPECT_NEAR(q, 0.25, 0.03) << x << "," << y;
+      }
+    }
+  EXPECT_GT(half, 100);
+  EXPECT_GT(quarter, 100);
+}
+
+TEST(Overlays, BudgetHeatMapFollowsTheRayCount) {
+  const int w = 200, h = 120;
+  const FoveationModel model(Display{}, w, h, {60, 60}, FoveationParams{});
+  Rgba8 image(w, h);
+  std::fill(image.px.begin(), image.px.end(), uint8_t(0));
+  OverlayInputs in;
+  in.model = &model;
+  draw_overlays(image, 0, 0, w, h, parse_overlays("budget"), in);
+  // Over black at half opacity: the heat colour of n(E)/n_max, halved
+  for (auto [x, y] : {std::pair{60, 60}, {100, 60}, {190, 10}}) {
+    const FoveaSample f = model.evaluate(x, y);
+    const glm::u8vec3 c = heat_colour(static_cast<float>(f.rays) / 400.0f);
+    for (int k = 0; k < 3; ++k) EXPECT_NEAR(image.at(x, y)[k], c[k] * 0.5, 6.0) << x << "," << y;
+  }
+  EXPECT_GT(heat_colour(1.0f).r, 200);
+  EXPECT_LT(heat_colour(0.0f).r, 30);
+}
+
+}  // namespace
+}  // namespace foveal

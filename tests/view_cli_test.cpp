@@ -1,0 +1,118 @@
+// `foveal view` as a script runs it: a window under Xvfb (software OpenGL), N frames, a screenshot.
+#include "cli_helpers.h"
+#include "foveal/io/image_io.h"
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+namespace foveal_test {
+namespace {
+
+bool have_xvfb() { return std::system("command -v xvfb-run > /dev/null 2>&1") == 0; }
+
+// `foveal view ARGS` behind a launcher (xvfb-run, env) in the scratch folder. Leak checking is
+// off for it: Mesa's drivers keep allocations until the process ends.
+// Concurrent tests look for a free X display from different numbers (xvfb-run -a alone can race).
+CliRun run_view(const std::string& args, std::string launcher = "") {
+  if (launcher.empty())
+    launcher = "xvfb-run -a -n " + std::to_string(100 + ::getpid() % 800) + " -s '-screen 0 1280x1024x24'";
+  fs::create_directories(scratch(""));
+  const std::string cmd = "cd '" + scratch("").string() + "' && ASAN_OPTIONS=detect_leaks=0 " + launcher + " '" FOVEAL_EXE "' view " + args +
+                          " > out.txt 2> err.txt < /dev/null";
+  CliRun r;
+  const int raw = std::system(cmd.c_str());
+  r.status = WIFEXITED(raw) ? WEXITSTATUS(raw) : 128 + WTERMSIG(raw);
+  auto slurp = [&](const char* name) {
+    std::stringstream s;
+    s << std::ifstream(scratch(name)).rdbuf();
+    return s.str();
+  };
+  r.out = slurp("out.txt");
+  r.err = slurp("err.txt");
+  return r;
+}
+
+nlohmann::json read_json(const std::string& name) {
+  std::ifstream in(scratch(name));
+  return nlohmann::json::parse(in);
+}
+
+TEST(ViewCli, ScreenshotIsTheRenderCommandsImage) {
+  if (!have_xvfb()) GTEST_SKIP() << "skipped: xvfb-run absent (Debian package xvfb)";
+  const std::string common = "--scene builtin:box --size 240x150 --gaze 70,60 --max-rays 48";
+  const CliRun v = run_view(common + " --frames 3 --overlays none --screenshot view.png --window-screenshot window.png");
+  ASSERT_EQ(v.status, 0) << v.err;
+  const CliRun r = foveal("render " + common + " -o render.png -q");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const foveal::Image a = foveal::load_image(scratch("view.png").string()), b = foveal::load_image(scratch("render.png").string());
+  ASSERT_EQ(a.width, b.width);
+  ASSERT_EQ(a.height, b.height);
+  EXPECT_EQ(a.pixels, b.pixels);
+  // The window shows those pixels: at scale 1, centred in the 640-pixel-high area left of the 340-pixel panel
+  const foveal::Image win = foveal::load_image(scratch("window.png").string());
+  ASSERT_EQ(win.width, 240 + 340);
+  ASSERT_EQ(win.height, 640);
+  size_t same = 0;
+  for (int y = 0; y < 150; ++y)
+    for (int x = 0; x < 240; ++x) same += win.at(x, 245 + y, 0) == a.at(x, y, 0) && win.at(x, 245 + y, 1) == a.at(x, y, 1);
+  EXPECT_GT(same, 240u * 150u * 99 / 100);
+  const nlohmann::json j = read_json("view.json");
+  EXPECT_EQ(j["converged"], true);
+  EXPECT_EQ(j["render_gaze_px"][0], 70.0);
+  EXPECT_GT(j["frame"]["ao_rays_per_second"].get<double>(), 0.0);
+  EXPECT_GT(j["ui_frame_ms"].get<double>(), 0.0);  // the frame time is measured
+}
+
+TEST(ViewCli, SideBySideAndVisionScreenshotsWithOverlays) {
+  if (!have_xvfb()) GTEST_SKIP() << "skipped: xvfb-run absent (Debian package xvfb)";
+  const CliRun s = run_view("--scene builtin:box --size 200x120 --gaze 60,50 --max-rays 32 --mode side-by-side --overlays all --frames 2 "
+                            "--screenshot sbs.png");
+  ASSERT_EQ(s.status, 0) << s.err;
+  const foveal::Image sbs = foveal::load_image(scratch("sbs.png").string());
+  EXPECT_EQ(sbs.width, 600);  // foveated | reference | difference
+  EXPECT_EQ(sbs.height, 120);
+  EXPECT_NEAR(sbs.at(60, 50, 0), 1.0f, 1e-6f);  // the gaze cross on every pane
+  EXPECT_NEAR(sbs.at(260, 50, 0), 1.0f, 1e-6f);
+  const CliRun v = run_view("--scene builtin:box --size 200x120 --gaze 60,50 --mode vision --eye myopia:-3 --frames 2 --screenshot vision.png");
+  ASSERT_EQ(v.status, 0) << v.err;
+  const nlohmann::json j = read_json("vision.json");
+  EXPECT_EQ(j["settings"]["eye"]["preset"], "myopia:-3");
+  EXPECT_EQ(j["vision_step"]["step"], 1);
+  EXPECT_NEAR(j["vision_step"]["focus_px"][0].get<double>(), 60, 1e-3);
+}
+
+TEST(ViewCli, RecordedGazeDrivesTheView) {
+  if (!have_xvfb()) GTEST_SKIP() << "skipped: xvfb-run absent (Debian package xvfb)";
+  // Three fixations on a 480×300 screen, played 10× faster than recorded: after 60 frames it has ended on the last, (240, 150)
+  const std::string rec = write_three_fixations("view_gaze.csv");
+  const CliRun v = run_view("--scene builtin:box --size 240x150 --max-rays 16 --gaze " + rec +
+                            " --screen 480x300 --speed 10 --frames 60 --overlays gaze,scanpath --screenshot rec.png");
+  ASSERT_EQ(v.status, 0) << v.err;
+  const nlohmann::json j = read_json("rec.json");
+  EXPECT_NEAR(j["fixation_px"][0].get<double>(), 120, 0.5);  // (240, 150) on the screen → (120, 75) in the render
+  EXPECT_NEAR(j["fixation_px"][1].get<double>(), 75, 0.5);
+  EXPECT_NEAR(j["render_gaze_px"][0].get<double>(), 120, 0.5);
+  EXPECT_NE(j["gaze_source"].get<std::string>().find("ended"), std::string::npos);
+}
+
+TEST(ViewCli, NoDisplayAndBadOptionsAreOneClearLine) {
+  const CliRun no_display = run_view("--frames 1 --screenshot x.png --size 64x64", "env -u DISPLAY -u WAYLAND_DISPLAY");
+  EXPECT_EQ(no_display.status, 1) << no_display.err;
+  EXPECT_NE(no_display.err.find("needs a display"), std::string::npos) << no_display.err;
+  EXPECT_EQ(lines(no_display.err), 1u) << no_display.err;
+  const CliRun mode = foveal("view --mode fullscreen");
+  EXPECT_EQ(mode.status, 1);
+  EXPECT_NE(mode.err.find("unknown view mode 'fullscreen'"), std::string::npos) << mode.err;
+  const CliRun overlay = foveal("view --overlays gaze,heat");
+  EXPECT_EQ(overlay.status, 1);
+  EXPECT_NE(overlay.err.find("unknown overlay 'heat'"), std::string::npos) << overlay.err;
+  const CliRun frames = foveal("view --frames 3");
+  EXPECT_EQ(frames.status, 1);
+  EXPECT_NE(frames.err.find("--screenshot"), std::string::npos) << frames.err;
+  const CliRun missing = foveal("view --gaze no_such_recording.asc");
+  EXPECT_EQ(missing.status, 1);
+  EXPECT_NE(missing.err.find("no_such_recording.asc"), std::string::npos) << missing.err;
+}
+
+}  // namespace
+}  // namespace foveal_test
