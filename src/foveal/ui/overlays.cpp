@@ -16,16 +16,46 @@
 
 namespace foveal {
 
+namespace {
+
+// The 255 linear values where the sRGB byte steps up: byte(v) = number of thresholds ≤ v. Found
+// by bisection on linear_to_srgb itself, so the bytes are exactly save_image()'s (the function is
+// monotonic) at the cost of 8 comparisons instead of a pow per channel.
+const std::array<float, 255>& srgb_steps() {
+  static const std::array<float, 255> steps = [] {
+    std::array<float, 255> t{};
+    auto byte = [](float v) { return std::lround(linear_to_srgb(v) * 255.0f); };
+    for (int k = 1; k <= 255; ++k) {
+      float lo = 0.0f, hi = 1.0f;  // byte(lo) < k ≤ byte(hi)
+      while (std::nextafter(lo, 2.0f) < hi) {
+        const float mid = std::max(std::nextafter(lo, 2.0f), std::min(std::nextafter(hi, -1.0f), 0.5f * (lo + hi)));
+        (byte(mid) >= k ? hi : lo) = mid;
+      }
+      t[k - 1] = hi;
+    }
+    return t;
+  }();
+  return steps;
+}
+
+inline uint8_t srgb_byte(float v, const std::array<float, 255>& steps) {
+  if (!(v > 0)) return 0;  // also NaN
+  int i = 0;
+  for (int half = 128; half > 0; half /= 2)
+    if (i + half <= 255 && steps[i + half - 1] <= v) i += half;
+  return static_cast<uint8_t>(i);
+}
+
+}  // namespace
+
 Rgba8 to_rgba8(const Image& linear) {
   Rgba8 out(linear.width, linear.height);
   const int c = linear.channels;
+  const auto& steps = srgb_steps();
   tbb::parallel_for(0, linear.height, [&](int y) {
     for (int x = 0; x < linear.width; ++x) {
       uint8_t* p = out.at(x, y);
-      for (int k = 0; k < 3; ++k) {
-        const float v = linear.at(x, y, c >= 3 ? k : 0);
-        p[k] = static_cast<uint8_t>(std::lround(linear_to_srgb(v) * 255.0f));
-      }
+      for (int k = 0; k < 3; ++k) p[k] = srgb_byte(linear.at(x, y, c >= 3 ? k : 0), steps);
     }
   });
   return out;
@@ -101,6 +131,27 @@ float QualityGrid::quality(double x_px, double y_px) const {
   return (r0[0] * (1 - fx) + r0[1] * fx) * (1 - fy) + (r1[0] * (1 - fx) + r1[1] * fx) * fy;
 }
 
+void QualityGrid::fill(std::vector<float>& q) const {
+  q.resize(static_cast<size_t>(width_) * height_);
+  // Per column: grid cell and weight, once; per row: the two grid rows blended, once
+  std::vector<int> cell(width_);
+  std::vector<float> weight(width_);
+  for (int x = 0; x < width_; ++x) {
+    const double gx = std::clamp((x + 0.5) / step_, 0.0, nx_ - 1.0);
+    cell[x] = std::min(static_cast<int>(gx), nx_ - 2);
+    weight[x] = static_cast<float>(gx - cell[x]);
+  }
+  tbb::parallel_for(0, height_, [&](int y) {
+    const double gy = std::clamp((y + 0.5) / step_, 0.0, ny_ - 1.0);
+    const int j = std::min(static_cast<int>(gy), ny_ - 2);
+    const float fy = static_cast<float>(gy - j);
+    std::vector<float> row(nx_);
+    for (int i = 0; i < nx_; ++i) row[i] = q_[static_cast<size_t>(j) * nx_ + i] * (1 - fy) + q_[static_cast<size_t>(j + 1) * nx_ + i] * fy;
+    float* out = q.data() + static_cast<size_t>(y) * width_;
+    for (int x = 0; x < width_; ++x) out[x] = row[cell[x]] * (1 - weight[x]) + row[cell[x] + 1] * weight[x];
+  });
+}
+
 glm::u8vec3 heat_colour(float t) {
   t = std::clamp(t, 0.0f, 1.0f);
   // Piecewise-linear through five stops
@@ -163,9 +214,7 @@ void draw_overlays(Rgba8& image, int x0, int y0, int width, int height, const Ov
     // q(E) per pixel, interpolated from the coarse grid, once for both overlays
     const QualityGrid grid(*in.model, width, height, 2);
     std::vector<float> q(static_cast<size_t>(width) * height);
-    tbb::parallel_for(0, height, [&](int y) {
-      for (int x = 0; x < width; ++x) q[static_cast<size_t>(y) * width + x] = grid.quality(x + 0.5, y + 0.5);
-    });
+    grid.fill(q);
     if (which.budget) {
       // n(E)/n_max → colour through a table over q (1024 steps), half transparent
       const FoveationParams& fp = in.model->params();

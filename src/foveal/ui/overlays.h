@@ -54,6 +54,8 @@ class QualityGrid {
   QualityGrid(const FoveationModel& model, int width, int height, int step = 4);
   // q at a render position (pixel centres at +0.5), interpolated.
   float quality(double x_px, double y_px) const;
+  // q at every pixel centre (row-major), the same values as quality(x + 0.5, y + 0.5).
+  void fill(std::vector<float>& q) const;
 
  private:
   int width_, height_, step_, nx_, ny_;

@@ -8,6 +8,7 @@
 
 #include <fmt/core.h>
 #include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
 
 #include <algorithm>
 #include <atomic>
@@ -342,7 +343,8 @@ void ViewSession::update(const Overlays& overlays) {
     sh.converged = sh.result.generation == generation_ && sh.result.last;
     base_dirty_ = true;
   }
-  compose(overlays);
+  // Isolated: this thread's parallel loops must not pick up the renderer's tiles while they wait
+  tbb::this_task_arena::isolate([&] { compose(overlays); });
 }
 
 void ViewSession::compose(const Overlays& overlays) {
