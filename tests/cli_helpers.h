@@ -20,11 +20,12 @@ struct CliRun {
   std::string out, err;
 };
 
-// Run the executable with arguments in a scratch folder; capture exit status and both streams.
-inline CliRun foveal(const std::string& args) {
+// Run the executable with arguments in a scratch folder, behind an optional launcher (env,
+// xvfb-run, …); capture exit status and both streams.
+inline CliRun run_foveal(const std::string& launcher, const std::string& args) {
   static const fs::path dir = fs::temp_directory_path() / ("foveal_cli_" + std::to_string(::getpid()));
   fs::create_directories(dir);
-  const std::string cmd = "cd '" + dir.string() + "' && '" FOVEAL_EXE "' " + args + " > out.txt 2> err.txt";
+  const std::string cmd = "cd '" + dir.string() + "' && " + launcher + " '" FOVEAL_EXE "' " + args + " > out.txt 2> err.txt";
   CliRun r;
   const int raw = std::system(cmd.c_str());
   r.status = WIFEXITED(raw) ? WEXITSTATUS(raw) : 128 + WTERMSIG(raw);
@@ -37,6 +38,7 @@ inline CliRun foveal(const std::string& args) {
   r.err = slurp("err.txt");
   return r;
 }
+inline CliRun foveal(const std::string& args) { return run_foveal("", args); }
 
 inline fs::path scratch(const std::string& name) { return fs::temp_directory_path() / ("foveal_cli_" + std::to_string(::getpid())) / name; }
 

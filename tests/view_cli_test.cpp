@@ -10,26 +10,12 @@ namespace {
 
 bool have_xvfb() { return std::system("command -v xvfb-run > /dev/null 2>&1") == 0; }
 
-// `foveal view ARGS` behind a launcher (xvfb-run, env) in the scratch folder. Leak checking is
-// off for it: Mesa's drivers keep allocations until the process ends.
-// Concurrent tests look for a free X display from different numbers (xvfb-run -a alone can race).
+// `foveal view ARGS` under a virtual display (or another launcher). Leak checking is off for it:
+// Mesa's drivers keep allocations until the process ends. Concurrent tests look for a free X
+// display from different numbers (xvfb-run -a alone can race).
 CliRun run_view(const std::string& args, std::string launcher = "") {
-  if (launcher.empty())
-    launcher = "xvfb-run -a -n " + std::to_string(100 + ::getpid() % 800) + " -s '-screen 0 1280x1024x24'";
-  fs::create_directories(scratch(""));
-  const std::string cmd = "cd '" + scratch("").string() + "' && ASAN_OPTIONS=detect_leaks=0 " + launcher + " '" FOVEAL_EXE "' view " + args +
-                          " > out.txt 2> err.txt < /dev/null";
-  CliRun r;
-  const int raw = std::system(cmd.c_str());
-  r.status = WIFEXITED(raw) ? WEXITSTATUS(raw) : 128 + WTERMSIG(raw);
-  auto slurp = [&](const char* name) {
-    std::stringstream s;
-    s << std::ifstream(scratch(name)).rdbuf();
-    return s.str();
-  };
-  r.out = slurp("out.txt");
-  r.err = slurp("err.txt");
-  return r;
+  if (launcher.empty()) launcher = "xvfb-run -a -n " + std::to_string(100 + ::getpid() % 800) + " -s '-screen 0 1280x1024x24'";
+  return run_foveal("ASAN_OPTIONS=detect_leaks=0 " + launcher, "view " + args + " < /dev/null");
 }
 
 nlohmann::json read_json(const std::string& name) {
