@@ -1,6 +1,7 @@
 // foveal/ui/session.cpp — see session.h.
 #include "foveal/ui/session.h"
 
+#include "foveal/gaze/steps.h"
 #include "foveal/io/outputs.h"
 #include "foveal/perception/eye.h"
 #include "foveal/util/error.h"
@@ -110,6 +111,7 @@ struct Request {
   Camera camera;
   glm::dvec2 gaze{0};
   bool restart_vision = false;
+  bool blink = false;             // vision: the eye blinked since the last step
 };
 
 struct Result {
@@ -154,6 +156,7 @@ struct ViewSession::Worker {
     wanted = r.generation;
     {
       const std::lock_guard lock(mutex);
+      if (pending && pending->blink) r.blink = true;  // a replaced step's blink still happened
       pending = std::move(r);
     }
     wake.notify_all();
@@ -227,6 +230,7 @@ struct ViewSession::Worker {
     out.gaze = r.gaze;
     if (s.mode == ViewMode::vision) {
       if (!sim || r.restart_vision) sim = std::make_unique<VisionSimulation>(tracer, scene, s.vision);
+      if (r.blink) sim->blink_before_next_step();
       const StepStats step = sim->step(r.camera, glm::vec2(r.gaze));
       out.last = true;
       out.stage = fmt::format("vision step {}", step.step);
@@ -292,7 +296,14 @@ void ViewSession::set_camera(const Camera& camera) { camera_ = camera; }
 
 void ViewSession::request_if_changed() {
   const glm::dvec2 centre(settings_.render.width * 0.5, settings_.render.height * 0.5);
-  const glm::dvec2 gaze = fixation_.value_or(centre);
+  glm::dvec2 gaze = fixation_.value_or(centre);
+  if (settings_.mode == ViewMode::vision) {
+    // A step per new fixation: the filter refines a fixation's centre as its samples arrive, and
+    // a move of less than 1° is the same fixation
+    const double px_per_deg = pixels_per_degree(settings_.render.display) * settings_.render.width / settings_.render.display.res_x;
+    if (!step_fixation_ || glm::length(gaze - *step_fixation_) > px_per_deg) step_fixation_ = gaze;
+    gaze = *step_fixation_;
+  }
   const std::string settings_key = settings_json(settings_).dump();
   nlohmann::json key = {{"settings", settings_key}, {"camera", camera_json(camera_)}};
   if (settings_.mode != ViewMode::reference) key["gaze"] = {gaze.x, gaze.y};
@@ -307,6 +318,10 @@ void ViewSession::request_if_changed() {
   r.camera = camera_;
   r.gaze = gaze;
   r.restart_vision = restart;
+  if (settings_.mode == ViewMode::vision && blink_pending_) {
+    r.blink = true;
+    blink_pending_ = false;
+  }
   shown_state_->converged = false;
   worker_->submit(std::move(r));
 }
@@ -318,7 +333,13 @@ void ViewSession::update(const Overlays& overlays) {
     gaze_.source->poll(samples);
     for (const GazeSample& s : samples) {
       if (tracker_) tracker_->push(s);
-      if (s.valid) raw_gaze_ = gaze_.mapping.to_render(s.px);
+      if (s.valid) {
+        raw_gaze_ = gaze_.mapping.to_render(s.px);
+        // A tracker's lost samples for a blink's duration (not the cursor leaving the image): the field forgets
+        if (!mouse_ && in_gap_ && last_valid_s_ && blink_gap(*last_valid_s_, s.t_s)) blink_pending_ = true;
+        last_valid_s_ = s.t_s;
+      }
+      in_gap_ = !s.valid;
     }
     if (!samples.empty() && !samples.back().valid) raw_gaze_.reset();
     if (tracker_) {

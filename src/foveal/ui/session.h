@@ -108,6 +108,9 @@ class ViewSession {
   std::optional<GazeGeometry> geometry_;
   std::optional<FixationTracker> tracker_;
   std::optional<glm::dvec2> raw_gaze_, fixation_;
+  std::optional<glm::dvec2> step_fixation_;  // vision: the fixation of the last step
+  std::optional<double> last_valid_s_;  // time of the last valid sample
+  bool in_gap_ = false, blink_pending_ = false;
   std::vector<glm::dvec2> scanpath_;
   std::string last_key_, region_key_, mark_key_;
   uint64_t generation_ = 0;

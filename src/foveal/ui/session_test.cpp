@@ -162,6 +162,51 @@ TEST(ViewSession, MouseRestingBecomesTheFixationTheRenderFollows) {
   EXPECT_NEAR(session.status().fixation->x, 120, 0.5);
 }
 
+TEST(ViewSession, VisionStepsFollowRecordedFixationsAndBlinks) {
+  // 500 Hz on a 480×300 screen: 300 ms at (100, 100), a 150 ms blink (lost samples), 300 ms at
+  // (400, 200), a 28 ms saccade, 300 ms at (240, 150); replayed on a clock the test advances
+  Recording rec;
+  rec.source = "three fixations";
+  rec.screen_px = {480, 300};
+  double t = 0;
+  auto hold = [&](glm::dvec2 p, int n, bool valid) {
+    for (int i = 0; i < n; ++i, t += 0.002) {
+      GazeSample s;
+      s.t_s = t;
+      s.valid = valid;
+      s.px = valid ? p + glm::dvec2(0.3 * std::sin(i), 0.3 * std::cos(i)) : glm::dvec2(NAN);
+      rec.samples.push_back(s);
+    }
+  };
+  hold({100, 100}, 150, true);
+  hold({}, 75, false);
+  hold({400, 200}, 150, true);
+  for (int i = 1; i < 15; ++i) hold(glm::mix(glm::dvec2(400, 200), glm::dvec2(240, 150), i / 15.0), 1, true);
+  hold({240, 150}, 150, true);
+  double now = 0;
+  const ViewSettings s = small_settings(ViewMode::vision);
+  GazeInput g;
+  g.source = std::make_unique<RecordingPlayback>(rec, 1.0, [&now] { return now; });
+  g.mapping = make_screen_mapping(rec.screen_px, {s.render.width, s.render.height});
+  g.display = s.render.display;
+  ViewSession session(box(), box_tracer(), default_camera(box()), s, std::move(g));
+  std::vector<StepStats> steps;
+  for (; now < 1.3; now += 1.0 / 60) {
+    // Each displayed frame: the step for the current fixation finishes before time moves on
+    ASSERT_TRUE(session.wait_until_converged(120, kNone));
+    const auto step = session.status().step;
+    if (step && (steps.empty() || steps.back().step != step->step)) steps.push_back(*step);
+  }
+  // The image centre until the first fixation, then one step per fixation (the filter refining a
+  // fixation's centre is not a new step), and the blink before the second fixation's
+  ASSERT_EQ(steps.size(), 4u);
+  const double x[4] = {80, 100 / 3.0, 400 / 3.0, 80};
+  for (int k = 0; k < 4; ++k) {
+    EXPECT_NEAR(steps[k].focus_px.x, x[k], 1.0) << k;
+    EXPECT_EQ(steps[k].blink, k == 2) << k;
+  }
+}
+
 TEST(ViewSession, ScreenshotWritesTheShownImageAndItsStats) {
   const ViewSettings s = small_settings(ViewMode::foveated);
   ViewSession session(box(), box_tracer(), default_camera(box()), s, fixed({80, 50}));

@@ -1,6 +1,8 @@
 // foveal/ui/window.cpp — see window.h. The only file that talks to GLFW, OpenGL and Dear ImGui.
 #include "foveal/ui/window.h"
 
+#include "foveal/ui/navigation.h"
+
 #include "foveal/util/error.h"
 #include "foveal/util/stats.h"
 #include "foveal/util/timer.h"
@@ -9,7 +11,6 @@
 #include <backends/imgui_impl_glfw.h>
 #include <backends/imgui_impl_opengl3.h>
 #include <fmt/core.h>
-#include <glm/gtc/matrix_transform.hpp>
 #include <imgui.h>
 
 #include <algorithm>
@@ -24,55 +25,6 @@ namespace foveal {
 namespace {
 
 std::string glfw_error;  // the last message of GLFW's error callback
-
-// Rotate v about a unit axis by an angle (radians).
-glm::vec3 rotate(glm::vec3 v, glm::vec3 axis, float angle) {
-  return glm::vec3(glm::rotate(glm::mat4(1.0f), angle, glm::normalize(axis)) * glm::vec4(v, 0.0f));
-}
-
-// Orbit and fly navigation on a Camera.
-struct Navigator {
-  bool fly = false;
-  float speed = 1.0f;  // fly: scene units per second (set from the scene's size)
-
-  void rotate_view(Camera& c, float dx, float dy) const {
-    const glm::vec3 up = glm::normalize(c.up);
-    if (!fly) {  // orbit: the eye moves around the look point
-      glm::vec3 offset = c.eye - c.look;
-      offset = rotate(offset, up, -dx * 0.006f);
-      const glm::vec3 right = glm::cross(glm::normalize(offset), up);
-      const glm::vec3 pitched = rotate(offset, right, dy * 0.006f);
-      if (glm::length(glm::cross(glm::normalize(pitched), up)) > 0.05f) offset = pitched;  // never over the pole
-      c.eye = c.look + offset;
-    } else {  // fly: the look point moves around the eye
-      glm::vec3 dir = c.look - c.eye;
-      dir = rotate(dir, up, -dx * 0.004f);
-      const glm::vec3 right = glm::cross(glm::normalize(dir), up);
-      const glm::vec3 pitched = rotate(dir, right, -dy * 0.004f);
-      if (glm::length(glm::cross(glm::normalize(pitched), up)) > 0.05f) dir = pitched;
-      c.look = c.eye + dir;
-    }
-  }
-  void pan(Camera& c, float dx, float dy) const {
-    const glm::vec3 f = c.look - c.eye;
-    const glm::vec3 right = glm::normalize(glm::cross(f, c.up)), up = glm::normalize(glm::cross(right, f));
-    const glm::vec3 d = (-dx * right + dy * up) * glm::length(f) * 0.0015f;
-    c.eye += d;
-    c.look += d;
-  }
-  void dolly(Camera& c, float wheel) const {
-    const glm::vec3 f = c.look - c.eye;
-    const float factor = std::pow(0.9f, wheel);
-    if (!fly) c.eye = c.look - f * factor;
-    else c.eye += glm::normalize(f) * speed * 0.25f * wheel, c.look += glm::normalize(f) * speed * 0.25f * wheel;
-  }
-  void move(Camera& c, glm::vec3 local, float seconds) const {  // local: right, up, forward
-    const glm::vec3 f = glm::normalize(c.look - c.eye), right = glm::normalize(glm::cross(f, c.up)), up = glm::normalize(c.up);
-    const glm::vec3 d = (local.x * right + local.y * up + local.z * f) * speed * seconds;
-    c.eye += d;
-    c.look += d;
-  }
-};
 
 // Numbered free path beside the requested one: name.png, name_1.png, name_2.png, …
 std::string free_path(const std::string& path) {
