@@ -1,5 +1,6 @@
 // `foveal view` as a script runs it: a window under Xvfb (software OpenGL), N frames, a screenshot.
 #include "cli_helpers.h"
+#include "fake_pupil.h"
 #include "foveal/io/image_io.h"
 
 #include <gtest/gtest.h>
@@ -79,6 +80,23 @@ TEST(ViewCli, RecordedGazeDrivesTheView) {
   EXPECT_NEAR(j["fixation_px"][1].get<double>(), 75, 0.5);
   EXPECT_NEAR(j["render_gaze_px"][0].get<double>(), 120, 0.5);
   EXPECT_NE(j["gaze_source"].get<std::string>().find("ended"), std::string::npos);
+}
+
+TEST(ViewCli, LiveTrackerThatHangsUpDoesNotStopTheView) {
+  if (!have_xvfb()) GTEST_SKIP() << "skipped: xvfb-run absent (Debian package xvfb)";
+  FakePupil fake;
+  std::vector<std::pair<std::string, std::string>> messages;
+  for (int i = 0; i < 60; ++i) messages.emplace_back("surfaces.screen", surface_gaze(0.25, 0.75, true, 10 + 0.004 * i));
+  for (int i = 0; i < 60; ++i) messages.emplace_back("surfaces.screen", surface_gaze(0.75, 0.25, true, 10.3 + 0.004 * i));
+  fake.serve(messages, true, nullptr);
+  const CliRun v = run_view("--gaze '" + fake.url("surface=screen") + "' --screen 400x200 --size 80x40 --max-rays 8 --frames 90 "
+                            "--screenshot live.png");
+  ASSERT_EQ(v.status, 0) << v.err;
+  const nlohmann::json j = read_json("live.json");
+  // norm (0.75, 0.25) of 400×200 (origin bottom-left) → (300, 150) on the screen → (60, 30) in the 80×40 render
+  EXPECT_NEAR(j["fixation_px"][0].get<double>(), 60, 1e-3);
+  EXPECT_NEAR(j["fixation_px"][1].get<double>(), 30, 1e-3);
+  EXPECT_NE(j["gaze_source"].get<std::string>().find("disconnected"), std::string::npos) << j["gaze_source"];
 }
 
 TEST(ViewCli, NoDisplayAndBadOptionsAreOneClearLine) {
