@@ -20,6 +20,7 @@ int main(int argc, char** argv) {
   const auto replay = foveal::app::add_replay_command(app);
   const auto simulate = foveal::app::add_simulate_command(app);
   const auto view = foveal::app::add_view_command(app);
+  const auto compare = foveal::app::add_compare_command(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
@@ -40,6 +41,7 @@ int main(int argc, char** argv) {
     if (app.got_subcommand("replay")) return replay();
     if (app.got_subcommand("simulate")) return simulate();
     if (app.got_subcommand("view")) return view();
+    if (app.got_subcommand("compare")) return compare();
     return 2;
   } catch (const foveal::Error& e) {
     fmt::print(stderr, "foveal: error: {}\n", e.what());
