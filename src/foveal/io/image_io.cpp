@@ -11,7 +11,10 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
+#include <array>
 #include <bit>
 #include <cmath>
 #include <cstring>
@@ -36,24 +39,33 @@ float linear_to_srgb(float v) {
   return v <= 0.0031308f ? 12.92f * v : 1.055f * std::pow(v, 1.0f / 2.4f) - 0.055f;
 }
 
-void save_image(const Image& image, const std::string& path, bool srgb) {
-  if (image.empty()) fail("{}: cannot write an empty image", path);
+namespace {
+
+// The 255 linear values where the sRGB byte steps up: byte(v) = number of steps ≤ v. Found by
+// bisection on lround(255·linear_to_srgb(v)) itself, so a byte found among them is exactly that
+// rounding, without a pow (the function is monotonic; tested over every step).
+const std::array<float, 255>& srgb_steps() {
+  static const std::array<float, 255> steps = [] {
+    std::array<float, 255> t{};
+    auto byte = [](float v) { return std::lround(linear_to_srgb(v) * 255.0f); };
+    for (int k = 1; k <= 255; ++k) {
+      float lo = 0.0f, hi = 1.0f;  // byte(lo) < k ≤ byte(hi)
+      while (std::nextafter(lo, 2.0f) < hi) {
+        const float mid = std::max(std::nextafter(lo, 2.0f), std::min(std::nextafter(hi, -1.0f), 0.5f * (lo + hi)));
+        (byte(mid) >= k ? hi : lo) = mid;
+      }
+      t[k - 1] = hi;
+    }
+    return t;
+  }();
+  return steps;
+}
+
+// An 8-bit BGR(A) or grey matrix to PNG/JPEG/BMP/PPM.
+void write_8bit(const cv::Mat& mat, const std::string& path) {
   const std::string ext = extension(path);
-  if (ext == ".pfm") return save_pfm(image, path);
-  if (ext == ".exr") return save_exr(image, path);
   if (ext != ".png" && ext != ".jpg" && ext != ".jpeg" && ext != ".bmp" && ext != ".ppm")
     fail("{}: unknown image format '{}' (use .png, .jpg, .pfm or .exr)", path, ext);
-  // 8-bit, BGR order for OpenCV
-  const int type = image.channels == 1 ? CV_8UC1 : CV_8UC3;
-  cv::Mat mat(image.height, image.width, type);
-  for (int y = 0; y < image.height; ++y)
-    for (int x = 0; x < image.width; ++x)
-      for (int c = 0; c < std::min(3, image.channels); ++c) {
-        float v = image.at(x, y, c);
-        v = srgb ? linear_to_srgb(v) : std::clamp(std::isfinite(v) ? v : 0.0f, 0.0f, 1.0f);
-        const int channel = image.channels == 1 ? 0 : 2 - c;
-        mat.ptr<uint8_t>(y)[x * mat.channels() + channel] = static_cast<uint8_t>(std::lround(v * 255.0f));
-      }
   bool ok = false;
   try {
     ok = cv::imwrite(path, mat);
@@ -61,6 +73,74 @@ void save_image(const Image& image, const std::string& path, bool srgb) {
     fail("{}: cannot write image: {}", path, e.what());
   }
   if (!ok) fail("{}: cannot write image (does the folder exist?)", path);
+}
+
+// Where to start looking: the byte at the lower edge of each of 4096 equal buckets of [0, 1]
+// (the sRGB curve is steepest at 0, 3.2 bytes per 1/4096, so a few steps from there at most).
+const std::array<uint8_t, 4097>& srgb_bucket_start() {
+  static const std::array<uint8_t, 4097> start = [] {
+    const auto& steps = srgb_steps();
+    std::array<uint8_t, 4097> t{};
+    for (int b = 0; b <= 4096; ++b)
+      t[b] = static_cast<uint8_t>(std::upper_bound(steps.begin(), steps.end(), b / 4096.0f) - steps.begin());
+    return t;
+  }();
+  return start;
+}
+
+inline uint8_t srgb_byte(float v, const float* steps, const uint8_t* start) {
+  if (!(v > 0)) return 0;  // also NaN
+  if (v >= 1) return 255;
+  // One bucket early, in case v·4096 rounded up to the next bucket's edge
+  const int b = static_cast<int>(v * 4096.0f);
+  int i = start[b > 0 ? b - 1 : 0];
+  while (i < 255 && steps[i] <= v) ++i;
+  return static_cast<uint8_t>(i);
+}
+
+}  // namespace
+
+uint8_t srgb_byte(float v) { return srgb_byte(v, srgb_steps().data(), srgb_bucket_start().data()); }
+
+Rgba8 to_rgba8(const Image& linear) {
+  Rgba8 out(linear.width, linear.height);
+  const int c = linear.channels;
+  const float* steps = srgb_steps().data();
+  const uint8_t* start = srgb_bucket_start().data();
+  tbb::parallel_for(0, linear.height, [&](int y) {
+    for (int x = 0; x < linear.width; ++x) {
+      uint8_t* p = out.at(x, y);
+      for (int k = 0; k < 3; ++k) p[k] = srgb_byte(linear.at(x, y, c >= 3 ? k : 0), steps, start);
+    }
+  });
+  return out;
+}
+
+void save_rgba8(const Rgba8& image, const std::string& path) {
+  if (image.empty()) fail("{}: cannot write an empty image", path);
+  const cv::Mat rgba(image.height, image.width, CV_8UC4, const_cast<uint8_t*>(image.px.data()));
+  cv::Mat bgr;
+  cv::cvtColor(rgba, bgr, cv::COLOR_RGBA2BGR);
+  write_8bit(bgr, path);
+}
+
+void save_image(const Image& image, const std::string& path, bool srgb) {
+  if (image.empty()) fail("{}: cannot write an empty image", path);
+  const std::string ext = extension(path);
+  if (ext == ".pfm") return save_pfm(image, path);
+  if (ext == ".exr") return save_exr(image, path);
+  // 8-bit, BGR order for OpenCV
+  const int type = image.channels == 1 ? CV_8UC1 : CV_8UC3;
+  cv::Mat mat(image.height, image.width, type);
+  for (int y = 0; y < image.height; ++y)
+    for (int x = 0; x < image.width; ++x)
+      for (int c = 0; c < std::min(3, image.channels); ++c) {
+        const float v = image.at(x, y, c);
+        const int channel = image.channels == 1 ? 0 : 2 - c;
+        mat.ptr<uint8_t>(y)[x * mat.channels() + channel] =
+            srgb ? srgb_byte(v) : static_cast<uint8_t>(std::lround(std::clamp(std::isfinite(v) ? v : 0.0f, 0.0f, 1.0f) * 255.0f));
+      }
+  write_8bit(mat, path);
 }
 
 Image load_image(const std::string& path) {

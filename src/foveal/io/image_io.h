@@ -3,12 +3,19 @@
 
 #include "foveal/util/image.h"
 
+#include <cstdint>
 #include <string>
 
 namespace foveal {
 
 // Linear value → sRGB-encoded value in [0, 1].
 float linear_to_srgb(float v);
+// Linear value → sRGB byte, lround(255·linear_to_srgb(v)) by table (what 8-bit files and the viewer show).
+uint8_t srgb_byte(float v);
+// Linear RGB (or grey) → sRGB bytes with alpha 255, as save_image() writes a PNG.
+Rgba8 to_rgba8(const Image& linear);
+// Write 8-bit RGBA as PNG/JPEG/BMP (alpha dropped); throws Error naming the file.
+void save_rgba8(const Rgba8& image, const std::string& path);
 
 // Write by extension: .png (8-bit; `srgb` encodes linear values), .pfm or .exr (float, as is).
 // Throws Error naming the file on failure.

@@ -7,6 +7,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 
@@ -18,6 +19,16 @@ std::string svg_colour(glm::vec3 c) {
 }
 
 }  // namespace
+
+glm::u8vec3 heat_colour(float t) {
+  t = std::clamp(t, 0.0f, 1.0f);
+  // Piecewise-linear through five stops
+  static const glm::vec3 stops[5] = {{0.05f, 0.05f, 0.35f}, {0.0f, 0.45f, 0.9f}, {0.1f, 0.85f, 0.85f}, {1.0f, 0.9f, 0.1f}, {0.9f, 0.1f, 0.05f}};
+  const float s = t * 4;
+  const int k = std::min(static_cast<int>(s), 3);
+  const glm::vec3 c = glm::mix(stops[k], stops[k + 1], s - k);
+  return glm::u8vec3(glm::round(c * 255.0f));
+}
 
 void save_plot(const Plot& plot, const std::string& path) {
   const std::string ext = std::filesystem::path(path).extension().string();

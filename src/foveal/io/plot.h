@@ -29,6 +29,10 @@ struct Plot {
   std::vector<Label> labels;
 };
 
+// The heat colour map for a fraction t in [0, 1] (dark blue → cyan → yellow → red), sRGB bytes:
+// error maps, the viewer's AO budget.
+glm::u8vec3 heat_colour(float t);
+
 // Write by extension: .svg or .png; throws Error naming the file.
 void save_plot(const Plot& plot, const std::string& path);
 

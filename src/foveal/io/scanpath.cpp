@@ -75,7 +75,7 @@ void write_fixation_picture(const Image& img, const std::vector<glm::vec2>& fixa
   for (int y = 0; y < img.height; ++y)
     for (int x = 0; x < img.width; ++x)
       for (int c = 0; c < 3; ++c)
-        canvas.at<cv::Vec3b>(y, x)[2 - c] = static_cast<uint8_t>(std::lround(255.0f * linear_to_srgb(img.at(x, y, std::min(c, img.channels - 1)))));
+        canvas.at<cv::Vec3b>(y, x)[2 - c] = srgb_byte(img.at(x, y, std::min(c, img.channels - 1)));
   auto at = [](glm::vec2 p) { return cv::Point(int(std::lround(p.x)), int(std::lround(p.y))); };
   for (const glm::vec2& c : corners) cv::circle(canvas, at(c), 1, cv::Scalar(0, 215, 255), cv::FILLED);
   const int radius = std::max(4, std::min(img.width, img.height) / 60);

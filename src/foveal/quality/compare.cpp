@@ -2,7 +2,6 @@
 #include "foveal/quality/compare.h"
 
 #include "foveal/io/plot.h"
-#include "foveal/ui/overlays.h"
 #include "foveal/util/error.h"
 
 #include <fmt/format.h>

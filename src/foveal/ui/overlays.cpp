@@ -1,12 +1,9 @@
 // foveal/ui/overlays.cpp — see overlays.h.
 #include "foveal/ui/overlays.h"
 
-#include "foveal/io/image_io.h"
+#include "foveal/io/plot.h"
 #include "foveal/util/error.h"
 
-#include <opencv2/core.hpp>
-#include <opencv2/imgcodecs.hpp>
-#include <opencv2/imgproc.hpp>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
@@ -15,51 +12,6 @@
 #include <sstream>
 
 namespace foveal {
-
-namespace {
-
-// The 255 linear values where the sRGB byte steps up: byte(v) = number of thresholds ≤ v. Found
-// by bisection on linear_to_srgb itself, so the bytes are exactly save_image()'s (the function is
-// monotonic) at the cost of 8 comparisons instead of a pow per channel.
-const std::array<float, 255>& srgb_steps() {
-  static const std::array<float, 255> steps = [] {
-    std::array<float, 255> t{};
-    auto byte = [](float v) { return std::lround(linear_to_srgb(v) * 255.0f); };
-    for (int k = 1; k <= 255; ++k) {
-      float lo = 0.0f, hi = 1.0f;  // byte(lo) < k ≤ byte(hi)
-      while (std::nextafter(lo, 2.0f) < hi) {
-        const float mid = std::max(std::nextafter(lo, 2.0f), std::min(std::nextafter(hi, -1.0f), 0.5f * (lo + hi)));
-        (byte(mid) >= k ? hi : lo) = mid;
-      }
-      t[k - 1] = hi;
-    }
-    return t;
-  }();
-  return steps;
-}
-
-inline uint8_t srgb_byte(float v, const std::array<float, 255>& steps) {
-  if (!(v > 0)) return 0;  // also NaN
-  int i = 0;
-  for (int half = 128; half > 0; half /= 2)
-    if (i + half <= 255 && steps[i + half - 1] <= v) i += half;
-  return static_cast<uint8_t>(i);
-}
-
-}  // namespace
-
-Rgba8 to_rgba8(const Image& linear) {
-  Rgba8 out(linear.width, linear.height);
-  const int c = linear.channels;
-  const auto& steps = srgb_steps();
-  tbb::parallel_for(0, linear.height, [&](int y) {
-    for (int x = 0; x < linear.width; ++x) {
-      uint8_t* p = out.at(x, y);
-      for (int k = 0; k < 3; ++k) p[k] = srgb_byte(linear.at(x, y, c >= 3 ? k : 0), steps);
-    }
-  });
-  return out;
-}
 
 void paste(Rgba8& dst, const Rgba8& src, int x0, int y0) {
   for (int y = 0; y < src.height; ++y) {
@@ -70,20 +22,6 @@ void paste(Rgba8& dst, const Rgba8& src, int x0, int y0) {
       if (tx >= 0 && tx < dst.width) std::copy_n(src.at(x, y), 4, dst.at(tx, ty));
     }
   }
-}
-
-void save_rgba8(const Rgba8& image, const std::string& path) {
-  if (image.empty()) fail("{}: cannot write an empty image", path);
-  cv::Mat rgba(image.height, image.width, CV_8UC4, const_cast<uint8_t*>(image.px.data()));
-  cv::Mat bgr;
-  cv::cvtColor(rgba, bgr, cv::COLOR_RGBA2BGR);
-  bool ok = false;
-  try {
-    ok = cv::imwrite(path, bgr);
-  } catch (const cv::Exception& e) {
-    fail("{}: cannot write image: {}", path, e.what());
-  }
-  if (!ok) fail("{}: cannot write image (does the folder exist? .png, .jpg or .bmp)", path);
 }
 
 Overlays parse_overlays(const std::string& text) {
@@ -150,16 +88,6 @@ void QualityGrid::fill(std::vector<float>& q) const {
     float* out = q.data() + static_cast<size_t>(y) * width_;
     for (int x = 0; x < width_; ++x) out[x] = row[cell[x]] * (1 - weight[x]) + row[cell[x] + 1] * weight[x];
   });
-}
-
-glm::u8vec3 heat_colour(float t) {
-  t = std::clamp(t, 0.0f, 1.0f);
-  // Piecewise-linear through five stops
-  static const glm::vec3 stops[5] = {{0.05f, 0.05f, 0.35f}, {0.0f, 0.45f, 0.9f}, {0.1f, 0.85f, 0.85f}, {1.0f, 0.9f, 0.1f}, {0.9f, 0.1f, 0.05f}};
-  const float s = t * 4;
-  const int k = std::min(static_cast<int>(s), 3);
-  const glm::vec3 c = glm::mix(stops[k], stops[k + 1], s - k);
-  return glm::u8vec3(glm::round(c * 255.0f));
 }
 
 namespace {

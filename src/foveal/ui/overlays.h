@@ -16,23 +16,8 @@
 
 namespace foveal {
 
-// 8-bit sRGB RGBA pixels, rows top to bottom (the layout OpenGL's GL_RGBA / GL_UNSIGNED_BYTE upload takes).
-struct Rgba8 {
-  int width = 0, height = 0;
-  std::vector<uint8_t> px;  // width·height·4
-  Rgba8() = default;
-  Rgba8(int w, int h) : width(w), height(h), px(static_cast<size_t>(w) * h * 4, 255) {}
-  uint8_t* at(int x, int y) { return px.data() + (static_cast<size_t>(y) * width + x) * 4; }
-  const uint8_t* at(int x, int y) const { return px.data() + (static_cast<size_t>(y) * width + x) * 4; }
-  bool empty() const { return px.empty(); }
-};
-
-// Linear RGB (or grey) → sRGB bytes, rounded exactly as save_image() writes a PNG; alpha 255.
-Rgba8 to_rgba8(const Image& linear);
 // Paste `src` into `dst` with its top-left corner at (x0, y0).
 void paste(Rgba8& dst, const Rgba8& src, int x0, int y0);
-// Write as a PNG (RGB, alpha dropped); throws Error naming the file.
-void save_rgba8(const Rgba8& image, const std::string& path);
 
 // Which overlays are drawn.
 struct Overlays {
@@ -61,9 +46,6 @@ class QualityGrid {
   int width_, height_, step_, nx_, ny_;
   std::vector<float> q_;
 };
-
-// The colour of the heat map for a fraction t in [0, 1] (dark blue → cyan → yellow → red), sRGB.
-glm::u8vec3 heat_colour(float t);
 
 // What the overlays need of the current frame. Positions are render pixels of the image the
 // overlays are drawn on (origin top-left).

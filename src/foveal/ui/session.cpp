@@ -2,6 +2,7 @@
 #include "foveal/ui/session.h"
 
 #include "foveal/gaze/steps.h"
+#include "foveal/io/image_io.h"
 #include "foveal/io/outputs.h"
 #include "foveal/perception/eye.h"
 #include "foveal/util/error.h"

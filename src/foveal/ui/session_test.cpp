@@ -1,6 +1,7 @@
 // The viewer's session and overlays, without a window: every shown pixel comes from the library's
 // render and simulation functions, the gaze pipeline follows the mouse, overlays sit where the
 // foveation model says.
+#include "foveal/io/plot.h"
 #include "foveal/ui/overlays.h"
 #include "foveal/ui/session.h"
 #include "foveal/io/image_io.h"
@@ -246,26 +247,6 @@ TEST(ViewSession, BadSettingsAreRefusedWithTheReason) {
   }
   EXPECT_EQ(to_string(parse_overlays("all")), "gaze,contours,budget,scanpath,sharp");
   EXPECT_EQ(to_string(parse_overlays("none")), "none");
-}
-
-TEST(Overlays, DisplayBytesAreTheSavedPngBytes) {
-  // Every float around every step of the sRGB byte, and a sweep, against save_image's rounding
-  std::vector<float> values = {-1.0f, 0.0f, -0.0f, 1e-30f, 1.0f, 2.0f, NAN, INFINITY};
-  for (int i = 0; i <= 200000; ++i) values.push_back(-0.01f + 1.02f * i / 200000.0f);
-  for (int k = 0; k <= 255; ++k) {
-    // the linear value whose sRGB encoding is exactly (k − 0.5)/255, and its neighbours
-    const float s = (k - 0.5f) / 255.0f;
-    float v = s <= 0.04045f ? s / 12.92f : std::pow((s + 0.055f) / 1.055f, 2.4f);
-    for (int d = 0; d < 8; ++d) v = std::nextafter(v, -1.0f);
-    for (int d = 0; d < 16; ++d, v = std::nextafter(v, 2.0f)) values.push_back(v);
-  }
-  Image img(static_cast<int>(values.size()), 1, 1);
-  img.pixels = values;
-  const Rgba8 bytes = to_rgba8(img);
-  for (size_t i = 0; i < values.size(); ++i) {
-    const long expected = std::lround(linear_to_srgb(values[i]) * 255.0f);
-    ASSERT_EQ(bytes.at(static_cast<int>(i), 0)[0], expected) << "v = " << values[i];
-  }
 }
 
 TEST(Overlays, GridFillIsTheInterpolatedQuality) {

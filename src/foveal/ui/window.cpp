@@ -1,6 +1,7 @@
 // foveal/ui/window.cpp — see window.h. The only file that talks to GLFW, OpenGL and Dear ImGui.
 #include "foveal/ui/window.h"
 
+#include "foveal/io/image_io.h"
 #include "foveal/ui/navigation.h"
 
 #include "foveal/util/error.h"

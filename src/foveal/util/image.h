@@ -2,6 +2,7 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 #include <vector>
 
 namespace foveal {
@@ -25,6 +26,17 @@ struct Image {
     return pixels[(static_cast<size_t>(y) * width + x) * channels + c];
   }
   bool empty() const { return pixels.empty(); }
+};
+
+// 8-bit sRGB RGBA pixels, rows top to bottom (the layout of an OpenGL GL_RGBA / GL_UNSIGNED_BYTE texture).
+struct Rgba8 {
+  int width = 0, height = 0;
+  std::vector<uint8_t> px;  // width·height·4
+  Rgba8() = default;
+  Rgba8(int w, int h) : width(w), height(h), px(static_cast<size_t>(w) * h * 4, 255) {}
+  uint8_t* at(int x, int y) { return px.data() + (static_cast<size_t>(y) * width + x) * 4; }
+  const uint8_t* at(int x, int y) const { return px.data() + (static_cast<size_t>(y) * width + x) * 4; }
+  bool empty() const { return px.empty(); }
 };
 
 }  // namespace foveal
