@@ -59,7 +59,7 @@ std::function<int()> add_compare_command(CLI::App& app) {
     if (!(o->error_scale > 0)) fail("--error-scale: must be > 0, got {}", o->error_scale);
     const Comparison c = compare_images(a, b, b2 ? &*b2 : nullptr, display, gaze, params);
     if (!o->error_map.empty()) save_image(error_map_image(c, o->error_scale), o->error_map, false);
-    if (!o->plot.empty()) write_error_plot(c, a, b, b2 ? &*b2 : nullptr, o->plot);
+    if (!o->plot.empty()) write_error_plot(c, o->plot);
     if (!o->json.empty()) {
       nlohmann::json j = {{"image", o->a}, {"reference", o->b}, {"width", c.width}, {"height", c.height},
                           {"gaze_px", {gaze.x, gaze.y}},

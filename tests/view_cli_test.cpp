@@ -104,18 +104,16 @@ TEST(ViewCli, NoDisplayAndBadOptionsAreOneClearLine) {
   EXPECT_EQ(no_display.status, 1) << no_display.err;
   EXPECT_NE(no_display.err.find("needs a display"), std::string::npos) << no_display.err;
   EXPECT_EQ(lines(no_display.err), 1u) << no_display.err;
-  const CliRun mode = foveal("view --mode fullscreen");
-  EXPECT_EQ(mode.status, 1);
-  EXPECT_NE(mode.err.find("unknown view mode 'fullscreen'"), std::string::npos) << mode.err;
-  const CliRun overlay = foveal("view --overlays gaze,heat");
-  EXPECT_EQ(overlay.status, 1);
-  EXPECT_NE(overlay.err.find("unknown overlay 'heat'"), std::string::npos) << overlay.err;
-  const CliRun frames = foveal("view --frames 3");
-  EXPECT_EQ(frames.status, 1);
-  EXPECT_NE(frames.err.find("--screenshot"), std::string::npos) << frames.err;
-  const CliRun missing = foveal("view --gaze no_such_recording.asc");
-  EXPECT_EQ(missing.status, 1);
-  EXPECT_NE(missing.err.find("no_such_recording.asc"), std::string::npos) << missing.err;
+  for (const auto& [args, expected] : std::vector<std::pair<std::string, std::string>>{
+           {"view --mode fullscreen", "unknown view mode 'fullscreen'"},
+           {"view --overlays gaze,heat", "unknown overlay 'heat'"},
+           {"view --frames 3", "--screenshot"},
+           {"view --gaze no_such_recording.asc", "no_such_recording.asc"}}) {
+    const CliRun r = foveal(args);
+    EXPECT_EQ(r.status, 1) << args;
+    EXPECT_EQ(lines(r.err), 1u) << args << "\n" << r.err;
+    EXPECT_NE(r.err.find(expected), std::string::npos) << args << "\n" << r.err;
+  }
 }
 
 }  // namespace

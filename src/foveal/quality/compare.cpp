@@ -36,18 +36,21 @@ cv::Mat channel(const Image& img, int c) {
   return m;
 }
 
-// Per-pixel squared error (mean over channels).
-std::vector<double> squared_error(const Image& a, const Image& b) {
-  std::vector<double> e(static_cast<size_t>(a.width) * a.height);
-  for (size_t i = 0; i < e.size(); ++i) {
-    double s = 0;
+// Per-pixel squared and absolute errors (means over channels), in one pass.
+void pixel_errors(const Image& a, const Image& b, std::vector<double>& squared, std::vector<float>* absolute) {
+  const size_t n = static_cast<size_t>(a.width) * a.height;
+  squared.resize(n);
+  if (absolute) absolute->resize(n);
+  for (size_t i = 0; i < n; ++i) {
+    double sq = 0, ab = 0;
     for (int c = 0; c < a.channels; ++c) {
       const double d = static_cast<double>(a.pixels[i * a.channels + c]) - b.pixels[i * a.channels + c];
-      s += d * d;
+      sq += d * d;
+      ab += std::abs(d);
     }
-    e[i] = s / a.channels;
+    squared[i] = sq / a.channels;
+    if (absolute) (*absolute)[i] = static_cast<float>(ab / a.channels);
   }
-  return e;
 }
 
 struct Accumulator {
@@ -123,18 +126,13 @@ Comparison compare_images(const Image& a, const Image& b, const Image* b2, const
       c.foveal[static_cast<size_t>(y) * a.width + x] = f.quality >= 1.0 - 1e-12;
     }
   });
-  const std::vector<double> se = squared_error(a, b);
+  pixel_errors(a, b, c.squared_error, &c.abs_error);
   c.ssim_map = ssim_map(a, b);
-  c.abs_error.resize(n);
-  for (size_t i = 0; i < n; ++i) {
-    double s = 0;
-    for (int ch = 0; ch < a.channels; ++ch) s += std::abs(static_cast<double>(a.pixels[i * a.channels + ch]) - b.pixels[i * a.channels + ch]);
-    c.abs_error[i] = static_cast<float>(s / a.channels);
-  }
-  std::vector<double> se2;
+  const std::vector<double>& se = c.squared_error;
+  const std::vector<double>& se2 = c.noise_squared_error;
   std::vector<float> ssim2;
   if (b2) {
-    se2 = squared_error(*b2, b);
+    pixel_errors(*b2, b, c.noise_squared_error, nullptr);
     ssim2 = ssim_map(*b2, b);
   }
   Accumulator whole, whole_noise;
@@ -182,14 +180,16 @@ Image error_map_image(const Comparison& c, float full_scale) {
   return out;
 }
 
-void write_error_plot(const Comparison& c, const Image& a, const Image& b, const Image* b2, const std::string& path) {
+void write_error_plot(const Comparison& c, const std::string& path) {
   // RMSE per 1° bin
   float max_ecc = 0;
   for (float e : c.eccentricity_deg) max_ecc = std::max(max_ecc, e);
   const int bins = std::max(1, static_cast<int>(std::ceil(max_ecc)));
   std::vector<double> se(bins, 0), se2(bins, 0);
   std::vector<size_t> count(bins, 0);
-  const std::vector<double> e = squared_error(a, b), e2 = b2 ? squared_error(*b2, b) : std::vector<double>();
+  const std::vector<double>& e = c.squared_error;
+  const std::vector<double>& e2 = c.noise_squared_error;
+  const bool b2 = !e2.empty();
   for (size_t i = 0; i < e.size(); ++i) {
     const int k = std::min(bins - 1, static_cast<int>(c.eccentricity_deg[i]));
     se[k] += e[i];

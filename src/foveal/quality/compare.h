@@ -57,6 +57,8 @@ struct Comparison {
   std::vector<BandResult> bands;
   std::vector<float> ssim_map;          // per pixel, mean over channels
   std::vector<float> abs_error;         // per pixel |a − b|, mean over channels
+  std::vector<double> squared_error;    // per pixel (a − b)², mean over channels
+  std::vector<double> noise_squared_error;  // per pixel (b2 − b)² (empty without a second reference)
   std::vector<float> eccentricity_deg;  // per pixel, the renderer's exact angle from the gaze
   std::vector<uint8_t> foveal;          // per pixel: q(E) = 1
 };
@@ -72,6 +74,6 @@ Comparison compare_images(const Image& a, const Image& b, const Image* b2, const
 // |a − b| per pixel as a heat-map image (linear RGB), scaled so that `full_scale` is the hottest.
 Image error_map_image(const Comparison& c, float full_scale);
 // RMSE in 1° eccentricity bins against eccentricity (.png or .svg); with the noise floor where known.
-void write_error_plot(const Comparison& c, const Image& a, const Image& b, const Image* b2, const std::string& path);
+void write_error_plot(const Comparison& c, const std::string& path);
 
 }  // namespace foveal

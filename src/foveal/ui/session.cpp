@@ -138,7 +138,6 @@ struct ViewSession::Worker {
   bool stop = false;                  // guarded by mutex
   std::atomic<uint64_t> wanted{0};
   std::atomic<double> progress{0};
-  std::atomic<bool> busy{false};
   std::unique_ptr<VisionSimulation> sim;  // the worker's own
   std::thread thread;
 
@@ -184,7 +183,6 @@ struct ViewSession::Worker {
         if (stop) return;
         r = std::move(*pending);
         pending.reset();
-        busy = true;
       }
       try {
         run(r);
@@ -197,7 +195,6 @@ struct ViewSession::Worker {
         failed.error = e.what();
         publish(std::move(failed));
       }
-      busy = false;
     }
   }
 
@@ -305,14 +302,14 @@ void ViewSession::request_if_changed() {
     if (!step_fixation_ || glm::length(gaze - *step_fixation_) > px_per_deg) step_fixation_ = gaze;
     gaze = *step_fixation_;
   }
+  // What the image depends on: the settings, the camera, and (but for the reference) the gaze
   const std::string settings_key = settings_json(settings_).dump();
-  nlohmann::json key = {{"settings", settings_key}, {"camera", camera_json(camera_)}};
-  if (settings_.mode != ViewMode::reference) key["gaze"] = {gaze.x, gaze.y};
-  const std::string k = key.dump();
-  if (k == last_key_) return;
+  const std::string view_key = camera_json(camera_).dump() + (settings_.mode != ViewMode::reference ? fmt::format("|{},{}", gaze.x, gaze.y) : "");
+  if (settings_key == settings_key_ && view_key == view_key_) return;
   // The vision simulation starts afresh when anything but the camera and the fixation changed
-  const bool restart = last_key_.empty() || nlohmann::json::parse(last_key_)["settings"] != settings_key;
-  last_key_ = k;
+  const bool restart = settings_key != settings_key_;
+  settings_key_ = settings_key;
+  view_key_ = view_key;
   Request r;
   r.generation = ++generation_;
   r.settings = settings_;

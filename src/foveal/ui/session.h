@@ -112,7 +112,8 @@ class ViewSession {
   std::optional<double> last_valid_s_;  // time of the last valid sample
   bool in_gap_ = false, blink_pending_ = false;
   std::vector<glm::dvec2> scanpath_;
-  std::string last_key_, region_key_, mark_key_;
+  std::string settings_key_, view_key_;  // what the last request was for
+  std::string region_key_, mark_key_;     // what the overlay layers show
   uint64_t generation_ = 0;
   std::unique_ptr<Worker> worker_;
   std::unique_ptr<Shown> shown_state_;

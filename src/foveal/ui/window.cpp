@@ -52,7 +52,7 @@ int run_window(ViewSession& session, WindowOptions options) {
   glfwWindowHint(GLFW_CONTEXT_VERSION_MAJOR, 3);
   glfwWindowHint(GLFW_CONTEXT_VERSION_MINOR, 0);
   const int panel_w = 340;
-  const int image_w = session.image().width > 0 ? session.image().width : session.settings().render.width * session.panes();
+  const int image_w = session.settings().render.width * session.panes();  // the window fits the first mode
   const int image_h = session.settings().render.height;
   int win_w = image_w + (options.panel ? panel_w : 0), win_h = std::max(image_h, options.panel ? 640 : 0);
   if (const GLFWvidmode* mode = glfwGetVideoMode(glfwGetPrimaryMonitor())) {
