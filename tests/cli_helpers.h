@@ -4,6 +4,8 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <gtest/gtest.h>
+
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -46,6 +48,14 @@ inline size_t lines(const std::string& s) {
   size_t n = 0;
   for (char c : s) n += c == '\n';
   return n;
+}
+
+// Bad input: `foveal ARGS` exits with 1 and says `expected` in one line.
+inline void expect_one_line_error(const std::string& args, const std::string& expected) {
+  const CliRun r = foveal(args);
+  EXPECT_EQ(r.status, 1) << args;
+  EXPECT_EQ(lines(r.err), 1u) << args << "\n" << r.err;
+  EXPECT_NE(r.err.find(expected), std::string::npos) << args << "\n" << r.err;
 }
 
 // A 500 Hz t,x,y,confidence recording on a 480×300 screen: 300 ms fixations at (100, 100),

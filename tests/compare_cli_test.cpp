@@ -43,12 +43,8 @@ TEST(CompareCli, BadInputIsOneClearLine) {
            {"compare small.png tall.png", "same size"},
            {"compare small.png missing.png", "missing.png"},
            {"compare small.png small.png --gaze 1", "--gaze"},
-           {"compare small.png small.png --ellipse 0", "--ellipse"}}) {
-    const CliRun r = foveal(args);
-    EXPECT_EQ(r.status, 1) << args;
-    EXPECT_EQ(lines(r.err), 1u) << args << "\n" << r.err;
-    EXPECT_NE(r.err.find(expected), std::string::npos) << args << "\n" << r.err;
-  }
+           {"compare small.png small.png --ellipse 0", "--ellipse"}})
+    expect_one_line_error(args, expected);
 }
 
 }  // namespace

@@ -108,12 +108,8 @@ TEST(ViewCli, NoDisplayAndBadOptionsAreOneClearLine) {
            {"view --mode fullscreen", "unknown view mode 'fullscreen'"},
            {"view --overlays gaze,heat", "unknown overlay 'heat'"},
            {"view --frames 3", "--screenshot"},
-           {"view --gaze no_such_recording.asc", "no_such_recording.asc"}}) {
-    const CliRun r = foveal(args);
-    EXPECT_EQ(r.status, 1) << args;
-    EXPECT_EQ(lines(r.err), 1u) << args << "\n" << r.err;
-    EXPECT_NE(r.err.find(expected), std::string::npos) << args << "\n" << r.err;
-  }
+           {"view --gaze no_such_recording.asc", "no_such_recording.asc"}})
+    expect_one_line_error(args, expected);
 }
 
 }  // namespace
