@@ -1,5 +1,7 @@
 // apps/bench_command.cpp — `foveal bench ao`: the first paper's Table 1 on this machine.
 #include "commands.h"
+#include "foveal/cuda/gpu.h"
+#include "foveal/cuda/gpu_benchmark.h"
 #include "foveal/io/outputs.h"
 #include "foveal/render/ao_benchmark.h"
 #include "foveal/util/error.h"
@@ -26,7 +28,8 @@ std::function<int()> add_bench_command(CLI::App& app) {
   bench->require_subcommand(1);
   auto* ao = bench->add_subcommand("ao", "the first paper's Table 1: full-frame vs foveated AO for 3 cameras × 6 gaze points");
   struct Options {
-    std::string scene, size = "840x525", display = "47.5,30,60,1680,1050", json, markdown, trace_api = "stream";
+    std::string scene, size = "840x525", display = "47.5,30,60,1680,1050", json, markdown, trace_api = "stream",
+                device = "auto";
     std::vector<std::string> cameras;
     int max_rays = 400, threads = 0, repeats = 1;
     double gamma = 2;
@@ -45,6 +48,7 @@ std::function<int()> add_bench_command(CLI::App& app) {
   ao->add_flag("--full", o->full, "full run: 5 frames per case (default: 1, for a quick look)");
   ao->add_option("--threads", o->threads, "worker threads (0 = all cores)")->capture_default_str()->check(CLI::Range(0, 4096));
   ao->add_option("--trace-api", o->trace_api, "occlusion API of the renderer: stream, packet8 or single")->capture_default_str();
+  add_device_option(*ao, o->device);
   ao->add_option("--json", o->json, "write the table as JSON");
   ao->add_option("--markdown", o->markdown, "write the table as Markdown");
 
@@ -69,6 +73,8 @@ std::function<int()> add_bench_command(CLI::App& app) {
     } else {
       scene = load_scene(spec);
     }
+    const gpu::ComputeDevice device = gpu::choose_device(o->device);
+    fmt::print("foveal bench ao: device {}\n", gpu::describe_device(device));
     AoBenchParams p;
     const glm::ivec2 size = parse_size("--size", o->size);
     p.render.width = size.x;
@@ -80,6 +86,23 @@ std::function<int()> add_bench_command(CLI::App& app) {
     p.cameras = o->cameras;
     p.repeats = o->full ? std::max(o->repeats, 5) : o->repeats;
     validate(p.render);
+    if (device == gpu::ComputeDevice::cuda) {
+      // The GPU table, with the CPU measured in the same run
+      gpu::BenchParams g;
+      g.render = p.render;
+      g.cameras = p.cameras;
+      g.repeats = o->full ? 20 : 5;
+      g.cpu_repeats = p.repeats;
+      fmt::print("foveal bench ao: {}, {}x{}, n_max {}, gamma {:g}; GPU {} frames per case (median), CPU {} ({} threads)\n",
+                 spec, size.x, size.y, o->max_rays, o->gamma, g.repeats, g.cpu_repeats, threads.threads());
+      const gpu::BenchResult result =
+          gpu::run_benchmark(scene, g, [](const std::string& line) { fmt::print("  {}\n", line), std::fflush(stdout); });
+      const std::string table = gpu::to_markdown(result);
+      fmt::print("\n{}", table);
+      if (!o->json.empty()) write_json_file(o->json, gpu::to_json(result));
+      if (!o->markdown.empty()) write_text_file(o->markdown, table);
+      return 0;
+    }
     const Tracer tracer(scene, parse_trace_api(o->trace_api));
     fmt::print("foveal bench ao: {} ({} triangles), {}x{}, n_max {}, gamma {:g}, {} threads, {} frame(s) per case\n", spec,
                tracer.triangles(), size.x, size.y, o->max_rays, o->gamma, threads.threads(), p.repeats);

@@ -46,6 +46,8 @@ struct RenderOptions {
   bool mode_option = true;  // view has its own --mode (foveated, reference, side-by-side, vision)
 };
 void add_render_options(CLI::App& command, RenderOptions& options);
+// --device auto|cpu|cuda (see gpu::choose_device).
+void add_device_option(CLI::App& command, std::string& device);
 // Size, display and renderer options → validated params (gaze unset).
 RenderParams resolve_render_params(const ViewOptions& view, const RenderOptions& options);
 

@@ -1,5 +1,6 @@
 // apps/render_command.cpp — `foveal render`: one frame of foveated (or full-frame) AO.
 #include "commands.h"
+#include "foveal/cuda/gpu.h"
 #include "foveal/io/image_io.h"
 #include "foveal/io/outputs.h"
 #include "foveal/render/render.h"
@@ -50,6 +51,11 @@ void add_view_options(CLI::App& cmd, ViewOptions& o) {
   cmd.add_option("--threads", o.threads, "worker threads (0 = all cores)")->capture_default_str()->check(CLI::Range(0, 4096));
 }
 
+void add_device_option(CLI::App& cmd, std::string& device) {
+  cmd.add_option("--device", device, "where the passes run: auto (cuda when a usable NVIDIA GPU is present, else cpu), cpu or cuda")
+      ->capture_default_str();
+}
+
 void add_render_options(CLI::App& cmd, RenderOptions& o) {
   if (o.mode_option)
     cmd.add_option("--mode", o.mode, "foveated (budget follows the gaze) or full (n_max rays everywhere: the reference)")
@@ -96,13 +102,14 @@ std::function<int()> add_render_command(CLI::App& app) {
   struct Options {
     ViewOptions view;
     RenderOptions render;
-    std::string gaze, output = "render.png", aov, mask, stats, plot;
+    std::string gaze, output = "render.png", aov, mask, stats, plot, device = "auto";
     bool quiet = false;
   };
   auto o = std::make_shared<Options>();
   add_view_options(*cmd, o->view);
   cmd->add_option("--gaze", o->gaze, "gaze point X,Y in render pixels, origin top-left (default: image centre; may lie off the image)");
   add_render_options(*cmd, o->render);
+  add_device_option(*cmd, o->device);
   cmd->add_option("-o,--output", o->output, "shaded image (.png; .pfm/.exr keep linear floats)")->capture_default_str();
   cmd->add_option("--aov", o->aov, "float buffers NAME=FILE[,…] as .pfm/.exr; names: ao, depth, position, normal, albedo, budget, quality, blend, eccentricity");
   cmd->add_option("--mask", o->mask, "ROI/budget mask of the paper's Figure 5 (PNG): grey = n(E)/n_max, red cross at the gaze");
@@ -118,34 +125,51 @@ std::function<int()> add_render_command(CLI::App& app) {
     const TraceApi api = parse_trace_api(o->render.trace_api);
     if (!o->plot.empty()) write_acuity_plot(p.display, p.foveation, o->plot);
 
+    const gpu::ComputeDevice device = gpu::choose_device(o->device);
+
     // Scene, tracer, frame
     const Scene scene = load_scene(o->view.scene);
     const Camera camera = resolve_camera(scene, o->view);
-    const Tracer tracer(scene, api);
-    // A progress line on a terminal, for renders long enough to wait for
-    const bool show_progress = !o->quiet && isatty(fileno(stderr));
-    const Timer clock;
-    int shown = -1;
-    const Frame frame = render_frame(tracer, scene, camera, p, [&](double fraction) {
-      const int percent = static_cast<int>(fraction * 100);
-      if (!show_progress || percent == shown || clock.ms() < 1000) return;
-      shown = percent;
-      fmt::print(stderr, "\r  AO {:3d}%  {:.1f} s", percent, clock.ms() / 1000);
-    });
-    if (shown >= 0) fmt::print(stderr, "\r{:40}\r", "");
+    Frame frame;
+    size_t triangles = 0;
+    double build_ms = 0;
+    if (device == gpu::ComputeDevice::cuda) {
+      gpu::Renderer renderer(scene);
+      triangles = scene.triangles.size();
+      build_ms = renderer.bvh().build_ms;
+      frame = renderer.render(camera, p);
+    } else {
+      const Tracer tracer(scene, api);
+      triangles = tracer.triangles();
+      build_ms = tracer.build_ms();
+      // A progress line on a terminal, for renders long enough to wait for
+      const bool show_progress = !o->quiet && isatty(fileno(stderr));
+      const Timer clock;
+      int shown = -1;
+      frame = render_frame(tracer, scene, camera, p, [&](double fraction) {
+        const int percent = static_cast<int>(fraction * 100);
+        if (!show_progress || percent == shown || clock.ms() < 1000) return;
+        shown = percent;
+        fmt::print(stderr, "\r  AO {:3d}%  {:.1f} s", percent, clock.ms() / 1000);
+      });
+      if (shown >= 0) fmt::print(stderr, "\r{:40}\r", "");
+    }
 
     // Outputs
     save_image(frame.color, o->output);
     if (!o->aov.empty()) write_aovs(frame, o->aov);
     if (!o->mask.empty()) save_image(budget_mask(frame, p.foveation.max_rays), o->mask, false);
-    if (!o->stats.empty()) write_json_file(o->stats, frame_stats_json(frame, p, scene, tracer, threads.threads()));
+    if (!o->stats.empty()) write_json_file(o->stats, frame_stats_json(frame, p, scene, triangles, build_ms, threads.threads(),
+                                                                   gpu::to_string(device),
+                                                                   device == gpu::ComputeDevice::cuda ? "bvh2" : to_string(api)));
     if (o->quiet) return 0;
     const FrameStats& s = frame.stats;
     fmt::print("foveal render: {} ({} triangles{}, BVH {:.0f} ms), camera '{}', {}x{}, {} mode, gaze ({:.0f}, {:.0f}), {} threads\n",
-               scene.source, tracer.triangles(),
+               scene.source, triangles,
                scene.skipped_triangles ? fmt::format(", {} degenerate skipped", scene.skipped_triangles) : "",
-               tracer.build_ms(), camera.name, p.width, p.height, to_string(p.mode), frame.gaze_px.x, frame.gaze_px.y,
+               build_ms, camera.name, p.width, p.height, to_string(p.mode), frame.gaze_px.x, frame.gaze_px.y,
                threads.threads());
+    fmt::print("  device   {}\n", gpu::describe_device(device));
     fmt::print("  AO rays  {:.2f} M ({:.1f} per pixel, {}..{}), {:.1f} Mrays/s\n", s.ao_rays / 1e6, s.ao_rays_mean,
                s.ao_rays_min, s.ao_rays_max, s.ao_ms > 0 ? s.ao_rays / (s.ao_ms * 1e3) : 0.0);
     fmt::print("  time     primary {:.1f} ms, foveation {:.1f} ms, AO {:.1f} ms, shade {:.1f} ms, total {:.1f} ms\n",

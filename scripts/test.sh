@@ -21,7 +21,7 @@ seconds="${FUZZ_SECONDS:-20}"
 if [ "$seconds" != 0 ]; then
   echo "== libFuzzer targets, ${seconds}s each"
   cmake -S . -B build-fuzz -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_COMPILER=clang++ \
-    -DFOVEAL_FUZZ=ON -DFOVEAL_BUILD_TESTS=OFF -DFOVEAL_BUILD_BENCH=OFF >/dev/null
+    -DFOVEAL_FUZZ=ON -DFOVEAL_CUDA=OFF -DFOVEAL_BUILD_TESTS=OFF -DFOVEAL_BUILD_BENCH=OFF >/dev/null
   targets=$(cd fuzz && ls fuzz_*.cpp | sed 's/\.cpp$//')
   # shellcheck disable=SC2086
   cmake --build build-fuzz --parallel "$jobs" --target $targets

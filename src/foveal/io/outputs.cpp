@@ -147,7 +147,9 @@ void write_acuity_plot(const Display& display, const FoveationParams& params, co
   save_plot(plot, path);
 }
 
-nlohmann::json frame_stats_json(const Frame& f, const RenderParams& p, const Scene& scene, const Tracer& tracer, int threads) {
+nlohmann::json frame_stats_json(const Frame& f, const RenderParams& p, const Scene& scene, size_t bvh_triangles,
+                                double build_ms, int threads, const std::string& device,
+                                const std::string& trace_api) {
   const FrameStats& s = f.stats;
   nlohmann::json j;
   j["mode"] = to_string(p.mode);
@@ -156,10 +158,11 @@ nlohmann::json frame_stats_json(const Frame& f, const RenderParams& p, const Sce
   j["gaze_px"] = {f.gaze_px.x, f.gaze_px.y};
   j["seed"] = p.seed;
   j["threads"] = threads;
+  j["device"] = device;
   j["scene"] = {{"source", scene.source},
-                {"triangles", tracer.triangles()},
+                {"triangles", bvh_triangles},
                 {"skipped_triangles", scene.skipped_triangles},
-                {"build_ms", tracer.build_ms()}};
+                {"build_ms", build_ms}};
   j["rays"] = {{"primary", s.primary_rays}, {"ao", s.ao_rays}, {"shadow", s.shadow_rays},
                {"total", s.primary_rays + s.ao_rays + s.shadow_rays}};
   j["ao_rays_per_pixel"] = {{"mean", s.ao_rays_mean}, {"min", s.ao_rays_min}, {"max", s.ao_rays_max}};
@@ -179,7 +182,7 @@ nlohmann::json frame_stats_json(const Frame& f, const RenderParams& p, const Sce
                 {"ambient_constant", s.ambient_constant},
                 {"ambient_constant_auto", !p.ambient_constant.has_value()}};
   j["ao_distance"] = std::isfinite(s.ao_distance) ? nlohmann::json(s.ao_distance) : nlohmann::json("inf");
-  j["trace_api"] = to_string(tracer.occlusion_api());
+  j["trace_api"] = trace_api;
   j["peak_rss_mib"] = peak_rss_mib();
   return j;
 }

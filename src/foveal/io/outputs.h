@@ -33,7 +33,8 @@ void write_acuity_plot(const Display& display, const FoveationParams& params, co
 
 // The `--stats` JSON of the CLI contract for one frame.
 nlohmann::json frame_stats_json(const Frame& frame, const RenderParams& params, const Scene& scene,
-                                const Tracer& tracer, int threads);
+                                size_t bvh_triangles, double build_ms, int threads, const std::string& device,
+                                const std::string& trace_api);  // device "cpu"/"cuda", trace API "stream", … or "bvh2"
 
 // Peak resident memory of this process so far, MiB.
 double peak_rss_mib();

@@ -58,23 +58,6 @@ double field_of_view_y_deg(const Display& d) { return 2.0 * std::atan(d.height_c
 double pixels_per_degree(const Display& d) { return d.res_x / field_of_view_x_deg(d); }
 double max_display_cpd(const Display& d) { return pixels_per_degree(d) / 2.0; }
 
-double acuity_cutoff_cpd(double e_deg, double max_cpd) {
-  return std::min(max_cpd, kAcuityFovealCpd * kAcuityE2Deg / (kAcuityE2Deg + std::max(0.0, e_deg)));
-}
-
-int ao_ray_budget(double q, const FoveationParams& p) {
-  const double span = static_cast<double>(p.max_rays - p.min_rays);
-  q = std::clamp(q, 0.0, 1.0);
-  const double qg = p.gamma == 2.0 ? q * q : std::pow(q, p.gamma);  // the default γ without pow()
-  return p.min_rays + static_cast<int>(std::lround(span * qg));
-}
-
-double blend_weight(double q, int rays, const FoveationParams& p) {
-  if (rays <= 0) return 0.0;
-  q = std::clamp(q, 0.0, 1.0);
-  return p.beta == 1.0 ? q : std::pow(q, p.beta);
-}
-
 FoveationModel::FoveationModel(const Display& display, int w, int h, glm::dvec2 gaze_px, const FoveationParams& params)
     : display_(display), width_(w), height_(h), params_(params) {
   validate(display_);
@@ -85,33 +68,6 @@ FoveationModel::FoveationModel(const Display& display, int w, int h, glm::dvec2 
   gaze_dir_ = glm::normalize(eye_ray(gaze_px.x, gaze_px.y));
   horiz_ = glm::normalize(glm::cross(glm::dvec3(0, 1, 0), gaze_dir_));
   vert_ = glm::cross(gaze_dir_, horiz_);
-}
-
-glm::dvec3 FoveationModel::eye_ray(double x_px, double y_px) const {
-  return {(x_px / width_ - 0.5) * display_.width_cm, (y_px / height_ - 0.5) * display_.height_cm,
-          display_.distance_cm};
-}
-
-FoveaSample FoveationModel::evaluate(int x, int y) const { return evaluate_at(x + 0.5, y + 0.5); }
-
-FoveaSample FoveationModel::evaluate_at(double x_px, double y_px) const {
-  FoveaSample s;
-  const glm::dvec3 p = glm::normalize(eye_ray(x_px, y_px));
-  // Exact angle between the two eye rays, split along the gaze's tangent-plane axes
-  const double angle = std::atan2(glm::length(glm::cross(gaze_dir_, p)), glm::dot(gaze_dir_, p));
-  const double ph = glm::dot(p, horiz_), pv = glm::dot(p, vert_);
-  const double len = std::hypot(ph, pv);
-  const double c = len > 0 ? ph / len : 1.0, sn = len > 0 ? pv / len : 0.0;
-  s.angle_deg = angle * kDeg;
-  s.ex_deg = s.angle_deg * c;
-  s.ey_deg = s.angle_deg * sn;
-  // Elliptical region of interest, acuity, budget and blend
-  const double a = params_.ellipse_ratio;
-  s.effective_deg = std::sqrt((s.ex_deg / a) * (s.ex_deg / a) + s.ey_deg * s.ey_deg);
-  s.quality = acuity_cutoff_cpd(s.effective_deg, max_cpd_) / foveal_cpd_;
-  s.rays = ao_ray_budget(s.quality, params_);
-  s.blend = blend_weight(s.quality, s.rays, params_);
-  return s;
 }
 
 }  // namespace foveal

@@ -7,7 +7,13 @@
 // AO ray count n(E) and the blend weight b(E).
 #pragma once
 
+#include "foveal/util/hd.h"
+
 #include <glm/glm.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
 
 #include <string>
 
@@ -37,10 +43,12 @@ double pixels_per_degree(const Display& display);
 // Highest frequency the display can show, cycles/degree (= ppd / 2).
 double max_display_cpd(const Display& display);
 
-// Acuity cut-off of eq. 4, cycles/degree: min(max_cpd, 43.1·E2/(E2+E)), E in degrees.
-double acuity_cutoff_cpd(double eccentricity_deg, double max_cpd);
 inline constexpr double kAcuityE2Deg = 3.118;     // eccentricity of half resolution, degrees
 inline constexpr double kAcuityFovealCpd = 43.1;  // foveal cut-off, cycles/degree
+// Acuity cut-off of eq. 4, cycles/degree: min(max_cpd, 43.1·E2/(E2+E)), E in degrees.
+FOVEAL_HD inline double acuity_cutoff_cpd(double e_deg, double max_cpd) {
+  return std::min(max_cpd, kAcuityFovealCpd * kAcuityE2Deg / (kAcuityE2Deg + std::max(0.0, e_deg)));
+}
 
 // Parameters of the foveation model (DESIGN.md defaults).
 struct FoveationParams {
@@ -52,9 +60,18 @@ struct FoveationParams {
 };
 
 // AO rays for a quality q: n_min + round((n_max − n_min)·q^γ).
-int ao_ray_budget(double q, const FoveationParams& params);
+FOVEAL_HD inline int ao_ray_budget(double q, const FoveationParams& p) {
+  const double span = static_cast<double>(p.max_rays - p.min_rays);
+  q = std::clamp(q, 0.0, 1.0);
+  const double qg = p.gamma == 2.0 ? q * q : std::pow(q, p.gamma);  // the default γ without pow()
+  return p.min_rays + static_cast<int>(std::lround(span * qg));
+}
 // Blend weight of AO against the constant ambient: q^β, and 0 where no ray is cast.
-double blend_weight(double q, int rays, const FoveationParams& params);
+FOVEAL_HD inline double blend_weight(double q, int rays, const FoveationParams& p) {
+  if (rays <= 0) return 0.0;
+  q = std::clamp(q, 0.0, 1.0);
+  return p.beta == 1.0 ? q : std::pow(q, p.beta);
+}
 
 // Per-pixel result of the foveation model.
 struct FoveaSample {
@@ -67,18 +84,41 @@ struct FoveaSample {
   double blend = 1;    // b(E) in [0, 1]
 };
 
-// The model for one frame: display, render size and gaze; evaluate() is a pure per-pixel function.
+// The model for one frame: display, render size and gaze; evaluate() is a pure per-pixel function,
+// the same on the CPU and the GPU (the object is trivially copyable into a kernel's arguments).
 class FoveationModel {
  public:
   FoveationModel(const Display& display, int render_width, int render_height, glm::dvec2 gaze_px,
                  const FoveationParams& params);
 
   // Eye ray (cm, eye at origin, +z towards the screen, +y down) through a render position.
-  glm::dvec3 eye_ray(double x_px, double y_px) const;
+  FOVEAL_HD glm::dvec3 eye_ray(double x_px, double y_px) const {
+    return {(x_px / width_ - 0.5) * display_.width_cm, (y_px / height_ - 0.5) * display_.height_cm,
+            display_.distance_cm};
+  }
   // The model at the centre of pixel (x, y).
-  FoveaSample evaluate(int x, int y) const;
+  FOVEAL_HD FoveaSample evaluate(int x, int y) const { return evaluate_at(x + 0.5, y + 0.5); }
   // The model at a render position (pixel centres are at +0.5).
-  FoveaSample evaluate_at(double x_px, double y_px) const;
+  FOVEAL_HD FoveaSample evaluate_at(double x_px, double y_px) const {
+    constexpr double kDeg = 180.0 / std::numbers::pi;
+    FoveaSample s;
+    const glm::dvec3 p = glm::normalize(eye_ray(x_px, y_px));
+    // Exact angle between the two eye rays, split along the gaze's tangent-plane axes
+    const double angle = std::atan2(glm::length(glm::cross(gaze_dir_, p)), glm::dot(gaze_dir_, p));
+    const double ph = glm::dot(p, horiz_), pv = glm::dot(p, vert_);
+    const double len = std::hypot(ph, pv);
+    const double c = len > 0 ? ph / len : 1.0, sn = len > 0 ? pv / len : 0.0;
+    s.angle_deg = angle * kDeg;
+    s.ex_deg = s.angle_deg * c;
+    s.ey_deg = s.angle_deg * sn;
+    // Elliptical region of interest, acuity, budget and blend
+    const double a = params_.ellipse_ratio;
+    s.effective_deg = std::sqrt((s.ex_deg / a) * (s.ex_deg / a) + s.ey_deg * s.ey_deg);
+    s.quality = acuity_cutoff_cpd(s.effective_deg, max_cpd_) / foveal_cpd_;
+    s.rays = ao_ray_budget(s.quality, params_);
+    s.blend = blend_weight(s.quality, s.rays, params_);
+    return s;
+  }
 
   double max_cpd() const { return max_cpd_; }
   const FoveationParams& params() const { return params_; }

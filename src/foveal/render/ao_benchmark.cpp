@@ -29,6 +29,8 @@ Frame timed_frame(const Tracer& tracer, const Scene& scene, const Camera& camera
   return frame;
 }
 
+}  // namespace
+
 // Centre of the pixels that see the material with the most triangles (the object, not the walls).
 glm::dvec2 object_gaze(const Scene& scene, const Frame& frame) {
   std::map<uint32_t, size_t> count;
@@ -58,6 +60,14 @@ glm::dvec2 object_gaze(const Scene& scene, const Frame& frame) {
     }
   return pick;
 }
+
+std::vector<std::pair<std::string, glm::dvec2>> benchmark_gazes(const Scene& scene, const Frame& reference) {
+  const double w = reference.gbuffer.width, h = reference.gbuffer.height;
+  return {{"centre", {w * 0.5, h * 0.5}},   {"top-left", {0.5, 0.5}},          {"top-right", {w - 0.5, 0.5}},
+          {"bottom-left", {0.5, h - 0.5}}, {"bottom-right", {w - 0.5, h - 0.5}}, {"object", object_gaze(scene, reference)}};
+}
+
+namespace {
 
 // AO rays of each tile of a frame (the tiles of trace_ao).
 std::vector<uint64_t> tile_rays(const Frame& f) {
@@ -90,7 +100,6 @@ AoBenchResult run_ao_benchmark(const Scene& scene, const Tracer& tracer, const A
 
   const RenderParams base = params.render;
   validate(base);
-  const int w = base.width, h = base.height;
   for (const Camera& camera : cameras) {
     AoBenchCamera cam;
     cam.name = camera.name;
@@ -147,9 +156,7 @@ AoBenchResult run_ao_benchmark(const Scene& scene, const Tracer& tracer, const A
                     cam.raw_rays_per_second[2] / 1e6, cam.ao_pass_rays_per_second / 1e6, cam.renderer_vs_raw));
 
     // Gaze points: centre, the four corners, and on the object
-    const std::vector<std::pair<std::string, glm::dvec2>> gazes = {
-        {"centre", {w * 0.5, h * 0.5}},   {"top-left", {0.5, 0.5}},          {"top-right", {w - 0.5, 0.5}},
-        {"bottom-left", {0.5, h - 0.5}}, {"bottom-right", {w - 0.5, h - 0.5}}, {"object", object_gaze(scene, reference)}};
+    const auto gazes = benchmark_gazes(scene, reference);
     for (const auto& [label, gaze] : gazes) {
       RenderParams fov = base;
       fov.mode = RenderMode::foveated;

@@ -58,6 +58,11 @@ struct AoBenchResult {
   std::vector<AoBenchCamera> cameras;
 };
 
+// The table's gaze points for a reference frame (its G-buffer): the centre, the four corner
+// pixels, and the pixel nearest the centroid of the object (the material with most triangles).
+std::vector<std::pair<std::string, glm::dvec2>> benchmark_gazes(const Scene& scene, const Frame& reference);
+glm::dvec2 object_gaze(const Scene& scene, const Frame& reference);
+
 // Run the benchmark; `progress` receives one line per finished measurement.
 AoBenchResult run_ao_benchmark(const Scene& scene, const Tracer& tracer, const AoBenchParams& params,
                                const std::function<void(const std::string&)>& progress = {});

@@ -22,8 +22,6 @@ constexpr int kTile = kTileSize;     // pixels per tile side
 constexpr size_t kAoBatch = 1024;    // occlusion rays handed to the tracer at once
 constexpr int kMaxRaysLimit = 65535; // n is stored in 16 bits
 
-const glm::vec3 kBackground(0.06f, 0.06f, 0.08f);
-
 // Run body(x0, x1, y0, y1, tile) over fixed 16×16 tiles in parallel; the result never depends on the order.
 template <class Body>
 void for_each_tile(int width, int height, Body&& body) {
@@ -37,29 +35,6 @@ void for_each_tile(int width, int height, Body&& body) {
   });
 }
 
-// The AO rays of one pixel: the hemisphere frame, the lifted origin and the pixel's scramble.
-struct PixelRays {
-  Frame3 frame;
-  glm::vec3 origin;
-  SobolScramble scramble;
-  float distance;
-
-  PixelRays(glm::vec3 position, glm::vec3 normal, float epsilon, float ao_distance, uint64_t seed, uint32_t x, uint32_t y)
-      : frame(make_frame(normal)),
-        origin(position + ray_offset(position, epsilon) * normal),
-        scramble(sobol_scramble(pixel_seed(seed, x, y))),
-        distance(ao_distance) {}
-
-  // Cosine-weighted ray k of the pixel's scrambled Sobol sequence.
-  Ray operator()(uint32_t k) const {
-    Ray r;
-    r.org = origin;
-    r.tnear = 0.0f;
-    r.dir = frame.to_world(cosine_hemisphere(sobol_2d(k, scramble)));
-    r.tfar = distance;
-    return r;
-  }
-};
 
 }  // namespace
 
@@ -97,14 +72,28 @@ CameraRays::CameraRays(const Camera& camera, int width, int height)
   up_ = glm::cross(right, forward_) * tan_half;
 }
 
-Ray CameraRays::operator()(double x_px, double y_px) const {
-  const auto sx = static_cast<float>(2.0 * x_px / width_ - 1.0), sy = static_cast<float>(1.0 - 2.0 * y_px / height_);
-  Ray r;
-  r.org = eye_;
-  r.dir = glm::normalize(forward_ + sx * right_ + sy * up_);
-  r.tnear = 0.0f;
-  r.tfar = std::numeric_limits<float>::infinity();
-  return r;
+
+SceneView scene_view(const Scene& scene, std::vector<MaterialView>& materials, std::vector<TextureView>& textures) {
+  materials.clear();
+  for (const Material& m : scene.materials) materials.push_back({m.diffuse, m.specular, m.shininess, m.diffuse_texture});
+  textures.clear();
+  for (const Texture& t : scene.textures) textures.push_back({t.rgb.data(), t.width, t.height});
+  SceneView v;
+  v.positions = scene.positions.data();
+  v.normals = scene.normals.data();
+  v.uvs = scene.uvs.data();
+  v.triangles = scene.triangles.data();
+  v.material_ids = scene.material_ids.data();
+  v.materials = materials.data();
+  v.textures = textures.data();
+  v.srgb_lut = srgb_to_linear_lut();
+  return v;
+}
+
+std::vector<Light> frame_lights(const std::vector<Light>& scene_lights, const Camera& camera) {
+  std::vector<Light> lights = scene_lights;
+  if (lights.empty()) lights.push_back({Light::Type::point, camera.eye, glm::vec3(0.5f), glm::vec3(0.3f)});
+  return lights;
 }
 
 float resolve_ao_distance(const Scene& scene, const Bounds& bounds, std::optional<float> requested) {
@@ -115,10 +104,6 @@ float resolve_ao_distance(const Scene& scene, const Bounds& bounds, std::optiona
 
 float surface_epsilon(const Bounds& bounds) { return std::max(1e-9f, 1e-6f * bounds.diagonal()); }
 
-float ray_offset(glm::vec3 p, float scene_epsilon) {
-  // About 80 float ulps of the point's magnitude, plus a floor tied to the scene's size
-  return scene_epsilon + 1e-5f * std::max({std::abs(p.x), std::abs(p.y), std::abs(p.z)});
-}
 
 namespace {
 
@@ -136,6 +121,9 @@ GBuffer trace_into_gbuffer(const Tracer& tracer, const Scene& scene, int width, 
   g.albedo.assign(n, glm::vec3(0.0f));
   g.depth.assign(n, std::numeric_limits<float>::infinity());
   g.view.assign(n, glm::vec3(0.0f));
+  std::vector<MaterialView> materials;
+  std::vector<TextureView> textures;
+  const SceneView view = scene_view(scene, materials, textures);
   for_each_tile(width, height, [&](int x0, int x1, int y0, int y1) {
     Ray rays[kTile * kTile];
     Hit hits[kTile * kTile];
@@ -149,29 +137,13 @@ GBuffer trace_into_gbuffer(const Tracer& tracer, const Scene& scene, int width, 
         const Hit& h = hits[x - x0];
         g.view[i] = rays[x - x0].dir;
         if (!h.valid()) continue;
-        // Surface point from barycentrics (more precise than org + t·dir)
-        const glm::uvec3 tri = scene.triangles[h.prim];
-        const float w = 1.0f - h.u - h.v;
+        const Surface surface = surface_at(view, h, rays[x - x0].dir);
         g.prim[i] = h.prim;
         g.depth[i] = h.t;
-        g.position[i] = w * scene.positions[tri.x] + h.u * scene.positions[tri.y] + h.v * scene.positions[tri.z];
-        // Normals facing the camera; the shading normal never on the far side of the surface
-        glm::vec3 ng = glm::normalize(h.ng);
-        if (glm::dot(ng, rays[x - x0].dir) > 0) ng = -ng;
-        glm::vec3 ns = w * scene.normals[tri.x] + h.u * scene.normals[tri.y] + h.v * scene.normals[tri.z];
-        const float len = glm::length(ns);
-        ns = len > 0 && std::isfinite(len) ? ns / len : ng;
-        if (glm::dot(ns, ng) < 0) ns = -ns;
-        g.geo_normal[i] = ng;
-        g.normal[i] = ns;
-        // Albedo: material colour times the diffuse texture
-        const Material& m = scene.materials[scene.material_ids[h.prim]];
-        glm::vec3 albedo = m.diffuse;
-        if (m.diffuse_texture >= 0) {
-          const glm::vec2 uv = w * scene.uvs[tri.x] + h.u * scene.uvs[tri.y] + h.v * scene.uvs[tri.z];
-          albedo *= scene.textures[m.diffuse_texture].sample(uv);
-        }
-        g.albedo[i] = albedo;
+        g.position[i] = surface.position;
+        g.geo_normal[i] = surface.geo_normal;
+        g.normal[i] = surface.normal;
+        g.albedo[i] = surface.albedo;
       }
     }
   });
@@ -218,7 +190,7 @@ FoveationMaps foveation_maps(const RenderParams& params, glm::dvec2 gaze_px) {
 float estimate_visibility(const Tracer& tracer, glm::vec3 position, glm::vec3 normal, int rays, float ao_distance,
                           float epsilon, uint64_t seed, uint32_t x, uint32_t y) {
   if (rays <= 0) return 1.0f;
-  const PixelRays pixel(position, normal, epsilon, ao_distance, seed, x, y);
+  const AoPixelRays pixel(position, normal, epsilon, ao_distance, seed, x, y, sobol_table_2d());
   std::vector<Ray> batch(static_cast<size_t>(rays));
   std::vector<uint8_t> occluded(batch.size());
   for (int k = 0; k < rays; ++k) batch[k] = pixel(static_cast<uint32_t>(k));
@@ -282,8 +254,8 @@ uint64_t trace_ao(const Tracer& tracer, const GBuffer& g, const FoveationMaps& m
         const size_t i = static_cast<size_t>(y) * g.width + x;
         const int n = maps.rays[i];
         if (!g.hit(i) || n == 0) continue;
-        const PixelRays pixel(g.position[i], g.geo_normal[i], epsilon, ao_distance, seed, static_cast<uint32_t>(x),
-                              static_cast<uint32_t>(y));
+        const AoPixelRays pixel(g.position[i], g.geo_normal[i], epsilon, ao_distance, seed, static_cast<uint32_t>(x),
+                                static_cast<uint32_t>(y), sobol_table_2d());
         b.segments.push_back({i, static_cast<uint32_t>(fill), static_cast<uint32_t>(fill), n});
         for (int k = 0; k < n; ++k) {
           b.rays[fill++] = pixel(static_cast<uint32_t>(k));
@@ -318,8 +290,8 @@ void collect_ao_rays(const GBuffer& g, const FoveationMaps& maps, float ao_dista
                      size_t stride, std::vector<Ray>& rays) {
   for (size_t i = 0; i < g.prim.size(); i += std::max<size_t>(1, stride)) {
     if (!g.hit(i) || maps.rays[i] == 0) continue;
-    const PixelRays pixel(g.position[i], g.geo_normal[i], epsilon, ao_distance, seed, static_cast<uint32_t>(i % g.width),
-                          static_cast<uint32_t>(i / g.width));
+    const AoPixelRays pixel(g.position[i], g.geo_normal[i], epsilon, ao_distance, seed,
+                            static_cast<uint32_t>(i % g.width), static_cast<uint32_t>(i / g.width), sobol_table_2d());
     for (uint32_t k = 0; k < maps.rays[i]; ++k) rays.push_back(pixel(k));
   }
 }
@@ -340,41 +312,29 @@ Image shade(const Tracer& tracer, const Scene& scene, const Camera& camera, cons
             const std::vector<float>& visibility, float ambient_constant, bool shadows, float epsilon,
             uint64_t* shadow_rays) {
   Image image(g.width, g.height, 3);
-  // Lights: the scene's, else a head light at the camera
-  std::vector<Light> lights = scene.lights;
-  if (lights.empty()) lights.push_back({Light::Type::point, camera.eye, glm::vec3(0.5f), glm::vec3(0.3f)});
+  const std::vector<Light> lights = frame_lights(scene.lights, camera);
+  std::vector<MaterialView> materials;
+  std::vector<TextureView> textures;
+  scene_view(scene, materials, textures);
   tbb::enumerable_thread_specific<uint64_t> shadow_count(0);
   for_each_tile(g.width, g.height, [&](int x0, int x1, int y0, int y1) {
     for (int y = y0; y < y1; ++y)
       for (int x = x0; x < x1; ++x) {
         const size_t i = static_cast<size_t>(y) * g.width + x;
-        glm::vec3 c = kBackground;
+        glm::vec3 c = background_colour();
         if (g.hit(i)) {
-          const Material& m = scene.materials[scene.material_ids[g.prim[i]]];
-          const glm::vec3 n = g.normal[i], v = -g.view[i], p = g.position[i];
+          const MaterialView& m = materials[scene.material_ids[g.prim[i]]];
           // Blended ambient factor: k_a = b·V + (1 − b)·k_const
           const float b = maps.blend[i];
           const float ka = b * visibility[i] + (1.0f - b) * ambient_constant;
-          c = ka * scene.ambient * g.albedo[i];
-          for (const Light& light : lights) {
-            glm::vec3 l = light.type == Light::Type::point ? light.vector - p : -light.vector;
-            const float dist = glm::length(l);
-            if (!(dist > 0)) continue;
-            l /= dist;
-            const float ndotl = glm::dot(n, l);
-            if (ndotl <= 0) continue;
-            if (shadows) {
-              Ray s{.org = p + ray_offset(p, epsilon) * g.geo_normal[i], .dir = l,
-                    .tfar = light.type == Light::Type::point ? dist : 1e30f};
-              uint8_t blocked = 0;
-              tracer.occluded({&s, 1}, {&blocked, 1});
-              ++shadow_count.local();
-              if (blocked) continue;
-            }
-            const glm::vec3 r = glm::reflect(-l, n);
-            const float rdotv = std::max(0.0f, glm::dot(r, v));
-            c += g.albedo[i] * ndotl * light.diffuse + m.specular * std::pow(rdotv, m.shininess) * light.specular;
-          }
+          c = shade_point(m, g.albedo[i], g.position[i], g.normal[i], g.geo_normal[i], g.view[i], ka, scene.ambient,
+                          lights.data(), static_cast<int>(lights.size()), shadows, epsilon, [&](const Ray& ray) {
+                            Ray s = ray;
+                            uint8_t blocked = 0;
+                            tracer.occluded({&s, 1}, {&blocked, 1});
+                            ++shadow_count.local();
+                            return blocked != 0;
+                          });
         }
         for (int k = 0; k < 3; ++k) image.at(x, y, k) = c[k];
       }

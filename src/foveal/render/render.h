@@ -8,6 +8,7 @@
 #pragma once
 
 #include "foveal/perception/foveation.h"
+#include "foveal/render/pixel.h"
 #include "foveal/scene/scene.h"
 #include "foveal/trace/tracer.h"
 #include "foveal/util/image.h"
@@ -89,24 +90,13 @@ struct Frame {
   FrameStats stats;
 };
 
-// Primary rays of a pinhole camera for one image size; the basis is computed once.
-class CameraRays {
- public:
-  CameraRays(const Camera& camera, int width, int height);
-  // Ray through a render position (pixel centres at +0.5), unit direction.
-  Ray operator()(double x_px, double y_px) const;
-
- private:
-  glm::vec3 eye_, forward_, right_, up_;  // right_ and up_ scaled to the image plane at distance 1
-  int width_, height_;
-};
-
 // AO ray length for a scene: the explicit value, else the scene's, else 0.2 × bounding-box diagonal.
 float resolve_ao_distance(const Scene& scene, const Bounds& bounds, std::optional<float> requested);
 // Smallest offset that lifts ray origins off a surface, scene units (10⁻⁶ × scene diagonal).
 float surface_epsilon(const Bounds& bounds);
-// Offset along the normal for a ray leaving point p: the scene's epsilon plus 10⁻⁵ × |p|∞.
-float ray_offset(glm::vec3 p, float scene_epsilon);
+
+// The lights a frame is shaded with: the scene's, else a head light at the camera.
+std::vector<Light> frame_lights(const std::vector<Light>& scene_lights, const Camera& camera);
 
 // Primary rays through every pixel centre.
 GBuffer trace_primary(const Tracer& tracer, const Scene& scene, const Camera& camera, int width, int height);

@@ -34,22 +34,10 @@ bool finite(glm::vec3 v) { return std::isfinite(v.x) && std::isfinite(v.y) && st
 }  // namespace
 
 glm::vec3 Texture::sample(glm::vec2 uv) const {
-  if (width <= 0 || height <= 0 || !std::isfinite(uv.x) || !std::isfinite(uv.y)) return glm::vec3(1.0f);
-  const auto& lut = srgb_to_linear_table();
-  // Texel coordinates with wrap-around; v flipped since rows run top to bottom
-  const float fx = (uv.x - std::floor(uv.x)) * width - 0.5f;
-  const float fy = (1.0f - (uv.y - std::floor(uv.y))) * height - 0.5f;
-  const int x0 = static_cast<int>(std::floor(fx)), y0 = static_cast<int>(std::floor(fy));
-  const float tx = fx - x0, ty = fy - y0;
-  auto texel = [&](int x, int y) {
-    x = ((x % width) + width) % width;
-    y = ((y % height) + height) % height;
-    const uint8_t* p = &rgb[(static_cast<size_t>(y) * width + x) * 3];
-    return glm::vec3(lut[p[0]], lut[p[1]], lut[p[2]]);
-  };
-  return glm::mix(glm::mix(texel(x0, y0), texel(x0 + 1, y0), tx), glm::mix(texel(x0, y0 + 1), texel(x0 + 1, y0 + 1), tx),
-                  ty);
+  return sample_texture({rgb.data(), width, height}, srgb_to_linear_lut(), uv);
 }
+
+const float* srgb_to_linear_lut() { return srgb_to_linear_table().data(); }
 
 Bounds Scene::bounds() const {
   Bounds b;

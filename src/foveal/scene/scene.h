@@ -5,8 +5,11 @@
 // from a mesh file (through Assimp), a scene JSON file, or a built-in generator.
 #pragma once
 
+#include "foveal/util/hd.h"
+
 #include <glm/glm.hpp>
 
+#include <cmath>
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -23,6 +26,33 @@ struct Texture {
   // Bilinear, wrapping lookup in linear RGB; uv origin at the bottom-left as in OBJ.
   glm::vec3 sample(glm::vec2 uv) const;
 };
+
+// The 256 sRGB byte values decoded to linear.
+const float* srgb_to_linear_lut();
+
+// A texture's texels wherever they are (host or device memory), for the per-pixel shading code.
+struct TextureView {
+  const uint8_t* rgb = nullptr;  // width*height*3, sRGB-encoded
+  int width = 0, height = 0;
+};
+
+// Texture::sample on a view, with `lut` = srgb_to_linear_lut() or its device copy.
+FOVEAL_HD inline glm::vec3 sample_texture(const TextureView& tex, const float* lut, glm::vec2 uv) {
+  if (tex.width <= 0 || tex.height <= 0 || !std::isfinite(uv.x) || !std::isfinite(uv.y)) return glm::vec3(1.0f);
+  // Texel coordinates with wrap-around; v flipped since rows run top to bottom
+  const float fx = (uv.x - std::floor(uv.x)) * tex.width - 0.5f;
+  const float fy = (1.0f - (uv.y - std::floor(uv.y))) * tex.height - 0.5f;
+  const int x0 = static_cast<int>(std::floor(fx)), y0 = static_cast<int>(std::floor(fy));
+  const float tx = fx - x0, ty = fy - y0;
+  auto texel = [&](int x, int y) {
+    x = ((x % tex.width) + tex.width) % tex.width;
+    y = ((y % tex.height) + tex.height) % tex.height;
+    const uint8_t* p = &tex.rgb[(static_cast<size_t>(y) * tex.width + x) * 3];
+    return glm::vec3(lut[p[0]], lut[p[1]], lut[p[2]]);
+  };
+  return glm::mix(glm::mix(texel(x0, y0), texel(x0 + 1, y0), tx), glm::mix(texel(x0, y0 + 1), texel(x0 + 1, y0 + 1), tx),
+                  ty);
+}
 
 // Phong material of eq. 2 (reflectances in linear RGB).
 struct Material {

@@ -1,8 +1,6 @@
 // foveal/util/error.h — the one exception type the library throws for bad input.
 #pragma once
 
-#include <fmt/format.h>
-
 #include <stdexcept>
 #include <string>
 
@@ -13,6 +11,14 @@ struct Error : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+}  // namespace foveal
+
+// fmt 9 does not compile under nvcc: CUDA sources throw Error with a ready string
+#if !defined(__CUDACC__)
+#include <fmt/format.h>
+
+namespace foveal {
+
 // Throw an Error with an fmt-formatted message.
 template <class... Args>
 [[noreturn]] void fail(fmt::format_string<Args...> format, Args&&... args) {
@@ -20,3 +26,4 @@ template <class... Args>
 }
 
 }  // namespace foveal
+#endif

@@ -4,6 +4,8 @@
 // image does not depend on the thread count or on the order in which tiles run.
 #pragma once
 
+#include "foveal/util/hd.h"
+
 #include <glm/glm.hpp>
 
 #include <bit>
@@ -14,7 +16,7 @@
 namespace foveal {
 
 // 32-bit integer hash with good avalanche (lowbias32, C. Wellons).
-constexpr uint32_t hash32(uint32_t x) {
+FOVEAL_HD constexpr uint32_t hash32(uint32_t x) {
   x ^= x >> 16;
   x *= 0x7feb352dU;
   x ^= x >> 15;
@@ -24,18 +26,18 @@ constexpr uint32_t hash32(uint32_t x) {
 }
 
 // Hash of several words, order-sensitive.
-constexpr uint32_t hash_combine(uint32_t seed, uint32_t value) {
+FOVEAL_HD constexpr uint32_t hash_combine(uint32_t seed, uint32_t value) {
   return hash32(seed ^ (value + 0x9e3779b9U + (seed << 6) + (seed >> 2)));
 }
 
 // Seed of one pixel: the same for a pixel whatever the render mode or thread count.
-constexpr uint32_t pixel_seed(uint64_t seed, uint32_t x, uint32_t y) {
+FOVEAL_HD constexpr uint32_t pixel_seed(uint64_t seed, uint32_t x, uint32_t y) {
   uint32_t h = hash_combine(hash32(static_cast<uint32_t>(seed)), static_cast<uint32_t>(seed >> 32));
   return hash_combine(hash_combine(h, x), y);
 }
 
 // Reverse the bits of a 32-bit word.
-constexpr uint32_t reverse_bits(uint32_t x) {
+FOVEAL_HD constexpr uint32_t reverse_bits(uint32_t x) {
   x = ((x >> 1) & 0x55555555U) | ((x & 0x55555555U) << 1);
   x = ((x >> 2) & 0x33333333U) | ((x & 0x33333333U) << 2);
   x = ((x >> 4) & 0x0F0F0F0FU) | ((x & 0x0F0F0F0FU) << 4);
@@ -44,8 +46,8 @@ constexpr uint32_t reverse_bits(uint32_t x) {
 }
 
 // First two dimensions of the Sobol (0,2)-sequence as 32-bit fixed point.
-constexpr uint32_t sobol_dim0(uint32_t index) { return reverse_bits(index); }
-constexpr uint32_t sobol_dim1(uint32_t index) {
+FOVEAL_HD constexpr uint32_t sobol_dim0(uint32_t index) { return reverse_bits(index); }
+FOVEAL_HD constexpr uint32_t sobol_dim1(uint32_t index) {
   uint32_t result = 0;
   for (uint32_t v = 1U << 31; index != 0; index >>= 1, v ^= v >> 1)
     if (index & 1U) result ^= v;
@@ -53,7 +55,7 @@ constexpr uint32_t sobol_dim1(uint32_t index) {
 }
 
 // Fixed point [0, 2^32) to float in [0, 1).
-inline float to_unit_float(uint32_t bits) {
+FOVEAL_HD inline float to_unit_float(uint32_t bits) {
   return static_cast<float>(bits >> 8) * 0x1p-24f;
 }
 
@@ -66,15 +68,17 @@ struct SobolScramble {
   uint32_t x = 0, y = 0;
   const uint32_t* table = nullptr;  // sobol_table_2d(), looked up once per pixel, not per ray
 };
-inline SobolScramble sobol_scramble(uint32_t pixel_hash) {
-  return {hash32(pixel_hash ^ 0xa511e9b3U), hash32(pixel_hash ^ 0x63d83595U), sobol_table_2d()};
+// `table` is sobol_table_2d() or, on the GPU, its copy in device memory.
+FOVEAL_HD inline SobolScramble sobol_scramble(uint32_t pixel_hash, const uint32_t* table) {
+  return {hash32(pixel_hash ^ 0xa511e9b3U), hash32(pixel_hash ^ 0x63d83595U), table};
 }
+inline SobolScramble sobol_scramble(uint32_t pixel_hash) { return sobol_scramble(pixel_hash, sobol_table_2d()); }
 
 // The k-th point of a 2-D Sobol sequence under a pixel's scramble; values in [0,1).
 // Random digit scrambling (an XOR per dimension) keeps the (0,2) stratification of every
 // power-of-two prefix, so any ray count n gets well-spread directions, and costs one
 // instruction per ray where hash-based Owen scrambling cost about ten per ray (measured).
-inline glm::vec2 sobol_2d(uint32_t k, SobolScramble scramble) {
+FOVEAL_HD inline glm::vec2 sobol_2d(uint32_t k, SobolScramble scramble) {
   uint32_t s0, s1;
   if (k < kSobolTableSize) {
     s0 = scramble.table[2 * k];
@@ -93,7 +97,7 @@ inline glm::vec2 scrambled_sobol_2d(uint32_t k, uint32_t pixel_hash) { return so
 // [0, π/2), absolute error below 4e-6, without branches (the quadrant of a Sobol point is
 // unpredictable). Written here because libm's sincos was a tenth of the cost of an AO ray
 // (measured), and directions need no more precision than this.
-inline glm::vec2 cos_sin_2pi(float t) {
+FOVEAL_HD inline glm::vec2 cos_sin_2pi(float t) {
   const float q4 = t * 4.0f;  // t ≥ 0: truncation is floor, and cheaper than floorf without SSE4.1
   const int whole = static_cast<int>(q4);
   const auto quadrant = static_cast<uint32_t>(whole) & 3U;
@@ -112,7 +116,7 @@ inline glm::vec2 cos_sin_2pi(float t) {
 // reduction to [0, 1] and Abramowitz & Stegun's polynomial 4.4.47 (absolute error 1.2e-5 rad,
 // 0.0007°). Written here
 // because libm's atan2 was three quarters of the vision simulation's per-pixel CoC pass (measured).
-inline float angle_atan2(float y, float x) {
+FOVEAL_HD inline float angle_atan2(float y, float x) {
   const float ax = std::abs(x), lo = std::min(ax, y), hi = std::max(ax, y);
   const float a = hi > 0 ? lo / hi : 0.0f, s = a * a;
   float r = a * (0.9998660f + s * (-0.3302995f + s * (0.1801410f + s * (-0.0851330f + s * 0.0208351f))));
@@ -122,7 +126,7 @@ inline float angle_atan2(float y, float x) {
 }
 
 // Cosine-weighted direction on the +z hemisphere from a point of the unit square (pdf cos/pi).
-inline glm::vec3 cosine_hemisphere(glm::vec2 u) {
+FOVEAL_HD inline glm::vec3 cosine_hemisphere(glm::vec2 u) {
   const float r = std::sqrt(u.x);
   const glm::vec2 cs = cos_sin_2pi(u.y);
   return {r * cs.x, r * cs.y, std::sqrt(std::max(0.0f, 1.0f - u.x))};
@@ -131,9 +135,9 @@ inline glm::vec3 cosine_hemisphere(glm::vec2 u) {
 // Orthonormal basis around a unit normal (Duff et al. 2017), branchless and NaN-free.
 struct Frame3 {
   glm::vec3 t, b, n;  // tangent, bitangent, normal
-  glm::vec3 to_world(glm::vec3 v) const { return t * v.x + b * v.y + n * v.z; }
+  FOVEAL_HD glm::vec3 to_world(glm::vec3 v) const { return t * v.x + b * v.y + n * v.z; }
 };
-inline Frame3 make_frame(glm::vec3 n) {
+FOVEAL_HD inline Frame3 make_frame(glm::vec3 n) {
   const float sign = std::copysign(1.0f, n.z);
   const float a = -1.0f / (sign + n.z);
   const float b = n.x * n.y * a;

@@ -1,0 +1,94 @@
+// foveal/cuda/gpu.h — the CUDA backend: both pipelines' passes on an NVIDIA GPU.
+//
+// This header has no CUDA types, so every part of foveal includes it whether or not the build
+// found a CUDA toolkit. Without one (or without a GPU at run time) gpu::availability() says why,
+// and constructing a gpu::Renderer throws an Error with that reason.
+//
+// The GPU renderer runs the CPU renderer's passes (render.h) as kernels over device memory:
+// primary rays through a BVH built on the CPU by Embree's SAH builder (trace/bvh.h), the
+// foveation model, foveated AO with per-pixel ray counts, and Phong shading. The per-pixel
+// code is the CPU's own (render/pixel.h, perception/foveation.h, util/sampling.h); the
+// buffers stay on the GPU between passes, and only what the caller asks for is copied back.
+#pragma once
+
+#include "foveal/render/render.h"
+#include "foveal/trace/bvh.h"
+
+#include <memory>
+#include <span>
+#include <string>
+
+namespace foveal::gpu {
+
+// Where a command runs its passes.
+enum class ComputeDevice { cpu, cuda };
+const char* to_string(ComputeDevice device);
+// "auto" → cuda when a GPU is usable, else cpu; "cpu"; "cuda" → Error with the reason when it is
+// unusable. Throws Error for any other name.
+ComputeDevice choose_device(const std::string& name);
+// One line for the user: "device: cuda (NVIDIA H100 …)" or "device: cpu (no GPU: reason)".
+std::string describe_device(ComputeDevice device);
+
+// What the process can use, found once; never throws.
+struct Availability {
+  bool compiled = false;  // this build has the CUDA backend
+  bool usable = false;    // and a GPU answered
+  std::string reason;     // why not, when not usable
+  std::string name;       // the GPU's name
+  int compute_major = 0, compute_minor = 0;
+  int multiprocessors = 0;
+  double memory_gib = 0;
+  std::string describe() const;  // "NVIDIA H100 80GB HBM3 (compute 9.0, 132 SMs, 79.1 GiB)" or the reason
+};
+const Availability& availability();
+
+// How the AO pass spreads rays over GPU threads.
+enum class AoSchedule {
+  balanced,   // every thread traces the same number of rays (a prefix sum over the per-pixel counts)
+  per_pixel,  // one thread per pixel loops over its own n(E) rays (the papers' OptiX layout)
+};
+const char* to_string(AoSchedule schedule);
+
+// Which buffers render() copies back into the Frame (the colour always).
+struct FrameOutputs {
+  bool visibility = true;
+  bool maps = true;
+  bool gbuffer = true;
+};
+
+// GPU times of one frame's passes, milliseconds (CUDA events).
+struct GpuPassTimes {
+  double primary_ms = 0, foveation_ms = 0, scan_ms = 0, ao_ms = 0, shade_ms = 0, total_ms = 0;
+  double download_ms = 0;  // copying the asked-for buffers back (host clock)
+};
+
+// One scene on the GPU: its BVH, triangles, materials and textures, and the frame buffers.
+class Renderer {
+ public:
+  // Builds the BVH and uploads the scene; throws Error when the backend is unavailable.
+  explicit Renderer(const Scene& scene);
+  ~Renderer();
+  Renderer(const Renderer&) = delete;
+  Renderer& operator=(const Renderer&) = delete;
+
+  // One frame, as render_frame() on the CPU: the same RenderParams, the same Frame.
+  Frame render(const Camera& camera, const RenderParams& params, const FrameOutputs& outputs = {});
+  const GpuPassTimes& last_times() const;
+
+  void set_ao_schedule(AoSchedule schedule);
+  AoSchedule ao_schedule() const;
+  const Bvh& bvh() const;
+
+  // Raw tracing of given rays on the GPU (tests, and the GPU's own throughput baseline).
+  void intersect(std::span<const Ray> rays, std::span<Hit> hits);
+  void occluded(std::span<const Ray> rays, std::span<uint8_t> occluded);
+  // Occlusion rays per second on the given rays (already on the GPU when the clock starts).
+  double measure_occlusion_rate(std::span<const Ray> rays, int repeats = 5);
+
+  struct Impl;
+
+ private:
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace foveal::gpu

@@ -1,0 +1,666 @@
+// foveal/cuda/gpu_renderer.cu — the GPU renderer: one kernel per pass over device buffers.
+#include "foveal/cuda/gpu.h"
+
+#include "foveal/util/error.h"
+#include "foveal/util/sampling.h"
+#include "foveal/util/timer.h"
+
+#include <cub/device/device_scan.cuh>
+#include <cuda_runtime.h>
+
+#include <dlfcn.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <limits>
+#include <string>
+#include <vector>
+
+namespace foveal::gpu {
+namespace {
+
+void check(cudaError_t status, const char* what) {
+  if (status != cudaSuccess) throw Error(std::string("CUDA: ") + what + ": " + cudaGetErrorString(status));
+}
+#define FOVEAL_CUDA_CHECK(call) check((call), #call)
+// After a launch: the launch's own error (bad configuration), not waiting for the kernel
+#define FOVEAL_CUDA_LAUNCHED(name) check(cudaGetLastError(), name)
+
+// A growable device array of T; contents are not kept when it grows.
+template <class T>
+class DeviceArray {
+ public:
+  DeviceArray() = default;
+  DeviceArray(const DeviceArray&) = delete;
+  DeviceArray& operator=(const DeviceArray&) = delete;
+  ~DeviceArray() {
+    if (ptr_) cudaFree(ptr_);
+  }
+  void reserve(size_t count) {
+    if (count <= capacity_) return;
+    if (ptr_) cudaFree(ptr_);
+    ptr_ = nullptr;
+    capacity_ = 0;
+    FOVEAL_CUDA_CHECK(cudaMalloc(&ptr_, std::max<size_t>(count, 1) * sizeof(T)));
+    capacity_ = count;
+  }
+  void upload(const T* data, size_t count) {
+    reserve(count);
+    if (count) FOVEAL_CUDA_CHECK(cudaMemcpy(ptr_, data, count * sizeof(T), cudaMemcpyHostToDevice));
+  }
+  void upload(const std::vector<T>& v) { upload(v.data(), v.size()); }
+  void download(T* data, size_t count) const {
+    if (count) FOVEAL_CUDA_CHECK(cudaMemcpy(data, ptr_, count * sizeof(T), cudaMemcpyDeviceToHost));
+  }
+  T* get() const { return ptr_; }
+
+ private:
+  T* ptr_ = nullptr;
+  size_t capacity_ = 0;
+};
+
+// Counters one frame accumulates on the GPU, read back once at its end.
+struct FrameCounters {
+  unsigned long long total_rays;    // AO rays of the frame (the prefix sum's total)
+  unsigned long long fovea_open;    // unblocked AO rays of pixels with q = 1 (the `auto` ambient constant)
+  unsigned long long fovea_pixels;  // pixels with q = 1, a hit and rays
+  unsigned long long shadow_rays;
+  int min_rays, max_rays;           // over pixels that hit the scene
+};
+
+// ---- Kernels ---------------------------------------------------------------------------------
+
+struct GBufferPtrs {
+  uint32_t* prim;
+  glm::vec3* position;
+  glm::vec3* geo_normal;
+  glm::vec3* normal;
+  glm::vec3* albedo;
+  glm::vec3* view;
+  float* depth;
+};
+
+__global__ void primary_kernel(BvhView bvh, SceneView scene, CameraRays camera, int width, int height, GBufferPtrs g) {
+  const int x = blockIdx.x * blockDim.x + threadIdx.x, y = blockIdx.y * blockDim.y + threadIdx.y;
+  if (x >= width || y >= height) return;
+  const size_t i = static_cast<size_t>(y) * width + x;
+  const Ray ray = camera(x + 0.5, y + 0.5);
+  g.view[i] = ray.dir;
+  Hit h;
+  if (!bvh_trace<false>(bvh, ray, &h)) {
+    g.prim[i] = Hit::kNoHit;
+    g.depth[i] = std::numeric_limits<float>::infinity();
+    g.position[i] = g.geo_normal[i] = g.normal[i] = g.albedo[i] = glm::vec3(0.0f);
+    return;
+  }
+  const Surface s = surface_at(scene, h, ray.dir);
+  g.prim[i] = h.prim;
+  g.depth[i] = h.t;
+  g.position[i] = s.position;
+  g.geo_normal[i] = s.geo_normal;
+  g.normal[i] = s.normal;
+  g.albedo[i] = s.albedo;
+}
+
+struct MapPtrs {
+  float* quality;
+  float* eccentricity;
+  uint16_t* rays;
+  float* blend;
+  unsigned long long* ray_count;  // rays the AO pass traces for the pixel (0 where nothing was hit)
+};
+
+__global__ void foveation_kernel(FoveationModel model, bool foveated, int max_rays, int width, int height,
+                                 const uint32_t* prim, MapPtrs m, FrameCounters* counters) {
+  const int x = blockIdx.x * blockDim.x + threadIdx.x, y = blockIdx.y * blockDim.y + threadIdx.y;
+  if (x >= width || y >= height) return;
+  const size_t i = static_cast<size_t>(y) * width + x;
+  const FoveaSample s = model.evaluate(x, y);
+  m.eccentricity[i] = static_cast<float>(s.effective_deg);
+  float q = 1.0f, b = max_rays > 0 ? 1.0f : 0.0f;
+  int n = max_rays;
+  if (foveated) {
+    q = static_cast<float>(s.quality);
+    n = s.rays;
+    b = static_cast<float>(s.blend);
+  }
+  m.quality[i] = q;
+  m.rays[i] = static_cast<uint16_t>(n);
+  m.blend[i] = b;
+  const bool hit = prim[i] != Hit::kNoHit;
+  m.ray_count[i] = hit ? static_cast<unsigned long long>(n) : 0ULL;
+  if (hit) {
+    atomicMin(&counters->min_rays, n);
+    atomicMax(&counters->max_rays, n);
+  }
+}
+
+struct AoArgs {
+  BvhView bvh;
+  const glm::vec3* position;
+  const glm::vec3* geo_normal;
+  const unsigned long long* offset;  // exclusive prefix sum of ray_count
+  const unsigned long long* ray_count;
+  const uint32_t* sobol;
+  uint32_t* blocked;  // per pixel, zeroed before the pass
+  const FrameCounters* counters;
+  size_t pixels;
+  int width;
+  float ao_distance, epsilon;
+  uint64_t seed;
+};
+
+__device__ AoPixelRays pixel_rays(const AoArgs& a, size_t i) {
+  return AoPixelRays(a.position[i], a.geo_normal[i], a.epsilon, a.ao_distance, a.seed, static_cast<uint32_t>(i % a.width),
+                     static_cast<uint32_t>(i / a.width), a.sobol);
+}
+
+// Balanced: the frame's rays in pixel order, kAoChunk consecutive rays per thread, a grid-stride
+// loop over chunks. A thread finds its first pixel by binary search in the prefix sum, then
+// walks on; blocked counts are integers added atomically, so the result is exact in any order.
+constexpr int kAoChunk = 8;
+
+__global__ void ao_balanced_kernel(AoArgs a) {
+  const unsigned long long total = a.counters->total_rays;
+  const unsigned long long chunks = (total + kAoChunk - 1) / kAoChunk;
+  for (unsigned long long c = blockIdx.x * static_cast<unsigned long long>(blockDim.x) + threadIdx.x; c < chunks;
+       c += static_cast<unsigned long long>(gridDim.x) * blockDim.x) {
+    unsigned long long r = c * kAoChunk;
+    const unsigned long long end = min(r + kAoChunk, total);
+    // Last pixel whose offset is ≤ r: the one whose range holds ray r
+    size_t lo = 0, hi = a.pixels;  // answer in [lo, hi)
+    while (hi - lo > 1) {
+      const size_t mid = (lo + hi) / 2;
+      if (a.offset[mid] <= r) lo = mid;
+      else hi = mid;
+    }
+    size_t pixel = lo;
+    unsigned long long pixel_end = a.offset[pixel] + a.ray_count[pixel];
+    AoPixelRays rays = pixel_rays(a, pixel);
+    uint32_t blocked = 0;
+    for (; r < end; ++r) {
+      if (r >= pixel_end) {
+        if (blocked) atomicAdd(&a.blocked[pixel], blocked);
+        blocked = 0;
+        do ++pixel;
+        while (a.ray_count[pixel] == 0);
+        pixel_end = a.offset[pixel] + a.ray_count[pixel];
+        rays = pixel_rays(a, pixel);
+      }
+      const Ray ray = rays(static_cast<uint32_t>(r - a.offset[pixel]));
+      blocked += bvh_trace<true>(a.bvh, ray, nullptr) ? 1U : 0U;
+    }
+    if (blocked) atomicAdd(&a.blocked[pixel], blocked);
+  }
+}
+
+// Per pixel: one thread loops over its own pixel's rays (as the papers' OptiX kernels did).
+__global__ void ao_per_pixel_kernel(AoArgs a) {
+  const size_t i = blockIdx.x * static_cast<size_t>(blockDim.x) + threadIdx.x;
+  if (i >= a.pixels) return;
+  const auto n = static_cast<uint32_t>(a.ray_count[i]);
+  if (n == 0) return;
+  const AoPixelRays rays = pixel_rays(a, i);
+  uint32_t blocked = 0;
+  for (uint32_t k = 0; k < n; ++k) blocked += bvh_trace<true>(a.bvh, rays(k), nullptr) ? 1U : 0U;
+  a.blocked[i] = blocked;
+}
+
+// Per-pixel AO visibility V = open / n, and the fovea's sums for the `auto` ambient constant.
+__global__ void visibility_kernel(size_t pixels, const unsigned long long* ray_count, const float* quality,
+                                  const uint32_t* blocked, float* visibility, FrameCounters* counters) {
+  const size_t i = blockIdx.x * static_cast<size_t>(blockDim.x) + threadIdx.x;
+  if (i >= pixels) return;
+  const auto n = static_cast<uint32_t>(ray_count[i]);
+  const uint32_t open = n - blocked[i];
+  visibility[i] = n > 0 ? static_cast<float>(open) / static_cast<float>(n) : 1.0f;
+  if (n > 0 && quality[i] >= 1.0f) {
+    atomicAdd(&counters->fovea_open, static_cast<unsigned long long>(open));
+    atomicAdd(&counters->fovea_pixels, 1ULL);
+  }
+}
+
+struct ShadeArgs {
+  BvhView bvh;
+  const uint32_t* prim;
+  const uint32_t* material_ids;
+  const MaterialView* materials;
+  GBufferPtrs g;
+  const float* blend;
+  const float* visibility;
+  const Light* lights;
+  int light_count;
+  glm::vec3 ambient;
+  bool auto_constant;
+  float ambient_constant;  // when not auto
+  int max_rays;
+  bool shadows;
+  float epsilon;
+  int width, height;
+  glm::vec3* color;
+  FrameCounters* counters;
+};
+
+__global__ void shade_kernel(ShadeArgs a) {
+  const int x = blockIdx.x * blockDim.x + threadIdx.x, y = blockIdx.y * blockDim.y + threadIdx.y;
+  if (x >= a.width || y >= a.height) return;
+  const size_t i = static_cast<size_t>(y) * a.width + x;
+  glm::vec3 c = background_colour();
+  if (a.prim[i] != Hit::kNoHit) {
+    float k_const = a.ambient_constant;
+    if (a.auto_constant) {  // mean fovea visibility: every q = 1 pixel has n_max rays
+      const FrameCounters& f = *a.counters;
+      k_const = f.fovea_pixels > 0 && a.max_rays > 0
+                    ? static_cast<float>(static_cast<double>(f.fovea_open) /
+                                         (static_cast<double>(f.fovea_pixels) * a.max_rays))
+                    : 1.0f;
+    }
+    const float b = a.blend[i];
+    const float ka = b * a.visibility[i] + (1.0f - b) * k_const;
+    uint32_t shadow_rays = 0;
+    c = shade_point(a.materials[a.material_ids[a.prim[i]]], a.g.albedo[i], a.g.position[i], a.g.normal[i],
+                    a.g.geo_normal[i], a.g.view[i], ka, a.ambient, a.lights, a.light_count, a.shadows, a.epsilon,
+                    [&](const Ray& ray) {
+                      ++shadow_rays;
+                      return bvh_trace<true>(a.bvh, ray, nullptr);
+                    });
+    if (shadow_rays) atomicAdd(&a.counters->shadow_rays, static_cast<unsigned long long>(shadow_rays));
+  }
+  a.color[i] = c;
+}
+
+__global__ void intersect_kernel(BvhView bvh, const Ray* rays, Hit* hits, size_t count) {
+  const size_t i = blockIdx.x * static_cast<size_t>(blockDim.x) + threadIdx.x;
+  if (i >= count) return;
+  Hit h;
+  bvh_trace<false>(bvh, rays[i], &h);
+  hits[i] = h;
+}
+
+__global__ void occluded_kernel(BvhView bvh, const Ray* rays, uint8_t* occluded, size_t count) {
+  const size_t i = blockIdx.x * static_cast<size_t>(blockDim.x) + threadIdx.x;
+  if (i >= count) return;
+  occluded[i] = bvh_trace<true>(bvh, rays[i], nullptr) ? 1 : 0;
+}
+
+__global__ void total_kernel(const unsigned long long* offset, const unsigned long long* ray_count, size_t pixels,
+                             FrameCounters* counters) {
+  counters->total_rays = pixels > 0 ? offset[pixels - 1] + ray_count[pixels - 1] : 0ULL;
+}
+
+unsigned blocks_for(size_t count, unsigned threads) { return static_cast<unsigned>((count + threads - 1) / threads); }
+
+// Events that time the passes of one frame on the default stream.
+struct PassEvents {
+  cudaEvent_t e[6] = {};
+  PassEvents() {
+    for (auto& ev : e) FOVEAL_CUDA_CHECK(cudaEventCreate(&ev));
+  }
+  ~PassEvents() {
+    for (auto& ev : e) cudaEventDestroy(ev);
+  }
+  void record(int k) { FOVEAL_CUDA_CHECK(cudaEventRecord(e[k])); }
+  double ms(int a, int b) const {
+    float t = 0;
+    FOVEAL_CUDA_CHECK(cudaEventElapsedTime(&t, e[a], e[b]));
+    return t;
+  }
+};
+
+}  // namespace
+
+// ---- Availability ----------------------------------------------------------------------------
+
+const Availability& availability() {
+  static const Availability found = [] {
+    Availability a;
+    a.compiled = true;
+    // The runtime would report a missing driver as "insufficient"; say what is missing
+    void* driver = dlopen("libcuda.so.1", RTLD_LAZY | RTLD_LOCAL);
+    if (driver == nullptr) {
+      a.reason = "no NVIDIA driver is installed (libcuda.so.1 cannot be loaded)";
+      return a;
+    }
+    dlclose(driver);
+    int count = 0;
+    const cudaError_t status = cudaGetDeviceCount(&count);
+    if (status != cudaSuccess) {
+      a.reason = std::string("the CUDA runtime found no usable GPU: ") + cudaGetErrorString(status);
+      cudaGetLastError();
+      return a;
+    }
+    if (count == 0) {
+      a.reason = "no CUDA-capable GPU is present";
+      return a;
+    }
+    cudaDeviceProp prop{};
+    if (cudaGetDeviceProperties(&prop, 0) != cudaSuccess) {
+      a.reason = "cannot read the GPU's properties";
+      return a;
+    }
+    a.name = prop.name;
+    a.compute_major = prop.major;
+    a.compute_minor = prop.minor;
+    a.multiprocessors = prop.multiProcessorCount;
+    a.memory_gib = static_cast<double>(prop.totalGlobalMem) / (1024.0 * 1024.0 * 1024.0);
+    // A trivial allocation proves the context starts (and that this build has code for the GPU)
+    void* probe = nullptr;
+    const cudaError_t alloc = cudaMalloc(&probe, 256);
+    if (alloc != cudaSuccess) {
+      a.reason = std::string("the GPU cannot be used: ") + cudaGetErrorString(alloc);
+      cudaGetLastError();
+      return a;
+    }
+    cudaFree(probe);
+    a.usable = true;
+    return a;
+  }();
+  return found;
+}
+
+// ---- Renderer --------------------------------------------------------------------------------
+
+struct Renderer::Impl {
+  Bvh bvh;
+  size_t triangle_count = 0;
+  AoSchedule schedule = AoSchedule::balanced;
+  GpuPassTimes times;
+  int ao_grid = 0;  // blocks of the balanced AO kernel (a full GPU)
+
+  // Scene
+  DeviceArray<BvhNode> nodes;
+  DeviceArray<BvhTriangle> triangles;
+  DeviceArray<glm::vec3> positions, normals;
+  DeviceArray<glm::vec2> uvs;
+  DeviceArray<glm::uvec3> tris;
+  DeviceArray<uint32_t> material_ids;
+  DeviceArray<MaterialView> materials;
+  DeviceArray<TextureView> textures;
+  DeviceArray<uint8_t> texels;
+  DeviceArray<float> srgb_lut;
+  DeviceArray<uint32_t> sobol;
+  DeviceArray<Light> lights;
+  std::vector<Light> scene_lights;
+  glm::vec3 ambient{0.6f};
+  float epsilon = 0;
+  float default_ao_distance = 0;
+
+  // Frame
+  DeviceArray<uint32_t> prim;
+  DeviceArray<glm::vec3> position, geo_normal, normal, albedo, view, color;
+  DeviceArray<float> depth, quality, eccentricity, blend, visibility;
+  DeviceArray<uint16_t> rays;
+  DeviceArray<unsigned long long> ray_count, offset;
+  DeviceArray<uint32_t> blocked;
+  DeviceArray<FrameCounters> counters;
+  DeviceArray<uint8_t> scan_temp;
+  size_t scan_temp_bytes = 0;
+
+  // Raw tracing
+  DeviceArray<Ray> raw_rays;
+  DeviceArray<Hit> raw_hits;
+  DeviceArray<uint8_t> raw_occluded;
+
+  BvhView bvh_view() const { return {nodes.get(), triangles.get()}; }
+  SceneView scene_view() const {
+    SceneView v;
+    v.positions = positions.get();
+    v.normals = normals.get();
+    v.uvs = uvs.get();
+    v.triangles = tris.get();
+    v.material_ids = material_ids.get();
+    v.materials = materials.get();
+    v.textures = textures.get();
+    v.srgb_lut = srgb_lut.get();
+    return v;
+  }
+};
+
+const char* to_string(AoSchedule schedule) { return schedule == AoSchedule::balanced ? "balanced" : "per-pixel"; }
+
+std::string Availability::describe() const {
+  if (!usable) return reason;
+  char text[256];
+  std::snprintf(text, sizeof text, "%s (compute %d.%d, %d SMs, %.1f GiB)", name.c_str(), compute_major, compute_minor,
+                multiprocessors, memory_gib);
+  return text;
+}
+
+Renderer::Renderer(const Scene& scene) : impl_(std::make_unique<Impl>()) {
+  const Availability& a = availability();
+  if (!a.usable) throw Error("--device cuda: " + a.reason);
+  Impl& m = *impl_;
+  m.bvh = build_bvh(scene);
+  m.triangle_count = scene.triangles.size();
+  m.nodes.upload(m.bvh.nodes);
+  m.triangles.upload(m.bvh.triangles);
+  m.positions.upload(scene.positions);
+  m.normals.upload(scene.normals);
+  m.uvs.upload(scene.uvs);
+  m.tris.upload(scene.triangles);
+  m.material_ids.upload(scene.material_ids);
+  // Textures: one buffer of texels, views pointing into it
+  size_t texel_bytes = 0;
+  for (const Texture& t : scene.textures) texel_bytes += t.rgb.size();
+  std::vector<uint8_t> texels;
+  texels.reserve(texel_bytes);
+  std::vector<size_t> starts;
+  for (const Texture& t : scene.textures) {
+    starts.push_back(texels.size());
+    texels.insert(texels.end(), t.rgb.begin(), t.rgb.end());
+  }
+  m.texels.upload(texels);
+  std::vector<TextureView> views;
+  for (size_t k = 0; k < scene.textures.size(); ++k)
+    views.push_back({m.texels.get() + starts[k], scene.textures[k].width, scene.textures[k].height});
+  m.textures.upload(views);
+  std::vector<MaterialView> materials;
+  for (const Material& mat : scene.materials)
+    materials.push_back({mat.diffuse, mat.specular, mat.shininess, mat.diffuse_texture});
+  m.materials.upload(materials);
+  m.srgb_lut.upload(srgb_to_linear_lut(), 256);
+  m.sobol.upload(sobol_table_2d(), 2 * kSobolTableSize);
+  m.ambient = scene.ambient;
+  m.scene_lights = scene.lights;
+  const Bounds bounds = scene.bounds();
+  m.epsilon = surface_epsilon(bounds);
+  m.default_ao_distance = resolve_ao_distance(scene, bounds, std::nullopt);
+  m.counters.reserve(1);
+  // A grid that fills the GPU for the balanced AO kernel's grid-stride loop
+  int per_sm = 0;
+  FOVEAL_CUDA_CHECK(cudaOccupancyMaxActiveBlocksPerMultiprocessor(&per_sm, ao_balanced_kernel, 128, 0));
+  m.ao_grid = std::max(1, per_sm) * a.multiprocessors;
+}
+
+Renderer::~Renderer() = default;
+
+void Renderer::set_ao_schedule(AoSchedule schedule) { impl_->schedule = schedule; }
+AoSchedule Renderer::ao_schedule() const { return impl_->schedule; }
+const Bvh& Renderer::bvh() const { return impl_->bvh; }
+const GpuPassTimes& Renderer::last_times() const { return impl_->times; }
+
+Frame Renderer::render(const Camera& camera, const RenderParams& params, const FrameOutputs& outputs) {
+  validate(params);
+  Impl& m = *impl_;
+  const int w = params.width, h = params.height;
+  const size_t n = static_cast<size_t>(w) * h;
+  for (auto* a : {&m.position, &m.geo_normal, &m.normal, &m.albedo, &m.view, &m.color}) a->reserve(n);
+  for (auto* a : {&m.depth, &m.quality, &m.eccentricity, &m.blend, &m.visibility}) a->reserve(n);
+  m.prim.reserve(n);
+  m.rays.reserve(n);
+  m.ray_count.reserve(n);
+  m.offset.reserve(n);
+  m.blocked.reserve(n);
+  size_t temp_bytes = 0;
+  FOVEAL_CUDA_CHECK(cub::DeviceScan::ExclusiveSum(nullptr, temp_bytes, m.ray_count.get(), m.offset.get(), n));
+  if (temp_bytes > m.scan_temp_bytes) {
+    m.scan_temp.reserve(temp_bytes);
+    m.scan_temp_bytes = temp_bytes;
+  }
+  const std::vector<Light> lights = frame_lights(m.scene_lights, camera);
+  m.lights.upload(lights);
+  Frame f;
+  f.gaze_px = params.gaze_px.value_or(glm::dvec2(w * 0.5, h * 0.5));
+  const float ao_distance = params.ao_distance ? *params.ao_distance : m.default_ao_distance;
+  const FoveationModel model(params.display, w, h, f.gaze_px, params.foveation);
+  const Timer wall;
+  FrameCounters zero{0, 0, 0, 0, std::numeric_limits<int>::max(), 0};
+  FOVEAL_CUDA_CHECK(cudaMemcpy(m.counters.get(), &zero, sizeof zero, cudaMemcpyHostToDevice));
+  FOVEAL_CUDA_CHECK(cudaMemset(m.blocked.get(), 0, n * sizeof(uint32_t)));
+  const dim3 block2d(16, 8), grid2d((w + 15) / 16, (h + 7) / 8);
+  const GBufferPtrs g{m.prim.get(), m.position.get(), m.geo_normal.get(), m.normal.get(), m.albedo.get(), m.view.get(),
+                      m.depth.get()};
+  PassEvents ev;
+  ev.record(0);
+  // Primary rays → G-buffer
+  primary_kernel<<<grid2d, block2d>>>(m.bvh_view(), m.scene_view(), CameraRays(camera, w, h), w, h, g);
+  FOVEAL_CUDA_LAUNCHED("primary rays");
+  ev.record(1);
+  // Foveation model → q, n, b and each pixel's ray count
+  const MapPtrs maps{m.quality.get(), m.eccentricity.get(), m.rays.get(), m.blend.get(), m.ray_count.get()};
+  foveation_kernel<<<grid2d, block2d>>>(model, params.mode == RenderMode::foveated, params.foveation.max_rays, w, h,
+                                        m.prim.get(), maps, m.counters.get());
+  FOVEAL_CUDA_LAUNCHED("foveation model");
+  ev.record(2);
+  // Prefix sum of the ray counts; the total goes straight into the counters
+  temp_bytes = m.scan_temp_bytes;
+  FOVEAL_CUDA_CHECK(cub::DeviceScan::ExclusiveSum(m.scan_temp.get(), temp_bytes, m.ray_count.get(), m.offset.get(), n));
+  total_kernel<<<1, 1>>>(m.offset.get(), m.ray_count.get(), n, m.counters.get());
+  FOVEAL_CUDA_LAUNCHED("ray total");
+  ev.record(3);
+  // Foveated AO
+  AoArgs ao{m.bvh_view(), m.position.get(), m.geo_normal.get(), m.offset.get(), m.ray_count.get(), m.sobol.get(),
+            m.blocked.get(), m.counters.get(), n, w, ao_distance, m.epsilon, params.seed};
+  if (m.schedule == AoSchedule::balanced)
+    ao_balanced_kernel<<<m.ao_grid, 128>>>(ao);
+  else
+    ao_per_pixel_kernel<<<blocks_for(n, 128), 128>>>(ao);
+  FOVEAL_CUDA_LAUNCHED("ambient occlusion");
+  ev.record(4);
+  // Visibility, then Phong shading with the blended ambient term
+  visibility_kernel<<<blocks_for(n, 256), 256>>>(n, m.ray_count.get(), m.quality.get(), m.blocked.get(),
+                                                  m.visibility.get(), m.counters.get());
+  FOVEAL_CUDA_LAUNCHED("visibility");
+  ShadeArgs sh{m.bvh_view(), m.prim.get(), m.material_ids.get(), m.materials.get(), g, m.blend.get(),
+               m.visibility.get(), m.lights.get(), static_cast<int>(lights.size()), m.ambient,
+               !params.ambient_constant.has_value(), params.ambient_constant.value_or(1.0f), params.foveation.max_rays,
+               params.shadows, m.epsilon, w, h, m.color.get(), m.counters.get()};
+  shade_kernel<<<grid2d, block2d>>>(sh);
+  FOVEAL_CUDA_LAUNCHED("shading");
+  ev.record(5);
+  FOVEAL_CUDA_CHECK(cudaEventSynchronize(ev.e[5]));
+  FOVEAL_CUDA_CHECK(cudaGetLastError());  // a fault inside a kernel
+  m.times.primary_ms = ev.ms(0, 1);
+  m.times.foveation_ms = ev.ms(1, 2);
+  m.times.scan_ms = ev.ms(2, 3);
+  m.times.ao_ms = ev.ms(3, 4);
+  m.times.shade_ms = ev.ms(4, 5);
+  m.times.total_ms = ev.ms(0, 5);
+  // Copy back what was asked for
+  const Timer download;
+  FrameCounters counters{};
+  m.counters.download(&counters, 1);
+  f.color = Image(w, h, 3);
+  static_assert(sizeof(glm::vec3) == 3 * sizeof(float));
+  m.color.download(reinterpret_cast<glm::vec3*>(f.color.pixels.data()), n);
+  if (outputs.visibility) {
+    f.visibility.resize(n);
+    m.visibility.download(f.visibility.data(), n);
+  }
+  if (outputs.maps) {
+    f.maps.width = w;
+    f.maps.height = h;
+    f.maps.quality.resize(n);
+    f.maps.eccentricity.resize(n);
+    f.maps.rays.resize(n);
+    f.maps.blend.resize(n);
+    m.quality.download(f.maps.quality.data(), n);
+    m.eccentricity.download(f.maps.eccentricity.data(), n);
+    m.rays.download(f.maps.rays.data(), n);
+    m.blend.download(f.maps.blend.data(), n);
+  }
+  if (outputs.gbuffer) {
+    GBuffer& gb = f.gbuffer;
+    gb.width = w;
+    gb.height = h;
+    gb.prim.resize(n);
+    for (auto* v : {&gb.position, &gb.normal, &gb.geo_normal, &gb.albedo, &gb.view}) v->resize(n);
+    gb.depth.resize(n);
+    m.prim.download(gb.prim.data(), n);
+    m.position.download(gb.position.data(), n);
+    m.normal.download(gb.normal.data(), n);
+    m.geo_normal.download(gb.geo_normal.data(), n);
+    m.albedo.download(gb.albedo.data(), n);
+    m.view.download(gb.view.data(), n);
+    m.depth.download(gb.depth.data(), n);
+  }
+  m.times.download_ms = download.ms();
+  // Stats as the CPU renderer reports them; times are the GPU's
+  FrameStats& s = f.stats;
+  s.primary_ms = m.times.primary_ms;
+  s.foveation_ms = m.times.foveation_ms;
+  s.ao_ms = m.times.scan_ms + m.times.ao_ms;
+  s.shade_ms = m.times.shade_ms;
+  s.total_ms = m.times.total_ms;
+  s.primary_rays = n;
+  s.ao_rays = counters.total_rays;
+  s.shadow_rays = counters.shadow_rays;
+  s.ao_rays_mean = static_cast<double>(s.ao_rays) / static_cast<double>(n);
+  s.ao_rays_min = counters.min_rays == std::numeric_limits<int>::max() ? 0 : counters.min_rays;
+  s.ao_rays_max = counters.max_rays;
+  s.ambient_constant = params.ambient_constant ? *params.ambient_constant
+                       : counters.fovea_pixels > 0 && params.foveation.max_rays > 0
+                           ? static_cast<float>(static_cast<double>(counters.fovea_open) /
+                                                (static_cast<double>(counters.fovea_pixels) * params.foveation.max_rays))
+                           : 1.0f;
+  s.ao_distance = ao_distance;
+  (void)wall;
+  return f;
+}
+
+void Renderer::intersect(std::span<const Ray> rays, std::span<Hit> hits) {
+  Impl& m = *impl_;
+  if (hits.size() < rays.size()) throw Error("gpu::Renderer::intersect: fewer hits than rays");
+  m.raw_rays.upload(rays.data(), rays.size());
+  m.raw_hits.reserve(rays.size());
+  intersect_kernel<<<blocks_for(rays.size(), 128), 128>>>(m.bvh_view(), m.raw_rays.get(), m.raw_hits.get(), rays.size());
+  FOVEAL_CUDA_LAUNCHED("intersect");
+  m.raw_hits.download(hits.data(), rays.size());
+}
+
+void Renderer::occluded(std::span<const Ray> rays, std::span<uint8_t> occluded) {
+  Impl& m = *impl_;
+  if (occluded.size() < rays.size()) throw Error("gpu::Renderer::occluded: fewer results than rays");
+  m.raw_rays.upload(rays.data(), rays.size());
+  m.raw_occluded.reserve(rays.size());
+  occluded_kernel<<<blocks_for(rays.size(), 128), 128>>>(m.bvh_view(), m.raw_rays.get(), m.raw_occluded.get(),
+                                                         rays.size());
+  FOVEAL_CUDA_LAUNCHED("occluded");
+  m.raw_occluded.download(occluded.data(), rays.size());
+}
+
+double Renderer::measure_occlusion_rate(std::span<const Ray> rays, int repeats) {
+  Impl& m = *impl_;
+  if (rays.empty()) return 0;
+  m.raw_rays.upload(rays.data(), rays.size());
+  m.raw_occluded.reserve(rays.size());
+  PassEvents ev;
+  occluded_kernel<<<blocks_for(rays.size(), 128), 128>>>(m.bvh_view(), m.raw_rays.get(), m.raw_occluded.get(),
+                                                         rays.size());  // warm-up
+  FOVEAL_CUDA_LAUNCHED("occluded");
+  std::vector<double> times;
+  for (int r = 0; r < std::max(1, repeats); ++r) {
+    ev.record(0);
+    occluded_kernel<<<blocks_for(rays.size(), 128), 128>>>(m.bvh_view(), m.raw_rays.get(), m.raw_occluded.get(),
+                                                           rays.size());
+    FOVEAL_CUDA_LAUNCHED("occluded");
+    ev.record(1);
+    FOVEAL_CUDA_CHECK(cudaEventSynchronize(ev.e[1]));
+    times.push_back(ev.ms(0, 1));
+  }
+  std::sort(times.begin(), times.end());
+  const double median_ms = times[times.size() / 2];
+  return median_ms > 0 ? static_cast<double>(rays.size()) / (median_ms * 1e-3) : 0.0;
+}
+
+}  // namespace foveal::gpu

@@ -1,0 +1,34 @@
+// foveal/cuda/gpu_stub.cpp — the CUDA backend's interface in a build without a CUDA toolkit.
+#include "foveal/cuda/gpu.h"
+
+#include "foveal/util/error.h"
+
+namespace foveal::gpu {
+
+const Availability& availability() {
+  static const Availability none = [] {
+    Availability a;
+    a.reason = "this build of foveal has no CUDA backend (no CUDA toolkit was found when it was built; install one "
+               "and rebuild)";
+    return a;
+  }();
+  return none;
+}
+
+std::string Availability::describe() const { return usable ? name : reason; }
+const char* to_string(AoSchedule schedule) { return schedule == AoSchedule::balanced ? "balanced" : "per-pixel"; }
+
+struct Renderer::Impl {};
+
+Renderer::Renderer(const Scene&) { fail("--device cuda: {}", availability().reason); }
+Renderer::~Renderer() = default;
+Frame Renderer::render(const Camera&, const RenderParams&, const FrameOutputs&) { fail("no CUDA backend"); }
+const GpuPassTimes& Renderer::last_times() const { fail("no CUDA backend"); }
+void Renderer::set_ao_schedule(AoSchedule) {}
+AoSchedule Renderer::ao_schedule() const { return AoSchedule::balanced; }
+const Bvh& Renderer::bvh() const { fail("no CUDA backend"); }
+void Renderer::intersect(std::span<const Ray>, std::span<Hit>) { fail("no CUDA backend"); }
+void Renderer::occluded(std::span<const Ray>, std::span<uint8_t>) { fail("no CUDA backend"); }
+double Renderer::measure_occlusion_rate(std::span<const Ray>, int) { fail("no CUDA backend"); }
+
+}  // namespace foveal::gpu
