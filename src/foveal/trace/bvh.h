@@ -171,7 +171,8 @@ FOVEAL_HD inline bool bvh_trace(const BvhView& bvh, const Ray& ray, Hit* hit) {
     if (inner_count == 2) {
       const bool swap = inner_entry[1] < inner_entry[0];
       stack[sp] = inner[swap ? 0 : 1];
-      stack_entry[sp++] = inner_entry[swap ? 0 : 1];
+      if constexpr (!kAnyHit) stack_entry[sp] = inner_entry[swap ? 0 : 1];
+      ++sp;
       node = inner[swap ? 1 : 0];
       continue;
     }
@@ -179,11 +180,12 @@ FOVEAL_HD inline bool bvh_trace(const BvhView& bvh, const Ray& ray, Hit* hit) {
       node = inner[0];
       continue;
     }
-    // Pop the next subtree that may still hold a closer hit
+    // Pop the next subtree that may still hold a closer hit (an any-hit ray's interval never
+    // shrinks, so it keeps no entry distances)
     node = -1;
     while (sp > 0) {
       --sp;
-      if (stack_entry[sp] <= tfar) {
+      if (kAnyHit || stack_entry[sp] <= tfar) {
         node = stack[sp];
         break;
       }
