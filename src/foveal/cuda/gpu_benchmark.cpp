@@ -131,7 +131,6 @@ BenchResult run_benchmark(const Scene& scene, const BenchParams& params,
       c.vs_cpu = compare_frames(frame, cpu_frame);
     }
     if (keep) *keep = std::move(frame);
-    return c;
   };
 
   for (const Camera& camera : cameras) {

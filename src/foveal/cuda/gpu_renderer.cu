@@ -68,6 +68,14 @@ struct FrameCounters {
   int min_rays, max_rays;           // over pixels that hit the scene
 };
 
+// The `auto` ambient constant: the mean visibility of the q = 1 pixels, all of which trace n_max
+// rays, from the frame's integer sums (exact, and the same in any summation order).
+__host__ __device__ inline float fovea_mean_visibility(const FrameCounters& f, int max_rays) {
+  return f.fovea_pixels > 0 && max_rays > 0
+             ? static_cast<float>(static_cast<double>(f.fovea_open) / (static_cast<double>(f.fovea_pixels) * max_rays))
+             : 1.0f;
+}
+
 // ---- Kernels ---------------------------------------------------------------------------------
 
 struct GBufferPtrs {
@@ -247,14 +255,7 @@ __global__ void shade_kernel(ShadeArgs a) {
   const size_t i = static_cast<size_t>(y) * a.width + x;
   glm::vec3 c = background_colour();
   if (a.prim[i] != Hit::kNoHit) {
-    float k_const = a.ambient_constant;
-    if (a.auto_constant) {  // mean fovea visibility: every q = 1 pixel has n_max rays
-      const FrameCounters& f = *a.counters;
-      k_const = f.fovea_pixels > 0 && a.max_rays > 0
-                    ? static_cast<float>(static_cast<double>(f.fovea_open) /
-                                         (static_cast<double>(f.fovea_pixels) * a.max_rays))
-                    : 1.0f;
-    }
+    const float k_const = a.auto_constant ? fovea_mean_visibility(*a.counters, a.max_rays) : a.ambient_constant;
     const float b = a.blend[i];
     const float ka = b * a.visibility[i] + (1.0f - b) * k_const;
     uint32_t shadow_rays = 0;
@@ -365,6 +366,7 @@ struct Renderer::Impl {
   size_t triangle_count = 0;
   AoSchedule schedule = AoSchedule::balanced;
   GpuPassTimes times;
+  PassEvents events;  // timing the passes of each frame
   int ao_grid = 0;  // blocks of the balanced AO kernel (a full GPU)
 
   // Scene
@@ -426,9 +428,10 @@ std::string Availability::describe() const {
   return text;
 }
 
-Renderer::Renderer(const Scene& scene) : impl_(std::make_unique<Impl>()) {
+Renderer::Renderer(const Scene& scene) {
   const Availability& a = availability();
   if (!a.usable) throw Error("--device cuda: " + a.reason);
+  impl_ = std::make_unique<Impl>();  // CUDA events and buffers: only once a GPU answered
   Impl& m = *impl_;
   m.bvh = build_bvh(scene);
   m.triangle_count = scene.triangles.size();
@@ -454,10 +457,7 @@ Renderer::Renderer(const Scene& scene) : impl_(std::make_unique<Impl>()) {
   for (size_t k = 0; k < scene.textures.size(); ++k)
     views.push_back({m.texels.get() + starts[k], scene.textures[k].width, scene.textures[k].height});
   m.textures.upload(views);
-  std::vector<MaterialView> materials;
-  for (const Material& mat : scene.materials)
-    materials.push_back({mat.diffuse, mat.specular, mat.shininess, mat.diffuse_texture});
-  m.materials.upload(materials);
+  m.materials.upload(material_views(scene));
   m.srgb_lut.upload(srgb_to_linear_lut(), 256);
   m.sobol.upload(sobol_table_2d(), 2 * kSobolTableSize);
   m.ambient = scene.ambient;
@@ -503,14 +503,13 @@ Frame Renderer::render(const Camera& camera, const RenderParams& params, const F
   f.gaze_px = params.gaze_px.value_or(glm::dvec2(w * 0.5, h * 0.5));
   const float ao_distance = params.ao_distance ? *params.ao_distance : m.default_ao_distance;
   const FoveationModel model(params.display, w, h, f.gaze_px, params.foveation);
-  const Timer wall;
   FrameCounters zero{0, 0, 0, 0, std::numeric_limits<int>::max(), 0};
   FOVEAL_CUDA_CHECK(cudaMemcpy(m.counters.get(), &zero, sizeof zero, cudaMemcpyHostToDevice));
   FOVEAL_CUDA_CHECK(cudaMemset(m.blocked.get(), 0, n * sizeof(uint32_t)));
   const dim3 block2d(16, 8), grid2d((w + 15) / 16, (h + 7) / 8);
   const GBufferPtrs g{m.prim.get(), m.position.get(), m.geo_normal.get(), m.normal.get(), m.albedo.get(), m.view.get(),
                       m.depth.get()};
-  PassEvents ev;
+  PassEvents& ev = m.events;
   ev.record(0);
   // Primary rays → G-buffer
   primary_kernel<<<grid2d, block2d>>>(m.bvh_view(), m.scene_view(), CameraRays(camera, w, h), w, h, g);
@@ -608,13 +607,9 @@ Frame Renderer::render(const Camera& camera, const RenderParams& params, const F
   s.ao_rays_mean = static_cast<double>(s.ao_rays) / static_cast<double>(n);
   s.ao_rays_min = counters.min_rays == std::numeric_limits<int>::max() ? 0 : counters.min_rays;
   s.ao_rays_max = counters.max_rays;
-  s.ambient_constant = params.ambient_constant ? *params.ambient_constant
-                       : counters.fovea_pixels > 0 && params.foveation.max_rays > 0
-                           ? static_cast<float>(static_cast<double>(counters.fovea_open) /
-                                                (static_cast<double>(counters.fovea_pixels) * params.foveation.max_rays))
-                           : 1.0f;
+  s.ambient_constant =
+      params.ambient_constant ? *params.ambient_constant : fovea_mean_visibility(counters, params.foveation.max_rays);
   s.ao_distance = ao_distance;
-  (void)wall;
   return f;
 }
 
@@ -644,7 +639,7 @@ double Renderer::measure_occlusion_rate(std::span<const Ray> rays, int repeats) 
   if (rays.empty()) return 0;
   m.raw_rays.upload(rays.data(), rays.size());
   m.raw_occluded.reserve(rays.size());
-  PassEvents ev;
+  PassEvents& ev = m.events;
   occluded_kernel<<<blocks_for(rays.size(), 128), 128>>>(m.bvh_view(), m.raw_rays.get(), m.raw_occluded.get(),
                                                          rays.size());  // warm-up
   FOVEAL_CUDA_LAUNCHED("occluded");

@@ -93,6 +93,8 @@ struct SceneView {
   const float* srgb_lut = nullptr;
 };
 
+// The scene's materials as the shading code reads them (host memory; the GPU uploads a copy).
+std::vector<MaterialView> material_views(const Scene& scene);
 // Host views of a scene; the material and texture views are written into the two vectors.
 SceneView scene_view(const Scene& scene, std::vector<MaterialView>& materials, std::vector<TextureView>& textures);
 

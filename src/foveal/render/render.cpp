@@ -73,9 +73,14 @@ CameraRays::CameraRays(const Camera& camera, int width, int height)
 }
 
 
+std::vector<MaterialView> material_views(const Scene& scene) {
+  std::vector<MaterialView> views;
+  for (const Material& m : scene.materials) views.push_back({m.diffuse, m.specular, m.shininess, m.diffuse_texture});
+  return views;
+}
+
 SceneView scene_view(const Scene& scene, std::vector<MaterialView>& materials, std::vector<TextureView>& textures) {
-  materials.clear();
-  for (const Material& m : scene.materials) materials.push_back({m.diffuse, m.specular, m.shininess, m.diffuse_texture});
+  materials = material_views(scene);
   textures.clear();
   for (const Texture& t : scene.textures) textures.push_back({t.rgb.data(), t.width, t.height});
   SceneView v;
@@ -313,9 +318,7 @@ Image shade(const Tracer& tracer, const Scene& scene, const Camera& camera, cons
             uint64_t* shadow_rays) {
   Image image(g.width, g.height, 3);
   const std::vector<Light> lights = frame_lights(scene.lights, camera);
-  std::vector<MaterialView> materials;
-  std::vector<TextureView> textures;
-  scene_view(scene, materials, textures);
+  const std::vector<MaterialView> materials = material_views(scene);
   tbb::enumerable_thread_specific<uint64_t> shadow_count(0);
   for_each_tile(g.width, g.height, [&](int x0, int x1, int y0, int y1) {
     for (int y = y0; y < y1; ++y)

@@ -164,7 +164,7 @@ Bvh build_bvh(const Scene& scene) {
     fail("Embree's BVH builder failed (error {})", static_cast<int>(error));
   }
   Flattener f{scene, bvh};
-  bvh.nodes.reserve(2 * prims.size() / 2 + 1);
+  bvh.nodes.reserve(prims.size() / 2 + 1);  // about one inner node per two leaves of 1–4 triangles
   bvh.triangles.reserve(prims.size());
   if (root->leaf) {  // a scene small enough for one leaf: a root with one leaf child
     BvhNode n;
