@@ -23,6 +23,20 @@ std::string repository_scene(const std::string& file, const std::string& data_fi
   return "";
 }
 
+Scene load_paper_scene(std::string& spec, const std::string& command) {
+  if (!spec.empty()) return load_scene(spec);
+  // The paper's dragon box, or the built-in box when the dragon is missing
+  spec = repository_scene("dragon-box.json");
+  try {
+    if (spec.empty()) fail("scenes/dragon-box.json not found");
+    return load_scene(spec);
+  } catch (const Error& e) {
+    fmt::print("foveal {}: the paper's dragon scene is unavailable ({}); running on builtin:box instead\n", command, e.what());
+    spec = "builtin:box";
+    return load_scene(spec);
+  }
+}
+
 std::function<int()> add_bench_command(CLI::App& app) {
   auto* bench = app.add_subcommand("bench", "benchmarks that reproduce the papers' tables");
   bench->require_subcommand(1);
@@ -54,25 +68,13 @@ std::function<int()> add_bench_command(CLI::App& app) {
 
   auto vision = add_bench_vision_command(*bench);
   auto blur = add_bench_blur_command(*bench);
+  auto quality = add_bench_quality_command(*bench);
   auto* blur_cmd = bench->get_subcommand("blur");
+  auto* quality_cmd = bench->get_subcommand("quality");
   auto run_ao = [o] {
     const ThreadScope threads(o->threads);
-    // Scene: the paper's dragon box, or the built-in box when the dragon is missing
     std::string spec = o->scene;
-    Scene scene;
-    if (spec.empty()) {
-      spec = repository_scene("dragon-box.json");
-      try {
-        if (spec.empty()) fail("scenes/dragon-box.json not found");
-        scene = load_scene(spec);
-      } catch (const Error& e) {
-        fmt::print("foveal bench ao: the paper's dragon scene is unavailable ({}); running on builtin:box instead\n", e.what());
-        spec = "builtin:box";
-        scene = load_scene(spec);
-      }
-    } else {
-      scene = load_scene(spec);
-    }
+    const Scene scene = load_paper_scene(spec, "bench ao");
     const gpu::ComputeDevice device = gpu::choose_device(o->device);
     fmt::print("foveal bench ao: device {}\n", gpu::describe_device(device));
     AoBenchParams p;
@@ -118,7 +120,9 @@ std::function<int()> add_bench_command(CLI::App& app) {
     if (!o->markdown.empty()) write_text_file(o->markdown, table);
     return 0;
   };
-  return [run_ao, vision, blur, ao, blur_cmd] { return ao->parsed() ? run_ao() : blur_cmd->parsed() ? blur() : vision(); };
+  return [run_ao, vision, blur, quality, ao, blur_cmd, quality_cmd] {
+    return ao->parsed() ? run_ao() : blur_cmd->parsed() ? blur() : quality_cmd->parsed() ? quality() : vision();
+  };
 }
 
 }  // namespace foveal::app

@@ -22,6 +22,7 @@ std::function<int()> add_view_command(CLI::App& app);
 std::function<int()> add_compare_command(CLI::App& app);
 std::function<int()> add_bench_vision_command(CLI::App& bench);
 std::function<int()> add_bench_blur_command(CLI::App& bench);
+std::function<int()> add_bench_quality_command(CLI::App& bench);
 
 // Options shared by the commands that render: parsed text, turned into params by each command.
 struct ViewOptions {
@@ -40,7 +41,7 @@ struct ViewOptions {
 struct RenderOptions {
   std::string mode = "foveated", ao_distance, ambient = "1", trace_api = "stream";
   int max_rays = 400, min_rays = 0;
-  double gamma = 2, beta = 1, ellipse = 1.538;
+  double gamma = 2, beta = 0, ellipse = 1.538;
   uint64_t seed = 1;
   bool shadows = false;
   bool mode_option = true;  // view has its own --mode (foveated, reference, side-by-side, vision)
@@ -61,6 +62,9 @@ void add_view_options(CLI::App& command, ViewOptions& options);
 // A scene JSON of the repository's scenes/ folder (from the working folder or the source tree),
 // or "" when it is missing or the ../shared/data file it needs (`data_file`, relative) is absent.
 std::string repository_scene(const std::string& file, const std::string& data_file = "");
+// `spec` loaded, or when empty the paper's dragon box (scenes/dragon-box.json), or builtin:box
+// when the dragon is absent (said on stdout); `spec` is set to what was loaded.
+Scene load_paper_scene(std::string& spec, const std::string& command);
 
 // Options that say how to read a recording and filter its fixations (gaze, replay).
 struct GazeOptions {

@@ -28,7 +28,7 @@ nlohmann::json stats_json(const ErrorStats& s) {
 std::function<int()> add_compare_command(CLI::App& app) {
   auto* cmd = app.add_subcommand("compare", "PSNR, SSIM and RMSE of an image against a reference, whole and per eccentricity band around the gaze");
   struct Options {
-    std::string a, b, b2, gaze, display = "47.5,30,60,1680,1050", json, error_map, plot;
+    std::string a, b, b2, gaze, display = "47.5,30,60,1680,1050", json, markdown, error_map, plot;
     double ellipse = 1.538;
     float error_scale = 0.1f;
     bool quiet = false;
@@ -42,6 +42,7 @@ std::function<int()> add_compare_command(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--ellipse", o->ellipse, "ROI ellipse ratio a of the q(E) = 1 region (as rendered)")->capture_default_str();
   cmd->add_option("--json", o->json, "write every figure as JSON");
+  cmd->add_option("--markdown", o->markdown, "write the per-band table as Markdown");
   cmd->add_option("--error-map", o->error_map, "per-pixel |image − reference| as a heat map (PNG)");
   cmd->add_option("--error-scale", o->error_scale, "the error the heat map's hottest colour stands for")->capture_default_str();
   cmd->add_option("--plot", o->plot, "RMSE against eccentricity in 1° bins (.png or .svg)");
@@ -66,9 +67,12 @@ std::function<int()> add_compare_command(CLI::App& app) {
                           {"display", {{"width_cm", display.width_cm}, {"height_cm", display.height_cm}, {"distance_cm", display.distance_cm},
                                        {"res_x", display.res_x}, {"res_y", display.res_y}}},
                           {"whole", stats_json(c.whole)}};
+      j["acuity_weighted_rmse"] = c.weighted_rmse;
       if (b2) {
         j["reference2"] = o->b2;
         j["whole_noise"] = stats_json(*c.whole_noise);
+        j["acuity_weighted_noise_rmse"] = c.weighted_noise_rmse;
+        j["acuity_weighted_ratio"] = c.weighted_ratio();
       }
       for (const BandResult& r : c.bands) {
         nlohmann::json band = {{"name", r.band.name}, {"error", stats_json(r.error)}};
@@ -83,6 +87,7 @@ std::function<int()> add_compare_command(CLI::App& app) {
       }
       write_json_file(o->json, j);
     }
+    if (!o->markdown.empty()) write_text_file(o->markdown, comparison_markdown(c));
     if (o->quiet) return 0;
     fmt::print("foveal compare: {} against {} ({}x{}, gaze {:.0f},{:.0f})\n", o->a, o->b, c.width, c.height, gaze.x, gaze.y);
     auto row = [&](const std::string& name, const ErrorStats& s) {
@@ -98,6 +103,9 @@ std::function<int()> add_compare_command(CLI::App& app) {
         fmt::print("   noise RMSE {:.5f}  ×{:.2f} ± {:.2f}{}", r.noise->rmse, r.noise_ratio, r.ratio_se, r.within_noise ? "  within noise" : "");
       fmt::print("\n");
     }
+    fmt::print("  acuity-weighted RMSE {:.5f}", c.weighted_rmse);
+    if (b2) fmt::print("   noise {:.5f}  ×{:.2f}", c.weighted_noise_rmse, c.weighted_ratio());
+    fmt::print("\n");
     return 0;
   };
 }

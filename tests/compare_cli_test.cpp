@@ -5,8 +5,18 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
+#include <cstdio>
+#include <sstream>
+
 namespace foveal_test {
 namespace {
+
+std::string fmt_ratio(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.2f", v);
+  return buf;
+}
 
 TEST(CompareCli, BandsJsonErrorMapAndPlot) {
   const std::string common = "render --scene builtin:box --size 200x125 --gaze 60,50 -q --max-rays 32";
@@ -44,6 +54,64 @@ TEST(CompareCli, BadInputIsOneClearLine) {
            {"compare small.png missing.png", "missing.png"},
            {"compare small.png small.png --gaze 1", "--gaze"},
            {"compare small.png small.png --ellipse 0", "--ellipse"}})
+    expect_one_line_error(args, expected);
+}
+
+TEST(CompareCli, MarkdownTableAndAcuityWeightedError) {
+  const std::string common = "render --scene builtin:box --size 160x100 --gaze 40,50 -q --max-rays 16";
+  ASSERT_EQ(foveal(common + " -o fov.png").status, 0);
+  ASSERT_EQ(foveal(common + " --mode full --seed 2 -o ref.png").status, 0);
+  ASSERT_EQ(foveal(common + " --mode full --seed 3 -o ref2.png").status, 0);
+  const CliRun r = foveal("compare fov.png ref.png --reference2 ref2.png --gaze 40,50 --json w.json --markdown w.md");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const auto j = nlohmann::json::parse(std::ifstream(scratch("w.json")));
+  const double w = j["acuity_weighted_rmse"], wn = j["acuity_weighted_noise_rmse"];
+  EXPECT_NEAR(j["acuity_weighted_ratio"].get<double>(), w / wn, 1e-9);
+  // q² ≤ 1 weights the fovea most: the weighted error lies between the fovea's and the whole image's worst
+  EXPECT_GT(w, 0.0);
+  std::stringstream md;
+  md << std::ifstream(scratch("w.md")).rdbuf();
+  const std::string table = md.str();
+  EXPECT_NE(table.find("| q(E) = 1 |"), std::string::npos) << table;
+  EXPECT_NE(table.find(fmt_ratio(j["bands"][5]["noise_ratio"].get<double>())), std::string::npos) << table;
+  EXPECT_EQ(std::count(table.begin(), table.end(), '\n'), 2 + 7 + 2);  // header, rule, whole + 6 bands, blank, weighted
+}
+
+TEST(BenchQualityCli, SweepTableJsonAndPlot) {
+  const CliRun r = foveal("bench quality --scene builtin:box --size 120x75 --reference-rays 16 --gamma 1,3 --max-rays 8,16 "
+                          "--beta 1 --gaze 30,40 --gaze 90,20 --json q.json --markdown q.md --plot q.png");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const auto j = nlohmann::json::parse(std::ifstream(scratch("q.json")));
+  ASSERT_EQ(j["points"].size(), 4u);  // 2 γ × 2 n_max × 1 β
+  bool any_front = false;
+  for (const auto& p : j["points"]) {
+    ASSERT_EQ(p["gazes"].size(), 2u);
+    EXPECT_NEAR(p["speedup"].get<double>(), j["reference_ms"].get<double>() / p["ms"].get<double>(), 1e-6);
+    any_front |= p["pareto"].get<bool>();
+  }
+  EXPECT_TRUE(any_front);
+  // More rays at the same γ: a smaller ray ratio
+  EXPECT_GT(j["points"][0]["ray_ratio"].get<double>(), j["points"][1]["ray_ratio"].get<double>());
+  std::stringstream md;
+  md << std::ifstream(scratch("q.md")).rdbuf();
+  const std::string table = md.str();
+  EXPECT_EQ(std::count(table.begin(), table.end(), '\n'), 2 + 2 + 4);  // preface, blank, header, rule, 4 rows
+  const foveal::Image plot = foveal::load_image(scratch("q.png").string());
+  EXPECT_EQ(plot.width, 1300);  // two panels: still error and flicker
+  EXPECT_EQ(r.out.find("the defaults"), std::string::npos);  // not in the grid: no line about them
+  EXPECT_NE(r.out.find("recommended"), std::string::npos) << r.out;
+}
+
+TEST(BenchQualityCli, BadOptionsAreOneClearLine) {
+  const std::string base = "bench quality --scene builtin:plane --size 40x30 ";
+  for (const auto& [args, expected] : std::vector<std::pair<std::string, std::string>>{
+           {base + "--max-rays 0", "--max-rays"},
+           {base + "--max-rays 2.5", "--max-rays"},
+           {base + "--gamma 0", "--gamma"},
+           {base + "--beta -1", "--beta"},
+           {base + "--gamma x", "--gamma"},
+           {base + "--gazes nowhere", "nowhere"},
+           {base + "--gaze 3", "--gaze"}})
     expect_one_line_error(args, expected);
 }
 

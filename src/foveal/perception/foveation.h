@@ -56,7 +56,10 @@ struct FoveationParams {
   int max_rays = 400;            // n_max, AO rays per pixel at q = 1
   int min_rays = 0;              // n_min, AO rays per pixel far from the gaze
   double gamma = 2.0;            // exponent of q in the ray budget
-  double beta = 1.0;             // exponent of q in the blend weight
+  // Exponent of q in the blend weight. 0 (AO wherever a ray is cast; the constant term only where
+  // n = 0) because `foveal bench quality` measured it closest to the reference and steadiest across
+  // saccades at every γ and n_max, at the same speed (docs/quality.md); 1 is the papers' blend.
+  double beta = 0.0;
 };
 
 // AO rays for a quality q: n_min + round((n_max − n_min)·q^γ).
@@ -70,7 +73,7 @@ FOVEAL_HD inline int ao_ray_budget(double q, const FoveationParams& p) {
 FOVEAL_HD inline double blend_weight(double q, int rays, const FoveationParams& p) {
   if (rays <= 0) return 0.0;
   q = std::clamp(q, 0.0, 1.0);
-  return p.beta == 1.0 ? q : std::pow(q, p.beta);
+  return p.beta == 0.0 ? 1.0 : p.beta == 1.0 ? q : std::pow(q, p.beta);
 }
 
 // Per-pixel result of the foveation model.

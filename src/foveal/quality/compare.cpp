@@ -119,11 +119,13 @@ Comparison compare_images(const Image& a, const Image& b, const Image* b2, const
   const FoveationModel model(display, a.width, a.height, gaze_px, params);
   c.eccentricity_deg.resize(n);
   c.foveal.resize(n);
+  c.quality.resize(n);
   tbb::parallel_for(0, a.height, [&](int y) {
     for (int x = 0; x < a.width; ++x) {
       const FoveaSample f = model.evaluate(x, y);
       c.eccentricity_deg[static_cast<size_t>(y) * a.width + x] = static_cast<float>(f.angle_deg);
       c.foveal[static_cast<size_t>(y) * a.width + x] = f.quality >= 1.0 - 1e-12;
+      c.quality[static_cast<size_t>(y) * a.width + x] = static_cast<float>(f.quality);
     }
   });
   pixel_errors(a, b, c.squared_error, &c.abs_error);
@@ -137,7 +139,12 @@ Comparison compare_images(const Image& a, const Image& b, const Image* b2, const
   }
   Accumulator whole, whole_noise;
   std::vector<Accumulator> acc(bands.size()), noise(bands.size());
+  double w_sum = 0, w_se = 0, w_se2 = 0;
   for (size_t i = 0; i < n; ++i) {
+    const double w = static_cast<double>(c.quality[i]) * c.quality[i];
+    w_sum += w;
+    w_se += w * se[i];
+    if (b2) w_se2 += w * se2[i];
     auto add = [&](Accumulator& t, bool second) {
       ++t.pixels;
       const double v = second ? se2[i] : se[i];
@@ -155,6 +162,8 @@ Comparison compare_images(const Image& a, const Image& b, const Image* b2, const
   }
   c.whole = whole.stats();
   if (b2) c.whole_noise = whole_noise.stats();
+  c.weighted_rmse = w_sum > 0 ? std::sqrt(w_se / w_sum) : 0.0;
+  c.weighted_noise_rmse = w_sum > 0 ? std::sqrt(w_se2 / w_sum) : 0.0;
   for (size_t k = 0; k < bands.size(); ++k) {
     BandResult r;
     r.band = bands[k];
@@ -169,6 +178,28 @@ Comparison compare_images(const Image& a, const Image& b, const Image* b2, const
     c.bands.push_back(r);
   }
   return c;
+}
+
+std::string comparison_markdown(const Comparison& c) {
+  const bool b2 = c.whole_noise.has_value();
+  auto psnr = [](double v) { return std::isfinite(v) ? fmt::format("{:.2f}", v) : std::string("inf"); };
+  std::string out = b2 ? "| region | pixels | RMSE | PSNR (dB) | SSIM | reference noise RMSE | × noise | verdict |\n"
+                         "|---|---:|---:|---:|---:|---:|---:|---|\n"
+                       : "| region | pixels | RMSE | PSNR (dB) | SSIM |\n|---|---:|---:|---:|---:|\n";
+  auto row = [&](const std::string& name, const ErrorStats& s, const BandResult* r) {
+    out += fmt::format("| {} | {} | {:.5f} | {} | {:.4f} |", name, s.pixels, s.rmse, psnr(s.psnr), s.ssim);
+    if (b2 && r && r->noise && s.pixels > 0)
+      out += fmt::format(" {:.5f} | {:.2f} ± {:.2f} | {} |", r->noise->rmse, r->noise_ratio, r->ratio_se,
+                         r->within_noise ? "within noise" : "outside");
+    else if (b2)
+      out += fmt::format(" {} | | |", c.whole_noise && !r ? fmt::format("{:.5f}", c.whole_noise->rmse) : "");
+    out += "\n";
+  };
+  row("whole image", c.whole, nullptr);
+  for (const BandResult& r : c.bands) row(r.band.foveal_region ? "q(E) = 1" : r.band.name + "°", r.error, &r);
+  out += fmt::format("\nAcuity-weighted RMSE (each pixel's squared error weighted by q(E)²): {:.5f}", c.weighted_rmse);
+  if (b2) out += fmt::format("; the reference's own: {:.5f} (× {:.2f})", c.weighted_noise_rmse, c.weighted_ratio());
+  return out + "\n";
 }
 
 Image error_map_image(const Comparison& c, float full_scale) {

@@ -61,6 +61,13 @@ struct Comparison {
   std::vector<double> noise_squared_error;  // per pixel (b2 − b)² (empty without a second reference)
   std::vector<float> eccentricity_deg;  // per pixel, the renderer's exact angle from the gaze
   std::vector<uint8_t> foveal;          // per pixel: q(E) = 1
+  std::vector<float> quality;           // per pixel q(E), the renderer's normalised acuity
+  // Acuity-weighted RMSE: sqrt(Σ q² · e² / Σ q²). An error counts in proportion to the resolvable
+  // cells per unit area where it lies (∝ f_c², the reasoning behind γ = 2): one number for the
+  // error a viewer fixating the gaze point can see. The same for the second reference when given.
+  double weighted_rmse = 0;
+  double weighted_noise_rmse = 0;   // 0 without a second reference
+  double weighted_ratio() const { return weighted_noise_rmse > 0 ? weighted_rmse / weighted_noise_rmse : 0.0; }
 };
 
 // The per-pixel SSIM map (mean over channels) of two images of the same size.
@@ -70,6 +77,10 @@ std::vector<float> ssim_map(const Image& a, const Image& b);
 // The images must have the same size and channels; throws Error otherwise.
 Comparison compare_images(const Image& a, const Image& b, const Image* b2, const Display& display, glm::dvec2 gaze_px,
                           const FoveationParams& params, const std::vector<Band>& bands = default_bands());
+
+// The per-band table (pixels, RMSE, PSNR, SSIM, and with a second reference the noise RMSE, the
+// ratio and the verdict) as Markdown, with the acuity-weighted RMSE below it.
+std::string comparison_markdown(const Comparison& c);
 
 // |a − b| per pixel as a heat-map image (linear RGB), scaled so that `full_scale` is the hottest.
 Image error_map_image(const Comparison& c, float full_scale);

@@ -1,0 +1,155 @@
+// apps/bench_quality.cpp — `foveal bench quality`: the speed–quality trade-off of the foveation
+// model's parameters (γ, n_max, β), with the Pareto front and the configuration it recommends.
+#include "commands.h"
+#include "foveal/io/outputs.h"
+#include "foveal/quality/sweep.h"
+#include "foveal/render/ao_benchmark.h"
+#include "foveal/trace/tracer.h"
+#include "foveal/util/error.h"
+#include "foveal/util/parallel.h"
+#include "foveal/util/parse.h"
+#include "foveal/gaze/text.h"
+
+#include <fmt/core.h>
+
+#include <memory>
+
+namespace foveal::app {
+
+std::function<int()> add_bench_quality_command(CLI::App& bench) {
+  auto* cmd = bench.add_subcommand(
+      "quality", "speed–quality trade-off: sweeps γ, n_max and β, times each against the full frame, measures its error per band, and draws the Pareto front");
+  struct Options {
+    std::string scene, camera, size = "840x525", display = "47.5,30,60,1680,1050", ambient = "1", json, markdown, plot;
+    std::string gamma = "1,2,3,4", max_rays = "100,200,400", beta = "0,0.5,1,2", gaze_names = "object,centre";
+    std::vector<std::string> gazes;
+    int reference_rays = 400, threads = 0, repeats = 1;
+    double ellipse = 1.538, max_error = 4, max_flicker = 2, saccade = 5;
+    uint64_t seed = 1;
+    bool full = false;
+  };
+  auto o = std::make_shared<Options>();
+  cmd->add_option("--scene", o->scene, "scene (default: scenes/dragon-box.json, the paper's dragon in a box; builtin:box when the dragon is absent)");
+  cmd->add_option("--camera", o->camera, "camera of the scene (default: its first)");
+  cmd->add_option("--size", o->size, "render size WxH")->capture_default_str();
+  cmd->add_option("--display", o->display, "display W_CM,H_CM,DIST_CM[,RES_X,RES_Y]")->capture_default_str();
+  cmd->add_option("--gamma", o->gamma, "γ values to sweep, comma-separated")->capture_default_str();
+  cmd->add_option("--max-rays", o->max_rays, "n_max values to sweep, comma-separated")->capture_default_str();
+  cmd->add_option("--beta", o->beta, "β values to sweep, comma-separated")->capture_default_str();
+  cmd->add_option("--gazes", o->gaze_names,
+                  "gaze points by name, comma-separated: object (the pixel nearest the object's centroid), centre, top-left, "
+                  "top-right, bottom-left, bottom-right, or all")
+      ->capture_default_str();
+  cmd->add_option("--gaze", o->gazes, "an explicit gaze point X,Y in render pixels (repeatable; replaces --gazes)");
+  cmd->add_option("--reference-rays", o->reference_rays, "rays per pixel of the full-frame reference")->capture_default_str()->check(CLI::Range(1, 4096));
+  cmd->add_option("--ellipse", o->ellipse, "horizontal:vertical ratio a of the elliptical ROI")->capture_default_str();
+  cmd->add_option("--ambient-constant", o->ambient, "k_const away from the gaze: a number, or auto (mean AO visibility of the fovea)")->capture_default_str();
+  cmd->add_option("--seed", o->seed, "seed of the foveated frames (the references use seed+1 and seed+2)")->capture_default_str();
+  cmd->add_option("--repeats", o->repeats, "timed frames per configuration (median)")->capture_default_str()->check(CLI::Range(1, 100));
+  cmd->add_option("--max-error", o->max_error,
+                  "the recommendation: the fastest configuration whose fovea is within the reference's noise and whose "
+                  "acuity-weighted error is at most this many times the reference's noise")
+      ->capture_default_str();
+  cmd->add_option("--max-flicker", o->max_flicker, "… and whose flicker after a saccade is at most this many times the reference's noise")
+      ->capture_default_str();
+  cmd->add_option("--saccade", o->saccade, "flicker: the saccade between the two frames compared, degrees (horizontal)")
+      ->capture_default_str()->check(CLI::Range(0.0, 90.0));
+  cmd->add_flag("--full", o->full,
+                "full run: γ 1,1.5,2,2.5,3,4 × n_max 50,100,200,300,400 × β 0,0.25,0.5,1,2,4 at all six gaze points, 3 frames "
+                "each (default: a quick grid at two gaze points)");
+  cmd->add_option("--threads", o->threads, "worker threads (0 = all cores)")->capture_default_str()->check(CLI::Range(0, 4096));
+  cmd->add_option("--json", o->json, "write every configuration, gaze point and band as JSON");
+  cmd->add_option("--markdown", o->markdown, "write the table as Markdown");
+  cmd->add_option("--plot", o->plot, "the Pareto plot: speed-up against the acuity-weighted error (.png or .svg)");
+
+  return [o] {
+    const ThreadScope threads(o->threads);
+    if (o->full) {
+      // The full grid replaces the quick one's defaults, not values the user gave
+      if (o->gamma == "1,2,3,4") o->gamma = "1,1.5,2,2.5,3,4";
+      if (o->max_rays == "100,200,400") o->max_rays = "50,100,200,300,400";
+      if (o->beta == "0,0.5,1,2") o->beta = "0,0.25,0.5,1,2,4";
+      if (o->gaze_names == "object,centre") o->gaze_names = "all";
+      o->repeats = std::max(o->repeats, 3);
+    }
+    std::string spec = o->scene;
+    const Scene scene = load_paper_scene(spec, "bench quality");
+    ViewOptions view;
+    view.scene = spec;
+    view.camera = o->camera;
+    view.size = o->size;
+    view.display = o->display;
+    RenderOptions ro;
+    ro.ambient = o->ambient;
+    ro.ellipse = o->ellipse;
+    QualitySweepParams p;
+    p.render = resolve_render_params(view, ro);
+    const Camera camera = resolve_camera(scene, view);
+    p.camera_name = o->camera.empty() ? (scene.cameras.empty() ? std::string("default") : scene.cameras.front().name) : o->camera;
+    p.gammas = parse_numbers("--gamma", o->gamma);
+    p.betas = parse_numbers("--beta", o->beta);
+    p.max_rays.clear();
+    for (double n : parse_numbers("--max-rays", o->max_rays)) {
+      if (n != std::floor(n) || n < 1 || n > 65535) fail("--max-rays: every value must be a whole number in [1, 65535], got {:g}", n);
+      p.max_rays.push_back(static_cast<int>(n));
+    }
+    p.reference_rays = o->reference_rays;
+    p.seed = o->seed;
+    p.repeats = o->repeats;
+    p.saccade_deg = o->saccade;
+    const Tracer tracer(scene);
+    if (!o->gazes.empty()) {
+      for (const std::string& g : o->gazes) p.gazes.emplace_back(g, parse_vec2("--gaze", g));
+    } else {
+      // Named points of the first paper's table, found on a primary-ray frame
+      RenderParams probe = p.render;
+      probe.foveation.max_rays = 0;
+      const auto named = benchmark_gazes(scene, render_frame(tracer, scene, camera, probe));
+      for (const std::string_view name : text::split(o->gaze_names, ',')) {
+        bool found = false;
+        for (const auto& g : named)
+          if (name == "all" || g.first == name) p.gazes.push_back(g), found = true;
+        if (!found) fail("--gazes: unknown gaze point '{}' (object, centre, top-left, top-right, bottom-left, bottom-right or all)", name);
+      }
+    }
+    fmt::print("foveal bench quality: {} ({} triangles), camera {}, {}x{}, {} threads; {} gamma × {} n_max × {} beta at {} gaze point(s)\n",
+               spec, tracer.triangles(), p.camera_name, p.render.width, p.render.height, threads.threads(), p.gammas.size(),
+               p.max_rays.size(), p.betas.size(), p.gazes.size());
+    for (const auto& [label, g] : p.gazes) fmt::print("  gaze {} at {:.0f},{:.0f}\n", label, g.x, g.y);
+    const QualitySweepResult result = run_quality_sweep(scene, tracer, camera, p, [](const std::string& line) {
+      fmt::print("  {}\n", line);
+      std::fflush(stdout);
+    });
+    const std::string table = to_markdown(result);
+    fmt::print("\n{}\n", table);
+    const FoveationParams defaults;
+    const int pick = recommended_point(result.points, o->max_error, o->max_flicker);
+    const std::string rule = fmt::format("fastest with the fovea within noise, acuity-weighted error ≤ {:g}× and flicker ≤ {:g}× noise",
+                                         o->max_error, o->max_flicker);
+    if (pick >= 0) {
+      const QualityPoint& q = result.points[pick];
+      fmt::print("recommended ({}): gamma {:g}, n_max {}, beta {:g} — {:.2f}× faster, error {:.2f}×, flicker {:.2f}× noise\n", rule,
+                 q.gamma, q.max_rays, q.beta, q.speedup, q.weighted_ratio, q.flicker_ratio);
+    } else {
+      fmt::print("recommended: none ({})\n", rule);
+    }
+    for (const QualityPoint& q : result.points)
+      if (q.gamma == defaults.gamma && q.max_rays == defaults.max_rays && q.beta == defaults.beta)
+        fmt::print("the defaults (gamma {:g}, n_max {}, beta {:g}): {:.2f}× faster, error {:.2f}×, flicker {:.2f}× noise, fovea {}, {}\n",
+                   q.gamma, q.max_rays, q.beta, q.speedup, q.weighted_ratio, q.flicker_ratio,
+                   q.fovea_within_noise ? "within noise" : "outside noise", q.pareto ? "on the Pareto front" : "not on the Pareto front");
+    if (!o->json.empty()) {
+      auto j = to_json(result);
+      j["repeats"] = p.repeats;
+      j["max_error"] = o->max_error;
+      j["max_flicker"] = o->max_flicker;
+      j["recommended"] = pick;
+      write_json_file(o->json, j);
+    }
+    if (!o->markdown.empty()) write_text_file(o->markdown, table);
+    if (!o->plot.empty()) write_pareto_plot(result, o->plot, defaults.gamma, defaults.max_rays, defaults.beta);
+    return 0;
+  };
+}
+
+}  // namespace foveal::app

@@ -1,0 +1,147 @@
+// The speed–quality sweep: a configuration that casts the reference's rays everywhere and blends
+// no constant ambient term is indistinguishable from the reference's own noise in every band; the
+// ray budget falls as γ grows; the Pareto front is exactly the non-dominated set; the
+// recommendation follows its definition; the acuity-weighted RMSE is the weighted mean it claims.
+#include "foveal/quality/sweep.h"
+#include "foveal/trace/tracer.h"
+#include "foveal/util/error.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+namespace foveal {
+namespace {
+
+QualityPoint point(double speedup, double ratio, bool fovea = true, double flicker = 0) {
+  QualityPoint p;
+  p.speedup = speedup;
+  p.weighted_ratio = ratio;
+  p.flicker_ratio = flicker;
+  p.fovea_within_noise = fovea;
+  return p;
+}
+
+TEST(QualitySweep, ParetoFrontIsTheNonDominatedSet) {
+  std::vector<QualityPoint> pts = {point(1, 1), point(2, 3), point(2, 2), point(3, 5), point(1.5, 4), point(3, 5)};
+  mark_pareto_front(pts);
+  EXPECT_TRUE(pts[0].pareto);   // the most accurate
+  EXPECT_FALSE(pts[1].pareto);  // as fast as pts[2] with more error
+  EXPECT_TRUE(pts[2].pareto);
+  EXPECT_TRUE(pts[3].pareto);   // the fastest (its twin equal, neither dominates the other)
+  EXPECT_FALSE(pts[4].pareto);  // slower and worse than pts[2]
+  EXPECT_TRUE(pts[5].pareto);
+  // A third objective: less flicker keeps a slower, less accurate point on the front
+  pts.push_back(point(1.5, 4, true, -1));
+  mark_pareto_front(pts);
+  EXPECT_TRUE(pts.back().pareto);
+  EXPECT_FALSE(pts[4].pareto);
+  // The recommendation: fastest within the bounds and with the fovea within noise
+  EXPECT_EQ(recommended_point(pts, 2.5, 1), 2);
+  EXPECT_EQ(recommended_point(pts, 2.5, -0.5), -1);  // only the flicker-free point passes, and its error is too large
+  EXPECT_EQ(recommended_point(pts, 4, -0.5), 6);
+  pts[2].fovea_within_noise = false;
+  EXPECT_EQ(recommended_point(pts, 2.5, 1), 0);
+  EXPECT_EQ(recommended_point(pts, 0.5, 1), -1);
+}
+
+TEST(QualitySweep, ReferenceLikeConfigurationIsWithinNoiseEverywhere) {
+  const Scene scene = load_scene("builtin:box");
+  const Tracer tracer(scene);
+  const Camera camera = default_camera(scene);
+  QualitySweepParams p;
+  p.render.width = 160;
+  p.render.height = 100;
+  p.reference_rays = 32;
+  p.gazes = {{"centre", {80, 50}}, {"left", {20, 60}}};
+  // γ → 0: every pixel gets the reference's 32 rays; β = 0: AO everywhere, no constant term.
+  // γ = 2, β = 1: the papers' blend; γ = 4: fewer rays still.
+  p.gammas = {0.001, 2, 4};
+  p.max_rays = {32};
+  p.betas = {0, 1};
+  const QualitySweepResult r = run_quality_sweep(scene, tracer, camera, p);
+  ASSERT_EQ(r.points.size(), 6u);
+  ASSERT_EQ(r.band_names.size(), default_bands().size());
+  const QualityPoint& like_reference = r.points[0];
+  EXPECT_EQ(like_reference.gamma, 0.001);
+  EXPECT_EQ(like_reference.beta, 0.0);
+  EXPECT_NEAR(like_reference.ray_ratio, 1.0, 0.01);
+  EXPECT_TRUE(like_reference.fovea_within_noise);
+  for (const QualityGazeResult& g : like_reference.per_gaze)
+    for (const BandResult& b : g.bands)
+      if (b.error.pixels > 200) EXPECT_TRUE(b.within_noise) << g.gaze_label << " " << b.band.name << " ×" << b.noise_ratio;
+  EXPECT_NEAR(like_reference.weighted_ratio, 1.0, 0.15);
+  // Nearly the reference's rays at every pixel, whatever the gaze: next to no flicker after a
+  // saccade; the defaults' budget changes with the gaze, so their frames change
+  EXPECT_LT(like_reference.flicker_ratio, 0.2);
+  EXPECT_GT(r.points[3].flicker_ratio, like_reference.flicker_ratio);
+  // β changes no ray: the two βs of one γ have the same frame time and ray ratio
+  for (size_t k = 0; k < r.points.size(); k += 2) {
+    EXPECT_EQ(r.points[k].ms, r.points[k + 1].ms);
+    EXPECT_EQ(r.points[k].ray_ratio, r.points[k + 1].ray_ratio);
+  }
+  // Fewer rays as γ grows; the fovea keeps the reference's rays, so stays within noise
+  EXPECT_LT(r.points[0].ray_ratio, r.points[2].ray_ratio);
+  EXPECT_LT(r.points[2].ray_ratio, r.points[4].ray_ratio);
+  EXPECT_TRUE(r.points[2].fovea_within_noise);
+  // Speed-up is the reference's time over the mean frame time
+  for (const QualityPoint& q : r.points) {
+    double ms = 0;
+    for (const auto& g : q.per_gaze) ms += g.ms / q.per_gaze.size();
+    EXPECT_NEAR(q.speedup, r.reference_ms / ms, 1e-9 * q.speedup);
+  }
+  // The front: no point on it is dominated, every point off it is
+  for (const QualityPoint& a : r.points) {
+    bool dominated = false;
+    for (const QualityPoint& b : r.points)
+      dominated |= b.speedup >= a.speedup && b.weighted_ratio <= a.weighted_ratio &&
+                   (b.speedup > a.speedup || b.weighted_ratio < a.weighted_ratio);
+    EXPECT_EQ(a.pareto, !dominated);
+  }
+}
+
+TEST(QualitySweep, BadGridIsRefused) {
+  const Scene scene = load_scene("builtin:plane");
+  const Tracer tracer(scene);
+  QualitySweepParams p;
+  p.render.width = 16;
+  p.render.height = 16;
+  p.gazes = {{"centre", {8, 8}}};
+  p.gammas = {0};
+  EXPECT_THROW(run_quality_sweep(scene, tracer, default_camera(scene), p), Error);
+  p.gammas = {2};
+  p.betas = {};
+  EXPECT_THROW(run_quality_sweep(scene, tracer, default_camera(scene), p), Error);
+  p.betas = {1};
+  p.gazes.clear();
+  EXPECT_THROW(run_quality_sweep(scene, tracer, default_camera(scene), p), Error);
+}
+
+TEST(QualitySweep, AcuityWeightedRmseIsTheWeightedMean) {
+  const int w = 120, h = 80;
+  Image a(w, h, 3), b(w, h, 3);
+  for (float& v : a.pixels) v = 0.5f;
+  b = a;
+  const Display display;  // the paper's lab display
+  const glm::dvec2 gaze(30, 40);
+  FoveationParams fp;
+  // A uniform error δ: every weighting gives δ
+  for (float& v : b.pixels) v += 0.01f;
+  Comparison c = compare_images(a, b, nullptr, display, gaze, fp);
+  EXPECT_NEAR(c.weighted_rmse, 0.01, 1e-6);
+  // Error only on one pixel far from the gaze and one inside the fovea: the weights are q² there
+  b = a;
+  const int far_x = w - 1, far_y = h - 1, near_x = 30, near_y = 40;
+  for (int ch = 0; ch < 3; ++ch) b.at(far_x, far_y, ch) += 0.1f, b.at(near_x, near_y, ch) += 0.1f;
+  c = compare_images(a, b, nullptr, display, gaze, fp);
+  double sum_w = 0;
+  for (float q : c.quality) sum_w += double(q) * q;
+  const double q_far = c.quality[size_t(far_y) * w + far_x], q_near = c.quality[size_t(near_y) * w + near_x];
+  EXPECT_EQ(q_near, 1.0);
+  EXPECT_LT(q_far, 1.0);
+  const double d = double(0.5f + 0.1f) - 0.5;
+  EXPECT_NEAR(c.weighted_rmse, std::sqrt((q_far * q_far + 1.0) * d * d / sum_w), 1e-9);
+}
+
+}  // namespace
+}  // namespace foveal
