@@ -7,7 +7,7 @@ packages=(
   libembree-dev libtbb-dev libassimp-dev libglm-dev libcli11-dev nlohmann-json3-dev libfmt-dev
   libopenexr-dev libopencv-core-dev libopencv-imgproc-dev libopencv-imgcodecs-dev libopencv-features2d-dev
   libgtest-dev libgmock-dev libbenchmark-dev
-  cppzmq-dev libmsgpack-cxx-dev ffmpeg
+  cppzmq-dev libmsgpack-cxx-dev ffmpeg jq
   libglfw3-dev libimgui-dev libgl-dev xvfb xauth libgl1-mesa-dri
 )
 missing=()

@@ -36,23 +36,7 @@ cd "$root"
 start=$(date +%s)
 say() { echo "report: $*" >&2; }
 
-# Pictures in a grid of COLUMNS, each scaled to WIDTH pixels across (ffmpeg's xstack)
-stack() {  # stack OUT WIDTH COLUMNS IN...
-  local result=$1 width=$2 columns=$3
-  shift 3
-  local n=$# inputs=() filter="" layout=""
-  for f in "$@"; do inputs+=(-i "$f"); done
-  for ((k = 0; k < n; ++k)); do filter+="[$k]scale=$width:-2[s$k];"; done
-  for ((k = 0; k < n; ++k)); do
-    local x="0" y="0"
-    for ((c = 0; c < k % columns; ++c)); do x+="+w$c"; done
-    for ((r = 0; r < k / columns; ++r)); do y+="+h$((r * columns))"; done
-    filter+="[s$k]"
-    layout+="${layout:+|}${x}_${y}"
-  done
-  filter+="xstack=inputs=$n:layout=$layout:fill=white"
-  ffmpeg -loglevel error -y "${inputs[@]}" -filter_complex "$filter" -frames:v 1 -update 1 "$result"
-}
+source "$root/scripts/pictures.sh"
 
 cpu=$(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2- | sed 's/^ *//' || true)
 threads=$(nproc)
@@ -189,7 +173,7 @@ repeats=(); [[ $full == 1 ]] && repeats=(--full)
   echo "| setting 2 | F / G / H / I | 2.36 / 2.65 / 2.19 / 1.30 | 146 / 176 / 128 / 35 % |"
   echo "| setting 3 | J / K / L / M / N / O | 1.40 / 1.82 / 2.33 / 2.24 / 1.00 / 1.17 | 46 / 194 / 276 / 261 / 61 / 89 % |"
   echo
-  echo "Here: speed-ups of $(jq -r '[.cameras[].cases[].speedup_pct] | "\(min|round)–\(max|round) %"' "$work/ao.json") (the paper: 24–276 %);"
+  echo "Here: speed-ups of $(jq -r '[.cameras[].gaze[].speedup_pct] | "\(min|round)–\(max|round) %"' "$work/ao.json") (the paper: 24–276 %);"
   echo "the gaze on the object, where the triangles are, gains least in both."
   echo
 } >> "$md"
@@ -294,22 +278,24 @@ say "the gaze filters against the trackers' own fixations"
   echo "| recording | tracker fixations | filter | fixations | agreement | κ | causal agreement | causal κ |"
   echo "|---|---:|---|---:|---:|---:|---:|---:|"
 } >> "$md"
-recordings=("$data/gaze/eyelink/monoRemote500.asc" "$data/gaze/eyelink/bino1000.asc" "$data/gaze/pupil_labs/gaze_positions.csv"
+recordings=("$data/gaze/eyelink/monoRemote500.asc" "$data/gaze/eyelink/bino1000.asc" "$data/gaze/pupil_labs/tutorial10/gaze_positions.csv" "$data/gaze/pupil_labs/gaze_positions.csv"
             "$data/gaze/tobii/tx300_participant1_trial2.tsv")
-for rec in "${recordings[@]}"; do
+for k in "${!recordings[@]}"; do
+  rec=${recordings[$k]}
+  label=${rec#"$data/gaze/"}
   if [[ ! -f $rec ]]; then
-    echo "| $(basename "$rec") | skipped: absent | | | | | | |" >> "$md"
+    echo "| $label | skipped: absent | | | | | | |" >> "$md"
     continue
   fi
-  j="$work/gaze-$(basename "$rec").json"
+  j="$work/gaze-$k.json"
   if ! "$foveal" gaze "$rec" --json "$j" --no-scanpath > /dev/null 2> "$work/gaze.err"; then
-    echo "| $(basename "$rec") | $(head -c 120 "$work/gaze.err") | | | | | | |" >> "$md"
+    echo "| $label | $(head -c 120 "$work/gaze.err") | | | | | | |" >> "$md"
     continue
   fi
-  jq -r --arg r "$(basename "$rec")" '.tracker_fixations as $t | .fixations | to_entries[] | select(.value.comparison != null) |
+  jq -r --arg r "$label" '.tracker_fixations as $t | .fixations | to_entries[] | select(.value.comparison != null) |
     "| \($r) | \($t) | \(.key) | \(.value.count) | \(.value.comparison.agreement*1000|round/10) % | \(.value.comparison.kappa*100|round/100) | \(.value.causal.agreement*1000|round/10) % | \(.value.causal.kappa*100|round/100) |"' "$j" >> "$md"
   jq -e '[.fixations[] | select(.comparison != null)] | length > 0' "$j" > /dev/null ||
-    echo "| $(basename "$rec") | none in the file | — | $(jq -r '[.fixations[].count] | map(tostring) | join(" / ")' "$j") | | | | |" >> "$md"
+    echo "| $label | none in the file | — | $(jq -r '[.fixations[].count] | map(tostring) | join(" / ")' "$j") (I-DT / I-VT) | | | | |" >> "$md"
 done
 echo >> "$md"
 echo "_Report made in $(( $(date +%s) - start )) s._" >> "$md"

@@ -17,26 +17,7 @@ command -v ffmpeg > /dev/null || { echo "vision-figures: ffmpeg is needed" >&2; 
 mkdir -p "$images"
 cd "$root"
 
-# Pictures in a grid of COLUMNS, each scaled to WIDTH pixels across or cropped (ffmpeg's xstack)
-stack() {  # stack OUT WIDTH COLUMNS IN...
-  local out=$1 width=$2 columns=$3
-  shift 3
-  local n=$# inputs=() filter="" layout=""
-  for f in "$@"; do inputs+=(-i "$f"); done
-  # WIDTH may be a crop W:H:X:Y of the full-resolution pictures instead of a width to scale to
-  local each="scale=$width:-2"
-  [[ $width == *:* ]] && each="crop=$width"
-  for ((k = 0; k < n; ++k)); do filter+="[$k]$each[s$k];"; done
-  for ((k = 0; k < n; ++k)); do
-    local x="0" y="0"
-    for ((c = 0; c < k % columns; ++c)); do x+="+w$c"; done
-    for ((r = 0; r < k / columns; ++r)); do y+="+h$((r * columns))"; done
-    filter+="[s$k]"
-    layout+="${layout:+|}${x}_${y}"
-  done
-  filter+="xstack=inputs=$n:layout=$layout:fill=white"
-  ffmpeg -loglevel error -y "${inputs[@]}" -filter_complex "$filter" -frames:v 1 -update 1 "$out"
-}
+source "$root/scripts/pictures.sh"
 
 scene=scenes/conference.json
 echo "vision-figures: the paper's Figure 3 (steps 1, 4, 20, 69)"

@@ -12,6 +12,14 @@
 namespace foveal_test {
 namespace {
 
+// builtin:box as fov.png (seed 1) and the full-frame references ref.png (seed 2) and ref2.png (seed 3).
+void render_foveated_and_references(const std::string& options) {
+  const std::string common = "render --scene builtin:box -q " + options;
+  ASSERT_EQ(foveal(common + " -o fov.png").status, 0);
+  ASSERT_EQ(foveal(common + " --mode full --seed 2 -o ref.png").status, 0);
+  ASSERT_EQ(foveal(common + " --mode full --seed 3 -o ref2.png").status, 0);
+}
+
 std::string fmt_ratio(double v) {
   char buf[32];
   std::snprintf(buf, sizeof buf, "%.2f", v);
@@ -19,10 +27,7 @@ std::string fmt_ratio(double v) {
 }
 
 TEST(CompareCli, BandsJsonErrorMapAndPlot) {
-  const std::string common = "render --scene builtin:box --size 200x125 --gaze 60,50 -q --max-rays 32";
-  ASSERT_EQ(foveal(common + " -o fov.png").status, 0);
-  ASSERT_EQ(foveal(common + " --mode full --seed 2 -o ref.png").status, 0);
-  ASSERT_EQ(foveal(common + " --mode full --seed 3 -o ref2.png").status, 0);
+  render_foveated_and_references("--size 200x125 --gaze 60,50 --max-rays 32");
   const CliRun r = foveal("compare fov.png ref.png --reference2 ref2.png --gaze 60,50 --json cmp.json --error-map err.png --plot err_plot.png");
   ASSERT_EQ(r.status, 0) << r.err;
   EXPECT_NE(r.out.find("q(E)=1"), std::string::npos) << r.out;
@@ -58,10 +63,7 @@ TEST(CompareCli, BadInputIsOneClearLine) {
 }
 
 TEST(CompareCli, MarkdownTableAndAcuityWeightedError) {
-  const std::string common = "render --scene builtin:box --size 160x100 --gaze 40,50 -q --max-rays 16";
-  ASSERT_EQ(foveal(common + " -o fov.png").status, 0);
-  ASSERT_EQ(foveal(common + " --mode full --seed 2 -o ref.png").status, 0);
-  ASSERT_EQ(foveal(common + " --mode full --seed 3 -o ref2.png").status, 0);
+  render_foveated_and_references("--size 160x100 --gaze 40,50 --max-rays 16");
   const CliRun r = foveal("compare fov.png ref.png --reference2 ref2.png --gaze 40,50 --json w.json --markdown w.md");
   ASSERT_EQ(r.status, 0) << r.err;
   const auto j = nlohmann::json::parse(std::ifstream(scratch("w.json")));

@@ -192,7 +192,7 @@ TEST(Compare, PaperSettingIsWithinTheReferencesNoiseAtTheFovea) {
   ASSERT_TRUE(fovea.band.foveal_region);
   EXPECT_GT(fovea.error.pixels, 10000u);
   EXPECT_TRUE(fovea.within_noise) << "ratio " << fovea.noise_ratio << " ± " << fovea.ratio_se;
-  EXPECT_FALSE(c.bands[3].within_noise);  // 10–20°: the constant ambient term replaces AO there
+  EXPECT_FALSE(c.bands[3].within_noise);  // 10–20°: a quarter of the rays or fewer there
 }
 
 }  // namespace

@@ -2,6 +2,7 @@
 #include "foveal/quality/sweep.h"
 
 #include "foveal/io/plot.h"
+#include "foveal/render/ao_benchmark.h"
 #include "foveal/trace/tracer.h"
 #include "foveal/util/error.h"
 #include <tbb/global_control.h>
@@ -14,19 +15,6 @@
 
 namespace foveal {
 namespace {
-
-// Median-timed render of `repeats` identical frames.
-Frame timed_render(const Tracer& tracer, const Scene& scene, const Camera& camera, const RenderParams& p, int repeats,
-                   double& ms) {
-  std::vector<double> times;
-  Frame frame;
-  for (int r = 0; r < std::max(1, repeats); ++r) {
-    frame = render_frame(tracer, scene, camera, p);
-    times.push_back(frame.stats.total_ms);
-  }
-  ms = median(times);
-  return frame;
-}
 
 nlohmann::json number(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(v > 0 ? "inf" : "-inf"); }
 
@@ -74,7 +62,7 @@ QualitySweepResult run_quality_sweep(const Scene& scene, const Tracer& tracer, c
   full.foveation.max_rays = params.reference_rays;
   full.foveation.min_rays = std::min(full.foveation.min_rays, params.reference_rays);
   full.seed = params.seed + 1;
-  const Frame reference = timed_render(tracer, scene, camera, full, params.repeats, result.reference_ms);
+  const Frame reference = timed_frame(tracer, scene, camera, full, params.repeats, result.reference_ms);
   result.reference_ao_rays = reference.stats.ao_rays;
   full.seed = params.seed + 2;
   const Image reference2 = render_frame(tracer, scene, camera, full).color;
@@ -100,7 +88,7 @@ QualitySweepResult run_quality_sweep(const Scene& scene, const Tracer& tracer, c
         p.foveation.min_rays = std::min(p.foveation.min_rays, n_max);
         p.foveation.beta = params.betas.front();
         double ms = 0;
-        const Frame frame = timed_render(tracer, scene, camera, p, params.repeats, ms);
+        const Frame frame = timed_frame(tracer, scene, camera, p, params.repeats, ms);
         // The frame after a saccade to the right (to the left when that leaves the image)
         const double shift = params.saccade_deg * pixels_per_degree(p.display) * p.width / p.display.res_x;
         RenderParams after = p;

@@ -14,9 +14,6 @@
 #include "foveal/util/stats.h"
 
 namespace foveal {
-namespace {
-
-// Median frame time of `repeats` renders (the frame itself is the same every time).
 Frame timed_frame(const Tracer& tracer, const Scene& scene, const Camera& camera, const RenderParams& p, int repeats,
                   double& median_ms) {
   std::vector<double> times;
@@ -28,8 +25,6 @@ Frame timed_frame(const Tracer& tracer, const Scene& scene, const Camera& camera
   median_ms = median(times);
   return frame;
 }
-
-}  // namespace
 
 // Centre of the pixels that see the material with the most triangles (the object, not the walls).
 glm::dvec2 object_gaze(const Scene& scene, const Frame& frame) {

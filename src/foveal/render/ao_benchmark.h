@@ -58,6 +58,10 @@ struct AoBenchResult {
   std::vector<AoBenchCamera> cameras;
 };
 
+// The median frame time of `repeats` renders (the frame itself is the same every time), and the frame.
+Frame timed_frame(const Tracer& tracer, const Scene& scene, const Camera& camera, const RenderParams& p, int repeats,
+                  double& median_ms);
+
 // The table's gaze points for a reference frame (its G-buffer): the centre, the four corner
 // pixels, and the pixel nearest the centroid of the object (the material with most triangles).
 std::vector<std::pair<std::string, glm::dvec2>> benchmark_gazes(const Scene& scene, const Frame& reference);
