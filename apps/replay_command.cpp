@@ -1,6 +1,7 @@
 // apps/replay_command.cpp — `foveal replay`: a foveated-AO sequence that follows a recording or
 // a live tracker; frames (PNG), frames.csv, optionally a video and stats JSON.
 #include "commands.h"
+#include "foveal/cuda/gpu.h"
 #include "foveal/io/image_io.h"
 #include "foveal/io/outputs.h"
 #include "foveal/io/video.h"
@@ -39,6 +40,7 @@ std::function<int()> add_replay_command(CLI::App& app) {
     double fps = 30, start = 0, duration = 0, live_timeout = 5;
     int frames = 0;
     bool no_reuse = false, mark = false, quiet = false;
+    std::string device = "auto";
   };
   auto o = std::make_shared<Options>();
   cmd->add_option("--gaze", o->source, "a recording (EyeLink .asc, Pupil gaze_positions.csv, Tobii .tsv, t,x,y CSV) or a live tracker: pupil://HOST:PORT[?surface=NAME]")
@@ -46,6 +48,7 @@ std::function<int()> add_replay_command(CLI::App& app) {
   add_view_options(*cmd, o->view);
   add_render_options(*cmd, o->render);
   add_gaze_options(*cmd, o->gaze);
+  add_device_option(*cmd, o->device);
   cmd->add_option("-o,--output", o->output, "folder for frame_NNNNN.png and frames.csv (created)")->required();
   cmd->add_option("--fps", o->fps, "frames per second of gaze time")->capture_default_str();
   cmd->add_option("--frames", o->frames, "number of frames (0: to the end of the recording; live: 10 s)")->capture_default_str();
@@ -85,6 +88,14 @@ std::function<int()> add_replay_command(CLI::App& app) {
     const Scene scene = load_scene(o->view.scene);
     const Camera camera = resolve_camera(scene, o->view);
     const Tracer tracer(scene, parse_trace_api(o->render.trace_api));
+    // The frames on the GPU when one is chosen (only the image comes back: the sink needs nothing else)
+    const gpu::ComputeDevice device = gpu::choose_device(o->device);
+    std::unique_ptr<gpu::Renderer> gpu_renderer;
+    FrameRenderer renderer;
+    if (device == gpu::ComputeDevice::cuda) {
+      gpu_renderer = std::make_unique<gpu::Renderer>(scene);
+      renderer = [&](const RenderParams& p) { return gpu_renderer->render(camera, p, gpu::FrameOutputs{false, false, false}); };
+    }
 
     namespace fs = std::filesystem;
     std::error_code ec;
@@ -125,9 +136,9 @@ std::function<int()> add_replay_command(CLI::App& app) {
     std::string source_name = o->source;
     if (live) {
       PupilSource source(o->source, read.screen_px, read.min_confidence);
-      summary = replay_live(source, gaze_display, tracer, scene, camera, params, settings, sink, progress);
+      summary = replay_live(source, gaze_display, tracer, scene, camera, params, settings, sink, progress, renderer);
     } else {
-      summary = replay_recording(*recording, gaze_display, tracer, scene, camera, params, settings, sink, progress);
+      summary = replay_recording(*recording, gaze_display, tracer, scene, camera, params, settings, sink, progress, renderer);
     }
     if (shown) fmt::print(stderr, "\r{:80}\r", "");
     csv.close();
@@ -144,6 +155,7 @@ std::function<int()> add_replay_command(CLI::App& app) {
                           {"mode", to_string(params.mode)},
                           {"seed", params.seed},
                           {"threads", threads.threads()},
+                          {"device", gpu::to_string(device)},
                           {"scene", {{"source", scene.source}, {"triangles", tracer.triangles()}, {"build_ms", tracer.build_ms()}}},
                           {"rays", {{"ao", summary.ao_rays}}},
                           {"time_ms", {{"frames", summary.render_ms}, {"total", summary.wall_ms},
@@ -159,6 +171,7 @@ std::function<int()> add_replay_command(CLI::App& app) {
     fmt::print("foveal replay: {} → {} frames at {:g} fps ({} rendered, {} reused: gaze unchanged), {}x{}, {} filter, {} threads\n",
                source_name, summary.frames, o->fps, summary.frames - summary.reused, summary.reused, params.width, params.height,
                o->gaze.fixation, threads.threads());
+    fmt::print("  device   {}\n", gpu::describe_device(device));
     fmt::print("  time     {:.1f} s ({:.0f} ms per rendered frame), {:.1f} M AO rays\n", summary.wall_ms / 1000,
                summary.frames > summary.reused ? summary.render_ms / (summary.frames - summary.reused) : 0.0, summary.ao_rays / 1e6);
     fmt::print("  wrote    {}/frame_00000.png … , {}", o->output, csv_path);

@@ -7,7 +7,7 @@
 #
 #   scripts/report.sh [--full] [BUILD_DIR]
 #
-# Quick by default (about ten minutes on two cores); --full runs the benchmarks at their full
+# Quick by default (about five minutes on two cores); --full runs the benchmarks at their full
 # length (5 frames per case, the whole quality grid at six gaze points; about an hour).
 # Needs ffmpeg (pictures side by side) and jq (tables from the JSON); sections whose data in
 # ../shared/data is absent say "skipped".

@@ -28,6 +28,20 @@ TEST(DeviceCli, UnknownOrUnavailableDeviceIsOneLine) {
   expect_one_line_error("render --scene builtin:box --device cuda",
                         "--device cuda: unavailable: " + foveal::gpu::availability().reason);
   expect_one_line_error("bench ao --scene builtin:box --device cuda", "--device cuda: unavailable");
+  const std::string recording = write_three_fixations("device_three.csv");
+  expect_one_line_error("replay --gaze " + recording + " --screen 480x300 --scene builtin:box --size 48x30 --frames 2 -o dev_replay --device cuda",
+                        "--device cuda: unavailable");
+}
+
+TEST(DeviceCli, ReplayNamesItsDevice) {
+  const std::string recording = write_three_fixations("device_replay.csv");
+  const CliRun r = foveal("replay --gaze " + recording + " --screen 480x300 --scene builtin:box --size 48x30 --max-rays 4 --frames 3 "
+                          "-o dev_replay --stats dev_replay.json --device cpu");
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_NE(r.out.find("device   cpu"), std::string::npos) << r.out;
+  const auto j = nlohmann::json::parse(std::ifstream(scratch("dev_replay.json")));
+  EXPECT_EQ(j["device"], "cpu");
+  EXPECT_EQ(j["frames"], 3);
 }
 
 }  // namespace

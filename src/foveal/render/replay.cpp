@@ -24,8 +24,9 @@ namespace {
 // Renders frames, reusing the last one when the gaze has not moved.
 class FrameMaker {
  public:
-  FrameMaker(const Tracer& tracer, const Scene& scene, const Camera& camera, const RenderParams& params, bool reuse)
-      : tracer_(tracer), scene_(scene), camera_(camera), params_(params), reuse_(reuse) {}
+  FrameMaker(const Tracer& tracer, const Scene& scene, const Camera& camera, const RenderParams& params, bool reuse,
+             const FrameRenderer& renderer)
+      : tracer_(tracer), scene_(scene), camera_(camera), params_(params), reuse_(reuse), renderer_(renderer) {}
 
   const Frame& make(glm::dvec2 gaze, ReplayFrame& info) {
     const Timer clock;
@@ -34,7 +35,7 @@ class FrameMaker {
     if (!info.reused) {
       RenderParams p = params_;
       p.gaze_px = gaze;
-      frame_ = render_frame(tracer_, scene_, camera_, p);
+      frame_ = renderer_ ? renderer_(p) : render_frame(tracer_, scene_, camera_, p);
       last_gaze_ = gaze;
     }
     info.ao_rays = frame_.stats.ao_rays;
@@ -48,6 +49,7 @@ class FrameMaker {
   const Camera& camera_;
   const RenderParams& params_;
   bool reuse_;
+  const FrameRenderer& renderer_;
   std::optional<glm::dvec2> last_gaze_;
   Frame frame_;
 };
@@ -71,14 +73,14 @@ int replay_frame_count(const Recording& r, const ReplaySettings& s) {
 
 ReplaySummary replay_recording(const Recording& r, const Display& display, const Tracer& tracer, const Scene& scene,
                                const Camera& camera, const RenderParams& params, const ReplaySettings& s,
-                               const ReplaySink& sink, const ReplayProgress& progress) {
+                               const ReplaySink& sink, const ReplayProgress& progress, const FrameRenderer& renderer) {
   validate(s);
   if (r.samples.empty()) fail("{}: no samples to replay", r.source);
   const Timer wall;
   const GazeGeometry geometry(display, r.screen_px);
   const ScreenMapping mapping = make_screen_mapping(r.screen_px, {params.width, params.height}, s.stimulus);
   FixationTracker tracker(s.method, s.fixation, geometry);
-  FrameMaker maker(tracer, scene, camera, params, s.reuse);
+  FrameMaker maker(tracer, scene, camera, params, s.reuse, renderer);
   const int count = replay_frame_count(r, s);
   const double first = r.samples.front().t_s, t0 = first + s.start_s;
   const glm::dvec2 centre(0.5 * params.width, 0.5 * params.height);
@@ -108,14 +110,14 @@ ReplaySummary replay_recording(const Recording& r, const Display& display, const
 
 ReplaySummary replay_live(GazeSource& source, const Display& display, const Tracer& tracer, const Scene& scene,
                           const Camera& camera, const RenderParams& params, const ReplaySettings& s,
-                          const ReplaySink& sink, const ReplayProgress& progress) {
+                          const ReplaySink& sink, const ReplayProgress& progress, const FrameRenderer& renderer) {
   validate(s);
   const Timer wall;
   const glm::ivec2 screen = source.screen_px();
   const GazeGeometry geometry(display, screen);
   const ScreenMapping mapping = make_screen_mapping(screen, {params.width, params.height}, s.stimulus);
   FixationTracker tracker(s.method, s.fixation, geometry);
-  FrameMaker maker(tracer, scene, camera, params, s.reuse);
+  FrameMaker maker(tracer, scene, camera, params, s.reuse, renderer);
   const int count = s.frames > 0 ? s.frames : static_cast<int>(std::ceil((s.duration_s > 0 ? s.duration_s : 10.0) * s.fps));
   const glm::dvec2 centre(0.5 * params.width, 0.5 * params.height);
   ReplaySummary summary;

@@ -52,6 +52,9 @@ struct ReplaySummary {
 
 using ReplaySink = std::function<void(const ReplayFrame&, const Frame&)>;
 using ReplayProgress = std::function<void(int done, int total)>;
+// Renders one frame for the params (gaze set); empty: render_frame on the CPU with the given tracer.
+// The sink reads the frame's colour and stats only, so a renderer may leave the other buffers empty.
+using FrameRenderer = std::function<Frame(const RenderParams&)>;
 
 // Frames at which a recording replay renders (t_0 and count) for the settings.
 int replay_frame_count(const Recording& recording, const ReplaySettings& settings);
@@ -59,12 +62,12 @@ int replay_frame_count(const Recording& recording, const ReplaySettings& setting
 // Replay a recording. `display` gives the angles for the filter (its physical size; the recording's screen pixels).
 ReplaySummary replay_recording(const Recording& recording, const Display& display, const Tracer& tracer, const Scene& scene,
                                const Camera& camera, const RenderParams& params, const ReplaySettings& settings,
-                               const ReplaySink& sink, const ReplayProgress& progress = {});
+                               const ReplaySink& sink, const ReplayProgress& progress = {}, const FrameRenderer& renderer = {});
 
 // Follow a live source in real time. Stops after the frames (or 10 s), or — with `stopped` set —
 // when the source has been silent or disconnected for live_timeout_s.
 ReplaySummary replay_live(GazeSource& source, const Display& display, const Tracer& tracer, const Scene& scene,
                           const Camera& camera, const RenderParams& params, const ReplaySettings& settings,
-                          const ReplaySink& sink, const ReplayProgress& progress = {});
+                          const ReplaySink& sink, const ReplayProgress& progress = {}, const FrameRenderer& renderer = {});
 
 }  // namespace foveal
