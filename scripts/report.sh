@@ -30,6 +30,8 @@ work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 [[ -x $foveal ]] || { echo "report: $foveal not built (run scripts/setup.sh)" >&2; exit 1; }
 for tool in ffmpeg jq; do command -v $tool > /dev/null || { echo "report: $tool is needed (scripts/deps.sh installs it)" >&2; exit 1; }; done
+# The tree the report is made from (before the report itself is rewritten)
+commit=$(git -C "$root" describe --always --dirty 2>/dev/null || echo unknown)
 mkdir -p "$out"
 rm -f "$out"/*.png
 cd "$root"
@@ -40,7 +42,6 @@ source "$root/scripts/pictures.sh"
 
 cpu=$(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2- | sed 's/^ *//' || true)
 threads=$(nproc)
-commit=$(git -C "$root" describe --always --dirty 2>/dev/null || echo unknown)
 {
   echo "# Results report"
   echo
