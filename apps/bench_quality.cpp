@@ -33,10 +33,10 @@ std::function<int()> add_bench_quality_command(CLI::App& bench) {
   cmd->add_option("--camera", o->camera, "camera of the scene (default: its first)");
   cmd->add_option("--size", o->size, "render size WxH")->capture_default_str();
   cmd->add_option("--display", o->display, "display W_CM,H_CM,DIST_CM[,RES_X,RES_Y]")->capture_default_str();
-  cmd->add_option("--gamma", o->gamma, "γ values to sweep, comma-separated")->capture_default_str();
-  cmd->add_option("--max-rays", o->max_rays, "n_max values to sweep, comma-separated")->capture_default_str();
-  cmd->add_option("--beta", o->beta, "β values to sweep, comma-separated")->capture_default_str();
-  cmd->add_option("--gazes", o->gaze_names,
+  auto* gamma = cmd->add_option("--gamma", o->gamma, "γ values to sweep, comma-separated")->capture_default_str();
+  auto* max_rays = cmd->add_option("--max-rays", o->max_rays, "n_max values to sweep, comma-separated")->capture_default_str();
+  auto* beta = cmd->add_option("--beta", o->beta, "β values to sweep, comma-separated")->capture_default_str();
+  auto* gaze_names = cmd->add_option("--gazes", o->gaze_names,
                   "gaze points by name, comma-separated: object (the pixel nearest the object's centroid), centre, top-left, "
                   "top-right, bottom-left, bottom-right, or all")
       ->capture_default_str();
@@ -62,14 +62,14 @@ std::function<int()> add_bench_quality_command(CLI::App& bench) {
   cmd->add_option("--markdown", o->markdown, "write the table as Markdown");
   cmd->add_option("--plot", o->plot, "the Pareto plot: speed-up against the acuity-weighted error (.png or .svg)");
 
-  return [o] {
+  return [o, gamma, max_rays, beta, gaze_names] {
     const ThreadScope threads(o->threads);
     if (o->full) {
       // The full grid replaces the quick one's defaults, not values the user gave
-      if (o->gamma == "1,2,3,4") o->gamma = "1,1.5,2,2.5,3,4";
-      if (o->max_rays == "100,200,400") o->max_rays = "50,100,200,300,400";
-      if (o->beta == "0,0.5,1,2") o->beta = "0,0.25,0.5,1,2,4";
-      if (o->gaze_names == "object,centre") o->gaze_names = "all";
+      if (!gamma->count()) o->gamma = "1,1.5,2,2.5,3,4";
+      if (!max_rays->count()) o->max_rays = "50,100,200,300,400";
+      if (!beta->count()) o->beta = "0,0.25,0.5,1,2,4";
+      if (!gaze_names->count()) o->gaze_names = "all";
       o->repeats = std::max(o->repeats, 3);
     }
     std::string spec = o->scene;

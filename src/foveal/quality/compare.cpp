@@ -106,10 +106,38 @@ std::vector<float> ssim_map(const Image& a, const Image& b) {
   return out;
 }
 
-Comparison compare_images(const Image& a, const Image& b, const Image* b2, const Display& display, glm::dvec2 gaze_px,
-                          const FoveationParams& params, const std::vector<Band>& bands) {
+ReferenceNoise reference_noise(const Image& b2, const Image& b) {
+  check_same(b2, b, "the second reference");
+  ReferenceNoise noise;
+  pixel_errors(b2, b, noise.squared_error, nullptr);
+  noise.ssim = ssim_map(b2, b);
+  return noise;
+}
+
+double acuity_weighted_rmse(const Image& a, const Image& b, const std::vector<float>& quality) {
   check_same(a, b, "the image");
-  if (b2) check_same(*b2, b, "the second reference");
+  if (quality.size() != static_cast<size_t>(a.width) * a.height) fail("acuity_weighted_rmse: {} q values for {}x{} pixels", quality.size(), a.width, a.height);
+  std::vector<double> se;
+  pixel_errors(a, b, se, nullptr);
+  double w_sum = 0, w_se = 0;
+  for (size_t i = 0; i < se.size(); ++i) {
+    const double w = static_cast<double>(quality[i]) * quality[i];
+    w_sum += w;
+    w_se += w * se[i];
+  }
+  return w_sum > 0 ? std::sqrt(w_se / w_sum) : 0.0;
+}
+
+namespace {
+
+// The comparison, with the reference's noise maps or without (nullptr).
+Comparison compare(const Image& a, const Image& b, const ReferenceNoise* noise, const Display& display, glm::dvec2 gaze_px,
+                   const FoveationParams& params, const std::vector<Band>& bands) {
+  check_same(a, b, "the image");
+  const size_t pixels = static_cast<size_t>(a.width) * a.height;
+  if (noise && (noise->squared_error.size() != pixels || noise->ssim.size() != pixels))
+    fail("compare: the reference's noise maps are not of the image's size");
+  const bool b2 = noise != nullptr;
   Comparison c;
   c.width = a.width;
   c.height = a.height;
@@ -131,14 +159,12 @@ Comparison compare_images(const Image& a, const Image& b, const Image* b2, const
   pixel_errors(a, b, c.squared_error, &c.abs_error);
   c.ssim_map = ssim_map(a, b);
   const std::vector<double>& se = c.squared_error;
+  if (b2) c.noise_squared_error = noise->squared_error;
   const std::vector<double>& se2 = c.noise_squared_error;
-  std::vector<float> ssim2;
-  if (b2) {
-    pixel_errors(*b2, b, c.noise_squared_error, nullptr);
-    ssim2 = ssim_map(*b2, b);
-  }
+  static const std::vector<float> no_ssim;
+  const std::vector<float>& ssim2 = b2 ? noise->ssim : no_ssim;
   Accumulator whole, whole_noise;
-  std::vector<Accumulator> acc(bands.size()), noise(bands.size());
+  std::vector<Accumulator> acc(bands.size()), noise_acc(bands.size());
   double w_sum = 0, w_se = 0, w_se2 = 0;
   for (size_t i = 0; i < n; ++i) {
     const double w = static_cast<double>(c.quality[i]) * c.quality[i];
@@ -157,7 +183,7 @@ Comparison compare_images(const Image& a, const Image& b, const Image* b2, const
     for (size_t k = 0; k < bands.size(); ++k)
       if (in_band(bands[k], c.eccentricity_deg[i], c.foveal[i])) {
         add(acc[k], false);
-        if (b2) add(noise[k], true);
+        if (b2) add(noise_acc[k], true);
       }
   }
   c.whole = whole.stats();
@@ -169,7 +195,7 @@ Comparison compare_images(const Image& a, const Image& b, const Image* b2, const
     r.band = bands[k];
     r.error = acc[k].stats();
     if (b2) {
-      r.noise = noise[k].stats();
+      r.noise = noise_acc[k].stats();
       r.noise_ratio = r.noise->rmse > 0 ? r.error.rmse / r.noise->rmse : (r.error.rmse > 0 ? std::numeric_limits<double>::infinity() : 0.0);
       // Within the noise: the ratio is not above 1 by more than twice its standard error
       r.ratio_se = r.noise_ratio * std::hypot(r.error.rmse_rel_se, r.noise->rmse_rel_se);
@@ -179,6 +205,8 @@ Comparison compare_images(const Image& a, const Image& b, const Image* b2, const
   }
   return c;
 }
+
+}  // namespace
 
 std::string comparison_markdown(const Comparison& c) {
   const bool b2 = c.whole_noise.has_value();
@@ -200,6 +228,18 @@ std::string comparison_markdown(const Comparison& c) {
   out += fmt::format("\nAcuity-weighted RMSE (each pixel's squared error weighted by q(E)²): {:.5f}", c.weighted_rmse);
   if (b2) out += fmt::format("; the reference's own: {:.5f} (× {:.2f})", c.weighted_noise_rmse, c.weighted_ratio());
   return out + "\n";
+}
+
+Comparison compare_images(const Image& a, const Image& b, const Image* b2, const Display& display, glm::dvec2 gaze_px,
+                          const FoveationParams& params, const std::vector<Band>& bands) {
+  if (!b2) return compare(a, b, nullptr, display, gaze_px, params, bands);
+  const ReferenceNoise noise = reference_noise(*b2, b);
+  return compare(a, b, &noise, display, gaze_px, params, bands);
+}
+
+Comparison compare_images(const Image& a, const Image& b, const ReferenceNoise& noise, const Display& display,
+                          glm::dvec2 gaze_px, const FoveationParams& params, const std::vector<Band>& bands) {
+  return compare(a, b, &noise, display, gaze_px, params, bands);
 }
 
 Image error_map_image(const Comparison& c, float full_scale) {

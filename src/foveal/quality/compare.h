@@ -78,6 +78,21 @@ std::vector<float> ssim_map(const Image& a, const Image& b);
 Comparison compare_images(const Image& a, const Image& b, const Image* b2, const Display& display, glm::dvec2 gaze_px,
                           const FoveationParams& params, const std::vector<Band>& bands = default_bands());
 
+// The per-pixel part of the reference's noise — (b2 − b)² and SSIM(b2, b) — which depends on
+// neither the judged image nor the gaze: computed once, it serves every comparison against `b`.
+struct ReferenceNoise {
+  std::vector<double> squared_error;  // per pixel, mean over channels
+  std::vector<float> ssim;            // per pixel, mean over channels
+};
+ReferenceNoise reference_noise(const Image& b2, const Image& b);
+// The same comparison with the reference's noise already computed.
+Comparison compare_images(const Image& a, const Image& b, const ReferenceNoise& noise, const Display& display,
+                          glm::dvec2 gaze_px, const FoveationParams& params, const std::vector<Band>& bands = default_bands());
+
+// sqrt(Σ q²·e² / Σ q²) of a against b with the given per-pixel q (a Comparison's `quality`):
+// the acuity-weighted RMSE alone, without the maps and SSIM of a whole comparison.
+double acuity_weighted_rmse(const Image& a, const Image& b, const std::vector<float>& quality);
+
 // The per-band table (pixels, RMSE, PSNR, SSIM, and with a second reference the noise RMSE, the
 // ratio and the verdict) as Markdown, with the acuity-weighted RMSE below it.
 std::string comparison_markdown(const Comparison& c);

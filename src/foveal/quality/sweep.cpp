@@ -40,10 +40,23 @@ QualitySweepResult run_quality_sweep(const Scene& scene, const Tracer& tracer, c
   RenderParams base = params.render;
   base.seed = params.seed;
   validate(base);
-  for (double g : params.gammas) base.foveation.gamma = g, validate(base);
-  for (double b : params.betas) base.foveation.beta = b, validate(base);
-  for (int n : params.max_rays) base.foveation.max_rays = n, base.foveation.min_rays = std::min(base.foveation.min_rays, n), validate(base);
-  base.foveation = params.render.foveation;
+  // Every value of the grid, checked before hours of rendering (validate names the option)
+  for (double g : params.gammas) {
+    RenderParams check = base;
+    check.foveation.gamma = g;
+    validate(check);
+  }
+  for (double b : params.betas) {
+    RenderParams check = base;
+    check.foveation.beta = b;
+    validate(check);
+  }
+  for (int n : params.max_rays) {
+    RenderParams check = base;
+    check.foveation.max_rays = n;
+    check.foveation.min_rays = std::min(check.foveation.min_rays, n);
+    validate(check);
+  }
 
   QualitySweepResult result;
   result.scene = scene.source;
@@ -65,7 +78,8 @@ QualitySweepResult run_quality_sweep(const Scene& scene, const Tracer& tracer, c
   const Frame reference = timed_frame(tracer, scene, camera, full, params.repeats, result.reference_ms);
   result.reference_ao_rays = reference.stats.ao_rays;
   full.seed = params.seed + 2;
-  const Image reference2 = render_frame(tracer, scene, camera, full).color;
+  // The reference's own noise: per pixel, the same for every configuration and gaze
+  const ReferenceNoise noise = reference_noise(render_frame(tracer, scene, camera, full).color, reference.color);
   say(fmt::format("reference: full frame, {} rays per pixel, {:.0f} ms, {:.1f} M AO rays", params.reference_rays,
                   result.reference_ms, reference.stats.ao_rays * 1e-6));
 
@@ -107,8 +121,8 @@ QualitySweepResult run_quality_sweep(const Scene& scene, const Tracer& tracer, c
             image_after = shade(tracer, scene, camera, next.gbuffer, foveation_maps(after, *after.gaze_px), next.visibility,
                                 next.stats.ambient_constant, p.shadows, epsilon);
           }
-          const Comparison c = compare_images(image, reference.color, &reference2, p.display, gaze, p.foveation);
-          const Comparison flicker = compare_images(image_after, image, nullptr, p.display, gaze, p.foveation);
+          const Comparison c = compare_images(image, reference.color, noise, p.display, gaze, p.foveation);
+          const double flicker = acuity_weighted_rmse(image_after, image, c.quality);
           QualityGazeResult g;
           g.gaze_label = label;
           g.gaze_px = gaze;
@@ -116,8 +130,9 @@ QualitySweepResult run_quality_sweep(const Scene& scene, const Tracer& tracer, c
           g.ao_rays = frame.stats.ao_rays;
           g.weighted_rmse = c.weighted_rmse;
           g.weighted_ratio = c.weighted_ratio();
-          g.flicker_rmse = flicker.weighted_rmse;
-          g.flicker_ratio = c.weighted_noise_rmse > 0 ? flicker.weighted_rmse / c.weighted_noise_rmse : 0.0;
+          g.weighted_noise_rmse = c.weighted_noise_rmse;
+          g.flicker_rmse = flicker;
+          g.flicker_ratio = c.weighted_noise_rmse > 0 ? flicker / c.weighted_noise_rmse : 0.0;
           g.bands = c.bands;
           g.whole = c.whole;
           result.points[first + k].per_gaze.push_back(g);
@@ -131,7 +146,6 @@ QualitySweepResult run_quality_sweep(const Scene& scene, const Tracer& tracer, c
 
   // Means over the gaze points
   const size_t bands = result.band_names.size();
-  double noise_sum = 0;
   for (QualityPoint& q : result.points) {
     const double g = static_cast<double>(q.per_gaze.size());
     double ms = 0, rays = 0;
@@ -161,11 +175,8 @@ QualitySweepResult run_quality_sweep(const Scene& scene, const Tracer& tracer, c
     q.speedup = q.ms > 0 ? result.reference_ms / q.ms : 0.0;
     q.ray_ratio = rays > 0 ? static_cast<double>(result.reference_ao_rays) * g / rays : std::numeric_limits<double>::infinity();
   }
-  if (!result.points.empty()) {
-    for (const QualityGazeResult& r : result.points.front().per_gaze)
-      noise_sum += r.weighted_ratio > 0 ? r.weighted_rmse / r.weighted_ratio : 0.0;
-    result.reference_noise_weighted_rmse = noise_sum / static_cast<double>(params.gazes.size());
-  }
+  for (const QualityGazeResult& r : result.points.front().per_gaze)
+    result.reference_noise_weighted_rmse += r.weighted_noise_rmse / static_cast<double>(params.gazes.size());
   mark_pareto_front(result.points);
   return result;
 }

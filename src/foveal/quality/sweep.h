@@ -42,6 +42,7 @@ struct QualityGazeResult {
   double ms = 0;
   uint64_t ao_rays = 0;
   double weighted_rmse = 0, weighted_ratio = 0;  // acuity-weighted RMSE, and as a multiple of the reference's noise
+  double weighted_noise_rmse = 0;                // the reference's own acuity-weighted seed-to-seed RMSE at this gaze
   // Flicker: the acuity-weighted RMSE (weights q² of this gaze) between this frame and the frame
   // rendered after a saccade of saccade_deg, where the full-frame reference does not change at all;
   // as a multiple of the reference's noise. Still-image errors miss it; the paper's blend exists to hide it.

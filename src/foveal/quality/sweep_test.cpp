@@ -141,6 +141,37 @@ TEST(QualitySweep, AcuityWeightedRmseIsTheWeightedMean) {
   EXPECT_LT(q_far, 1.0);
   const double d = double(0.5f + 0.1f) - 0.5;
   EXPECT_NEAR(c.weighted_rmse, std::sqrt((q_far * q_far + 1.0) * d * d / sum_w), 1e-9);
+  // The stand-alone weighted RMSE (the sweep's flicker) is the comparison's
+  EXPECT_DOUBLE_EQ(acuity_weighted_rmse(b, a, c.quality), c.weighted_rmse);
+}
+
+TEST(QualitySweep, PrecomputedReferenceNoiseGivesTheSameComparison) {
+  // The sweep computes the reference's noise maps once; every figure must equal the one-call comparison
+  const int w = 90, h = 60;
+  Image a(w, h, 3), b(w, h, 3), b2(w, h, 3);
+  for (size_t i = 0; i < a.pixels.size(); ++i) {
+    a.pixels[i] = 0.5f + 0.3f * std::sin(0.37f * i);
+    b.pixels[i] = 0.5f + 0.3f * std::sin(0.37f * i + 0.05f);
+    b2.pixels[i] = 0.5f + 0.3f * std::sin(0.37f * i - 0.04f);
+  }
+  const Display display;
+  const FoveationParams fp;
+  const Comparison once = compare_images(a, b, &b2, display, {20, 30}, fp);
+  const ReferenceNoise noise = reference_noise(b2, b);
+  for (const glm::dvec2 gaze : {glm::dvec2(20, 30), glm::dvec2(80, 10)}) {
+    const Comparison direct = compare_images(a, b, &b2, display, gaze, fp);
+    const Comparison cached = compare_images(a, b, noise, display, gaze, fp);
+    EXPECT_EQ(cached.weighted_noise_rmse, direct.weighted_noise_rmse);
+    EXPECT_EQ(cached.whole_noise->rmse, direct.whole_noise->rmse);
+    EXPECT_EQ(cached.whole_noise->ssim, direct.whole_noise->ssim);
+    for (size_t k = 0; k < direct.bands.size(); ++k) {
+      EXPECT_EQ(cached.bands[k].noise_ratio, direct.bands[k].noise_ratio) << k;
+      EXPECT_EQ(cached.bands[k].within_noise, direct.bands[k].within_noise) << k;
+    }
+  }
+  EXPECT_GT(once.weighted_noise_rmse, 0.0);
+  Image small(10, 10, 3);
+  EXPECT_THROW(compare_images(small, small, noise, display, {5, 5}, fp), Error);  // maps of another size
 }
 
 }  // namespace
