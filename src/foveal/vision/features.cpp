@@ -3,6 +3,9 @@
 
 #include "foveal/io/image_io.h"
 #include "foveal/util/error.h"
+#include "foveal/vision/fast.h"
+
+#include <tbb/parallel_for.h>
 
 #include <opencv2/core.hpp>
 #include <opencv2/features2d.hpp>
@@ -13,14 +16,19 @@
 
 namespace foveal {
 
-std::vector<uint8_t> grey_8bit(const Image& img) {
-  if (img.channels < 3) fail("features: need an RGB image, got {} channels", img.channels);
-  // linear → 8-bit sRGB through a table (4096 steps of the clamped linear value)
+const std::vector<uint8_t>& srgb8_table() {
   static const std::vector<uint8_t> table = [] {
     std::vector<uint8_t> t(4097);
     for (int k = 0; k <= 4096; ++k) t[k] = static_cast<uint8_t>(std::lround(255.0f * linear_to_srgb(k / 4096.0f)));
     return t;
   }();
+  return table;
+}
+
+std::vector<uint8_t> grey_8bit(const Image& img) {
+  if (img.channels < 3) fail("features: need an RGB image, got {} channels", img.channels);
+  // linear → 8-bit sRGB through a table (4096 steps of the clamped linear value)
+  const std::vector<uint8_t>& table = srgb8_table();
   cv::Mat rgb(img.height, img.width, CV_8UC3);
   uint8_t* out = rgb.ptr<uint8_t>();
   const size_t n = size_t(img.width) * img.height;
@@ -46,6 +54,22 @@ std::vector<Corner> detect_corners(const Image& img, int threshold, bool nonmax)
   std::sort(corners.begin(), corners.end(), [](const Corner& a, const Corner& b) {
     return a.px.y != b.px.y ? a.px.y < b.px.y : a.px.x < b.px.x;
   });
+  return corners;
+}
+
+std::vector<Corner> fast_corners(const std::vector<uint8_t>& grey, int w, int h, int threshold, bool nonmax) {
+  if (grey.size() != size_t(w) * h) fail("features: {} grey values for a {}x{} image", grey.size(), w, h);
+  std::vector<uint8_t> scores(grey.size());
+  tbb::parallel_for(0, h, [&](int y) {
+    for (int x = 0; x < w; ++x) scores[size_t(y) * w + x] = static_cast<uint8_t>(fast::score(grey.data(), w, h, x, y, threshold));
+  });
+  std::vector<Corner> corners;
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const uint8_t s = scores[size_t(y) * w + x];
+      if (s > 0 && (!nonmax || fast::is_local_maximum(scores.data(), w, h, x, y)))
+        corners.push_back({{x + 0.5f, y + 0.5f}, float(s)});
+    }
   return corners;
 }
 

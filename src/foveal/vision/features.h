@@ -22,6 +22,14 @@ struct Corner {
 std::vector<uint8_t> grey_8bit(const Image& linear_rgb);
 // FAST-9 corners (cv::FAST, TYPE_9_16) of a linear RGB image.
 std::vector<Corner> detect_corners(const Image& linear_rgb, int threshold = 20, bool nonmax_suppression = true);
+// The table grey_8bit() maps a linear value through: entry k is the sRGB byte of k / 4096 (the
+// value clamped to [0, 1], index value·4096 + 0.5); the GPU uploads the same 4097 bytes.
+const std::vector<uint8_t>& srgb8_table();
+// The same corners from the per-pixel functions the GPU runs (vision/fast.h), on the CPU: the
+// test that holds them, and so the GPU's corners, to OpenCV's. Without suppression the score
+// is still the response (OpenCV reports 0 there).
+std::vector<Corner> fast_corners(const std::vector<uint8_t>& grey, int width, int height, int threshold = 20,
+                                 bool nonmax_suppression = true);
 
 // Simulated saccades (DESIGN.md "Focus selection"): the first fixation ∝ score × a bivariate
 // Gaussian around the image centre; each next one ∝ score among corners within the maximum

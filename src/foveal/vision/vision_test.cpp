@@ -6,6 +6,7 @@
 #include "foveal/scene/scene.h"
 #include "foveal/trace/tracer.h"
 #include "foveal/vision/blur.h"
+#include "foveal/vision/fast.h"
 #include "foveal/vision/features.h"
 #include "foveal/vision/sharpness.h"
 #include "foveal/vision/simulate.h"
@@ -18,6 +19,8 @@
 
 #include <cmath>
 #include <filesystem>
+#include <random>
+#include <set>
 
 using namespace foveal;
 
@@ -64,8 +67,72 @@ TEST(Vision, FastIsOpenCvs) {
     for (const Corner& c : corners) a.insert({c.px.x - 0.5f, c.px.y - 0.5f, c.score});
     for (const cv::KeyPoint& k : points) b.insert({k.pt.x, k.pt.y, k.response});
     EXPECT_EQ(a, b) << name;
+    // The per-pixel functions the GPU runs (vision/fast.h) find the same keypoints with the same
+    // scores, at several thresholds, with and without non-maximum suppression
+    const cv::Mat grey_mat(img.height, img.width, CV_8UC1, const_cast<uint8_t*>(grey.data()));
+    for (int threshold : {5, 20, 60})
+      for (bool nonmax : {true, false}) {
+        std::vector<cv::KeyPoint> expected;
+        cv::FAST(grey_mat, expected, threshold, nonmax, cv::FastFeatureDetector::TYPE_9_16);
+        const std::vector<Corner> shared = fast_corners(grey, img.width, img.height, threshold, nonmax);
+        std::multiset<std::tuple<float, float, float>> got, want;
+        // (without suppression OpenCV computes no score and reports 0; ours is kept for the saccades)
+        for (const Corner& c : shared) got.insert({c.px.x - 0.5f, c.px.y - 0.5f, nonmax ? c.score : 0.0f});
+        for (const cv::KeyPoint& k : expected) want.insert({k.pt.x, k.pt.y, k.response});
+        ASSERT_GT(want.size(), 10u) << name << " threshold " << threshold;
+        EXPECT_EQ(got, want) << name << " threshold " << threshold << (nonmax ? " nonmax" : "");
+      }
   }
   if (!any) GTEST_SKIP() << "skipped: no images under " << dir;
+}
+
+TEST(Vision, SharedFastMatchesOpenCvOnRenderedAndSyntheticImages) {
+  // Without the data: a rendered picture and noise with flat patches (ties in the non-maximum
+  // suppression, corners at the 3-pixel border, saturated values)
+  std::vector<std::pair<std::string, Image>> images;
+  images.emplace_back("test picture", test_picture(160, 120));
+  Image noise(97, 64, 3);
+  std::mt19937 rng(7);
+  for (int y = 0; y < noise.height; ++y)
+    for (int x = 0; x < noise.width; ++x) {
+      const float v = (x / 8 + y / 8) % 3 == 0 ? 0.5f : float(rng() % 1000) / 999.0f;
+      for (int c = 0; c < 3; ++c) noise.at(x, y, c) = c == 0 ? v : v * v;
+    }
+  images.emplace_back("noise", noise);
+  for (const auto& [name, img] : images) {
+    const std::vector<uint8_t> grey = grey_8bit(img);
+    const cv::Mat grey_mat(img.height, img.width, CV_8UC1, const_cast<uint8_t*>(grey.data()));
+    for (int threshold : {1, 10, 30, 255})
+      for (bool nonmax : {true, false}) {
+        std::vector<cv::KeyPoint> expected;
+        cv::FAST(grey_mat, expected, threshold, nonmax, cv::FastFeatureDetector::TYPE_9_16);
+        std::multiset<std::tuple<float, float, float>> got, want;
+        for (const Corner& c : fast_corners(grey, img.width, img.height, threshold, nonmax))
+          got.insert({c.px.x - 0.5f, c.px.y - 0.5f, nonmax ? c.score : 0.0f});
+        for (const cv::KeyPoint& k : expected) want.insert({k.pt.x, k.pt.y, k.response});
+        if (threshold < 255) EXPECT_GT(want.size(), 0u) << name << " threshold " << threshold;
+        EXPECT_EQ(got, want) << name << " threshold " << threshold << (nonmax ? " nonmax" : "");
+      }
+  }
+  // The GPU's grey conversion is cv::cvtColor's for every one of the 2^24 sRGB triples
+  cv::Mat rgb(4096, 4096, CV_8UC3);
+  for (uint32_t i = 0; i < (1u << 24); ++i) {
+    uint8_t* p = rgb.data + size_t(i) * 3;
+    p[0] = uint8_t(i >> 16);
+    p[1] = uint8_t(i >> 8);
+    p[2] = uint8_t(i);
+  }
+  cv::Mat grey;
+  cv::cvtColor(rgb, grey, cv::COLOR_RGB2GRAY);
+  size_t differ = 0;
+  for (uint32_t i = 0; i < (1u << 24); ++i) differ += fast::grey_of(i >> 16, (i >> 8) & 255, i & 255) != grey.data[i];
+  EXPECT_EQ(differ, 0u);
+  // and its linear → sRGB byte table is the CPU's
+  const std::vector<uint8_t>& table = srgb8_table();
+  ASSERT_EQ(table.size(), 4097u);
+  EXPECT_EQ(table[0], 0);
+  EXPECT_EQ(table[4096], 255);
+  EXPECT_EQ(table[737], 118);  // linear 0.18 (grey card) → sRGB 0.461
 }
 
 TEST(Vision, SaccadesAreReproducibleAndGlaucomaShortensThem) {
