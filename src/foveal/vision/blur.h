@@ -11,6 +11,7 @@
 #pragma once
 
 #include "foveal/util/image.h"
+#include "foveal/vision/blur_kernel.h"
 
 #include <glm/glm.hpp>
 
@@ -24,10 +25,9 @@ struct BlurParams {
   bool scatter_aware = true;     // a tap counts only if its own CoC reaches the pixel (no sharp-edge bleeding)
 };
 
-// Taps for a CoC diameter d (pixels): about one per pixel within 2.1σ (0.4·d²), at least 8, at
-// most `max_taps`; 0 below a quarter pixel (the pixel is copied). Taps spaced wider than two
-// pixels read a half-, quarter-, … resolution copy of the image (2×2 box averages).
-int taps_for_diameter(float d, int max_taps);
+// taps_for_diameter(d, max_taps), the taps of a CoC of d pixels, is in blur_kernel.h with the
+// per-pixel gather both backends run. Taps spaced wider than two pixels read a half-, quarter-, …
+// resolution copy of the image (2×2 box averages).
 
 // The unit-disc tap pattern (Vogel spiral) with its Gaussian weights (σ = 1/3 of the radius).
 struct TapPattern {
@@ -35,6 +35,16 @@ struct TapPattern {
   std::vector<float> weight;      // exp(−|o|²·9/2), not normalised
 };
 TapPattern make_tap_pattern(int taps);
+// The patterns of min(8, max_taps) … max_taps taps end to end, as the gather reads them.
+struct TapTable {
+  std::vector<glm::vec2> offsets;
+  std::vector<float> weights;
+  std::vector<int> start;  // pattern of n taps at start[n − first_count]
+  int first_count = 0, max_taps = 0;
+};
+TapTable make_tap_table(int max_taps);
+// An elliptical CoC's axes in image coordinates (y down) for an axis angle in degrees.
+void ellipse_axes(float axis_deg, glm::vec2* along, glm::vec2* across);
 
 // Elliptical CoCs (astigmatism): per pixel, the diameters along and across an axis as fractions
 // of the pixel's CoC diameter (the larger is 1), and the axis angle in degrees (0 = horizontal,

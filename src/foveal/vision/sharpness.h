@@ -7,44 +7,89 @@
 #pragma once
 
 #include "foveal/scene/scene.h"
+#include "foveal/util/hd.h"
 
 #include <glm/glm.hpp>
 
+#include <cmath>
 #include <cstdint>
 #include <limits>
 #include <vector>
 
 namespace foveal {
 
+// The field as plain arrays in host or device memory: what one pixel reads and writes, written
+// once for the CPU's class below and the GPU's kernels.
+struct SharpnessFieldView {
+  glm::vec3 origin{0};
+  float voxel = 1;
+  glm::ivec3 dims{0};
+  float* coc = nullptr;
+  uint32_t* stamp = nullptr;
+  uint32_t* written = nullptr;     // epoch of the last write
+  const float* growth = nullptr;   // (1 + s)^age for ages below growth_size
+  uint32_t growth_size = 0;
+  uint32_t epoch = 1;
+  double log_growth = 0;           // log(1 + s)
+
+  // Cell index of a point, or −1 outside the grid (and for NaN).
+  FOVEAL_HD int64_t cell(glm::vec3 p) const {
+    const glm::vec3 g = (p - origin) / voxel;
+    if (!(g.x >= 0 && g.y >= 0 && g.z >= 0)) return -1;
+    const glm::ivec3 c(g);
+    if (c.x >= dims.x || c.y >= dims.y || c.z >= dims.z) return -1;
+    return (int64_t(c.z) * dims.y + c.y) * dims.x + c.x;
+  }
+  // Effective (starved) CoC of a cell at step t; infinity if never seen in this epoch.
+  FOVEAL_HD float effective(int64_t c, uint32_t step) const {
+    if (c < 0 || written[c] != epoch) return std::numeric_limits<float>::infinity();
+    const uint32_t age = step >= stamp[c] ? step - stamp[c] : 0;
+    const float g = age < growth_size ? growth[age] : static_cast<float>(std::exp(log_growth * double(age)));
+    return coc[c] * g;
+  }
+  // Keep `value` at step t if it is smaller than the cell's effective CoC; returns whether it was.
+  FOVEAL_HD bool update(int64_t c, float value, uint32_t step) const {
+    if (c < 0 || !(value < effective(c, step))) return false;
+    coc[c] = value;
+    stamp[c] = step;
+    written[c] = epoch;
+    return true;
+  }
+};
+
 class SharpnessField {
  public:
   // `voxel` is the cell edge in scene units; the grid covers `bounds` (slightly padded).
   SharpnessField(const Bounds& bounds, float voxel, double starvation = 0.015);
+  // Moves keep the arrays (and so the view's pointers); a copy would not.
+  SharpnessField(SharpnessField&&) = default;
+  SharpnessField& operator=(SharpnessField&&) = default;
+  SharpnessField(const SharpnessField&) = delete;
+  SharpnessField& operator=(const SharpnessField&) = delete;
 
   // Cell index of a point, or −1 outside the grid.
-  int64_t cell(glm::vec3 p) const;
+  int64_t cell(glm::vec3 p) const { return view_.cell(p); }
   // Effective (starved) CoC of a cell at step t; infinity if never seen in this epoch.
-  float effective(int64_t cell, uint32_t step) const;
-  float effective(glm::vec3 p, uint32_t step) const;
+  float effective(int64_t cell, uint32_t step) const { return view_.effective(cell, step); }
+  float effective(glm::vec3 p, uint32_t step) const { return view_.effective(view_.cell(p), step); }
   // Keep `coc` at step t if it is smaller than the cell's effective CoC; returns whether it was.
-  bool update(int64_t cell, float coc, uint32_t step);
+  bool update(int64_t cell, float coc, uint32_t step) { return view_.update(cell, coc, step); }
   // A blink: every cell becomes unseen.
-  void blink() { ++epoch_; }
+  void blink() { ++view_.epoch; }
+  // The arrays (a GPU copy of the field starts from them) and the growth table.
+  const SharpnessFieldView& view() const { return view_; }
+  const std::vector<float>& growth_table() const { return growth_; }
 
-  glm::ivec3 dims() const { return dims_; }
-  float voxel() const { return voxel_; }
+  glm::ivec3 dims() const { return view_.dims; }
+  float voxel() const { return view_.voxel; }
   size_t cells() const { return coc_.size(); }
   double starvation() const { return starvation_; }
 
   static constexpr float kUnseen = std::numeric_limits<float>::infinity();
 
  private:
-  glm::vec3 origin_;
-  float voxel_;
-  glm::ivec3 dims_;
   double starvation_;
-  double log_growth_;
-  uint32_t epoch_ = 1;
+  SharpnessFieldView view_;  // points into the vectors below
   std::vector<float> coc_;
   std::vector<uint32_t> stamp_;
   std::vector<uint32_t> written_;  // epoch of the last write

@@ -49,6 +49,19 @@ VisionSimulation::VisionSimulation(const Tracer& tracer, const Scene& scene, con
       field_(scene.bounds(), params.voxel > 0 ? params.voxel : default_voxel_size(scene.bounds()), params.starvation),
       saccades_(saccade_params_for(params.eye, params.saccades), params.height / 40.0, params.seed) {}
 
+CocModel VisionSimulation::coc_model(const Camera& camera, glm::vec3 gaze_dir, double focus_vergence) const {
+  CocModel m;
+  m.axis = glm::normalize(camera.look - camera.eye);
+  m.gaze_dir = gaze_dir;
+  m.metres_per_unit = scene_.meters_per_unit;
+  m.focus_vergence = static_cast<float>(focus_vergence);
+  m.pupil_deg = static_cast<float>(glm::degrees(params_.eye.pupil_diameter_mm * 1e-3));
+  m.penalty_per_deg = static_cast<float>(peripheral_penalty_per_deg(params_.eye));
+  m.cylinder = static_cast<float>(params_.eye.cylinder_d);
+  m.astigmatic = params_.eye.cylinder_d > 0;
+  return m;
+}
+
 StepStats VisionSimulation::step(const Camera& camera, std::optional<glm::vec2> fixation) {
   const Timer total;
   StepStats s;
@@ -90,42 +103,27 @@ StepStats VisionSimulation::step(const Camera& camera, std::optional<glm::vec2> 
     s.blink = true;
     blink_requested_ = false;
   }
-  const double penalty = peripheral_penalty_per_deg(params_.eye);
   // The eye sits at the camera: eccentricity is the angle between the camera rays through the
   // pixel and through the fixation; distances are along the optical axis (a thin lens focuses planes)
   const CameraRays rays(camera, w, h);
   const glm::vec3 gaze_dir(rays(s.focus_px.x, s.focus_px.y).dir);
-  const double pupil_m = params_.eye.pupil_diameter_mm * 1e-3;
-  std::vector<float> now_deg(n);  // this step's CoC (the ellipse's larger diameter), degrees
   const bool astigmatic = params_.eye.cylinder_d > 0;
-  const double cylinder = params_.eye.cylinder_d;
   if (astigmatic) {
     shape_.scale.resize(n);
     shape_.axis_deg = static_cast<float>(params_.eye.cylinder_axis_deg);
   }
+  const CocModel model = coc_model(camera, gaze_dir, s.focus_vergence);
+  std::vector<float> now_deg(n);  // this step's CoC (the ellipse's larger diameter), degrees
   std::vector<int64_t> cells(n);  // each pixel's field cell (−1: background)
-  // Per pixel in single precision (vergences of at most a few dioptres, angles of degrees)
-  const float metres = scene_.meters_per_unit, focus = static_cast<float>(s.focus_vergence);
-  const float pupil_deg = static_cast<float>(glm::degrees(pupil_m)), penalty_f = static_cast<float>(penalty), cyl = static_cast<float>(cylinder);
   tbb::parallel_for(tbb::blocked_range<int>(0, h, 8), [&](const tbb::blocked_range<int>& rows) {
     for (int y = rows.begin(); y < rows.end(); ++y)
       for (int x = 0; x < w; ++x) {
         const size_t i = size_t(y) * w + x;
-        cells[i] = gbuffer_.hit(i) ? field_.cell(gbuffer_.position[i]) : -1;
-        const glm::vec3 ray = gbuffer_.view[i];
-        const float axial_m = gbuffer_.hit(i) ? gbuffer_.depth[i] * glm::dot(ray, axis) * metres : 0.0f;
-        const float object_vergence = axial_m > 0 ? 1.0f / axial_m : 0.0f;
-        const float ecc = glm::degrees(angle_atan2(glm::length(glm::cross(ray, gaze_dir)), glm::dot(ray, gaze_dir)));
-        // coc_axes_rad(), inlined: A·|1/D − v| along the cylinder axis, A·|1/D − v − C| across it
-        const float along = pupil_deg * std::abs(object_vergence - focus) + penalty_f * ecc;
-        if (!astigmatic) {
-          now_deg[i] = along;
-          continue;
-        }
-        const float across = pupil_deg * std::abs(object_vergence - focus - cyl) + penalty_f * ecc;
-        const float major = std::max(along, across);
-        now_deg[i] = major;
-        shape_.scale[i] = major > 0 ? glm::vec2(along / major, across / major) : glm::vec2(1.0f);
+        const bool hit = gbuffer_.hit(i);
+        cells[i] = hit ? field_.cell(gbuffer_.position[i]) : -1;
+        const PixelCoc c = model(hit, gbuffer_.depth[i], gbuffer_.view[i]);
+        now_deg[i] = c.major_deg;
+        if (astigmatic) shape_.scale[i] = c.scale;
       }
   });
   // Pixels share cells, so the update runs in pixel order on one thread (deterministic)

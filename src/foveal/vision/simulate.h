@@ -5,6 +5,7 @@
 #include "foveal/perception/eye.h"
 #include "foveal/render/render.h"
 #include "foveal/vision/blur.h"
+#include "foveal/vision/coc.h"
 #include "foveal/vision/features.h"
 #include "foveal/vision/sharpness.h"
 
@@ -64,6 +65,9 @@ class VisionSimulation {
   double pixels_per_degree() const { return ppd_; }  // the camera's, at the image centre (after a step)
 
  private:
+  // The per-pixel CoC of this step: the camera's axis, the fixation's ray, the accommodation
+  CocModel coc_model(const Camera& camera, glm::vec3 gaze_dir, double focus_vergence) const;
+
   const Tracer& tracer_;
   const Scene& scene_;
   SimulateParams params_;
