@@ -1,6 +1,7 @@
 // apps/bench_vision.cpp — `foveal bench vision`: the second paper's Table 1 (per-stage times of
 // one simulation step) on this machine.
 #include "commands.h"
+#include "foveal/cuda/gpu.h"
 #include "foveal/io/outputs.h"
 #include "foveal/util/error.h"
 #include "foveal/util/parallel.h"
@@ -119,11 +120,48 @@ std::function<int()> add_bench_blur_command(CLI::App& bench) {
   };
 }
 
+namespace {
+
+// Medians over the steps after the first (warm-up) of one case on one device, and what the
+// comparison of devices needs: the fixations, the last step's corners and perceived image.
+struct VisionCase {
+  double trace = 0, features = 0, sharpness = 0, blur = 0, total = 0;
+  std::vector<glm::vec2> fixations;
+  std::vector<Corner> corners;
+  Image perceived;
+};
+
+VisionCase run_vision_case(const Tracer& tracer, const Scene& scene, const Camera& camera, const SimulateParams& p, int steps) {
+  VisionSimulation sim(tracer, scene, p);
+  std::vector<double> trace, features, sharpness, blur, total;
+  VisionCase c;
+  for (int k = 0; k < steps; ++k) {
+    const StepStats s = sim.step(camera);
+    c.fixations.push_back(s.focus_px);
+    if (k == 0) continue;  // warm-up
+    trace.push_back(s.trace_ms);
+    features.push_back(s.features_ms);
+    sharpness.push_back(s.sharpness_ms);
+    blur.push_back(s.blur_ms);
+    total.push_back(s.total_ms);
+  }
+  c.trace = median(trace);
+  c.features = median(features);
+  c.sharpness = median(sharpness);
+  c.blur = median(blur);
+  c.total = median(total);
+  c.corners = sim.corners();
+  c.perceived = sim.perceived();
+  return c;
+}
+
+}  // namespace
+
 std::function<int()> add_bench_vision_command(CLI::App& bench) {
   auto* cmd = bench.add_subcommand("vision", "the second paper's Table 1: milliseconds per stage of a simulation step");
   struct Options {
     std::vector<std::string> scenes, sizes{"1024x768", "1280x720"};
-    std::string json, markdown, eye = "healthy";
+    std::string json, markdown, eye = "healthy", device = "auto";
     int steps = 20, threads = 0;
     uint64_t seed = 1;
   };
@@ -137,9 +175,15 @@ std::function<int()> add_bench_vision_command(CLI::App& bench) {
   cmd->add_option("--threads", o->threads, "worker threads (0 = all cores)")->capture_default_str()->check(CLI::Range(0, 4096));
   cmd->add_option("--json", o->json, "write the table as JSON");
   cmd->add_option("--markdown", o->markdown, "write the table as Markdown");
+  cmd->add_option("--device", o->device,
+                  "where the steps run: cpu, cuda (then the CPU runs the same cases in the same run, for the ratio and "
+                  "the agreement), or auto (cuda when a usable NVIDIA GPU is present)")
+      ->capture_default_str();
 
   return [o] {
     const ThreadScope threads(o->threads);
+    const gpu::ComputeDevice device = gpu::choose_device(o->device);
+    const bool cuda = device == gpu::ComputeDevice::cuda;
     std::vector<std::string> scenes = o->scenes;
     if (scenes.empty()) {
       if (const std::string conference = repository_scene("conference.json", kConferenceObj); !conference.empty())
@@ -148,10 +192,13 @@ std::function<int()> add_bench_vision_command(CLI::App& bench) {
     }
     const EyeParams eye = parse_eye_preset(o->eye);
     nlohmann::json rows = nlohmann::json::array();
-    std::string md = fmt::format("| scene | size | trace ms | features ms | sharpness ms | blur ms | total ms | (features+sharpness+blur) / trace |\n"
-                                 "|---|---|---:|---:|---:|---:|---:|---:|\n");
+    std::string md = cuda ? std::string("| scene | size | device | trace ms | features ms | sharpness ms | blur ms | step ms | CPU step ms | CPU / GPU | same fixations | perceived mean abs diff |\n"
+                                        "|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n")
+                          : std::string("| scene | size | trace ms | features ms | sharpness ms | blur ms | total ms | (features+sharpness+blur) / trace |\n"
+                                        "|---|---|---:|---:|---:|---:|---:|---:|\n");
     fmt::print("foveal bench vision: {} steps per case (median of steps 2…), features every step, eye {}, {} threads\n", o->steps,
                o->eye, threads.threads());
+    fmt::print("  device   {}\n", gpu::describe_device(device));
     for (const std::string& spec : scenes) {
       const Scene scene = load_scene(spec);
       const Tracer tracer(scene);
@@ -164,29 +211,45 @@ std::function<int()> add_bench_vision_command(CLI::App& bench) {
         p.eye = eye;
         p.seed = o->seed;
         p.features_every_step = true;  // the paper's timing: corners every step
-        VisionSimulation sim(tracer, scene, p);
-        std::vector<double> trace, features, sharpness, blur, total;
-        for (int k = 0; k < o->steps; ++k) {
-          const StepStats s = sim.step(camera);
-          if (k == 0) continue;  // warm-up
-          trace.push_back(s.trace_ms);
-          features.push_back(s.features_ms);
-          sharpness.push_back(s.sharpness_ms);
-          blur.push_back(s.blur_ms);
-          total.push_back(s.total_ms);
+        p.cuda = cuda;
+        const VisionCase c = run_vision_case(tracer, scene, camera, p, o->steps);
+        const double ratio = c.trace > 0 ? (c.features + c.sharpness + c.blur) / c.trace : 0;
+        fmt::print("  {:<28} {:>9}  trace {:6.2f}  features {:6.2f}  sharpness {:6.2f}  blur {:6.2f}  total {:6.2f} ms  (rest/trace {:.2f})\n",
+                   scene.source, size_text, c.trace, c.features, c.sharpness, c.blur, c.total, ratio);
+        nlohmann::json row = {{"scene", scene.source}, {"triangles", tracer.triangles()}, {"size", size_text}, {"steps", o->steps - 1},
+                              {"device", gpu::to_string(device)},
+                              {"time_ms", {{"trace", c.trace}, {"features", c.features}, {"sharpness", c.sharpness}, {"blur", c.blur}, {"total", c.total}}},
+                              {"non_tracing_over_trace", ratio}};
+        if (!cuda) {
+          md += fmt::format("| {} | {} | {:.1f} | {:.1f} | {:.1f} | {:.1f} | {:.1f} | {:.2f} |\n", scene.source, size_text, c.trace,
+                            c.features, c.sharpness, c.blur, c.total, ratio);
+        } else {
+          // The same case on the CPU, in the same run: the ratio, and how far the devices agree
+          p.cuda = false;
+          const VisionCase cpu = run_vision_case(tracer, scene, camera, p, o->steps);
+          size_t same = 0;
+          for (size_t k = 0; k < c.fixations.size(); ++k) same += c.fixations[k] == cpu.fixations[k];
+          double diff = 0;
+          for (size_t i = 0; i < c.perceived.pixels.size(); ++i) diff += std::abs(c.perceived.pixels[i] - cpu.perceived.pixels[i]);
+          diff /= std::max<size_t>(1, c.perceived.pixels.size());
+          const double speedup = c.total > 0 ? cpu.total / c.total : 0;
+          fmt::print("  {:<28} {:>9}  CPU: trace {:6.2f}  features {:6.2f}  sharpness {:6.2f}  blur {:6.2f}  total {:6.2f} ms  → GPU {:.1f}× faster; "
+                     "fixations identical at {}/{} steps, perceived mean |diff| {:.2e}\n",
+                     "", "", cpu.trace, cpu.features, cpu.sharpness, cpu.blur, cpu.total, speedup, same, c.fixations.size(), diff);
+          row["cpu"] = {{"time_ms", {{"trace", cpu.trace}, {"features", cpu.features}, {"sharpness", cpu.sharpness}, {"blur", cpu.blur}, {"total", cpu.total}}},
+                        {"threads", threads.threads()}};
+          row["cpu_over_gpu"] = speedup;
+          row["agreement"] = {{"same_fixations", same}, {"steps", c.fixations.size()}, {"corners_gpu", c.corners.size()},
+                              {"corners_cpu", cpu.corners.size()}, {"perceived_mean_abs_diff", diff}};
+          md += fmt::format("| {} | {} | {} | {:.2f} | {:.2f} | {:.2f} | {:.2f} | {:.2f} | {:.1f} | {:.1f} | {}/{} | {:.1e} |\n", scene.source, size_text,
+                            gpu::availability().name, c.trace, c.features, c.sharpness, c.blur, c.total, cpu.total, speedup, same,
+                            c.fixations.size(), diff);
         }
-        const double t = median(trace), f = median(features), sh = median(sharpness), b = median(blur),
-                     all = median(total);
-        const double ratio = t > 0 ? (f + sh + b) / t : 0;
-        fmt::print("  {:<28} {:>9}  trace {:6.1f}  features {:6.1f}  sharpness {:6.1f}  blur {:6.1f}  total {:6.1f} ms  (rest/trace {:.2f})\n",
-                   scene.source, size_text, t, f, sh, b, all, ratio);
-        md += fmt::format("| {} | {} | {:.1f} | {:.1f} | {:.1f} | {:.1f} | {:.1f} | {:.2f} |\n", scene.source, size_text, t, f, sh, b, all, ratio);
-        rows.push_back({{"scene", scene.source}, {"triangles", tracer.triangles()}, {"size", size_text}, {"steps", o->steps - 1},
-                        {"time_ms", {{"trace", t}, {"features", f}, {"sharpness", sh}, {"blur", b}, {"total", all}}},
-                        {"non_tracing_over_trace", ratio}});
+        rows.push_back(row);
       }
     }
-    if (!o->json.empty()) write_json_file(o->json, {{"threads", threads.threads()}, {"eye", o->eye}, {"rows", rows}});
+    if (!o->json.empty())
+      write_json_file(o->json, {{"threads", threads.threads()}, {"eye", o->eye}, {"device", gpu::describe_device(device)}, {"rows", rows}});
     if (!o->markdown.empty()) write_text_file(o->markdown, md);
     return 0;
   };

@@ -1,5 +1,7 @@
 // apps/simulate_command.cpp — `foveal simulate`: the second paper's temporal simulation of vision.
 #include "commands.h"
+
+#include "foveal/cuda/gpu.h"
 #include "foveal/gaze/steps.h"
 #include "foveal/io/image_io.h"
 #include "foveal/io/outputs.h"
@@ -37,6 +39,7 @@ std::function<int()> add_simulate_command(CLI::App& app) {
     double pupil = 3.5, image_distance = 25, starvation = 0.015, voxel = 0, saccade_max = 15, saccade_min = 2, ambient = 0.3;
     uint64_t seed = 1;
     bool quiet = false;
+    std::string device = "auto";
   };
   auto o = std::make_shared<Options>();
   o->view.size = "1024x768";
@@ -74,10 +77,13 @@ std::function<int()> add_simulate_command(CLI::App& app) {
   cmd->add_option("--video", o->video, "also a video of every step's perceived image (ffmpeg)");
   cmd->add_option("--stats", o->stats, "per-stage timings and per-step records as JSON");
   cmd->add_flag("-q,--quiet", o->quiet, "print nothing on success");
+  add_device_option(*cmd, o->device);
 
   return [o, steps_option] {
     const ThreadScope threads(o->view.threads);
     SimulateParams p;
+    const gpu::ComputeDevice device = gpu::choose_device(o->device);
+    p.cuda = device == gpu::ComputeDevice::cuda;
     const glm::ivec2 size = parse_size("--size", o->view.size);
     p.width = size.x;
     p.height = size.y;
@@ -210,6 +216,7 @@ std::function<int()> add_simulate_command(CLI::App& app) {
       j["eye"] = o->eye;
       j["seed"] = p.seed;
       j["threads"] = threads.threads();
+      j["device"] = gpu::to_string(device);
       j["scene"] = {{"source", scene.source}, {"triangles", tracer.triangles()}, {"build_ms", tracer.build_ms()}};
       j["pixels_per_degree"] = sim.pixels_per_degree();
       j["field"] = {{"voxel", sim.field().voxel()}, {"cells", sim.field().cells()}, {"starvation", p.starvation}};
@@ -249,6 +256,7 @@ std::function<int()> add_simulate_command(CLI::App& app) {
                scene.source, tracer.triangles(), path ? "path " + path->name : camera.name, p.width, p.height, o->eye, range.near_point_m(),
                std::isfinite(range.far_point_m()) ? fmt::format("{:.2f} m", range.far_point_m()) : "infinity", steps.size(),
                threads.threads());
+    fmt::print("  device   {}\n", gpu::describe_device(device));
     if (gaze) fmt::print("  gaze     {}\n", gaze_summary);
     fmt::print("  sharp    {:.1f}% of the image after the last step; scan path {:.0f} px over {} fixations\n",
                100 * steps.back().sharp_fraction, path_px, fixations.size());

@@ -1,5 +1,6 @@
 // apps/view_command.cpp — `foveal view`: the interactive viewer (GLFW + Dear ImGui).
 #include "commands.h"
+#include "foveal/cuda/gpu.h"
 #include "foveal/ui/session.h"
 #include "foveal/ui/window.h"
 #include "foveal/util/error.h"
@@ -25,6 +26,7 @@ std::function<int()> add_view_command(CLI::App& app) {
     float diff_gain = 8;
     int frames = 0, blink_every = 0;
     bool no_panel = false, no_progressive = false;
+    std::string device = "auto";
   };
   auto o = std::make_shared<Options>();
   o->view.eye_option = "--from";
@@ -57,9 +59,12 @@ std::function<int()> add_view_command(CLI::App& app) {
   cmd->add_option("--timeout", o->timeout, "--frames: longest wait for the finished image, seconds")->capture_default_str();
   cmd->add_flag("--no-panel", o->no_panel, "start with the parameter panel hidden (Tab toggles it)");
 
+  add_device_option(*cmd, o->device);
   return [o] {
     const ThreadScope threads(o->view.threads);
     ViewSettings s;
+    const gpu::ComputeDevice device = gpu::choose_device(o->device);
+    s.cuda = device == gpu::ComputeDevice::cuda;
     s.render = resolve_render_params(o->view, o->render);
     s.mode = parse_view_mode(o->mode);
     s.eye = o->eye;
@@ -119,6 +124,7 @@ std::function<int()> add_view_command(CLI::App& app) {
       const ViewStatus st = session.status();
       fmt::print("foveal view: {} mode, {}x{}, gaze {}, {} → {} ({}, {:.0f} ms)\n", to_string(s.mode), s.render.width,
                  s.render.height, source_name, st.stage, o->screenshot, st.converged ? "converged" : "not converged", st.render_ms);
+      fmt::print("  device   {}\n", gpu::describe_device(device));
     }
     return 0;
   };

@@ -229,7 +229,7 @@ if [[ -f $conference ]]; then
   } >> "$md"
 
   say "the second paper: Table 1 (bench vision)"
-  "$foveal" bench vision --size 1280x720 --json "$work/vision.json" --markdown "$work/vision.md" > "$work/vision.log"
+  "$foveal" bench vision --device cpu --size 1280x720 --json "$work/vision.json" --markdown "$work/vision.md" > "$work/vision.log"
   {
     echo "### Table 1: milliseconds per stage of one step"
     echo

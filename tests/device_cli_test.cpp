@@ -31,6 +31,32 @@ TEST(DeviceCli, UnknownOrUnavailableDeviceIsOneLine) {
   const std::string recording = write_three_fixations("device_three.csv");
   expect_one_line_error("replay --gaze " + recording + " --screen 480x300 --scene builtin:box --size 48x30 --frames 2 -o dev_replay --device cuda",
                         "--device cuda: unavailable");
+  expect_one_line_error("simulate --scene builtin:box --size 64x48 --steps 2 -o dev_sim --device cuda", "--device cuda: unavailable");
+  expect_one_line_error("bench vision --scene builtin:box --size 64x48 --steps 2 --device cuda", "--device cuda: unavailable");
+  expect_one_line_error("view --scene builtin:box --device cuda", "--device cuda: unavailable");
+}
+
+// The vision simulation and its benchmark name their device; on a GPU the benchmark runs the CPU
+// beside it and reports the ratio and how far the two agree.
+TEST(DeviceCli, SimulateAndBenchVisionNameTheirDevice) {
+  const CliRun r = foveal("simulate --scene builtin:box --size 64x48 --steps 3 --save-steps '' -o dev_sim --stats dev_sim.json --device cpu");
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_NE(r.out.find("device   cpu"), std::string::npos) << r.out;
+  EXPECT_EQ(nlohmann::json::parse(std::ifstream(scratch("dev_sim.json")))["device"], "cpu");
+  const CliRun b = foveal("bench vision --scene builtin:box --size 64x48 --steps 2 --json dev_vision.json");
+  ASSERT_EQ(b.status, 0) << b.err;
+  const auto j = nlohmann::json::parse(std::ifstream(scratch("dev_vision.json")));
+  ASSERT_EQ(j["rows"].size(), 1u);
+  const auto& row = j["rows"][0];
+  if (!foveal::gpu::availability().usable) {
+    EXPECT_EQ(row["device"], "cpu");
+    EXPECT_FALSE(row.contains("cpu_over_gpu"));
+    return;
+  }
+  EXPECT_EQ(row["device"], "cuda");
+  EXPECT_GT(row["cpu_over_gpu"].get<double>(), 0);
+  EXPECT_NEAR(row["cpu_over_gpu"].get<double>(), row["cpu"]["time_ms"]["total"].get<double>() / row["time_ms"]["total"].get<double>(), 1e-6);
+  EXPECT_LT(row["agreement"]["perceived_mean_abs_diff"].get<double>(), 0.01);
 }
 
 TEST(DeviceCli, ReplayNamesItsDevice) {

@@ -13,6 +13,10 @@
 
 #include "foveal/render/render.h"
 #include "foveal/trace/bvh.h"
+#include "foveal/vision/blur.h"
+#include "foveal/vision/coc.h"
+#include "foveal/vision/features.h"
+#include "foveal/vision/sharpness.h"
 
 #include <memory>
 #include <span>
@@ -84,6 +88,52 @@ class Renderer {
   void occluded(std::span<const Ray> rays, std::span<uint8_t> occluded);
   // Occlusion rays per second on the given rays (already on the GPU when the clock starts).
   double measure_occlusion_rate(std::span<const Ray> rays, int repeats = 5);
+
+  struct Impl;
+
+ private:
+  friend class VisionPasses;
+  std::unique_ptr<Impl> impl_;
+};
+
+// GPU times of one vision step's passes, milliseconds (CUDA events); copies back on the host clock.
+struct VisionPassTimes {
+  double trace_ms = 0, features_ms = 0, sharpness_ms = 0, blur_ms = 0, download_ms = 0;
+};
+
+// The second paper's passes for one scene on the GPU: the ray-cast image, FAST corners, the
+// sharpness field (kept on the GPU), each pixel's CoC and the variable blur. VisionSimulation
+// (vision/simulate.h) drives it a step at a time; the saccade model chooses among the corners on
+// the CPU. The per-pixel code is the CPU's (vision/fast.h, coc.h, sharpness.h, blur_kernel.h).
+class VisionPasses {
+ public:
+  // Uploads the scene and an empty field with `field`'s grid and starvation; throws Error when
+  // the backend is unavailable.
+  VisionPasses(const Scene& scene, const SharpnessField& field, const BlurParams& blur);
+  ~VisionPasses();
+  VisionPasses(const VisionPasses&) = delete;
+  VisionPasses& operator=(const VisionPasses&) = delete;
+
+  // Primary rays and Phong shading with a constant ambient factor (no shadows), kept on the GPU.
+  void trace(const Camera& camera, int width, int height, float ambient);
+  // FAST-9 corners of the traced image (cv::FAST's, see vision/fast.h), by row then column.
+  std::vector<Corner> corners(int threshold, bool nonmax_suppression = true);
+  // The hit distance along pixel (x, y)'s ray (infinity for the background), and the ray.
+  float depth_at(int x, int y, glm::vec3* view);
+  // A blink: every cell of the field becomes unseen.
+  void blink();
+  // This step's CoC per pixel, the field's update with it (unless `update` is false: glaucoma's
+  // skipped steps), and the blur's CoC in pixels (the field's memory where there is geometry);
+  // returns how many pixels' CoC is below `sharp_px`.
+  size_t sharpness(const CocModel& model, uint32_t step, bool update, float pixels_per_degree, float sharp_px);
+  // The variable blur of the traced image with the last sharpness()'s CoCs (elliptical with the
+  // model's shape when it was astigmatic, the cylinder's axis at `axis_deg`).
+  void blur(float axis_deg);
+
+  Image color() const;      // the traced image
+  Image perceived() const;  // the blurred one
+  std::vector<float> coc_px() const;
+  const VisionPassTimes& last_times() const;
 
   struct Impl;
 

@@ -31,4 +31,21 @@ void Renderer::intersect(std::span<const Ray>, std::span<Hit>) { fail("no CUDA b
 void Renderer::occluded(std::span<const Ray>, std::span<uint8_t>) { fail("no CUDA backend"); }
 double Renderer::measure_occlusion_rate(std::span<const Ray>, int) { fail("no CUDA backend"); }
 
+struct VisionPasses::Impl {};
+
+VisionPasses::VisionPasses(const Scene&, const SharpnessField&, const BlurParams&) {
+  fail("--device cuda: {}", availability().reason);
+}
+VisionPasses::~VisionPasses() = default;
+void VisionPasses::trace(const Camera&, int, int, float) { fail("no CUDA backend"); }
+std::vector<Corner> VisionPasses::corners(int, bool) { fail("no CUDA backend"); }
+float VisionPasses::depth_at(int, int, glm::vec3*) { fail("no CUDA backend"); }
+void VisionPasses::blink() { fail("no CUDA backend"); }
+size_t VisionPasses::sharpness(const CocModel&, uint32_t, bool, float, float) { fail("no CUDA backend"); }
+void VisionPasses::blur(float) { fail("no CUDA backend"); }
+Image VisionPasses::color() const { fail("no CUDA backend"); }
+Image VisionPasses::perceived() const { fail("no CUDA backend"); }
+std::vector<float> VisionPasses::coc_px() const { fail("no CUDA backend"); }
+const VisionPassTimes& VisionPasses::last_times() const { fail("no CUDA backend"); }
+
 }  // namespace foveal::gpu

@@ -2,13 +2,18 @@
 // none is usable (CI has none); the device choice is tested everywhere.
 #include "foveal/cuda/gpu.h"
 #include "foveal/cuda/gpu_benchmark.h"
+#include "foveal/perception/eye.h"
 #include "foveal/util/error.h"
+#include "foveal/vision/simulate.h"
 
 #include <gtest/gtest.h>
+#include <opencv2/features2d.hpp>
 
 #include <cstring>
 #include <filesystem>
 #include <random>
+#include <set>
+#include <tuple>
 
 namespace foveal {
 namespace {
@@ -169,6 +174,115 @@ TEST(Gpu, RawTracingMatchesTheSharedTraversalOnTheCpu) {
   EXPECT_GE(same, rays.size() * 9995 / 10000);
   EXPECT_GE(same_occ, rays.size() * 9995 / 10000);
   EXPECT_GT(renderer.measure_occlusion_rate(rays, 3), 0);
+}
+
+// ---- The second paper's passes ---------------------------------------------------------------
+
+TEST(GpuDevice, VisionPassesRefusedWithoutAGpu) {
+  if (gpu::availability().usable) GTEST_SKIP() << "skipped: a GPU is present";
+  const Scene scene = make_builtin_scene("box");
+  const Tracer tracer(scene);
+  SimulateParams p;
+  p.width = 64;
+  p.height = 48;
+  p.cuda = true;
+  try {
+    VisionSimulation sim(tracer, scene, p);
+    ADD_FAILURE() << "a GPU simulation was made without a GPU";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find(gpu::availability().reason), std::string::npos) << e.what();
+  }
+}
+
+// FAST on the GPU finds exactly cv::FAST's keypoints, with its scores, on the GPU's own image.
+TEST(Gpu, VisionCornersAreOpenCvs) {
+  FOVEAL_NEED_GPU();
+  const Scene scene = make_builtin_scene("box");
+  const SharpnessField field(scene.bounds(), default_voxel_size(scene.bounds()));
+  gpu::VisionPasses passes(scene, field, {});
+  const Camera camera = default_camera(scene);
+  passes.trace(camera, 640, 480, 0.3f);
+  const Image color = passes.color();
+  const std::vector<uint8_t> grey = grey_8bit(color);
+  const cv::Mat mat(color.height, color.width, CV_8UC1, const_cast<uint8_t*>(grey.data()));
+  for (int threshold : {10, 20, 40}) {
+    std::vector<cv::KeyPoint> expected;
+    cv::FAST(mat, expected, threshold, true, cv::FastFeatureDetector::TYPE_9_16);
+    const std::vector<Corner> got = passes.corners(threshold);
+    ASSERT_GT(expected.size(), 20u) << threshold;
+    std::multiset<std::tuple<float, float, float>> a, b;
+    for (const Corner& c : got) a.insert({c.px.x - 0.5f, c.px.y - 0.5f, c.score});
+    for (const cv::KeyPoint& k : expected) b.insert({k.pt.x, k.pt.y, k.response});
+    EXPECT_EQ(a, b) << "threshold " << threshold;
+    // and sorted by row, then column, as on the CPU
+    EXPECT_TRUE(std::is_sorted(got.begin(), got.end(), [](const Corner& l, const Corner& r) {
+      return l.px.y != r.px.y ? l.px.y < r.px.y : l.px.x < r.px.x;
+    }));
+  }
+}
+
+// The GPU's blur of its own image with its own CoCs is the CPU's variable_blur of the same two,
+// but for float rounding (fused multiply-adds).
+TEST(Gpu, VisionBlurIsTheCpusOnTheSameInput) {
+  FOVEAL_NEED_GPU();
+  const Scene scene = make_builtin_scene("box");
+  const Tracer tracer(scene);
+  SimulateParams p;
+  p.width = 320;
+  p.height = 240;
+  p.eye = parse_eye_preset("myopia:-2");
+  p.cuda = true;
+  VisionSimulation sim(tracer, scene, p);
+  const Camera camera = default_camera(scene);
+  for (int k = 0; k < 3; ++k) sim.step(camera);
+  const Image cpu = variable_blur(sim.color(), sim.coc_px(), p.blur);
+  const Image& gpu = sim.perceived();
+  ASSERT_EQ(cpu.pixels.size(), gpu.pixels.size());
+  double worst = 0;
+  size_t blurred = 0;
+  for (size_t i = 0; i < cpu.pixels.size(); ++i) worst = std::max(worst, double(std::abs(cpu.pixels[i] - gpu.pixels[i])));
+  for (float c : sim.coc_px()) blurred += c > 2;
+  EXPECT_LT(worst, 1e-4);
+  EXPECT_GT(blurred, sim.coc_px().size() / 4);  // the test blurs something
+}
+
+// Whole steps: the same fixations (given), the same field (to the cells where float positions
+// differ), the same blur, for a healthy, a glaucomatous and an astigmatic eye; and a GPU run
+// repeats itself exactly.
+TEST(Gpu, VisionStepsMatchTheCpu) {
+  FOVEAL_NEED_GPU();
+  const Scene scene = make_builtin_scene("box");
+  const Tracer tracer(scene);
+  const Camera camera = default_camera(scene);
+  const std::vector<glm::vec2> fixations = {{160, 120}, {60, 80}, {250, 200}, {100, 190}, {200, 40}, {160, 120}};
+  for (const char* eye : {"healthy", "glaucoma:0.7", "astigmatism:2@30+myopia:-1"}) {
+    SimulateParams p;
+    p.width = 320;
+    p.height = 240;
+    p.eye = parse_eye_preset(eye);
+    p.blink_every = 4;
+    VisionSimulation cpu(tracer, scene, p);
+    p.cuda = true;
+    VisionSimulation gpu(tracer, scene, p), again(tracer, scene, p);
+    for (size_t k = 0; k < fixations.size(); ++k) {
+      const StepStats a = cpu.step(camera, fixations[k]), b = gpu.step(camera, fixations[k]);
+      again.step(camera, fixations[k]);
+      EXPECT_EQ(a.blink, b.blink);
+      EXPECT_NEAR(a.focus_vergence, b.focus_vergence, 1e-3) << eye << " step " << k;
+      EXPECT_NEAR(a.sharp_fraction, b.sharp_fraction, 0.01) << eye << " step " << k;
+      // CoCs: equal but where a pixel's cell or depth differs in the last bits
+      const std::vector<float>& ca = cpu.coc_px();
+      const std::vector<float>& cb = gpu.coc_px();
+      size_t close = 0;
+      for (size_t i = 0; i < ca.size(); ++i)
+        close += (std::isinf(ca[i]) && std::isinf(cb[i])) || std::abs(ca[i] - cb[i]) <= 1e-3f * std::max(1.0f, std::abs(ca[i]));
+      EXPECT_GE(double(close) / ca.size(), 0.99) << eye << " step " << k;
+      double diff = 0;
+      for (size_t i = 0; i < cpu.perceived().pixels.size(); ++i) diff += std::abs(cpu.perceived().pixels[i] - gpu.perceived().pixels[i]);
+      EXPECT_LT(diff / cpu.perceived().pixels.size(), 2e-3) << eye << " step " << k;
+      EXPECT_EQ(gpu.perceived().pixels, again.perceived().pixels) << eye << " step " << k;
+    }
+  }
 }
 
 }  // namespace

@@ -1,6 +1,8 @@
 // foveal/ui/session.cpp — see session.h.
 #include "foveal/ui/session.h"
 
+#include "foveal/cuda/gpu.h"
+
 #include "foveal/gaze/steps.h"
 #include "foveal/io/image_io.h"
 #include "foveal/io/outputs.h"
@@ -72,7 +74,8 @@ nlohmann::json settings_json(const ViewSettings& s) {
                    {"starvation", s.vision.starvation}, {"blink_every", s.vision.blink_every}, {"voxel", s.vision.voxel},
                    {"sharp_px", s.vision.sharp_px}, {"seed", s.vision.seed}}},
           {"diff_gain", s.diff_gain},
-          {"progressive", s.progressive}};
+          {"progressive", s.progressive},
+          {"device", s.cuda ? "cuda" : "cpu"}};
 }
 
 nlohmann::json camera_json(const Camera& c) {
@@ -139,6 +142,7 @@ struct ViewSession::Worker {
   std::atomic<uint64_t> wanted{0};
   std::atomic<double> progress{0};
   std::unique_ptr<VisionSimulation> sim;  // the worker's own
+  std::unique_ptr<gpu::Renderer> gpu;     // with settings.cuda: the scene on the GPU, made on first use
   std::thread thread;
 
   Worker(const Scene& s, const Tracer& t) : scene(s), tracer(t), thread([this] { loop(); }) {}
@@ -212,6 +216,12 @@ struct ViewSession::Worker {
     p.foveation.max_rays = std::min(p.foveation.max_rays, rays);
     p.foveation.min_rays = std::min(p.foveation.min_rays, p.foveation.max_rays);
     progress = 0;
+    if (r.settings.cuda) {  // a GPU frame takes milliseconds: no progress, cancelled between stages
+      if (!gpu) gpu = std::make_unique<gpu::Renderer>(scene);
+      Frame f = gpu->render(r.camera, p, gpu::FrameOutputs{false, false, false});
+      check(r.generation);
+      return f;
+    }
     Frame f = render_frame(tracer, scene, r.camera, p, [&](double fraction) {
       progress = fraction;
       check(r.generation);
@@ -227,7 +237,11 @@ struct ViewSession::Worker {
     out.generation = r.generation;
     out.gaze = r.gaze;
     if (s.mode == ViewMode::vision) {
-      if (!sim || r.restart_vision) sim = std::make_unique<VisionSimulation>(tracer, scene, s.vision);
+      if (!sim || r.restart_vision) {
+        SimulateParams vision = s.vision;
+        vision.cuda = s.cuda;
+        sim = std::make_unique<VisionSimulation>(tracer, scene, vision);
+      }
       if (r.blink) sim->blink_before_next_step();
       const StepStats step = sim->step(r.camera, glm::vec2(r.gaze));
       out.last = true;

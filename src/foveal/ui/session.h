@@ -37,6 +37,7 @@ struct ViewSettings {
   std::string eye = "healthy";  // the eye preset text (vision.eye is parsed from it, then pupil applied)
   float diff_gain = 8;        // side by side: |foveated − reference| × this gain
   bool progressive = true;    // a cheap quarter-resolution frame before the full one
+  bool cuda = false;          // frames and vision steps on the GPU (gpu::Renderer, gpu::VisionPasses)
 };
 // Parse `eye` into vision.eye (keeping the pupil and image distance) and check everything; throws Error.
 void resolve(ViewSettings& settings);

@@ -16,9 +16,13 @@
 #include <cstddef>
 #include <type_traits>
 
+// Always inlined: FOVEAL_FORCE_INLINE on functions, FOVEAL_INLINE on lambdas (the CPU's per-CPU
+// builds of the gather would otherwise call the baseline build; the GPU inlines by itself)
 #if defined(__CUDACC__)
-#define FOVEAL_INLINE __forceinline__
+#define FOVEAL_FORCE_INLINE __forceinline__
+#define FOVEAL_INLINE
 #else
+#define FOVEAL_FORCE_INLINE inline __attribute__((always_inline))
 #define FOVEAL_INLINE __attribute__((always_inline))
 #endif
 
@@ -89,7 +93,7 @@ FOVEAL_HD inline Texel zero_texel() {
 // its own CoC d (clamped), Gaussian-weighted, bilinear reads of the level whose texels match the
 // taps' spacing; scatter-aware where the tiles say a smaller CoC is near.
 template <int CH, class Texel>
-FOVEAL_HD inline FOVEAL_INLINE void gather_pixel(const GatherView<Texel>& g, const float* image, float* dst, int x, int y) {
+FOVEAL_HD FOVEAL_FORCE_INLINE void gather_pixel(const GatherView<Texel>& g, const float* image, float* dst, int x, int y) {
   const size_t i = size_t(y) * g.width + x;
   const float d = g.coc[i];
   const int n = taps_for_diameter(d, g.max_taps);

@@ -16,6 +16,7 @@
 
 #include "foveal/util/hd.h"
 
+#include <cmath>
 #include <cstdint>
 
 namespace foveal::fast {
@@ -73,6 +74,13 @@ FOVEAL_HD inline bool is_local_maximum(const uint8_t* scores, int width, int hei
       if (scores[static_cast<long>(ny) * width + nx] >= s) return false;
     }
   return true;
+}
+
+// The entry of srgb8_table() (features.h) for a linear value: clamped to [0, 1]; NaN and ±∞ → 0.
+FOVEAL_HD inline int srgb8_index(float v) {
+  const float f = std::isfinite(v) ? v : 0.0f;
+  const float c = f < 0.0f ? 0.0f : (f > 1.0f ? 1.0f : f);
+  return static_cast<int>(c * 4096.0f + 0.5f);
 }
 
 // BT.601 luma (0.299, 0.587, 0.114) of an 8-bit sRGB triple in 15-bit fixed point, rounded, as

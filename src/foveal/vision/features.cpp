@@ -35,7 +35,7 @@ std::vector<uint8_t> grey_8bit(const Image& img) {
   for (size_t i = 0; i < n; ++i)
     for (int c = 0; c < 3; ++c) {
       const float v = img.pixels[i * img.channels + c];
-      out[i * 3 + c] = table[static_cast<int>(std::clamp(std::isfinite(v) ? v : 0.0f, 0.0f, 1.0f) * 4096.0f + 0.5f)];
+      out[i * 3 + c] = table[fast::srgb8_index(v)];
     }
   cv::Mat grey;
   cv::cvtColor(rgb, grey, cv::COLOR_RGB2GRAY);

@@ -3,6 +3,8 @@
 
 #include "foveal/vision/thin_lens.h"
 
+#include "foveal/cuda/gpu.h"
+
 #include "foveal/util/error.h"
 #include "foveal/util/sampling.h"
 #include "foveal/util/timer.h"
@@ -47,7 +49,84 @@ VisionSimulation::VisionSimulation(const Tracer& tracer, const Scene& scene, con
       ppd_(0),
       epsilon_(surface_epsilon(scene.bounds())),
       field_(scene.bounds(), params.voxel > 0 ? params.voxel : default_voxel_size(scene.bounds()), params.starvation),
-      saccades_(saccade_params_for(params.eye, params.saccades), params.height / 40.0, params.seed) {}
+      saccades_(saccade_params_for(params.eye, params.saccades), params.height / 40.0, params.seed) {
+  if (params_.cuda) gpu_ = std::make_unique<gpu::VisionPasses>(scene, field_, params_.blur);
+}
+
+VisionSimulation::~VisionSimulation() = default;
+
+const Image& VisionSimulation::color() const {
+  if (color_stale_) color_ = gpu_->color();
+  color_stale_ = false;
+  return color_;
+}
+
+const Image& VisionSimulation::perceived() const {
+  if (perceived_stale_) perceived_ = gpu_->perceived();
+  perceived_stale_ = false;
+  return perceived_;
+}
+
+const std::vector<float>& VisionSimulation::coc_px() const {
+  if (coc_stale_) coc_ = gpu_->coc_px();
+  coc_stale_ = false;
+  return coc_;
+}
+
+bool VisionSimulation::blink_due(int step) {
+  const bool due = (params_.blink_every > 0 && step > 1 && (step - 1) % params_.blink_every == 0) || blink_requested_;
+  blink_requested_ = false;
+  return due;
+}
+
+// The same step with the passes on the GPU (gpu::VisionPasses): only the corners, the fixated
+// pixel's depth and the sharp count come back; the images when asked for.
+StepStats VisionSimulation::gpu_step(const Camera& camera, std::optional<glm::vec2> fixation) {
+  const Timer total;
+  StepStats s;
+  s.step = static_cast<int>(++step_);
+  const int w = params_.width, h = params_.height;
+  gpu_->trace(camera, w, h, params_.ambient);
+  ppd_ = camera_pixels_per_degree(camera, h);
+  saccades_.set_pixels_per_degree(ppd_);
+  s.camera_moved = !last_camera_ || !same_camera(*last_camera_, camera);
+  if (s.camera_moved || params_.features_every_step) {
+    corners_ = gpu_->corners(params_.fast_threshold, true);
+    if (s.camera_moved && last_camera_) saccades_.reset();
+    last_camera_ = camera;
+  }
+  s.corners = corners_.size();
+  bool skipped = false;
+  const Timer choose;
+  s.focus_px = fixation ? *fixation : saccades_.next(corners_, {w, h}, &skipped);
+  s.skipped = skipped && !fixation;
+  const double choose_ms = choose.ms();
+  const int fx = std::clamp(int(s.focus_px.x), 0, w - 1), fy = std::clamp(int(s.focus_px.y), 0, h - 1);
+  glm::vec3 view(0.0f);
+  const float depth = gpu_->depth_at(fx, fy, &view);
+  const glm::vec3 axis = glm::normalize(camera.look - camera.eye);
+  s.focus_depth_m = std::isfinite(depth) ? depth * glm::dot(view, axis) * scene_.meters_per_unit : INFINITY;
+  s.focus_vergence = accommodate(params_.eye, s.focus_depth_m);
+  if (blink_due(s.step)) {
+    field_.blink();
+    gpu_->blink();
+    s.blink = true;
+  }
+  const glm::vec3 gaze_dir(CameraRays(camera, w, h)(s.focus_px.x, s.focus_px.y).dir);
+  const size_t sharp = gpu_->sharpness(coc_model(camera, gaze_dir, s.focus_vergence), step_, !s.skipped,
+                                       static_cast<float>(ppd_), params_.sharp_px);
+  s.sharp_fraction = double(sharp) / (double(w) * h);
+  gpu_->blur(static_cast<float>(params_.eye.cylinder_axis_deg));
+  color_stale_ = perceived_stale_ = coc_stale_ = true;
+  // The passes' GPU times (the saccade choice on the CPU counts with the features)
+  const gpu::VisionPassTimes& t = gpu_->last_times();
+  s.trace_ms = t.trace_ms;
+  s.features_ms = (s.camera_moved || params_.features_every_step ? t.features_ms : 0.0) + choose_ms;
+  s.sharpness_ms = t.sharpness_ms;
+  s.blur_ms = t.blur_ms;
+  s.total_ms = total.ms();
+  return s;
+}
 
 CocModel VisionSimulation::coc_model(const Camera& camera, glm::vec3 gaze_dir, double focus_vergence) const {
   CocModel m;
@@ -63,6 +142,7 @@ CocModel VisionSimulation::coc_model(const Camera& camera, glm::vec3 gaze_dir, d
 }
 
 StepStats VisionSimulation::step(const Camera& camera, std::optional<glm::vec2> fixation) {
+  if (gpu_) return gpu_step(camera, fixation);
   const Timer total;
   StepStats s;
   s.step = static_cast<int>(++step_);
@@ -98,10 +178,9 @@ StepStats VisionSimulation::step(const Camera& camera, std::optional<glm::vec2> 
   const glm::vec3 axis = glm::normalize(camera.look - camera.eye);
   s.focus_depth_m = gbuffer_.hit(fi) ? gbuffer_.depth[fi] * glm::dot(gbuffer_.view[fi], axis) * scene_.meters_per_unit : INFINITY;
   s.focus_vergence = accommodate(params_.eye, s.focus_depth_m);
-  if ((params_.blink_every > 0 && s.step > 1 && (s.step - 1) % params_.blink_every == 0) || blink_requested_) {
+  if (blink_due(s.step)) {
     field_.blink();
     s.blink = true;
-    blink_requested_ = false;
   }
   // The eye sits at the camera: eccentricity is the angle between the camera rays through the
   // pixel and through the fixation; distances are along the optical axis (a thin lens focuses planes)

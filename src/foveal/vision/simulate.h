@@ -13,6 +13,9 @@
 #include <optional>
 
 namespace foveal {
+namespace gpu {
+class VisionPasses;
+}
 
 // The eye sits at the camera: the camera's field of view, not a display, sets the visual angles.
 struct SimulateParams {
@@ -28,6 +31,7 @@ struct SimulateParams {
   float ambient = 0.3f;           // constant Phong ambient factor of the colour image
   BlurParams blur;
   uint64_t seed = 1;
+  bool cuda = false;              // run the passes on the GPU (gpu::VisionPasses); the saccades stay on the CPU
 };
 void validate(const SimulateParams& params);
 
@@ -50,18 +54,23 @@ struct StepStats {
 
 class VisionSimulation {
  public:
+  // With params.cuda the scene is uploaded to the GPU (Error with the reason when none answers).
   VisionSimulation(const Tracer& tracer, const Scene& scene, const SimulateParams& params);
+  ~VisionSimulation();
   // One step with this camera (the corners are recomputed when it differs from the last one's).
   // `fixation` replaces the simulated saccade (tracked gaze), in render pixels.
   StepStats step(const Camera& camera, std::optional<glm::vec2> fixation = std::nullopt);
   // The eye blinks before the next step (the field forgets), e.g. a tracker's blink.
   void blink_before_next_step() { blink_requested_ = true; }
 
-  const Image& color() const { return color_; }          // the sharp ray-cast image
-  const Image& perceived() const { return perceived_; }  // the blurred result
-  const std::vector<float>& coc_px() const { return coc_; }  // per-pixel CoC diameter used for the blur
+  // On the GPU the images stay there until first asked for after a step.
+  const Image& color() const;                // the sharp ray-cast image
+  const Image& perceived() const;            // the blurred result
+  const std::vector<float>& coc_px() const;  // per-pixel CoC diameter used for the blur
   const std::vector<Corner>& corners() const { return corners_; }
+  // The field (on the CPU; with params.cuda the GPU keeps its own and this one stays empty).
   const SharpnessField& field() const { return field_; }
+  bool on_gpu() const { return gpu_ != nullptr; }
   double pixels_per_degree() const { return ppd_; }  // the camera's, at the image centre (after a step)
 
  private:
@@ -78,8 +87,13 @@ class VisionSimulation {
   std::optional<Camera> last_camera_;
   std::vector<Corner> corners_;
   GBuffer gbuffer_;
-  Image color_, perceived_;
-  std::vector<float> coc_;
+  std::unique_ptr<gpu::VisionPasses> gpu_;
+  // Filled by step() on the CPU, copied back on demand from the GPU
+  mutable Image color_, perceived_;
+  mutable std::vector<float> coc_;
+  mutable bool color_stale_ = false, perceived_stale_ = false, coc_stale_ = false;
+  StepStats gpu_step(const Camera& camera, std::optional<glm::vec2> fixation);
+  bool blink_due(int step);  // a blink every blink_every steps, or one asked for (consumed)
   CocShape shape_;  // astigmatism: this step's ellipse per pixel
   uint32_t step_ = 0;
   bool blink_requested_ = false;
