@@ -13,6 +13,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
+#include <vector>
 
 namespace foveal {
 
@@ -42,90 +44,179 @@ bool same_camera(const Camera& a, const Camera& b) {
 
 }  // namespace
 
+// What a step asks of a device. Images, CoCs and timings stay with the passes; on the GPU they
+// are copied back only when asked for.
+class VisionSimulation::Passes {
+ public:
+  virtual ~Passes() = default;
+  // Ray-cast colour and depth (Phong with a constant ambient term, textures where present)
+  virtual void trace(const Camera& camera, int width, int height, float ambient) = 0;
+  // FAST-9 corners of the traced image, non-maximum suppressed, by row then column
+  virtual std::vector<Corner> corners(int threshold) = 0;
+  // The hit distance along pixel (x, y)'s ray (infinity for the background), and the ray
+  virtual float depth_at(int x, int y, glm::vec3* view) = 0;
+  virtual void blink() = 0;
+  // This step's CoC per pixel, the field's update (unless `update` is false), the blur's CoC in
+  // pixels; returns how many pixels are sharp
+  virtual size_t sharpness(const CocModel& model, uint32_t step, bool update, float ppd, float sharp_px) = 0;
+  virtual void blur(float axis_deg) = 0;
+  virtual const Image& color() = 0;
+  virtual const Image& perceived() = 0;
+  virtual const std::vector<float>& coc_px() = 0;
+  // The last trace/corners/sharpness/blur's times, milliseconds
+  virtual const gpu::VisionPassTimes& times() const = 0;
+};
+
+namespace {
+
+// The passes on the CPU: Embree rays, cv::FAST, the field in pixel order, the blur with oneTBB.
+class CpuPasses final : public VisionSimulation::Passes {
+ public:
+  CpuPasses(const Tracer& tracer, const Scene& scene, SharpnessField& field, const BlurParams& blur)
+      : tracer_(tracer), scene_(scene), field_(field), blur_(blur), epsilon_(surface_epsilon(scene.bounds())) {}
+
+  void trace(const Camera& camera, int width, int height, float ambient) override {
+    const Timer t;
+    gbuffer_ = trace_primary(tracer_, scene_, camera, width, height);
+    color_ = shade_constant_ambient(tracer_, scene_, camera, gbuffer_, ambient, epsilon_);
+    times_ = {};
+    times_.trace_ms = t.ms();
+  }
+
+  std::vector<Corner> corners(int threshold) override {
+    const Timer t;
+    std::vector<Corner> found = detect_corners(color_, threshold, true);
+    times_.features_ms = t.ms();
+    return found;
+  }
+
+  float depth_at(int x, int y, glm::vec3* view) override {
+    const size_t i = size_t(y) * gbuffer_.width + x;
+    if (view) *view = gbuffer_.view[i];
+    return gbuffer_.hit(i) ? gbuffer_.depth[i] : INFINITY;
+  }
+
+  void blink() override { field_.blink(); }
+
+  size_t sharpness(const CocModel& model, uint32_t step, bool update, float ppd, float sharp_px) override {
+    const Timer t;
+    const int w = gbuffer_.width, h = gbuffer_.height;
+    const size_t n = size_t(w) * h;
+    astigmatic_ = model.astigmatic;
+    if (astigmatic_) shape_.scale.resize(n);
+    now_deg_.resize(n);  // this step's CoC (the ellipse's larger diameter), degrees
+    cells_.resize(n);    // each pixel's field cell (−1: background)
+    tbb::parallel_for(tbb::blocked_range<int>(0, h, 8), [&](const tbb::blocked_range<int>& rows) {
+      for (int y = rows.begin(); y < rows.end(); ++y)
+        for (int x = 0; x < w; ++x) {
+          const size_t i = size_t(y) * w + x;
+          const bool hit = gbuffer_.hit(i);
+          cells_[i] = hit ? field_.cell(gbuffer_.position[i]) : -1;
+          const PixelCoc c = model(hit, gbuffer_.depth[i], gbuffer_.view[i]);
+          now_deg_[i] = c.major_deg;
+          if (astigmatic_) shape_.scale[i] = c.scale;
+        }
+    });
+    // Pixels share cells, so the update runs in pixel order on one thread (deterministic)
+    if (update)
+      for (size_t i = 0; i < n; ++i) field_.update(cells_[i], now_deg_[i], step);
+    // The blur's CoC: the field's memory where there is geometry, this step's CoC for the background
+    coc_.resize(n);
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 4096), [&](const tbb::blocked_range<size_t>& r) {
+      for (size_t i = r.begin(); i < r.end(); ++i)
+        coc_[i] = (cells_[i] >= 0 ? field_.effective(cells_[i], step) : now_deg_[i]) * ppd;
+    });
+    const size_t sharp = std::count_if(coc_.begin(), coc_.end(), [&](float c) { return c < sharp_px; });
+    times_.sharpness_ms = t.ms();
+    return sharp;
+  }
+
+  void blur(float axis_deg) override {
+    const Timer t;
+    shape_.axis_deg = axis_deg;
+    perceived_ = variable_blur(color_, coc_, blur_, astigmatic_ ? &shape_ : nullptr);
+    times_.blur_ms = t.ms();
+  }
+
+  const Image& color() override { return color_; }
+  const Image& perceived() override { return perceived_; }
+  const std::vector<float>& coc_px() override { return coc_; }
+  const gpu::VisionPassTimes& times() const override { return times_; }
+
+ private:
+  const Tracer& tracer_;
+  const Scene& scene_;
+  SharpnessField& field_;
+  BlurParams blur_;
+  float epsilon_;
+  GBuffer gbuffer_;
+  Image color_, perceived_;
+  std::vector<float> now_deg_, coc_;
+  std::vector<int64_t> cells_;
+  CocShape shape_;  // astigmatism: this step's ellipse per pixel
+  bool astigmatic_ = false;
+  gpu::VisionPassTimes times_;
+};
+
+// The passes on the GPU (gpu::VisionPasses keeps its own field); the images come back when first
+// asked for after a step.
+class GpuPasses final : public VisionSimulation::Passes {
+ public:
+  GpuPasses(const Scene& scene, const SharpnessField& field, const BlurParams& blur) : gpu_(scene, field, blur) {}
+
+  void trace(const Camera& camera, int width, int height, float ambient) override {
+    gpu_.trace(camera, width, height, ambient);
+    color_ = std::nullopt;
+    perceived_ = std::nullopt;
+    coc_ = std::nullopt;
+  }
+  std::vector<Corner> corners(int threshold) override { return gpu_.corners(threshold, true); }
+  float depth_at(int x, int y, glm::vec3* view) override { return gpu_.depth_at(x, y, view); }
+  void blink() override { gpu_.blink(); }
+  size_t sharpness(const CocModel& model, uint32_t step, bool update, float ppd, float sharp_px) override {
+    coc_ = std::nullopt;
+    return gpu_.sharpness(model, step, update, ppd, sharp_px);
+  }
+  void blur(float axis_deg) override {
+    gpu_.blur(axis_deg);
+    perceived_ = std::nullopt;
+  }
+  const Image& color() override { return color_ ? *color_ : color_.emplace(gpu_.color()); }
+  const Image& perceived() override { return perceived_ ? *perceived_ : perceived_.emplace(gpu_.perceived()); }
+  const std::vector<float>& coc_px() override { return coc_ ? *coc_ : coc_.emplace(gpu_.coc_px()); }
+  const gpu::VisionPassTimes& times() const override { return gpu_.last_times(); }
+
+ private:
+  gpu::VisionPasses gpu_;
+  std::optional<Image> color_, perceived_;
+  std::optional<std::vector<float>> coc_;
+};
+
+}  // namespace
+
 VisionSimulation::VisionSimulation(const Tracer& tracer, const Scene& scene, const SimulateParams& params)
     : tracer_(tracer),
       scene_(scene),
       params_((validate(params), params)),
       ppd_(0),
-      epsilon_(surface_epsilon(scene.bounds())),
       field_(scene.bounds(), params.voxel > 0 ? params.voxel : default_voxel_size(scene.bounds()), params.starvation),
       saccades_(saccade_params_for(params.eye, params.saccades), params.height / 40.0, params.seed) {
-  if (params_.cuda) gpu_ = std::make_unique<gpu::VisionPasses>(scene, field_, params_.blur);
+  if (params_.cuda)
+    passes_ = std::make_unique<GpuPasses>(scene, field_, params_.blur);  // Error with the reason when no GPU answers
+  else
+    passes_ = std::make_unique<CpuPasses>(tracer, scene, field_, params_.blur);
 }
 
 VisionSimulation::~VisionSimulation() = default;
 
-const Image& VisionSimulation::color() const {
-  if (color_stale_) color_ = gpu_->color();
-  color_stale_ = false;
-  return color_;
-}
-
-const Image& VisionSimulation::perceived() const {
-  if (perceived_stale_) perceived_ = gpu_->perceived();
-  perceived_stale_ = false;
-  return perceived_;
-}
-
-const std::vector<float>& VisionSimulation::coc_px() const {
-  if (coc_stale_) coc_ = gpu_->coc_px();
-  coc_stale_ = false;
-  return coc_;
-}
+const Image& VisionSimulation::color() const { return passes_->color(); }
+const Image& VisionSimulation::perceived() const { return passes_->perceived(); }
+const std::vector<float>& VisionSimulation::coc_px() const { return passes_->coc_px(); }
 
 bool VisionSimulation::blink_due(int step) {
   const bool due = (params_.blink_every > 0 && step > 1 && (step - 1) % params_.blink_every == 0) || blink_requested_;
   blink_requested_ = false;
   return due;
-}
-
-// The same step with the passes on the GPU (gpu::VisionPasses): only the corners, the fixated
-// pixel's depth and the sharp count come back; the images when asked for.
-StepStats VisionSimulation::gpu_step(const Camera& camera, std::optional<glm::vec2> fixation) {
-  const Timer total;
-  StepStats s;
-  s.step = static_cast<int>(++step_);
-  const int w = params_.width, h = params_.height;
-  gpu_->trace(camera, w, h, params_.ambient);
-  ppd_ = camera_pixels_per_degree(camera, h);
-  saccades_.set_pixels_per_degree(ppd_);
-  s.camera_moved = !last_camera_ || !same_camera(*last_camera_, camera);
-  if (s.camera_moved || params_.features_every_step) {
-    corners_ = gpu_->corners(params_.fast_threshold, true);
-    if (s.camera_moved && last_camera_) saccades_.reset();
-    last_camera_ = camera;
-  }
-  s.corners = corners_.size();
-  bool skipped = false;
-  const Timer choose;
-  s.focus_px = fixation ? *fixation : saccades_.next(corners_, {w, h}, &skipped);
-  s.skipped = skipped && !fixation;
-  const double choose_ms = choose.ms();
-  const int fx = std::clamp(int(s.focus_px.x), 0, w - 1), fy = std::clamp(int(s.focus_px.y), 0, h - 1);
-  glm::vec3 view(0.0f);
-  const float depth = gpu_->depth_at(fx, fy, &view);
-  const glm::vec3 axis = glm::normalize(camera.look - camera.eye);
-  s.focus_depth_m = std::isfinite(depth) ? depth * glm::dot(view, axis) * scene_.meters_per_unit : INFINITY;
-  s.focus_vergence = accommodate(params_.eye, s.focus_depth_m);
-  if (blink_due(s.step)) {
-    field_.blink();
-    gpu_->blink();
-    s.blink = true;
-  }
-  const glm::vec3 gaze_dir(CameraRays(camera, w, h)(s.focus_px.x, s.focus_px.y).dir);
-  const size_t sharp = gpu_->sharpness(coc_model(camera, gaze_dir, s.focus_vergence), step_, !s.skipped,
-                                       static_cast<float>(ppd_), params_.sharp_px);
-  s.sharp_fraction = double(sharp) / (double(w) * h);
-  gpu_->blur(static_cast<float>(params_.eye.cylinder_axis_deg));
-  color_stale_ = perceived_stale_ = coc_stale_ = true;
-  // The passes' GPU times (the saccade choice on the CPU counts with the features)
-  const gpu::VisionPassTimes& t = gpu_->last_times();
-  s.trace_ms = t.trace_ms;
-  s.features_ms = (s.camera_moved || params_.features_every_step ? t.features_ms : 0.0) + choose_ms;
-  s.sharpness_ms = t.sharpness_ms;
-  s.blur_ms = t.blur_ms;
-  s.total_ms = total.ms();
-  return s;
 }
 
 CocModel VisionSimulation::coc_model(const Camera& camera, glm::vec3 gaze_dir, double focus_vergence) const {
@@ -142,85 +233,60 @@ CocModel VisionSimulation::coc_model(const Camera& camera, glm::vec3 gaze_dir, d
 }
 
 StepStats VisionSimulation::step(const Camera& camera, std::optional<glm::vec2> fixation) {
-  if (gpu_) return gpu_step(camera, fixation);
   const Timer total;
   StepStats s;
   s.step = static_cast<int>(++step_);
   const int w = params_.width, h = params_.height;
-  const size_t n = size_t(w) * h;
+  Passes& passes = *passes_;
 
-  // 1. Ray-cast colour and depth (Phong with a constant ambient term, textures where present)
-  Timer t;
-  gbuffer_ = trace_primary(tracer_, scene_, camera, w, h);
-  color_ = shade_constant_ambient(tracer_, scene_, camera, gbuffer_, params_.ambient, epsilon_);
-  s.trace_ms = t.ms();
+  // 1. Ray-cast colour and depth
+  passes.trace(camera, w, h, params_.ambient);
 
   // 2. Corners, recomputed when the camera moved; the next fixation
-  t.reset();
   ppd_ = camera_pixels_per_degree(camera, h);
   saccades_.set_pixels_per_degree(ppd_);
   s.camera_moved = !last_camera_ || !same_camera(*last_camera_, camera);
-  if (s.camera_moved || params_.features_every_step) {
-    corners_ = detect_corners(color_, params_.fast_threshold, true);
+  const bool detect = s.camera_moved || params_.features_every_step;
+  if (detect) {
+    corners_ = passes.corners(params_.fast_threshold);
     if (s.camera_moved && last_camera_) saccades_.reset();  // a new view: no recent fixations in it
     last_camera_ = camera;
   }
   s.corners = corners_.size();
+  const Timer choose;
   bool skipped = false;
   s.focus_px = fixation ? *fixation : saccades_.next(corners_, {w, h}, &skipped);
   s.skipped = skipped && !fixation;
-  s.features_ms = t.ms();
+  const double choose_ms = choose.ms();
 
-  // 3. Accommodate to the fixated depth, CoC per pixel, update the field
-  t.reset();
+  // 3. Accommodate to the fixated depth (along the optical axis: a thin lens focuses planes)
   const int fx = std::clamp(int(s.focus_px.x), 0, w - 1), fy = std::clamp(int(s.focus_px.y), 0, h - 1);
-  const size_t fi = size_t(fy) * w + fx;
+  glm::vec3 view(0.0f);
+  const float depth = passes.depth_at(fx, fy, &view);
   const glm::vec3 axis = glm::normalize(camera.look - camera.eye);
-  s.focus_depth_m = gbuffer_.hit(fi) ? gbuffer_.depth[fi] * glm::dot(gbuffer_.view[fi], axis) * scene_.meters_per_unit : INFINITY;
+  s.focus_depth_m = std::isfinite(depth) ? depth * glm::dot(view, axis) * scene_.meters_per_unit : INFINITY;
   s.focus_vergence = accommodate(params_.eye, s.focus_depth_m);
   if (blink_due(s.step)) {
-    field_.blink();
+    passes.blink();
     s.blink = true;
   }
-  // The eye sits at the camera: eccentricity is the angle between the camera rays through the
-  // pixel and through the fixation; distances are along the optical axis (a thin lens focuses planes)
-  const CameraRays rays(camera, w, h);
-  const glm::vec3 gaze_dir(rays(s.focus_px.x, s.focus_px.y).dir);
-  const bool astigmatic = params_.eye.cylinder_d > 0;
-  if (astigmatic) {
-    shape_.scale.resize(n);
-    shape_.axis_deg = static_cast<float>(params_.eye.cylinder_axis_deg);
-  }
-  const CocModel model = coc_model(camera, gaze_dir, s.focus_vergence);
-  std::vector<float> now_deg(n);  // this step's CoC (the ellipse's larger diameter), degrees
-  std::vector<int64_t> cells(n);  // each pixel's field cell (−1: background)
-  tbb::parallel_for(tbb::blocked_range<int>(0, h, 8), [&](const tbb::blocked_range<int>& rows) {
-    for (int y = rows.begin(); y < rows.end(); ++y)
-      for (int x = 0; x < w; ++x) {
-        const size_t i = size_t(y) * w + x;
-        const bool hit = gbuffer_.hit(i);
-        cells[i] = hit ? field_.cell(gbuffer_.position[i]) : -1;
-        const PixelCoc c = model(hit, gbuffer_.depth[i], gbuffer_.view[i]);
-        now_deg[i] = c.major_deg;
-        if (astigmatic) shape_.scale[i] = c.scale;
-      }
-  });
-  // Pixels share cells, so the update runs in pixel order on one thread (deterministic)
-  if (!s.skipped)  // glaucoma's skipped steps do not update the field
-    for (size_t i = 0; i < n; ++i) field_.update(cells[i], now_deg[i], step_);
-  // The blur's CoC: the field's memory where there is geometry, this step's CoC for the background
-  coc_.resize(n);
-  const float ppd = static_cast<float>(ppd_);
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 4096), [&](const tbb::blocked_range<size_t>& r) {
-    for (size_t i = r.begin(); i < r.end(); ++i) coc_[i] = (cells[i] >= 0 ? field_.effective(cells[i], step_) : now_deg[i]) * ppd;
-  });
-  s.sharp_fraction = double(std::count_if(coc_.begin(), coc_.end(), [&](float c) { return c < params_.sharp_px; })) / n;
-  s.sharpness_ms = t.ms();
 
-  // 4. Variable blur
-  t.reset();
-  perceived_ = variable_blur(color_, coc_, params_.blur, astigmatic ? &shape_ : nullptr);
-  s.blur_ms = t.ms();
+  // 4. CoC per pixel and the field's update (glaucoma's skipped steps do not update it). The eye
+  // sits at the camera: eccentricity is the angle between the camera rays through the pixel and
+  // through the fixation.
+  const glm::vec3 gaze_dir(CameraRays(camera, w, h)(s.focus_px.x, s.focus_px.y).dir);
+  const size_t sharp = passes.sharpness(coc_model(camera, gaze_dir, s.focus_vergence), step_, !s.skipped,
+                                        static_cast<float>(ppd_), params_.sharp_px);
+  s.sharp_fraction = double(sharp) / (double(w) * h);
+
+  // 5. Variable blur
+  passes.blur(static_cast<float>(params_.eye.cylinder_axis_deg));
+
+  const gpu::VisionPassTimes& t = passes.times();
+  s.trace_ms = t.trace_ms;
+  s.features_ms = (detect ? t.features_ms : 0.0) + choose_ms;  // the saccade's choice counts with the features
+  s.sharpness_ms = t.sharpness_ms;
+  s.blur_ms = t.blur_ms;
   s.total_ms = total.ms();
   return s;
 }

@@ -13,9 +13,6 @@
 #include <optional>
 
 namespace foveal {
-namespace gpu {
-class VisionPasses;
-}
 
 // The eye sits at the camera: the camera's field of view, not a display, sets the visual angles.
 struct SimulateParams {
@@ -70,7 +67,11 @@ class VisionSimulation {
   const std::vector<Corner>& corners() const { return corners_; }
   // The field (on the CPU; with params.cuda the GPU keeps its own and this one stays empty).
   const SharpnessField& field() const { return field_; }
-  bool on_gpu() const { return gpu_ != nullptr; }
+  bool on_gpu() const { return params_.cuda; }
+
+  // One step's passes on one device (simulate.cpp: the CPU's, and gpu::VisionPasses behind the
+  // same calls); step() runs the same sequence with either.
+  class Passes;
   double pixels_per_degree() const { return ppd_; }  // the camera's, at the image centre (after a step)
 
  private:
@@ -81,20 +82,12 @@ class VisionSimulation {
   const Scene& scene_;
   SimulateParams params_;
   double ppd_;
-  float epsilon_;
   SharpnessField field_;
   SaccadeModel saccades_;
   std::optional<Camera> last_camera_;
   std::vector<Corner> corners_;
-  GBuffer gbuffer_;
-  std::unique_ptr<gpu::VisionPasses> gpu_;
-  // Filled by step() on the CPU, copied back on demand from the GPU
-  mutable Image color_, perceived_;
-  mutable std::vector<float> coc_;
-  mutable bool color_stale_ = false, perceived_stale_ = false, coc_stale_ = false;
-  StepStats gpu_step(const Camera& camera, std::optional<glm::vec2> fixation);
+  std::unique_ptr<Passes> passes_;
   bool blink_due(int step);  // a blink every blink_every steps, or one asked for (consumed)
-  CocShape shape_;  // astigmatism: this step's ellipse per pixel
   uint32_t step_ = 0;
   bool blink_requested_ = false;
 };
