@@ -89,7 +89,9 @@ TEST(ViewCli, LiveTrackerThatHangsUpDoesNotStopTheView) {
   for (int i = 0; i < 60; ++i) messages.emplace_back("surfaces.screen", surface_gaze(0.25, 0.75, true, 10 + 0.004 * i));
   for (int i = 0; i < 60; ++i) messages.emplace_back("surfaces.screen", surface_gaze(0.75, 0.25, true, 10.3 + 0.004 * i));
   fake.serve(messages, true, nullptr);
-  const CliRun v = run_view("--gaze '" + fake.url("surface=screen") + "' --screen 400x200 --size 80x40 --max-rays 8 --frames 90 "
+  // At most 60 frames a second: 240 frames leave the tracker (120 messages, then the hang-up) at
+  // least 4 s, ample also on a loaded machine
+  const CliRun v = run_view("--gaze '" + fake.url("surface=screen") + "' --screen 400x200 --size 80x40 --max-rays 8 --frames 240 "
                             "--screenshot live.png");
   ASSERT_EQ(v.status, 0) << v.err;
   const nlohmann::json j = read_json("live.json");
