@@ -8,7 +8,8 @@
 // - The field: pixels share cells, and the CPU updates them in pixel order. A cell's result is
 //   the smallest of its pixels' CoCs when that is below the cell's effective CoC, whatever the
 //   order; the GPU finds that smallest CoC (and the cell's first pixel, which writes it) with
-//   64-bit atomic minima keyed by a per-step serial, so the scratch arrays never need clearing.
+//   64-bit atomic minima keyed by a per-step serial (ConcurrentFieldUpdate in vision/sharpness.h,
+//   held to the pixel-order loop on the CPU), so the scratch arrays never need clearing.
 // - The blur: the pyramid, its CoC minima and the tiles are small passes of their own; the gather
 //   is one thread per pixel.
 #include "foveal/cuda/gpu_internal.cuh"
@@ -83,15 +84,9 @@ struct CocArgs {
   int64_t* cells;
   float* now_deg;
   glm::vec2* scale;  // astigmatism, else null
-  unsigned long long* cell_min;    // per cell: (~serial) << 32 | CoC bits
-  unsigned long long* cell_owner;  // per cell: (~serial) << 32 | first pixel
-  uint32_t serial;
+  ConcurrentFieldUpdate concurrent;  // the cells' smallest CoC and first pixel of this step
   bool update;
 };
-
-__device__ inline unsigned long long keyed(uint32_t serial, uint32_t low) {
-  return (static_cast<unsigned long long>(~serial) << 32) | low;
-}
 
 // This step's CoC and cell per pixel; the cells' smallest CoC and first pixel of this step.
 __global__ void coc_kernel(CocArgs a) {
@@ -103,21 +98,14 @@ __global__ void coc_kernel(CocArgs a) {
   a.cells[i] = c;
   a.now_deg[i] = coc.major_deg;
   if (a.scale) a.scale[i] = coc.scale;
-  if (a.update && c >= 0) {
-    // CoCs are ≥ 0, so their bit patterns order as the values do (NaN above all: never kept)
-    atomicMin(&a.cell_min[c], keyed(a.serial, __float_as_uint(coc.major_deg)));
-    atomicMin(&a.cell_owner[c], keyed(a.serial, static_cast<uint32_t>(i)));
-  }
+  if (a.update) a.concurrent.offer(c, coc.major_deg, static_cast<uint32_t>(i));
 }
 
 // The cell's first pixel applies the cell's smallest CoC, as the CPU's updates in pixel order do.
 __global__ void field_update_kernel(CocArgs a, uint32_t step) {
   const size_t i = blockIdx.x * static_cast<size_t>(blockDim.x) + threadIdx.x;
   if (i >= a.pixels) return;
-  const int64_t c = a.cells[i];
-  if (c < 0 || a.cell_owner[c] != keyed(a.serial, static_cast<uint32_t>(i))) return;
-  const unsigned long long m = a.cell_min[c];
-  a.field.update(c, __uint_as_float(static_cast<uint32_t>(m & 0xffffffffULL)), step);
+  a.concurrent.apply(a.field, a.cells[i], static_cast<uint32_t>(i), step);
 }
 
 // The blur's CoC in pixels: the field's memory where there is geometry, this step's elsewhere.
@@ -349,8 +337,8 @@ size_t VisionPasses::sharpness(const CocModel& model, uint32_t step, bool update
   if (m.astigmatic) m.scale.reserve(n);
   if (update) ++m.serial;
   const CocArgs a{model, m.field, r.prim.get(), r.position.get(), r.depth.get(), r.view.get(), n, m.cells.get(),
-                  m.now_deg.get(), m.astigmatic ? m.scale.get() : nullptr, m.cell_min.get(), m.cell_owner.get(),
-                  m.serial, update};
+                  m.now_deg.get(), m.astigmatic ? m.scale.get() : nullptr,
+                  ConcurrentFieldUpdate{m.cell_min.get(), m.cell_owner.get(), m.serial}, update};
   m.events.record(0);
   FOVEAL_CUDA_CHECK(cudaMemset(m.sharp_count.get(), 0, sizeof(unsigned long long)));
   coc_kernel<<<blocks_for(n, 256), 256>>>(a);

@@ -16,6 +16,11 @@
 #include <limits>
 #include <vector>
 
+#if !defined(__CUDA_ARCH__)
+#include <atomic>
+#include <cstring>
+#endif
+
 namespace foveal {
 
 // The field as plain arrays in host or device memory: what one pixel reads and writes, written
@@ -54,6 +59,64 @@ struct SharpnessFieldView {
     stamp[c] = step;
     written[c] = epoch;
     return true;
+  }
+};
+
+// One step's update of the field from every pixel at once, in any order (the GPU's threads; the
+// CPU's loop updates in pixel order). Both keep, for each cell, the smallest of its pixels' CoCs
+// when that is below the cell's effective CoC: every pixel offer()s its CoC, recording its cell's
+// smallest CoC and first pixel with 64-bit atomic minima, then apply() lets that first pixel
+// write the cell. A key is (~serial) << 32 | value, so a later step's keys lie below every earlier
+// one's: the two arrays start all ones and are never cleared; `serial` counts the updating steps.
+struct ConcurrentFieldUpdate {
+  unsigned long long* cell_min = nullptr;    // per cell: the smallest CoC's bits this serial
+  unsigned long long* cell_owner = nullptr;  // per cell: the first pixel this serial
+  uint32_t serial = 1;
+
+  FOVEAL_HD unsigned long long key(uint32_t low) const { return (static_cast<unsigned long long>(~serial) << 32) | low; }
+
+  // Non-negative floats order as their bits; zero of either sign is 0, NaN lies above infinity
+  // (never kept, as on the CPU).
+  FOVEAL_HD static uint32_t order_bits(float v) {
+    if (v == 0.0f) return 0;
+#if defined(__CUDA_ARCH__)
+    return __float_as_uint(v);
+#else
+    uint32_t b;
+    std::memcpy(&b, &v, sizeof b);
+    return b;
+#endif
+  }
+  FOVEAL_HD static float from_bits(uint32_t b) {
+#if defined(__CUDA_ARCH__)
+    return __uint_as_float(b);
+#else
+    float v;
+    std::memcpy(&v, &b, sizeof v);
+    return v;
+#endif
+  }
+  FOVEAL_HD static void atomic_min(unsigned long long* p, unsigned long long v) {
+#if defined(__CUDA_ARCH__)
+    atomicMin(p, v);
+#else
+    std::atomic_ref<unsigned long long> a(*p);
+    unsigned long long now = a.load(std::memory_order_relaxed);
+    while (v < now && !a.compare_exchange_weak(now, v, std::memory_order_relaxed)) {
+    }
+#endif
+  }
+
+  // Pass 1, every pixel: its cell (−1: none) and this step's CoC (≥ 0).
+  FOVEAL_HD void offer(int64_t c, float coc, uint32_t pixel) const {
+    if (c < 0) return;
+    atomic_min(&cell_min[c], key(order_bits(coc)));
+    atomic_min(&cell_owner[c], key(pixel));
+  }
+  // Pass 2, every pixel, after all of pass 1: the cell's first pixel updates it; whether it did.
+  FOVEAL_HD bool apply(const SharpnessFieldView& field, int64_t c, uint32_t pixel, uint32_t step) const {
+    if (c < 0 || cell_owner[c] != key(pixel)) return false;
+    return field.update(c, from_bits(static_cast<uint32_t>(cell_min[c] & 0xffffffffULL)), step);
   }
 };
 

@@ -13,12 +13,15 @@
 #include "foveal/vision/thin_lens.h"
 
 #include <gtest/gtest.h>
+#include <tbb/parallel_for.h>
 #include <opencv2/features2d.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include <cmath>
+#include <atomic>
 #include <filesystem>
+#include <numeric>
 #include <random>
 #include <set>
 
@@ -195,6 +198,58 @@ TEST(Vision, SharpnessFieldKeepsMinimaStarvesLazilyAndBlinks) {
   field.blink();
   EXPECT_TRUE(std::isinf(field.effective(c, 100)));
   EXPECT_TRUE(field.update(c, 4.0f, 101));
+}
+
+// The GPU's update (every pixel at once: atomic minima per cell, then the cell's first pixel
+// writes) run here with real threads and in shuffled order, against the CPU's pixel-order loop:
+// the same field after every step, through skipped steps and blinks, with ties, zeros of both
+// signs, infinities and NaNs among the CoCs.
+TEST(Vision, ConcurrentFieldUpdateIsThePixelOrderUpdate) {
+  Bounds bounds;
+  bounds.lo = glm::vec3(0);
+  bounds.hi = glm::vec3(1);
+  SharpnessField ordered(bounds, 0.125f, 0.015), concurrent(bounds, 0.125f, 0.015);
+  const size_t cells = concurrent.cells(), n = 20000;
+  std::vector<unsigned long long> cell_min(cells, ~0ULL), cell_owner(cells, ~0ULL);
+  ConcurrentFieldUpdate update{cell_min.data(), cell_owner.data(), 0};
+  std::mt19937 rng(7);
+  std::vector<uint32_t> order(n);
+  std::iota(order.begin(), order.end(), 0u);
+  size_t applied_total = 0;
+  for (uint32_t step = 1; step <= 40; ++step) {
+    if (step % 9 == 0) {
+      ordered.blink();
+      concurrent.blink();
+    }
+    // Few cells for many pixels (contention), a tenth background; CoCs on a coarse grid (ties)
+    std::vector<int64_t> cell(n);
+    std::vector<float> coc(n);
+    for (size_t i = 0; i < n; ++i) {
+      const uint32_t r = rng();
+      cell[i] = r % 10 == 0 ? -1 : int64_t((r >> 4) % std::min<size_t>(cells, 300));
+      const uint32_t v = (r >> 12) % 64;
+      coc[i] = v == 0 ? 0.0f : v == 1 ? -0.0f : v == 2 ? INFINITY : v == 3 ? NAN : 0.05f * float(v % 40) + 0.01f * step;
+    }
+    if (step % 7 == 3) continue;  // glaucoma's skipped step: neither field is updated, no serial used
+    for (size_t i = 0; i < n; ++i) ordered.update(cell[i], coc[i], step);
+    ++update.serial;
+    std::shuffle(order.begin(), order.end(), rng);
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 64), [&](const tbb::blocked_range<size_t>& r) {
+      for (size_t k = r.begin(); k < r.end(); ++k) update.offer(cell[order[k]], coc[order[k]], order[k]);
+    });
+    std::atomic<size_t> applied{0};
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 64), [&](const tbb::blocked_range<size_t>& r) {
+      for (size_t k = r.begin(); k < r.end(); ++k)
+        applied += update.apply(concurrent.view(), cell[order[k]], order[k], step) ? 1 : 0;
+    });
+    applied_total += applied;
+    for (size_t c = 0; c < cells; ++c) {
+      const float a = ordered.effective(int64_t(c), step), b = concurrent.effective(int64_t(c), step);
+      ASSERT_TRUE(a == b) << "cell " << c << " step " << step << ": " << a << " vs " << b;
+      ASSERT_EQ(ordered.effective(int64_t(c), step + 5), concurrent.effective(int64_t(c), step + 5)) << "cell " << c;
+    }
+  }
+  EXPECT_GT(applied_total, 300u);  // cells were written, again and again
 }
 
 TEST(Vision, BlurLeavesSharpPixelsMatchesAGaussianAndPreservesEnergy) {
