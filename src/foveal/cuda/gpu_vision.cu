@@ -148,10 +148,7 @@ __global__ void min_kernel(const float* below, int bw, int bh, float* out, int w
 __global__ void tile_min_kernel(const float* clamped, int width, int height, int tiles_x, int tiles_y, float* tile_min) {
   const int tx = blockIdx.x * blockDim.x + threadIdx.x, ty = blockIdx.y * blockDim.y + threadIdx.y;
   if (tx >= tiles_x || ty >= tiles_y) return;
-  float m = INFINITY;
-  for (int y = ty * blur::kTile; y < min(height, (ty + 1) * blur::kTile); ++y)
-    for (int x = tx * blur::kTile; x < min(width, (tx + 1) * blur::kTile); ++x) m = fminf(m, clamped[static_cast<size_t>(y) * width + x]);
-  tile_min[static_cast<size_t>(ty) * tiles_x + tx] = m;
+  tile_min[static_cast<size_t>(ty) * tiles_x + tx] = blur::tile_minimum(clamped, width, height, tx, ty);
 }
 
 __global__ void gather_kernel(blur::GatherView<glm::vec4> g, const float* image, float* out) {

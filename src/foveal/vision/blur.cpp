@@ -129,12 +129,10 @@ Image variable_blur(const Image& img, const std::vector<float>& coc, const BlurP
     for (size_t i = r.begin(); i < r.end(); ++i) clamped[i] = blur::clamp_coc(coc[i], params.max_diameter_px);
   });
   const int tiles_x = (w + blur::kTile - 1) / blur::kTile, tiles_y = (h + blur::kTile - 1) / blur::kTile;
-  std::vector<float> tile_min(size_t(tiles_x) * tiles_y, INFINITY);
-  for (int y = 0; y < h; ++y)
-    for (int x = 0; x < w; ++x) {
-      float& m = tile_min[size_t(y / blur::kTile) * tiles_x + x / blur::kTile];
-      m = std::min(m, clamped[size_t(y) * w + x]);
-    }
+  std::vector<float> tile_min(size_t(tiles_x) * tiles_y);
+  tbb::parallel_for(0, tiles_y, [&](int ty) {
+    for (int tx = 0; tx < tiles_x; ++tx) tile_min[size_t(ty) * tiles_x + tx] = blur::tile_minimum(clamped.data(), w, h, tx, ty);
+  });
   // Smallest CoC under each texel of each level (a min pyramid), then under each texel's 2×2
   // bilinear footprint (x, x+1) × (y, y+1)
   std::vector<std::vector<float>> min_quad(levels.size());

@@ -14,6 +14,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
+#include <limits>
 #include <type_traits>
 
 // Always inlined: FOVEAL_FORCE_INLINE on functions, FOVEAL_INLINE on lambdas (the CPU's per-CPU
@@ -195,6 +196,14 @@ FOVEAL_HD inline Texel box_average(const Texel* below, int bw, int bh, int x, in
 FOVEAL_HD inline float min_of_block(const float* v, int w, int x0, int y0, int x1, int y1) {
   return std::min(std::min(v[size_t(y0) * w + x0], v[size_t(y0) * w + x1]),
                   std::min(v[size_t(y1) * w + x0], v[size_t(y1) * w + x1]));
+}
+// The smallest (clamped) CoC of tile (tx, ty): its kTile × kTile pixels, cut at the image's edge.
+FOVEAL_HD inline float tile_minimum(const float* coc, int w, int h, int tx, int ty) {
+  float m = std::numeric_limits<float>::infinity();
+  const int x1 = std::min(w, (tx + 1) * kTile), y1 = std::min(h, (ty + 1) * kTile);
+  for (int y = ty * kTile; y < y1; ++y)
+    for (int x = tx * kTile; x < x1; ++x) m = std::min(m, coc[size_t(y) * w + x]);
+  return m;
 }
 // A CoC as the gather reads it: at most `max_diameter`, NaN and infinity → the max.
 FOVEAL_HD inline float clamp_coc(float coc, float max_diameter) {
