@@ -375,11 +375,7 @@ void VisionPasses::blur(float axis_deg) {
   int lw = w, lh = h;
   g.level_count = 0;
   for (int l = 0; l < blur::kMaxLevels; ++l) {
-    if (l > 0) {
-      if (lw < 4 || lh < 4) break;
-      lw = (lw + 1) / 2;
-      lh = (lh + 1) / 2;
-    }
+    if (l > 0 && !blur::next_level(&lw, &lh)) break;
     const size_t texels = static_cast<size_t>(lw) * lh;
     m.level_texels[l].reserve(texels);
     m.level_min[l].reserve(texels);

@@ -76,10 +76,10 @@ std::vector<Level> pyramid(const Image& img, int levels) {
   });
   for (int l = 1; l < levels; ++l) {
     const Level& src = out.back();
-    if (src.width < 4 || src.height < 4) break;
     Level dst;
-    dst.width = (src.width + 1) / 2;
-    dst.height = (src.height + 1) / 2;
+    dst.width = src.width;
+    dst.height = src.height;
+    if (!blur::next_level(&dst.width, &dst.height)) break;
     dst.texels.resize(size_t(dst.width) * dst.height);
     tbb::parallel_for(tbb::blocked_range<int>(0, dst.height, 16), [&](const tbb::blocked_range<int>& rows) {
       for (int y = rows.begin(); y < rows.end(); ++y)

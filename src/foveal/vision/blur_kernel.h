@@ -184,6 +184,14 @@ FOVEAL_HD FOVEAL_FORCE_INLINE void gather_pixel(const GatherView<Texel>& g, cons
 }
 
 // The preparation, per element, for both backends.
+// The size of the level above one of w × h texels (half, rounded up); false when w × h is too
+// small to halve (under 4 texels a side): the pyramid ends there.
+inline bool next_level(int* w, int* h) {
+  if (*w < 4 || *h < 4) return false;
+  *w = (*w + 1) / 2;
+  *h = (*h + 1) / 2;
+  return true;
+}
 // A texel of level l + 1: the mean of the 2×2 texels below (clamped at the odd edge).
 template <class Texel>
 FOVEAL_HD inline Texel box_average(const Texel* below, int bw, int bh, int x, int y) {
