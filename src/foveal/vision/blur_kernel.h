@@ -183,7 +183,6 @@ FOVEAL_HD FOVEAL_FORCE_INLINE void gather_pixel(const GatherView<Texel>& g, cons
   for (int c = 0; c < CH; ++c) dst[c] = sum[c] / total;
 }
 
-// The preparation, per element, for both backends.
 // The size of the level above one of w × h texels (half, rounded up); false when w × h is too
 // small to halve (under 4 texels a side): the pyramid ends there.
 inline bool next_level(int* w, int* h) {
@@ -192,6 +191,8 @@ inline bool next_level(int* w, int* h) {
   *h = (*h + 1) / 2;
   return true;
 }
+
+// The preparation, per element, for both backends.
 // A texel of level l + 1: the mean of the 2×2 texels below (clamped at the odd edge).
 template <class Texel>
 FOVEAL_HD inline Texel box_average(const Texel* below, int bw, int bh, int x, int y) {

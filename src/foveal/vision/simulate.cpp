@@ -166,9 +166,7 @@ class GpuPasses final : public VisionSimulation::Passes {
 
   void trace(const Camera& camera, int width, int height, float ambient) override {
     gpu_.trace(camera, width, height, ambient);
-    color_ = std::nullopt;
-    perceived_ = std::nullopt;
-    coc_ = std::nullopt;
+    color_ = std::nullopt;  // each pass drops the copy of what it changed
   }
   std::vector<Corner> corners(int threshold) override { return gpu_.corners(threshold, true); }
   float depth_at(int x, int y, glm::vec3* view) override { return gpu_.depth_at(x, y, view); }

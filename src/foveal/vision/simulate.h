@@ -68,11 +68,11 @@ class VisionSimulation {
   // The field (on the CPU; with params.cuda the GPU keeps its own and this one stays empty).
   const SharpnessField& field() const { return field_; }
   bool on_gpu() const { return params_.cuda; }
+  double pixels_per_degree() const { return ppd_; }  // the camera's, at the image centre (after a step)
 
   // One step's passes on one device (simulate.cpp: the CPU's, and gpu::VisionPasses behind the
   // same calls); step() runs the same sequence with either.
   class Passes;
-  double pixels_per_degree() const { return ppd_; }  // the camera's, at the image centre (after a step)
 
  private:
   // The per-pixel CoC of this step: the camera's axis, the fixation's ray, the accommodation
