@@ -67,6 +67,7 @@ struct FakePupil {
   zmq::socket_t remote{context, zmq::socket_type::rep};
   zmq::socket_t pub{context, zmq::socket_type::xpub};
   int remote_port = 0, pub_port = 0;
+  std::chrono::milliseconds pause{1};  // between messages; 0 sends a burst
   std::thread thread;
 
   FakePupil() {
@@ -97,7 +98,7 @@ struct FakePupil {
       for (const auto& [topic, payload] : messages) {
         pub.send(zmq::buffer(topic), zmq::send_flags::sndmore);
         pub.send(zmq::buffer(payload), zmq::send_flags::none);
-        std::this_thread::sleep_for(std::chrono::milliseconds(1));
+        if (pause.count() > 0) std::this_thread::sleep_for(pause);
       }
       if (hang_up) {
         pub.close();

@@ -191,7 +191,8 @@ struct PupilSource::Impl {
               pending.insert(pending.end(), decoded.begin(), decoded.end());
               last = std::chrono::steady_clock::now();
               any = true;
-              disconnected = false;
+              // Not `disconnected = false`: messages sent before a hang-up can be read after
+              // it; only the monitor's CONNECTED says the tracker is back
             }
           } else {
             const std::lock_guard lock(mutex);

@@ -100,6 +100,28 @@ TEST(Source, SurfaceGazeThenDisconnect) {
   EXPECT_LT(std::chrono::duration<double>(Clock::now() - start).count(), 0.1);
 }
 
+TEST(Source, HangUpBehindABurstStaysDisconnected) {
+  // The hang-up can be seen before the reader has drained the messages sent ahead of it; those
+  // messages must not make a tracker that has gone look connected again
+  FakePupil fake;
+  fake.pause = std::chrono::milliseconds(0);
+  std::vector<std::pair<std::string, std::string>> messages;
+  for (int i = 0; i < 900; ++i) messages.emplace_back("surfaces.screen", surface_gaze(0.5, 0.5, true, 0.001 * i));
+  fake.serve(messages, true, nullptr);
+  PupilSource source(fake.url("surface=screen&timeout=3"), {100, 100});
+  // The publisher's hang-up drops what it had not sent yet (linger 0): read until nothing more comes
+  std::vector<GazeSample> samples;
+  size_t seen = 0;
+  EXPECT_TRUE(eventually([&] {
+    source.poll(samples);
+    const bool quiet = !samples.empty() && samples.size() == seen && source.silent_s() > 0.3;
+    seen = samples.size();
+    return quiet;
+  }));
+  EXPECT_GT(samples.size(), 0u);
+  EXPECT_EQ(source.state(), SourceState::disconnected);
+}
+
 TEST(Source, WorldGazeSkipsMalformedAndTurnsStale) {
   FakePupil fake;
   fake.serve({{"gaze.3d.01.", world_gaze(0.5, 0.5, 0.9, 1.0)},
