@@ -172,43 +172,55 @@ struct PupilSource::Impl {
   size_t malformed = 0, received = 0;
   double stale_s = 0.5;
 
+  // One message from the subscriber, if one is there; false when none is.
+  bool read_one(glm::ivec2 screen, float min_confidence, std::vector<GazeSample>& decoded) {
+    std::vector<zmq::message_t> parts;
+    if (!zmq::recv_multipart(sub, std::back_inserter(parts), zmq::recv_flags::dontwait)) return false;
+    decoded.clear();
+    const bool ok = parts.size() >= 2 &&
+                    decode_pupil_message(parts[0].to_string(), parts[1].data(), parts[1].size(), screen, min_confidence, decoded);
+    const std::lock_guard lock(mutex);
+    ++received;
+    if (!ok) {
+      ++malformed;
+    } else {
+      pending.insert(pending.end(), decoded.begin(), decoded.end());
+      last = std::chrono::steady_clock::now();
+      any = true;
+    }
+    return true;
+  }
+
   void run(glm::ivec2 screen, float min_confidence) {
     zmq::pollitem_t items[] = {{sub.handle(), 0, ZMQ_POLLIN, 0}, {monitor.handle(), 0, ZMQ_POLLIN, 0}};
+    zmq::pollitem_t sub_only[] = {{sub.handle(), 0, ZMQ_POLLIN, 0}};
     std::vector<GazeSample> decoded;
     while (!stop.load()) {
       try {
         zmq::poll(items, 2, std::chrono::milliseconds(50));
-        if (items[0].revents & ZMQ_POLLIN) {
-          std::vector<zmq::message_t> parts;
-          if (zmq::recv_multipart(sub, std::back_inserter(parts), zmq::recv_flags::dontwait) && parts.size() >= 2) {
-            decoded.clear();
-            const bool ok = decode_pupil_message(parts[0].to_string(), parts[1].data(), parts[1].size(), screen, min_confidence, decoded);
-            const std::lock_guard lock(mutex);
-            ++received;
-            if (!ok) {
-              ++malformed;
-            } else {
-              pending.insert(pending.end(), decoded.begin(), decoded.end());
-              last = std::chrono::steady_clock::now();
-              any = true;
-              // Not `disconnected = false`: messages sent before a hang-up can be read after
-              // it; only the monitor's CONNECTED says the tracker is back
-            }
-          } else {
-            const std::lock_guard lock(mutex);
-            ++received;
-            ++malformed;
+        if (items[0].revents & ZMQ_POLLIN)
+          while (!stop.load() && read_one(screen, min_confidence, decoded)) {
           }
-        }
         if (items[1].revents & ZMQ_POLLIN) {
           std::vector<zmq::message_t> event;
           if (zmq::recv_multipart(monitor, std::back_inserter(event), zmq::recv_flags::dontwait) && !event.empty() &&
               event[0].size() >= sizeof(uint16_t)) {
             uint16_t id = 0;
             std::memcpy(&id, event[0].data(), sizeof id);
-            const std::lock_guard lock(mutex);
-            if (id == ZMQ_EVENT_DISCONNECTED) disconnected = true;
-            if (id == ZMQ_EVENT_CONNECTED) disconnected = false;
+            if (id == ZMQ_EVENT_DISCONNECTED) {
+              // What the tracker sent before it hung up is still on its way to this socket: read it
+              // all (until 50 ms pass without a message), so that a caller that sees
+              // `disconnected` and then polls has every sample
+              while (!stop.load() && zmq::poll(sub_only, 1, std::chrono::milliseconds(50)) > 0)
+                while (read_one(screen, min_confidence, decoded)) {
+                }
+              const std::lock_guard lock(mutex);
+              disconnected = true;
+            } else if (id == ZMQ_EVENT_CONNECTED) {
+              // Only this says the tracker is back: messages sent before a hang-up can be read after it
+              const std::lock_guard lock(mutex);
+              disconnected = false;
+            }
           }
         }
       } catch (const zmq::error_t&) {

@@ -30,6 +30,8 @@ class GazeSource {
   virtual ~GazeSource() = default;
   // Append the samples that arrived since the last call, in time order (never blocks).
   virtual void poll(std::vector<GazeSample>& out) = 0;
+  // disconnected and ended are reported only once every sample that came before them is in the
+  // buffer poll() hands over: a caller that sees either and then polls has them all.
   virtual SourceState state() const = 0;
   // Seconds since the last sample arrived (since the start when none has).
   virtual double silent_s() const = 0;

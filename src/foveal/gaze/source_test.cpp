@@ -100,26 +100,30 @@ TEST(Source, SurfaceGazeThenDisconnect) {
   EXPECT_LT(std::chrono::duration<double>(Clock::now() - start).count(), 0.1);
 }
 
-TEST(Source, HangUpBehindABurstStaysDisconnected) {
-  // The hang-up can be seen before the reader has drained the messages sent ahead of it; those
-  // messages must not make a tracker that has gone look connected again
+TEST(Source, HangUpBehindABurstComesAfterItsSamples) {
+  // The hang-up can be seen before the messages sent ahead of it are read: they must neither be
+  // lost to a caller that stops at `disconnected` nor make the tracker look connected again
   FakePupil fake;
   fake.pause = std::chrono::milliseconds(0);
   std::vector<std::pair<std::string, std::string>> messages;
   for (int i = 0; i < 900; ++i) messages.emplace_back("surfaces.screen", surface_gaze(0.5, 0.5, true, 0.001 * i));
   fake.serve(messages, true, nullptr);
   PupilSource source(fake.url("surface=screen&timeout=3"), {100, 100});
-  // The publisher's hang-up drops what it had not sent yet (linger 0): read until nothing more comes
+  // Once `disconnected` is reported, one poll hands over everything that came before the hang-up
+  // (the publisher's hang-up drops what it had not sent yet: linger 0)
+  // (watched without pauses, to catch the moment it turns)
+  const auto deadline = Clock::now() + std::chrono::seconds(5);
+  while (source.state() != SourceState::disconnected && Clock::now() < deadline) std::this_thread::yield();
+  ASSERT_EQ(source.state(), SourceState::disconnected);
   std::vector<GazeSample> samples;
-  size_t seen = 0;
-  EXPECT_TRUE(eventually([&] {
-    source.poll(samples);
-    const bool quiet = !samples.empty() && samples.size() == seen && source.silent_s() > 0.3;
-    seen = samples.size();
-    return quiet;
-  }));
+  source.poll(samples);
   EXPECT_GT(samples.size(), 0u);
+  const size_t handed_over = samples.size();
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  source.poll(samples);
+  EXPECT_EQ(samples.size(), handed_over) << "samples arrived after the hang-up was reported";
   EXPECT_EQ(source.state(), SourceState::disconnected);
+  for (size_t i = 0; i < samples.size(); ++i) EXPECT_DOUBLE_EQ(samples[i].t_s, 0.001 * i);  // in order, none lost between
 }
 
 TEST(Source, WorldGazeSkipsMalformedAndTurnsStale) {

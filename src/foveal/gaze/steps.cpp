@@ -112,6 +112,9 @@ std::optional<GazeStep> LiveSteps::next(double timeout_s) {
     if (!pending_.empty()) continue;
     const SourceState state = source_.state();
     if (state == SourceState::disconnected || state == SourceState::ended) {
+      // A source turns disconnected or ended only after handing over what it had: take it
+      source_.poll(pending_);
+      if (!pending_.empty()) continue;
       why_ = fmt::format("{}: {} after {} samples", source_.name(), to_string(state), samples_);
       return std::nullopt;
     }
