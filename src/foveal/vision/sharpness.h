@@ -11,6 +11,7 @@
 
 #include <glm/glm.hpp>
 
+#include <bit>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -18,7 +19,6 @@
 
 #if !defined(__CUDA_ARCH__)
 #include <atomic>
-#include <cstring>
 #endif
 
 namespace foveal {
@@ -77,25 +77,7 @@ struct ConcurrentFieldUpdate {
 
   // Non-negative floats order as their bits; zero of either sign is 0, NaN lies above infinity
   // (never kept, as on the CPU).
-  FOVEAL_HD static uint32_t order_bits(float v) {
-    if (v == 0.0f) return 0;
-#if defined(__CUDA_ARCH__)
-    return __float_as_uint(v);
-#else
-    uint32_t b;
-    std::memcpy(&b, &v, sizeof b);
-    return b;
-#endif
-  }
-  FOVEAL_HD static float from_bits(uint32_t b) {
-#if defined(__CUDA_ARCH__)
-    return __uint_as_float(b);
-#else
-    float v;
-    std::memcpy(&v, &b, sizeof v);
-    return v;
-#endif
-  }
+  FOVEAL_HD static uint32_t order_bits(float v) { return v == 0.0f ? 0 : std::bit_cast<uint32_t>(v); }
   FOVEAL_HD static void atomic_min(unsigned long long* p, unsigned long long v) {
 #if defined(__CUDA_ARCH__)
     atomicMin(p, v);
@@ -116,7 +98,7 @@ struct ConcurrentFieldUpdate {
   // Pass 2, every pixel, after all of pass 1: the cell's first pixel updates it; whether it did.
   FOVEAL_HD bool apply(const SharpnessFieldView& field, int64_t c, uint32_t pixel, uint32_t step) const {
     if (c < 0 || cell_owner[c] != key(pixel)) return false;
-    return field.update(c, from_bits(static_cast<uint32_t>(cell_min[c] & 0xffffffffULL)), step);
+    return field.update(c, std::bit_cast<float>(static_cast<uint32_t>(cell_min[c] & 0xffffffffULL)), step);
   }
 };
 
