@@ -190,6 +190,11 @@ struct PupilSource::Impl {
     }
     return true;
   }
+  // Every message there is now (until stopped).
+  void drain(glm::ivec2 screen, float min_confidence, std::vector<GazeSample>& decoded) {
+    while (!stop.load() && read_one(screen, min_confidence, decoded)) {
+    }
+  }
 
   void run(glm::ivec2 screen, float min_confidence) {
     zmq::pollitem_t items[] = {{sub.handle(), 0, ZMQ_POLLIN, 0}, {monitor.handle(), 0, ZMQ_POLLIN, 0}};
@@ -198,9 +203,7 @@ struct PupilSource::Impl {
     while (!stop.load()) {
       try {
         zmq::poll(items, 2, std::chrono::milliseconds(50));
-        if (items[0].revents & ZMQ_POLLIN)
-          while (!stop.load() && read_one(screen, min_confidence, decoded)) {
-          }
+        if (items[0].revents & ZMQ_POLLIN) drain(screen, min_confidence, decoded);
         if (items[1].revents & ZMQ_POLLIN) {
           std::vector<zmq::message_t> event;
           if (zmq::recv_multipart(monitor, std::back_inserter(event), zmq::recv_flags::dontwait) && !event.empty() &&
@@ -212,8 +215,7 @@ struct PupilSource::Impl {
               // all (until 50 ms pass without a message), so that a caller that sees
               // `disconnected` and then polls has every sample
               while (!stop.load() && zmq::poll(sub_only, 1, std::chrono::milliseconds(50)) > 0)
-                while (read_one(screen, min_confidence, decoded)) {
-                }
+                drain(screen, min_confidence, decoded);
               const std::lock_guard lock(mutex);
               disconnected = true;
             } else if (id == ZMQ_EVENT_CONNECTED) {
