@@ -8,6 +8,7 @@
 #include "foveal/util/parse.h"
 #include "foveal/util/stats.h"
 #include "foveal/io/image_io.h"
+#include "foveal/vision/features.h"
 #include "foveal/vision/simulate.h"
 #include "foveal/vision/thin_lens.h"
 
@@ -16,7 +17,9 @@
 
 #include <algorithm>
 #include <filesystem>
+#include <iterator>
 #include <memory>
+#include <tuple>
 
 namespace foveal::app {
 
@@ -122,36 +125,105 @@ std::function<int()> add_bench_blur_command(CLI::App& bench) {
 
 namespace {
 
-// Medians over the steps after the first (warm-up) of one case on one device, and what the
-// comparison of devices needs: the fixations, the last step's corners and perceived image.
-struct VisionCase {
+// Medians over the steps after the first (warm-up) of one case on one device.
+struct StageTimes {
   double trace = 0, features = 0, sharpness = 0, blur = 0, total = 0;
-  std::vector<glm::vec2> fixations;
-  std::vector<Corner> corners;
-  Image perceived;
 };
 
-VisionCase run_vision_case(const Tracer& tracer, const Scene& scene, const Camera& camera, const SimulateParams& p, int steps) {
-  VisionSimulation sim(tracer, scene, p);
+// Collects one device's step timings and gives their medians.
+struct StageSeries {
   std::vector<double> trace, features, sharpness, blur, total;
-  VisionCase c;
-  for (int k = 0; k < steps; ++k) {
-    const StepStats s = sim.step(camera);
-    c.fixations.push_back(s.focus_px);
-    if (k == 0) continue;  // warm-up
+  void add(const StepStats& s) {
     trace.push_back(s.trace_ms);
     features.push_back(s.features_ms);
     sharpness.push_back(s.sharpness_ms);
     blur.push_back(s.blur_ms);
     total.push_back(s.total_ms);
   }
-  c.trace = median(trace);
-  c.features = median(features);
-  c.sharpness = median(sharpness);
-  c.blur = median(blur);
-  c.total = median(total);
-  c.corners = sim.corners();
-  c.perceived = sim.perceived();
+  StageTimes medians() const { return {median(trace), median(features), median(sharpness), median(blur), median(total)}; }
+};
+
+// How far two devices' free-running simulations of one case agree. Each device draws its own
+// saccades from the same seed, so the chains stay the same while the corners do; the first step
+// whose corners differ says why (how many of the FAST image's grey pixels differ).
+struct Agreement {
+  int steps = 0;
+  int same_fixations = 0;           // leading steps whose fixations are identical
+  int first_corner_difference = 0;  // the first step whose corners differ (0: none did)
+  size_t grey_px_differing = 0;     // … and at that step: grey pixels that differ, of grey_px
+  size_t grey_px = 0;
+  size_t corners_differing = 0;     // corners of one device only (of corners_total on the GPU)
+  size_t corners_total = 0;
+  double perceived_mean_abs_diff = 0;  // the largest per-step mean while the fixations are identical
+};
+
+bool same_corners(const std::vector<Corner>& a, const std::vector<Corner>& b) {
+  return std::equal(a.begin(), a.end(), b.begin(), b.end(),
+                    [](const Corner& l, const Corner& r) { return l.px == r.px && l.score == r.score; });
+}
+
+// Corners found by one device and not by the other (both lists are sorted by row, then column).
+size_t corners_of_one(const std::vector<Corner>& a, const std::vector<Corner>& b) {
+  auto key = [](const Corner& c) { return std::tuple(c.px.y, c.px.x, c.score); };
+  std::vector<std::tuple<float, float, float>> ka, kb, only;
+  for (const Corner& c : a) ka.push_back(key(c));
+  for (const Corner& c : b) kb.push_back(key(c));
+  std::sort(ka.begin(), ka.end());
+  std::sort(kb.begin(), kb.end());
+  std::set_symmetric_difference(ka.begin(), ka.end(), kb.begin(), kb.end(), std::back_inserter(only));
+  return only.size();
+}
+
+double mean_abs_diff(const Image& a, const Image& b) {
+  double diff = 0;
+  for (size_t i = 0; i < a.pixels.size(); ++i) diff += std::abs(a.pixels[i] - b.pixels[i]);
+  return diff / double(std::max<size_t>(1, a.pixels.size()));
+}
+
+// One case: the steps of `p` (on its device); with `compare`, the same case on the CPU step for
+// step beside it, for the ratio and the agreement.
+struct VisionCase {
+  StageTimes times, cpu;
+  Agreement agreement;
+};
+
+VisionCase run_vision_case(const Tracer& tracer, const Scene& scene, const Camera& camera, const SimulateParams& p, int steps,
+                           bool compare) {
+  VisionSimulation sim(tracer, scene, p);
+  std::unique_ptr<VisionSimulation> cpu;
+  if (compare) {
+    SimulateParams q = p;
+    q.cuda = false;
+    cpu = std::make_unique<VisionSimulation>(tracer, scene, q);
+  }
+  StageSeries own, other;
+  VisionCase c;
+  bool fixations_same = true;
+  for (int k = 0; k < steps; ++k) {
+    const StepStats s = sim.step(camera);
+    if (k > 0) own.add(s);  // the first is the warm-up
+    if (!cpu) continue;
+    const StepStats t = cpu->step(camera);
+    if (k > 0) other.add(t);
+    Agreement& g = c.agreement;
+    g.steps = k + 1;
+    if (!fixations_same) continue;  // the chains have parted: nothing more to compare
+    // This step's fixation is drawn among this step's corners: compare them first
+    if (g.first_corner_difference == 0 && !same_corners(sim.corners(), cpu->corners())) {
+      g.first_corner_difference = k + 1;
+      const std::vector<uint8_t> ga = grey_8bit(sim.color()), gb = grey_8bit(cpu->color());
+      g.grey_px = ga.size();
+      for (size_t i = 0; i < ga.size(); ++i) g.grey_px_differing += ga[i] != gb[i];
+      g.corners_differing = corners_of_one(sim.corners(), cpu->corners());
+      g.corners_total = sim.corners().size();
+    }
+    fixations_same = s.focus_px == t.focus_px;
+    if (!fixations_same) continue;
+    ++g.same_fixations;
+    g.perceived_mean_abs_diff = std::max(g.perceived_mean_abs_diff, mean_abs_diff(sim.perceived(), cpu->perceived()));
+  }
+  c.times = own.medians();
+  if (cpu) c.cpu = other.medians();
   return c;
 }
 
@@ -192,8 +264,8 @@ std::function<int()> add_bench_vision_command(CLI::App& bench) {
     }
     const EyeParams eye = parse_eye_preset(o->eye);
     nlohmann::json rows = nlohmann::json::array();
-    std::string md = cuda ? std::string("| scene | size | device | trace ms | features ms | sharpness ms | blur ms | step ms | CPU step ms | CPU / GPU | same fixations | perceived mean abs diff |\n"
-                                        "|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n")
+    std::string md = cuda ? std::string("| scene | size | device | trace ms | features ms | sharpness ms | blur ms | step ms | CPU step ms | CPU / GPU | same fixations | corners first differ at step | perceived mean abs diff |\n"
+                                        "|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n")
                           : std::string("| scene | size | trace ms | features ms | sharpness ms | blur ms | total ms | (features+sharpness+blur) / trace |\n"
                                         "|---|---|---:|---:|---:|---:|---:|---:|\n");
     fmt::print("foveal bench vision: {} steps per case (median of steps 2…), features every step, eye {}, {} threads\n", o->steps,
@@ -212,7 +284,8 @@ std::function<int()> add_bench_vision_command(CLI::App& bench) {
         p.seed = o->seed;
         p.features_every_step = true;  // the paper's timing: corners every step
         p.cuda = cuda;
-        const VisionCase c = run_vision_case(tracer, scene, camera, p, o->steps);
+        const VisionCase vc = run_vision_case(tracer, scene, camera, p, o->steps, cuda);
+        const StageTimes& c = vc.times;
         const double ratio = c.trace > 0 ? (c.features + c.sharpness + c.blur) / c.trace : 0;
         fmt::print("  {:<28} {:>9}  trace {:6.2f}  features {:6.2f}  sharpness {:6.2f}  blur {:6.2f}  total {:6.2f} ms  (rest/trace {:.2f})\n",
                    scene.source, size_text, c.trace, c.features, c.sharpness, c.blur, c.total, ratio);
@@ -224,26 +297,37 @@ std::function<int()> add_bench_vision_command(CLI::App& bench) {
           md += fmt::format("| {} | {} | {:.1f} | {:.1f} | {:.1f} | {:.1f} | {:.1f} | {:.2f} |\n", scene.source, size_text, c.trace,
                             c.features, c.sharpness, c.blur, c.total, ratio);
         } else {
-          // The same case on the CPU, in the same run: the ratio, and how far the devices agree
-          p.cuda = false;
-          const VisionCase cpu = run_vision_case(tracer, scene, camera, p, o->steps);
-          size_t same = 0;
-          for (size_t k = 0; k < c.fixations.size(); ++k) same += c.fixations[k] == cpu.fixations[k];
-          double diff = 0;
-          for (size_t i = 0; i < c.perceived.pixels.size(); ++i) diff += std::abs(c.perceived.pixels[i] - cpu.perceived.pixels[i]);
-          diff /= std::max<size_t>(1, c.perceived.pixels.size());
+          // The same case on the CPU, step for step in the same run: the ratio, and how far the devices agree
+          const StageTimes& cpu = vc.cpu;
+          const Agreement& g = vc.agreement;
           const double speedup = c.total > 0 ? cpu.total / c.total : 0;
-          fmt::print("  {:<28} {:>9}  CPU: trace {:6.2f}  features {:6.2f}  sharpness {:6.2f}  blur {:6.2f}  total {:6.2f} ms  → GPU {:.1f}× faster; "
-                     "fixations identical at {}/{} steps, perceived mean |diff| {:.2e}\n",
-                     "", "", cpu.trace, cpu.features, cpu.sharpness, cpu.blur, cpu.total, speedup, same, c.fixations.size(), diff);
+          const std::string parted =
+              g.first_corner_difference == 0
+                  ? std::string("the corners identical at every step")
+                  : fmt::format("the corners first differ at step {} ({} of {} corners; {} of {} grey pixels differ)", g.first_corner_difference,
+                                g.corners_differing, g.corners_total, g.grey_px_differing, g.grey_px);
+          fmt::print("  {:<28} {:>9}  CPU: trace {:6.2f}  features {:6.2f}  sharpness {:6.2f}  blur {:6.2f}  total {:6.2f} ms  → GPU {:.1f}× faster\n"
+                     "  {:<28} {:>9}  same fixations for {}/{} steps, {}; perceived mean |diff| ≤ {:.2e} while the same\n",
+                     "", "", cpu.trace, cpu.features, cpu.sharpness, cpu.blur, cpu.total, speedup, "", "", g.same_fixations, g.steps, parted,
+                     g.perceived_mean_abs_diff);
           row["cpu"] = {{"time_ms", {{"trace", cpu.trace}, {"features", cpu.features}, {"sharpness", cpu.sharpness}, {"blur", cpu.blur}, {"total", cpu.total}}},
                         {"threads", threads.threads()}};
           row["cpu_over_gpu"] = speedup;
-          row["agreement"] = {{"same_fixations", same}, {"steps", c.fixations.size()}, {"corners_gpu", c.corners.size()},
-                              {"corners_cpu", cpu.corners.size()}, {"perceived_mean_abs_diff", diff}};
-          md += fmt::format("| {} | {} | {} | {:.2f} | {:.2f} | {:.2f} | {:.2f} | {:.2f} | {:.1f} | {:.1f} | {}/{} | {:.1e} |\n", scene.source, size_text,
-                            gpu::availability().name, c.trace, c.features, c.sharpness, c.blur, c.total, cpu.total, speedup, same,
-                            c.fixations.size(), diff);
+          row["agreement"] = {{"steps", g.steps},
+                              {"same_fixations", g.same_fixations},
+                              {"first_corner_difference_step", g.first_corner_difference},
+                              {"corners_differing", g.corners_differing},
+                              {"corners_gpu", g.corners_total},
+                              {"grey_px_differing", g.grey_px_differing},
+                              {"grey_px", g.grey_px},
+                              {"perceived_mean_abs_diff", g.perceived_mean_abs_diff}};
+          const std::string first = g.first_corner_difference == 0
+                                        ? std::string("–")
+                                        : fmt::format("{} ({}/{} corners, {} grey px)", g.first_corner_difference, g.corners_differing,
+                                                      g.corners_total, g.grey_px_differing);
+          md += fmt::format("| {} | {} | {} | {:.2f} | {:.2f} | {:.2f} | {:.2f} | {:.2f} | {:.1f} | {:.1f} | {}/{} | {} | {:.1e} |\n", scene.source,
+                            size_text, gpu::availability().name, c.trace, c.features, c.sharpness, c.blur, c.total, cpu.total, speedup,
+                            g.same_fixations, g.steps, first, g.perceived_mean_abs_diff);
         }
         rows.push_back(row);
       }

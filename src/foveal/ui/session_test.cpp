@@ -1,6 +1,7 @@
 // The viewer's session and overlays, without a window: every shown pixel comes from the library's
 // render and simulation functions, the gaze pipeline follows the mouse, overlays sit where the
 // foveation model says.
+#include "foveal/cuda/gpu.h"
 #include "foveal/io/plot.h"
 #include "foveal/ui/overlays.h"
 #include "foveal/ui/session.h"
@@ -247,6 +248,41 @@ TEST(ViewSession, BadSettingsAreRefusedWithTheReason) {
   }
   EXPECT_EQ(to_string(parse_overlays("all")), "gaze,contours,budget,scanpath,sharp");
   EXPECT_EQ(to_string(parse_overlays("none")), "none");
+}
+
+// The view on the GPU (`--device cuda`): the finished panes are the GPU renderer's frames and a
+// vision step is the GPU simulation's step. Skipped where no GPU is usable.
+TEST(Gpu, ViewShowsTheGpusFramesAndVisionSteps) {
+  if (!gpu::availability().usable) GTEST_SKIP() << "skipped: " << gpu::availability().reason;
+  const Camera camera = default_camera(box());
+  ViewSettings s = small_settings(ViewMode::side_by_side);
+  s.cuda = true;
+  ViewSession session(box(), box_tracer(), camera, s, fixed({120, 30}));
+  ASSERT_TRUE(session.wait_until_converged(120, kNone));
+  gpu::Renderer renderer(box());
+  RenderParams p = s.render;
+  p.gaze_px = glm::dvec2(120, 30);
+  const Frame foveated = renderer.render(camera, p);
+  p.mode = RenderMode::full;
+  const Frame reference = renderer.render(camera, p);
+  ASSERT_EQ(session.image().width, 3 * s.render.width);
+  EXPECT_EQ(differing(session.image(), 0, to_rgba8(foveated.color)), 0u);
+  EXPECT_EQ(differing(session.image(), s.render.width, to_rgba8(reference.color)), 0u);
+  EXPECT_EQ(session.status().ao_rays, reference.stats.ao_rays);
+
+  ViewSettings v = small_settings(ViewMode::vision);
+  v.vision.eye.pupil_diameter_mm = 8;
+  v.cuda = true;
+  ViewSession vision(box(), box_tracer(), camera, v, fixed({40, 50}));
+  ASSERT_TRUE(vision.wait_until_converged(120, kNone));
+  resolve(v);
+  SimulateParams vp = v.vision;
+  vp.cuda = true;
+  VisionSimulation sim(box_tracer(), box(), vp);
+  const StepStats step = sim.step(camera, glm::vec2(40, 50));
+  EXPECT_EQ(differing(vision.image(), 0, to_rgba8(sim.perceived())), 0u);
+  ASSERT_TRUE(vision.status().step.has_value());
+  EXPECT_DOUBLE_EQ(vision.status().step->sharp_fraction, step.sharp_fraction);
 }
 
 TEST(Overlays, GridFillIsTheInterpolatedQuality) {
