@@ -8,6 +8,8 @@
 #include "foveal/util/parse.h"
 #include "foveal/util/stats.h"
 #include "foveal/io/image_io.h"
+#include "foveal/render/pixel.h"
+#include "foveal/trace/tracer.h"
 #include "foveal/vision/features.h"
 #include "foveal/vision/simulate.h"
 #include "foveal/vision/thin_lens.h"
@@ -19,6 +21,7 @@
 #include <filesystem>
 #include <iterator>
 #include <memory>
+#include <span>
 #include <tuple>
 
 namespace foveal::app {
@@ -180,6 +183,27 @@ double mean_abs_diff(const Image& a, const Image& b) {
   return diff / double(std::max<size_t>(1, a.pixels.size()));
 }
 
+// The primary rays of a w×h image in 16×8 tiles, the order in which the GPU's trace pass groups
+// them (and coherent runs for Embree's streams): the rays of the raw-tracing baselines.
+std::vector<Ray> primary_rays_in_tiles(const Camera& camera, int w, int h) {
+  const CameraRays ray(camera, w, h);
+  std::vector<Ray> rays;
+  rays.reserve(static_cast<size_t>(w) * h);
+  for (int ty = 0; ty < h; ty += 8)
+    for (int tx = 0; tx < w; tx += 16)
+      for (int y = ty; y < std::min(h, ty + 8); ++y)
+        for (int x = tx; x < std::min(w, tx + 16); ++x) rays.push_back(ray(x + 0.5, y + 0.5));
+  return rays;
+}
+
+// Raw Embree closest-hit rays per second on `rays`: the median of three runs after a warm-up.
+double raw_embree_rate(const Tracer& tracer, std::span<const Ray> rays) {
+  measure_raw_intersection(tracer, rays);
+  std::vector<double> rates;
+  for (int k = 0; k < 3; ++k) rates.push_back(measure_raw_intersection(tracer, rays).rays_per_second);
+  return median(rates);
+}
+
 // One case: the steps of `p` (on its device); with `compare`, the same case on the CPU step for
 // step beside it, for the ratio and the agreement.
 struct VisionCase {
@@ -264,10 +288,11 @@ std::function<int()> add_bench_vision_command(CLI::App& bench) {
     }
     const EyeParams eye = parse_eye_preset(o->eye);
     nlohmann::json rows = nlohmann::json::array();
-    std::string md = cuda ? std::string("| scene | size | device | trace ms | features ms | sharpness ms | blur ms | step ms | CPU step ms | CPU / GPU | same fixations | corners first differ at step | perceived mean abs diff |\n"
-                                        "|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n")
-                          : std::string("| scene | size | trace ms | features ms | sharpness ms | blur ms | total ms | (features+sharpness+blur) / trace |\n"
-                                        "|---|---|---:|---:|---:|---:|---:|---:|\n");
+    std::string md = cuda ? std::string("| scene | size | device | trace ms | features ms | sharpness ms | blur ms | step ms | CPU step ms | CPU / GPU | GPU trace / raw | CPU trace / raw | same fixations | corners first differ at step | perceived mean abs diff |\n"
+                                        "|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n")
+                          : std::string("| scene | size | trace ms | features ms | sharpness ms | blur ms | total ms | (features+sharpness+blur) / trace | "
+                                        "trace / raw Embree |\n"
+                                        "|---|---|---:|---:|---:|---:|---:|---:|---:|\n");
     fmt::print("foveal bench vision: {} steps per case (median of steps 2…), features every step, eye {}, {} threads\n", o->steps,
                o->eye, threads.threads());
     fmt::print("  device   {}\n", gpu::describe_device(device));
@@ -275,6 +300,8 @@ std::function<int()> add_bench_vision_command(CLI::App& bench) {
       const Scene scene = load_scene(spec);
       const Tracer tracer(scene);
       const Camera camera = !scene.cameras.empty() ? scene.cameras.front() : default_camera(scene);
+      std::unique_ptr<gpu::Renderer> raw_gpu;  // the GPU's raw closest-hit baseline (its own copy of the scene)
+      if (cuda) raw_gpu = std::make_unique<gpu::Renderer>(scene);
       for (const std::string& size_text : o->sizes) {
         const glm::ivec2 size = parse_size("--size", size_text);
         SimulateParams p;
@@ -287,31 +314,47 @@ std::function<int()> add_bench_vision_command(CLI::App& bench) {
         const VisionCase vc = run_vision_case(tracer, scene, camera, p, o->steps, cuda);
         const StageTimes& c = vc.times;
         const double ratio = c.trace > 0 ? (c.features + c.sharpness + c.blur) / c.trace : 0;
-        fmt::print("  {:<28} {:>9}  trace {:6.2f}  features {:6.2f}  sharpness {:6.2f}  blur {:6.2f}  total {:6.2f} ms  (rest/trace {:.2f})\n",
-                   scene.source, size_text, c.trace, c.features, c.sharpness, c.blur, c.total, ratio);
+        // The trace stage's primary-ray rate against raw closest-hit tracing of the same rays
+        const std::vector<Ray> rays = primary_rays_in_tiles(camera, size.x, size.y);
+        auto rate = [&](double ms) { return ms > 0 ? rays.size() / (ms * 1e-3) : 0.0; };
+        const double raw_cpu = raw_embree_rate(tracer, rays);
+        const double raw = cuda ? raw_gpu->measure_intersection_rate(rays, 5) : raw_cpu;
+        const double trace_vs_raw = raw > 0 ? rate(c.trace) / raw : 0;
+        fmt::print("  {:<28} {:>9}  trace {:6.2f}  features {:6.2f}  sharpness {:6.2f}  blur {:6.2f}  total {:6.2f} ms  (rest/trace {:.2f})\n"
+                   "  {:<28} {:>9}  trace {:.0f} Mrays/s = {:.2f} of raw {} closest-hit tracing of the same rays ({:.0f} Mrays/s)\n",
+                   scene.source, size_text, c.trace, c.features, c.sharpness, c.blur, c.total, ratio, "", "", rate(c.trace) / 1e6, trace_vs_raw,
+                   cuda ? "GPU" : "Embree", raw / 1e6);
         nlohmann::json row = {{"scene", scene.source}, {"triangles", tracer.triangles()}, {"size", size_text}, {"steps", o->steps - 1},
                               {"device", gpu::to_string(device)},
                               {"time_ms", {{"trace", c.trace}, {"features", c.features}, {"sharpness", c.sharpness}, {"blur", c.blur}, {"total", c.total}}},
-                              {"non_tracing_over_trace", ratio}};
+                              {"non_tracing_over_trace", ratio},
+                              {"trace_rays_per_second", rate(c.trace)},
+                              {"raw_closest_hit_rays_per_second", raw},
+                              {"trace_over_raw", trace_vs_raw}};
         if (!cuda) {
-          md += fmt::format("| {} | {} | {:.1f} | {:.1f} | {:.1f} | {:.1f} | {:.1f} | {:.2f} |\n", scene.source, size_text, c.trace,
-                            c.features, c.sharpness, c.blur, c.total, ratio);
+          md += fmt::format("| {} | {} | {:.1f} | {:.1f} | {:.1f} | {:.1f} | {:.1f} | {:.2f} | {:.2f} |\n", scene.source, size_text, c.trace,
+                            c.features, c.sharpness, c.blur, c.total, ratio, trace_vs_raw);
         } else {
           // The same case on the CPU, step for step in the same run: the ratio, and how far the devices agree
           const StageTimes& cpu = vc.cpu;
           const Agreement& g = vc.agreement;
           const double speedup = c.total > 0 ? cpu.total / c.total : 0;
+          const double cpu_trace_vs_raw = raw_cpu > 0 ? rate(cpu.trace) / raw_cpu : 0;
           const std::string parted =
               g.first_corner_difference == 0
                   ? std::string("the corners identical at every step")
                   : fmt::format("the corners first differ at step {} ({} of {} corners; {} of {} grey pixels differ)", g.first_corner_difference,
                                 g.corners_differing, g.corners_total, g.grey_px_differing, g.grey_px);
           fmt::print("  {:<28} {:>9}  CPU: trace {:6.2f}  features {:6.2f}  sharpness {:6.2f}  blur {:6.2f}  total {:6.2f} ms  → GPU {:.1f}× faster\n"
+                     "  {:<28} {:>9}  CPU: trace {:.0f} Mrays/s = {:.2f} of raw Embree closest-hit tracing of the same rays ({:.0f} Mrays/s)\n"
                      "  {:<28} {:>9}  same fixations for {}/{} steps, {}; perceived mean |diff| ≤ {:.2e} while the same\n",
-                     "", "", cpu.trace, cpu.features, cpu.sharpness, cpu.blur, cpu.total, speedup, "", "", g.same_fixations, g.steps, parted,
-                     g.perceived_mean_abs_diff);
+                     "", "", cpu.trace, cpu.features, cpu.sharpness, cpu.blur, cpu.total, speedup, "", "", rate(cpu.trace) / 1e6, cpu_trace_vs_raw,
+                     raw_cpu / 1e6, "", "", g.same_fixations, g.steps, parted, g.perceived_mean_abs_diff);
           row["cpu"] = {{"time_ms", {{"trace", cpu.trace}, {"features", cpu.features}, {"sharpness", cpu.sharpness}, {"blur", cpu.blur}, {"total", cpu.total}}},
-                        {"threads", threads.threads()}};
+                        {"threads", threads.threads()},
+                        {"trace_rays_per_second", rate(cpu.trace)},
+                        {"raw_closest_hit_rays_per_second", raw_cpu},
+                        {"trace_over_raw", cpu_trace_vs_raw}};
           row["cpu_over_gpu"] = speedup;
           row["agreement"] = {{"steps", g.steps},
                               {"same_fixations", g.same_fixations},
@@ -325,9 +368,9 @@ std::function<int()> add_bench_vision_command(CLI::App& bench) {
                                         ? std::string("–")
                                         : fmt::format("{} ({}/{} corners, {} grey px)", g.first_corner_difference, g.corners_differing,
                                                       g.corners_total, g.grey_px_differing);
-          md += fmt::format("| {} | {} | {} | {:.2f} | {:.2f} | {:.2f} | {:.2f} | {:.2f} | {:.1f} | {:.1f} | {}/{} | {} | {:.1e} |\n", scene.source,
-                            size_text, gpu::availability().name, c.trace, c.features, c.sharpness, c.blur, c.total, cpu.total, speedup,
-                            g.same_fixations, g.steps, first, g.perceived_mean_abs_diff);
+          md += fmt::format("| {} | {} | {} | {:.2f} | {:.2f} | {:.2f} | {:.2f} | {:.2f} | {:.1f} | {:.1f} | {:.2f} | {:.2f} | {}/{} | {} | {:.1e} |\n",
+                            scene.source, size_text, gpu::availability().name, c.trace, c.features, c.sharpness, c.blur, c.total, cpu.total,
+                            speedup, trace_vs_raw, cpu_trace_vs_raw, g.same_fixations, g.steps, first, g.perceived_mean_abs_diff);
         }
         rows.push_back(row);
       }

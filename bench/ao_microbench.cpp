@@ -52,7 +52,7 @@ void BM_RawEmbreeOcclusion(benchmark::State& state) {
   Setup& s = setup();
   const auto api = static_cast<TraceApi>(state.range(0));
   for (auto _ : state) {
-    const RawOcclusionResult r = measure_raw_occlusion(s.tracer, s.rays, api);
+    const RawTraceResult r = measure_raw_occlusion(s.tracer, s.rays, api);
     state.SetIterationTime(r.seconds);
   }
   state.SetItemsProcessed(static_cast<int64_t>(state.iterations() * s.rays.size()));

@@ -88,6 +88,8 @@ class Renderer {
   void occluded(std::span<const Ray> rays, std::span<uint8_t> occluded);
   // Occlusion rays per second on the given rays (already on the GPU when the clock starts).
   double measure_occlusion_rate(std::span<const Ray> rays, int repeats = 5);
+  // Closest-hit rays per second on the given rays, likewise (the baseline of a primary-ray pass).
+  double measure_intersection_rate(std::span<const Ray> rays, int repeats = 5);
 
   struct Impl;
 

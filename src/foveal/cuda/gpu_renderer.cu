@@ -470,28 +470,48 @@ void Renderer::occluded(std::span<const Ray> rays, std::span<uint8_t> occluded) 
   m.raw_occluded.download(occluded.data(), rays.size());
 }
 
-double Renderer::measure_occlusion_rate(std::span<const Ray> rays, int repeats) {
-  Impl& m = *impl_;
-  if (rays.empty()) return 0;
-  m.raw_rays.upload(rays.data(), rays.size());
-  m.raw_occluded.reserve(rays.size());
-  PassEvents& ev = m.events;
-  occluded_kernel<<<blocks_for(rays.size(), 128), 128>>>(m.bvh_view(), m.raw_rays.get(), m.raw_occluded.get(),
-                                                         rays.size());  // warm-up
-  FOVEAL_CUDA_LAUNCHED("occluded");
+namespace {
+
+// Rays per second of `launch` over `rays` rays already on the GPU: the median of `repeats` timed
+// launches after a warm-up, CUDA events around each.
+template <class Launch>
+double median_rate(PassEvents& ev, size_t rays, int repeats, const Launch& launch) {
+  launch();  // warm-up
   std::vector<double> times;
   for (int r = 0; r < std::max(1, repeats); ++r) {
     ev.record(0);
-    occluded_kernel<<<blocks_for(rays.size(), 128), 128>>>(m.bvh_view(), m.raw_rays.get(), m.raw_occluded.get(),
-                                                           rays.size());
-    FOVEAL_CUDA_LAUNCHED("occluded");
+    launch();
     ev.record(1);
     FOVEAL_CUDA_CHECK(cudaEventSynchronize(ev.e[1]));
     times.push_back(ev.ms(0, 1));
   }
   std::sort(times.begin(), times.end());
   const double median_ms = times[times.size() / 2];
-  return median_ms > 0 ? static_cast<double>(rays.size()) / (median_ms * 1e-3) : 0.0;
+  return median_ms > 0 ? static_cast<double>(rays) / (median_ms * 1e-3) : 0.0;
+}
+
+}  // namespace
+
+double Renderer::measure_occlusion_rate(std::span<const Ray> rays, int repeats) {
+  Impl& m = *impl_;
+  if (rays.empty()) return 0;
+  m.raw_rays.upload(rays.data(), rays.size());
+  m.raw_occluded.reserve(rays.size());
+  return median_rate(m.events, rays.size(), repeats, [&] {
+    occluded_kernel<<<blocks_for(rays.size(), 128), 128>>>(m.bvh_view(), m.raw_rays.get(), m.raw_occluded.get(), rays.size());
+    FOVEAL_CUDA_LAUNCHED("occluded");
+  });
+}
+
+double Renderer::measure_intersection_rate(std::span<const Ray> rays, int repeats) {
+  Impl& m = *impl_;
+  if (rays.empty()) return 0;
+  m.raw_rays.upload(rays.data(), rays.size());
+  m.raw_hits.reserve(rays.size());
+  return median_rate(m.events, rays.size(), repeats, [&] {
+    intersect_kernel<<<blocks_for(rays.size(), 128), 128>>>(m.bvh_view(), m.raw_rays.get(), m.raw_hits.get(), rays.size());
+    FOVEAL_CUDA_LAUNCHED("intersect");
+  });
 }
 
 }  // namespace foveal::gpu

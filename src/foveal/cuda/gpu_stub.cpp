@@ -30,6 +30,7 @@ const Bvh& Renderer::bvh() const { fail("no CUDA backend"); }
 void Renderer::intersect(std::span<const Ray>, std::span<Hit>) { fail("no CUDA backend"); }
 void Renderer::occluded(std::span<const Ray>, std::span<uint8_t>) { fail("no CUDA backend"); }
 double Renderer::measure_occlusion_rate(std::span<const Ray>, int) { fail("no CUDA backend"); }
+double Renderer::measure_intersection_rate(std::span<const Ray>, int) { fail("no CUDA backend"); }
 
 struct VisionPasses::Impl {};
 

@@ -174,6 +174,7 @@ TEST(Gpu, RawTracingMatchesTheSharedTraversalOnTheCpu) {
   EXPECT_GE(same, rays.size() * 9995 / 10000);
   EXPECT_GE(same_occ, rays.size() * 9995 / 10000);
   EXPECT_GT(renderer.measure_occlusion_rate(rays, 3), 0);
+  EXPECT_GT(renderer.measure_intersection_rate(rays, 3), 0);
 }
 
 // ---- The second paper's passes ---------------------------------------------------------------

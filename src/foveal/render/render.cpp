@@ -112,37 +112,39 @@ float surface_epsilon(const Bounds& bounds) { return std::max(1e-9f, 1e-6f * bou
 
 namespace {
 
-// Trace one ray per pixel, made by `ray_for(x, y)`, into a G-buffer.
+// Trace one ray per pixel, made by `ray_for(x, y)`, into a G-buffer, reusing its memory. Every
+// pixel is written in the parallel loop (misses too), so nothing is cleared on one thread first.
 template <class RayFor>
-GBuffer trace_into_gbuffer(const Tracer& tracer, const Scene& scene, int width, int height, const RayFor& ray_for) {
-  GBuffer g;
+void trace_into_gbuffer(const Tracer& tracer, const Scene& scene, int width, int height, const RayFor& ray_for, GBuffer& g) {
   g.width = width;
   g.height = height;
   const size_t n = static_cast<size_t>(width) * height;
-  g.prim.assign(n, Hit::kNoHit);
-  g.position.assign(n, glm::vec3(0.0f));
-  g.normal.assign(n, glm::vec3(0.0f));
-  g.geo_normal.assign(n, glm::vec3(0.0f));
-  g.albedo.assign(n, glm::vec3(0.0f));
-  g.depth.assign(n, std::numeric_limits<float>::infinity());
-  g.view.assign(n, glm::vec3(0.0f));
+  for (auto* v : {&g.position, &g.normal, &g.geo_normal, &g.albedo, &g.view}) v->resize(n);
+  g.prim.resize(n);
+  g.depth.resize(n);
   std::vector<MaterialView> materials;
   std::vector<TextureView> textures;
   const SceneView view = scene_view(scene, materials, textures);
   for_each_tile(width, height, [&](int x0, int x1, int y0, int y1) {
     Ray rays[kTile * kTile];
     Hit hits[kTile * kTile];
-    for (int y = y0; y < y1; ++y) {
-      // One row of the tile at a time: coherent rays, one tracer call
-      const int count = x1 - x0;
-      for (int x = x0; x < x1; ++x) rays[x - x0] = ray_for(x, y);
-      tracer.intersect({rays, static_cast<size_t>(count)}, {hits, static_cast<size_t>(count)});
-      for (int x = x0; x < x1; ++x) {
+    // The whole tile in one tracer call: coherent rays, in streams as long as the tile
+    const int count = (x1 - x0) * (y1 - y0);
+    for (int y = y0, k = 0; y < y1; ++y)
+      for (int x = x0; x < x1; ++x, ++k) rays[k] = ray_for(x, y);
+    tracer.intersect({rays, static_cast<size_t>(count)}, {hits, static_cast<size_t>(count)});
+    for (int y = y0, k = 0; y < y1; ++y) {
+      for (int x = x0; x < x1; ++x, ++k) {
         const size_t i = static_cast<size_t>(y) * width + x;
-        const Hit& h = hits[x - x0];
-        g.view[i] = rays[x - x0].dir;
-        if (!h.valid()) continue;
-        const Surface surface = surface_at(view, h, rays[x - x0].dir);
+        const Hit& h = hits[k];
+        g.view[i] = rays[k].dir;
+        if (!h.valid()) {
+          g.prim[i] = Hit::kNoHit;
+          g.depth[i] = std::numeric_limits<float>::infinity();
+          g.position[i] = g.geo_normal[i] = g.normal[i] = g.albedo[i] = glm::vec3(0.0f);
+          continue;
+        }
+        const Surface surface = surface_at(view, h, rays[k].dir);
         g.prim[i] = h.prim;
         g.depth[i] = h.t;
         g.position[i] = surface.position;
@@ -152,18 +154,25 @@ GBuffer trace_into_gbuffer(const Tracer& tracer, const Scene& scene, int width, 
       }
     }
   });
-  return g;
 }
 
 }  // namespace
 
 GBuffer trace_primary(const Tracer& tracer, const Scene& scene, const Camera& camera, int width, int height) {
+  GBuffer g;
+  trace_primary(tracer, scene, camera, width, height, g);
+  return g;
+}
+
+void trace_primary(const Tracer& tracer, const Scene& scene, const Camera& camera, int width, int height, GBuffer& out) {
   const CameraRays camera_ray(camera, width, height);
-  return trace_into_gbuffer(tracer, scene, width, height, [&](int x, int y) { return camera_ray(x + 0.5, y + 0.5); });
+  trace_into_gbuffer(tracer, scene, width, height, [&](int x, int y) { return camera_ray(x + 0.5, y + 0.5); }, out);
 }
 
 GBuffer trace_gbuffer(const Tracer& tracer, const Scene& scene, int width, int height, const std::function<Ray(int, int)>& ray_for) {
-  return trace_into_gbuffer(tracer, scene, width, height, ray_for);
+  GBuffer g;
+  trace_into_gbuffer(tracer, scene, width, height, ray_for, g);
+  return g;
 }
 
 FoveationMaps foveation_maps(const RenderParams& params, glm::dvec2 gaze_px) {

@@ -100,6 +100,8 @@ std::vector<Light> frame_lights(const std::vector<Light>& scene_lights, const Ca
 
 // Primary rays through every pixel centre.
 GBuffer trace_primary(const Tracer& tracer, const Scene& scene, const Camera& camera, int width, int height);
+// The same into `out`, reusing its memory (a simulation traces a frame every step).
+void trace_primary(const Tracer& tracer, const Scene& scene, const Camera& camera, int width, int height, GBuffer& out);
 // One ray per pixel from `ray_for(x, y)` (unit direction) into a G-buffer (depth = distance along that ray).
 GBuffer trace_gbuffer(const Tracer& tracer, const Scene& scene, int width, int height, const std::function<Ray(int, int)>& ray_for);
 // The foveation model evaluated at every pixel (full mode: q = 1, n = n_max, b = 1).

@@ -212,7 +212,7 @@ void Tracer::set_occlusion_api(TraceApi api) { impl_->api = api; }
 double Tracer::build_ms() const { return impl_->build_ms; }
 size_t Tracer::triangles() const { return impl_->triangles; }
 
-RawOcclusionResult measure_raw_occlusion(const Tracer& tracer, std::span<const Ray> rays, TraceApi api) {
+RawTraceResult measure_raw_occlusion(const Tracer& tracer, std::span<const Ray> rays, TraceApi api) {
   // Copy once, before timing
   std::vector<RTCRay> converted(rays.size());
   for (size_t i = 0; i < rays.size(); ++i) to_embree(rays[i], converted[i]);
@@ -222,10 +222,31 @@ RawOcclusionResult measure_raw_occlusion(const Tracer& tracer, std::span<const R
   tbb::parallel_for(tbb::blocked_range<size_t>(0, rays.size(), kBatch), [&](const tbb::blocked_range<size_t>& r) {
     occluded_embree(scene, api, converted.data() + r.begin(), r.size(), out.data() + r.begin());
   });
-  RawOcclusionResult result;
+  RawTraceResult result;
   result.seconds = timer.ms() / 1000.0;
   result.rays_per_second = result.seconds > 0 ? rays.size() / result.seconds : 0;
-  for (uint8_t o : out) result.occluded += o;
+  for (uint8_t o : out) result.hit += o;
+  return result;
+}
+
+RawTraceResult measure_raw_intersection(const Tracer& tracer, std::span<const Ray> rays) {
+  std::vector<RTCRayHit> converted(rays.size());
+  for (size_t i = 0; i < rays.size(); ++i) {
+    to_embree(rays[i], converted[i].ray);
+    converted[i].hit.geomID = converted[i].hit.primID = converted[i].hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+  }
+  RTCScene scene = tracer.impl_->scene;
+  const Timer timer;
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, rays.size(), kBatch), [&](const tbb::blocked_range<size_t>& r) {
+    RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+    rtcIntersect1M(scene, &ctx, converted.data() + r.begin(), static_cast<unsigned>(r.size()), sizeof(RTCRayHit));
+  });
+  RawTraceResult result;
+  result.seconds = timer.ms() / 1000.0;
+  result.rays_per_second = result.seconds > 0 ? rays.size() / result.seconds : 0;
+  for (const RTCRayHit& rh : converted) result.hit += rh.hit.geomID != RTC_INVALID_GEOMETRY_ID;
   return result;
 }
 

@@ -44,11 +44,11 @@ enum class TraceApi { single, packet8, stream };
 const char* to_string(TraceApi api);
 TraceApi parse_trace_api(const std::string& name);  // throws Error for an unknown name
 
-// Result of measure_raw_occlusion().
-struct RawOcclusionResult {
+// Result of measure_raw_occlusion() and measure_raw_intersection().
+struct RawTraceResult {
   double rays_per_second = 0;  // rays traced per second of wall time
   double seconds = 0;          // wall time of the traversal alone
-  size_t occluded = 0;         // rays that hit something
+  size_t hit = 0;              // rays that hit something
 };
 
 // A built acceleration structure over a scene's triangles; const methods are thread-safe.
@@ -73,13 +73,19 @@ class Tracer {
   struct Impl;
 
  private:
-  friend RawOcclusionResult measure_raw_occlusion(const Tracer&, std::span<const Ray>, TraceApi);
+  friend RawTraceResult measure_raw_occlusion(const Tracer&, std::span<const Ray>, TraceApi);
+  friend RawTraceResult measure_raw_intersection(const Tracer&, std::span<const Ray>);
   std::unique_ptr<Impl> impl_;
 };
 
 // Raw Embree occlusion throughput on the given rays, rays per second: the rays are converted
 // to Embree's layout before the clock starts and traced in parallel chunks with `api`: the
 // baseline against which the renderer's AO rate is judged.
-RawOcclusionResult measure_raw_occlusion(const Tracer& tracer, std::span<const Ray> rays, TraceApi api);
+RawTraceResult measure_raw_occlusion(const Tracer& tracer, std::span<const Ray> rays, TraceApi api);
+
+// Raw Embree closest-hit throughput on the given rays, rays per second (converted before the
+// clock starts, traced as coherent streams in parallel chunks, results left in Embree's layout):
+// the baseline against which a primary-ray pass is judged.
+RawTraceResult measure_raw_intersection(const Tracer& tracer, std::span<const Ray> rays);
 
 }  // namespace foveal

@@ -56,7 +56,17 @@ TEST(Tracer, OcclusionApisAgree) {
     copy = rays;
     tracer.occluded(copy, out);
     EXPECT_EQ(out, reference) << to_string(api);
-    EXPECT_EQ(measure_raw_occlusion(tracer, rays, api).occluded, blocked);
+    EXPECT_EQ(measure_raw_occlusion(tracer, rays, api).hit, blocked);
   }
+  // Closest hits, raw: the same rays with an infinite tfar hit what intersect() says they hit
+  std::vector<Ray> unbounded = rays;
+  for (Ray& r : unbounded) r.tfar = 1e30f;
+  std::vector<Hit> hits(unbounded.size());
+  tracer.intersect(unbounded, hits);
+  size_t hit = 0;
+  for (const Hit& h : hits) hit += h.valid();
+  const RawTraceResult raw = measure_raw_intersection(tracer, unbounded);
+  EXPECT_EQ(raw.hit, hit);
+  EXPECT_GT(raw.rays_per_second, 0);
   EXPECT_THROW(parse_trace_api("simd"), Error);
 }
