@@ -114,8 +114,10 @@ namespace {
 
 // Trace one ray per pixel, made by `ray_for(x, y)`, into a G-buffer, reusing its memory. Every
 // pixel is written in the parallel loop (misses too), so nothing is cleared on one thread first.
-template <class RayFor>
-void trace_into_gbuffer(const Tracer& tracer, const Scene& scene, int width, int height, const RayFor& ray_for, GBuffer& g) {
+// `after_tile(x0, x1, y0, y1)` runs on each tile once it is traced, while its pixels are in cache.
+template <class RayFor, class AfterTile>
+void trace_into_gbuffer(const Tracer& tracer, const Scene& scene, int width, int height, const RayFor& ray_for, GBuffer& g,
+                        const AfterTile& after_tile) {
   g.width = width;
   g.height = height;
   const size_t n = static_cast<size_t>(width) * height;
@@ -153,8 +155,11 @@ void trace_into_gbuffer(const Tracer& tracer, const Scene& scene, int width, int
         g.albedo[i] = surface.albedo;
       }
     }
+    after_tile(x0, x1, y0, y1);
   });
 }
+
+constexpr auto kNothingAfter = [](int, int, int, int) {};
 
 }  // namespace
 
@@ -166,12 +171,12 @@ GBuffer trace_primary(const Tracer& tracer, const Scene& scene, const Camera& ca
 
 void trace_primary(const Tracer& tracer, const Scene& scene, const Camera& camera, int width, int height, GBuffer& out) {
   const CameraRays camera_ray(camera, width, height);
-  trace_into_gbuffer(tracer, scene, width, height, [&](int x, int y) { return camera_ray(x + 0.5, y + 0.5); }, out);
+  trace_into_gbuffer(tracer, scene, width, height, [&](int x, int y) { return camera_ray(x + 0.5, y + 0.5); }, out, kNothingAfter);
 }
 
 GBuffer trace_gbuffer(const Tracer& tracer, const Scene& scene, int width, int height, const std::function<Ray(int, int)>& ray_for) {
   GBuffer g;
-  trace_into_gbuffer(tracer, scene, width, height, ray_for, g);
+  trace_into_gbuffer(tracer, scene, width, height, ray_for, g, kNothingAfter);
   return g;
 }
 
@@ -322,6 +327,37 @@ float foveal_mean_visibility(const GBuffer& g, const FoveationMaps& maps, const 
   return count > 0 ? static_cast<float>(sum / count) : 1.0f;
 }
 
+namespace {
+
+// Phong shading of one tile's pixels from the G-buffer into `image`; `ambient_factor(i)` is pixel
+// i's k_a, `occluded(ray)` answers shadow rays (asked only with `shadows`).
+template <class AmbientFactor, class Occluded>
+void shade_tile(const Scene& scene, const GBuffer& g, const std::vector<MaterialView>& materials, const std::vector<Light>& lights,
+                bool shadows, float epsilon, const AmbientFactor& ambient_factor, const Occluded& occluded, int x0, int x1, int y0,
+                int y1, Image& image) {
+  for (int y = y0; y < y1; ++y)
+    for (int x = x0; x < x1; ++x) {
+      const size_t i = static_cast<size_t>(y) * g.width + x;
+      glm::vec3 c = background_colour();
+      if (g.hit(i)) {
+        const MaterialView& m = materials[scene.material_ids[g.prim[i]]];
+        c = shade_point(m, g.albedo[i], g.position[i], g.normal[i], g.geo_normal[i], g.view[i], ambient_factor(i), scene.ambient,
+                        lights.data(), static_cast<int>(lights.size()), shadows, epsilon, occluded);
+      }
+      for (int k = 0; k < 3; ++k) image.at(x, y, k) = c[k];
+    }
+}
+
+constexpr auto kNoShadowRays = [](const Ray&) { return false; };
+
+// `image` as a w×h RGB image, its memory kept when it already has that size (every pixel is written after).
+void make_rgb(Image& image, int width, int height) {
+  if (image.width == width && image.height == height && image.channels == 3) return;
+  image = Image(width, height, 3);
+}
+
+}  // namespace
+
 Image shade(const Tracer& tracer, const Scene& scene, const Camera& camera, const GBuffer& g, const FoveationMaps& maps,
             const std::vector<float>& visibility, float ambient_constant, bool shadows, float epsilon,
             uint64_t* shadow_rays) {
@@ -329,27 +365,17 @@ Image shade(const Tracer& tracer, const Scene& scene, const Camera& camera, cons
   const std::vector<Light> lights = frame_lights(scene.lights, camera);
   const std::vector<MaterialView> materials = material_views(scene);
   tbb::enumerable_thread_specific<uint64_t> shadow_count(0);
+  // Blended ambient factor: k_a = b·V + (1 − b)·k_const
+  const auto ka = [&](size_t i) { return maps.blend[i] * visibility[i] + (1.0f - maps.blend[i]) * ambient_constant; };
+  const auto occluded = [&](const Ray& ray) {
+    Ray s = ray;
+    uint8_t blocked = 0;
+    tracer.occluded({&s, 1}, {&blocked, 1});
+    ++shadow_count.local();
+    return blocked != 0;
+  };
   for_each_tile(g.width, g.height, [&](int x0, int x1, int y0, int y1) {
-    for (int y = y0; y < y1; ++y)
-      for (int x = x0; x < x1; ++x) {
-        const size_t i = static_cast<size_t>(y) * g.width + x;
-        glm::vec3 c = background_colour();
-        if (g.hit(i)) {
-          const MaterialView& m = materials[scene.material_ids[g.prim[i]]];
-          // Blended ambient factor: k_a = b·V + (1 − b)·k_const
-          const float b = maps.blend[i];
-          const float ka = b * visibility[i] + (1.0f - b) * ambient_constant;
-          c = shade_point(m, g.albedo[i], g.position[i], g.normal[i], g.geo_normal[i], g.view[i], ka, scene.ambient,
-                          lights.data(), static_cast<int>(lights.size()), shadows, epsilon, [&](const Ray& ray) {
-                            Ray s = ray;
-                            uint8_t blocked = 0;
-                            tracer.occluded({&s, 1}, {&blocked, 1});
-                            ++shadow_count.local();
-                            return blocked != 0;
-                          });
-        }
-        for (int k = 0; k < 3; ++k) image.at(x, y, k) = c[k];
-      }
+    shade_tile(scene, g, materials, lights, shadows, epsilon, ka, occluded, x0, x1, y0, y1, image);
   });
   if (shadow_rays) {
     *shadow_rays = 0;
@@ -358,14 +384,30 @@ Image shade(const Tracer& tracer, const Scene& scene, const Camera& camera, cons
   return image;
 }
 
-Image shade_constant_ambient(const Tracer& tracer, const Scene& scene, const Camera& camera, const GBuffer& g,
+Image shade_constant_ambient(const Tracer& /*tracer*/, const Scene& scene, const Camera& camera, const GBuffer& g,
                              float ambient_constant, float epsilon) {
-  const size_t n = size_t(g.width) * g.height;
-  FoveationMaps none;  // blend 0 everywhere: k_a = k_const
-  none.width = g.width;
-  none.height = g.height;
-  none.blend.assign(n, 0.0f);
-  return shade(tracer, scene, camera, g, none, std::vector<float>(n, 1.0f), ambient_constant, false, epsilon);
+  Image image(g.width, g.height, 3);
+  const std::vector<Light> lights = frame_lights(scene.lights, camera);
+  const std::vector<MaterialView> materials = material_views(scene);
+  const auto ka = [&](size_t) { return ambient_constant; };
+  for_each_tile(g.width, g.height, [&](int x0, int x1, int y0, int y1) {
+    shade_tile(scene, g, materials, lights, false, epsilon, ka, kNoShadowRays, x0, x1, y0, y1, image);
+  });
+  return image;
+}
+
+void trace_primary_shaded(const Tracer& tracer, const Scene& scene, const Camera& camera, int width, int height, float ambient_constant,
+                          float epsilon, GBuffer& gbuffer, Image& color) {
+  make_rgb(color, width, height);
+  const std::vector<Light> lights = frame_lights(scene.lights, camera);
+  const std::vector<MaterialView> materials = material_views(scene);
+  const auto ka = [&](size_t) { return ambient_constant; };
+  const CameraRays camera_ray(camera, width, height);
+  trace_into_gbuffer(
+      tracer, scene, width, height, [&](int x, int y) { return camera_ray(x + 0.5, y + 0.5); }, gbuffer,
+      [&](int x0, int x1, int y0, int y1) {
+        shade_tile(scene, gbuffer, materials, lights, false, epsilon, ka, kNoShadowRays, x0, x1, y0, y1, color);
+      });
 }
 
 Frame render_frame(const Tracer& tracer, const Scene& scene, const Camera& camera, const RenderParams& params,

@@ -137,6 +137,10 @@ Image shade(const Tracer& tracer, const Scene& scene, const Camera& camera, cons
 // Phong shading with the constant ambient factor everywhere (no AO): the vision simulation's colour.
 Image shade_constant_ambient(const Tracer& tracer, const Scene& scene, const Camera& camera, const GBuffer& gbuffer,
                              float ambient_constant, float epsilon);
+// trace_primary into `gbuffer` and shade_constant_ambient into `color` in one pass over the tiles
+// (each tile shaded while its G-buffer is in cache), reusing both one's memory: the same results.
+void trace_primary_shaded(const Tracer& tracer, const Scene& scene, const Camera& camera, int width, int height, float ambient_constant,
+                          float epsilon, GBuffer& gbuffer, Image& color);
 
 // All passes for one frame.
 // `progress` reports the AO pass, the long one (see trace_ao).

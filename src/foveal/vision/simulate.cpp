@@ -77,8 +77,7 @@ class CpuPasses final : public VisionSimulation::Passes {
 
   void trace(const Camera& camera, int width, int height, float ambient) override {
     const Timer t;
-    trace_primary(tracer_, scene_, camera, width, height, gbuffer_);
-    color_ = shade_constant_ambient(tracer_, scene_, camera, gbuffer_, ambient, epsilon_);
+    trace_primary_shaded(tracer_, scene_, camera, width, height, ambient, epsilon_, gbuffer_, color_);
     times_ = {};
     times_.trace_ms = t.ms();
   }
