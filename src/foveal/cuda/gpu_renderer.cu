@@ -490,28 +490,28 @@ double median_rate(PassEvents& ev, size_t rays, int repeats, const Launch& launc
   return median_ms > 0 ? static_cast<double>(rays) / (median_ms * 1e-3) : 0.0;
 }
 
+// Raw any-hit or closest-hit rays per second of the scene's BVH on `rays`.
+double raw_rate(Renderer::Impl& m, std::span<const Ray> rays, int repeats, bool any_hit) {
+  if (rays.empty()) return 0;
+  m.raw_rays.upload(rays.data(), rays.size());
+  if (any_hit)
+    m.raw_occluded.reserve(rays.size());
+  else
+    m.raw_hits.reserve(rays.size());
+  return median_rate(m.events, rays.size(), repeats, [&] {
+    const unsigned blocks = blocks_for(rays.size(), 128);
+    if (any_hit)
+      occluded_kernel<<<blocks, 128>>>(m.bvh_view(), m.raw_rays.get(), m.raw_occluded.get(), rays.size());
+    else
+      intersect_kernel<<<blocks, 128>>>(m.bvh_view(), m.raw_rays.get(), m.raw_hits.get(), rays.size());
+    FOVEAL_CUDA_LAUNCHED(any_hit ? "occluded" : "intersect");
+  });
+}
+
 }  // namespace
 
-double Renderer::measure_occlusion_rate(std::span<const Ray> rays, int repeats) {
-  Impl& m = *impl_;
-  if (rays.empty()) return 0;
-  m.raw_rays.upload(rays.data(), rays.size());
-  m.raw_occluded.reserve(rays.size());
-  return median_rate(m.events, rays.size(), repeats, [&] {
-    occluded_kernel<<<blocks_for(rays.size(), 128), 128>>>(m.bvh_view(), m.raw_rays.get(), m.raw_occluded.get(), rays.size());
-    FOVEAL_CUDA_LAUNCHED("occluded");
-  });
-}
+double Renderer::measure_occlusion_rate(std::span<const Ray> rays, int repeats) { return raw_rate(*impl_, rays, repeats, true); }
 
-double Renderer::measure_intersection_rate(std::span<const Ray> rays, int repeats) {
-  Impl& m = *impl_;
-  if (rays.empty()) return 0;
-  m.raw_rays.upload(rays.data(), rays.size());
-  m.raw_hits.reserve(rays.size());
-  return median_rate(m.events, rays.size(), repeats, [&] {
-    intersect_kernel<<<blocks_for(rays.size(), 128), 128>>>(m.bvh_view(), m.raw_rays.get(), m.raw_hits.get(), rays.size());
-    FOVEAL_CUDA_LAUNCHED("intersect");
-  });
-}
+double Renderer::measure_intersection_rate(std::span<const Ray> rays, int repeats) { return raw_rate(*impl_, rays, repeats, false); }
 
 }  // namespace foveal::gpu
