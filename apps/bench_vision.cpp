@@ -165,7 +165,7 @@ bool same_corners(const std::vector<Corner>& a, const std::vector<Corner>& b) {
                     [](const Corner& l, const Corner& r) { return l.px == r.px && l.score == r.score; });
 }
 
-// Corners found by one device and not by the other (both lists are sorted by row, then column).
+// Corners found by one device and not by the other.
 size_t corners_of_one(const std::vector<Corner>& a, const std::vector<Corner>& b) {
   auto key = [](const Corner& c) { return std::tuple(c.px.y, c.px.x, c.score); };
   std::vector<std::tuple<float, float, float>> ka, kb, only;

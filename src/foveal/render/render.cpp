@@ -165,13 +165,9 @@ constexpr auto kNothingAfter = [](int, int, int, int) {};
 
 GBuffer trace_primary(const Tracer& tracer, const Scene& scene, const Camera& camera, int width, int height) {
   GBuffer g;
-  trace_primary(tracer, scene, camera, width, height, g);
-  return g;
-}
-
-void trace_primary(const Tracer& tracer, const Scene& scene, const Camera& camera, int width, int height, GBuffer& out) {
   const CameraRays camera_ray(camera, width, height);
-  trace_into_gbuffer(tracer, scene, width, height, [&](int x, int y) { return camera_ray(x + 0.5, y + 0.5); }, out, kNothingAfter);
+  trace_into_gbuffer(tracer, scene, width, height, [&](int x, int y) { return camera_ray(x + 0.5, y + 0.5); }, g, kNothingAfter);
+  return g;
 }
 
 GBuffer trace_gbuffer(const Tracer& tracer, const Scene& scene, int width, int height, const std::function<Ray(int, int)>& ray_for) {
@@ -348,13 +344,27 @@ void shade_tile(const Scene& scene, const GBuffer& g, const std::vector<Material
     }
 }
 
-constexpr auto kNoShadowRays = [](const Ray&) { return false; };
+// Phong shading with one ambient factor everywhere and no shadow rays (the vision simulation's
+// colour), a tile at a time into `image`.
+class ConstantAmbientShading {
+ public:
+  ConstantAmbientShading(const Scene& scene, const Camera& camera, const GBuffer& g, float ambient_constant, float epsilon,
+                         Image& image)
+      : scene_(scene), g_(g), lights_(frame_lights(scene.lights, camera)), materials_(material_views(scene)),
+        ambient_constant_(ambient_constant), epsilon_(epsilon), image_(image) {}
+  void operator()(int x0, int x1, int y0, int y1) const {
+    shade_tile(scene_, g_, materials_, lights_, false, epsilon_, [this](size_t) { return ambient_constant_; },
+               [](const Ray&) { return false; }, x0, x1, y0, y1, image_);
+  }
 
-// `image` as a w×h RGB image, its memory kept when it already has that size (every pixel is written after).
-void make_rgb(Image& image, int width, int height) {
-  if (image.width == width && image.height == height && image.channels == 3) return;
-  image = Image(width, height, 3);
-}
+ private:
+  const Scene& scene_;
+  const GBuffer& g_;
+  const std::vector<Light> lights_;
+  const std::vector<MaterialView> materials_;
+  const float ambient_constant_, epsilon_;
+  Image& image_;
+};
 
 }  // namespace
 
@@ -384,30 +394,18 @@ Image shade(const Tracer& tracer, const Scene& scene, const Camera& camera, cons
   return image;
 }
 
-Image shade_constant_ambient(const Tracer& /*tracer*/, const Scene& scene, const Camera& camera, const GBuffer& g,
-                             float ambient_constant, float epsilon) {
+Image shade_constant_ambient(const Scene& scene, const Camera& camera, const GBuffer& g, float ambient_constant, float epsilon) {
   Image image(g.width, g.height, 3);
-  const std::vector<Light> lights = frame_lights(scene.lights, camera);
-  const std::vector<MaterialView> materials = material_views(scene);
-  const auto ka = [&](size_t) { return ambient_constant; };
-  for_each_tile(g.width, g.height, [&](int x0, int x1, int y0, int y1) {
-    shade_tile(scene, g, materials, lights, false, epsilon, ka, kNoShadowRays, x0, x1, y0, y1, image);
-  });
+  for_each_tile(g.width, g.height, ConstantAmbientShading(scene, camera, g, ambient_constant, epsilon, image));
   return image;
 }
 
 void trace_primary_shaded(const Tracer& tracer, const Scene& scene, const Camera& camera, int width, int height, float ambient_constant,
                           float epsilon, GBuffer& gbuffer, Image& color) {
-  make_rgb(color, width, height);
-  const std::vector<Light> lights = frame_lights(scene.lights, camera);
-  const std::vector<MaterialView> materials = material_views(scene);
-  const auto ka = [&](size_t) { return ambient_constant; };
+  if (color.width != width || color.height != height || color.channels != 3) color = Image(width, height, 3);  // else its memory is kept
   const CameraRays camera_ray(camera, width, height);
-  trace_into_gbuffer(
-      tracer, scene, width, height, [&](int x, int y) { return camera_ray(x + 0.5, y + 0.5); }, gbuffer,
-      [&](int x0, int x1, int y0, int y1) {
-        shade_tile(scene, gbuffer, materials, lights, false, epsilon, ka, kNoShadowRays, x0, x1, y0, y1, color);
-      });
+  trace_into_gbuffer(tracer, scene, width, height, [&](int x, int y) { return camera_ray(x + 0.5, y + 0.5); }, gbuffer,
+                     ConstantAmbientShading(scene, camera, gbuffer, ambient_constant, epsilon, color));
 }
 
 Frame render_frame(const Tracer& tracer, const Scene& scene, const Camera& camera, const RenderParams& params,

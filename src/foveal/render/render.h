@@ -100,8 +100,6 @@ std::vector<Light> frame_lights(const std::vector<Light>& scene_lights, const Ca
 
 // Primary rays through every pixel centre.
 GBuffer trace_primary(const Tracer& tracer, const Scene& scene, const Camera& camera, int width, int height);
-// The same into `out`, reusing its memory (a simulation traces a frame every step).
-void trace_primary(const Tracer& tracer, const Scene& scene, const Camera& camera, int width, int height, GBuffer& out);
 // One ray per pixel from `ray_for(x, y)` (unit direction) into a G-buffer (depth = distance along that ray).
 GBuffer trace_gbuffer(const Tracer& tracer, const Scene& scene, int width, int height, const std::function<Ray(int, int)>& ray_for);
 // The foveation model evaluated at every pixel (full mode: q = 1, n = n_max, b = 1).
@@ -135,8 +133,7 @@ Image shade(const Tracer& tracer, const Scene& scene, const Camera& camera, cons
             float epsilon, uint64_t* shadow_rays = nullptr);
 
 // Phong shading with the constant ambient factor everywhere (no AO): the vision simulation's colour.
-Image shade_constant_ambient(const Tracer& tracer, const Scene& scene, const Camera& camera, const GBuffer& gbuffer,
-                             float ambient_constant, float epsilon);
+Image shade_constant_ambient(const Scene& scene, const Camera& camera, const GBuffer& gbuffer, float ambient_constant, float epsilon);
 // trace_primary into `gbuffer` and shade_constant_ambient into `color` in one pass over the tiles
 // (each tile shaded while its G-buffer is in cache), reusing both one's memory: the same results.
 void trace_primary_shaded(const Tracer& tracer, const Scene& scene, const Camera& camera, int width, int height, float ambient_constant,

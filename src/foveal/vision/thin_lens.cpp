@@ -46,7 +46,7 @@ Image thin_lens_reference(const Tracer& tracer, const Scene& scene, const Camera
       ray.dir = glm::normalize(d - float(v) * lens);
       return ray;
     });
-    const Image c = shade_constant_ambient(tracer, scene, camera, g, p.ambient, epsilon);
+    const Image c = shade_constant_ambient(scene, camera, g, p.ambient, epsilon);
     for (size_t i = 0; i < sum.pixels.size(); ++i) sum.pixels[i] += c.pixels[i];
   }
   for (float& x : sum.pixels) x /= float(p.samples);
@@ -57,7 +57,7 @@ Image thin_lens_approximation(const Tracer& tracer, const Scene& scene, const Ca
                               const BlurParams& blur) {
   check(p);
   const GBuffer g = trace_primary(tracer, scene, camera, p.width, p.height);
-  const Image color = shade_constant_ambient(tracer, scene, camera, g, p.ambient, surface_epsilon(scene.bounds()));
+  const Image color = shade_constant_ambient(scene, camera, g, p.ambient, surface_epsilon(scene.bounds()));
   const double ppd = camera_pixels_per_degree(camera, p.height);
   const double a = p.pupil_diameter_mm * 1e-3;
   const glm::vec3 forward = glm::normalize(camera.look - camera.eye);
