@@ -1,0 +1,362 @@
+// foveal/impair/impairments.cpp — ocular media, field loss, metamorphopsia, colour; their order.
+#include "foveal/impair/impairments.h"
+
+#include "foveal/perception/foveation.h"
+#include "foveal/util/error.h"
+#include "foveal/util/timer.h"
+
+#include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+namespace foveal {
+
+namespace {
+
+constexpr double kSrPerDeg2 = (std::numbers::pi / 180.0) * (std::numbers::pi / 180.0);
+
+cv::Mat as_mat(Image& image) {
+  return cv::Mat(image.height, image.width, image.channels == 3 ? CV_32FC3 : CV_32FC1, image.pixels.data());
+}
+
+double age_factor(double age) { return 1.0 + std::pow(age / 62.5, 4.0); }
+
+// splitmix64: a portable, seedable sequence (the same distortion on every platform)
+uint64_t splitmix(uint64_t& state) {
+  uint64_t z = (state += 0x9E3779B97F4A7C15ull);
+  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+  z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+  return z ^ (z >> 31);
+}
+double uniform(uint64_t& state) { return (splitmix(state) >> 11) * 0x1.0p-53; }
+
+}  // namespace
+
+double cie_glare_psf(double theta, double age, double p) {
+  return 10.0 / (theta * theta * theta) + (5.0 / (theta * theta) + 0.1 * p / theta) * age_factor(age) + 0.0025 * p;
+}
+
+double cie_glare_fraction(double t1, double t2, double age, double p) {
+  if (!(t2 > t1)) return 0.0;
+  const double g = age_factor(age);
+  return 2.0 * std::numbers::pi * kSrPerDeg2 *
+         (10.0 * (1.0 / t1 - 1.0 / t2) + 5.0 * g * std::log(t2 / t1) + 0.1 * p * g * (t2 - t1) +
+          0.0025 * p * (t2 * t2 - t1 * t1) / 2.0);
+}
+
+double cataract_straylight_factor(double severity) { return std::pow(10.0, std::clamp(severity, 0.0, 1.0)); }
+
+glm::dvec3 lens_transmittance(const MediaParams& m) {
+  // Pokorny, Smith & Lutze 1987: the multiplier of the age-dependent density D1
+  auto multiplier = [](double age) {
+    return age <= 60 ? 1.0 + 0.02 * (std::max(age, 20.0) - 32.0) : 1.56 + 0.0667 * (age - 60.0);
+  };
+  const glm::dvec3 d1(0.02, 0.05, 0.25);
+  const double extra = multiplier(m.age_years) - multiplier(25.0) + 0.0667 * 40.0 * std::clamp(m.cataract, 0.0, 1.0);
+  return glm::dvec3(std::pow(10.0, -d1.x * extra), std::pow(10.0, -d1.y * extra), std::pow(10.0, -d1.z * extra));
+}
+
+std::vector<float> glare_kernel(double ppd, int rx, int ry, const MediaParams& m) {
+  const int w = 2 * rx + 1, h = 2 * ry + 1;
+  std::vector<float> k(size_t(w) * h, 0.0f);
+  const double s = cataract_straylight_factor(m.cataract);
+  const double pixel_deg = 1.0 / ppd, pixel_sr = pixel_deg * pixel_deg * kSrPerDeg2;
+  tbb::parallel_for(0, h, [&](int j) {
+    for (int i = 0; i < w; ++i) {
+      const int dx = i - rx, dy = j - ry;
+      double v = 0;
+      if (dx == 0 && dy == 0) {
+        // the pixel itself: the scatter from 0.1° to the radius of a disc of the pixel's area
+        v = cie_glare_fraction(kGlareMinDeg, pixel_deg / std::sqrt(std::numbers::pi), m.age_years, m.pigmentation);
+      } else if (std::abs(dx) <= 2 && std::abs(dy) <= 2) {
+        // near the centre the equation changes across a pixel: 8 × 8 sub-samples
+        constexpr int n = 8;
+        for (int b = 0; b < n; ++b)
+          for (int a = 0; a < n; ++a) {
+            const double t = std::hypot(dx + (a + 0.5) / n - 0.5, dy + (b + 0.5) / n - 0.5) * pixel_deg;
+            if (t >= kGlareMinDeg) v += cie_glare_psf(t, m.age_years, m.pigmentation) * pixel_sr / (n * n);
+          }
+      } else {
+        v = cie_glare_psf(std::hypot(dx, dy) * pixel_deg, m.age_years, m.pigmentation) * pixel_sr;
+      }
+      k[size_t(j) * w + i] = static_cast<float>(s * v);
+    }
+  });
+  return k;
+}
+
+void apply_glare(Image& image, double ppd, const MediaParams& m) {
+  if (image.empty()) return;
+  // the scatter is smooth beyond a few tenths of a degree: compute it on a coarser grid
+  const int factor = std::max(1, (image.width + 319) / 320);
+  const cv::Mat full = as_mat(image);
+  cv::Mat small;
+  if (factor > 1)
+    cv::resize(full, small, cv::Size((image.width + factor - 1) / factor, (image.height + factor - 1) / factor), 0, 0,
+               cv::INTER_AREA);
+  else
+    small = full.clone();
+  const int rx = small.cols - 1, ry = small.rows - 1;
+  std::vector<float> k = glare_kernel(ppd * small.cols / image.width, rx, ry, m);
+  double eta = 0;
+  for (float v : k) eta += v;
+  if (eta > 0.95) {  // more than the light there is: the straylight saturates
+    for (float& v : k) v = static_cast<float>(v * 0.95 / eta);
+    eta = 0.95;
+  }
+  const cv::Mat kernel(2 * ry + 1, 2 * rx + 1, CV_32F, k.data());
+  cv::Mat scattered;
+  cv::filter2D(small, scattered, CV_32F, kernel, cv::Point(-1, -1), 0, cv::BORDER_CONSTANT);
+  if (factor > 1) cv::resize(scattered, scattered, full.size(), 0, 0, cv::INTER_LINEAR);
+  cv::Mat out = full * (1.0 - eta) + scattered;
+  out.copyTo(full);
+}
+
+FieldMode parse_field_mode(const std::string& name) {
+  for (FieldMode m : {FieldMode::contrast, FieldMode::blur, FieldMode::grey, FieldMode::fill})
+    if (name == to_string(m)) return m;
+  fail("unknown field-loss mode '{}' (expected contrast, blur, grey or fill)", name);
+}
+
+const char* to_string(FieldMode mode) {
+  switch (mode) {
+    case FieldMode::contrast: return "contrast";
+    case FieldMode::blur: return "blur";
+    case FieldMode::grey: return "grey";
+    case FieldMode::fill: return "fill";
+  }
+  return "?";
+}
+
+namespace {
+
+// Multiply each channel of `a` (any channel count) by the one-channel `w`.
+void scale_channels(cv::Mat& a, const cv::Mat& w) {
+  if (a.channels() == 1) {
+    cv::multiply(a, w, a);
+    return;
+  }
+  std::vector<cv::Mat> ws(a.channels(), w);
+  cv::Mat w3;
+  cv::merge(ws, w3);
+  cv::multiply(a, w3, a);
+}
+
+int pyramid_levels(cv::Size size) {
+  int levels = 0;
+  while (levels < 8 && std::min(size.width, size.height) >= 16) {
+    size = cv::Size((size.width + 1) / 2, (size.height + 1) / 2);
+    ++levels;
+  }
+  return levels;
+}
+
+}  // namespace
+
+void apply_field_loss(Image& image, const std::vector<float>& loss_db, FieldMode mode) {
+  if (loss_db.size() != size_t(image.width) * image.height) fail("field loss: {} values for a {}x{} image", loss_db.size(),
+                                                                  image.width, image.height);
+  cv::Mat img = as_mat(image);
+  const cv::Mat loss(image.height, image.width, CV_32F, const_cast<float*>(loss_db.data()));
+  cv::Mat m;  // the remaining sensitivity 10^(−L/10)
+  const cv::Mat scaled_loss = loss * (-std::log(10.0) / 10.0);
+  cv::exp(scaled_loss, m);
+  if (mode == FieldMode::grey) {
+    const cv::Scalar mean = cv::mean(img);
+    cv::Mat fill(img.size(), img.type(), mean), keep = img.clone(), rest = 1.0 - m;
+    scale_channels(keep, m);
+    scale_channels(fill, rest);
+    cv::Mat out = keep + fill;
+    out.copyTo(img);
+    return;
+  }
+  const int levels = pyramid_levels(img.size());
+  std::vector<cv::Mat> g{img.clone()};
+  for (int k = 0; k < levels; ++k) {
+    cv::Mat down;
+    cv::pyrDown(g.back(), down);
+    g.push_back(down);
+  }
+  if (mode == FieldMode::fill) {
+    // push: premultiplied colour and weight down the pyramid; pull: each level keeps what it sees
+    // and takes the rest from the level below
+    std::vector<cv::Mat> pc{img.clone()}, pw{m.clone()};
+    scale_channels(pc[0], m);
+    for (int k = 0; k < levels; ++k) {
+      cv::Mat c, w;
+      cv::pyrDown(pc.back(), c);
+      cv::pyrDown(pw.back(), w);
+      pc.push_back(c);
+      pw.push_back(w);
+    }
+    cv::Mat fill = pc.back().clone();
+    const cv::Mat floor_w = cv::max(pw.back(), 1e-6);
+    const cv::Mat inv = 1.0 / floor_w;
+    scale_channels(fill, inv);
+    for (int k = levels - 1; k >= 0; --k) {
+      cv::Mat up;
+      cv::pyrUp(fill, up, pc[k].size());
+      const cv::Mat missing = 1.0 - pw[k];
+      const cv::Mat rest = cv::max(missing, 0.0);
+      scale_channels(up, rest);
+      fill = pc[k] + up;
+    }
+    fill.copyTo(img);
+    return;
+  }
+  // Laplacian bands, each scaled by its weight at its own resolution
+  cv::Mat out = g[levels];
+  for (int k = levels - 1; k >= 0; --k) {
+    cv::Mat up, band;
+    cv::pyrUp(g[k + 1], up, g[k].size());
+    band = g[k] - up;
+    cv::Mat w;
+    if (mode == FieldMode::contrast) {
+      if (k == 0) w = m;
+      else cv::resize(m, w, g[k].size(), 0, 0, cv::INTER_LINEAR);
+    } else {  // blur: every 6 dB removes one more octave from the finest
+      cv::Mat l;
+      if (k == 0) l = loss;
+      else cv::resize(loss, l, g[k].size(), 0, 0, cv::INTER_LINEAR);
+      const cv::Mat raw = (k + 1.0) - l / 6.0;
+      const cv::Mat above = cv::max(raw, 0.0);
+      w = cv::min(above, 1.0);
+    }
+    scale_channels(band, w);
+    cv::Mat next;
+    cv::pyrUp(out, next, g[k].size());
+    out = next + band;
+  }
+  out.copyTo(img);
+}
+
+glm::dvec2 Metamorphopsia::displacement(double x, double y) const {
+  if (!any()) return {0, 0};
+  const double r = std::hypot(x, y);
+  if (r > radius_deg + 1) return {0, 0};
+  // 12 Gaussian bumps in the disc, each pushing in its own direction
+  uint64_t state = seed * 0x2545F4914F6CDD1Dull + 17;
+  const double sigma = radius_deg / 3.0;
+  glm::dvec2 d(0);
+  for (int k = 0; k < 12; ++k) {
+    const double cr = radius_deg * std::sqrt(uniform(state)), ca = 2 * std::numbers::pi * uniform(state);
+    const double da = 2 * std::numbers::pi * uniform(state);
+    const glm::dvec2 c(cr * std::cos(ca), cr * std::sin(ca));
+    const double e = std::exp(-((x - c.x) * (x - c.x) + (y - c.y) * (y - c.y)) / (2 * sigma * sigma));
+    d += e * glm::dvec2(std::cos(da), std::sin(da));
+  }
+  const double window = 1.0 - std::clamp((r - radius_deg + 1) / 2.0, 0.0, 1.0);
+  return d * (amplitude_deg * window / 2.0);
+}
+
+std::string Impairments::describe() const {
+  std::string s;
+  auto add = [&](const std::string& part) { s += (s.empty() ? "" : ", ") + part; };
+  if (media.glare) add(fmt::format("glare (age {}, cataract {})", media.age_years, media.cataract));
+  if (media.yellowing) add("lens yellowing");
+  if (!field.empty()) add(fmt::format("field loss ({}, {})", field.view, to_string(field_mode)));
+  if (metamorphopsia.any()) add(fmt::format("metamorphopsia {}° within {}°", metamorphopsia.amplitude_deg, metamorphopsia.radius_deg));
+  if (cvd.type != CvdType::none) add(fmt::format("{} {}", to_string(cvd.type), cvd.severity));
+  return s.empty() ? "none" : s;
+}
+
+ImpairmentPasses::ImpairmentPasses(const Impairments& impairments)
+    : impairments_(impairments), map_(impairments.field.map()) {}
+
+std::vector<float> ImpairmentPasses::loss_db(const Retinotopy& r) const {
+  std::vector<float> loss(r.field_deg.size(), 0.0f);
+  if (map_.empty()) return loss;
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, loss.size(), 4096), [&](const tbb::blocked_range<size_t>& range) {
+    for (size_t i = range.begin(); i < range.end(); ++i)
+      loss[i] = static_cast<float>(map_.loss_db(r.field_deg[i].x, r.field_deg[i].y));
+  });
+  return loss;
+}
+
+ImpairTimes ImpairmentPasses::apply(Image& image, const Retinotopy& r) const {
+  const Timer total;
+  ImpairTimes t;
+  const Impairments& im = impairments_;
+  if (image.channels != 3) fail("impairments need a 3-channel image, got {}", image.channels);
+  if (size_t(image.width) * image.height != r.field_deg.size()) fail("impairments: the retinotopy does not fit the image");
+  {  // 1. Ocular media
+    const Timer timer;
+    if (im.media.glare) apply_glare(image, r.ppd, im.media);
+    if (im.media.yellowing) {
+      const glm::dvec3 tr = lens_transmittance(im.media);
+      const size_t n = size_t(image.width) * image.height;
+      for (size_t i = 0; i < n; ++i)
+        for (int c = 0; c < 3; ++c) image.pixels[i * 3 + c] *= static_cast<float>(tr[c]);
+    }
+    t.media_ms = timer.ms();
+  }
+  {  // 2. Retina: metamorphopsia moves the image, the field loss acts where it lands
+    const Timer timer;
+    if (im.metamorphopsia.any()) {
+      cv::Mat map_x(image.height, image.width, CV_32F), map_y(image.height, image.width, CV_32F);
+      tbb::parallel_for(0, image.height, [&](int y) {
+        for (int x = 0; x < image.width; ++x) {
+          const glm::vec2 f = r.field_deg[size_t(y) * image.width + x];
+          const glm::dvec2 d = im.metamorphopsia.displacement(f.x, f.y);
+          map_x.at<float>(y, x) = static_cast<float>(x + d.x * r.ppd);
+          map_y.at<float>(y, x) = static_cast<float>(y - d.y * r.ppd);
+        }
+      });
+      cv::Mat src = as_mat(image).clone(), dst = as_mat(image);
+      cv::remap(src, dst, map_x, map_y, cv::INTER_LINEAR, cv::BORDER_REFLECT);
+    }
+    if (!map_.empty()) apply_field_loss(image, loss_db(r), im.field_mode);
+    t.field_ms = timer.ms();
+  }
+  {  // 3. Colour vision
+    const Timer timer;
+    apply_cvd(im.cvd, image);
+    t.colour_ms = timer.ms();
+  }
+  t.total_ms = total.ms();
+  return t;
+}
+
+Retinotopy display_retinotopy(const Display& display, int width, int height, glm::dvec2 gaze_px) {
+  FoveationParams round;
+  round.ellipse_ratio = 1.0;
+  const FoveationModel model(display, width, height, gaze_px, round);
+  Retinotopy r{width, height, std::vector<glm::vec2>(size_t(width) * height),
+               pixels_per_degree(display) * width / display.res_x};
+  tbb::parallel_for(0, height, [&](int y) {
+    for (int x = 0; x < width; ++x) {
+      const FoveaSample s = model.evaluate(x, y);
+      r.field_deg[size_t(y) * width + x] = glm::vec2(static_cast<float>(s.ex_deg), static_cast<float>(-s.ey_deg));
+    }
+  });
+  return r;
+}
+
+Image amsler_grid(const ImpairmentPasses& passes, double ppd) {
+  const int size = static_cast<int>(std::lround(22 * ppd));  // 20° of grid and a 1° margin
+  Image grid(size, size, 3, 0.0f);
+  const double c = size / 2.0;
+  const float line = static_cast<float>(std::max(1.0, ppd / 12));
+  for (int y = 0; y < size; ++y)
+    for (int x = 0; x < size; ++x) {
+      const double fx = (x + 0.5 - c) / ppd, fy = (y + 0.5 - c) / ppd;
+      const bool inside = std::abs(fx) <= 10.0 + 0.5 / ppd && std::abs(fy) <= 10.0 + 0.5 / ppd;
+      // pixels from the nearest line (lines every ppd pixels through the centre)
+      const double gx = std::abs(std::remainder(x + 0.5 - c, ppd)), gy = std::abs(std::remainder(y + 0.5 - c, ppd));
+      const bool on = inside && (gx <= line / 2 + 1e-9 || gy <= line / 2 + 1e-9);
+      const bool dot = std::hypot(fx, fy) * ppd < 2.5 * line;
+      if (on || dot) grid.at(x, y, 0) = grid.at(x, y, 1) = grid.at(x, y, 2) = 1.0f;
+    }
+  Retinotopy r{size, size, std::vector<glm::vec2>(size_t(size) * size), ppd};
+  for (int y = 0; y < size; ++y)
+    for (int x = 0; x < size; ++x)
+      r.field_deg[size_t(y) * size + x] = glm::vec2((x + 0.5 - c) / ppd, (c - y - 0.5) / ppd);
+  passes.apply(grid, r);
+  return grid;
+}
+
+}  // namespace foveal

@@ -1,0 +1,121 @@
+// foveal/impair/impairments.h — what an impaired eye does to the image after its optics: the ocular
+// media (forward scatter and lens yellowing), the retina (visual-field loss, metamorphopsia) and
+// colour vision — in that order, on linear RGB, with the field centred on the fixation.
+#pragma once
+
+#include "foveal/impair/cvd.h"
+#include "foveal/impair/field.h"
+#include "foveal/util/image.h"
+
+#include <glm/glm.hpp>
+
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace foveal {
+
+// Forward light scatter: the CIE 2002 general disability glare equation (CIE 146:2002; Vos & van
+// den Berg 1999), the equivalent veiling luminance per glare illuminance, sr⁻¹, θ in degrees
+// (valid 0.1°–100°), age A in years, pigmentation p (0 very dark eyes, 0.5 brown, 1 blue-green):
+//   L/E = 10/θ³ + (5/θ² + 0.1·p/θ)·(1 + (A/62.5)⁴) + 0.0025·p
+double cie_glare_psf(double theta_deg, double age_years, double pigmentation);
+// Its integral over the solid angle between θ1 and θ2 (small-angle: dΩ = 2π θ dθ): the fraction of
+// the light scattered there.
+double cie_glare_fraction(double theta1_deg, double theta2_deg, double age_years, double pigmentation);
+inline constexpr double kGlareMinDeg = 0.1;
+
+struct MediaParams {
+  double cataract = 0;        // severity 0–1: straylight × 10^severity (up to 1 log unit above age-normal)
+  double age_years = 25;      // the CIE equation's age and the lens's yellowing
+  double pigmentation = 0.5;  // the CIE equation's p
+  bool glare = false;         // forward scatter (on with a cataract, or asked for)
+  bool yellowing = false;     // lens transmittance (on with a cataract, or asked for)
+  bool any() const { return glare || yellowing; }
+};
+// The straylight multiplier of a cataract severity.
+double cataract_straylight_factor(double severity);
+// Lens transmittance for linear R, G, B relative to a 25-year-old lens: the age dependence of
+// Pokorny, Smith & Lutze 1987 (the age-dependent density D1 × [1 + 0.02(A − 32)] to 60 years,
+// × [1.56 + 0.0667(A − 60)] beyond), D1 at the sRGB primaries' dominant wavelengths (about 610,
+// 545 and 465 nm) taken as 0.02, 0.05 and 0.25; a brunescent cataract of severity s adds the density
+// of 40·s more years.
+glm::dvec3 lens_transmittance(const MediaParams& media);
+
+// The scatter kernel on a pixel grid of `ppd` pixels per degree, (2·rx+1) × (2·ry+1): each pixel the
+// CIE equation times its solid angle, the centre the integral from 0.1° to the pixel's own radius.
+// Multiplied by the straylight factor; its sum is the scattered fraction η.
+std::vector<float> glare_kernel(double ppd, int rx, int ry, const MediaParams& media);
+// out = (1 − η)·I + K ⊛ I (light scattered beyond the image is lost). Computed on a grid of at most
+// about 320 columns, the scattered part upsampled.
+void apply_glare(Image& image, double ppd, const MediaParams& media);
+
+// How a field loss is shown. `contrast` (default): each band of a Laplacian pyramid (Burt &
+// Adelson 1983) is scaled by the local sensitivity 10^(−L/10), Peli's local band-limited contrast
+// (Peli 1990) reduced by L dB at unchanged local mean luminance. `blur`: every 6 dB removes the
+// finest remaining octave. `grey`: the image fades into its mean colour. `fill`: the surround fills
+// in (push-pull interpolation from where sensitivity remains).
+enum class FieldMode { contrast, blur, grey, fill };
+FieldMode parse_field_mode(const std::string& name);
+const char* to_string(FieldMode mode);
+// `loss_db` per pixel (width × height).
+void apply_field_loss(Image& image, const std::vector<float>& loss_db, FieldMode mode);
+
+// Metamorphopsia: a smooth retinotopic distortion within `radius_deg` of the fovea, displacements
+// up to about `amplitude_deg`, the same for a seed.
+struct Metamorphopsia {
+  double amplitude_deg = 0;
+  double radius_deg = 6;
+  uint64_t seed = 1;
+  bool any() const { return amplitude_deg > 0; }
+  // The displacement (degrees, field coordinates: x right, y up) at a field location.
+  glm::dvec2 displacement(double x_deg, double y_deg) const;
+};
+
+struct Impairments {
+  MediaParams media;
+  VisualField field;
+  FieldMode field_mode = FieldMode::contrast;
+  Metamorphopsia metamorphopsia;
+  CvdParams cvd;
+  bool any() const { return media.any() || !field.empty() || metamorphopsia.any() || cvd.type != CvdType::none; }
+  std::string describe() const;  // one line, for logs and stats
+};
+
+// Where each pixel lies in the visual field of the current fixation: degrees, x right, y up.
+struct Retinotopy {
+  int width = 0, height = 0;
+  std::vector<glm::vec2> field_deg;  // width × height
+  double ppd = 1;                    // pixels per degree at the fixation
+};
+
+// The render fills a display seen from its centre (perception/foveation.h): the exact angle from the
+// gaze, split as the foveation model splits it, y turned upwards; ppd at the display centre.
+struct Display;
+Retinotopy display_retinotopy(const Display& display, int width, int height, glm::dvec2 gaze_px);
+
+struct ImpairTimes {
+  double media_ms = 0, field_ms = 0, colour_ms = 0, total_ms = 0;
+};
+
+// The impairments of one eye, prepared once (the field's loss map) and applied to each frame.
+class ImpairmentPasses {
+ public:
+  explicit ImpairmentPasses(const Impairments& impairments);
+  const Impairments& impairments() const { return impairments_; }
+  const FieldMap& field_map() const { return map_; }
+  // Media, then retina (metamorphopsia, field loss), then colour, in place on linear RGB.
+  ImpairTimes apply(Image& image, const Retinotopy& retinotopy) const;
+  // The per-pixel loss (dB) of the field at this fixation.
+  std::vector<float> loss_db(const Retinotopy& retinotopy) const;
+
+ private:
+  Impairments impairments_;
+  FieldMap map_;
+};
+
+// An Amsler grid (20 × 20 squares of 1°, a central dot; white on black) as the eye sees it while
+// fixating its centre: `ppd` pixels per degree.
+Image amsler_grid(const ImpairmentPasses& passes, double ppd);
+
+}  // namespace foveal
