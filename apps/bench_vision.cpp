@@ -2,6 +2,7 @@
 // one simulation step) on this machine.
 #include "commands.h"
 #include "foveal/cuda/gpu.h"
+#include "foveal/impair/profile.h"
 #include "foveal/io/outputs.h"
 #include "foveal/util/error.h"
 #include "foveal/util/parallel.h"
@@ -11,6 +12,7 @@
 #include "foveal/render/pixel.h"
 #include "foveal/trace/tracer.h"
 #include "foveal/vision/features.h"
+#include "foveal/impair/profile.h"
 #include "foveal/vision/simulate.h"
 #include "foveal/vision/thin_lens.h"
 
@@ -131,19 +133,27 @@ namespace {
 // Medians over the steps after the first (warm-up) of one case on one device.
 struct StageTimes {
   double trace = 0, features = 0, sharpness = 0, blur = 0, total = 0;
+  ImpairTimes impair;  // the impairment passes (media, retina, colour; on the CPU)
 };
 
 // Collects one device's step timings and gives their medians.
 struct StageSeries {
-  std::vector<double> trace, features, sharpness, blur, total;
+  std::vector<double> trace, features, sharpness, blur, total, media, retina, colour, impair;
   void add(const StepStats& s) {
+    media.push_back(s.impair.media_ms);
+    retina.push_back(s.impair.field_ms);
+    colour.push_back(s.impair.colour_ms);
+    impair.push_back(s.impair.total_ms);
     trace.push_back(s.trace_ms);
     features.push_back(s.features_ms);
     sharpness.push_back(s.sharpness_ms);
     blur.push_back(s.blur_ms);
     total.push_back(s.total_ms);
   }
-  StageTimes medians() const { return {median(trace), median(features), median(sharpness), median(blur), median(total)}; }
+  StageTimes medians() const {
+    return {median(trace), median(features), median(sharpness), median(blur), median(total),
+            ImpairTimes{median(media), median(retina), median(colour), median(impair)}};
+  }
 };
 
 // How far two devices' free-running simulations of one case agree. Each device draws its own
@@ -258,6 +268,7 @@ std::function<int()> add_bench_vision_command(CLI::App& bench) {
   struct Options {
     std::vector<std::string> scenes, sizes{"1024x768", "1280x720"};
     std::string json, markdown, eye = "healthy", device = "auto";
+    std::string impairments = "cataract:0.5+field:arcuate:20+metamorphopsia:0.3+cvd:deutan:0.6";
     int steps = 20, threads = 0;
     uint64_t seed = 1;
   };
@@ -266,7 +277,10 @@ std::function<int()> add_bench_vision_command(CLI::App& bench) {
   cmd->add_option("--size", o->sizes, "sizes WxH")->delimiter(',')->capture_default_str();
   cmd->add_option("--steps", o->steps, "steps per case (median reported; the first is left out as warm-up)")
       ->capture_default_str()->check(CLI::Range(2, 10000));
-  cmd->add_option("--eye", o->eye, "eye preset")->capture_default_str();
+  cmd->add_option("--eye", o->eye, "eye preset (the optics; as for simulate)")->capture_default_str();
+  cmd->add_option("--impairments", o->impairments,
+                  "impairments timed after the optics in every step (presets as for simulate --eye; 'none' for the paper's step alone)")
+      ->capture_default_str();
   cmd->add_option("--seed", o->seed, "seed of the saccades")->capture_default_str();
   cmd->add_option("--threads", o->threads, "worker threads (0 = all cores)")->capture_default_str()->check(CLI::Range(0, 4096));
   cmd->add_option("--json", o->json, "write the table as JSON");
@@ -286,13 +300,14 @@ std::function<int()> add_bench_vision_command(CLI::App& bench) {
         scenes.push_back(conference);
       scenes.push_back("builtin:box");
     }
-    const EyeParams eye = parse_eye_preset(o->eye);
+    const EyeSpec eye_spec = parse_eye_spec(o->eye);
+    const Impairments impair = o->impairments == "none" ? Impairments{} : parse_eye_spec(o->impairments).impair;
     nlohmann::json rows = nlohmann::json::array();
     std::string md = cuda ? std::string("| scene | size | device | trace ms | features ms | sharpness ms | blur ms | step ms | CPU step ms | CPU / GPU | GPU trace / raw | CPU trace / raw | same fixations | corners first differ at step | perceived mean abs diff |\n"
                                         "|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n")
-                          : std::string("| scene | size | trace ms | features ms | sharpness ms | blur ms | total ms | (features+sharpness+blur) / trace | "
-                                        "trace / raw Embree |\n"
-                                        "|---|---|---:|---:|---:|---:|---:|---:|---:|\n");
+                          : std::string("| scene | size | trace ms | features ms | sharpness ms | blur ms | impairments ms (media + retina + colour) | total ms | (features+sharpness+blur) / trace | "
+                                        "impairments / trace | trace / raw Embree |\n"
+                                        "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
     fmt::print("foveal bench vision: {} steps per case (median of steps 2…), features every step, eye {}, {} threads\n", o->steps,
                o->eye, threads.threads());
     fmt::print("  device   {}\n", gpu::describe_device(device));
@@ -307,7 +322,8 @@ std::function<int()> add_bench_vision_command(CLI::App& bench) {
         SimulateParams p;
         p.width = size.x;
         p.height = size.y;
-        p.eye = eye;
+        p.eye = eye_spec.eye;
+        p.impair = impair;
         p.seed = o->seed;
         p.features_every_step = true;  // the paper's timing: corners every step
         p.cuda = cuda;
@@ -320,6 +336,10 @@ std::function<int()> add_bench_vision_command(CLI::App& bench) {
         const double raw_cpu = raw_embree_rate(tracer, rays);
         const double raw = cuda ? raw_gpu->measure_intersection_rate(rays, 5) : raw_cpu;
         const double trace_vs_raw = raw > 0 ? rate(c.trace) / raw : 0;
+        if (impair.any())
+          fmt::print("  {:<28} {:>9}  impairments {:6.2f} ms (media {:.2f}, retina {:.2f}, colour {:.2f}) = {:.2f} of the trace stage\n",
+                     scene.source, size_text, c.impair.total_ms, c.impair.media_ms, c.impair.field_ms, c.impair.colour_ms,
+                     c.trace > 0 ? c.impair.total_ms / c.trace : 0.0);
         fmt::print("  {:<28} {:>9}  trace {:6.2f}  features {:6.2f}  sharpness {:6.2f}  blur {:6.2f}  total {:6.2f} ms  (rest/trace {:.2f})\n"
                    "  {:<28} {:>9}  trace {:.0f} Mrays/s = {:.2f} of raw {} closest-hit tracing of the same rays ({:.0f} Mrays/s)\n",
                    scene.source, size_text, c.trace, c.features, c.sharpness, c.blur, c.total, ratio, "", "", rate(c.trace) / 1e6, trace_vs_raw,
@@ -328,12 +348,18 @@ std::function<int()> add_bench_vision_command(CLI::App& bench) {
                               {"device", gpu::to_string(device)},
                               {"time_ms", {{"trace", c.trace}, {"features", c.features}, {"sharpness", c.sharpness}, {"blur", c.blur}, {"total", c.total}}},
                               {"non_tracing_over_trace", ratio},
+                              {"impairments", impair.describe()},
+                              {"impairments_ms", {{"media", c.impair.media_ms}, {"retina", c.impair.field_ms}, {"colour", c.impair.colour_ms},
+                                                  {"total", c.impair.total_ms}}},
+                              {"impairments_over_trace", c.trace > 0 ? c.impair.total_ms / c.trace : 0.0},
                               {"trace_rays_per_second", rate(c.trace)},
                               {"raw_closest_hit_rays_per_second", raw},
                               {"trace_over_raw", trace_vs_raw}};
         if (!cuda) {
-          md += fmt::format("| {} | {} | {:.1f} | {:.1f} | {:.1f} | {:.1f} | {:.1f} | {:.2f} | {:.2f} |\n", scene.source, size_text, c.trace,
-                            c.features, c.sharpness, c.blur, c.total, ratio, trace_vs_raw);
+          md += fmt::format("| {} | {} | {:.1f} | {:.1f} | {:.1f} | {:.1f} | {:.1f} ({:.1f} + {:.1f} + {:.1f}) | {:.1f} | {:.2f} | {:.2f} | {:.2f} |\n",
+                            scene.source, size_text, c.trace, c.features, c.sharpness, c.blur, c.impair.total_ms, c.impair.media_ms,
+                            c.impair.field_ms, c.impair.colour_ms, c.total, ratio, c.trace > 0 ? c.impair.total_ms / c.trace : 0.0,
+                            trace_vs_raw);
         } else {
           // The same case on the CPU, step for step in the same run: the ratio, and how far the devices agree
           const StageTimes& cpu = vc.cpu;

@@ -10,6 +10,7 @@
 #include "foveal/util/error.h"
 #include "foveal/util/parallel.h"
 #include "foveal/util/parse.h"
+#include "foveal/impair/profile.h"
 #include "foveal/util/stats.h"
 #include "foveal/util/timer.h"
 #include "foveal/vision/simulate.h"
@@ -48,7 +49,9 @@ std::function<int()> add_simulate_command(CLI::App& app) {
   add_view_options(*cmd, o->view);
   cmd->add_option("--path", o->path, "a camera path of the scene JSON (camera_paths): the camera moves between steps");
   auto* steps_option = cmd->add_option("--steps", o->steps, "time steps (one fixation each); with a --gaze recording: at most this many (default: all its fixations)")->capture_default_str()->check(CLI::Range(1, 100000));
-  cmd->add_option("--eye", o->eye, "eye: healthy, glaucoma[:SEVERITY 0..1], myopia:-D, hyperopia:D, presbyopia:AGE, astigmatism:CYL[@AXIS]; join with '+'")
+  cmd->add_option("--eye", o->eye, "eye: healthy, glaucoma[:SEVERITY 0..1], myopia:-D, hyperopia:D, presbyopia:AGE, astigmatism:CYL[@AXIS], "
+                  "age:Y, cataract[:S], glare, cvd:TYPE[:S], achromatopsia, field:FILE.csv|GRID:FILE|DEFECT, field-view:OD|OS|both, "
+                  "field-mode:contrast|blur|grey|fill, amd[:R[:A]], metamorphopsia:A[:R]; join with '+'; or a profile .json")
       ->capture_default_str();
   cmd->add_option("--pupil", o->pupil, "pupil diameter A, mm")->capture_default_str();
   cmd->add_option("--image-distance", o->image_distance, "lens-to-retina distance I, mm")->capture_default_str();
@@ -87,8 +90,10 @@ std::function<int()> add_simulate_command(CLI::App& app) {
     const glm::ivec2 size = parse_size("--size", o->view.size);
     p.width = size.x;
     p.height = size.y;
-    p.eye = parse_eye_preset(o->eye);
-    p.eye.pupil_diameter_mm = o->pupil;
+    const EyeSpec eye_spec = parse_eye_spec(o->eye);
+    p.eye = eye_spec.eye;
+    p.impair = eye_spec.impair;
+    if (!o->eye.ends_with(".json") || o->pupil != 3.5) p.eye.pupil_diameter_mm = o->pupil;
     p.eye.image_distance_mm = o->image_distance;
     p.starvation = o->starvation;
     p.voxel = static_cast<float>(o->voxel);
@@ -207,6 +212,11 @@ std::function<int()> add_simulate_command(CLI::App& app) {
       for (const StepStats& s : steps) v.push_back(s.*field);
       return median(v);
     };
+    auto stage_impair = [&](double ImpairTimes::*field) {
+      std::vector<double> v;
+      for (const StepStats& s : steps) v.push_back(s.impair.*field);
+      return median(v);
+    };
     double path_px = 0;
     for (size_t k = 1; k < fixations.size(); ++k) path_px += glm::length(fixations[k] - fixations[k - 1]);
     if (!o->stats.empty()) {
@@ -214,6 +224,7 @@ std::function<int()> add_simulate_command(CLI::App& app) {
       j["width"] = p.width;
       j["height"] = p.height;
       j["eye"] = o->eye;
+      j["impairments"] = p.impair.describe();
       j["seed"] = p.seed;
       j["threads"] = threads.threads();
       j["device"] = gpu::to_string(device);
@@ -224,6 +235,10 @@ std::function<int()> add_simulate_command(CLI::App& app) {
                       {"features", stage(&StepStats::features_ms)},
                       {"sharpness", stage(&StepStats::sharpness_ms)},
                       {"blur", stage(&StepStats::blur_ms)},
+                      {"impairments", stage_impair(&ImpairTimes::total_ms)},
+                      {"media", stage_impair(&ImpairTimes::media_ms)},
+                      {"retina", stage_impair(&ImpairTimes::field_ms)},
+                      {"colour", stage_impair(&ImpairTimes::colour_ms)},
                       {"total", stage(&StepStats::total_ms)},
                       {"statistic", "median over steps"}};
       j["scan_path_px"] = path_px;
@@ -257,6 +272,9 @@ std::function<int()> add_simulate_command(CLI::App& app) {
                std::isfinite(range.far_point_m()) ? fmt::format("{:.2f} m", range.far_point_m()) : "infinity", steps.size(),
                threads.threads());
     fmt::print("  device   {}\n", gpu::describe_device(device));
+    if (p.impair.any())
+      fmt::print("  impaired {} ({:.1f} ms per step; on the CPU{})\n", p.impair.describe(), stage_impair(&ImpairTimes::total_ms),
+                 p.cuda ? ", after the GPU's passes" : "");
     if (gaze) fmt::print("  gaze     {}\n", gaze_summary);
     fmt::print("  sharp    {:.1f}% of the image after the last step; scan path {:.0f} px over {} fixations\n",
                100 * steps.back().sharp_fraction, path_px, fixations.size());

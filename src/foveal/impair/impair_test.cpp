@@ -395,10 +395,11 @@ TEST(Glare, ThePointSpreadKeepsEnergyAndFollowsTheEquation) {
   MediaParams m;
   m.age_years = 60;
   m.glare = true;
-  const int n = 201;  // one pixel per 0.1° over 20°: no reduced grid
+  const int n = 151;  // one pixel per 0.1° over 15°: no reduced grid
+  const int c = n / 2;
   const double ppd = 10;
   Image delta(n, n, 3, 0.0f);
-  for (int c = 0; c < 3; ++c) delta.at(100, 100, c) = 1.0f;
+  for (int ch = 0; ch < 3; ++ch) delta.at(c, c, ch) = 1.0f;
   Image out = delta;
   apply_glare(out, ppd, m);
   const std::vector<float> k = glare_kernel(ppd, n - 1, n - 1, m);
@@ -407,7 +408,7 @@ TEST(Glare, ThePointSpreadKeepsEnergyAndFollowsTheEquation) {
   for (int j = 0; j < kw; ++j)
     for (int i = 0; i < kw; ++i) {
       eta += k[size_t(j) * kw + i];
-      if (std::abs(i - (n - 1)) <= 100 && std::abs(j - (n - 1)) <= 100) landed += k[size_t(j) * kw + i];
+      if (std::abs(i - (n - 1)) <= c && std::abs(j - (n - 1)) <= c) landed += k[size_t(j) * kw + i];
     }
   double total = 0;
   for (int y = 0; y < n; ++y)
@@ -415,7 +416,16 @@ TEST(Glare, ThePointSpreadKeepsEnergyAndFollowsTheEquation) {
   // what stays + what is scattered within the image; the rest left the image
   EXPECT_NEAR(total, 1.0 - eta + landed, 1e-4);
   EXPECT_GT(eta, landed);
-  EXPECT_NEAR(out.at(150, 100, 1) / (cie_glare_psf(5.0, 60, 0.5) * std::pow(std::numbers::pi / 180 / ppd, 2)), 1.0, 1e-3);
+  EXPECT_NEAR(out.at(c + 50, c, 1) / (cie_glare_psf(5.0, 60, 0.5) * std::pow(std::numbers::pi / 180 / ppd, 2)), 1.0, 1e-3);
+  // a larger image goes through the reduced grid: the same scatter 5° out, within a few per cent
+  Image big(640, 480, 3, 0.0f);
+  for (int ch = 0; ch < 3; ++ch) big.at(320, 240, ch) = 1.0f;
+  apply_glare(big, 40, m);
+  double ring = 0;
+  for (int a = 0; a < 360; a += 10)
+    ring += big.at(320 + int(std::lround(200 * std::cos(a * std::numbers::pi / 180))),
+                   240 + int(std::lround(200 * std::sin(a * std::numbers::pi / 180))), 0);
+  EXPECT_NEAR(ring / 36 / (cie_glare_psf(5.0, 60, 0.5) * std::pow(std::numbers::pi / 180 / 40, 2)), 1.0, 0.05);
 }
 
 TEST(Media, LensYellowingFollowsPokornysAgeFactors) {

@@ -56,7 +56,7 @@ glm::dvec3 lens_transmittance(const MediaParams& m) {
     return age <= 60 ? 1.0 + 0.02 * (std::max(age, 20.0) - 32.0) : 1.56 + 0.0667 * (age - 60.0);
   };
   const glm::dvec3 d1(0.02, 0.05, 0.25);
-  const double extra = multiplier(m.age_years) - multiplier(25.0) + 0.0667 * 40.0 * std::clamp(m.cataract, 0.0, 1.0);
+  const double extra = multiplier(m.age_years) - multiplier(25.0) + 0.0667 * 20.0 * std::clamp(m.cataract, 0.0, 1.0);
   return glm::dvec3(std::pow(10.0, -d1.x * extra), std::pow(10.0, -d1.y * extra), std::pow(10.0, -d1.z * extra));
 }
 
@@ -89,10 +89,19 @@ std::vector<float> glare_kernel(double ppd, int rx, int ry, const MediaParams& m
   return k;
 }
 
-void apply_glare(Image& image, double ppd, const MediaParams& m) {
+struct GlareSpectrum {
+  int width = 0, height = 0;  // the reduced grid
+  double ppd = 0;
+  MediaParams media;
+  cv::Size padded;
+  cv::Mat spectrum;  // the kernel's DFT (CCS packed)
+  double eta = 0;    // the kernel's sum
+};
+
+void apply_glare(Image& image, double ppd, const MediaParams& m, std::shared_ptr<GlareSpectrum>* cache) {
   if (image.empty()) return;
-  // the scatter is smooth beyond a few tenths of a degree: compute it on a coarser grid
-  const int factor = std::max(1, (image.width + 319) / 320);
+  // the scatter is smooth beyond a few tenths of a degree: compute it on a grid of at most 160 columns
+  const int factor = std::max(1, (image.width + 159) / 160);
   const cv::Mat full = as_mat(image);
   cv::Mat small;
   if (factor > 1)
@@ -100,21 +109,57 @@ void apply_glare(Image& image, double ppd, const MediaParams& m) {
                cv::INTER_AREA);
   else
     small = full.clone();
-  const int rx = small.cols - 1, ry = small.rows - 1;
-  std::vector<float> k = glare_kernel(ppd * small.cols / image.width, rx, ry, m);
-  double eta = 0;
-  for (float v : k) eta += v;
-  if (eta > 0.95) {  // more than the light there is: the straylight saturates
-    for (float& v : k) v = static_cast<float>(v * 0.95 / eta);
-    eta = 0.95;
+  const double small_ppd = ppd * small.cols / image.width;
+  std::shared_ptr<GlareSpectrum> g = cache ? *cache : nullptr;
+  if (!g || g->width != small.cols || g->height != small.rows || g->ppd != small_ppd || g->media.age_years != m.age_years ||
+      g->media.pigmentation != m.pigmentation || g->media.cataract != m.cataract) {
+    // the kernel covers every pair of pixels; the linear convolution fits the padded size
+    g = std::make_shared<GlareSpectrum>();
+    g->width = small.cols;
+    g->height = small.rows;
+    g->ppd = small_ppd;
+    g->media = m;
+    const int rx = small.cols - 1, ry = small.rows - 1;
+    std::vector<float> k = glare_kernel(small_ppd, rx, ry, m);
+    double eta = 0;
+    for (float v : k) eta += v;
+    if (eta > 0.95) {  // more than the light there is: the straylight saturates
+      for (float& v : k) v = static_cast<float>(v * 0.95 / eta);
+      eta = 0.95;
+    }
+    g->eta = eta;
+    g->padded = cv::Size(cv::getOptimalDFTSize(small.cols + 2 * rx), cv::getOptimalDFTSize(small.rows + 2 * ry));
+    cv::Mat padded = cv::Mat::zeros(g->padded, CV_32F);
+    cv::Mat(2 * ry + 1, 2 * rx + 1, CV_32F, k.data()).copyTo(padded(cv::Rect(0, 0, 2 * rx + 1, 2 * ry + 1)));
+    cv::dft(padded, g->spectrum, 0, 2 * ry + 1);
+    if (cache) *cache = g;
   }
-  const cv::Mat kernel(2 * ry + 1, 2 * rx + 1, CV_32F, k.data());
+  std::vector<cv::Mat> channels;
+  cv::split(small, channels);
+  for (cv::Mat& c : channels) {
+    cv::Mat padded = cv::Mat::zeros(g->padded, CV_32F), spectrum, product, conv;
+    c.copyTo(padded(cv::Rect(0, 0, c.cols, c.rows)));
+    cv::dft(padded, spectrum, 0, c.rows);
+    cv::mulSpectrums(spectrum, g->spectrum, product, 0);
+    cv::dft(product, conv, cv::DFT_INVERSE | cv::DFT_SCALE | cv::DFT_REAL_OUTPUT);
+    // the kernel's centre sits at (cols − 1, rows − 1) of the full convolution
+    conv(cv::Rect(c.cols - 1, c.rows - 1, c.cols, c.rows)).copyTo(c);
+  }
   cv::Mat scattered;
-  cv::filter2D(small, scattered, CV_32F, kernel, cv::Point(-1, -1), 0, cv::BORDER_CONSTANT);
-  if (factor > 1) cv::resize(scattered, scattered, full.size(), 0, 0, cv::INTER_LINEAR);
-  cv::Mat out = full * (1.0 - eta) + scattered;
-  out.copyTo(full);
+  cv::merge(channels, scattered);
+  thread_local cv::Mat up_buffer;  // full size, kept per thread
+  cv::Mat& up = up_buffer;
+  if (factor > 1) cv::resize(scattered, up, full.size(), 0, 0, cv::INTER_LINEAR);
+  else scattered.copyTo(up);
+  const float keep = static_cast<float>(1.0 - g->eta);
+  const size_t n = image.pixels.size();
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 1 << 16), [&](const tbb::blocked_range<size_t>& r) {
+    const float* u = up.ptr<float>();
+    for (size_t i = r.begin(); i < r.end(); ++i) image.pixels[i] = keep * image.pixels[i] + u[i];
+  });
 }
+
+void apply_glare(Image& image, double ppd, const MediaParams& m) { apply_glare(image, ppd, m, nullptr); }
 
 FieldMode parse_field_mode(const std::string& name) {
   for (FieldMode m : {FieldMode::contrast, FieldMode::blur, FieldMode::grey, FieldMode::fill})
@@ -134,16 +179,17 @@ const char* to_string(FieldMode mode) {
 
 namespace {
 
-// Multiply each channel of `a` (any channel count) by the one-channel `w`.
+// Multiply each channel of `a` (float, any channel count) by the one-channel `w`, in place.
 void scale_channels(cv::Mat& a, const cv::Mat& w) {
-  if (a.channels() == 1) {
-    cv::multiply(a, w, a);
-    return;
-  }
-  std::vector<cv::Mat> ws(a.channels(), w);
-  cv::Mat w3;
-  cv::merge(ws, w3);
-  cv::multiply(a, w3, a);
+  const int n = a.channels();
+  tbb::parallel_for(tbb::blocked_range<int>(0, a.rows, 16), [&](const tbb::blocked_range<int>& rows) {
+    for (int y = rows.begin(); y < rows.end(); ++y) {
+      float* p = a.ptr<float>(y);
+      const float* s = w.ptr<float>(y);
+      for (int x = 0; x < a.cols; ++x)
+        for (int c = 0; c < n; ++c) p[x * n + c] *= s[x];
+    }
+  });
 }
 
 int pyramid_levels(cv::Size size) {
@@ -162,9 +208,12 @@ void apply_field_loss(Image& image, const std::vector<float>& loss_db, FieldMode
                                                                   image.width, image.height);
   cv::Mat img = as_mat(image);
   const cv::Mat loss(image.height, image.width, CV_32F, const_cast<float*>(loss_db.data()));
-  cv::Mat m;  // the remaining sensitivity 10^(−L/10)
-  const cv::Mat scaled_loss = loss * (-std::log(10.0) / 10.0);
-  cv::exp(scaled_loss, m);
+  if (image.channels != 3) fail("field loss needs a 3-channel image, got {} channels", image.channels);
+  cv::Mat m;  // the remaining sensitivity 10^(−L/10), for grey and fill
+  if (mode == FieldMode::grey || mode == FieldMode::fill) {
+    const cv::Mat scaled_loss = loss * (-std::log(10.0) / 10.0);
+    cv::exp(scaled_loss, m);
+  }
   if (mode == FieldMode::grey) {
     const cv::Scalar mean = cv::mean(img);
     cv::Mat fill(img.size(), img.type(), mean), keep = img.clone(), rest = 1.0 - m;
@@ -175,7 +224,7 @@ void apply_field_loss(Image& image, const std::vector<float>& loss_db, FieldMode
     return;
   }
   const int levels = pyramid_levels(img.size());
-  std::vector<cv::Mat> g{img.clone()};
+  std::vector<cv::Mat> g{img};  // level 0 is the image itself (read before the last pass writes it)
   for (int k = 0; k < levels; ++k) {
     cv::Mat down;
     cv::pyrDown(g.back(), down);
@@ -208,30 +257,39 @@ void apply_field_loss(Image& image, const std::vector<float>& loss_db, FieldMode
     fill.copyTo(img);
     return;
   }
-  // Laplacian bands, each scaled by its weight at its own resolution
-  cv::Mat out = g[levels];
+  // Laplacian bands, each scaled by its weight at its own resolution; the finest level is fused
+  // into one pass that writes the image (full-size buffers kept per thread: no page faults per frame)
+  const float ln10_10 = static_cast<float>(std::log(10.0) / 10.0);
+  auto weight = [&](float l, int k) {
+    return mode == FieldMode::contrast ? std::exp(-l * ln10_10) : std::clamp((k + 1.0f) - l / 6.0f, 0.0f, 1.0f);
+  };
+  cv::Mat out = g[levels].clone();
+  thread_local cv::Mat up_g_buffer, up_o_buffer;
+  cv::Mat& up_g = up_g_buffer;  // (the workers below see this thread's buffers through these)
+  cv::Mat& up_o = up_o_buffer;
   for (int k = levels - 1; k >= 0; --k) {
-    cv::Mat up, band;
-    cv::pyrUp(g[k + 1], up, g[k].size());
-    band = g[k] - up;
-    cv::Mat w;
-    if (mode == FieldMode::contrast) {
-      if (k == 0) w = m;
-      else cv::resize(m, w, g[k].size(), 0, 0, cv::INTER_LINEAR);
-    } else {  // blur: every 6 dB removes one more octave from the finest
-      cv::Mat l;
-      if (k == 0) l = loss;
-      else cv::resize(loss, l, g[k].size(), 0, 0, cv::INTER_LINEAR);
-      const cv::Mat raw = (k + 1.0) - l / 6.0;
-      const cv::Mat above = cv::max(raw, 0.0);
-      w = cv::min(above, 1.0);
-    }
-    scale_channels(band, w);
-    cv::Mat next;
-    cv::pyrUp(out, next, g[k].size());
-    out = next + band;
+    const cv::Mat& gk = k == 0 ? img : g[k];
+    cv::pyrUp(g[k + 1], up_g, gk.size());
+    cv::pyrUp(out, up_o, gk.size());
+    cv::Mat lk;
+    if (k == 0) lk = loss;
+    else cv::resize(loss, lk, gk.size(), 0, 0, cv::INTER_LINEAR);
+    cv::Mat& dst = k == 0 ? img : up_o;  // the finest level writes the image itself
+    tbb::parallel_for(tbb::blocked_range<int>(0, gk.rows, 8), [&](const tbb::blocked_range<int>& rows) {
+      for (int y = rows.begin(); y < rows.end(); ++y) {
+        const float* gp = gk.ptr<float>(y);
+        const float* ug = up_g.ptr<float>(y);
+        const float* uo = up_o.ptr<float>(y);
+        const float* lp = lk.ptr<float>(y);
+        float* d = dst.ptr<float>(y);
+        for (int x = 0; x < gk.cols; ++x) {
+          const float w = lp[x] == 0.0f ? 1.0f : weight(lp[x], k);
+          for (int c = 0; c < 3; ++c) d[x * 3 + c] = uo[x * 3 + c] + w * (gp[x * 3 + c] - ug[x * 3 + c]);
+        }
+      }
+    });
+    if (k > 0) out = up_o.clone();
   }
-  out.copyTo(img);
 }
 
 glm::dvec2 Metamorphopsia::displacement(double x, double y) const {
@@ -282,10 +340,11 @@ ImpairTimes ImpairmentPasses::apply(Image& image, const Retinotopy& r) const {
   ImpairTimes t;
   const Impairments& im = impairments_;
   if (image.channels != 3) fail("impairments need a 3-channel image, got {}", image.channels);
-  if (size_t(image.width) * image.height != r.field_deg.size()) fail("impairments: the retinotopy does not fit the image");
+  if (needs_retinotopy() && size_t(image.width) * image.height != r.field_deg.size())
+    fail("impairments: the retinotopy does not fit the image");
   {  // 1. Ocular media
     const Timer timer;
-    if (im.media.glare) apply_glare(image, r.ppd, im.media);
+    if (im.media.glare) apply_glare(image, r.ppd, im.media, &glare_cache_);
     if (im.media.yellowing) {
       const glm::dvec3 tr = lens_transmittance(im.media);
       const size_t n = size_t(image.width) * image.height;
@@ -297,16 +356,43 @@ ImpairTimes ImpairmentPasses::apply(Image& image, const Retinotopy& r) const {
   {  // 2. Retina: metamorphopsia moves the image, the field loss acts where it lands
     const Timer timer;
     if (im.metamorphopsia.any()) {
-      cv::Mat map_x(image.height, image.width, CV_32F), map_y(image.height, image.width, CV_32F);
-      tbb::parallel_for(0, image.height, [&](int y) {
-        for (int x = 0; x < image.width; ++x) {
+      // the distortion is smooth: displacements on a grid of every 4th pixel, interpolated
+      constexpr int step = 4;
+      const int gw = (image.width + step - 1) / step + 1, gh = (image.height + step - 1) / step + 1;
+      cv::Mat gx(gh, gw, CV_32F), gy(gh, gw, CV_32F);
+      tbb::parallel_for(0, gh, [&](int j) {
+        for (int i = 0; i < gw; ++i) {
+          const int x = std::min(i * step, image.width - 1), y = std::min(j * step, image.height - 1);
           const glm::vec2 f = r.field_deg[size_t(y) * image.width + x];
           const glm::dvec2 d = im.metamorphopsia.displacement(f.x, f.y);
-          map_x.at<float>(y, x) = static_cast<float>(x + d.x * r.ppd);
-          map_y.at<float>(y, x) = static_cast<float>(y - d.y * r.ppd);
+          gx.at<float>(j, i) = static_cast<float>(d.x * r.ppd);
+          gy.at<float>(j, i) = static_cast<float>(-d.y * r.ppd);
         }
       });
-      cv::Mat src = as_mat(image).clone(), dst = as_mat(image);
+      thread_local cv::Mat map_x_buffer, map_y_buffer, source_buffer;  // full size, kept per thread
+      cv::Mat& map_x = map_x_buffer;
+      cv::Mat& map_y = map_y_buffer;
+      map_x.create(image.height, image.width, CV_32F);
+      map_y.create(image.height, image.width, CV_32F);
+      tbb::parallel_for(0, image.height, [&](int y) {
+        const int j = y / step;
+        const float ty = float(y - j * step) / step;
+        float* mx = map_x.ptr<float>(y);
+        float* my = map_y.ptr<float>(y);
+        for (int x = 0; x < image.width; ++x) {
+          const int i = x / step;
+          const float tx = float(x - i * step) / step;
+          auto lerp2 = [&](const cv::Mat& m) {
+            return (1 - ty) * ((1 - tx) * m.at<float>(j, i) + tx * m.at<float>(j, i + 1)) +
+                   ty * ((1 - tx) * m.at<float>(j + 1, i) + tx * m.at<float>(j + 1, i + 1));
+          };
+          mx[x] = static_cast<float>(x) + lerp2(gx);
+          my[x] = static_cast<float>(y) + lerp2(gy);
+        }
+      });
+      cv::Mat& src = source_buffer;
+      as_mat(image).copyTo(src);
+      cv::Mat dst = as_mat(image);
       cv::remap(src, dst, map_x, map_y, cv::INTER_LINEAR, cv::BORDER_REFLECT);
     }
     if (!map_.empty()) apply_field_loss(image, loss_db(r), im.field_mode);

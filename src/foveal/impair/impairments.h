@@ -39,7 +39,7 @@ double cataract_straylight_factor(double severity);
 // Pokorny, Smith & Lutze 1987 (the age-dependent density D1 × [1 + 0.02(A − 32)] to 60 years,
 // × [1.56 + 0.0667(A − 60)] beyond), D1 at the sRGB primaries' dominant wavelengths (about 610,
 // 545 and 465 nm) taken as 0.02, 0.05 and 0.25; a brunescent cataract of severity s adds the density
-// of 40·s more years.
+// of 20·s more years.
 glm::dvec3 lens_transmittance(const MediaParams& media);
 
 // The scatter kernel on a pixel grid of `ppd` pixels per degree, (2·rx+1) × (2·ry+1): each pixel the
@@ -47,8 +47,10 @@ glm::dvec3 lens_transmittance(const MediaParams& media);
 // Multiplied by the straylight factor; its sum is the scattered fraction η.
 std::vector<float> glare_kernel(double ppd, int rx, int ry, const MediaParams& media);
 // out = (1 − η)·I + K ⊛ I (light scattered beyond the image is lost). Computed on a grid of at most
-// about 320 columns, the scattered part upsampled.
+// 160 columns, the scattered part upsampled (the kernel's spectrum cached for the next frame).
 void apply_glare(Image& image, double ppd, const MediaParams& media);
+struct GlareSpectrum;  // the kernel's spectrum, kept while the grid and the media stay the same
+void apply_glare(Image& image, double ppd, const MediaParams& media, std::shared_ptr<GlareSpectrum>* cache);
 
 // How a field loss is shown. `contrast` (default): each band of a Laplacian pyramid (Burt &
 // Adelson 1983) is scaled by the local sensitivity 10^(−L/10), Peli's local band-limited contrast
@@ -104,7 +106,9 @@ class ImpairmentPasses {
   explicit ImpairmentPasses(const Impairments& impairments);
   const Impairments& impairments() const { return impairments_; }
   const FieldMap& field_map() const { return map_; }
-  // Media, then retina (metamorphopsia, field loss), then colour, in place on linear RGB.
+  bool needs_retinotopy() const { return !map_.empty() || impairments_.metamorphopsia.any(); }
+  // Media, then retina (metamorphopsia, field loss), then colour, in place on linear RGB. The
+  // retinotopy's field_deg may be empty when the retina is unimpaired (needs_retinotopy()).
   ImpairTimes apply(Image& image, const Retinotopy& retinotopy) const;
   // The per-pixel loss (dB) of the field at this fixation.
   std::vector<float> loss_db(const Retinotopy& retinotopy) const;
@@ -112,6 +116,7 @@ class ImpairmentPasses {
  private:
   Impairments impairments_;
   FieldMap map_;
+  mutable std::shared_ptr<GlareSpectrum> glare_cache_;  // apply() is not for concurrent use
 };
 
 // An Amsler grid (20 × 20 squares of 1°, a central dot; white on black) as the eye sees it while

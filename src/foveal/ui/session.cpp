@@ -1,6 +1,8 @@
 // foveal/ui/session.cpp — see session.h.
 #include "foveal/ui/session.h"
 
+#include "foveal/impair/profile.h"
+
 #include "foveal/cuda/gpu.h"
 
 #include "foveal/gaze/steps.h"
@@ -43,7 +45,9 @@ ViewMode parse_view_mode(const std::string& name) {
 void resolve(ViewSettings& s) {
   validate(s.render);
   const double pupil = s.vision.eye.pupil_diameter_mm, image_distance = s.vision.eye.image_distance_mm;
-  s.vision.eye = parse_eye_preset(s.eye);
+  const EyeSpec spec = parse_eye_spec(s.eye);  // optics and impairments (presets or a profile)
+  s.vision.eye = spec.eye;
+  s.vision.impair = spec.impair;
   s.vision.eye.pupil_diameter_mm = pupil;
   s.vision.eye.image_distance_mm = image_distance;
   s.vision.width = s.render.width;

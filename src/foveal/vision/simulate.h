@@ -2,6 +2,7 @@
 // the next fixation → accommodation → per-pixel CoC → sharpness field → variable blur.
 #pragma once
 
+#include "foveal/impair/impairments.h"
 #include "foveal/perception/eye.h"
 #include "foveal/render/render.h"
 #include "foveal/vision/blur.h"
@@ -29,6 +30,9 @@ struct SimulateParams {
   BlurParams blur;
   uint64_t seed = 1;
   bool cuda = false;              // run the passes on the GPU (gpu::VisionPasses); the saccades stay on the CPU
+  // After the optics: ocular media, the retina (metamorphopsia, field loss centred on the fixation),
+  // colour vision (impair/impairments.h); on the CPU, also after the GPU's passes
+  Impairments impair;
 };
 void validate(const SimulateParams& params);
 
@@ -47,7 +51,13 @@ struct StepStats {
   size_t corners = 0;
   double sharp_fraction = 0;      // pixels whose remembered CoC is below sharp_px
   double trace_ms = 0, features_ms = 0, sharpness_ms = 0, blur_ms = 0, total_ms = 0;
+  ImpairTimes impair;             // the impairment passes (0 without any)
 };
+
+// Where each pixel of a camera's image lies in the visual field of an eye at the camera fixating
+// `fixation_px`: the exact angle between the two rays, split along the fixation's tangent-plane
+// axes (the camera's right and up); ppd = the camera's at the image centre.
+Retinotopy camera_retinotopy(const Camera& camera, int width, int height, glm::vec2 fixation_px);
 
 class VisionSimulation {
  public:
@@ -62,7 +72,7 @@ class VisionSimulation {
 
   // On the GPU the images stay there until first asked for after a step.
   const Image& color() const;                // the sharp ray-cast image
-  const Image& perceived() const;            // the blurred result
+  const Image& perceived() const;            // the blurred result (with the impairments, where there are any)
   const std::vector<float>& coc_px() const;  // per-pixel CoC diameter used for the blur
   const std::vector<Corner>& corners() const { return corners_; }
   // The field (on the CPU; with params.cuda the GPU keeps its own and this one stays empty).
@@ -87,6 +97,8 @@ class VisionSimulation {
   std::optional<Camera> last_camera_;
   std::vector<Corner> corners_;
   std::unique_ptr<Passes> passes_;
+  std::unique_ptr<ImpairmentPasses> impair_;  // with params.impair.any()
+  Image impaired_;                            // this step's perceived image through the impairments
   bool blink_due(int step);  // a blink every blink_every steps, or one asked for (consumed)
   uint32_t step_ = 0;
   bool blink_requested_ = false;
