@@ -20,6 +20,7 @@ std::function<int()> add_replay_command(CLI::App& app);
 std::function<int()> add_simulate_command(CLI::App& app);
 std::function<int()> add_view_command(CLI::App& app);
 std::function<int()> add_compare_command(CLI::App& app);
+std::function<int()> add_perceive_command(CLI::App& app);
 std::function<int()> add_bench_vision_command(CLI::App& bench);
 std::function<int()> add_bench_blur_command(CLI::App& bench);
 std::function<int()> add_bench_quality_command(CLI::App& bench);

@@ -21,6 +21,7 @@ int main(int argc, char** argv) {
   const auto simulate = foveal::app::add_simulate_command(app);
   const auto view = foveal::app::add_view_command(app);
   const auto compare = foveal::app::add_compare_command(app);
+  const auto perceive = foveal::app::add_perceive_command(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
@@ -42,6 +43,7 @@ int main(int argc, char** argv) {
     if (app.got_subcommand("simulate")) return simulate();
     if (app.got_subcommand("view")) return view();
     if (app.got_subcommand("compare")) return compare();
+    if (app.got_subcommand("perceive")) return perceive();
     return 2;
   } catch (const foveal::Error& e) {
     fmt::print(stderr, "foveal: error: {}\n", e.what());

@@ -380,15 +380,19 @@ TEST(Glare, TheKernelIsTheCieEquationAtSampleAnglesAndItsSumTheScatteredFraction
   const double pixel_sr = std::pow(std::numbers::pi / 180 / ppd, 2);
   for (double deg : {1.0, 2.0, 5.0, 10.0, 25.0}) {
     const int dx = static_cast<int>(deg * ppd);
-    const double cie = 10 / std::pow(deg, 3) + (5 / (deg * deg) + 0.1 * 0.5 / deg) * (1 + std::pow(70 / 62.5, 4)) + 0.0025 * 0.5;
-    EXPECT_NEAR(k[size_t(r) * w + r + dx] / (s * cie * pixel_sr), 1.0, 1e-5) << deg << "°";
+    // CIE 146:2002 with the cataract's straylight on the age-dependent term
+    const double cie = 10 / std::pow(deg, 3) + s * (5 / (deg * deg) + 0.1 * 0.5 / deg) * (1 + std::pow(70 / 62.5, 4)) + 0.0025 * 0.5;
+    EXPECT_NEAR(k[size_t(r) * w + r + dx] / (cie * pixel_sr), 1.0, 1e-5) << deg << "°";
   }
   // the kernel within 20° holds the equation's integral from 0.1° to 20°
   double inside = 0;
   for (int j = 0; j < w; ++j)
     for (int i = 0; i < w; ++i)
       if (std::hypot(i - r, j - r) <= 20 * ppd) inside += k[size_t(j) * w + i];
-  EXPECT_NEAR(inside / (s * cie_glare_fraction(0.1, 20, 70, 0.5)), 1.0, 0.02);
+  EXPECT_NEAR(inside / cie_glare_fraction(0.1, 20, 70, 0.5, s), 1.0, 0.02);
+  // the equation's values (CIE 146:2002) at 1° for a 25-year-old brown eye: 10 + 5·1.026 + 0.05·1.026 + 0.00125
+  EXPECT_NEAR(cie_glare_psf(1.0, 25, 0.5), 10 + 5.05 * (1 + std::pow(25 / 62.5, 4)) + 0.00125, 1e-12);
+  EXPECT_NEAR(cie_glare_psf(10.0, 25, 0.5), 0.01 + (0.05 + 0.005) * (1 + std::pow(25 / 62.5, 4)) + 0.00125, 1e-12);
 }
 
 TEST(Glare, ThePointSpreadKeepsEnergyAndFollowsTheEquation) {

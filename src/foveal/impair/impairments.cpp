@@ -36,13 +36,13 @@ double uniform(uint64_t& state) { return (splitmix(state) >> 11) * 0x1.0p-53; }
 
 }  // namespace
 
-double cie_glare_psf(double theta, double age, double p) {
-  return 10.0 / (theta * theta * theta) + (5.0 / (theta * theta) + 0.1 * p / theta) * age_factor(age) + 0.0025 * p;
+double cie_glare_psf(double theta, double age, double p, double straylight) {
+  return 10.0 / (theta * theta * theta) + straylight * (5.0 / (theta * theta) + 0.1 * p / theta) * age_factor(age) + 0.0025 * p;
 }
 
-double cie_glare_fraction(double t1, double t2, double age, double p) {
+double cie_glare_fraction(double t1, double t2, double age, double p, double straylight) {
   if (!(t2 > t1)) return 0.0;
-  const double g = age_factor(age);
+  const double g = straylight * age_factor(age);
   return 2.0 * std::numbers::pi * kSrPerDeg2 *
          (10.0 * (1.0 / t1 - 1.0 / t2) + 5.0 * g * std::log(t2 / t1) + 0.1 * p * g * (t2 - t1) +
           0.0025 * p * (t2 * t2 - t1 * t1) / 2.0);
@@ -71,19 +71,19 @@ std::vector<float> glare_kernel(double ppd, int rx, int ry, const MediaParams& m
       double v = 0;
       if (dx == 0 && dy == 0) {
         // the pixel itself: the scatter from 0.1° to the radius of a disc of the pixel's area
-        v = cie_glare_fraction(kGlareMinDeg, pixel_deg / std::sqrt(std::numbers::pi), m.age_years, m.pigmentation);
+        v = cie_glare_fraction(kGlareMinDeg, pixel_deg / std::sqrt(std::numbers::pi), m.age_years, m.pigmentation, s);
       } else if (std::abs(dx) <= 2 && std::abs(dy) <= 2) {
         // near the centre the equation changes across a pixel: 8 × 8 sub-samples
         constexpr int n = 8;
         for (int b = 0; b < n; ++b)
           for (int a = 0; a < n; ++a) {
             const double t = std::hypot(dx + (a + 0.5) / n - 0.5, dy + (b + 0.5) / n - 0.5) * pixel_deg;
-            if (t >= kGlareMinDeg) v += cie_glare_psf(t, m.age_years, m.pigmentation) * pixel_sr / (n * n);
+            if (t >= kGlareMinDeg) v += cie_glare_psf(t, m.age_years, m.pigmentation, s) * pixel_sr / (n * n);
           }
       } else {
-        v = cie_glare_psf(std::hypot(dx, dy) * pixel_deg, m.age_years, m.pigmentation) * pixel_sr;
+        v = cie_glare_psf(std::hypot(dx, dy) * pixel_deg, m.age_years, m.pigmentation, s) * pixel_sr;
       }
-      k[size_t(j) * w + i] = static_cast<float>(s * v);
+      k[size_t(j) * w + i] = static_cast<float>(v);
     }
   });
   return k;

@@ -19,14 +19,15 @@ namespace foveal {
 // den Berg 1999), the equivalent veiling luminance per glare illuminance, sr⁻¹, θ in degrees
 // (valid 0.1°–100°), age A in years, pigmentation p (0 very dark eyes, 0.5 brown, 1 blue-green):
 //   L/E = 10/θ³ + (5/θ² + 0.1·p/θ)·(1 + (A/62.5)⁴) + 0.0025·p
-double cie_glare_psf(double theta_deg, double age_years, double pigmentation);
+// A cataract multiplies the age-dependent (lens) term by `straylight` (1 = age-normal).
+double cie_glare_psf(double theta_deg, double age_years, double pigmentation, double straylight = 1.0);
 // Its integral over the solid angle between θ1 and θ2 (small-angle: dΩ = 2π θ dθ): the fraction of
 // the light scattered there.
-double cie_glare_fraction(double theta1_deg, double theta2_deg, double age_years, double pigmentation);
+double cie_glare_fraction(double theta1_deg, double theta2_deg, double age_years, double pigmentation, double straylight = 1.0);
 inline constexpr double kGlareMinDeg = 0.1;
 
 struct MediaParams {
-  double cataract = 0;        // severity 0–1: straylight × 10^severity (up to 1 log unit above age-normal)
+  double cataract = 0;        // severity 0–1: the lens's straylight × 10^severity (up to 1 log unit above age-normal)
   double age_years = 25;      // the CIE equation's age and the lens's yellowing
   double pigmentation = 0.5;  // the CIE equation's p
   bool glare = false;         // forward scatter (on with a cataract, or asked for)
@@ -44,7 +45,7 @@ glm::dvec3 lens_transmittance(const MediaParams& media);
 
 // The scatter kernel on a pixel grid of `ppd` pixels per degree, (2·rx+1) × (2·ry+1): each pixel the
 // CIE equation times its solid angle, the centre the integral from 0.1° to the pixel's own radius.
-// Multiplied by the straylight factor; its sum is the scattered fraction η.
+// The cataract's straylight factor multiplies the equation's lens term; the sum is the scattered fraction η.
 std::vector<float> glare_kernel(double ppd, int rx, int ry, const MediaParams& media);
 // out = (1 − η)·I + K ⊛ I (light scattered beyond the image is lost). Computed on a grid of at most
 // 160 columns, the scattered part upsampled (the kernel's spectrum cached for the next frame).

@@ -1,0 +1,306 @@
+// apps/perceive_command.cpp — `foveal perceive`: a person's eye applied to the researcher's own
+// stimuli (an image, a folder of images or a video), gaze-contingent: the optics (defocus at the
+// viewing distance or a depth map), then the ocular media, the retina and colour vision.
+#include "commands.h"
+#include "foveal/gaze/recording.h"
+#include "foveal/gaze/steps.h"
+#include "foveal/impair/field_picture.h"
+#include "foveal/impair/profile.h"
+#include "foveal/io/image_io.h"
+#include "foveal/io/video.h"
+#include "foveal/util/error.h"
+#include "foveal/util/parallel.h"
+#include "foveal/util/parse.h"
+#include "foveal/util/timer.h"
+#include "foveal/vision/blur.h"
+
+#include <fmt/core.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+#include <numbers>
+#include <unistd.h>
+
+namespace foveal::app {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+bool is_float_format(const std::string& path) {
+  const std::string ext = fs::path(path).extension().string();
+  return ext == ".exr" || ext == ".pfm" || ext == ".EXR" || ext == ".PFM";
+}
+
+bool is_image(const fs::path& p) {
+  std::string ext = p.extension().string();
+  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return ext == ".png" || ext == ".jpg" || ext == ".jpeg" || ext == ".bmp" || ext == ".tif" || ext == ".tiff" || ext == ".exr" ||
+         ext == ".pfm";
+}
+
+bool is_video(const fs::path& p) {
+  std::string ext = p.extension().string();
+  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return ext == ".mp4" || ext == ".mkv" || ext == ".mov" || ext == ".webm" || ext == ".avi" || ext == ".m4v";
+}
+
+float srgb_to_linear(float v) {
+  return v <= 0.04045f ? v / 12.92f : std::pow((v + 0.055f) / 1.055f, 2.4f);
+}
+
+// An input frame as linear RGB: 8/16-bit files are sRGB-decoded, EXR/PFM kept as stored
+Image load_linear(const std::string& path) {
+  Image im = load_image(path);
+  if (im.channels == 1) {  // grey: three equal channels
+    Image rgb(im.width, im.height, 3);
+    for (size_t i = 0; i < im.pixels.size(); ++i) rgb.pixels[i * 3] = rgb.pixels[i * 3 + 1] = rgb.pixels[i * 3 + 2] = im.pixels[i];
+    im = std::move(rgb);
+  }
+  if (im.channels == 4) {  // alpha dropped
+    Image rgb(im.width, im.height, 3);
+    for (size_t i = 0; i < size_t(im.width) * im.height; ++i)
+      for (int c = 0; c < 3; ++c) rgb.pixels[i * 3 + c] = im.pixels[i * 4 + c];
+    im = std::move(rgb);
+  }
+  if (im.channels != 3) fail("{}: {} channels; perceive reads grey, RGB or RGBA images", path, im.channels);
+  if (!is_float_format(path))
+    for (float& v : im.pixels) v = srgb_to_linear(v);
+  return im;
+}
+
+struct Perceiver {
+  EyeSpec eye;
+  Display display;
+  std::optional<Image> depth;  // metres from the eye, per pixel
+  bool optics = true;
+  BlurParams blur;
+  std::unique_ptr<ImpairmentPasses> passes;
+
+  // One frame seen while fixating `gaze` (image pixels)
+  Image see(const Image& in, glm::dvec2 gaze) const {
+    if (depth && (depth->width != in.width || depth->height != in.height))
+      fail("--depth: {}x{}, the input is {}x{}", depth->width, depth->height, in.width, in.height);
+    const Display d = resolve_display_for(in);
+    const Retinotopy r = display_retinotopy(d, in.width, in.height, gaze);
+    Image out = in;
+    if (optics) {
+      // The eye accommodates to the fixated point; a pixel's CoC is A·|1/D − v| plus the peripheral
+      // penalty × its eccentricity (as simulate; without depth the stimulus is a plane at the viewing distance)
+      const double plane_m = d.distance_cm / 100.0;
+      auto depth_at = [&](int x, int y) {
+        if (!depth) return plane_m;
+        const double v = depth->at(std::clamp(x, 0, in.width - 1), std::clamp(y, 0, in.height - 1), 0);
+        return std::isfinite(v) && v > 0 ? v : std::numeric_limits<double>::infinity();
+      };
+      const double v = accommodate(eye.eye, depth_at(int(gaze.x), int(gaze.y)));
+      const double penalty = peripheral_penalty_per_deg(eye.eye);
+      std::vector<float> coc(size_t(in.width) * in.height);
+      CocShape shape;
+      const bool astigmatic = eye.eye.cylinder_d > 0;
+      if (astigmatic) shape.scale.resize(coc.size());
+      shape.axis_deg = static_cast<float>(eye.eye.cylinder_axis_deg);
+      for (int y = 0; y < in.height; ++y)
+        for (int x = 0; x < in.width; ++x) {
+          const size_t i = size_t(y) * in.width + x;
+          const double ecc = glm::length(glm::dvec2(r.field_deg[i]));
+          const glm::dvec2 axes = glm::degrees(coc_axes_rad(eye.eye, depth_at(x, y), v)) + penalty * ecc;
+          const double major = std::max(axes.x, axes.y);
+          coc[i] = static_cast<float>(major * r.ppd);
+          if (astigmatic) shape.scale[i] = major > 0 ? glm::vec2(axes / major) : glm::vec2(1.0f);
+        }
+      out = variable_blur(in, coc, blur, astigmatic ? &shape : nullptr);
+    }
+    if (passes) passes->apply(out, r);
+    return out;
+  }
+
+  Display resolve_display_for(const Image& in) const {
+    Display d = display;
+    if (d.res_x <= 0 || d.res_y <= 0) {  // the stimulus fills the display's width, with square pixels
+      d.res_x = in.width;
+      d.res_y = in.height;
+      d.height_cm = d.width_cm * in.height / in.width;
+    }
+    return d;
+  }
+};
+
+}  // namespace
+
+std::function<int()> add_perceive_command(CLI::App& app) {
+  auto* cmd = app.add_subcommand("perceive", "a person's eye applied to your own stimuli: an image, a folder of images or a video, "
+                                             "gaze-contingent (optics, media, visual field, colour vision)");
+  struct Options {
+    std::string input, output, eye = "healthy", gaze, depth, display = "47.5,30,60", stimulus, amsler, field_map;
+    double pupil = 0, fps = 30, start = 0;
+    int threads = 0, taps = 64;
+    bool no_optics = false, quiet = false;
+    GazeOptions gaze_options;
+  };
+  auto o = std::make_shared<Options>();
+  cmd->add_option("input", o->input, "a PNG/JPEG/EXR/PFM image, a folder of images, a video (ffmpeg), or builtin:amsler (an Amsler grid)")
+      ->required();
+  cmd->add_option("-o,--output", o->output, "the same kind as the input: an image file, a folder, a video file")->required();
+  cmd->add_option("--eye", o->eye, "the eye: presets joined with '+' (as for simulate: cataract:0.5, cvd:deutan:0.6, field:arcuate:20, "
+                                   "field:24-2:FILE.csv, amd:5, myopia:-2, …) or a profile .json")
+      ->capture_default_str();
+  cmd->add_option("--gaze", o->gaze, "X,Y in image pixels (default: the centre), or a recording (EyeLink .asc, Pupil, Tobii, t,x,y CSV): "
+                                     "each frame fixates where the recording's fixation was at the frame's time");
+  cmd->add_option("--depth", o->depth, "per-pixel distance from the eye in metres (EXR/PFM, the input's size); without it the stimulus is "
+                                       "a plane at the viewing distance");
+  cmd->add_option("--display", o->display, "W_CM,H_CM,DIST_CM[,RES_X,RES_Y]: the screen the stimulus fills and the viewing distance "
+                                           "(without a resolution: the stimulus fills the width with square pixels)")
+      ->capture_default_str();
+  cmd->add_option("--stimulus", o->stimulus, "X,Y,W,H: where the stimulus was shown on the recording's screen (default: the whole screen)");
+  cmd->add_option("--fps", o->fps, "frame rate of a folder of frames (a video's own rate is used)")->capture_default_str();
+  cmd->add_option("--start", o->start, "the recording's time, s from its first sample, at the first frame")->capture_default_str();
+  cmd->add_option("--pupil", o->pupil, "pupil diameter, mm (default: the eye's, 3.5)");
+  cmd->add_option("--blur-taps", o->taps, "most blur taps per pixel")->capture_default_str()->check(CLI::Range(1, 1024));
+  cmd->add_flag("--no-optics", o->no_optics, "skip the defocus blur (the media, field and colour only)");
+  cmd->add_option("--amsler", o->amsler, "also write the Amsler grid as this eye sees it (PNG)");
+  cmd->add_option("--field-map", o->field_map, "also write the visual field's loss map, ±30°, with the test locations (PNG)");
+  cmd->add_option("--threads", o->threads, "worker threads (0 = all cores)")->capture_default_str()->check(CLI::Range(0, 4096));
+  cmd->add_flag("-q,--quiet", o->quiet, "print nothing on success");
+  add_gaze_options(*cmd, o->gaze_options);
+
+  return [o] {
+    const ThreadScope threads(o->threads);
+    Perceiver p;
+    p.eye = parse_eye_spec(o->eye);
+    if (o->pupil != 0) {
+      p.eye.eye.pupil_diameter_mm = o->pupil;
+      validate(p.eye.eye);
+    }
+    p.optics = !o->no_optics;
+    p.blur.taps = o->taps;
+    p.display = parse_display(o->display);
+    if (std::count(o->display.begin(), o->display.end(), ',') == 2) p.display.res_x = p.display.res_y = 0;  // the input's size
+    if (!(o->fps > 0 && std::isfinite(o->fps))) fail("--fps: must be positive, got {}", o->fps);
+    if (!o->depth.empty()) p.depth = load_image(o->depth);
+    if (p.eye.impair.any()) p.passes = std::make_unique<ImpairmentPasses>(p.eye.impair);
+    const ImpairmentPasses& passes = p.passes ? *p.passes : *(p.passes = std::make_unique<ImpairmentPasses>(Impairments{}));
+
+    if (!o->amsler.empty()) save_image(amsler_grid(passes, 20), o->amsler);
+    if (!o->field_map.empty()) write_field_picture(p.eye.impair.field, passes.field_map(), o->field_map);
+
+    // The frames: one image, a folder, a video's frames, or the Amsler grid
+    std::vector<fs::path> frames;
+    std::string frame_dir;  // a video's decoded frames (removed at the end)
+    double fps = o->fps;
+    const bool amsler_input = o->input == "builtin:amsler";
+    const bool folder = !amsler_input && fs::is_directory(o->input);
+    const bool video = !amsler_input && !folder && is_video(o->input);
+    if (folder || video) {
+      if (fs::exists(o->output) && !fs::is_directory(o->output) && folder)
+        fail("-o {}: a folder of images needs a folder as output", o->output);
+      if (video && !is_video(o->output)) fail("-o {}: a video needs a video file as output (.mp4, .mkv, .mov, .webm)", o->output);
+    }
+    if (amsler_input) {
+      if (!o->gaze.empty()) fail("--gaze: the Amsler grid is always fixated at its centre");
+    } else if (folder) {
+      for (const auto& e : fs::directory_iterator(o->input))
+        if (e.is_regular_file() && is_image(e.path())) frames.push_back(e.path());
+      std::sort(frames.begin(), frames.end());
+      if (frames.empty()) fail("{}: no images (PNG, JPEG, BMP, TIFF, EXR, PFM) in the folder", o->input);
+    } else if (video) {
+      frame_dir = (fs::temp_directory_path() / fmt::format("foveal-perceive-{}", getpid())).string();
+      fs::create_directories(frame_dir);
+      fps = decode_video(o->input, frame_dir + "/in_%06d.png");
+      for (const auto& e : fs::directory_iterator(frame_dir)) frames.push_back(e.path());
+      std::sort(frames.begin(), frames.end());
+      if (frames.empty()) fail("{}: the video has no frames", o->input);
+    } else {
+      if (!fs::is_regular_file(o->input)) fail("{}: no such image, folder or video", o->input);
+      if (!is_image(o->input)) fail("{}: not an image perceive reads (PNG, JPEG, BMP, TIFF, EXR, PFM), a folder or a video", o->input);
+      frames.push_back(o->input);
+    }
+
+    // The gaze: a point, or a recording's fixation at each frame's time
+    std::optional<glm::dvec2> fixed_gaze;
+    std::vector<GazeStep> fixations;
+    std::optional<ScreenMapping> mapping;
+    double t0 = 0;
+    const bool recording_gaze = !o->gaze.empty() && !std::isdigit(static_cast<unsigned char>(o->gaze[0])) && o->gaze[0] != '-' &&
+                                o->gaze[0] != '.';
+    if (recording_gaze) {
+      if (o->gaze.find("://") != std::string::npos)
+        fail("--gaze: a live tracker drives the real-time commands (foveal view, simulate); perceive takes a point or a recording");
+      if (!folder && !video) fail("--gaze {}: a recording's gaze needs a video or a folder of frames (one fixation per frame's time); "
+                                  "for one image give --gaze X,Y", o->gaze);
+      const Display screen = parse_display(o->display, Display{});
+      const ReadOptions read = resolve_read_options(o->gaze_options, screen);
+      const Recording recording = read_recording(o->gaze, read);
+      if (recording.samples.empty()) fail("{}: no samples", recording.source);
+      const GazeGeometry geometry(screen, recording.screen_px);
+      fixations = recording_steps(recording, geometry, parse_step_fixations(o->gaze_options.fixation),
+                                  resolve_fixation_params(o->gaze_options));
+      if (fixations.empty()) fail("{}: no fixations", recording.source);
+      t0 = recording.samples.front().t_s + o->start;
+      mapping = make_screen_mapping(recording.screen_px, {0, 0}, o->stimulus);
+    } else if (!o->gaze.empty()) {
+      fixed_gaze = parse_vec2("--gaze", o->gaze);
+    }
+
+    const fs::path out_dir = folder ? fs::path(o->output) : video ? fs::path(frame_dir) : fs::path();
+    if (folder) {
+      std::error_code ec;
+      fs::create_directories(out_dir, ec);
+      if (ec) fail("{}: cannot create the output folder: {}", o->output, ec.message());
+    }
+    const bool show = !o->quiet && isatty(fileno(stderr));
+    const Timer clock;
+    double frame_ms = 0;
+    if (amsler_input) {
+      save_image(amsler_grid(passes, 20), o->output);
+    }
+    for (size_t k = 0; k < frames.size(); ++k) {
+      const Timer t;
+      const Image in = load_linear(frames[k].string());
+      glm::dvec2 gaze = fixed_gaze.value_or(glm::dvec2(in.width / 2.0, in.height / 2.0));
+      if (!fixations.empty()) {
+        // the fixation under way at the frame's time (the last one begun; the centre before the first)
+        const double time = t0 + k / fps;
+        const GazeStep* now = nullptr;
+        for (const GazeStep& g : fixations)
+          if (g.start_s <= time) now = &g;
+        if (now) {
+          ScreenMapping m = *mapping;
+          m.render_px = {in.width, in.height};
+          gaze = m.to_render(now->screen_px);
+        }
+      }
+      const Image seen = p.see(in, gaze);
+      std::string target;
+      if (folder) target = (out_dir / frames[k].filename()).string();
+      else if (video) target = (out_dir / fmt::format("out_{:06d}.png", k)).string();
+      else target = o->output;
+      save_image(seen, target, !is_float_format(target));
+      frame_ms += t.ms();
+      if (show && clock.ms() > 1000) fmt::print(stderr, "\r  frame {}/{} ", k + 1, frames.size());
+    }
+    if (show && clock.ms() > 1000) fmt::print(stderr, "\r{:40}\r", "");
+    if (video) {
+      encode_video((fs::path(frame_dir) / "out_%06d.png").string(), fps, o->output);
+      fs::remove_all(frame_dir);
+    }
+    if (!o->quiet) {
+      fmt::print("foveal perceive: {} ({} frame{}{}), eye {}\n", o->input, amsler_input ? 1 : frames.size(),
+                 frames.size() == 1 || amsler_input ? "" : "s", video ? fmt::format(" at {:.3g} fps", fps) : "", p.eye.source);
+      fmt::print("  optics   {}\n", p.optics ? fmt::format("focus {} … {}, pupil {} mm, viewing distance {} cm{}",
+                                                             focus_range(p.eye.eye).near_point_m() < 1e9 ? fmt::format("{:.2f} m", focus_range(p.eye.eye).near_point_m()) : "infinity",
+                                                             focus_range(p.eye.eye).far_point_m() < 1e9 ? fmt::format("{:.2f} m", focus_range(p.eye.eye).far_point_m()) : "infinity",
+                                                             p.eye.eye.pupil_diameter_mm, p.display.distance_cm, p.depth ? ", depth map" : "")
+                                                 : std::string("off"));
+      fmt::print("  impaired {}\n", p.eye.impair.describe());
+      if (!amsler_input) fmt::print("  time     {:.1f} ms per frame\n", frame_ms / frames.size());
+      fmt::print("  wrote    {}{}{}\n", o->output, o->amsler.empty() ? "" : ", " + o->amsler, o->field_map.empty() ? "" : ", " + o->field_map);
+    }
+    return 0;
+  };
+}
+
+}  // namespace foveal::app
