@@ -72,6 +72,22 @@ Image load_linear(const std::string& path) {
   return im;
 }
 
+// A glare test card, linear HDR: a dark room (0.02) with bright lamps (luminance 40) and a white
+// bar chart, 960×540 — what forward scatter shows best
+Image lamps_card() {
+  Image im(960, 540, 3, 0.02f);
+  const glm::vec2 lamps[] = {{160, 140}, {480, 110}, {800, 140}, {300, 420}, {660, 420}};
+  for (int y = 0; y < im.height; ++y)
+    for (int x = 0; x < im.width; ++x) {
+      float v = 0.02f;
+      for (const glm::vec2 c : lamps)
+        if (glm::length(glm::vec2(x, y) - c) < 9) v = 40.0f;
+      if (y > 250 && y < 300 && x > 280 && x < 680 && (x / 20) % 2 == 0) v = 0.8f;  // bars of a chart
+      for (int k = 0; k < 3; ++k) im.at(x, y, k) = v;
+    }
+  return im;
+}
+
 struct Perceiver {
   EyeSpec eye;
   Display display;
@@ -142,7 +158,8 @@ std::function<int()> add_perceive_command(CLI::App& app) {
     GazeOptions gaze_options;
   };
   auto o = std::make_shared<Options>();
-  cmd->add_option("input", o->input, "a PNG/JPEG/EXR/PFM image, a folder of images, a video (ffmpeg), or builtin:amsler (an Amsler grid)")
+  cmd->add_option("input", o->input, "a PNG/JPEG/EXR/PFM image, a folder of images, a video (ffmpeg), builtin:amsler (an Amsler grid) or builtin:lamps "
+                                   "(a glare test card: bright lamps in a dark room, linear HDR)")
       ->required();
   cmd->add_option("-o,--output", o->output, "the same kind as the input: an image file, a folder, a video file")->required();
   cmd->add_option("--eye", o->eye, "the eye: presets joined with '+' (as for simulate: cataract:0.5, cvd:deutan:0.6, field:arcuate:20, "
@@ -191,7 +208,7 @@ std::function<int()> add_perceive_command(CLI::App& app) {
     std::vector<fs::path> frames;
     std::string frame_dir;  // a video's decoded frames (removed at the end)
     double fps = o->fps;
-    const bool amsler_input = o->input == "builtin:amsler";
+    const bool amsler_input = o->input == "builtin:amsler", lamps_input = o->input == "builtin:lamps";
     const bool folder = !amsler_input && fs::is_directory(o->input);
     const bool video = !amsler_input && !folder && is_video(o->input);
     if (folder || video) {
@@ -213,6 +230,8 @@ std::function<int()> add_perceive_command(CLI::App& app) {
       for (const auto& e : fs::directory_iterator(frame_dir)) frames.push_back(e.path());
       std::sort(frames.begin(), frames.end());
       if (frames.empty()) fail("{}: the video has no frames", o->input);
+    } else if (lamps_input) {
+      frames.push_back("builtin:lamps");
     } else {
       if (!fs::is_regular_file(o->input)) fail("{}: no such image, folder or video", o->input);
       if (!is_image(o->input)) fail("{}: not an image perceive reads (PNG, JPEG, BMP, TIFF, EXR, PFM), a folder or a video", o->input);
@@ -259,7 +278,7 @@ std::function<int()> add_perceive_command(CLI::App& app) {
     }
     for (size_t k = 0; k < frames.size(); ++k) {
       const Timer t;
-      const Image in = load_linear(frames[k].string());
+      const Image in = lamps_input ? lamps_card() : load_linear(frames[k].string());
       glm::dvec2 gaze = fixed_gaze.value_or(glm::dvec2(in.width / 2.0, in.height / 2.0));
       if (!fixations.empty()) {
         // the fixation under way at the frame's time (the last one begun; the centre before the first)

@@ -200,25 +200,27 @@ std::vector<PerimetryField> read_field_file(const std::string& path, const std::
 
 double interpolate_loss_db(const PerimetryField& field, double x, double y) {
   const bool upper = y >= 0;
-  // the 4 nearest locations of the same hemifield (outside the blind spot)
-  std::array<std::pair<double, double>, 4> nearest;  // (distance², loss)
-  nearest.fill({INFINITY, 0});
+  // Shepard's 1/d² weights tapered by a Gaussian of the grid's spacing: exact at the locations,
+  // continuous everywhere (every location of the hemifield takes part), local, and the nearest
+  // locations' values far beyond the grid. Weights relative to the nearest one (no underflow).
+  constexpr double kSigmaDeg = 6.0;
+  double nearest = INFINITY;
   for (const FieldPoint& p : field.points) {
     if ((p.y_deg >= 0) != upper || inside_blind_spot(field.eye, {p.x_deg, p.y_deg})) continue;
     const double d2 = (p.x_deg - x) * (p.x_deg - x) + (p.y_deg - y) * (p.y_deg - y);
     if (d2 < 1e-12) return p.loss_db;
-    if (d2 < nearest.back().first) {
-      nearest.back() = {d2, p.loss_db};
-      std::sort(nearest.begin(), nearest.end());
-    }
+    nearest = std::min(nearest, d2);
   }
+  if (!std::isfinite(nearest)) return 0.0;  // a hemifield without locations: no loss known
   double sum = 0, weight = 0;
-  for (const auto& [d2, loss] : nearest)
-    if (std::isfinite(d2)) {
-      sum += loss / d2;
-      weight += 1.0 / d2;
-    }
-  return weight > 0 ? sum / weight : 0.0;  // a hemifield without locations: no loss known
+  for (const FieldPoint& p : field.points) {
+    if ((p.y_deg >= 0) != upper || inside_blind_spot(field.eye, {p.x_deg, p.y_deg})) continue;
+    const double d2 = (p.x_deg - x) * (p.x_deg - x) + (p.y_deg - y) * (p.y_deg - y);
+    const double w = std::exp(-(d2 - nearest) / (2 * kSigmaDeg * kSigmaDeg)) * nearest / d2;
+    sum += w * p.loss_db;
+    weight += w;
+  }
+  return sum / weight;
 }
 
 PerimetryField integrated_field(const PerimetryField& od, const PerimetryField& os) {
@@ -362,14 +364,30 @@ std::function<double(double, double)> generated_defect(const std::string& spec, 
        "central:R, altitudinal, hemianopia:left|right, quadrantanopia:QUADRANT)", kind);
 }
 
-FieldMap VisualField::map() const {
-  if (empty()) return FieldMap();
+std::string VisualField::resolved_view() const {
   bool has_od = false, has_os = false;
   for (const PerimetryField& f : measured) (f.eye == Eye::od ? has_od : has_os) = true;
   for (const Generated& g : generated)
     if (g.eye) (*g.eye == Eye::od ? has_od : has_os) = true;
-  std::string v = view;
-  if (v == "auto") v = has_od && has_os ? "both" : has_os ? "OS" : "OD";
+  if (view != "auto") return view;
+  return has_od && has_os ? "both" : has_os ? "OS" : "OD";
+}
+
+std::vector<FieldPoint> VisualField::view_points() const {
+  const std::string v = resolved_view();
+  std::optional<PerimetryField> merged;
+  for (const PerimetryField& f : measured) {
+    if (v != "both" && to_string(f.eye) != v) continue;
+    merged = merged ? integrated_field(*merged, f) : f;
+  }
+  return merged ? merged->points : std::vector<FieldPoint>{};
+}
+
+FieldMap VisualField::map() const {
+  if (empty()) return FieldMap();
+  bool has_od = false, has_os = false;
+  for (const PerimetryField& f : measured) (f.eye == Eye::od ? has_od : has_os) = true;
+  const std::string v = resolved_view();
   auto eye_map = [&](Eye eye, bool with_blind_spot) {
     std::vector<std::function<double(double, double)>> parts;
     for (const PerimetryField& f : measured)

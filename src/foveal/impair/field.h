@@ -102,8 +102,9 @@ class FieldMap {
 };
 
 // Interpolates one eye's losses, separately above and below the horizontal meridian: inverse-
-// distance weighting (Shepard 1968, power 2) of the 4 nearest test locations of the same
-// hemifield; exact at the locations, the nearest ones' values beyond the grid. Locations inside
+// distance weighting (Shepard 1968, power 2) of the test locations of the same hemifield, each
+// weight tapered by a Gaussian of σ = 6° (the 24-2's spacing) so that the map is local and
+// continuous; exact at the locations, the nearest ones' values beyond the grid. Locations inside
 // the blind spot are left out (the blind spot is added by the map, not interpolated).
 double interpolate_loss_db(const PerimetryField& field, double x_deg, double y_deg);
 
@@ -136,6 +137,10 @@ struct VisualField {
   bool empty() const { return measured.empty() && generated.empty(); }
   // The loss map of the view (monocular: the eye's field and blind spot; both: the better eye).
   FieldMap map() const;
+  // "OD", "OS" or "both": `view`, with auto resolved.
+  std::string resolved_view() const;
+  // The test locations of the view: one eye's, or the integrated field of both.
+  std::vector<FieldPoint> view_points() const;
 };
 
 }  // namespace foveal

@@ -24,17 +24,14 @@ void write_field_picture(const VisualField& field, const FieldMap& map, const st
   cv::line(img, {kSize / 2, 0}, {kSize / 2, kSize - 1}, axis, 1);
   cv::line(img, {0, kSize / 2}, {kSize - 1, kSize / 2}, axis, 1);
   for (int r : {10, 20, 30}) cv::circle(img, {kSize / 2, kSize / 2}, static_cast<int>(r * kPpd), axis, 1, cv::LINE_AA);
-  for (const PerimetryField& f : field.measured)
-    for (const FieldPoint& p : f.points) {
-      const cv::Point c(static_cast<int>(std::lround((p.x_deg + kHalf) * kPpd)), static_cast<int>(std::lround((kHalf - p.y_deg) * kPpd)));
-      // green (no loss) → red (30 dB); the eye's locations as circles (OD) or squares (OS)
-      const double t = std::clamp(p.loss_db / 30.0, 0.0, 1.0);
-      const cv::Scalar colour(40, 255 * (1 - t), 255 * t);
-      if (f.eye == Eye::od) cv::circle(img, c, 6, colour, cv::FILLED, cv::LINE_AA);
-      else cv::rectangle(img, c - cv::Point(5, 5), c + cv::Point(5, 5), colour, cv::FILLED);
-      cv::circle(img, c, 6, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
-    }
-  cv::putText(img, "view " + field.view + ", +-30 deg, white 0 dB .. black 30 dB loss", {8, kSize - 10}, cv::FONT_HERSHEY_SIMPLEX, 0.45,
+  // the view's test locations (both eyes: the integrated field), green (no loss) → red (30 dB)
+  for (const FieldPoint& p : field.view_points()) {
+    const cv::Point c(static_cast<int>(std::lround((p.x_deg + kHalf) * kPpd)), static_cast<int>(std::lround((kHalf - p.y_deg) * kPpd)));
+    const double t = std::clamp(p.loss_db / 30.0, 0.0, 1.0);
+    cv::circle(img, c, 6, cv::Scalar(40, 255 * (1 - t), 255 * t), cv::FILLED, cv::LINE_AA);
+    cv::circle(img, c, 6, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
+  }
+  cv::putText(img, "view " + field.resolved_view() + ", +-30 deg, white 0 dB .. black 30 dB loss", {8, kSize - 10}, cv::FONT_HERSHEY_SIMPLEX, 0.45,
               cv::Scalar(40, 40, 220), 1, cv::LINE_AA);
   bool ok = false;
   try {

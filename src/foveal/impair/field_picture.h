@@ -1,6 +1,6 @@
 // foveal/impair/field_picture.h — a visual field as a picture: the loss map over ±30° (white = no
-// loss, black = 30 dB or more), the meridians, and each measured test location as a dot coloured
-// by its loss.
+// loss, black = 30 dB or more), the meridians, and the view's test locations (both eyes: the
+// integrated field) as dots coloured by their loss.
 #pragma once
 
 #include "foveal/impair/field.h"
