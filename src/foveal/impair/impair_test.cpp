@@ -527,6 +527,7 @@ TEST(EyeSpec, ProfilesAreValidatedStrictlyWithJsonPaths) {
   EXPECT_EQ(error_of(R"({"eyes": {"OD": {}}, "view": "OS"})"), "p.json: /view: OS is not among the profile's eyes");
   EXPECT_NE(error_of(R"({"eyes": {"OD": {"field": {"file": "missing.csv"}}}})").find("/eyes/OD/field"), std::string::npos);
   EXPECT_NE(error_of("{\"eyes\": ").find("p.json: not valid JSON"), std::string::npos);
+  EXPECT_NE(error_of("{\"age\": 4444E54424}").find("p.json: not valid JSON"), std::string::npos);  // found by fuzzing
   std::filesystem::remove_all(dir);
 }
 

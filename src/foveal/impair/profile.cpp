@@ -186,6 +186,8 @@ EyeSpec parse_eye_profile(const std::string& text, const std::string& name, cons
     j = json::parse(body);
   } catch (const json::parse_error& e) {
     fail("{}: not valid JSON (byte {}): {}", name, e.byte, e.what());
+  } catch (const json::exception& e) {  // e.g. a number beyond double's range
+    fail("{}: not valid JSON: {}", name, e.what());
   }
   const Reader root(name, j, "");
   root.keys({"name", "age", "pigmentation", "view", "optics_eye", "field_mode", "colour_vision", "eyes"});
