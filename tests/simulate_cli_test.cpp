@@ -98,6 +98,19 @@ TEST(SimulateCli, BenchVisionReportsEveryStage) {
   EXPECT_GT(j["rows"][0]["time_ms"]["total"].get<double>(), 0);
 }
 
+TEST(SimulateCli, ImpairedEyesAreAppliedAndTimed) {
+  const CliRun r = foveal_test::foveal("simulate --size 160x100 --steps 3 --eye age:70+cataract:0.5+achromatopsia+field:arcuate:20 "
+                                       "-o sim-impaired --stats impaired.json");
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_NE(r.out.find("impaired glare (age 70, cataract 0.5)"), std::string::npos) << r.out;
+  const auto j = nlohmann::json::parse(std::ifstream(scratch("impaired.json")));
+  EXPECT_NE(j["impairments"].get<std::string>().find("field loss"), std::string::npos);
+  EXPECT_GT(j["time_ms"]["impairments"].get<double>(), 0.0);
+  EXPECT_GT(j["time_ms"]["media"].get<double>(), 0.0);
+  EXPECT_GT(j["time_ms"]["retina"].get<double>(), 0.0);
+  EXPECT_GT(j["time_ms"]["colour"].get<double>(), 0.0);
+}
+
 TEST(SimulateCli, BadInputGivesOneClearLine) {
   const std::vector<std::pair<std::string, std::string>> cases = {
       {"simulate -o s --eye blind", "unknown preset 'blind'"},
@@ -112,6 +125,9 @@ TEST(SimulateCli, BadInputGivesOneClearLine) {
       {"simulate -o s --gaze tcp://host:1", "unknown live source"},
       {"simulate -o s --gaze pupil://127.0.0.1:1 --fixation tracker", "fixation events"},
       {"simulate -o s --stimulus 0,0,10,10", "--stimulus requires --gaze"},
+      {"simulate -o s --eye field:missing-field.csv", "missing-field.csv"},
+      {"simulate -o s --eye cataract:1.5", "severity must be in [0, 1]"},
+      {"simulate -o s --eye field:hemianopia:up", "not one of the allowed sides"},
   };
   for (const auto& [args, expected] : cases) {
     const CliRun r = foveal_test::foveal(args);

@@ -134,6 +134,28 @@ TEST(ViewSession, VisionModeIsTheSimulationsStep) {
   EXPECT_GE(tinted_px, sharp_px * 95 / 100);  // a green tint changes almost every sharp pixel
 }
 
+TEST(ViewSession, VisionModeShowsTheImpairedEye) {
+  // achromatopsia and a field loss through the view: the same pixels as the simulation's step,
+  // and grey
+  const Camera camera = default_camera(box());
+  ViewSettings s = small_settings(ViewMode::vision);
+  s.eye = "achromatopsia+field:hemianopia:left+field-view:both";
+  ViewSession session(box(), box_tracer(), camera, s, fixed({80, 50}));
+  ASSERT_TRUE(session.wait_until_converged(120, kNone));
+  ViewSettings resolved = s;
+  resolve(resolved);
+  ASSERT_TRUE(resolved.vision.impair.any());
+  VisionSimulation sim(box_tracer(), box(), resolved.vision);
+  sim.step(camera, glm::vec2(80, 50));
+  EXPECT_EQ(differing(session.image(), 0, to_rgba8(sim.perceived())), 0u);
+  const Rgba8& shown = session.image();
+  for (int y = 0; y < shown.height; y += 7)
+    for (int x = 0; x < shown.width; x += 7) {
+      EXPECT_EQ(shown.at(x, y)[0], shown.at(x, y)[1]);
+      EXPECT_EQ(shown.at(x, y)[1], shown.at(x, y)[2]);
+    }
+}
+
 TEST(ViewSession, MouseRestingBecomesTheFixationTheRenderFollows) {
   const Camera camera = default_camera(box());
   const ViewSettings s = small_settings(ViewMode::foveated);
