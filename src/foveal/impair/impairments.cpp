@@ -369,31 +369,41 @@ ImpairTimes ImpairmentPasses::apply(Image& image, const Retinotopy& r) const {
           gy.at<float>(j, i) = static_cast<float>(-d.y * r.ppd);
         }
       });
-      thread_local cv::Mat map_x_buffer, map_y_buffer, source_buffer;  // full size, kept per thread
-      cv::Mat& map_x = map_x_buffer;
-      cv::Mat& map_y = map_y_buffer;
-      map_x.create(image.height, image.width, CV_32F);
-      map_y.create(image.height, image.width, CV_32F);
-      tbb::parallel_for(0, image.height, [&](int y) {
-        const int j = y / step;
-        const float ty = float(y - j * step) / step;
-        float* mx = map_x.ptr<float>(y);
-        float* my = map_y.ptr<float>(y);
-        for (int x = 0; x < image.width; ++x) {
-          const int i = x / step;
-          const float tx = float(x - i * step) / step;
-          auto lerp2 = [&](const cv::Mat& m) {
-            return (1 - ty) * ((1 - tx) * m.at<float>(j, i) + tx * m.at<float>(j, i + 1)) +
-                   ty * ((1 - tx) * m.at<float>(j + 1, i) + tx * m.at<float>(j + 1, i + 1));
-          };
-          mx[x] = static_cast<float>(x) + lerp2(gx);
-          my[x] = static_cast<float>(y) + lerp2(gy);
-        }
-      });
-      cv::Mat& src = source_buffer;
-      as_mat(image).copyTo(src);
-      cv::Mat dst = as_mat(image);
-      cv::remap(src, dst, map_x, map_y, cv::INTER_LINEAR, cv::BORDER_REFLECT);
+      // only the rectangle where something moves is remapped (the distortion is zero beyond R + 1°)
+      int i0 = gw, i1 = -1, j0 = gh, j1 = -1;
+      for (int j = 0; j < gh; ++j)
+        for (int i = 0; i < gw; ++i)
+          if (gx.at<float>(j, i) != 0.0f || gy.at<float>(j, i) != 0.0f)
+            i0 = std::min(i0, i), i1 = std::max(i1, i), j0 = std::min(j0, j), j1 = std::max(j1, j);
+      if (i1 >= 0) {
+        const int x0 = std::max(0, (i0 - 1) * step), y0 = std::max(0, (j0 - 1) * step);
+        const cv::Rect roi(x0, y0, std::min(image.width, (i1 + 1) * step + 1) - x0, std::min(image.height, (j1 + 1) * step + 1) - y0);
+        thread_local cv::Mat map_x_buffer, map_y_buffer, source_buffer;  // kept per thread
+        cv::Mat& map_x = map_x_buffer;
+        cv::Mat& map_y = map_y_buffer;
+        map_x.create(roi.height, roi.width, CV_32F);
+        map_y.create(roi.height, roi.width, CV_32F);
+        tbb::parallel_for(0, roi.height, [&](int ry) {
+          const int y = roi.y + ry, j = y / step;
+          const float ty = float(y - j * step) / step;
+          float* mx = map_x.ptr<float>(ry);
+          float* my = map_y.ptr<float>(ry);
+          for (int rx = 0; rx < roi.width; ++rx) {
+            const int x = roi.x + rx, i = x / step;
+            const float tx = float(x - i * step) / step;
+            auto lerp2 = [&](const cv::Mat& m) {
+              return (1 - ty) * ((1 - tx) * m.at<float>(j, i) + tx * m.at<float>(j, i + 1)) +
+                     ty * ((1 - tx) * m.at<float>(j + 1, i) + tx * m.at<float>(j + 1, i + 1));
+            };
+            mx[rx] = static_cast<float>(x) + lerp2(gx);
+            my[rx] = static_cast<float>(y) + lerp2(gy);
+          }
+        });
+        cv::Mat& src = source_buffer;
+        as_mat(image).copyTo(src);
+        cv::Mat dst = as_mat(image)(roi);
+        cv::remap(src, dst, map_x, map_y, cv::INTER_LINEAR, cv::BORDER_REFLECT);
+      }
     }
     if (!map_.empty()) apply_field_loss(image, loss_db(r), im.field_mode);
     t.field_ms = timer.ms();
