@@ -15,16 +15,6 @@
 
 namespace foveal::app {
 
-namespace {
-
-nlohmann::json number(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(v > 0 ? "inf" : "-inf"); }
-
-nlohmann::json stats_json(const ErrorStats& s) {
-  return {{"pixels", s.pixels}, {"rmse", s.rmse}, {"mse", s.mse}, {"psnr_db", number(s.psnr)}, {"ssim", s.ssim}};
-}
-
-}  // namespace
-
 std::function<int()> add_compare_command(CLI::App& app) {
   auto* cmd = app.add_subcommand("compare", "PSNR, SSIM and RMSE of an image against a reference, whole and per eccentricity band around the gaze");
   struct Options {
@@ -62,29 +52,10 @@ std::function<int()> add_compare_command(CLI::App& app) {
     if (!o->error_map.empty()) save_image(error_map_image(c, o->error_scale), o->error_map, false);
     if (!o->plot.empty()) write_error_plot(c, o->plot);
     if (!o->json.empty()) {
-      nlohmann::json j = {{"image", o->a}, {"reference", o->b}, {"width", c.width}, {"height", c.height},
-                          {"gaze_px", {gaze.x, gaze.y}},
-                          {"display", {{"width_cm", display.width_cm}, {"height_cm", display.height_cm}, {"distance_cm", display.distance_cm},
-                                       {"res_x", display.res_x}, {"res_y", display.res_y}}},
-                          {"whole", stats_json(c.whole)}};
-      j["acuity_weighted_rmse"] = c.weighted_rmse;
-      if (b2) {
-        j["reference2"] = o->b2;
-        j["whole_noise"] = stats_json(*c.whole_noise);
-        j["acuity_weighted_noise_rmse"] = c.weighted_noise_rmse;
-        j["acuity_weighted_ratio"] = c.weighted_ratio();
-      }
-      for (const BandResult& r : c.bands) {
-        nlohmann::json band = {{"name", r.band.name}, {"error", stats_json(r.error)}};
-        if (!r.band.foveal_region) band["deg"] = {r.band.lo_deg, number(r.band.hi_deg)};
-        if (r.noise) {
-          band["noise"] = stats_json(*r.noise);
-          band["noise_ratio"] = number(r.noise_ratio);
-          band["noise_ratio_se"] = r.ratio_se;
-          band["within_noise"] = r.within_noise;
-        }
-        j["bands"].push_back(band);
-      }
+      nlohmann::json j = comparison_json(c, display);
+      j["image"] = o->a;
+      j["reference"] = o->b;
+      if (b2) j["reference2"] = o->b2;
       write_json_file(o->json, j);
     }
     if (!o->markdown.empty()) write_text_file(o->markdown, comparison_markdown(c));

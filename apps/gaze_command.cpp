@@ -82,7 +82,7 @@ FixationParams resolve_fixation_params(const GazeOptions& o) {
 std::function<int()> add_gaze_command(CLI::App& app) {
   auto* cmd = app.add_subcommand("gaze", "summarise an eye-tracker recording: samples, fixations (I-VT, I-DT), agreement with the tracker, scan path");
   struct Options {
-    std::string recording, json, scanpath = "scanpath.png", display = "47.5,30,60";
+    std::string recording, json, samples, scanpath = "scanpath.png", display = "47.5,30,60";
     GazeOptions gaze;
     bool no_scanpath = false, quiet = false;
   };
@@ -92,6 +92,7 @@ std::function<int()> add_gaze_command(CLI::App& app) {
   cmd->add_option("--display", o->display, "the recording's screen W_CM,H_CM,DIST_CM[,RES_X,RES_Y] (angles for the filters); the resolution defaults to the recording's screen")
       ->capture_default_str();
   cmd->add_option("--json", o->json, "write the summary as JSON");
+  cmd->add_option("--samples", o->samples, "write the samples as read (t_s,x,y,confidence,valid: seconds, screen pixels, NaN where the eye was lost) as CSV");
   cmd->add_option("--scanpath", o->scanpath, "scan-path picture (PNG) of the --fixation filter's fixations")->capture_default_str();
   cmd->add_flag("--no-scanpath", o->no_scanpath, "do not draw the scan path");
   cmd->add_flag("-q,--quiet", o->quiet, "print nothing on success");
@@ -109,6 +110,12 @@ std::function<int()> add_gaze_command(CLI::App& app) {
     }
     const GazeSummary summary = summarize_recording(recording, display, params);
     if (!o->json.empty()) write_json_file(o->json, summary.json);
+    if (!o->samples.empty()) {
+      std::string text = "t_s,x,y,confidence,valid\n";
+      for (const GazeSample& s : recording.samples)
+        text += fmt::format("{:.17g},{:.17g},{:.17g},{:.9g},{}\n", s.t_s, s.px.x, s.px.y, s.confidence, s.valid ? 1 : 0);
+      write_text_file(o->samples, text);
+    }
     if (!o->no_scanpath) {
       const FixationResult& shown = method == FixationMethod::idt ? summary.filters[1].result : summary.filters[0].result;
       ScanpathStyle style;
@@ -120,6 +127,7 @@ std::function<int()> add_gaze_command(CLI::App& app) {
     fmt::print("{}", format_summary(recording, summary));
     if (method == FixationMethod::mean) fmt::print("  (mean is a per-frame average, not a fixation detector: the scan path shows I-VT)\n");
     if (!o->json.empty()) fmt::print("  wrote     {}\n", o->json);
+    if (!o->samples.empty()) fmt::print("  wrote     {}\n", o->samples);
     if (!o->no_scanpath) fmt::print("  wrote     {}\n", o->scanpath);
     return 0;
   };

@@ -302,3 +302,40 @@ void write_error_plot(const Comparison& c, const std::string& path) {
 }
 
 }  // namespace foveal
+
+namespace foveal {
+
+namespace {
+nlohmann::json json_number(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(v > 0 ? "inf" : "-inf"); }
+nlohmann::json stats_json(const ErrorStats& s) {
+  return {{"pixels", s.pixels}, {"rmse", s.rmse}, {"mse", s.mse}, {"psnr_db", json_number(s.psnr)}, {"ssim", s.ssim}};
+}
+}  // namespace
+
+nlohmann::json comparison_json(const Comparison& c, const Display& display) {
+  nlohmann::json j = {{"width", c.width}, {"height", c.height}, {"gaze_px", {c.gaze_px.x, c.gaze_px.y}},
+                      {"display", {{"width_cm", display.width_cm}, {"height_cm", display.height_cm}, {"distance_cm", display.distance_cm},
+                                   {"res_x", display.res_x}, {"res_y", display.res_y}}},
+                      {"whole", stats_json(c.whole)}};
+  j["acuity_weighted_rmse"] = c.weighted_rmse;
+  if (c.whole_noise) {
+    j["whole_noise"] = stats_json(*c.whole_noise);
+    j["acuity_weighted_noise_rmse"] = c.weighted_noise_rmse;
+    j["acuity_weighted_ratio"] = c.weighted_ratio();
+  }
+  j["bands"] = nlohmann::json::array();
+  for (const BandResult& r : c.bands) {
+    nlohmann::json band = {{"name", r.band.name}, {"error", stats_json(r.error)}};
+    if (!r.band.foveal_region) band["deg"] = {r.band.lo_deg, json_number(r.band.hi_deg)};
+    if (r.noise) {
+      band["noise"] = stats_json(*r.noise);
+      band["noise_ratio"] = json_number(r.noise_ratio);
+      band["noise_ratio_se"] = r.ratio_se;
+      band["within_noise"] = r.within_noise;
+    }
+    j["bands"].push_back(band);
+  }
+  return j;
+}
+
+}  // namespace foveal

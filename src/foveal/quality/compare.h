@@ -13,6 +13,7 @@
 #include "foveal/util/image.h"
 
 #include <glm/glm.hpp>
+#include <nlohmann/json.hpp>
 
 #include <limits>
 #include <optional>
@@ -96,6 +97,10 @@ double acuity_weighted_rmse(const Image& a, const Image& b, const std::vector<fl
 // The per-band table (pixels, RMSE, PSNR, SSIM, and with a second reference the noise RMSE, the
 // ratio and the verdict) as Markdown, with the acuity-weighted RMSE below it.
 std::string comparison_markdown(const Comparison& c);
+
+// Every figure of a comparison as JSON (the `compare --json` document without the file names):
+// size, gaze, display, whole, per band, the acuity-weighted RMSE; infinities as "inf".
+nlohmann::json comparison_json(const Comparison& c, const Display& display);
 
 // |a − b| per pixel as a heat-map image (linear RGB), scaled so that `full_scale` is the hottest.
 Image error_map_image(const Comparison& c, float full_scale);

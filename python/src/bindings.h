@@ -1,0 +1,24 @@
+// python/src/bindings.h — what the parts of foveal._core share.
+#pragma once
+
+#include <nanobind/nanobind.h>
+#include <nanobind/ndarray.h>
+#include <nlohmann/json.hpp>
+
+#include <initializer_list>
+#include <vector>
+
+namespace nb = nanobind;
+using namespace nb::literals;
+
+namespace foveal::python {
+
+// A JSON document as Python objects (through the json module: dicts, lists, numbers, strings).
+nb::object to_python(const nlohmann::json& j);
+// A NumPy array that owns `values`.
+nb::ndarray<nb::numpy, float> owned_array(std::vector<float>&& values, std::initializer_list<size_t> shape);
+
+// foveal._core's gaze functions (gaze.cpp).
+void bind_gaze(nb::module_& m);
+
+}  // namespace foveal::python

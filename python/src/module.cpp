@@ -1,0 +1,427 @@
+// python/src/module.cpp — foveal._core: the Python module over the library the command line uses.
+//
+// Nothing here computes anything of its own: each call fills the same parameter structs the CLI
+// fills and calls the same library functions. Images of a rendered frame are NumPy views of the
+// frame's own buffers (no copy; they keep the frame alive), and the GIL is released while the
+// library works, so that other Python threads (a tracker's, a window's) run meanwhile.
+#include "bindings.h"
+
+#include "foveal/cuda/gpu.h"
+#include "foveal/impair/profile.h"
+#include "foveal/io/image_io.h"
+#include "foveal/io/outputs.h"
+#include "foveal/quality/compare.h"
+#include "foveal/render/render.h"
+#include "foveal/util/error.h"
+#include "foveal/util/parallel.h"
+#include "foveal/util/timer.h"
+#include "foveal/vision/simulate.h"
+
+#include <nanobind/stl/array.h>
+#include <nanobind/stl/optional.h>
+#include <nanobind/stl/string.h>
+#include <nanobind/stl/tuple.h>
+#include <nanobind/stl/unique_ptr.h>
+#include <nanobind/stl/vector.h>
+
+#include <cstring>
+#include <memory>
+
+namespace foveal::python {
+
+nb::object to_python(const nlohmann::json& j) {
+  return nb::module_::import_("json").attr("loads")(j.dump());
+}
+
+nb::ndarray<nb::numpy, float> owned_array(std::vector<float>&& values, std::initializer_list<size_t> shape) {
+  auto* data = new std::vector<float>(std::move(values));
+  nb::capsule owner(data, [](void* p) noexcept { delete static_cast<std::vector<float>*>(p); });
+  return nb::ndarray<nb::numpy, float>(data->data(), shape, owner);
+}
+
+namespace {
+
+using Vec3 = std::array<float, 3>;
+glm::vec3 vec(const Vec3& v) { return {v[0], v[1], v[2]}; }
+Vec3 tuple(glm::vec3 v) { return {v.x, v.y, v.z}; }
+
+// A scene shared by the renderers and simulations made from it.
+struct PyScene {
+  std::shared_ptr<const Scene> scene;
+};
+
+// The camera to use: a Camera, a camera name of the scene, or None (the scene's first, or one framing it).
+Camera resolve_camera(const Scene& scene, const nb::object& camera) {
+  if (camera.is_none()) return !scene.cameras.empty() ? scene.cameras.front() : default_camera(scene);
+  if (nb::isinstance<nb::str>(camera)) return find_camera(scene, nb::cast<std::string>(camera));
+  return nb::cast<Camera>(camera);
+}
+
+std::pair<int, int> size_of(const std::array<int, 2>& size, const char* what) {
+  if (size[0] <= 0 || size[1] <= 0 || size[0] > 16384 || size[1] > 16384)
+    fail("{}: width and height must be in 1..16384 pixels, got {}x{}", what, size[0], size[1]);
+  return {size[0], size[1]};
+}
+
+// A rendered frame and what its stats need.
+struct PyFrame {
+  Frame frame;
+  RenderParams params;
+  std::shared_ptr<const Scene> scene;
+  size_t triangles = 0;
+  double build_ms = 0;
+  int threads = 0;
+  std::string device, trace_api;
+  double wall_ms = 0;  // the library call alone, from inside the binding
+};
+
+struct PyRenderer {
+  std::shared_ptr<const Scene> scene;
+  gpu::ComputeDevice device = gpu::ComputeDevice::cpu;
+  std::unique_ptr<Tracer> tracer;
+  std::unique_ptr<gpu::Renderer> gpu;
+  int threads = 0;
+  double build_ms = 0;
+
+  PyRenderer(const PyScene& s, const std::string& device_name, int threads_) : scene(s.scene), threads(threads_) {
+    if (threads < 0) fail("threads: must be 0 (all cores) or more, got {}", threads);
+    device = gpu::choose_device(device_name);
+    nb::gil_scoped_release release;
+    if (device == gpu::ComputeDevice::cuda) {
+      gpu = std::make_unique<gpu::Renderer>(*scene);
+      build_ms = gpu->bvh().build_ms;
+    } else {
+      const ThreadScope scope(threads);
+      tracer = std::make_unique<Tracer>(*scene);
+      build_ms = tracer->build_ms();
+    }
+  }
+
+  std::unique_ptr<PyFrame> render(const std::array<int, 2>& size, const nb::object& camera_arg,
+                                  std::optional<std::array<double, 2>> gaze, const std::string& mode, int max_rays,
+                                  int min_rays, double gamma, double beta, uint64_t seed, std::optional<Display> display,
+                                  double ellipse, std::optional<double> ao_distance, std::optional<double> ambient_constant,
+                                  bool shadows) {
+    auto out = std::make_unique<PyFrame>();
+    RenderParams& p = out->params;
+    std::tie(p.width, p.height) = size_of(size, "size");
+    p.mode = parse_render_mode(mode);
+    p.display = display ? *display : Display{};
+    p.foveation = {ellipse, max_rays, min_rays, gamma, beta};
+    if (ao_distance) p.ao_distance = static_cast<float>(*ao_distance);
+    if (ambient_constant) p.ambient_constant = static_cast<float>(*ambient_constant);
+    else p.ambient_constant.reset();
+    p.seed = seed;
+    p.shadows = shadows;
+    if (gaze) p.gaze_px = glm::dvec2((*gaze)[0], (*gaze)[1]);
+    validate(p);
+    const Camera camera = resolve_camera(*scene, camera_arg);
+    out->scene = scene;
+    out->build_ms = build_ms;
+    out->device = gpu::to_string(device);
+    {
+      nb::gil_scoped_release release;
+      const ThreadScope scope(threads);
+      out->threads = scope.threads();
+      const Timer clock;
+      if (gpu) {
+        out->frame = gpu->render(camera, p);
+        out->triangles = scene->triangles.size();
+        out->trace_api = "bvh2";
+      } else {
+        out->frame = render_frame(*tracer, *scene, camera, p);
+        out->triangles = tracer->triangles();
+        out->trace_api = to_string(TraceApi::stream);
+      }
+      out->wall_ms = clock.ms();
+    }
+    return out;
+  }
+};
+
+// A simulation and what it was made from.
+struct PyVision {
+  std::shared_ptr<const Scene> scene;
+  std::unique_ptr<Tracer> tracer;
+  std::unique_ptr<VisionSimulation> sim;
+  SimulateParams params;
+  Camera camera;
+  int threads = 0;
+};
+
+struct PyVisionStep {
+  nb::ndarray<nb::numpy, float> perceived, color, coc;
+  std::array<float, 2> fixation{};
+  double sharp_fraction = 0;
+  nb::object stats;
+};
+
+std::unique_ptr<PyVision> make_vision(const PyScene& s, const std::string& eye, const std::array<int, 2>& size, uint64_t seed,
+                                      const nb::object& camera, const std::string& device, int threads, int blink_every,
+                                      std::optional<double> pupil_mm, double starvation, bool features_every_step) {
+  auto v = std::make_unique<PyVision>();
+  v->scene = s.scene;
+  SimulateParams& p = v->params;
+  std::tie(p.width, p.height) = size_of(size, "size");
+  const EyeSpec spec = parse_eye_spec(eye);
+  p.eye = spec.eye;
+  p.impair = spec.impair;
+  if (pupil_mm) p.eye.pupil_diameter_mm = *pupil_mm;
+  p.seed = seed;
+  p.blink_every = blink_every;
+  p.starvation = starvation;
+  p.features_every_step = features_every_step;
+  if (threads < 0) fail("threads: must be 0 (all cores) or more, got {}", threads);
+  v->threads = threads;
+  p.cuda = gpu::choose_device(device) == gpu::ComputeDevice::cuda;
+  validate(p);
+  v->camera = resolve_camera(*v->scene, camera);
+  nb::gil_scoped_release release;
+  const ThreadScope scope(threads);
+  v->tracer = std::make_unique<Tracer>(*v->scene);
+  v->sim = std::make_unique<VisionSimulation>(*v->tracer, *v->scene, p);
+  return v;
+}
+
+PyVisionStep vision_step(PyVision& v, std::optional<std::array<float, 2>> fixation, const nb::object& camera) {
+  if (!camera.is_none()) v.camera = resolve_camera(*v.scene, camera);
+  StepStats s;
+  Image perceived, color;
+  std::vector<float> coc;
+  {
+    nb::gil_scoped_release release;
+    const ThreadScope scope(v.threads);
+    std::optional<glm::vec2> fix;
+    if (fixation) fix = glm::vec2((*fixation)[0], (*fixation)[1]);
+    s = v.sim->step(v.camera, fix);
+    perceived = v.sim->perceived();
+    color = v.sim->color();
+    coc = v.sim->coc_px();
+  }
+  PyVisionStep r;
+  const size_t w = static_cast<size_t>(v.params.width), h = static_cast<size_t>(v.params.height);
+  r.perceived = owned_array(std::move(perceived.pixels), {h, w, 3});
+  r.color = owned_array(std::move(color.pixels), {h, w, 3});
+  r.coc = owned_array(std::move(coc), {h, w});
+  r.fixation = {s.focus_px.x, s.focus_px.y};
+  r.sharp_fraction = s.sharp_fraction;
+  nlohmann::json j = {{"step", s.step}, {"fixation_px", {s.focus_px.x, s.focus_px.y}},
+                      {"focus_depth_m", std::isfinite(s.focus_depth_m) ? nlohmann::json(s.focus_depth_m) : nlohmann::json("inf")},
+                      {"focus_vergence_d", s.focus_vergence}, {"skipped", s.skipped}, {"blink", s.blink},
+                      {"camera_moved", s.camera_moved}, {"corners", s.corners}, {"sharp_fraction", s.sharp_fraction},
+                      {"time_ms", {{"trace", s.trace_ms}, {"features", s.features_ms}, {"sharpness", s.sharpness_ms},
+                                   {"blur", s.blur_ms}, {"impairments", s.impair.total_ms}, {"total", s.total_ms}}}};
+  r.stats = to_python(j);
+  return r;
+}
+
+Image image_from(const nb::ndarray<const float, nb::ndim<3>, nb::c_contig, nb::device::cpu>& a) {
+  Image img(static_cast<int>(a.shape(1)), static_cast<int>(a.shape(0)), static_cast<int>(a.shape(2)));
+  std::memcpy(img.pixels.data(), a.data(), img.pixels.size() * sizeof(float));
+  return img;
+}
+
+}  // namespace
+}  // namespace foveal::python
+
+using namespace foveal;
+using namespace foveal::python;
+
+NB_MODULE(_core, m) {
+  m.doc() = "foveal's C++ core: scenes, the foveated AO renderer, the vision simulation, gaze, image comparison";
+
+  // Every library error is one line naming the file, line or option, as the CLI prints it
+  nb::register_exception_translator([](const std::exception_ptr& p, void*) {
+    try {
+      std::rethrow_exception(p);
+    } catch (const Error& e) {
+      const std::string what = e.what();
+      const bool missing = what.find(": no such ") != std::string::npos || what.ends_with(": no such file") ||
+                           what.ends_with(" not found");
+      const bool device = what.find("--device") != std::string::npos && what.find("cuda") != std::string::npos;
+      PyErr_SetString(missing ? PyExc_FileNotFoundError : device ? PyExc_RuntimeError : PyExc_ValueError, what.c_str());
+    }
+  });
+
+  nb::class_<Display>(m, "Display", "The screen a render fills: physical size, viewing distance and resolution.")
+      .def(
+          "__init__",
+          [](Display* d, double width_cm, double height_cm, double distance_cm, int res_x, int res_y) {
+            new (d) Display{width_cm, height_cm, distance_cm, res_x, res_y};
+            validate(*d);
+          },
+          "width_cm"_a = 47.5, "height_cm"_a = 30.0, "distance_cm"_a = 60.0, "res_x"_a = 1680, "res_y"_a = 1050,
+          "A display W×H cm seen from D cm, with res_x × res_y pixels (defaults: the papers' 22-inch screen at 60 cm).")
+      .def_rw("width_cm", &Display::width_cm)
+      .def_rw("height_cm", &Display::height_cm)
+      .def_rw("distance_cm", &Display::distance_cm)
+      .def_rw("res_x", &Display::res_x)
+      .def_rw("res_y", &Display::res_y)
+      .def_prop_ro("pixels_per_degree", [](const Display& d) { return pixels_per_degree(d); },
+                   "Display pixels per degree at the screen centre.")
+      .def_prop_ro("fov_deg", [](const Display& d) { return std::array<double, 2>{field_of_view_x_deg(d), field_of_view_y_deg(d)}; },
+                   "Horizontal and vertical field of view, degrees.")
+      .def("__repr__", [](const Display& d) {
+        return fmt::format("Display(width_cm={}, height_cm={}, distance_cm={}, res_x={}, res_y={})", d.width_cm, d.height_cm,
+                           d.distance_cm, d.res_x, d.res_y);
+      });
+
+  nb::class_<Camera>(m, "Camera", "A pinhole camera: position, point looked at, up vector, vertical field of view.")
+      .def(
+          "__init__",
+          [](Camera* c, Vec3 eye, Vec3 look, Vec3 up, float fov, const std::string& name) {
+            new (c) Camera{name, vec(eye), vec(look), vec(up), fov};
+            if (glm::length(c->look - c->eye) == 0) fail("Camera: eye and look must differ");
+            if (glm::length(glm::cross(c->look - c->eye, c->up)) == 0) fail("Camera: up must not be parallel to the view direction");
+            if (!(fov > 0 && fov < 180)) fail("Camera: fov must be in (0, 180) degrees, got {}", fov);
+          },
+          "eye"_a, "look"_a, "up"_a = Vec3{0, 1, 0}, "fov"_a = 45.0f, "name"_a = "python",
+          "A camera at `eye` looking at `look` (scene units), `fov` the vertical field of view in degrees.")
+      .def_prop_ro("name", [](const Camera& c) { return c.name; })
+      .def_prop_ro("eye", [](const Camera& c) { return tuple(c.eye); })
+      .def_prop_ro("look", [](const Camera& c) { return tuple(c.look); })
+      .def_prop_ro("up", [](const Camera& c) { return tuple(c.up); })
+      .def_prop_ro("fov", [](const Camera& c) { return c.fov_deg; })
+      .def("__repr__", [](const Camera& c) {
+        return fmt::format("Camera(eye=({}, {}, {}), look=({}, {}, {}), fov={}, name='{}')", c.eye.x, c.eye.y, c.eye.z, c.look.x,
+                           c.look.y, c.look.z, c.fov_deg, c.name);
+      });
+
+  nb::class_<PyScene>(m, "Scene", "A scene: a mesh file, a scene .json, or builtin:box|sphere-plane|plane.")
+      .def(
+          "__init__",
+          [](PyScene* s, const std::string& spec) {
+            std::shared_ptr<const Scene> scene;
+            {
+              nb::gil_scoped_release release;
+              scene = std::make_shared<const Scene>(load_scene(spec));
+            }
+            new (s) PyScene{std::move(scene)};
+          },
+          "path_or_builtin"_a, "Load a mesh (OBJ, PLY, glTF, … through Assimp), a scene .json or a built-in scene.")
+      .def_prop_ro("source", [](const PyScene& s) { return s.scene->source; })
+      .def_prop_ro("triangles", [](const PyScene& s) { return s.scene->triangles.size(); }, "Triangles loaded.")
+      .def_prop_ro("cameras", [](const PyScene& s) { return s.scene->cameras; }, "The scene's named cameras.")
+      .def("camera", [](const PyScene& s, const std::string& name) { return find_camera(*s.scene, name); }, "name"_a,
+           "The named camera (ValueError listing the names when there is none).")
+      .def("default_camera", [](const PyScene& s) { return default_camera(*s.scene); }, "A camera framing the whole scene.")
+      .def("__repr__", [](const PyScene& s) { return fmt::format("Scene('{}', {} triangles)", s.scene->source, s.scene->triangles.size()); });
+
+  nb::class_<PyFrame>(m, "Frame", "A rendered frame. Its arrays are views of the frame's own buffers.")
+      .def_prop_ro(
+          "image",
+          [](PyFrame& f) {
+            const Image& c = f.frame.color;
+            return nb::ndarray<nb::numpy, float>(const_cast<float*>(c.pixels.data()),
+                                                 {size_t(c.height), size_t(c.width), size_t(c.channels)}, nb::find(&f));
+          },
+          "The shaded image: float32 H×W×3, linear RGB, a view (no copy) valid while the frame lives.")
+      .def(
+          "aov",
+          [](PyFrame& f, const std::string& name) {
+            Image img = aov_image(f.frame, name);
+            const size_t h = img.height, w = img.width, c = img.channels;
+            if (c == 1) return owned_array(std::move(img.pixels), {h, w});
+            return owned_array(std::move(img.pixels), {h, w, c});
+          },
+          "name"_a,
+          "A float buffer by the CLI's AOV name: ao, depth, position, normal, albedo, budget, quality, blend, eccentricity "
+          "(H×W or H×W×3; NaN where nothing was hit).")
+      .def_prop_ro(
+          "stats",
+          [](const PyFrame& f) {
+            return to_python(frame_stats_json(f.frame, f.params, *f.scene, f.triangles, f.build_ms, f.threads, f.device, f.trace_api));
+          },
+          "Timings and ray counts: the same fields as `foveal render --stats`.")
+      .def_prop_ro("gaze", [](const PyFrame& f) { return std::array<double, 2>{f.frame.gaze_px.x, f.frame.gaze_px.y}; },
+                   "The gaze point in render pixels.")
+      .def_prop_ro("width", [](const PyFrame& f) { return f.frame.color.width; })
+      .def_prop_ro("height", [](const PyFrame& f) { return f.frame.color.height; })
+      .def_prop_ro("library_ms", [](const PyFrame& f) { return f.wall_ms; },
+                   "Wall time of the library's render call alone, ms (for measuring the binding's own overhead).")
+      .def("save", [](const PyFrame& f, const std::string& path) { save_image(f.frame.color, path); }, "path"_a,
+           "Write the image as the CLI does (.png sRGB; .pfm/.exr linear floats).");
+
+  nb::class_<PyRenderer>(m, "Renderer", "The foveated-AO renderer of one scene on one device.")
+      .def(nb::init<const PyScene&, const std::string&, int>(), "scene"_a, "device"_a = "auto", "threads"_a = 0,
+           "Build the scene's BVH on `device` (auto: cuda when a usable NVIDIA GPU is present, else cpu); "
+           "`threads` = 0 uses all cores.")
+      .def("render", &PyRenderer::render, "size"_a = std::array<int, 2>{840, 525}, "camera"_a = nb::none(), "gaze"_a = nb::none(),
+           "mode"_a = "foveated", "max_rays"_a = 400, "min_rays"_a = 0, "gamma"_a = 2.0, "beta"_a = 0.0, "seed"_a = 1,
+           "display"_a = nb::none(), "ellipse"_a = 1.538, "ao_distance"_a = nb::none(), "ambient_constant"_a = 1.0,
+           "shadows"_a = false,
+           "Render one frame. `gaze` (x, y) in render pixels, origin top-left (default: the centre); mode 'foveated' "
+           "(the AO budget follows the gaze) or 'full' (max_rays everywhere: the reference); `camera` a Camera, a "
+           "camera name or None (the scene's first); `ambient_constant` None = the fovea's mean visibility. "
+           "The GIL is released while rendering.")
+      .def_prop_ro("device", [](const PyRenderer& r) { return std::string(gpu::to_string(r.device)); })
+      .def_prop_ro("device_description", [](const PyRenderer& r) { return gpu::describe_device(r.device); });
+
+  nb::class_<PyVisionStep>(m, "VisionStep", "One step of the vision simulation (arrays are the step's own copies).")
+      .def_ro("perceived", &PyVisionStep::perceived, "What the eye perceives: float32 H×W×3, linear RGB.")
+      .def_ro("color", &PyVisionStep::color, "The sharp ray-cast image: float32 H×W×3, linear RGB.")
+      .def_ro("coc", &PyVisionStep::coc, "Per-pixel circle-of-confusion diameter used for the blur, pixels (H×W).")
+      .def_ro("fixation", &PyVisionStep::fixation, "The fixation of this step, render pixels.")
+      .def_ro("sharp_fraction", &PyVisionStep::sharp_fraction, "Share of pixels remembered sharp.")
+      .def_ro("stats", &PyVisionStep::stats, "The step's record: fixation, depth, accommodation, blink, corners, stage times (ms).");
+
+  nb::class_<PyVision>(m, "VisionSimulation", "The second paper's simulation of human vision over time.")
+      .def("__init__",
+           [](PyVision* v, const PyScene& s, const std::string& eye, const std::array<int, 2>& size, uint64_t seed,
+              const nb::object& camera, const std::string& device, int threads, int blink_every, std::optional<double> pupil_mm,
+              double starvation, bool features_every_step) {
+             new (v) PyVision(std::move(*make_vision(s, eye, size, seed, camera, device, threads, blink_every, pupil_mm, starvation,
+                                                     features_every_step)));
+           },
+           "scene"_a, "eye"_a = "healthy", "size"_a = std::array<int, 2>{1024, 768}, "seed"_a = 1, "camera"_a = nb::none(),
+           "device"_a = "auto", "threads"_a = 0, "blink_every"_a = 0, "pupil_mm"_a = nb::none(), "starvation"_a = 0.015,
+           "features_every_step"_a = false,
+           "A simulation of `eye` (the CLI's --eye: presets joined with '+', e.g. 'myopia:-2+cvd:deutan:0.6', or a profile "
+           ".json) looking at `scene` through `camera`.")
+      .def("step", &vision_step, "fixation"_a = nb::none(), "camera"_a = nb::none(),
+           "One step: the next fixation (simulated saccade, or `fixation` (x, y) in render pixels from real gaze), "
+           "accommodation, the sharpness field, the blur and the impairments. Returns a VisionStep.")
+      .def("blink", [](PyVision& v) { v.sim->blink_before_next_step(); }, "The eye blinks before the next step (the field forgets).")
+      .def_prop_ro("on_gpu", [](const PyVision& v) { return v.sim->on_gpu(); });
+
+  m.def(
+      "_compare",
+      [](const nb::ndarray<const float, nb::ndim<3>, nb::c_contig, nb::device::cpu>& a,
+         const nb::ndarray<const float, nb::ndim<3>, nb::c_contig, nb::device::cpu>& b,
+         std::optional<nb::ndarray<const float, nb::ndim<3>, nb::c_contig, nb::device::cpu>> b2, std::optional<std::array<double, 2>> gaze,
+         std::optional<Display> display, double ellipse) {
+        const Image ia = image_from(a), ib = image_from(b);
+        std::optional<Image> ib2;
+        if (b2) ib2 = image_from(*b2);
+        Display d = display ? *display : Display{};
+        if (!display) {
+          d.res_x = ia.width;
+          d.res_y = ia.height;
+        }
+        if (!(ellipse > 0)) fail("ellipse: must be > 0, got {}", ellipse);
+        FoveationParams params;
+        params.ellipse_ratio = ellipse;
+        const glm::dvec2 g = gaze ? glm::dvec2((*gaze)[0], (*gaze)[1]) : glm::dvec2(ia.width * 0.5, ia.height * 0.5);
+        nlohmann::json j;
+        {
+          nb::gil_scoped_release release;
+          const Comparison c = compare_images(ia, ib, ib2 ? &*ib2 : nullptr, d, g, params);
+          j = comparison_json(c, d);
+        }
+        return to_python(j);
+      },
+      "a"_a, "b"_a, "b2"_a = nb::none(), "gaze"_a = nb::none(), "display"_a = nb::none(), "ellipse"_a = 1.538);
+
+  m.def("load_image", [](const std::string& path) {
+    Image img = load_image(path);
+    const size_t h = img.height, w = img.width, c = img.channels;
+    return owned_array(std::move(img.pixels), {h, w, c});
+  }, "path"_a, "Read an image as the CLI does: PNG/JPEG decoded from sRGB to linear, PFM/EXR as stored (float32 H×W×C).");
+  m.def("save_image", [](const nb::ndarray<const float, nb::ndim<3>, nb::c_contig, nb::device::cpu>& a, const std::string& path) {
+    save_image(image_from(a), path);
+  }, "image"_a, "path"_a, "Write a linear float32 H×W×3 image as the CLI does (.png sRGB; .pfm/.exr exact).");
+  m.def("device_available", [] { return gpu::availability().usable; }, "Whether a usable NVIDIA GPU answered.");
+  m.def("device_description", [] { return gpu::availability().describe(); }, "The GPU, or why there is none.");
+
+  bind_gaze(m);
+}
