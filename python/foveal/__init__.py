@@ -72,8 +72,8 @@ def compare(a: ImageLike, b: ImageLike, gaze: Optional[Tuple[float, float]] = No
     """Image quality of ``a`` against the reference ``b``, whole and per eccentricity band.
 
     ``a`` and ``b`` are H×W×C float arrays (linear, as rendered) or image paths. ``gaze`` is in
-    image pixels (default: the centre); ``display`` the screen the image filled (default: the
-    papers' 47.5×30 cm at 60 cm with the image's resolution). With ``reference2`` (the reference
+    image pixels (default: the centre); ``display`` the screen the image filled (default, as
+    the command line's: the papers' 47.5×30 cm, 1680×1050 at 60 cm). With ``reference2`` (the reference
     rendered with another seed) every band's error is also given as a multiple of the reference's
     own noise. Returns the dict of ``foveal compare --json``: ``whole``, ``bands`` (RMSE, PSNR,
     SSIM per band), ``acuity_weighted_rmse`` and, with ``reference2``, the noise ratios.

@@ -56,6 +56,9 @@ class Recording:
     has_tracker_fixations: bool = False
     block_starts: List[int] = field(default_factory=list)  #: first sample of each recording block
     notes: List[str] = field(default_factory=list)
+    #: the tracker's 3-D gaze direction per sample (N×3, NaN where none), where it gives one (Pupil's
+    #: gaze_point_3d); the filters measure angles with it, as the command line does
+    directions: Optional[np.ndarray] = None
 
     def __len__(self) -> int:
         return len(self.samples)
@@ -86,7 +89,8 @@ def read(path: str, format: str = "auto", screen: Optional[Tuple[int, int]] = No
                      source=d["source"], format=d["format"], tracker=d["tracker"], screen=tuple(d["screen"]),
                      eyes=d["eyes"], rate_hz=d["rate_hz"], nominal_rate_hz=d["nominal_rate_hz"],
                      has_tracker_fixations=d["has_tracker_fixations"], block_starts=list(d["block_starts"]),
-                     notes=list(d["notes"]))
+                     notes=list(d["notes"]),
+                     directions=None if d["directions"] is None else np.asarray(d["directions"]).reshape(-1, 3))
 
 
 _PARAMETERS = ("velocity_threshold_deg_s", "velocity_window_s", "gap_fill_s", "merge_gap_s", "merge_angle_deg",
@@ -105,10 +109,12 @@ def fixations(samples, method: str = "ivt", display: Optional[_core.Display] = N
     Returns a structured array of FIXATION_DTYPE (``first``/``last`` are sample indices); with
     ``labels=True`` also each sample's fixation index (−1: none).
     """
-    blocks = None
+    blocks, directions = None, None
     if isinstance(samples, Recording):
         screen = screen or samples.screen
         blocks = samples.block_starts
+        if samples.directions is not None:
+            directions = np.ascontiguousarray(samples.directions, dtype=np.float64).reshape(-1)
         samples = samples.samples
     if screen is None:
         raise ValueError("fixations: give screen=(W, H) in pixels with a bare sample array")
@@ -122,7 +128,7 @@ def fixations(samples, method: str = "ivt", display: Optional[_core.Display] = N
         display = _core.Display(47.5, 30.0, 60.0, int(screen[0]), int(screen[1]))
     col = lambda name: np.ascontiguousarray(samples[name], dtype=np.float64)  # noqa: E731
     d = _core._fixations(col("t_s"), col("x"), col("y"), col("confidence"), col("valid"), (int(screen[0]), int(screen[1])),
-                         display, method, {k: float(v) for k, v in params.items()}, blocks)
+                         display, method, {k: float(v) for k, v in params.items()}, blocks, directions)
     result = _events(d, FIXATION_DTYPE)
     return (result, np.asarray(d["label"])) if labels else result
 
@@ -194,6 +200,10 @@ class LslSource:
         if not (timeout > 0):
             raise ValueError(f"timeout: must be positive seconds, got {timeout}")
         self._lsl = pylsl
+        lost = getattr(pylsl, "LostError", None)
+        if lost is None:
+            from pylsl.util import LostError as lost
+        self._lost_error = lost
         prop, value = ("name", name) if name is not None else ("type", type)
         found = pylsl.resolve_byprop(prop, value, 1, timeout)
         if not found:
@@ -255,7 +265,7 @@ class LslSource:
     def poll(self) -> np.ndarray:
         try:
             chunk, stamps = self._inlet.pull_chunk(timeout=0.0)
-        except self._lsl.LostError:
+        except self._lost_error:
             self._lost = True
             chunk, stamps = [], []
         if not stamps:

@@ -14,6 +14,8 @@
 #include <nanobind/stl/unique_ptr.h>
 #include <nanobind/stl/vector.h>
 
+#include <algorithm>
+#include <cmath>
 #include <cstring>
 #include <memory>
 
@@ -69,8 +71,9 @@ using Column = nb::ndarray<const double, nb::ndim<1>, nb::c_contig, nb::device::
 
 // A recording rebuilt from columns (what foveal.gaze.fixations is given).
 Recording recording_from(const Column& t, const Column& x, const Column& y, const Column& confidence, const Column& valid,
-                         std::array<int, 2> screen) {
+                         std::array<int, 2> screen, const std::optional<Column>& directions) {
   const size_t n = t.shape(0);
+  if (directions && directions->shape(0) != 3 * n) fail("directions: expected 3 values per sample");
   if (x.shape(0) != n || y.shape(0) != n || confidence.shape(0) != n || valid.shape(0) != n)
     fail("samples: the columns t_s, x, y, confidence and valid must have the same length");
   if (screen[0] <= 0 || screen[1] <= 0) fail("screen: must be positive pixels, got {}x{}", screen[0], screen[1]);
@@ -86,6 +89,10 @@ Recording recording_from(const Column& t, const Column& x, const Column& y, cons
     s.px = {x.data()[i], y.data()[i]};
     s.confidence = static_cast<float>(confidence.data()[i]);
     s.valid = valid.data()[i] != 0 && std::isfinite(s.px.x) && std::isfinite(s.px.y);
+    if (directions) {
+      const double* d = directions->data() + 3 * i;
+      if (std::isfinite(d[0]) && std::isfinite(d[1]) && std::isfinite(d[2])) s.direction = glm::dvec3(d[0], d[1], d[2]);
+    }
   }
   r.block_starts = {0};
   return r;
@@ -130,6 +137,13 @@ void bind_gaze(nb::module_& m) {
         }
         nb::dict d;
         d["samples"] = sample_columns(r.samples);
+        // The tracker's 3-D gaze directions where it gives them (Pupil's gaze_point_3d): the filters use them
+        std::vector<double> directions;
+        const bool any_direction = std::any_of(r.samples.begin(), r.samples.end(), [](const GazeSample& s) { return s.direction.has_value(); });
+        if (any_direction)
+          for (const GazeSample& s : r.samples)
+            for (int k = 0; k < 3; ++k) directions.push_back(s.direction ? (*s.direction)[k] : NAN);
+        d["directions"] = any_direction ? nb::cast(column(std::move(directions))) : nb::none();
         d["fixations"] = event_columns(r.fixations);
         d["blinks"] = event_columns(r.blinks);
         d["source"] = r.source;
@@ -150,7 +164,8 @@ void bind_gaze(nb::module_& m) {
   m.def(
       "_fixations",
       [](const Column& t, const Column& x, const Column& y, const Column& confidence, const Column& valid, std::array<int, 2> screen,
-         const Display& display, const std::string& method, const nb::dict& params, std::optional<std::vector<size_t>> block_starts) {
+         const Display& display, const std::string& method, const nb::dict& params, std::optional<std::vector<size_t>> block_starts,
+         std::optional<Column> directions) {
         FixationParams p;
         for (auto [key, value] : params) {
           const std::string k = nb::cast<std::string>(key);
@@ -172,7 +187,7 @@ void bind_gaze(nb::module_& m) {
         validate(display);
         const FixationMethod fm = parse_fixation_method(method);
         if (fm == FixationMethod::mean) fail("fixations: 'mean' is a per-frame average, not a fixation filter: use ivt or idt");
-        Recording r = recording_from(t, x, y, confidence, valid, screen);
+        Recording r = recording_from(t, x, y, confidence, valid, screen, directions);
         if (block_starts && !block_starts->empty()) {
           for (size_t b : *block_starts)
             if (b >= r.samples.size() && !r.samples.empty()) fail("fixations: block start {} is past the last sample", b);
@@ -205,7 +220,7 @@ void bind_gaze(nb::module_& m) {
         d["label"] = column(std::move(label));
         return d;
       },
-      "t"_a, "x"_a, "y"_a, "confidence"_a, "valid"_a, "screen"_a, "display"_a, "method"_a, "params"_a, "block_starts"_a = nb::none());
+      "t"_a, "x"_a, "y"_a, "confidence"_a, "valid"_a, "screen"_a, "display"_a, "method"_a, "params"_a, "block_starts"_a = nb::none(), "directions"_a = nb::none());
 
   nb::class_<PyPupilSource>(m, "_PupilSource")
       .def("__init__",

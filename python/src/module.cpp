@@ -25,6 +25,7 @@
 #include <nanobind/stl/vector.h>
 
 #include <cstring>
+#include <filesystem>
 #include <memory>
 
 namespace foveal::python {
@@ -150,7 +151,7 @@ struct PyVision {
 };
 
 struct PyVisionStep {
-  nb::ndarray<nb::numpy, float> perceived, color, coc;
+  nb::object perceived, color, coc;  // NumPy arrays owning the step's copies
   std::array<float, 2> fixation{};
   double sharp_fraction = 0;
   nb::object stats;
@@ -200,9 +201,9 @@ PyVisionStep vision_step(PyVision& v, std::optional<std::array<float, 2>> fixati
   }
   PyVisionStep r;
   const size_t w = static_cast<size_t>(v.params.width), h = static_cast<size_t>(v.params.height);
-  r.perceived = owned_array(std::move(perceived.pixels), {h, w, 3});
-  r.color = owned_array(std::move(color.pixels), {h, w, 3});
-  r.coc = owned_array(std::move(coc), {h, w});
+  r.perceived = nb::cast(owned_array(std::move(perceived.pixels), {h, w, 3}));
+  r.color = nb::cast(owned_array(std::move(color.pixels), {h, w, 3}));
+  r.coc = nb::cast(owned_array(std::move(coc), {h, w}));
   r.fixation = {s.focus_px.x, s.focus_px.y};
   r.sharp_fraction = s.sharp_fraction;
   nlohmann::json j = {{"step", s.step}, {"fixation_px", {s.focus_px.x, s.focus_px.y}},
@@ -236,8 +237,11 @@ NB_MODULE(_core, m) {
       std::rethrow_exception(p);
     } catch (const Error& e) {
       const std::string what = e.what();
-      const bool missing = what.find(": no such ") != std::string::npos || what.ends_with(": no such file") ||
-                           what.ends_with(" not found");
+      // A file that is not there (the readers say "no such file", or "cannot open" a path that does not exist)
+      const size_t cannot = what.find(": cannot open");
+      const bool missing = what.find(": no such ") != std::string::npos || what.ends_with(" not found") ||
+                           (cannot != std::string::npos && what.find("for writing") == std::string::npos &&
+                            !std::filesystem::exists(what.substr(0, cannot)));
       const bool device = what.find("--device") != std::string::npos && what.find("cuda") != std::string::npos;
       PyErr_SetString(missing ? PyExc_FileNotFoundError : device ? PyExc_RuntimeError : PyExc_ValueError, what.c_str());
     }
@@ -393,11 +397,7 @@ NB_MODULE(_core, m) {
         const Image ia = image_from(a), ib = image_from(b);
         std::optional<Image> ib2;
         if (b2) ib2 = image_from(*b2);
-        Display d = display ? *display : Display{};
-        if (!display) {
-          d.res_x = ia.width;
-          d.res_y = ia.height;
-        }
+        const Display d = display ? *display : Display{};  // the command line's default, 47.5,30,60,1680,1050
         if (!(ellipse > 0)) fail("ellipse: must be > 0, got {}", ellipse);
         FoveationParams params;
         params.ellipse_ratio = ellipse;

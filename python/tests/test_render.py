@@ -1,0 +1,113 @@
+"""Renderer.render against the command line: the same pixels, stats and errors; arrays are views."""
+import gc
+import threading
+import time
+
+import numpy as np
+import pytest
+
+import foveal
+from conftest import cli_error, read_pfm, run_cli
+
+
+@pytest.fixture(scope="module")
+def box():
+    return foveal.Scene("builtin:box")
+
+
+@pytest.mark.parametrize("mode,gaze,seed", [("foveated", (100, 60), 1), ("full", (30, 90), 7)])
+def test_render_equals_the_command_lines_pfm_bit_for_bit(cli, box, tmp_path, mode, gaze, seed):
+    out, depth, stats = tmp_path / "cli.pfm", tmp_path / "depth.pfm", tmp_path / "stats.json"
+    run_cli(cli, "render", "--scene", "builtin:box", "--size", "200x120", "--mode", mode, "--gaze", f"{gaze[0]},{gaze[1]}",
+            "--max-rays", 64, "--seed", seed, "--device", "cpu", "-o", out, "--aov", f"depth={depth}", "--stats", stats, "-q")
+    frame = foveal.Renderer(box, device="cpu").render(size=(200, 120), mode=mode, gaze=gaze, max_rays=64, seed=seed)
+    expected = read_pfm(out)
+    assert frame.image.shape == expected.shape == (120, 200, 3)
+    assert np.array_equal(frame.image.view(np.uint32), expected.view(np.uint32)), "pixels differ from the CLI's"
+    np.testing.assert_array_equal(np.nan_to_num(frame.aov("depth"), nan=-1), np.nan_to_num(read_pfm(depth)[:, :, 0], nan=-1))
+    import json
+    cli_stats = json.loads(stats.read_text())
+    assert frame.stats.keys() == cli_stats.keys()
+    assert frame.stats["rays"] == cli_stats["rays"]
+    assert frame.stats["gaze_px"] == cli_stats["gaze_px"]
+
+
+def test_the_image_is_a_view_of_the_frames_buffer(box):
+    frame = foveal.Renderer(box, device="cpu").render(size=(64, 40), max_rays=8)
+    a, b = frame.image, frame.image
+    assert a.__array_interface__["data"][0] == b.__array_interface__["data"][0]
+    assert not a.flags["OWNDATA"] and np.shares_memory(a, b)
+    a[0, 0, 0] = 123.0
+    assert frame.image[0, 0, 0] == 123.0  # the same memory, not a copy
+    copy = a.copy()
+    del frame, b
+    gc.collect()
+    assert np.array_equal(a, copy)  # the view keeps the frame alive
+
+
+def test_scene_cameras_and_named_camera(box, tmp_path, cli):
+    names = [c.name for c in box.cameras]
+    assert "corner" in names
+    frame = foveal.Renderer(box, device="cpu").render(size=(80, 50), camera="corner", max_rays=4)
+    run_cli(cli, "render", "--scene", "builtin:box", "--camera", "corner", "--size", "80x50", "--max-rays", 4, "--device", "cpu",
+            "-o", tmp_path / "c.pfm", "-q")
+    assert np.array_equal(frame.image, read_pfm(tmp_path / "c.pfm"))
+    cam = foveal.Camera(eye=(0, 1.3, 6), look=(0, 1, 0), fov=40)
+    f2 = foveal.Renderer(box, device="cpu").render(size=(80, 50), camera=cam, max_rays=4)
+    assert not np.array_equal(frame.image, f2.image)
+
+
+def test_errors_carry_the_command_lines_message(cli, box, tmp_path):
+    missing = str(tmp_path / "missing.obj")
+    with pytest.raises(FileNotFoundError) as e:
+        foveal.Scene(missing)
+    assert str(e.value) == cli_error(cli, "render", "--scene", missing, "-o", tmp_path / "x.png")
+    renderer = foveal.Renderer(box, device="cpu")
+    with pytest.raises(ValueError) as e:
+        renderer.render(mode="sideways")
+    assert str(e.value) == cli_error(cli, "render", "--mode", "sideways", "-o", tmp_path / "x.png")
+    with pytest.raises(ValueError) as e:
+        renderer.render(camera="nowhere")
+    assert str(e.value) == cli_error(cli, "render", "--camera", "nowhere", "-o", tmp_path / "x.png")
+    with pytest.raises(ValueError, match="size"):
+        renderer.render(size=(0, 10))
+    with pytest.raises(ValueError, match="Camera"):
+        foveal.Camera(eye=(1, 2, 3), look=(1, 2, 3))
+    with pytest.raises(ValueError):
+        foveal.Display(-1, 30, 60, 100, 100)
+
+
+def test_no_gpu_is_a_runtime_error_when_cuda_is_asked_for(box):
+    if foveal.device_available():
+        pytest.skip("a GPU is present")
+    with pytest.raises(RuntimeError, match="cuda"):
+        foveal.Renderer(box, device="cuda")
+
+
+def test_the_gil_is_released_while_rendering(box):
+    renderer = foveal.Renderer(box, device="cpu", threads=1)
+    done = threading.Event()
+    counts = []
+
+    def work():
+        renderer.render(size=(320, 200), mode="full", max_rays=64)
+        done.set()
+
+    thread = threading.Thread(target=work)
+    thread.start()
+    ticks = 0
+    while not done.is_set():
+        ticks += 1
+        time.sleep(0.001)
+    thread.join()
+    counts.append(ticks)
+    assert ticks > 20, "the main thread did not run while the frame rendered"
+
+
+def test_stats_and_gaze(box):
+    frame = foveal.Renderer(box, device="cpu").render(size=(120, 80), gaze=(10, 20), max_rays=16, min_rays=2)
+    assert frame.gaze == (10.0, 20.0) or list(frame.gaze) == [10.0, 20.0]
+    assert frame.stats["width"] == 120 and frame.stats["height"] == 80
+    budget = frame.aov("budget")
+    assert budget.max() == 16 and budget.min() >= 2
+    assert frame.library_ms > 0
