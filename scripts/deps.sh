@@ -9,6 +9,7 @@ packages=(
   libgtest-dev libgmock-dev libbenchmark-dev
   cppzmq-dev libmsgpack-cxx-dev ffmpeg jq
   libglfw3-dev libimgui-dev libgl-dev xvfb xauth libgl1-mesa-dri
+  python3 python3-venv python3-dev python3-pip
 )
 missing=()
 for p in "${packages[@]}"; do

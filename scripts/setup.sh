@@ -8,6 +8,8 @@ cd "$(dirname "$0")/.."
 
 cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release >/dev/null
 cmake --build build --parallel "$(nproc)"
+# The Python package (pip install . into .venv) with the test tools and the PsychoPy examples' parts
+scripts/python-env.sh
 
 mkdir -p out
 ./build/foveal render --scene builtin:box --gaze 300,200 -o out/render.png --mask out/mask.png \

@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# Build and run the whole test suite: a Release build, then the same tests under AddressSanitizer
+# Build and run the whole test suite: a Release build, the Python package's tests (pip install .
+# into .venv, pytest), then the C++ tests under AddressSanitizer
 # and UndefinedBehaviorSanitizer, then each fuzz target for a bounded time.
 # Usage: scripts/test.sh   (FUZZ_SECONDS=N to change each target's fuzzing time, default 20; 0 skips fuzzing)
 set -euo pipefail
@@ -10,6 +11,10 @@ echo "== Release build and tests"
 cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release >/dev/null
 cmake --build build --parallel "$jobs"
 ctest --test-dir build --output-on-failure --parallel "$jobs"
+
+echo "== Python package: pip install . into .venv, then its tests (against the command line just built)"
+scripts/python-env.sh
+FOVEAL_CLI="$PWD/build/foveal" .venv/bin/python -m pytest -q python/tests
 
 echo "== AddressSanitizer + UndefinedBehaviorSanitizer build and tests"
 cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DFOVEAL_SANITIZE=ON -DFOVEAL_BUILD_BENCH=OFF >/dev/null

@@ -1,0 +1,149 @@
+#!/usr/bin/env python3
+"""How much foveation goes unnoticed? A two-alternative forced-choice experiment with QUEST.
+
+On each trial the observer fixates the cross and sees two intervals: the full-frame reference and
+a foveated rendering at the γ chosen by PsychoPy's QuestHandler, in random order; the observer
+presses 1 or 2 for the interval that looked degraded. A larger γ makes the AO budget fall faster
+with eccentricity (fewer rays, more visible noise and more of the constant ambient). QUEST works
+on log10 γ and estimates the γ detected on 82 % of trials (its default threshold, with a guess
+rate of 0.5 for 2AFC). PsychoPy's ExperimentHandler writes its standard data files (a wide CSV
+and a .psydat) under --out.
+
+    python examples/psychopy/foveation_threshold.py --participant P01
+    xvfb-run -a python examples/psychopy/foveation_threshold.py --simulate 3.0 --trials 40
+
+``--simulate GAMMA`` replaces the person with a simulated observer whose psychometric function is
+QUEST's own Weibull with its threshold at γ = GAMMA (so the experiment can run unattended, and a
+test can check that QUEST finds GAMMA); the stimuli are still rendered and shown.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import os
+import sys
+
+import numpy as np
+
+
+def parse_args(argv=None):
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0], formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("--participant", default="sim", help="participant id (file names)")
+    p.add_argument("--scene", default="builtin:box", help="scene (default builtin:box)")
+    p.add_argument("--size", default="840x525", help="stimulus size WxH pixels (default 840x525)")
+    p.add_argument("--display", default="47.5,30,60", help="screen W_CM,H_CM,DIST_CM")
+    p.add_argument("--max-rays", type=int, default=100, help="n_max (the reference's rays everywhere)")
+    p.add_argument("--trials", type=int, default=40, help="trials (default 40)")
+    p.add_argument("--start-gamma", type=float, default=2.0, help="QUEST's first guess of the threshold γ")
+    p.add_argument("--interval-s", type=float, default=0.75, help="each interval's duration, seconds")
+    p.add_argument("--device", default="auto", help="auto, cpu or cuda")
+    p.add_argument("--seed", type=int, default=1, help="seed of the interval order and the simulated observer")
+    p.add_argument("--simulate", type=float, default=None, metavar="GAMMA", help="a simulated observer with this threshold γ")
+    p.add_argument("--out", default="data", help="folder for PsychoPy's data files")
+    return p.parse_args(argv)
+
+
+# QUEST's psychometric function (Watson & Pelli 1983, as PsychoPy's QuestHandler uses it)
+BETA, DELTA, GUESS, P_THRESHOLD = 3.5, 0.01, 0.5, 0.82
+
+
+def weibull(log_gamma: float, log_threshold: float) -> float:
+    """P(correct) at log10 γ for an observer whose P_THRESHOLD point is at log_threshold."""
+    # QUEST places its threshold where P = P_THRESHOLD: shift the Weibull so that holds
+    p0 = (P_THRESHOLD - GUESS) / (1 - GUESS - DELTA)
+    shift = math.log10(-math.log(1 - p0)) / BETA  # the Weibull is at p0 of its range when x − xt = shift
+    x = log_gamma - log_threshold + shift
+    return DELTA * GUESS + (1 - DELTA) * (1 - (1 - GUESS) * math.exp(-10 ** (BETA * x)))
+
+
+def to_psychopy(image: np.ndarray) -> np.ndarray:
+    c = np.clip(image, 0.0, 1.0)
+    srgb = np.where(c <= 0.0031308, 12.92 * c, 1.055 * np.power(c, 1 / 2.4) - 0.055)
+    return np.flipud(srgb * 2.0 - 1.0).astype(np.float32)
+
+
+def main(argv=None) -> int:
+    args = parse_args(argv)
+    import foveal
+    from psychopy import core, data, event, visual
+
+    if args.trials < 1:
+        raise SystemExit("--trials: must be at least 1")
+    if args.simulate is not None and not args.simulate > 0:
+        raise SystemExit("--simulate: the threshold γ must be positive")
+    w, h = (int(v) for v in args.size.lower().split("x"))
+    wcm, hcm, dcm = (float(v) for v in args.display.split(","))
+    display = foveal.Display(wcm, hcm, dcm, w, h)
+    renderer = foveal.Renderer(foveal.Scene(args.scene), device=args.device)
+    gaze = (w / 2.0, h / 2.0)
+    reference = to_psychopy(renderer.render(size=(w, h), gaze=gaze, mode="full", max_rays=args.max_rays, display=display).image)
+
+    os.makedirs(args.out, exist_ok=True)
+    rng = np.random.default_rng(args.seed)
+    quest = data.QuestHandler(startVal=math.log10(args.start_gamma), startValSd=0.4, pThreshold=P_THRESHOLD,
+                              nTrials=args.trials, beta=BETA, delta=DELTA, gamma=GUESS, grain=0.005,
+                              minVal=math.log10(1.0), maxVal=math.log10(12.0), name="gamma")
+    exp = data.ExperimentHandler(name="foveation_threshold", extraInfo={"participant": args.participant, "scene": args.scene,
+                                                                          "simulated_threshold": args.simulate},
+                                 dataFileName=os.path.join(args.out, f"{args.participant}_foveation_threshold"))
+    exp.addLoop(quest)
+
+    win = visual.Window((w, h), units="pix", fullscr=False, allowGUI=False, color=(0, 0, 0))
+    stim = visual.ImageStim(win, image=reference, size=(w, h), units="pix", interpolate=False)
+    cross = visual.ShapeStim(win, vertices="cross", size=12, lineColor=(1, -1, -1), fillColor=(1, -1, -1))
+    prompt = visual.TextStim(win, text="Which interval was degraded? 1 or 2", height=18, color=(1, 1, 1))
+    clock = core.Clock()
+    duration = 0.0 if args.simulate is not None else args.interval_s
+
+    for log_gamma in quest:
+        gamma = 10 ** log_gamma
+        frame = renderer.render(size=(w, h), gaze=gaze, max_rays=args.max_rays, gamma=gamma, display=display)
+        foveated = to_psychopy(frame.image)
+        degraded_first = bool(rng.random() < 0.5)
+        for image in ((foveated, reference) if degraded_first else (reference, foveated)):
+            stim.image = image
+            clock.reset()
+            while True:  # at least one frame per interval, `duration` seconds with a person
+                stim.draw()
+                cross.draw()
+                win.flip()
+                if clock.getTime() >= duration:
+                    break
+            win.flip()
+        prompt.draw()
+        win.flip()
+        if args.simulate is not None:
+            correct = bool(rng.random() < weibull(log_gamma, math.log10(args.simulate)))
+            answer = (1 if degraded_first else 2) if correct else (2 if degraded_first else 1)
+            rt = float("nan")
+        else:
+            keys = event.waitKeys(keyList=["1", "2", "escape"], timeStamped=clock)
+            if keys[0][0] == "escape":
+                break
+            answer, rt = int(keys[0][0]), keys[0][1]
+            correct = answer == (1 if degraded_first else 2)
+        quest.addResponse(int(correct))
+        exp.addData("gamma", gamma)
+        exp.addData("degraded_interval", 1 if degraded_first else 2)
+        exp.addData("answer", answer)
+        exp.addData("rt_s", rt)
+        exp.addData("ao_rays_per_pixel", frame.stats["ao_rays_per_pixel"]["mean"])
+        exp.nextEntry()
+
+    win.close()
+    estimate = 10 ** quest.mean()
+    summary = {"participant": args.participant, "trials": quest.thisTrialN + 1, "threshold_gamma": estimate,
+               "threshold_gamma_sd_log10": quest.sd(), "simulated_threshold_gamma": args.simulate,
+               "p_threshold": P_THRESHOLD}
+    with open(os.path.join(args.out, f"{args.participant}_summary.json"), "w") as f:
+        json.dump(summary, f, indent=2)
+    exp.close()  # writes the .csv and .psydat
+    print(f"foveation_threshold: {summary['trials']} trials, QUEST threshold γ = {estimate:.2f} (sd {quest.sd():.3f} log10)"
+          + (f", simulated observer's γ = {args.simulate:g}" if args.simulate is not None else ""))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,62 @@
+"""Both PsychoPy examples run headless (Xvfb); QUEST finds the simulated observer's threshold."""
+import csv
+import json
+import os
+import pathlib
+import shutil
+import subprocess
+import sys
+
+import pytest
+
+REPO = pathlib.Path(__file__).resolve().parents[2]
+EXAMPLES = REPO / "examples" / "psychopy"
+
+
+def run_example(script, args, cwd, screen="1024x768"):
+    if shutil.which("xvfb-run") is None:
+        pytest.skip("xvfb-run is not installed")
+    try:
+        import psychopy  # noqa: F401
+    except ImportError:
+        pytest.skip("psychopy is not installed (scripts/python-env.sh installs it)")
+    command = ["xvfb-run", "-a", "-s", f"-screen 0 {screen}x24", sys.executable, str(EXAMPLES / script), *map(str, args)]
+    result = subprocess.run(command, cwd=cwd, capture_output=True, text=True, timeout=600, env={**os.environ, "PYTHONUNBUFFERED": "1"})
+    assert result.returncode == 0, result.stdout[-3000:] + result.stderr[-3000:]
+    return result
+
+
+def test_gaze_contingent_follows_the_mouse_gaze_and_logs_latency(tmp_path):
+    frames = 24
+    run_example("gaze_contingent.py", ["--size", "320x200", "--frames", frames, "--max-rays", 16, "--device", "cpu", "--fullscreen",
+                                       "--move-mouse", "--log", "frames.csv", "--summary", "summary.json"], tmp_path, screen="320x200")
+    rows = list(csv.DictReader(open(tmp_path / "frames.csv")))
+    summary = json.loads((tmp_path / "summary.json").read_text())
+    assert len(rows) == summary["frames"] == frames
+    # The frames followed a moving gaze (MouseGaze driven by the moving pointer)
+    assert summary["gaze_positions"] > frames // 2
+    for r in rows[1:]:
+        assert float(r["flip_time_s"]) > float(r["render_start_s"]) >= float(r["sample_time_s"])
+        assert float(r["render_ms"]) >= float(r["library_ms"]) > 0
+    assert 0 < summary["gaze_to_flip_ms_median"] <= summary["gaze_to_flip_ms_p95"]
+
+
+def test_foveation_threshold_quest_converges_to_the_simulated_observer(tmp_path):
+    threshold = 3.0
+    trials = 40
+    run_example("foveation_threshold.py", ["--simulate", threshold, "--trials", trials, "--size", "160x100", "--max-rays", 16,
+                                           "--device", "cpu", "--seed", 1, "--out", "data"], tmp_path)
+    summary = json.loads((tmp_path / "data" / "sim_summary.json").read_text())
+    assert summary["trials"] == trials
+    assert abs(summary["threshold_gamma"] - threshold) <= 0.2 * threshold
+    # PsychoPy's standard data files: one row per trial, the γ QUEST chose on each
+    rows = list(csv.DictReader(open(tmp_path / "data" / "sim_foveation_threshold.csv", encoding="utf-8-sig")))
+    assert len(rows) == trials
+    gammas = [float(r["gamma"]) for r in rows]
+    assert min(gammas) >= 1.0 and max(gammas) <= 12.0 and len(set(gammas)) > 5
+    assert (tmp_path / "data" / "sim_foveation_threshold.psydat").exists()
+    # Another threshold moves the estimate with it
+    run_example("foveation_threshold.py", ["--simulate", 6.0, "--trials", trials, "--size", "160x100", "--max-rays", 16,
+                                           "--device", "cpu", "--seed", 2, "--out", "data6", "--participant", "s6"], tmp_path)
+    six = json.loads((tmp_path / "data6" / "s6_summary.json").read_text())
+    assert abs(six["threshold_gamma"] - 6.0) <= 0.2 * 6.0
