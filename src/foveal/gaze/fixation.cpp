@@ -9,6 +9,16 @@
 
 namespace foveal {
 
+namespace {
+// Time windows are decided with a tolerance of 1 µs (a tenth of the shortest sampling interval of
+// any tracker), so that a sample exactly at a window's edge is inside it whatever the rounding of
+// the absolute timestamps: the same recording with its clock shifted gives the same fixations.
+constexpr double kTimeTolerance_s = 1e-6;
+bool within(double dt, double limit) { return dt <= limit + kTimeTolerance_s; }   // dt ≤ limit
+bool reaches(double dt, double limit) { return dt >= limit - kTimeTolerance_s; }  // dt ≥ limit
+bool inside(double dt, double limit) { return dt < limit - kTimeTolerance_s; }    // dt < limit: the edge is outside
+}  // namespace
+
 // ---------------------------------------------------------------------------------------------
 // Geometry
 
@@ -100,7 +110,7 @@ Prepared prepare(const Recording& r, const GazeGeometry& g, const FixationParams
   size_t last_valid = n;
   for (size_t i = 0; i < n; ++i) {
     if (!s[i].valid) continue;
-    if (last_valid != n && i > last_valid + 1 && s[i].t_s - s[last_valid].t_s <= p.gap_fill_s) {
+    if (last_valid != n && i > last_valid + 1 && within(s[i].t_s - s[last_valid].t_s, p.gap_fill_s)) {
       const double t0 = s[last_valid].t_s, span = s[i].t_s - t0;
       for (size_t k = last_valid + 1; k < i; ++k) {
         const double w = span > 0 ? (s[k].t_s - t0) / span : 0.5;
@@ -117,7 +127,7 @@ Prepared prepare(const Recording& r, const GazeGeometry& g, const FixationParams
   int run = -1;
   for (size_t i = 0; i < n; ++i) {
     if (!out.usable[i]) continue;
-    const bool continues = i > 0 && out.usable[i - 1] && s[i].t_s - s[i - 1].t_s <= std::max(p.gap_fill_s, 1e-9);
+    const bool continues = i > 0 && out.usable[i - 1] && within(s[i].t_s - s[i - 1].t_s, p.gap_fill_s);
     if (!continues) ++run;
     out.run[i] = run;
   }
@@ -192,9 +202,9 @@ FixationResult detect_ivt(const Recording& r, const GazeGeometry& g, const Fixat
   for (size_t i = 0; i < n; ++i) {
     if (prep.run[i] < 0) continue;
     if (lo > i) lo = i;
-    while (lo < i && (prep.run[lo] != prep.run[i] || s[i].t_s - s[lo].t_s > half)) ++lo;
+    while (lo < i && (prep.run[lo] != prep.run[i] || !inside(s[i].t_s - s[lo].t_s, half))) ++lo;
     hi = std::max(hi, i);
-    while (hi + 1 < n && prep.run[hi + 1] == prep.run[i] && s[hi + 1].t_s - s[i].t_s <= half) ++hi;
+    while (hi + 1 < n && prep.run[hi + 1] == prep.run[i] && inside(s[hi + 1].t_s - s[i].t_s, half)) ++hi;
     size_t a = lo, b = hi;
     if (a == b) {  // the window holds this sample only: use its neighbours in the run
       if (i + 1 < n && prep.run[i + 1] == prep.run[i]) b = i + 1;
@@ -222,7 +232,7 @@ FixationResult detect_ivt(const Recording& r, const GazeGeometry& g, const Fixat
   for (const Fixation& f : fixations) {
     if (!merged.empty()) {
       Fixation& m = merged.back();
-      const bool close_in_time = f.start_s - m.end_s <= p.merge_gap_s;
+      const bool close_in_time = within(f.start_s - m.end_s, p.merge_gap_s);
       const bool close_in_angle =
           std::isfinite(m.px.x) && std::isfinite(f.px.x) && angle_between_deg(g.direction(m.px), g.direction(f.px)) <= p.merge_angle_deg;
       if (close_in_time && close_in_angle) {
@@ -233,7 +243,7 @@ FixationResult detect_ivt(const Recording& r, const GazeGeometry& g, const Fixat
     merged.push_back(f);
   }
   // Discard short ones
-  std::erase_if(merged, [&](const Fixation& f) { return f.duration_s() < p.min_fixation_s || !std::isfinite(f.px.x); });
+  std::erase_if(merged, [&](const Fixation& f) { return !reaches(f.duration_s(), p.min_fixation_s) || !std::isfinite(f.px.x); });
   return with_labels(std::move(merged), n);
 }
 
@@ -251,8 +261,8 @@ FixationResult detect_idt(const Recording& r, const GazeGeometry& g, const Fixat
     }
     // The smallest window from i that spans the minimum duration
     size_t j = i;
-    while (j + 1 < n && prep.run[j + 1] == prep.run[i] && s[j].t_s - s[i].t_s < p.min_duration_s) ++j;
-    if (s[j].t_s - s[i].t_s < p.min_duration_s) {  // the run ends first
+    while (j + 1 < n && prep.run[j + 1] == prep.run[i] && !reaches(s[j].t_s - s[i].t_s, p.min_duration_s)) ++j;
+    if (!reaches(s[j].t_s - s[i].t_s, p.min_duration_s)) {  // the run ends first
       i = j + 1;
       continue;
     }
@@ -336,11 +346,11 @@ void FixationTracker::reset_candidate() {
 void FixationTracker::push(const GazeSample& s) {
   if (!s.valid) {
     // A gap longer than the gap fill ends any candidate; the output is held either way
-    if (s.t_s - last_valid_t_ > params_.gap_fill_s && method_ != FixationMethod::mean) reset_candidate();
+    if (!within(s.t_s - last_valid_t_, params_.gap_fill_s) && method_ != FixationMethod::mean) reset_candidate();
     if (method_ == FixationMethod::mean) in_fixation_ = false;
     return;
   }
-  if (s.t_s - last_valid_t_ > params_.gap_fill_s && method_ != FixationMethod::mean) reset_candidate();
+  if (!within(s.t_s - last_valid_t_, params_.gap_fill_s) && method_ != FixationMethod::mean) reset_candidate();
   last_valid_t_ = s.t_s;
   const glm::dvec3 dir = geometry_.direction(s);
   Entry e{s.t_s, dir, s.px, GazeGeometry::angles_deg(dir)};
@@ -372,7 +382,7 @@ void FixationTracker::push(const GazeSample& s) {
 void FixationTracker::push_ivt(const Entry& e) {
   // Velocity from the oldest sample within the window behind this one
   window_.push_back(e);
-  while (window_.size() > 2 && e.t - window_[1].t >= params_.velocity_window_s) window_.pop_front();
+  while (window_.size() > 2 && reaches(e.t - window_[1].t, params_.velocity_window_s)) window_.pop_front();
   if (window_.size() < 2) return;
   const Entry& a = window_.front();
   const double dt = e.t - a.t;
@@ -387,7 +397,7 @@ void FixationTracker::push_ivt(const Entry& e) {
   if (candidate_count_ == 0) candidate_start_ = e.t;
   candidate_sum_ += e.px;
   ++candidate_count_;
-  if (e.t - candidate_start_ >= params_.min_fixation_s) {
+  if (reaches(e.t - candidate_start_, params_.min_fixation_s)) {
     in_fixation_ = true;
     output_ = candidate_sum_ / static_cast<double>(candidate_count_);
   }
@@ -422,7 +432,7 @@ void FixationTracker::push_idt(const Entry& e) {
     }
     window_.pop_front();
   }
-  if (window_.back().t - window_.front().t >= params_.min_duration_s) {
+  if (reaches(window_.back().t - window_.front().t, params_.min_duration_s)) {
     in_fixation_ = true;
     candidate_sum_ = glm::dvec2(0);
     for (const Entry& w : window_) candidate_sum_ += w.px;

@@ -50,7 +50,7 @@ FixationMethod parse_fixation_method(const std::string& name);  // throws Error
 // Pupil Labs' 80 ms minimum duration.
 struct FixationParams {
   double velocity_threshold_deg_s = 30;  // I-VT: slower samples are fixation samples
-  double velocity_window_s = 0.020;      // I-VT: velocity over the samples within ±10 ms
+  double velocity_window_s = 0.020;      // I-VT: velocity over the samples less than ±10 ms away (times to 1 µs)
   double gap_fill_s = 0.075;             // both: invalid gaps up to this long are interpolated
   double merge_gap_s = 0.075;            // I-VT: fixations closer in time than this …
   double merge_angle_deg = 0.5;          // … and in angle than this are merged

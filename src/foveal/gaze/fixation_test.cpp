@@ -232,3 +232,29 @@ TEST(Fixation, RealRecordingsAgreeWithTheTrackersOwnFixations) {
   }
   if (!any) GTEST_SKIP() << "skipped: no recordings under " << gaze;
 }
+
+// The filters' time windows must not depend on where the clock started: the same recording with
+// every timestamp shifted by 10⁶ s gives the same fixations, sample for sample (offline and causal).
+TEST(Fixation, ShiftingTheClockChangesNoLabel) {
+  const std::string path = std::string(FOVEAL_DATA_DIR) + "/gaze/eyelink/monoRemote500.asc";
+  if (!std::filesystem::exists(path)) GTEST_SKIP() << "skipped: " << path << " is absent";
+  const Recording r = read_recording(path);
+  Recording shifted = r;
+  for (GazeSample& s : shifted.samples) s.t_s += 1e6;
+  const Display d{47.5, 30, 60, r.screen_px.x, r.screen_px.y};
+  const GazeGeometry g(d, r.screen_px);
+  for (FixationMethod m : {FixationMethod::ivt, FixationMethod::idt}) {
+    const FixationResult a = m == FixationMethod::ivt ? detect_ivt(r, g, {}) : detect_idt(r, g, {});
+    const FixationResult b = m == FixationMethod::ivt ? detect_ivt(shifted, g, {}) : detect_idt(shifted, g, {});
+    size_t differ = 0;
+    for (size_t i = 0; i < a.label.size(); ++i) differ += a.label[i] != b.label[i];
+    EXPECT_EQ(differ, 0u) << to_string(m) << ": " << differ << " of " << a.label.size() << " samples change label";
+    ASSERT_EQ(a.fixations.size(), b.fixations.size()) << to_string(m);
+    for (size_t k = 0; k < a.fixations.size(); ++k) {
+      EXPECT_EQ(a.fixations[k].first, b.fixations[k].first);
+      EXPECT_EQ(a.fixations[k].last, b.fixations[k].last);
+    }
+    const std::vector<bool> ca = causal_fixation_mask(r, m, {}, g), cb = causal_fixation_mask(shifted, m, {}, g);
+    EXPECT_TRUE(ca == cb) << to_string(m) << " (causal)";
+  }
+}
