@@ -41,6 +41,7 @@ std::vector<GazeEvent> intersect(const std::vector<GazeEvent>& a, const std::vec
 }  // namespace
 
 Recording parse_eyelink_asc(const std::string& content, const std::string& name, const ReadOptions& o) {
+  if (text::has_bom(content)) return parse_eyelink_asc(content.substr(3), name, o);
   Recording r;
   r.tracker = "SR Research EyeLink (ASC)";
   r.has_tracker_fixations = true;

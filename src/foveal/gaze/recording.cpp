@@ -84,6 +84,7 @@ void apply_validity(Recording& r, float min_confidence) {
 }
 
 GazeFormat detect_gaze_format(const std::string& text, const std::string& name) {
+  if (text::has_bom(text)) return detect_gaze_format(text.substr(3), name);
   const std::string_view head = std::string_view(text).substr(0, std::min<size_t>(text.size(), 1 << 16));
   const std::string_view first = head.substr(0, head.find('\n'));
   auto has = [](std::string_view s, std::string_view what) { return s.find(what) != std::string_view::npos; };
@@ -101,6 +102,7 @@ GazeFormat detect_gaze_format(const std::string& text, const std::string& name) 
 }
 
 Recording parse_recording(const std::string& text, const std::string& name, const ReadOptions& options) {
+  if (text::has_bom(text)) return parse_recording(text.substr(3), name, options);
   if (text.find_first_not_of(" \t\r\n") == std::string::npos) fail("{}: empty recording", name);
   const GazeFormat format = options.format == GazeFormat::automatic ? detect_gaze_format(text, name) : options.format;
   Recording r;
@@ -202,6 +204,7 @@ void check_time_order(double t, double previous, const std::string& name, int li
 }  // namespace
 
 Recording parse_pupil_gaze(const std::string& content, const std::string& name, const ReadOptions& o) {
+  if (text::has_bom(content)) return parse_pupil_gaze(content.substr(3), name, o);
   text::Lines lines(content);
   const Table t = read_header(lines, name, ',');
   const size_t c_time = t.require("gaze_timestamp"), c_conf = t.require("confidence"), c_x = t.require("norm_pos_x"),
@@ -261,6 +264,7 @@ std::vector<GazeEvent> read_events(const std::string& content, const std::string
 }  // namespace
 
 std::vector<GazeEvent> parse_pupil_fixations(const std::string& content, const std::string& name, glm::ivec2 screen_px) {
+  if (text::has_bom(content)) return parse_pupil_fixations(content.substr(3), name, screen_px);
   return read_events(content, name, [&](const Table& t) {
     const size_t c_start = t.require("start_timestamp"), c_dur = t.require("duration");
     const auto c_x = t.find("norm_pos_x"), c_y = t.find("norm_pos_y");
@@ -278,6 +282,7 @@ std::vector<GazeEvent> parse_pupil_fixations(const std::string& content, const s
 }
 
 std::vector<GazeEvent> parse_pupil_blinks(const std::string& content, const std::string& name) {
+  if (text::has_bom(content)) return parse_pupil_blinks(content.substr(3), name);
   return read_events(content, name, [&](const Table& t) {
     const size_t c_start = t.require("start_timestamp"), c_end = t.require("end_timestamp");
     return [&t, &name, c_start, c_end](const std::vector<std::string_view>& f, int line) {
@@ -294,6 +299,7 @@ std::vector<GazeEvent> parse_pupil_blinks(const std::string& content, const std:
 // Plain CSV: t,x,y[,confidence] with or without a header
 
 Recording parse_gaze_csv(const std::string& content, const std::string& name, const ReadOptions& o) {
+  if (text::has_bom(content)) return parse_gaze_csv(content.substr(3), name, o);
   text::Lines lines(content);
   Recording r;
   r.tracker = "plain CSV";

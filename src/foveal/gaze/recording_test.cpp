@@ -1,6 +1,7 @@
 // Recording readers: every real recording against its data README, hand-made files of each
 // format, and malformed input that must fail with file, line and reason (or read as invalid).
 #include "foveal/gaze/recording.h"
+#include "foveal/gaze/text.h"
 #include "foveal/util/error.h"
 
 #include <gtest/gtest.h>
@@ -241,5 +242,53 @@ TEST(Recording, RealTobii) {
     }
     EXPECT_GE(s.px.x, -0.1 * 1920);
     EXPECT_LE(s.px.x, 1920);
+  }
+}
+
+// Every text reader takes a UTF-8 byte-order mark (as spreadsheet programs on Windows save) and CRLF
+// line ends, alone and together, and reads the same samples and events as from the plain text.
+TEST(Recording, ByteOrderMarkAndCrlfInEveryReader) {
+  ReadOptions o;
+  o.screen_px = {1000, 500};
+  auto variants = [](const std::string& text) {
+    std::string crlf;
+    for (char c : text) crlf += c == '\n' ? std::string("\r\n") : std::string(1, c);
+    const std::string bom = "\xEF\xBB\xBF";
+    return std::vector<std::string>{bom + text, crlf, bom + crlf};
+  };
+  auto same = [](const Recording& a, const Recording& b, const std::string& what) {
+    ASSERT_EQ(a.samples.size(), b.samples.size()) << what;
+    for (size_t i = 0; i < a.samples.size(); ++i) {
+      EXPECT_EQ(a.samples[i].t_s, b.samples[i].t_s) << what;
+      EXPECT_EQ(a.samples[i].valid, b.samples[i].valid) << what;
+      if (a.samples[i].valid) EXPECT_EQ(a.samples[i].px, b.samples[i].px) << what;
+    }
+    EXPECT_EQ(a.fixations.size(), b.fixations.size()) << what;
+    EXPECT_EQ(a.format, b.format) << what;
+  };
+  const std::vector<std::pair<std::string, std::string>> files = {
+      {"gaze_positions.csv", "gaze_timestamp,world_index,confidence,norm_pos_x,norm_pos_y\n10.0,1,0.9,0.25,0.75\n10.004,1,0.95,0.5,0.5\n"},
+      {"tobii.tsv", "Time\tLGazePos2dx\tLGazePos2dy\tLValidity\tRGazePos2dx\tRGazePos2dy\tRValidity\n"
+                    "1000000\t0.4\t0.5\t0\t0.6\t0.5\t0\n1003333\t0.4\t0.5\t0\t0.6\t0.4\t0\n"},
+      {"plain.csv", "t,x,y\n0.0,10,20\n0.1,11,21\n"},
+      {"rec.asc", kAsc},
+  };
+  for (const auto& [name, text] : files) {
+    const Recording plain = parse_recording(text, name, o);
+    for (const std::string& v : variants(text)) {
+      EXPECT_EQ(detect_gaze_format(v, name), plain.format) << name;
+      same(parse_recording(v, name, o), plain, name);
+    }
+  }
+  // Pupil's side files
+  const std::string fixations = "id,start_timestamp,duration,start_frame_index,end_frame_index,norm_pos_x,norm_pos_y\n1,10.0,200,1,5,0.5,0.5\n";
+  const std::string blinks = "id,start_timestamp,duration,end_timestamp\n1,11.0,0.3,11.3\n";
+  for (const std::string& v : variants(fixations)) EXPECT_EQ(parse_pupil_fixations(v, "fixations.csv", {1000, 500}).size(), 1u);
+  for (const std::string& v : variants(blinks)) EXPECT_EQ(parse_pupil_blinks(v, "blinks.csv").size(), 1u);
+  // A real export saved with a BOM
+  const std::string path = kGaze + "/pupil_labs/gaze_positions.csv";
+  if (fs::exists(path)) {
+    const std::string text = text::read_file(path);
+    same(parse_recording("\xEF\xBB\xBF" + text, path, {}), parse_recording(text, path, {}), "real Pupil export");
   }
 }

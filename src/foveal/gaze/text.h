@@ -32,5 +32,8 @@ std::optional<double> to_number(std::string_view field, bool decimal_comma = fal
 
 // Read a whole file; throws Error naming the file.
 std::string read_file(const std::string& path);
+// A UTF-8 byte-order mark at the start (spreadsheet programs on Windows write one): every text
+// reader drops it.
+inline bool has_bom(std::string_view text) { return text.substr(0, 3) == "\xEF\xBB\xBF"; }
 
 }  // namespace foveal::text

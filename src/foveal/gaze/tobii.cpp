@@ -32,6 +32,7 @@ struct Columns {
 }  // namespace
 
 Recording parse_tobii(const std::string& content, const std::string& name, const ReadOptions& o) {
+  if (text::has_bom(content)) return parse_tobii(content.substr(3), name, o);
   text::Lines lines(content);
   std::string_view line;
   if (!lines.next(line)) fail("{}: empty file", name);

@@ -136,6 +136,7 @@ void mesh(Scene& scene, const Ctx& ctx, const json& m, const std::string& base_d
 }  // namespace
 
 Scene parse_scene_json(const std::string& text, const std::string& path, const std::string& base_dir) {
+  if (text.substr(0, 3) == "\xEF\xBB\xBF") return parse_scene_json(text.substr(3), path, base_dir);  // a UTF-8 byte-order mark
   json root;
   try {
     root = json::parse(text);

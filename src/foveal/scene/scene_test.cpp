@@ -193,3 +193,14 @@ TEST(Scene, CameraPathsInterpolateThroughNamedCameras) {
     }
   }
 }
+
+// A scene JSON saved with a UTF-8 byte-order mark and CRLF line ends reads as the plain one.
+TEST(Scene, JsonWithByteOrderMarkAndCrlf) {
+  const std::string text = "{\"meshes\": [{\"shape\": \"sphere\", \"radius\": 1, \"centre\": [0, 0, 0]}],\r\n"
+                           " \"cameras\": [{\"name\": \"a\", \"eye\": [0, 0, 10], \"look\": [0, 0, 0], \"fov\": 40}]}\r\n";
+  const Scene plain = parse_scene_json(text, "s.json", ".");
+  const Scene bom = parse_scene_json("\xEF\xBB\xBF" + text, "s.json", ".");
+  EXPECT_EQ(bom.triangles.size(), plain.triangles.size());
+  ASSERT_EQ(bom.cameras.size(), 1u);
+  EXPECT_EQ(bom.cameras[0].eye, plain.cameras[0].eye);
+}
