@@ -74,13 +74,28 @@ double Recording::rate_hz() const {
   return span > 0 ? static_cast<double>(intervals) / span : 0.0;
 }
 
-void apply_validity(Recording& r, float min_confidence) {
-  size_t blink = 0;
+bool plausible_point(glm::dvec2 px, glm::ivec2 screen) {
+  return std::isfinite(px.x) && std::isfinite(px.y) && px.x >= -screen.x && px.x <= 2.0 * screen.x && px.y >= -screen.y &&
+         px.y <= 2.0 * screen.y;
+}
+
+size_t apply_validity(Recording& r, float min_confidence) {
+  size_t blink = 0, implausible = 0;
   for (GazeSample& s : r.samples) {
     while (blink < r.blinks.size() && r.blinks[blink].end_s < s.t_s) ++blink;
     const bool in_blink = blink < r.blinks.size() && r.blinks[blink].start_s <= s.t_s;
-    s.valid = std::isfinite(s.px.x) && std::isfinite(s.px.y) && s.confidence >= min_confidence && !in_blink;
+    const bool finite = std::isfinite(s.px.x) && std::isfinite(s.px.y);
+    const bool plausible = plausible_point(s.px, r.screen_px);
+    if (finite && !plausible) {
+      ++implausible;
+      s.px = glm::dvec2(NAN);  // never a point to render or average with
+    }
+    s.valid = plausible && s.confidence >= min_confidence && !in_blink;
   }
+  if (implausible > 0)
+    r.notes.push_back(fmt::format("{} samples more than one screen ({}x{}) beyond its edges were marked invalid", implausible,
+                                  r.screen_px.x, r.screen_px.y));
+  return implausible;
 }
 
 GazeFormat detect_gaze_format(const std::string& text, const std::string& name) {
@@ -359,7 +374,12 @@ Recording parse_gaze_csv(const std::string& content, const std::string& name, co
     }
     r.samples.push_back(s);
   }
+  // Pixel coordinates without a stated screen may come from any monitor: judge them against at
+  // least an 8K screen (7680x4320), so that only glitches, not a large display, are refused
+  const glm::ivec2 screen = r.screen_px;
+  if (!o.csv_normalised && !o.screen_from_user) r.screen_px = glm::max(r.screen_px, glm::ivec2(7680, 4320));
   apply_validity(r, o.min_confidence);
+  r.screen_px = screen;
   return r;
 }
 

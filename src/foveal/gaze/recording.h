@@ -101,7 +101,13 @@ Recording parse_gaze_csv(const std::string& text, const std::string& name, const
 std::vector<GazeEvent> parse_pupil_fixations(const std::string& text, const std::string& name, glm::ivec2 screen_px);
 std::vector<GazeEvent> parse_pupil_blinks(const std::string& text, const std::string& name);
 
-// Mark samples inside blinks and below the confidence minimum invalid; used by the readers.
-void apply_validity(Recording& recording, float min_confidence);
+// Whether a gaze point can be where an eye looked: finite and at most one screen beyond the
+// screen's edges (x in [−W, 2W], y in [−H, 2H]). Points beyond are tracker glitches (a norm_pos of
+// 1e30), never gaze: the readers and the live sources mark them invalid and count them.
+bool plausible_point(glm::dvec2 px, glm::ivec2 screen_px);
+
+// Mark samples inside blinks, below the confidence minimum, or not plausible_point() invalid;
+// used by the readers. Returns how many were implausible (and says so in the recording's notes).
+size_t apply_validity(Recording& recording, float min_confidence);
 
 }  // namespace foveal

@@ -292,3 +292,29 @@ TEST(Recording, ByteOrderMarkAndCrlfInEveryReader) {
     same(parse_recording("\xEF\xBB\xBF" + text, path, {}), parse_recording(text, path, {}), "real Pupil export");
   }
 }
+
+// Absurd points in a recording (x = 1e300, or far off the stated screen) are invalid, carry no
+// point and are counted in the notes; points a little off the screen stay valid.
+TEST(Recording, AbsurdPointsAreInvalidAndCounted) {
+  const Recording c = parse_recording("t,x,y\n0.0,100,200\n0.01,1e300,200\n0.02,100,-1e9\n0.03,-50,20\n", "plain.csv", {});
+  ASSERT_EQ(c.samples.size(), 4u);
+  EXPECT_TRUE(c.samples[0].valid);
+  EXPECT_FALSE(c.samples[1].valid);
+  EXPECT_TRUE(std::isnan(c.samples[1].px.x));
+  EXPECT_FALSE(c.samples[2].valid);
+  EXPECT_TRUE(c.samples[3].valid);  // just off the screen's edge
+  ASSERT_FALSE(c.notes.empty());
+  EXPECT_NE(c.notes.back().find("2 samples"), std::string::npos) << c.notes.back();
+  // A large monitor's pixels without --screen are not glitches
+  const Recording big = parse_recording("t,x,y\n0.0,3800,2100\n", "uhd.csv", {});
+  EXPECT_TRUE(big.samples[0].valid);
+  // Normalised coordinates: more than one screen beyond the edges is invalid
+  ReadOptions norm;
+  norm.screen_px = {1000, 500};
+  const Recording p = parse_recording(
+      "gaze_timestamp,world_index,confidence,norm_pos_x,norm_pos_y\n10.0,1,0.9,0.25,0.75\n10.004,1,0.95,1e30,-5\n10.008,1,0.95,2.5,0.5\n",
+      "gaze_positions.csv", norm);
+  EXPECT_TRUE(p.samples[0].valid);
+  EXPECT_FALSE(p.samples[1].valid);
+  EXPECT_FALSE(p.samples[2].valid);
+}

@@ -125,6 +125,10 @@ bool decode_datum(const msgpack::object& d, glm::ivec2 screen, float min_confide
     on_surface = on->via.boolean;
   }
   s.valid = on_surface && s.confidence >= min_confidence;
+  if (!plausible_point(s.px, screen)) {  // a glitch far off the screen (PupilSource counts them)
+    s.px = glm::dvec2(NAN);
+    s.valid = false;
+  }
   out.push_back(s);
   return true;
 }
@@ -169,7 +173,7 @@ struct PupilSource::Impl {
   std::vector<GazeSample> pending;
   std::chrono::steady_clock::time_point start = std::chrono::steady_clock::now(), last = start;
   bool any = false, disconnected = false;
-  size_t malformed = 0, received = 0;
+  size_t malformed = 0, received = 0, implausible = 0;
   double stale_s = 0.5;
 
   // One message from the subscriber, if one is there; false when none is.
@@ -184,6 +188,7 @@ struct PupilSource::Impl {
     if (!ok) {
       ++malformed;
     } else {
+      for (const GazeSample& s : decoded) implausible += !std::isfinite(s.px.x);
       pending.insert(pending.end(), decoded.begin(), decoded.end());
       last = std::chrono::steady_clock::now();
       any = true;
@@ -305,6 +310,11 @@ double PupilSource::silent_s() const {
 size_t PupilSource::malformed() const {
   const std::lock_guard lock(impl_->mutex);
   return impl_->malformed;
+}
+
+size_t PupilSource::implausible() const {
+  const std::lock_guard lock(impl_->mutex);
+  return impl_->implausible;
 }
 
 size_t PupilSource::received() const {

@@ -73,6 +73,8 @@ class PupilSource final : public GazeSource {
   // Messages that could not be read (not a msgpack map, missing fields); they are skipped.
   size_t malformed() const;
   size_t received() const;
+  // Samples whose point was not plausible_point() (non-finite, or far off the screen): invalid.
+  size_t implausible() const;
 
  private:
   struct Impl;

@@ -1,6 +1,7 @@
 // Live gaze over a loopback Pupil Remote + publisher that speaks Pupil's documented wire format
 // (REQ "SUB_PORT" → port; multipart [topic, msgpack dict]), including a disconnect mid-stream
 // and a tracker that never answers; real-time playback on a fake clock.
+#include "foveal/gaze/fixation.h"
 #include "foveal/gaze/source.h"
 #include "foveal/util/error.h"
 #include "fake_pupil.h"
@@ -196,4 +197,30 @@ TEST(Source, RecordingPlaysBackInRealTime) {
   ASSERT_EQ(out.size(), 2u);
   EXPECT_TRUE(out[0].valid);
   EXPECT_FALSE(out[1].valid);
+}
+
+// A glitch far off the surface (norm_pos [1e30, -5] with on_surf true) is no gaze point: it is
+// invalid, carries no point, is counted, and the valid samples around it still make a fixation.
+TEST(Source, AbsurdGazeIsInvalidAndCounted) {
+  FakePupil fake;
+  std::vector<std::pair<std::string, std::string>> messages;
+  for (int i = 0; i < 60; ++i)
+    messages.emplace_back("surfaces.screen", i == 30 ? surface_gaze(1e30, -5, true, 0.004 * i) : surface_gaze(0.5, 0.5, true, 0.004 * i));
+  messages.emplace_back("surfaces.screen", surface_gaze(-1.5, 0.5, true, 0.24));  // one screen and a half to the left
+  messages.emplace_back("surfaces.screen", surface_gaze(1.9, -0.9, true, 0.244));  // off the screen, within one screen: kept
+  fake.serve(messages, false, nullptr);
+  PupilSource source(fake.url("surface=screen&timeout=3"), {1000, 500});
+  const std::vector<GazeSample> samples = collect(source, 62);
+  ASSERT_EQ(samples.size(), 62u);
+  EXPECT_FALSE(samples[30].valid);
+  EXPECT_TRUE(std::isnan(samples[30].px.x));
+  EXPECT_FALSE(samples[60].valid);
+  EXPECT_TRUE(samples[61].valid);
+  EXPECT_EQ(source.implausible(), 2u);
+  // The samples around the glitch still become one fixation
+  Recording r;
+  r.screen_px = {1000, 500};
+  r.samples.assign(samples.begin(), samples.begin() + 60);
+  const FixationResult f = detect_ivt(r, GazeGeometry(Display{47.5, 30, 60, 1000, 500}, r.screen_px), {});
+  EXPECT_EQ(f.fixations.size(), 1u);
 }
