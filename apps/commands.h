@@ -9,6 +9,7 @@
 #include <CLI/CLI.hpp>
 
 #include <functional>
+#include <optional>
 
 namespace foveal::app {
 
@@ -32,7 +33,7 @@ struct ViewOptions {
   std::string eye, look, up = "0,1,0";
   std::string eye_option = "--eye";  // simulate calls the camera position --from (--eye is the eye model there)
   bool display_option = true;        // simulate has no display: the eye sits at the camera
-  double fov = 0;
+  std::optional<double> fov;  // unset: the camera's
   std::string size = "840x525";
   std::string display = "47.5,30,60,1680,1050";
   int threads = 0;

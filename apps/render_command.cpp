@@ -29,9 +29,9 @@ Camera resolve_camera(const Scene& scene, const ViewOptions& o) {
     if (glm::length(cam.look - cam.eye) == 0) fail("{} and --look must differ", o.eye_option);
     if (glm::length(glm::cross(cam.look - cam.eye, cam.up)) == 0) fail("--up must not be parallel to the view direction");
   }
-  if (o.fov != 0) {
-    if (!(o.fov > 0 && o.fov < 180)) fail("--fov: must be in (0, 180) degrees, got {}", o.fov);
-    cam.fov_deg = static_cast<float>(o.fov);
+  if (o.fov) {  // given: the open range (0, 180) at both ends, 0 included
+    if (!(*o.fov > 0 && *o.fov < 180)) fail("--fov: must be in (0, 180) degrees, got {}", *o.fov);
+    cam.fov_deg = static_cast<float>(*o.fov);
   }
   return cam;
 }
