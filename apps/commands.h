@@ -83,5 +83,7 @@ void add_gaze_options(CLI::App& command, GazeOptions& options, const std::string
 // Reader options (screen for normalised coordinates defaults to the display's resolution).
 ReadOptions resolve_read_options(const GazeOptions& options, const Display& display);
 FixationParams resolve_fixation_params(const GazeOptions& options);
+// read_recording, with the reader's warnings (a truncated file, …) on stderr.
+Recording read_recording_warned(const std::string& path, const ReadOptions& options);
 
 }  // namespace foveal::app

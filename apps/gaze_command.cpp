@@ -64,6 +64,12 @@ ReadOptions resolve_read_options(const GazeOptions& o, const Display& display) {
   return r;
 }
 
+Recording read_recording_warned(const std::string& path, const ReadOptions& options) {
+  Recording r = read_recording(path, options);
+  for (const std::string& warning : r.warnings) fmt::print(stderr, "foveal: warning: {}\n", warning);
+  return r;
+}
+
 FixationParams resolve_fixation_params(const GazeOptions& o) {
   FixationParams p;
   p.velocity_threshold_deg_s = o.ivt_threshold;
@@ -103,7 +109,7 @@ std::function<int()> add_gaze_command(CLI::App& app) {
     const ReadOptions read = resolve_read_options(o->gaze, display);
     const FixationParams params = resolve_fixation_params(o->gaze);
     const FixationMethod method = parse_fixation_method(o->gaze.fixation);
-    const Recording recording = read_recording(o->recording, read);
+    const Recording recording = read_recording_warned(o->recording, read);
     if (!display_has_resolution) {
       display.res_x = recording.screen_px.x;
       display.res_y = recording.screen_px.y;

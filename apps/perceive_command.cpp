@@ -252,7 +252,7 @@ std::function<int()> add_perceive_command(CLI::App& app) {
                                   "for one image give --gaze X,Y", o->gaze);
       const Display screen = parse_display(o->display, Display{});
       const ReadOptions read = resolve_read_options(o->gaze_options, screen);
-      const Recording recording = read_recording(o->gaze, read);
+      const Recording recording = read_recording_warned(o->gaze, read);
       if (recording.samples.empty()) fail("{}: no samples", recording.source);
       const GazeGeometry geometry(screen, recording.screen_px);
       fixations = recording_steps(recording, geometry, parse_step_fixations(o->gaze_options.fixation),

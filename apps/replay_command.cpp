@@ -83,7 +83,7 @@ std::function<int()> add_replay_command(CLI::App& app) {
     if (!live && o->source.find("://") != std::string::npos)
       fail("--gaze: unknown live source '{}' (live trackers: pupil://HOST:PORT[?surface=NAME])", o->source);
     std::optional<Recording> recording;
-    if (!live) recording = read_recording(o->source, read);
+    if (!live) recording = read_recording_warned(o->source, read);
 
     const Scene scene = load_scene(o->view.scene);
     const Camera camera = resolve_camera(scene, o->view);

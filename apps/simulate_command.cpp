@@ -141,7 +141,7 @@ std::function<int()> add_simulate_command(CLI::App& app) {
                                                  fixation, *geometry);
         gaze_summary = fmt::format("live {} ({} filter)", o->gaze_source, to_string(from));
       } else {
-        const Recording recording = read_recording(o->gaze_source, read);
+        const Recording recording = read_recording_warned(o->gaze_source, read);
         if (recording.samples.empty()) fail("{}: no samples", recording.source);
         geometry.emplace(display, recording.screen_px);
         const double t0 = recording.samples.front().t_s + o->start;

@@ -107,7 +107,7 @@ std::function<int()> add_view_command(CLI::App& app) {
       gaze.fixed_px = parse_vec2("--gaze", o->source);
     } else {
       const ReadOptions read = resolve_read_options(o->gaze, s.render.display);
-      Recording recording = read_recording(o->source, read);
+      Recording recording = read_recording_warned(o->source, read);
       if (recording.samples.empty()) fail("{}: no samples", recording.source);
       const glm::ivec2 screen = recording.screen_px;
       gaze.source = std::make_unique<RecordingPlayback>(std::move(recording), o->speed);

@@ -163,3 +163,18 @@ TEST(GazeCli, BadInputGivesOneClearLine) {
     EXPECT_NE(r.err.find(expected), std::string::npos) << args << "\n" << r.err;
   }
 }
+
+// A truncated EyeLink file: the summary is made, and stderr says which block has no END.
+TEST(GazeCli, TruncatedRecordingIsSaidOnStderr) {
+  {
+    std::ofstream asc(scratch("cut.asc"));
+    asc << "MSG\t1000 DISPLAY_COORDS 0 0 799 599\nSTART\t1000 \tLEFT\tSAMPLES\tEVENTS\n"
+           "SAMPLES\tGAZE\tLEFT\tRATE\t 500.00\tTRACKING\tCR\tFILTER\t2\n";
+    for (int t = 1000; t < 1400; t += 2) asc << t << "\t  400.0\t  300.0\t 1000.0\t...\n";
+  }
+  const CliRun r = foveal_test::foveal("gaze cut.asc --no-scanpath");
+  EXPECT_EQ(r.status, 0) << r.err;
+  EXPECT_NE(r.err.find("foveal: warning: cut.asc: recording block 1 (from line 2) has no END: the file may be truncated"),
+            std::string::npos) << r.err;
+  EXPECT_NE(r.out.find("200"), std::string::npos) << r.out;  // its samples were summarised
+}

@@ -11,6 +11,7 @@ the eye was lost), ``confidence`` (0–1) and ``valid`` (bool).
 from __future__ import annotations
 
 import time
+import warnings as _warnings
 from dataclasses import dataclass, field
 from typing import Dict, List, Optional, Sequence, Tuple
 
@@ -56,6 +57,9 @@ class Recording:
     has_tracker_fixations: bool = False
     block_starts: List[int] = field(default_factory=list)  #: first sample of each recording block
     notes: List[str] = field(default_factory=list)
+    #: what the reader warns of (an EyeLink block without END: the file may be truncated); also
+    #: issued as Python warnings (UserWarning) when the file is read
+    warnings: List[str] = field(default_factory=list)
     #: the tracker's 3-D gaze direction per sample (N×3, NaN where none), where it gives one (Pupil's
     #: gaze_point_3d); the filters measure angles with it, as the command line does
     directions: Optional[np.ndarray] = None
@@ -85,11 +89,13 @@ def read(path: str, format: str = "auto", screen: Optional[Tuple[int, int]] = No
         raise ValueError(f"origin: expected top-left or bottom-left, got '{origin}'")
     d = _core._read_recording(str(path), format, screen, eye, float(min_confidence), _TIME_SCALES[time_unit],
                               coords == "norm", origin == "bottom-left", fixations_file, blinks_file, display_resolution)
+    for message in d["warnings"]:
+        _warnings.warn(message, stacklevel=2)
     return Recording(samples=_samples(d["samples"]), fixations=_events(d["fixations"]), blinks=_events(d["blinks"]),
                      source=d["source"], format=d["format"], tracker=d["tracker"], screen=tuple(d["screen"]),
                      eyes=d["eyes"], rate_hz=d["rate_hz"], nominal_rate_hz=d["nominal_rate_hz"],
                      has_tracker_fixations=d["has_tracker_fixations"], block_starts=list(d["block_starts"]),
-                     notes=list(d["notes"]),
+                     notes=list(d["notes"]), warnings=list(d["warnings"]),
                      directions=None if d["directions"] is None else np.asarray(d["directions"]).reshape(-1, 3))
 
 

@@ -156,6 +156,7 @@ void bind_gaze(nb::module_& m) {
         d["has_tracker_fixations"] = r.has_tracker_fixations;
         d["block_starts"] = std::vector<size_t>(r.block_starts);
         d["notes"] = r.notes;
+        d["warnings"] = r.warnings;
         return d;
       },
       "path"_a, "format"_a, "screen"_a, "eye"_a, "min_confidence"_a, "time_scale"_a, "normalised"_a, "origin_bottom_left"_a,

@@ -86,3 +86,14 @@ def test_a_pupil_that_does_not_answer_raises_within_its_timeout():
     with pytest.raises(ValueError, match="Pupil|answer|timeout|SUB_PORT"):
         foveal.gaze.PupilSource(f"pupil://127.0.0.1:{port}?timeout=0.5")
     assert time.monotonic() - start < 5
+
+
+def test_a_truncated_eyelink_file_warns(tmp_path):
+    cut = tmp_path / "cut.asc"
+    lines = ["MSG\t1000 DISPLAY_COORDS 0 0 799 599", "START\t1000 \tLEFT\tSAMPLES\tEVENTS",
+             "SAMPLES\tGAZE\tLEFT\tRATE\t 500.00\tTRACKING\tCR\tFILTER\t2"]
+    lines += [f"{t}\t  400.0\t  300.0\t 1000.0\t..." for t in range(1000, 1100, 2)]
+    cut.write_text("\n".join(lines) + "\n")
+    with pytest.warns(UserWarning, match="has no END: the file may be truncated"):
+        rec = foveal.gaze.read(str(cut))
+    assert len(rec) == 50 and len(rec.warnings) == 1

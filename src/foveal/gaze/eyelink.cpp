@@ -48,6 +48,7 @@ Recording parse_eyelink_asc(const std::string& content, const std::string& name,
   text::Lines lines(content);
   std::string_view line;
   bool in_block = false, saw_left = false, saw_right = false, display_coords = false;
+  size_t block_line = 0;  // where the open block started
   glm::dvec2 origin{0};  // top-left of DISPLAY_COORDS
   BlockLayout layout;
   std::vector<GazeEvent> fix[2], blink[2];  // per eye: 0 left, 1 right
@@ -110,6 +111,7 @@ Recording parse_eyelink_asc(const std::string& content, const std::string& name,
       saw_left |= layout.left;
       saw_right |= layout.right;
       r.block_starts.push_back(r.samples.size());
+      block_line = lines.number();
     } else if (key == "END") {
       if (!in_block) fail("{}: END without START", where());
       in_block = false;
@@ -154,6 +156,9 @@ Recording parse_eyelink_asc(const std::string& content, const std::string& name,
     }
     // Everything else (MSG, INPUT, SFIX, SSACC, ESACC, PRESCALER, BUTTON, "**" header, …) is not needed.
   }
+  if (in_block && !r.samples.empty())
+    r.warnings.push_back(fmt::format("{}: recording block {} (from line {}) has no END: the file may be truncated; its {} samples are used",
+                                     name, r.block_starts.size(), block_line, r.samples.size() - r.block_starts.back()));
   if (r.samples.empty()) fail("{}: no samples inside START…END blocks", name);
 
   // Eyes and the tracker's events for the eye(s) used

@@ -74,6 +74,8 @@ struct Recording {
   std::vector<GazeEvent> blinks;      // the tracker's own blinks
   bool has_tracker_fixations = false; // the format carries fixation events (even if there are none)
   std::vector<std::string> notes;     // what the reader did beyond the obvious (side files read, …)
+  std::vector<std::string> warnings;  // what the user must hear (a block cut short: the file may be truncated);
+                                      // the commands print them on stderr, the data read stays usable
 
   size_t valid_count() const;
   // Time from the first to the last sample, seconds.

@@ -318,3 +318,16 @@ TEST(Recording, AbsurdPointsAreInvalidAndCounted) {
   EXPECT_FALSE(p.samples[1].valid);
   EXPECT_FALSE(p.samples[2].valid);
 }
+
+// An EyeLink file cut in the middle of a block (no END) is read, with a warning that names the
+// block and says the file may be truncated; a complete file has no warning.
+TEST(Recording, TruncatedEyeLinkBlockIsReadWithAWarning) {
+  EXPECT_TRUE(parse_recording(kAsc, "whole.asc", {}).warnings.empty());
+  const std::string text = kAsc;
+  const std::string cut = text.substr(0, text.find("1006\t"));  // cut after the third sample
+  const Recording r = parse_recording(cut, "cut.asc", {});
+  EXPECT_EQ(r.samples.size(), 3u);
+  ASSERT_EQ(r.warnings.size(), 1u);
+  EXPECT_NE(r.warnings[0].find("cut.asc: recording block 1 (from line 3) has no END"), std::string::npos) << r.warnings[0];
+  EXPECT_NE(r.warnings[0].find("truncated"), std::string::npos);
+}
