@@ -18,7 +18,7 @@ namespace foveal::app {
 std::function<int()> add_compare_command(CLI::App& app) {
   auto* cmd = app.add_subcommand("compare", "PSNR, SSIM and RMSE of an image against a reference, whole and per eccentricity band around the gaze");
   struct Options {
-    std::string a, b, b2, gaze, display = "47.5,30,60,1680,1050", json, markdown, error_map, plot;
+    std::string a, b, b2, gaze, display = "47.5,30,60,1680,1050", json, markdown, error_map, plot, ssim_border = "reflect";
     double ellipse = 1.538;
     float error_scale = 0.1f;
     bool quiet = false;
@@ -31,6 +31,9 @@ std::function<int()> add_compare_command(CLI::App& app) {
   cmd->add_option("--display", o->display, "display W_CM,H_CM,DIST_CM[,RES_X,RES_Y] the image filled (the bands' degrees); without a resolution the image size is used")
       ->capture_default_str();
   cmd->add_option("--ellipse", o->ellipse, "ROI ellipse ratio a of the q(E) = 1 region (as rendered)")->capture_default_str();
+  cmd->add_option("--ssim-border", o->ssim_border,
+                  "SSIM near the edges: reflect (the image mirrored, every pixel counts) or valid (only 11x11 windows wholly inside "
+                  "the image count, as Wang et al.'s code and scikit-image)")->capture_default_str();
   cmd->add_option("--json", o->json, "write every figure as JSON");
   cmd->add_option("--markdown", o->markdown, "write the per-band table as Markdown");
   cmd->add_option("--error-map", o->error_map, "per-pixel |image − reference| as a heat map (PNG)");
@@ -48,7 +51,8 @@ std::function<int()> add_compare_command(CLI::App& app) {
     params.ellipse_ratio = o->ellipse;
     if (!(o->ellipse > 0)) fail("--ellipse: must be > 0, got {}", o->ellipse);
     if (!(o->error_scale > 0)) fail("--error-scale: must be > 0, got {}", o->error_scale);
-    const Comparison c = compare_images(a, b, b2 ? &*b2 : nullptr, display, gaze, params);
+    const SsimBorder border = parse_ssim_border(o->ssim_border);
+    const Comparison c = compare_images(a, b, b2 ? &*b2 : nullptr, display, gaze, params, default_bands(), border);
     if (!o->error_map.empty()) save_image(error_map_image(c, o->error_scale), o->error_map, false);
     if (!o->plot.empty()) write_error_plot(c, o->plot);
     if (!o->json.empty()) {
@@ -56,6 +60,7 @@ std::function<int()> add_compare_command(CLI::App& app) {
       j["image"] = o->a;
       j["reference"] = o->b;
       if (b2) j["reference2"] = o->b2;
+      j["ssim_border"] = to_string(border);
       write_json_file(o->json, j);
     }
     if (!o->markdown.empty()) write_text_file(o->markdown, comparison_markdown(c));

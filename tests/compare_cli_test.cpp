@@ -58,7 +58,8 @@ TEST(CompareCli, BadInputIsOneClearLine) {
            {"compare small.png tall.png", "same size"},
            {"compare small.png missing.png", "missing.png"},
            {"compare small.png small.png --gaze 1", "--gaze"},
-           {"compare small.png small.png --ellipse 0", "--ellipse"}})
+           {"compare small.png small.png --ellipse 0", "--ellipse"},
+           {"compare small.png small.png --ssim-border mirror", "--ssim-border"}})
     expect_one_line_error(args, expected);
 }
 

@@ -68,16 +68,18 @@ def _numbers(value: Any) -> Any:
 
 def compare(a: ImageLike, b: ImageLike, gaze: Optional[Tuple[float, float]] = None,
             display: Optional[Display] = None, reference2: Optional[ImageLike] = None,
-            ellipse: float = 1.538) -> dict:
+            ellipse: float = 1.538, ssim_border: str = "reflect") -> dict:
     """Image quality of ``a`` against the reference ``b``, whole and per eccentricity band.
 
     ``a`` and ``b`` are H×W×C float arrays (linear, as rendered) or image paths. ``gaze`` is in
     image pixels (default: the centre); ``display`` the screen the image filled (default, as
     the command line's: the papers' 47.5×30 cm, 1680×1050 at 60 cm). With ``reference2`` (the reference
     rendered with another seed) every band's error is also given as a multiple of the reference's
-    own noise. Returns the dict of ``foveal compare --json``: ``whole``, ``bands`` (RMSE, PSNR,
+    own noise. ``ssim_border``: ``reflect`` (the image mirrored at the edges, every pixel counts)
+    or ``valid`` (only windows wholly inside the image, as Wang et al.'s code and scikit-image).
+    Returns the dict of ``foveal compare --json``: ``whole``, ``bands`` (RMSE, PSNR,
     SSIM per band), ``acuity_weighted_rmse`` and, with ``reference2``, the noise ratios.
     """
     ia, ib = _image(a, "a"), _image(b, "b")
     ib2 = None if reference2 is None else _image(reference2, "reference2")
-    return _numbers(_core._compare(ia, ib, ib2, gaze, display, ellipse))
+    return _numbers(_core._compare(ia, ib, ib2, gaze, display, ellipse, ssim_border))

@@ -393,7 +393,7 @@ NB_MODULE(_core, m) {
       [](const nb::ndarray<const float, nb::ndim<3>, nb::c_contig, nb::device::cpu>& a,
          const nb::ndarray<const float, nb::ndim<3>, nb::c_contig, nb::device::cpu>& b,
          std::optional<nb::ndarray<const float, nb::ndim<3>, nb::c_contig, nb::device::cpu>> b2, std::optional<std::array<double, 2>> gaze,
-         std::optional<Display> display, double ellipse) {
+         std::optional<Display> display, double ellipse, const std::string& ssim_border) {
         const Image ia = image_from(a), ib = image_from(b);
         std::optional<Image> ib2;
         if (b2) ib2 = image_from(*b2);
@@ -402,15 +402,18 @@ NB_MODULE(_core, m) {
         FoveationParams params;
         params.ellipse_ratio = ellipse;
         const glm::dvec2 g = gaze ? glm::dvec2((*gaze)[0], (*gaze)[1]) : glm::dvec2(ia.width * 0.5, ia.height * 0.5);
+        const SsimBorder border = parse_ssim_border(ssim_border);
         nlohmann::json j;
         {
           nb::gil_scoped_release release;
-          const Comparison c = compare_images(ia, ib, ib2 ? &*ib2 : nullptr, d, g, params);
+          const Comparison c = compare_images(ia, ib, ib2 ? &*ib2 : nullptr, d, g, params, default_bands(), border);
           j = comparison_json(c, d);
+          j["ssim_border"] = to_string(border);
         }
         return to_python(j);
       },
-      "a"_a, "b"_a, "b2"_a = nb::none(), "gaze"_a = nb::none(), "display"_a = nb::none(), "ellipse"_a = 1.538);
+      "a"_a, "b"_a, "b2"_a = nb::none(), "gaze"_a = nb::none(), "display"_a = nb::none(), "ellipse"_a = 1.538,
+      "ssim_border"_a = "reflect");
 
   m.def("load_image", [](const std::string& path) {
     Image img = load_image(path);

@@ -54,7 +54,7 @@ void pixel_errors(const Image& a, const Image& b, std::vector<double>& squared, 
 }
 
 struct Accumulator {
-  size_t pixels = 0;
+  size_t pixels = 0, ssim_pixels = 0;
   double se = 0, se_sq = 0, ssim = 0;
   ErrorStats stats() const {
     ErrorStats s;
@@ -63,7 +63,8 @@ struct Accumulator {
     s.mse = se / pixels;
     s.rmse = std::sqrt(s.mse);
     s.psnr = s.mse > 0 ? 10 * std::log10(1.0 / s.mse) : std::numeric_limits<double>::infinity();
-    s.ssim = ssim / pixels;
+    s.ssim_pixels = ssim_pixels;
+    s.ssim = ssim_pixels > 0 ? ssim / ssim_pixels : std::numeric_limits<double>::quiet_NaN();
     // Standard error of the RMSE, relative: ½ · sd(se) / (mean(se)·√n)
     const double var = std::max(0.0, se_sq / pixels - s.mse * s.mse);
     s.rmse_rel_se = s.mse > 0 ? 0.5 * std::sqrt(var / pixels) / s.mse : 0.0;
@@ -77,7 +78,15 @@ bool in_band(const Band& band, double ecc_deg, bool foveal) {
 
 }  // namespace
 
-std::vector<float> ssim_map(const Image& a, const Image& b) {
+const char* to_string(SsimBorder border) { return border == SsimBorder::valid ? "valid" : "reflect"; }
+
+SsimBorder parse_ssim_border(const std::string& name) {
+  if (name == "reflect") return SsimBorder::reflect;
+  if (name == "valid") return SsimBorder::valid;
+  fail("--ssim-border: unknown convention '{}' (known: reflect, valid)", name);
+}
+
+std::vector<float> ssim_map(const Image& a, const Image& b, SsimBorder border) {
   check_same(a, b, "the image");
   const double c1 = 0.01 * 0.01, c2 = 0.03 * 0.03;  // (K1·L)², (K2·L)², L = 1
   const cv::Size window(11, 11);
@@ -103,14 +112,20 @@ std::vector<float> ssim_map(const Image& a, const Image& b) {
   std::vector<float> out(static_cast<size_t>(a.width) * a.height);
   for (int y = 0; y < a.height; ++y)
     for (int x = 0; x < a.width; ++x) out[static_cast<size_t>(y) * a.width + x] = static_cast<float>(sum.at<double>(y, x) / a.channels);
+  if (border == SsimBorder::valid) {  // only windows wholly inside the image (Wang et al.'s 'valid' filtering)
+    const int r = window.width / 2;
+    for (int y = 0; y < a.height; ++y)
+      for (int x = 0; x < a.width; ++x)
+        if (x < r || y < r || x >= a.width - r || y >= a.height - r) out[static_cast<size_t>(y) * a.width + x] = NAN;
+  }
   return out;
 }
 
-ReferenceNoise reference_noise(const Image& b2, const Image& b) {
+ReferenceNoise reference_noise(const Image& b2, const Image& b, SsimBorder ssim_border) {
   check_same(b2, b, "the second reference");
   ReferenceNoise noise;
   pixel_errors(b2, b, noise.squared_error, nullptr);
-  noise.ssim = ssim_map(b2, b);
+  noise.ssim = ssim_map(b2, b, ssim_border);
   return noise;
 }
 
@@ -132,7 +147,7 @@ namespace {
 
 // The comparison, with the reference's noise maps or without (nullptr).
 Comparison compare(const Image& a, const Image& b, const ReferenceNoise* noise, const Display& display, glm::dvec2 gaze_px,
-                   const FoveationParams& params, const std::vector<Band>& bands) {
+                   const FoveationParams& params, const std::vector<Band>& bands, SsimBorder ssim_border) {
   check_same(a, b, "the image");
   const size_t pixels = static_cast<size_t>(a.width) * a.height;
   if (noise && (noise->squared_error.size() != pixels || noise->ssim.size() != pixels))
@@ -157,7 +172,7 @@ Comparison compare(const Image& a, const Image& b, const ReferenceNoise* noise, 
     }
   });
   pixel_errors(a, b, c.squared_error, &c.abs_error);
-  c.ssim_map = ssim_map(a, b);
+  c.ssim_map = ssim_map(a, b, ssim_border);
   const std::vector<double>& se = c.squared_error;
   if (b2) c.noise_squared_error = noise->squared_error;
   const std::vector<double>& se2 = c.noise_squared_error;
@@ -176,7 +191,11 @@ Comparison compare(const Image& a, const Image& b, const ReferenceNoise* noise, 
       const double v = second ? se2[i] : se[i];
       t.se += v;
       t.se_sq += v * v;
-      t.ssim += second ? ssim2[i] : c.ssim_map[i];
+      const float ssim = second ? ssim2[i] : c.ssim_map[i];
+      if (std::isfinite(ssim)) {
+        t.ssim += ssim;
+        ++t.ssim_pixels;
+      }
     };
     add(whole, false);
     if (b2) add(whole_noise, true);
@@ -231,15 +250,15 @@ std::string comparison_markdown(const Comparison& c) {
 }
 
 Comparison compare_images(const Image& a, const Image& b, const Image* b2, const Display& display, glm::dvec2 gaze_px,
-                          const FoveationParams& params, const std::vector<Band>& bands) {
-  if (!b2) return compare(a, b, nullptr, display, gaze_px, params, bands);
-  const ReferenceNoise noise = reference_noise(*b2, b);
-  return compare(a, b, &noise, display, gaze_px, params, bands);
+                          const FoveationParams& params, const std::vector<Band>& bands, SsimBorder ssim_border) {
+  if (!b2) return compare(a, b, nullptr, display, gaze_px, params, bands, ssim_border);
+  const ReferenceNoise noise = reference_noise(*b2, b, ssim_border);
+  return compare(a, b, &noise, display, gaze_px, params, bands, ssim_border);
 }
 
 Comparison compare_images(const Image& a, const Image& b, const ReferenceNoise& noise, const Display& display,
-                          glm::dvec2 gaze_px, const FoveationParams& params, const std::vector<Band>& bands) {
-  return compare(a, b, &noise, display, gaze_px, params, bands);
+                          glm::dvec2 gaze_px, const FoveationParams& params, const std::vector<Band>& bands, SsimBorder ssim_border) {
+  return compare(a, b, &noise, display, gaze_px, params, bands, ssim_border);
 }
 
 Image error_map_image(const Comparison& c, float full_scale) {
@@ -308,7 +327,8 @@ namespace foveal {
 namespace {
 nlohmann::json json_number(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(v > 0 ? "inf" : "-inf"); }
 nlohmann::json stats_json(const ErrorStats& s) {
-  return {{"pixels", s.pixels}, {"rmse", s.rmse}, {"mse", s.mse}, {"psnr_db", json_number(s.psnr)}, {"ssim", s.ssim}};
+  return {{"pixels", s.pixels}, {"rmse", s.rmse}, {"mse", s.mse}, {"psnr_db", json_number(s.psnr)},
+          {"ssim", std::isfinite(s.ssim) ? nlohmann::json(s.ssim) : nlohmann::json(nullptr)}, {"ssim_pixels", s.ssim_pixels}};
 }
 }  // namespace
 

@@ -4,7 +4,10 @@
 //
 // SSIM is Wang et al. (2004): 11×11 Gaussian window of σ = 1.5, K1 = 0.01, K2 = 0.03, dynamic
 // range L = 1, computed on each colour channel and averaged; a band's SSIM is the mean of the
-// SSIM map over its pixels. PSNR uses a peak of 1 (images as stored: sRGB PNG values in [0, 1], or
+// SSIM map over its pixels. Near the border the window leaves the image: by default (`reflect`)
+// the image is mirrored there (OpenCV's BORDER_REFLECT_101) and every pixel has an SSIM; `valid`
+// is the convention of Wang et al.'s reference code and scikit-image — only pixels whose whole
+// window lies inside the image (5 px from every edge) count, the others are NaN in the map. PSNR uses a peak of 1 (images as stored: sRGB PNG values in [0, 1], or
 // linear floats from PFM/EXR). A second reference rendered with another seed measures the
 // reference's own Monte-Carlo noise: each band's error is also given as a multiple of it.
 #pragma once
@@ -25,10 +28,11 @@ namespace foveal {
 // Errors over a set of pixels.
 struct ErrorStats {
   size_t pixels = 0;
+  size_t ssim_pixels = 0;  // pixels with an SSIM (fewer than `pixels` near the border with SsimBorder::valid)
   double mse = 0;   // mean over pixels and channels of (a − b)²
   double rmse = 0;
   double psnr = std::numeric_limits<double>::infinity();  // 10·log10(1/mse) dB; inf when identical
-  double ssim = 1;  // mean of the SSIM map
+  double ssim = 1;  // mean of the SSIM map over the pixels that have one (NaN when none has)
   double rmse_rel_se = 0;  // standard error of the RMSE over these pixels, relative to it
 };
 
@@ -71,13 +75,19 @@ struct Comparison {
   double weighted_ratio() const { return weighted_noise_rmse > 0 ? weighted_rmse / weighted_noise_rmse : 0.0; }
 };
 
-// The per-pixel SSIM map (mean over channels) of two images of the same size.
-std::vector<float> ssim_map(const Image& a, const Image& b);
+enum class SsimBorder { reflect, valid };
+const char* to_string(SsimBorder border);
+SsimBorder parse_ssim_border(const std::string& name);  // throws Error for an unknown name
+
+// The per-pixel SSIM map (mean over channels) of two images of the same size; with `valid` the
+// pixels closer than 5 px to an edge are NaN (no SSIM).
+std::vector<float> ssim_map(const Image& a, const Image& b, SsimBorder border = SsimBorder::reflect);
 
 // Compare `a` with the reference `b` (and optionally a second reference `b2` of another seed).
 // The images must have the same size and channels; throws Error otherwise.
 Comparison compare_images(const Image& a, const Image& b, const Image* b2, const Display& display, glm::dvec2 gaze_px,
-                          const FoveationParams& params, const std::vector<Band>& bands = default_bands());
+                          const FoveationParams& params, const std::vector<Band>& bands = default_bands(),
+                          SsimBorder ssim_border = SsimBorder::reflect);
 
 // The per-pixel part of the reference's noise — (b2 − b)² and SSIM(b2, b) — which depends on
 // neither the judged image nor the gaze: computed once, it serves every comparison against `b`.
@@ -85,10 +95,12 @@ struct ReferenceNoise {
   std::vector<double> squared_error;  // per pixel, mean over channels
   std::vector<float> ssim;            // per pixel, mean over channels
 };
-ReferenceNoise reference_noise(const Image& b2, const Image& b);
+ReferenceNoise reference_noise(const Image& b2, const Image& b, SsimBorder ssim_border = SsimBorder::reflect);
 // The same comparison with the reference's noise already computed.
+// (`ssim_border` must be the one the noise was computed with.)
 Comparison compare_images(const Image& a, const Image& b, const ReferenceNoise& noise, const Display& display,
-                          glm::dvec2 gaze_px, const FoveationParams& params, const std::vector<Band>& bands = default_bands());
+                          glm::dvec2 gaze_px, const FoveationParams& params, const std::vector<Band>& bands = default_bands(),
+                          SsimBorder ssim_border = SsimBorder::reflect);
 
 // sqrt(Σ q²·e² / Σ q²) of a against b with the given per-pixel q (a Comparison's `quality`):
 // the acuity-weighted RMSE alone, without the maps and SSIM of a whole comparison.

@@ -197,3 +197,46 @@ TEST(Compare, PaperSettingIsWithinTheReferencesNoiseAtTheFovea) {
 
 }  // namespace
 }  // namespace foveal
+
+namespace foveal {
+
+// --ssim-border valid is the reference convention (Wang et al.'s code, scikit-image): the mean of
+// the SSIM map over the windows lying wholly inside the image, computed here the direct way.
+TEST(Compare, SsimValidBorderIsTheReferenceConvention) {
+  std::vector<std::pair<std::string, Image>> images{{"synthetic", noisy(gradient(60, 44), 0.05f, 11)}};
+  const std::filesystem::path baboon = FOVEAL_DATA_DIR "/images/baboon.jpg";
+  if (std::filesystem::exists(baboon)) images.emplace_back("baboon", load_image(baboon.string()));
+  const Display display{47.5, 30, 60, 1680, 1050};
+  for (const auto& [name, img] : images) {
+    const Image other = noisy(img, 0.03f, 5);
+    std::vector<cv::Mat> a(img.channels), b(img.channels);
+    for (int c = 0; c < img.channels; ++c) {
+      a[c].create(img.height, img.width, CV_64F);
+      b[c].create(img.height, img.width, CV_64F);
+      for (int y = 0; y < img.height; ++y)
+        for (int x = 0; x < img.width; ++x) {
+          a[c].at<double>(y, x) = other.at(x, y, c);
+          b[c].at<double>(y, x) = img.at(x, y, c);
+        }
+    }
+    double sum = 0;
+    size_t count = 0;
+    for (int y = 5; y < img.height - 5; ++y)
+      for (int x = 5; x < img.width - 5; ++x, ++count)
+        for (int c = 0; c < img.channels; ++c) sum += ssim_at(a[c], b[c], x, y) / img.channels;
+    const double reference = sum / count;
+    const Comparison valid = compare_images(other, img, nullptr, display, {img.width / 2.0, img.height / 2.0}, {}, default_bands(),
+                                            SsimBorder::valid);
+    EXPECT_EQ(valid.whole.ssim_pixels, count) << name;
+    EXPECT_NEAR(valid.whole.ssim, reference, 1e-6) << name;
+    EXPECT_TRUE(std::isnan(valid.ssim_map[0])) << name;
+    // The default mirrors the image at the edges and counts every pixel: a different number
+    const Comparison reflect = compare_images(other, img, nullptr, display, {img.width / 2.0, img.height / 2.0}, {});
+    EXPECT_EQ(reflect.whole.ssim_pixels, static_cast<size_t>(img.width) * img.height);
+    EXPECT_GT(std::abs(reflect.whole.ssim - reference), 1e-5) << name;
+    std::printf("%s: SSIM valid %.6f, reflect %.6f\n", name.c_str(), valid.whole.ssim, reflect.whole.ssim);
+  }
+  EXPECT_THROW(parse_ssim_border("mirror"), Error);
+}
+
+}  // namespace foveal
