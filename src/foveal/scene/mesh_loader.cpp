@@ -51,8 +51,13 @@ void append_mesh_file(Scene& scene, const std::string& path, const glm::mat4& tr
   // Triangulate, bake node transforms, drop points and lines; append_mesh fills in missing normals
   Assimp::Importer importer;
   importer.SetPropertyInteger(AI_CONFIG_PP_SBP_REMOVE, aiPrimitiveType_POINT | aiPrimitiveType_LINE);
-  const unsigned flags = aiProcess_Triangulate | aiProcess_PreTransformVertices | aiProcess_SortByPType |
-                         aiProcess_JoinIdenticalVertices | aiProcess_ValidateDataStructure;
+  // PLY is indexed already: joining identical vertices there only costs memory and time (about
+  // a third of the peak on a 2-million-triangle scan); formats that store vertices per face need it
+  std::string ext = fs::path(path).extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+  const unsigned join = ext == ".ply" ? 0u : unsigned(aiProcess_JoinIdenticalVertices);
+  const unsigned flags = aiProcess_Triangulate | aiProcess_PreTransformVertices | aiProcess_SortByPType | join |
+                         aiProcess_ValidateDataStructure;
   const aiScene* ai = importer.ReadFile(path, flags);
   if (ai == nullptr) fail("{}: cannot read mesh: {}", path, importer.GetErrorString());
   if (!ai->HasMeshes()) fail("{}: contains no meshes", path);
@@ -81,12 +86,23 @@ void append_mesh_file(Scene& scene, const std::string& path, const glm::mat4& tr
   }
   if (ai->mNumMaterials == 0) scene.materials.push_back(Material{});
 
-  // Geometry: one MeshData per Assimp mesh; append_mesh transforms it and drops degenerate triangles
-  size_t added = 0;
+  // Geometry: one MeshData per Assimp mesh, all copied before Assimp's scene is freed (so that its
+  // copy and foveal's are never held together with the scene's arrays); append_mesh then transforms
+  // each and drops degenerate triangles
+  struct Part {
+    MeshData data;
+    uint32_t material_id;
+    std::string name;
+  };
+  std::vector<Part> parts;
   for (unsigned mi = 0; mi < ai->mNumMeshes; ++mi) {
     const aiMesh* mesh = ai->mMeshes[mi];
     if (!(mesh->mPrimitiveTypes & aiPrimitiveType_TRIANGLE)) continue;
     MeshData data;
+    data.positions.reserve(mesh->mNumVertices);
+    if (mesh->HasNormals()) data.normals.reserve(mesh->mNumVertices);
+    if (mesh->HasTextureCoords(0)) data.uvs.reserve(mesh->mNumVertices);
+    data.triangles.reserve(mesh->mNumFaces);
     for (unsigned v = 0; v < mesh->mNumVertices; ++v) {
       data.positions.emplace_back(mesh->mVertices[v].x, mesh->mVertices[v].y, mesh->mVertices[v].z);
       if (mesh->HasNormals()) data.normals.emplace_back(mesh->mNormals[v].x, mesh->mNormals[v].y, mesh->mNormals[v].z);
@@ -96,12 +112,23 @@ void append_mesh_file(Scene& scene, const std::string& path, const glm::mat4& tr
       if (mesh->mFaces[f].mNumIndices == 3)
         data.triangles.emplace_back(mesh->mFaces[f].mIndices[0], mesh->mFaces[f].mIndices[1], mesh->mFaces[f].mIndices[2]);
     const uint32_t material_id = material_base + (mesh->mMaterialIndex < ai->mNumMaterials ? mesh->mMaterialIndex : 0);
+    parts.push_back({std::move(data), material_id, mesh->mName.C_Str()});
+  }
+  importer.FreeScene();
+  size_t added = 0, vertices = 0, triangles = 0;
+  for (const Part& part : parts) {
+    vertices += part.data.positions.size();
+    triangles += part.data.triangles.size();
+  }
+  reserve_mesh_space(scene, vertices, triangles);
+  for (Part& part : parts) {
     const size_t before = scene.triangles.size();
     try {
-      append_mesh(scene, data, material_id, transform);
+      append_mesh(scene, part.data, part.material_id, transform);
     } catch (const Error& e) {
-      fail("{}: mesh '{}': {}", path, mesh->mName.C_Str(), e.what());
+      fail("{}: mesh '{}': {}", path, part.name, e.what());
     }
+    part.data = MeshData{};  // freed as soon as it is in the scene
     added += scene.triangles.size() - before;
   }
   if (added == 0) fail("{}: contains no usable triangles", path);

@@ -1,5 +1,6 @@
 // foveal/scene/scene.cpp — scene assembly: triangles, normals, shapes, cameras, dispatch.
 #include "foveal/scene/scene.h"
+#include "foveal/util/memory.h"
 
 #include "foveal/util/error.h"
 
@@ -44,6 +45,14 @@ Bounds Scene::bounds() const {
   for (const auto& t : triangles)
     for (int k = 0; k < 3; ++k) b.extend(positions[t[k]]);
   return b;
+}
+
+void reserve_mesh_space(Scene& scene, size_t vertices, size_t triangles) {
+  scene.positions.reserve(scene.positions.size() + vertices);
+  scene.normals.reserve(scene.normals.size() + vertices);
+  scene.uvs.reserve(scene.uvs.size() + vertices);
+  scene.triangles.reserve(scene.triangles.size() + triangles);
+  scene.material_ids.reserve(scene.material_ids.size() + triangles);
 }
 
 void append_mesh(Scene& scene, const MeshData& mesh, uint32_t material_id, const glm::mat4& transform) {
@@ -202,6 +211,7 @@ Scene load_scene(const std::string& spec) {
   }
   if (scene.source.empty()) scene.source = spec;
   if (scene.triangles.empty()) fail("{}: contains no usable triangles", spec);
+  release_freed_memory();  // the importer's copies, freed: not resident beside the BVH
   return scene;
 }
 

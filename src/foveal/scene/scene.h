@@ -143,6 +143,9 @@ struct MeshData {
 // non-finite triangles are dropped (counted in skipped_triangles), missing or broken normals
 // are the area-weighted average of the adjacent faces. Throws Error for an index out of range.
 void append_mesh(Scene& scene, const MeshData& mesh, uint32_t material_id, const glm::mat4& transform);
+// Make room for this many more vertices and triangles in the scene's arrays (one allocation each
+// instead of growth by doubling, which briefly holds two copies).
+void reserve_mesh_space(Scene& scene, size_t vertices, size_t triangles);
 
 // Append raw triangles with one material; drops degenerate triangles; computes missing normals.
 void append_triangles(Scene& scene, const std::vector<glm::vec3>& positions,

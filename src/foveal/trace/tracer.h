@@ -54,7 +54,9 @@ struct RawTraceResult {
 // A built acceleration structure over a scene's triangles; const methods are thread-safe.
 class Tracer {
  public:
+  // The scene must outlive the tracer: Embree reads its triangles' indices in place.
   explicit Tracer(const Scene& scene, TraceApi occlusion_api = TraceApi::stream);
+  Tracer(Scene&&, TraceApi = TraceApi::stream) = delete;
   ~Tracer();
   Tracer(const Tracer&) = delete;
   Tracer& operator=(const Tracer&) = delete;

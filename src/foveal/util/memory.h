@@ -10,4 +10,9 @@ namespace foveal {
 // start-up; harmless where the C library is not glibc.
 void keep_freed_memory();
 
+// Give the heap's free memory back to the kernel now (glibc's malloc_trim): after a one-off
+// phase that freed much more than the frames will use, such as loading a large mesh, so that it
+// does not stay resident beside the BVH built next.
+void release_freed_memory();
+
 }  // namespace foveal
