@@ -139,7 +139,20 @@ def fixations(samples, method: str = "ivt", display: Optional[_core.Display] = N
     return (result, np.asarray(d["label"])) if labels else result
 
 
-class PupilSource:
+class _LiveSource:
+    """A live source closes when its ``with`` block ends."""
+
+    def close(self) -> None:  # pragma: no cover - overridden
+        raise NotImplementedError
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+
+class PupilSource(_LiveSource):
     """Live gaze from Pupil Capture's Network API (``pupil://HOST:PORT[?surface=NAME]``).
 
     Connecting waits a bounded time for Pupil Remote (``timeout=`` in the URL, default 2 s) and
@@ -170,14 +183,8 @@ class PupilSource:
     def close(self) -> None:
         self._source.close()
 
-    def __enter__(self):
-        return self
 
-    def __exit__(self, *exc):
-        self.close()
-
-
-class LslSource:
+class LslSource(_LiveSource):
     """Live gaze from a Lab Streaming Layer stream, read through pylsl.
 
     The stream is found by ``name`` (or ``type``, default "Gaze") within ``timeout`` seconds. Its
@@ -305,9 +312,3 @@ class LslSource:
 
     def close(self) -> None:
         self._inlet.close_stream()
-
-    def __enter__(self):
-        return self
-
-    def __exit__(self, *exc):
-        self.close()

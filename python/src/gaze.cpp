@@ -200,21 +200,15 @@ void bind_gaze(nb::module_& m) {
           const GazeGeometry geometry(display, r.screen_px);
           result = fm == FixationMethod::idt ? detect_idt(r, geometry, p) : detect_ivt(r, geometry, p);
         }
-        std::vector<double> start, end, fx, fy;
+        // The fixations as events (start, end, centre), with their first and last sample
+        std::vector<GazeEvent> events;
         std::vector<int64_t> first, last;
         for (const Fixation& f : result.fixations) {
-          start.push_back(f.start_s);
-          end.push_back(f.end_s);
-          fx.push_back(f.px.x);
-          fy.push_back(f.px.y);
+          events.push_back({f.start_s, f.end_s, f.px});
           first.push_back(static_cast<int64_t>(f.first));
           last.push_back(static_cast<int64_t>(f.last));
         }
-        nb::dict d;
-        d["start_s"] = column(std::move(start));
-        d["end_s"] = column(std::move(end));
-        d["x"] = column(std::move(fx));
-        d["y"] = column(std::move(fy));
+        nb::dict d = event_columns(events);
         d["first"] = column(std::move(first));
         d["last"] = column(std::move(last));
         std::vector<int32_t> label(result.label.begin(), result.label.end());

@@ -57,6 +57,17 @@ TEST(Compare, BadInputIsRefused) {
 // SSIM at one pixel straight from Wang et al. (2004): Gaussian-weighted means, variances and
 // covariance over the 11×11 window (σ = 1.5, weights summing to 1), borders reflected as OpenCV's
 // default (…cb|abcd|cb…), C1 = (0.01)², C2 = (0.03)².
+// Each channel of an image as a float64 matrix.
+std::vector<cv::Mat> channels_f64(const Image& img) {
+  std::vector<cv::Mat> out(img.channels);
+  for (int c = 0; c < img.channels; ++c) {
+    out[c].create(img.height, img.width, CV_64F);
+    for (int y = 0; y < img.height; ++y)
+      for (int x = 0; x < img.width; ++x) out[c].at<double>(y, x) = img.at(x, y, c);
+  }
+  return out;
+}
+
 double ssim_at(const cv::Mat& x, const cv::Mat& y, int px, int py) {
   const cv::Mat g = cv::getGaussianKernel(11, 1.5, CV_64F);
   auto reflect = [](int i, int n) { return i < 0 ? -i : i >= n ? 2 * n - 2 - i : i; };
@@ -97,16 +108,7 @@ TEST(Compare, SsimIsWangsFormulaOnNaturalImages) {
     }
     other = noisy(other, 0.02f, 7);
     const std::vector<float> map = ssim_map(other, img);
-    std::vector<cv::Mat> a(img.channels), b(img.channels);
-    for (int c = 0; c < img.channels; ++c) {
-      a[c].create(img.height, img.width, CV_64F);
-      b[c].create(img.height, img.width, CV_64F);
-      for (int y = 0; y < img.height; ++y)
-        for (int x = 0; x < img.width; ++x) {
-          a[c].at<double>(y, x) = other.at(x, y, c);
-          b[c].at<double>(y, x) = img.at(x, y, c);
-        }
-    }
+    const std::vector<cv::Mat> a = channels_f64(other), b = channels_f64(img);
     std::mt19937 rng(3);
     for (int k = 0; k < 60; ++k) {
       // random pixels, the first ones on the borders (where the window is reflected)
@@ -209,16 +211,7 @@ TEST(Compare, SsimValidBorderIsTheReferenceConvention) {
   const Display display{47.5, 30, 60, 1680, 1050};
   for (const auto& [name, img] : images) {
     const Image other = noisy(img, 0.03f, 5);
-    std::vector<cv::Mat> a(img.channels), b(img.channels);
-    for (int c = 0; c < img.channels; ++c) {
-      a[c].create(img.height, img.width, CV_64F);
-      b[c].create(img.height, img.width, CV_64F);
-      for (int y = 0; y < img.height; ++y)
-        for (int x = 0; x < img.width; ++x) {
-          a[c].at<double>(y, x) = other.at(x, y, c);
-          b[c].at<double>(y, x) = img.at(x, y, c);
-        }
-    }
+    const std::vector<cv::Mat> a = channels_f64(other), b = channels_f64(img);
     double sum = 0;
     size_t count = 0;
     for (int y = 5; y < img.height - 5; ++y)
