@@ -1,6 +1,7 @@
 // apps/gaze_command.cpp — `foveal gaze`: read a recording, summarise it, filter its fixations,
 // compare them with the tracker's own, draw the scan path.
 #include "commands.h"
+#include "foveal/gaze/events.h"
 #include "foveal/gaze/summary.h"
 #include "foveal/io/outputs.h"
 #include "foveal/io/scanpath.h"
@@ -10,6 +11,7 @@
 #include <fmt/core.h>
 
 #include <filesystem>
+#include <fstream>
 #include <memory>
 
 namespace foveal::app {
@@ -22,7 +24,7 @@ void add_gaze_options(CLI::App& cmd, GazeOptions& o, const std::string& fixation
   cmd.add_option("--min-confidence", o.min_confidence, "samples with lower tracker confidence are invalid (Pupil's default)")
       ->capture_default_str()->check(CLI::Range(0.0, 1.0));
   cmd.add_option("--time-unit", o.time_unit, "csv: unit of the t column: s, ms or us")->capture_default_str();
-  cmd.add_option("--coords", o.coords, "csv: x, y in px (screen pixels) or norm ([0,1] of the screen)")->capture_default_str();
+  cmd.add_option("--coords", o.coords, "csv: x, y in px (screen pixels), norm ([0,1] of the screen) or deg (degrees from the screen centre, y up, through --display; also columns x_deg, y_deg)")->capture_default_str();
   cmd.add_option("--origin", o.origin, "csv: top-left or bottom-left")->capture_default_str();
   cmd.add_option("--fixations", o.fixations_file, "Pupil: the tracker's fixations.csv (default: the one beside the recording)");
   cmd.add_option("--blinks", o.blinks_file, "Pupil: the tracker's blinks.csv (default: the one beside the recording)");
@@ -55,8 +57,12 @@ ReadOptions resolve_read_options(const GazeOptions& o, const Display& display) {
   else if (o.time_unit == "ms") r.csv_time_scale = 1e-3;
   else if (o.time_unit == "us") r.csv_time_scale = 1e-6;
   else fail("--time-unit: unknown unit '{}' (expected s, ms or us)", o.time_unit);
-  if (o.coords != "px" && o.coords != "norm") fail("--coords: expected px or norm, got '{}'", o.coords);
+  if (o.coords != "px" && o.coords != "norm" && o.coords != "deg") fail("--coords: expected px, norm or deg, got '{}'", o.coords);
   r.csv_normalised = o.coords == "norm";
+  r.csv_degrees = o.coords == "deg";
+  r.display_width_cm = display.width_cm;
+  r.display_height_cm = display.height_cm;
+  r.display_distance_cm = display.distance_cm;
   if (o.origin != "top-left" && o.origin != "bottom-left") fail("--origin: expected top-left or bottom-left, got '{}'", o.origin);
   r.csv_origin_bottom_left = o.origin == "bottom-left";
   r.fixations_file = o.fixations_file;
@@ -88,7 +94,7 @@ FixationParams resolve_fixation_params(const GazeOptions& o) {
 std::function<int()> add_gaze_command(CLI::App& app) {
   auto* cmd = app.add_subcommand("gaze", "summarise an eye-tracker recording: samples, fixations (I-VT, I-DT), agreement with the tracker, scan path");
   struct Options {
-    std::string recording, json, samples, scanpath = "scanpath.png", display = "47.5,30,60";
+    std::string recording, json, samples, scanpath = "scanpath.png", display = "47.5,30,60", events, samples_out, evaluate;
     GazeOptions gaze;
     bool no_scanpath = false, quiet = false;
   };
@@ -98,6 +104,11 @@ std::function<int()> add_gaze_command(CLI::App& app) {
   cmd->add_option("--display", o->display, "the recording's screen W_CM,H_CM,DIST_CM[,RES_X,RES_Y] (angles for the filters); the resolution defaults to the recording's screen")
       ->capture_default_str();
   cmd->add_option("--json", o->json, "write the summary as JSON");
+  cmd->add_option("--events", o->events, "label every sample: ivt or idt (fixations; other valid samples saccades, lost ones blinks), auto (ivt)");
+  cmd->add_option("--samples-out", o->samples_out, "--events: write t_s,x,y,label per sample (CSV)");
+  cmd->add_option("--evaluate", o->evaluate,
+                  "--events: score the labels against an expert's (CSV with t/t_s and label columns, e.g. the IRF recordings): "
+                  "sample-level Cohen's kappa per class and overall, event F1 (Hooge et al. 2018 matching), RTO/RTD");
   cmd->add_option("--samples", o->samples, "write the samples as read (t_s,x,y,confidence,valid: seconds, screen pixels, NaN where the eye was lost) as CSV");
   cmd->add_option("--scanpath", o->scanpath, "scan-path picture (PNG) of the --fixation filter's fixations")->capture_default_str();
   cmd->add_flag("--no-scanpath", o->no_scanpath, "do not draw the scan path");
@@ -116,6 +127,44 @@ std::function<int()> add_gaze_command(CLI::App& app) {
     }
     const GazeSummary summary = summarize_recording(recording, display, params);
     if (!o->json.empty()) write_json_file(o->json, summary.json);
+    std::optional<Evaluation> evaluation;
+    if (!o->events.empty()) {
+      if (o->events != "ivt" && o->events != "idt" && o->events != "auto")
+        fail("--events: unknown detector '{}' (ivt, idt or auto)", o->events);
+      const GazeGeometry geometry(display, recording.screen_px);
+      const FixationResult fixations = o->events == "idt" ? detect_idt(recording, geometry, params) : detect_ivt(recording, geometry, params);
+      const std::vector<EventLabel> labels = labels_from_fixations(recording, fixations);
+      if (!o->samples_out.empty()) {
+        std::string text = "t_s,x,y,label\n";
+        for (size_t i = 0; i < labels.size(); ++i)
+          text += fmt::format("{:.17g},{:.17g},{:.17g},{}\n", recording.samples[i].t_s, recording.samples[i].px.x,
+                              recording.samples[i].px.y, to_string(labels[i]));
+        write_text_file(o->samples_out, text);
+      }
+      if (!o->evaluate.empty()) {
+        const LabelFile expert = read_label_file(o->evaluate);
+        if (expert.label.size() != labels.size())
+          fail("{}: {} labelled samples, but the recording has {} samples", o->evaluate, expert.label.size(), labels.size());
+        std::vector<double> t(labels.size());
+        for (size_t i = 0; i < t.size(); ++i) t[i] = recording.samples[i].t_s;
+        evaluation = evaluate_labels(labels, expert.label, t);
+      }
+    } else if (!o->samples_out.empty() || !o->evaluate.empty()) {
+      fail("--samples-out and --evaluate need --events");
+    }
+    if (evaluation && !o->json.empty()) {
+      nlohmann::json j = nlohmann::json::parse(std::ifstream(o->json));
+      nlohmann::json classes = nlohmann::json::object();
+      auto number = [](double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); };
+      for (const ClassScore& c : evaluation->classes)
+        classes[to_string(c.label)] = {{"kappa", number(c.kappa)}, {"f1", number(c.f1)}, {"hits", c.hits}, {"misses", c.misses},
+                                       {"false_alarms", c.false_alarms}, {"reference_events", c.reference_events},
+                                       {"test_events", c.test_events}, {"rto_ms", c.rto_ms}, {"rtd_ms", c.rtd_ms}};
+      j["events"] = {{"detector", o->events}, {"labels", o->evaluate}, {"samples", evaluation->samples},
+                     {"kappa", number(evaluation->kappa)}, {"accuracy", evaluation->accuracy}, {"classes", classes},
+                     {"matching", "Hooge et al. 2018: earliest overlapping event of the same class"}};
+      write_json_file(o->json, j);
+    }
     if (!o->samples.empty()) {
       std::string text = "t_s,x,y,confidence,valid\n";
       for (const GazeSample& s : recording.samples)
@@ -134,6 +183,16 @@ std::function<int()> add_gaze_command(CLI::App& app) {
     if (method == FixationMethod::mean) fmt::print("  (mean is a per-frame average, not a fixation detector: the scan path shows I-VT)\n");
     if (!o->json.empty()) fmt::print("  wrote     {}\n", o->json);
     if (!o->samples.empty()) fmt::print("  wrote     {}\n", o->samples);
+    if (!o->samples_out.empty()) fmt::print("  wrote     {}\n", o->samples_out);
+    if (evaluation) {
+      fmt::print("  events    {} against {}: sample kappa {:.3f} (accuracy {:.3f})\n", o->events, o->evaluate, evaluation->kappa,
+                 evaluation->accuracy);
+      for (const ClassScore& c : evaluation->classes) {
+        if (c.reference_samples == 0 && c.test_samples == 0) continue;
+        fmt::print("    {:<9} kappa {:6.3f}  events F1 {:5.3f} ({} hits, {} misses, {} false alarms)  RTO {:+.1f} ms  RTD {:+.1f} ms\n",
+                   to_string(c.label), c.kappa, c.f1, c.hits, c.misses, c.false_alarms, c.rto_ms, c.rtd_ms);
+      }
+    }
     if (!o->no_scanpath) fmt::print("  wrote     {}\n", o->scanpath);
     return 0;
   };

@@ -178,3 +178,56 @@ TEST(GazeCli, TruncatedRecordingIsSaidOnStderr) {
             std::string::npos) << r.err;
   EXPECT_NE(r.out.find("200"), std::string::npos) << r.out;  // its samples were summarised
 }
+
+// --events labels every sample and --evaluate scores them against an expert's labels.
+TEST(GazeCli, EventsAreScoredAgainstExpertLabels) {
+  const std::string rec = write_three_fixations("three.csv");
+  // Labels of the same samples: everything a fixation (a poor expert), one row per sample
+  {
+    std::ifstream in(scratch("three.csv"));
+    std::ofstream out(scratch("three_labels.csv"));
+    std::string line;
+    std::getline(in, line);
+    out << "t,label\n";
+    while (std::getline(in, line))
+      if (!line.empty()) out << line.substr(0, line.find(',')) << ",fixation\n";
+  }
+  const CliRun r = foveal_test::foveal("gaze " + rec + " --events ivt --evaluate three_labels.csv --samples-out lab.csv --json ev.json --no-scanpath");
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_NE(r.out.find("events    ivt against three_labels.csv"), std::string::npos) << r.out;
+  const auto j = nlohmann::json::parse(std::ifstream(scratch("ev.json")));
+  EXPECT_EQ(j["events"]["classes"]["fixation"]["reference_events"], 1);
+  EXPECT_EQ(j["events"]["classes"]["fixation"]["hits"], 1);
+  EXPECT_GE(j["events"]["classes"]["saccade"]["false_alarms"].get<int>(), 2);  // the two saccades the expert missed
+  std::ifstream lab(scratch("lab.csv"));
+  std::string header;
+  std::getline(lab, header);
+  EXPECT_EQ(header, "t_s,x,y,label");
+  for (const auto& [args, expected] : std::vector<std::pair<std::string, std::string>>{
+           {"gaze " + rec + " --evaluate three_labels.csv", "need --events"},
+           {"gaze " + rec + " --events magic", "unknown detector"},
+           {"gaze " + rec + " --events ivt --evaluate missing_labels.csv", "missing_labels.csv"}}) {
+    const CliRun bad = foveal_test::foveal(args);
+    EXPECT_NE(bad.status, 0) << args;
+    EXPECT_EQ(lines(bad.err), 1u) << args << "\n" << bad.err;
+    EXPECT_NE(bad.err.find(expected), std::string::npos) << args << "\n" << bad.err;
+  }
+}
+
+// On an IRF recording (1000 Hz EyeLink, labelled by an expert) I-VT's fixations and saccades agree
+// with the expert far above chance; PSO, which I-VT cannot label, scores zero.
+TEST(GazeCli, IvtAgainstTheIrfExpert) {
+  const std::string path = std::string(FOVEAL_DATA_DIR) + "/eye-movements/irf/lookAtPoint_EL_S2.csv";
+  if (!std::filesystem::exists(path)) GTEST_SKIP() << "skipped: " << path << " is absent";
+  const CliRun r = foveal_test::foveal("gaze " + path + " --screen 1920x1080 --display 53.3,30.1,56.5 --events ivt --evaluate " + path +
+                                       " --json irf.json --no-scanpath -q");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const auto j = nlohmann::json::parse(std::ifstream(scratch("irf.json")));
+  const auto& c = j["events"]["classes"];
+  std::printf("IRF S2, ivt: kappa %.3f; fixation kappa %.3f F1 %.3f; saccade kappa %.3f F1 %.3f\n", j["events"]["kappa"].get<double>(),
+              c["fixation"]["kappa"].get<double>(), c["fixation"]["f1"].get<double>(), c["saccade"]["kappa"].get<double>(),
+              c["saccade"]["f1"].get<double>());
+  EXPECT_GT(c["fixation"]["kappa"].get<double>(), 0.6);
+  EXPECT_GT(c["saccade"]["f1"].get<double>(), 0.5);
+  EXPECT_EQ(c["pso"]["hits"], 0);
+}

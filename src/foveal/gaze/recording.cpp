@@ -321,7 +321,8 @@ Recording parse_gaze_csv(const std::string& content, const std::string& name, co
   r.eyes = "as recorded";
   r.screen_px = o.screen_px;
   // Column order: from a header of known names, or t,x,y[,confidence]
-  int c_t = 0, c_x = 1, c_y = 2, c_conf = -1;
+  int c_t = 0, c_x = 1, c_y = 2, c_conf = -1, c_status = -1, c_label = -1;
+  bool degrees = o.csv_degrees;
   size_t columns = 0;
   std::string_view line;
   double previous = -INFINITY;
@@ -335,12 +336,17 @@ Recording parse_gaze_csv(const std::string& content, const std::string& name, co
         c_t = c_x = c_y = c_conf = -1;
         for (size_t i = 0; i < f.size(); ++i) {
           const std::string_view col = text::trim(f[i]);
+          if (col == "x_deg" || col == "y_deg") degrees = true;
           int* slot = col == "t" || col == "time" || col == "t_s" ? &c_t
-                      : col == "x"                                ? &c_x
-                      : col == "y"                                ? &c_y
+                      : col == "x" || col == "x_deg"              ? &c_x
+                      : col == "y" || col == "y_deg"              ? &c_y
                       : col == "confidence"                       ? &c_conf
+                      : col == "status"                           ? &c_status
+                      : col == "label"                            ? &c_label
                                                                   : nullptr;
-          if (!slot) fail("{}:{}: unknown column '{}' (expected t, x, y and optionally confidence)", name, lines.number(), col);
+          if (!slot)
+            fail("{}:{}: unknown column '{}' (expected t, x, y (or x_deg, y_deg) and optionally confidence, status, label)", name,
+                 lines.number(), col);
           if (*slot >= 0) fail("{}:{}: column '{}' appears twice", name, lines.number(), col);
           *slot = static_cast<int>(i);
         }
@@ -364,9 +370,18 @@ Recording parse_gaze_csv(const std::string& content, const std::string& name, co
     check_time_order(s.t_s, previous, name, lines.number());
     previous = s.t_s;
     glm::dvec2 p{value(c_x, true, "x"), value(c_y, true, "y")};
-    if (o.csv_normalised) p *= glm::dvec2(r.screen_px);
+    if (degrees) {
+      // Degrees from the screen centre (y up) → the screen point of that direction
+      if (!(std::abs(p.x) < 89 && std::abs(p.y) < 89) && std::isfinite(p.x) && std::isfinite(p.y))
+        fail("{}:{}: gaze ({}, {}) degrees is not in front of the eye", name, lines.number(), p.x, p.y);
+      p = {0.5 * r.screen_px.x + std::tan(glm::radians(p.x)) * o.display_distance_cm * r.screen_px.x / o.display_width_cm,
+           0.5 * r.screen_px.y - std::tan(glm::radians(p.y)) * o.display_distance_cm * r.screen_px.y / o.display_height_cm};
+    } else if (o.csv_normalised) {
+      p *= glm::dvec2(r.screen_px);
+    }
     if (o.csv_origin_bottom_left) p.y = r.screen_px.y - p.y;
     s.px = p;
+    if (c_status >= 0 && value(c_status, false, "status") == 0) s.confidence = 0;  // the tracker lost the eye
     if (c_conf >= 0) {
       const double c = value(c_conf, false, "confidence");
       if (c < 0 || c > 1) fail("{}:{}: confidence {} is outside [0, 1]", name, lines.number(), c);
@@ -377,7 +392,7 @@ Recording parse_gaze_csv(const std::string& content, const std::string& name, co
   // Pixel coordinates without a stated screen may come from any monitor: judge them against at
   // least an 8K screen (7680x4320), so that only glitches, not a large display, are refused
   const glm::ivec2 screen = r.screen_px;
-  if (!o.csv_normalised && !o.screen_from_user) r.screen_px = glm::max(r.screen_px, glm::ivec2(7680, 4320));
+  if (!o.csv_normalised && !degrees && !o.screen_from_user) r.screen_px = glm::max(r.screen_px, glm::ivec2(7680, 4320));
   apply_validity(r, o.min_confidence);
   r.screen_px = screen;
   return r;

@@ -54,6 +54,9 @@ struct ReadOptions {
   double csv_time_scale = 1;         // seconds per unit of the t column (s: 1, ms: 1e-3, us: 1e-6)
   bool csv_normalised = false;       // x, y in [0, 1] of the screen instead of pixels
   bool csv_origin_bottom_left = false;
+  bool csv_degrees = false;          // x, y in degrees of visual angle from the screen centre (y up), mapped
+                                     // through the display below (also columns named x_deg, y_deg)
+  double display_width_cm = 47.5, display_height_cm = 30, display_distance_cm = 60;
   // Tracker events from side files (Pupil's fixations.csv / blinks.csv); empty → looked for beside the file
   std::string fixations_file, blinks_file;
   bool find_side_files = true;
