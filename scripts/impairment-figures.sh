@@ -5,18 +5,11 @@
 # by side). Takes about a minute on two cores.
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
-build=${1:-$root/build}
-foveal="$build/foveal"
-data="$root/../shared/data"
-images="$root/docs/images"
-work=$(mktemp -d)
-trap 'rm -rf "$work"' EXIT
-[[ -x $foveal ]] || { echo "impairment-figures: $foveal not built (run scripts/setup.sh)" >&2; exit 1; }
+source "$root/scripts/pictures.sh"
+figures_setup impairment-figures "${1:-}" ffmpeg
 [[ -d $data/scenes/sponza && -d $data/images ]] || { echo "impairment-figures: $data is absent" >&2; exit 1; }
-command -v ffmpeg > /dev/null || { echo "impairment-figures: ffmpeg is needed" >&2; exit 1; }
 mkdir -p "$images"
 cd "$root"
-source "$root/scripts/pictures.sh"
 
 field=examples/eyes/glaucoma-24-2.csv
 echo "impairment-figures: a 24-2 arcuate defect and its interpolated map (right eye)"

@@ -5,13 +5,9 @@
 # Takes about a minute on two cores.
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
-build=${1:-$root/build}
-foveal="$build/foveal"
-data="$root/../shared/data"
-images="$root/docs/images"
-[[ -x $foveal ]] || { echo "viewer-figures: $foveal not built (run scripts/setup.sh)" >&2; exit 1; }
+source "$root/scripts/pictures.sh"
+figures_setup viewer-figures "${1:-}" xvfb-run
 [[ -d $data/scenes ]] || { echo "viewer-figures: $data/scenes is absent" >&2; exit 1; }
-command -v xvfb-run > /dev/null || { echo "viewer-figures: xvfb-run is needed (Debian package xvfb)" >&2; exit 1; }
 mkdir -p "$images"
 cd "$root"
 view() { xvfb-run -a -s '-screen 0 2400x1200x24' "$foveal" view "$@"; }

@@ -5,19 +5,12 @@
 # side by side). Takes about two minutes on two cores.
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
-build=${1:-$root/build}
-foveal="$build/foveal"
-data="$root/../shared/data"
-images="$root/docs/images"
-work=$(mktemp -d)
-trap 'rm -rf "$work"' EXIT
-[[ -x $foveal ]] || { echo "vision-figures: $foveal not built (run scripts/setup.sh)" >&2; exit 1; }
+source "$root/scripts/pictures.sh"
+figures_setup vision-figures "${1:-}" ffmpeg
 [[ -d $data/scenes/conference ]] || { echo "vision-figures: $data/scenes/conference is absent" >&2; exit 1; }
-command -v ffmpeg > /dev/null || { echo "vision-figures: ffmpeg is needed" >&2; exit 1; }
 mkdir -p "$images"
 cd "$root"
 
-source "$root/scripts/pictures.sh"
 
 scene=scenes/conference.json
 echo "vision-figures: the paper's Figure 3 (steps 1, 4, 20, 69)"
