@@ -11,7 +11,6 @@
 #include <fmt/core.h>
 
 #include <filesystem>
-#include <fstream>
 #include <memory>
 
 namespace foveal::app {
@@ -126,13 +125,12 @@ std::function<int()> add_gaze_command(CLI::App& app) {
       display.res_y = recording.screen_px.y;
     }
     const GazeSummary summary = summarize_recording(recording, display, params);
-    if (!o->json.empty()) write_json_file(o->json, summary.json);
     std::optional<Evaluation> evaluation;
     if (!o->events.empty()) {
       if (o->events != "ivt" && o->events != "idt" && o->events != "auto")
         fail("--events: unknown detector '{}' (ivt, idt or auto)", o->events);
-      const GazeGeometry geometry(display, recording.screen_px);
-      const FixationResult fixations = o->events == "idt" ? detect_idt(recording, geometry, params) : detect_ivt(recording, geometry, params);
+      // The summary ran both filters already: ivt first, idt second
+      const FixationResult& fixations = summary.filters[o->events == "idt" ? 1 : 0].result;
       const std::vector<EventLabel> labels = labels_from_fixations(recording, fixations);
       if (!o->samples_out.empty()) {
         std::string text = "t_s,x,y,label\n";
@@ -152,17 +150,19 @@ std::function<int()> add_gaze_command(CLI::App& app) {
     } else if (!o->samples_out.empty() || !o->evaluate.empty()) {
       fail("--samples-out and --evaluate need --events");
     }
-    if (evaluation && !o->json.empty()) {
-      nlohmann::json j = nlohmann::json::parse(std::ifstream(o->json));
-      nlohmann::json classes = nlohmann::json::object();
-      auto number = [](double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); };
-      for (const ClassScore& c : evaluation->classes)
-        classes[to_string(c.label)] = {{"kappa", number(c.kappa)}, {"f1", number(c.f1)}, {"hits", c.hits}, {"misses", c.misses},
-                                       {"false_alarms", c.false_alarms}, {"reference_events", c.reference_events},
-                                       {"test_events", c.test_events}, {"rto_ms", c.rto_ms}, {"rtd_ms", c.rtd_ms}};
-      j["events"] = {{"detector", o->events}, {"labels", o->evaluate}, {"samples", evaluation->samples},
-                     {"kappa", number(evaluation->kappa)}, {"accuracy", evaluation->accuracy}, {"classes", classes},
-                     {"matching", "Hooge et al. 2018: earliest overlapping event of the same class"}};
+    if (!o->json.empty()) {
+      nlohmann::json j = summary.json;
+      if (evaluation) {
+        nlohmann::json classes = nlohmann::json::object();
+        auto number = [](double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); };
+        for (const ClassScore& c : evaluation->classes)
+          classes[to_string(c.label)] = {{"kappa", number(c.kappa)}, {"f1", number(c.f1)}, {"hits", c.hits}, {"misses", c.misses},
+                                         {"false_alarms", c.false_alarms}, {"reference_events", c.reference_events},
+                                         {"test_events", c.test_events}, {"rto_ms", c.rto_ms}, {"rtd_ms", c.rtd_ms}};
+        j["events"] = {{"detector", o->events}, {"labels", o->evaluate}, {"samples", evaluation->samples},
+                       {"kappa", number(evaluation->kappa)}, {"accuracy", evaluation->accuracy}, {"classes", classes},
+                       {"matching", "Hooge et al. 2018: earliest overlapping event of the same class"}};
+      }
       write_json_file(o->json, j);
     }
     if (!o->samples.empty()) {

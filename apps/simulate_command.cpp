@@ -244,17 +244,7 @@ std::function<int()> add_simulate_command(CLI::App& app) {
       j["scan_path_px"] = path_px;
       if (gaze) j["gaze"] = {{"source", o->gaze_source}, {"live", live}, {"fixation", o->gaze.fixation}, {"stopped", stopped}};
       for (const StepStats& s : steps) {
-        j["steps"].push_back({{"step", s.step},
-                              {"focus_px", {s.focus_px.x, s.focus_px.y}},
-                              {"focus_depth_m", std::isfinite(s.focus_depth_m) ? nlohmann::json(s.focus_depth_m) : nlohmann::json("inf")},
-                              {"focus_vergence_d", s.focus_vergence},
-                              {"sharp_fraction", s.sharp_fraction},
-                              {"blink", s.blink},
-                              {"skipped", s.skipped},
-                              {"camera_moved", s.camera_moved},
-                              {"corners", s.corners},
-                              {"time_ms", {{"trace", s.trace_ms}, {"features", s.features_ms}, {"sharpness", s.sharpness_ms},
-                                           {"blur", s.blur_ms}, {"total", s.total_ms}}}});
+        j["steps"].push_back(step_stats_json(s));
         if (gaze) {
           const GazeStep& g = gaze_steps[size_t(s.step - 1)];
           j["steps"].back()["gaze"] = {{"t_s", g.start_s}, {"duration_s", g.duration_s}, {"screen_px", {g.screen_px.x, g.screen_px.y}},

@@ -206,13 +206,7 @@ PyVisionStep vision_step(PyVision& v, std::optional<std::array<float, 2>> fixati
   r.coc = nb::cast(owned_array(std::move(coc), {h, w}));
   r.fixation = {s.focus_px.x, s.focus_px.y};
   r.sharp_fraction = s.sharp_fraction;
-  nlohmann::json j = {{"step", s.step}, {"fixation_px", {s.focus_px.x, s.focus_px.y}},
-                      {"focus_depth_m", std::isfinite(s.focus_depth_m) ? nlohmann::json(s.focus_depth_m) : nlohmann::json("inf")},
-                      {"focus_vergence_d", s.focus_vergence}, {"skipped", s.skipped}, {"blink", s.blink},
-                      {"camera_moved", s.camera_moved}, {"corners", s.corners}, {"sharp_fraction", s.sharp_fraction},
-                      {"time_ms", {{"trace", s.trace_ms}, {"features", s.features_ms}, {"sharpness", s.sharpness_ms},
-                                   {"blur", s.blur_ms}, {"impairments", s.impair.total_ms}, {"total", s.total_ms}}}};
-  r.stats = to_python(j);
+  r.stats = to_python(step_stats_json(s));
   return r;
 }
 
@@ -367,7 +361,7 @@ NB_MODULE(_core, m) {
       .def_ro("coc", &PyVisionStep::coc, "Per-pixel circle-of-confusion diameter used for the blur, pixels (H×W).")
       .def_ro("fixation", &PyVisionStep::fixation, "The fixation of this step, render pixels.")
       .def_ro("sharp_fraction", &PyVisionStep::sharp_fraction, "Share of pixels remembered sharp.")
-      .def_ro("stats", &PyVisionStep::stats, "The step's record: fixation, depth, accommodation, blink, corners, stage times (ms).");
+      .def_ro("stats", &PyVisionStep::stats, "The step's record, as in `simulate --stats`: focus_px, depth, accommodation, blink, corners, stage times (ms).");
 
   nb::class_<PyVision>(m, "VisionSimulation", "The second paper's simulation of human vision over time.")
       .def("__init__",

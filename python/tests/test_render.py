@@ -87,7 +87,6 @@ def test_no_gpu_is_a_runtime_error_when_cuda_is_asked_for(box):
 def test_the_gil_is_released_while_rendering(box):
     renderer = foveal.Renderer(box, device="cpu", threads=1)
     done = threading.Event()
-    counts = []
 
     def work():
         renderer.render(size=(320, 200), mode="full", max_rays=64)
@@ -100,7 +99,6 @@ def test_the_gil_is_released_while_rendering(box):
         ticks += 1
         time.sleep(0.001)
     thread.join()
-    counts.append(ticks)
     assert ticks > 20, "the main thread did not run while the frame rendered"
 
 

@@ -22,7 +22,7 @@ def test_vision_steps_are_reproducible_and_follow_a_given_fixation(box):
     assert 0 <= sa.sharp_fraction <= 1
     given = a.step(fixation=(20.0, 30.0))
     assert tuple(given.fixation) == (20.0, 30.0)
-    assert given.stats["step"] == 2 and given.stats["fixation_px"] == [20.0, 30.0]
+    assert given.stats["step"] == 2 and given.stats["focus_px"] == [20.0, 30.0]
     # The fixated pixel is seen sharply, the far corner is not (or less)
     assert given.coc[30, 20] <= given.coc[119, 159] + 1e-6
 

@@ -79,7 +79,7 @@ bool plausible_point(glm::dvec2 px, glm::ivec2 screen) {
          px.y <= 2.0 * screen.y;
 }
 
-size_t apply_validity(Recording& r, float min_confidence) {
+void apply_validity(Recording& r, float min_confidence) {
   size_t blink = 0, implausible = 0;
   for (GazeSample& s : r.samples) {
     while (blink < r.blinks.size() && r.blinks[blink].end_s < s.t_s) ++blink;
@@ -95,7 +95,6 @@ size_t apply_validity(Recording& r, float min_confidence) {
   if (implausible > 0)
     r.notes.push_back(fmt::format("{} samples more than one screen ({}x{}) beyond its edges were marked invalid", implausible,
                                   r.screen_px.x, r.screen_px.y));
-  return implausible;
 }
 
 GazeFormat detect_gaze_format(const std::string& text, const std::string& name) {

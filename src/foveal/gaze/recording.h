@@ -112,7 +112,7 @@ std::vector<GazeEvent> parse_pupil_blinks(const std::string& text, const std::st
 bool plausible_point(glm::dvec2 px, glm::ivec2 screen_px);
 
 // Mark samples inside blinks, below the confidence minimum, or not plausible_point() invalid;
-// used by the readers. Returns how many were implausible (and says so in the recording's notes).
-size_t apply_validity(Recording& recording, float min_confidence);
+// used by the readers. How many were implausible goes into the recording's notes.
+void apply_validity(Recording& recording, float min_confidence);
 
 }  // namespace foveal

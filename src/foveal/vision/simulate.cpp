@@ -210,6 +210,20 @@ VisionSimulation::~VisionSimulation() = default;
 const Image& VisionSimulation::color() const { return passes_->color(); }
 const Image& VisionSimulation::perceived() const { return impair_ ? impaired_ : passes_->perceived(); }
 
+nlohmann::json step_stats_json(const StepStats& s) {
+  return {{"step", s.step},
+          {"focus_px", {s.focus_px.x, s.focus_px.y}},
+          {"focus_depth_m", std::isfinite(s.focus_depth_m) ? nlohmann::json(s.focus_depth_m) : nlohmann::json("inf")},
+          {"focus_vergence_d", s.focus_vergence},
+          {"sharp_fraction", s.sharp_fraction},
+          {"blink", s.blink},
+          {"skipped", s.skipped},
+          {"camera_moved", s.camera_moved},
+          {"corners", s.corners},
+          {"time_ms", {{"trace", s.trace_ms}, {"features", s.features_ms}, {"sharpness", s.sharpness_ms}, {"blur", s.blur_ms},
+                       {"impairments", s.impair.total_ms}, {"total", s.total_ms}}}};
+}
+
 Retinotopy camera_retinotopy(const Camera& camera, int width, int height, glm::vec2 fixation_px) {
   const CameraRays rays(camera, width, height);
   const glm::vec3 g = rays(fixation_px.x, fixation_px.y).dir;

@@ -10,6 +10,8 @@
 #include "foveal/vision/features.h"
 #include "foveal/vision/sharpness.h"
 
+#include <nlohmann/json.hpp>
+
 #include <memory>
 #include <optional>
 
@@ -53,6 +55,10 @@ struct StepStats {
   double trace_ms = 0, features_ms = 0, sharpness_ms = 0, blur_ms = 0, total_ms = 0;
   ImpairTimes impair;             // the impairment passes (0 without any)
 };
+
+// One step's record as JSON (`simulate --stats`' "steps" entries, the Python step's stats): the
+// fixation, depth and accommodation, blink, skip, corners, sharp share and stage times in ms.
+nlohmann::json step_stats_json(const StepStats& s);
 
 // Where each pixel of a camera's image lies in the visual field of an eye at the camera fixating
 // `fixation_px`: the exact angle between the two rays, split along the fixation's tangent-plane
