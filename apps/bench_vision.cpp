@@ -78,7 +78,7 @@ std::function<int()> add_bench_blur_command(CLI::App& bench) {
     if (spec.empty()) spec = "builtin:box";
     const Scene scene = load_scene(spec);
     const Tracer tracer(scene);
-    const Camera camera = !scene.cameras.empty() ? scene.cameras.front() : default_camera(scene);
+    const Camera camera = first_camera(scene);
     const glm::ivec2 size = parse_size("--size", o->size);
     // Axial distances of the visible surfaces → near (5th percentile), middle (median), far (95th)
     const GBuffer g = trace_primary(tracer, scene, camera, size.x, size.y);
@@ -314,7 +314,7 @@ std::function<int()> add_bench_vision_command(CLI::App& bench) {
     for (const std::string& spec : scenes) {
       const Scene scene = load_scene(spec);
       const Tracer tracer(scene);
-      const Camera camera = !scene.cameras.empty() ? scene.cameras.front() : default_camera(scene);
+      const Camera camera = first_camera(scene);
       std::unique_ptr<gpu::Renderer> raw_gpu;  // the GPU's raw closest-hit baseline (its own copy of the scene)
       if (cuda) raw_gpu = std::make_unique<gpu::Renderer>(scene);
       for (const std::string& size_text : o->sizes) {

@@ -18,8 +18,7 @@
 namespace foveal::app {
 
 Camera resolve_camera(const Scene& scene, const ViewOptions& o) {
-  Camera cam = !o.camera.empty() ? find_camera(scene, o.camera)
-               : !scene.cameras.empty() ? scene.cameras.front() : default_camera(scene);
+  Camera cam = !o.camera.empty() ? find_camera(scene, o.camera) : first_camera(scene);
   if (!o.eye.empty() != !o.look.empty()) fail("{} and --look must be given together", o.eye_option);
   if (!o.eye.empty()) {
     cam.name = "command line";

@@ -53,7 +53,7 @@ struct PyScene {
 
 // The camera to use: a Camera, a camera name of the scene, or None (the scene's first, or one framing it).
 Camera resolve_camera(const Scene& scene, const nb::object& camera) {
-  if (camera.is_none()) return !scene.cameras.empty() ? scene.cameras.front() : default_camera(scene);
+  if (camera.is_none()) return first_camera(scene);
   if (nb::isinstance<nb::str>(camera)) return find_camera(scene, nb::cast<std::string>(camera));
   return nb::cast<Camera>(camera);
 }

@@ -136,6 +136,8 @@ void append_open_box(Scene& scene, glm::vec3 lo, glm::vec3 hi, const Material& m
   wall({h.x, l.y, l.z}, {h.x, l.y, h.z}, {h.x, h.y, h.z}, {h.x, h.y, l.z});  // right (+x)
 }
 
+Camera first_camera(const Scene& scene) { return scene.cameras.empty() ? default_camera(scene) : scene.cameras.front(); }
+
 Camera default_camera(const Scene& scene) {
   const Bounds b = scene.bounds();
   Camera cam;

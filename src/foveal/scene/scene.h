@@ -160,6 +160,8 @@ void append_open_box(Scene& scene, glm::vec3 lo, glm::vec3 hi, const Material& m
 
 // A camera looking at the whole scene from +z (used when the scene names none).
 Camera default_camera(const Scene& scene);
+// The camera used when none is asked for: the scene's first named one, else default_camera().
+Camera first_camera(const Scene& scene);
 // Find a camera by name; throws Error listing the known names.
 const Camera& find_camera(const Scene& scene, const std::string& name);
 // The named camera path; throws Error listing the known ones.
