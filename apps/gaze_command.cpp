@@ -1,6 +1,7 @@
 // apps/gaze_command.cpp — `foveal gaze`: read a recording, summarise it, filter its fixations,
 // compare them with the tracker's own, draw the scan path.
 #include "commands.h"
+#include "foveal/gaze/detect.h"
 #include "foveal/gaze/events.h"
 #include "foveal/gaze/summary.h"
 #include "foveal/io/outputs.h"
@@ -10,6 +11,8 @@
 
 #include <fmt/core.h>
 
+#include <algorithm>
+#include <chrono>
 #include <filesystem>
 #include <memory>
 
@@ -93,8 +96,11 @@ FixationParams resolve_fixation_params(const GazeOptions& o) {
 std::function<int()> add_gaze_command(CLI::App& app) {
   auto* cmd = app.add_subcommand("gaze", "summarise an eye-tracker recording: samples, fixations (I-VT, I-DT), agreement with the tracker, scan path");
   struct Options {
-    std::string recording, json, samples, scanpath = "scanpath.png", display = "47.5,30,60", events, samples_out, evaluate;
+    std::string recording, json, samples, scanpath = "scanpath.png", display = "47.5,30,60", events, samples_out, events_out, evaluate,
+        coder2;
     GazeOptions gaze;
+    double pursuit_velocity = 6, pursuit_window_ms = 40, min_pursuit_ms = 80, filter_window_ms = 6, ek_lambda = 6,
+           blink_flank_ms = 100, max_blink_ms = 2000;
     bool no_scanpath = false, quiet = false;
   };
   auto o = std::make_shared<Options>();
@@ -103,11 +109,28 @@ std::function<int()> add_gaze_command(CLI::App& app) {
   cmd->add_option("--display", o->display, "the recording's screen W_CM,H_CM,DIST_CM[,RES_X,RES_Y] (angles for the filters); the resolution defaults to the recording's screen")
       ->capture_default_str();
   cmd->add_option("--json", o->json, "write the summary as JSON");
-  cmd->add_option("--events", o->events, "label every sample: ivt or idt (fixations; other valid samples saccades, lost ones blinks), auto (ivt)");
+  cmd->add_option("--events", o->events,
+                  "label every sample and list the events: nhp (adaptive saccades + PSO + pursuit + blinks; the recommended, = auto), "
+                  "nh (Nystrom & Holmqvist 2010: saccades, PSO, fixations, blinks), ek (Engbert & Kliegl 2003 saccades), "
+                  "ivt or idt (fixation filters: other valid samples saccades, lost ones blinks), "
+                  "or file:LABELS.csv (another tool's labels of these samples, listed and scored the same way)");
   cmd->add_option("--samples-out", o->samples_out, "--events: write t_s,x,y,label per sample (CSV)");
+  cmd->add_option("--events-out", o->events_out,
+                  "--events: write the events as a BIDS-style events.tsv (onset, duration, trial_type, amplitude, peak velocity, "
+                  "start and end positions in degrees)");
   cmd->add_option("--evaluate", o->evaluate,
                   "--events: score the labels against an expert's (CSV with t/t_s and label columns, e.g. the IRF recordings): "
                   "sample-level Cohen's kappa per class and overall, event F1 (Hooge et al. 2018 matching), RTO/RTD");
+  cmd->add_option("--coder2", o->coder2, "--evaluate: a second coder's labels of the same samples: their agreement with the first is the ceiling");
+  cmd->add_option("--pursuit-velocity", o->pursuit_velocity, "nhp: intersaccadic samples faster than this are pursuit candidates, deg/s")
+      ->capture_default_str();
+  cmd->add_option("--pursuit-window-ms", o->pursuit_window_ms, "nhp: the pursuit velocity's least-squares window, ms")->capture_default_str();
+  cmd->add_option("--min-pursuit-ms", o->min_pursuit_ms, "nhp: shortest pursuit, ms")->capture_default_str();
+  cmd->add_option("--filter-window-ms", o->filter_window_ms, "nh, nhp: Savitzky-Golay window of the velocity, ms")->capture_default_str();
+  cmd->add_option("--ek-lambda", o->ek_lambda, "ek: threshold in median-based standard deviations of the velocity")->capture_default_str();
+  cmd->add_option("--blink-flank-ms", o->blink_flank_ms, "ek, nh, nhp: a blink takes in the lid's artefacts up to this long either side of the loss, ms")
+      ->capture_default_str();
+  cmd->add_option("--max-blink-ms", o->max_blink_ms, "ek, nh, nhp: longer losses are undefined, not blinks, ms")->capture_default_str();
   cmd->add_option("--samples", o->samples, "write the samples as read (t_s,x,y,confidence,valid: seconds, screen pixels, NaN where the eye was lost) as CSV");
   cmd->add_option("--scanpath", o->scanpath, "scan-path picture (PNG) of the --fixation filter's fixations")->capture_default_str();
   cmd->add_flag("--no-scanpath", o->no_scanpath, "do not draw the scan path");
@@ -125,13 +148,31 @@ std::function<int()> add_gaze_command(CLI::App& app) {
       display.res_y = recording.screen_px.y;
     }
     const GazeSummary summary = summarize_recording(recording, display, params);
-    std::optional<Evaluation> evaluation;
+    std::optional<EventDetection> detection;
+    double detect_ms = 0;
+    std::optional<Evaluation> evaluation, ceiling;
     if (!o->events.empty()) {
-      if (o->events != "ivt" && o->events != "idt" && o->events != "auto")
-        fail("--events: unknown detector '{}' (ivt, idt or auto)", o->events);
-      // The summary ran both filters already: ivt first, idt second
-      const FixationResult& fixations = summary.filters[o->events == "idt" ? 1 : 0].result;
-      const std::vector<EventLabel> labels = labels_from_fixations(recording, fixations);
+      EventParams ep;
+      ep.pursuit_velocity_deg_s = o->pursuit_velocity;
+      ep.pursuit_window_s = o->pursuit_window_ms / 1000;
+      ep.min_pursuit_s = o->min_pursuit_ms / 1000;
+      ep.filter_window_s = o->filter_window_ms / 1000;
+      ep.ek_lambda = o->ek_lambda;
+      ep.blink_flank_s = o->blink_flank_ms / 1000;
+      ep.max_blink_s = o->max_blink_ms / 1000;
+      const auto started = std::chrono::steady_clock::now();
+      if (o->events.rfind("file:", 0) == 0) {
+        // Another tool's labels of these samples: listed and scored like a detector's
+        const std::string path = o->events.substr(5);
+        const LabelFile file = read_label_file(path);
+        if (file.label.size() != recording.samples.size())
+          fail("{}: {} labelled samples, but the recording has {} samples", path, file.label.size(), recording.samples.size());
+        detection = events_from_labels(recording, GazeGeometry(display, recording.screen_px), file.label);
+      } else {
+        detection = detect_events(recording, GazeGeometry(display, recording.screen_px), parse_event_method(o->events), ep, params);
+      }
+      detect_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - started).count();
+      const std::vector<EventLabel>& labels = detection->labels;
       if (!o->samples_out.empty()) {
         std::string text = "t_s,x,y,label\n";
         for (size_t i = 0; i < labels.size(); ++i)
@@ -139,29 +180,49 @@ std::function<int()> add_gaze_command(CLI::App& app) {
                               recording.samples[i].px.y, to_string(labels[i]));
         write_text_file(o->samples_out, text);
       }
+      if (!o->events_out.empty()) write_text_file(o->events_out, events_tsv(*detection, recording));
       if (!o->evaluate.empty()) {
-        const LabelFile expert = read_label_file(o->evaluate);
-        if (expert.label.size() != labels.size())
-          fail("{}: {} labelled samples, but the recording has {} samples", o->evaluate, expert.label.size(), labels.size());
         std::vector<double> t(labels.size());
         for (size_t i = 0; i < t.size(); ++i) t[i] = recording.samples[i].t_s;
+        auto read_labels = [&](const std::string& path) {
+          LabelFile file = read_label_file(path);
+          if (file.label.size() != labels.size())
+            fail("{}: {} labelled samples, but the recording has {} samples", path, file.label.size(), labels.size());
+          return file;
+        };
+        const LabelFile expert = read_labels(o->evaluate);
         evaluation = evaluate_labels(labels, expert.label, t);
+        if (!o->coder2.empty()) ceiling = evaluate_labels(read_labels(o->coder2).label, expert.label, t);
       }
-    } else if (!o->samples_out.empty() || !o->evaluate.empty()) {
-      fail("--samples-out and --evaluate need --events");
+    } else if (!o->samples_out.empty() || !o->evaluate.empty() || !o->events_out.empty()) {
+      fail("--samples-out, --events-out and --evaluate need --events");
     }
+    if (!o->coder2.empty() && o->evaluate.empty()) fail("--coder2 needs --evaluate (the first coder's labels)");
     if (!o->json.empty()) {
       nlohmann::json j = summary.json;
-      if (evaluation) {
-        nlohmann::json classes = nlohmann::json::object();
+      if (detection) {
         auto number = [](double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); };
-        for (const ClassScore& c : evaluation->classes)
-          classes[to_string(c.label)] = {{"kappa", number(c.kappa)}, {"f1", number(c.f1)}, {"hits", c.hits}, {"misses", c.misses},
-                                         {"false_alarms", c.false_alarms}, {"reference_events", c.reference_events},
-                                         {"test_events", c.test_events}, {"rto_ms", c.rto_ms}, {"rtd_ms", c.rtd_ms}};
-        j["events"] = {{"detector", o->events}, {"labels", o->evaluate}, {"samples", evaluation->samples},
-                       {"kappa", number(evaluation->kappa)}, {"accuracy", evaluation->accuracy}, {"classes", classes},
-                       {"matching", "Hooge et al. 2018: earliest overlapping event of the same class"}};
+        auto scores = [&](const Evaluation& e) {
+          nlohmann::json classes = nlohmann::json::object();
+          for (const ClassScore& c : e.classes)
+            classes[to_string(c.label)] = {{"kappa", number(c.kappa)}, {"f1", number(c.f1)}, {"hits", c.hits}, {"misses", c.misses},
+                                           {"false_alarms", c.false_alarms}, {"reference_events", c.reference_events},
+                                           {"test_events", c.test_events}, {"rto_ms", c.rto_ms}, {"rtd_ms", c.rtd_ms}};
+          return nlohmann::json{{"samples", e.samples}, {"kappa", number(e.kappa)}, {"accuracy", e.accuracy}, {"classes", classes}};
+        };
+        nlohmann::json counts = nlohmann::json::object();
+        for (EventLabel c : kEventClasses) counts[to_string(c)] = 0;
+        for (const DetectedEvent& e : detection->events) counts[to_string(e.label)] = counts[to_string(e.label)].get<int>() + 1;
+        nlohmann::json ev = {{"detector", o->events.rfind("file:", 0) == 0 ? o->events : to_string(detection->method)}, {"detect_ms", detect_ms}, {"sampling_hz", detection->sampling_hz},
+                             {"peak_threshold_deg_s", number(detection->peak_threshold_deg_s)},
+                             {"onset_threshold_deg_s", number(detection->onset_threshold_deg_s)}, {"counts", counts}};
+        if (evaluation) {
+          ev.update(scores(*evaluation));
+          ev["labels"] = o->evaluate;
+          ev["matching"] = "Hooge et al. 2018: earliest overlapping event of the same class";
+        }
+        if (ceiling) ev["ceiling"] = scores(*ceiling), ev["ceiling"]["labels"] = o->coder2;
+        j["events"] = ev;
       }
       write_json_file(o->json, j);
     }
@@ -184,15 +245,29 @@ std::function<int()> add_gaze_command(CLI::App& app) {
     if (!o->json.empty()) fmt::print("  wrote     {}\n", o->json);
     if (!o->samples.empty()) fmt::print("  wrote     {}\n", o->samples);
     if (!o->samples_out.empty()) fmt::print("  wrote     {}\n", o->samples_out);
-    if (evaluation) {
-      fmt::print("  events    {} against {}: sample kappa {:.3f} (accuracy {:.3f})\n", o->events, o->evaluate, evaluation->kappa,
-                 evaluation->accuracy);
-      for (const ClassScore& c : evaluation->classes) {
+    if (!o->events_out.empty()) fmt::print("  wrote     {}\n", o->events_out);
+    if (detection) {
+      std::string counts;
+      for (EventLabel c : kEventClasses) {
+        const auto k = std::count_if(detection->events.begin(), detection->events.end(), [c](const DetectedEvent& e) { return e.label == c; });
+        counts += fmt::format("{}{} {}", counts.empty() ? "" : ", ", k, to_string(c));
+      }
+      fmt::print("  events    {} ({:.0f} Hz{}): {}\n", o->events.rfind("file:", 0) == 0 ? o->events : to_string(detection->method), detection->sampling_hz,
+                 std::isfinite(detection->peak_threshold_deg_s)
+                     ? fmt::format(", thresholds {:.1f}/{:.1f} deg/s", detection->peak_threshold_deg_s, detection->onset_threshold_deg_s)
+                     : "",
+                 counts);
+    }
+    auto print_scores = [](const Evaluation& e, const std::string& what) {
+      fmt::print("  {}: sample kappa {:.3f} (accuracy {:.3f})\n", what, e.kappa, e.accuracy);
+      for (const ClassScore& c : e.classes) {
         if (c.reference_samples == 0 && c.test_samples == 0) continue;
         fmt::print("    {:<9} kappa {:6.3f}  events F1 {:5.3f} ({} hits, {} misses, {} false alarms)  RTO {:+.1f} ms  RTD {:+.1f} ms\n",
                    to_string(c.label), c.kappa, c.f1, c.hits, c.misses, c.false_alarms, c.rto_ms, c.rtd_ms);
       }
-    }
+    };
+    if (evaluation) print_scores(*evaluation, fmt::format("scores    {} against {}", o->events, o->evaluate));
+    if (ceiling) print_scores(*ceiling, fmt::format("ceiling   {} against {}", o->coder2, o->evaluate));
     if (!o->no_scanpath) fmt::print("  wrote     {}\n", o->scanpath);
     return 0;
   };

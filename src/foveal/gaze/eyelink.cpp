@@ -76,12 +76,14 @@ Recording parse_eyelink_asc(const std::string& content, const std::string& name,
       if (s.t_s < previous) fail("{}: time {} ms is before the previous sample's {} ms (time must not go backwards)", where(), f[0], previous * 1000);
       previous = s.t_s;
       glm::dvec2 eye_px[2]{glm::dvec2(NAN), glm::dvec2(NAN)};
+      float eye_pupil[2]{NAN, NAN};
       size_t col = 1;
       for (int e = 0; e < 2; ++e) {
         if (e == 0 ? !layout.left : !layout.right) continue;
         const std::string_view fx = f[col], fy = f[col + 1], fp = f[col + 2];
         col += 3;
         if (!is_missing(fp) && !text::to_number(fp)) fail("{}: pupil '{}' is not a number", where(), fp);
+        if (!is_missing(fp) && *text::to_number(fp) > 0) eye_pupil[e] = static_cast<float>(*text::to_number(fp));
         if (is_missing(fx) || is_missing(fy)) continue;  // eye lost: an invalid sample, not a zero
         eye_px[e] = {num(fx, "gaze x"), num(fy, "gaze y")};
       }
@@ -91,6 +93,13 @@ Recording parse_eyelink_asc(const std::string& content, const std::string& name,
         case EyeSelection::right: s.px = layout.right ? eye_px[1] : eye_px[0]; break;
         case EyeSelection::average:
           s.px = ok[0] && ok[1] ? 0.5 * (eye_px[0] + eye_px[1]) : ok[0] ? eye_px[0] : eye_px[1];
+          break;
+      }
+      switch (o.eye) {  // the pupil of the eye the point came from (average: of both where both were seen)
+        case EyeSelection::left: s.pupil = layout.left ? eye_pupil[0] : eye_pupil[1]; break;
+        case EyeSelection::right: s.pupil = layout.right ? eye_pupil[1] : eye_pupil[0]; break;
+        case EyeSelection::average:
+          s.pupil = ok[0] && ok[1] ? 0.5f * (eye_pupil[0] + eye_pupil[1]) : ok[0] ? eye_pupil[0] : eye_pupil[1];
           break;
       }
       r.samples.push_back(s);

@@ -320,7 +320,7 @@ Recording parse_gaze_csv(const std::string& content, const std::string& name, co
   r.eyes = "as recorded";
   r.screen_px = o.screen_px;
   // Column order: from a header of known names, or t,x,y[,confidence]
-  int c_t = 0, c_x = 1, c_y = 2, c_conf = -1, c_status = -1, c_label = -1;
+  int c_t = 0, c_x = 1, c_y = 2, c_conf = -1, c_status = -1, c_label = -1, c_pupil = -1;
   bool degrees = o.csv_degrees;
   size_t columns = 0;
   std::string_view line;
@@ -342,9 +342,10 @@ Recording parse_gaze_csv(const std::string& content, const std::string& name, co
                       : col == "confidence"                       ? &c_conf
                       : col == "status"                           ? &c_status
                       : col == "label"                            ? &c_label
+                      : col == "pupil"                            ? &c_pupil
                                                                   : nullptr;
           if (!slot)
-            fail("{}:{}: unknown column '{}' (expected t, x, y (or x_deg, y_deg) and optionally confidence, status, label)", name,
+            fail("{}:{}: unknown column '{}' (expected t, x, y (or x_deg, y_deg) and optionally confidence, status, label, pupil)", name,
                  lines.number(), col);
           if (*slot >= 0) fail("{}:{}: column '{}' appears twice", name, lines.number(), col);
           *slot = static_cast<int>(i);
@@ -385,6 +386,11 @@ Recording parse_gaze_csv(const std::string& content, const std::string& name, co
       const double c = value(c_conf, false, "confidence");
       if (c < 0 || c > 1) fail("{}:{}: confidence {} is outside [0, 1]", name, lines.number(), c);
       s.confidence = static_cast<float>(c);
+    }
+    if (c_pupil >= 0) {
+      const double v = value(c_pupil, true, "pupil");
+      if (v < 0) fail("{}:{}: pupil size {} is negative", name, lines.number(), v);
+      if (v > 0) s.pupil = static_cast<float>(v);  // 0: no pupil seen (EyeLink's convention)
     }
     r.samples.push_back(s);
   }

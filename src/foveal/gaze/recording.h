@@ -31,6 +31,7 @@ struct GazeSample {
   float confidence = 1;    // tracker's confidence in [0, 1] (1 where the format has none)
   bool valid = false;      // finite point, confidence ≥ the minimum, not inside a blink
   std::optional<glm::dvec3> direction;  // gaze direction where the tracker gives one (Pupil's gaze_point_3d)
+  float pupil = NAN;       // pupil size in the tracker's units (EyeLink area or diameter, a CSV's pupil column); NaN if none
 };
 
 // An event of the tracker's own (EyeLink EFIX/EBLINK, Pupil fixations.csv/blinks.csv, Tobii Pro Lab).

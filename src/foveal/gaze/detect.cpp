@@ -1,0 +1,545 @@
+// foveal/gaze/detect.cpp — the event detectors of detect.h.
+#include "foveal/gaze/detect.h"
+
+#include "foveal/util/error.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+
+namespace foveal {
+
+const char* to_string(EventMethod m) {
+  switch (m) {
+    case EventMethod::ivt: return "ivt";
+    case EventMethod::idt: return "idt";
+    case EventMethod::ek: return "ek";
+    case EventMethod::nh: return "nh";
+    case EventMethod::nhp: return "nhp";
+  }
+  return "?";
+}
+
+EventMethod parse_event_method(const std::string& name) {
+  if (name == "auto") return kRecommendedEventMethod;
+  for (EventMethod m : {EventMethod::ivt, EventMethod::idt, EventMethod::ek, EventMethod::nh, EventMethod::nhp})
+    if (name == to_string(m)) return m;
+  fail("--events: unknown detector '{}' (ivt, idt, ek, nh, nhp or auto)", name);
+}
+
+void validate(const EventParams& p) {
+  auto positive = [](double v, const char* option) {
+    if (!(v > 0) || !std::isfinite(v)) fail("{}: must be a positive number, got {}", option, v);
+  };
+  auto non_negative = [](double v, const char* option) {
+    if (!(v >= 0) || !std::isfinite(v)) fail("{}: must be zero or positive, got {}", option, v);
+  };
+  non_negative(p.blink_flank_s, "--blink-flank-ms");
+  positive(p.max_blink_s, "--max-blink-ms");
+  positive(p.pupil_deviation, "--pupil-deviation");
+  positive(p.filter_window_s, "--filter-window-ms");
+  positive(p.initial_peak_deg_s, "--initial-peak");
+  positive(p.max_velocity_deg_s, "--max-velocity");
+  positive(p.max_acceleration_deg_s2, "--max-acceleration");
+  non_negative(p.min_saccade_s, "--min-saccade-ms");
+  non_negative(p.min_fixation_s, "--min-fixation-ms");
+  non_negative(p.pso_window_s, "--pso-window-ms");
+  positive(p.local_noise_s, "--local-noise-ms");
+  positive(p.ek_lambda, "--ek-lambda");
+  non_negative(p.ek_min_saccade_s, "--ek-min-saccade-ms");
+  positive(p.pursuit_window_s, "--pursuit-window-ms");
+  positive(p.pursuit_velocity_deg_s, "--pursuit-velocity");
+  non_negative(p.min_pursuit_s, "--min-pursuit-ms");
+}
+
+std::pair<double, double> adaptive_velocity_thresholds(const std::vector<float>& v, double initial) {
+  double peak = initial, mean = 0, sd = 0;
+  for (int iteration = 0; iteration < 200; ++iteration) {
+    double sum = 0, sum2 = 0;
+    size_t count = 0;
+    for (float x : v)
+      if (x < peak) {  // NaN compares false: left out
+        sum += x;
+        sum2 += static_cast<double>(x) * x;
+        ++count;
+      }
+    if (count < 2) break;
+    mean = sum / count;
+    sd = std::sqrt(std::max(0.0, sum2 / count - mean * mean));
+    const double next = mean + 6 * sd;
+    const bool converged = std::abs(next - peak) < 1;
+    peak = next;
+    if (converged) break;
+  }
+  return {peak, mean + 3 * sd};
+}
+
+namespace {
+
+constexpr double kDeg = 57.29577951308232;
+
+// Savitzky–Golay derivative weights for a centred window of half-width h (order 2: the first
+// derivative's weights equal the least-squares line's, k/Σk²; the second derivative's are
+// 2(k² − m)/Σ(k² − m)², m = Σk²/(2h+1)).
+struct SavitzkyGolay {
+  std::vector<std::vector<double>> d1, d2;  // [h][k + h]
+  explicit SavitzkyGolay(int h_max) : d1(h_max + 1), d2(h_max + 1) {
+    for (int h = 1; h <= h_max; ++h) {
+      double s2 = 0, m = 0;
+      for (int k = -h; k <= h; ++k) s2 += double(k) * k;
+      m = s2 / (2 * h + 1);
+      double s4 = 0;
+      for (int k = -h; k <= h; ++k) s4 += (k * k - m) * (k * k - m);
+      for (int k = -h; k <= h; ++k) {
+        d1[h].push_back(k / s2);
+        d2[h].push_back(2 * (k * k - m) / s4);
+      }
+    }
+  }
+};
+
+struct Signal {
+  size_t n = 0;
+  double dt = 0;
+  std::vector<glm::dvec3> dir;
+  std::vector<bool> valid;
+  std::vector<bool> noise;  // nh: physiologically impossible velocity or acceleration (never free)
+  std::vector<size_t> run_start, run_end;  // per sample: its run of contiguous valid samples [start, end)
+};
+
+Signal prepare(const Recording& r, const GazeGeometry& g) {
+  Signal s;
+  s.n = r.samples.size();
+  s.dir.assign(s.n, glm::dvec3(0, 0, 1));
+  s.valid.assign(s.n, false);
+  s.noise.assign(s.n, false);
+  std::vector<double> intervals;
+  for (size_t i = 0; i < s.n; ++i) {
+    if (r.samples[i].valid) {
+      s.valid[i] = true;
+      s.dir[i] = g.direction(r.samples[i]);
+    }
+    // The sampling interval: the median of (at most 4096, evenly spread) intervals
+    if (i > 0 && i % (1 + s.n / 4096) == 0 && r.samples[i].t_s > r.samples[i - 1].t_s)
+      intervals.push_back(r.samples[i].t_s - r.samples[i - 1].t_s);
+  }
+  if (intervals.empty()) {
+    s.dt = 0.001;
+  } else {
+    auto mid = intervals.begin() + intervals.size() / 2;
+    std::nth_element(intervals.begin(), mid, intervals.end());
+    s.dt = *mid;
+  }
+  s.run_start.assign(s.n, 0);
+  s.run_end.assign(s.n, 0);
+  for (size_t i = 0; i < s.n;) {
+    if (!s.valid[i]) {
+      s.run_start[i] = s.run_end[i] = i;
+      ++i;
+      continue;
+    }
+    size_t j = i + 1;
+    while (j < s.n && s.valid[j] && r.samples[j].t_s - r.samples[j - 1].t_s < 1.5 * s.dt) ++j;
+    for (size_t k = i; k < j; ++k) {
+      s.run_start[k] = i;
+      s.run_end[k] = j;
+    }
+    i = j;
+  }
+  return s;
+}
+
+// Angular velocity (°/s) and acceleration (°/s²) of the directions by Savitzky–Golay over half-width
+// h; the velocity's window shrinks near the edges of a valid run (a run's first and last sample:
+// the one-sided difference; one-sample runs: NaN), the acceleration is NaN there.
+void savitzky_golay(const Signal& s, int h, std::vector<float>& velocity, std::vector<float>* acceleration) {
+  const SavitzkyGolay sg(h);
+  velocity.assign(s.n, NAN);
+  if (acceleration) acceleration->assign(s.n, NAN);
+  for (size_t i = 0; i < s.n; ++i) {
+    if (!s.valid[i]) continue;
+    const int hi = static_cast<int>(std::min<size_t>({static_cast<size_t>(h), i - s.run_start[i], s.run_end[i] - 1 - i}));
+    if (hi < 1) {
+      // A run's first or last sample: the one-sided difference
+      if (s.run_end[i] - s.run_start[i] < 2) continue;
+      const size_t j = i == s.run_start[i] ? i + 1 : i - 1;
+      velocity[i] = static_cast<float>(kDeg * glm::length(s.dir[j] - s.dir[i]) / s.dt);
+      continue;
+    }
+    const glm::dvec3* d = &s.dir[i - hi];
+    const double* w1 = sg.d1[hi].data();
+    glm::dvec3 v(0);
+    for (int k = 0; k <= 2 * hi; ++k) v += w1[k] * d[k];
+    velocity[i] = static_cast<float>(kDeg * glm::length(v) / s.dt);
+    if (acceleration && hi == h) {  // narrower windows near a run's edge: too noisy to call anything impossible
+      const double* w2 = sg.d2[hi].data();
+      glm::dvec3 a(0);
+      for (int k = 0; k <= 2 * hi; ++k) a += w2[k] * d[k];
+      (*acceleration)[i] = static_cast<float>(kDeg * glm::length(a) / (s.dt * s.dt));
+    }
+  }
+}
+
+int half_width(double window_s, double dt) { return std::max(1, static_cast<int>(std::lround(0.5 * window_s / dt))); }
+
+// Lost runs → blinks (or undefined, when too long), widened over the lid's artefacts: `artefact(i)`
+// says whether a valid sample next to a loss still belongs to it.
+template <typename Artefact>
+void label_blinks(const Recording& r, const Signal& s, const EventParams& p, Artefact&& artefact, std::vector<EventLabel>& out) {
+  const size_t flank = static_cast<size_t>(std::lround(p.blink_flank_s / s.dt));
+  for (size_t i = 0; i < s.n;) {
+    if (s.valid[i]) {
+      ++i;
+      continue;
+    }
+    size_t j = i;
+    while (j < s.n && !s.valid[j]) ++j;
+    const double from = i > 0 ? r.samples[i - 1].t_s : r.samples[i].t_s, to = j < s.n ? r.samples[j].t_s : r.samples[j - 1].t_s;
+    const bool blink = to - from <= p.max_blink_s + 1e-6;
+    const EventLabel label = blink ? EventLabel::blink : EventLabel::undefined;
+    for (size_t k = i; k < j; ++k) out[k] = label;
+    if (blink) {
+      for (size_t k = i, steps = 0; k > 0 && steps < flank && s.valid[k - 1] && artefact(k - 1); --k, ++steps) out[k - 1] = label;
+      for (size_t k = j, steps = 0; k < s.n && steps < flank && s.valid[k] && artefact(k); ++k, ++steps) out[k] = label;
+    }
+    i = j;
+  }
+}
+
+// Whether a pupil is far from the recording's median (the lid covering it); false without pupils.
+struct PupilTest {
+  double median = NAN, deviation = 0;
+  PupilTest(const Recording& r, double deviation_) : deviation(deviation_) {
+    std::vector<float> p;
+    for (const GazeSample& s : r.samples)
+      if (s.valid && std::isfinite(s.pupil)) p.push_back(s.pupil);
+    if (p.empty()) return;
+    auto mid = p.begin() + p.size() / 2;
+    std::nth_element(p.begin(), mid, p.end());
+    median = *mid;
+  }
+  bool operator()(const GazeSample& s) const {
+    return std::isfinite(median) && median > 0 && std::isfinite(s.pupil) && std::abs(s.pupil - median) > deviation * median;
+  }
+};
+
+bool free_sample(const std::vector<EventLabel>& labels, const Signal& s, size_t i) {
+  return s.valid[i] && !s.noise[i] && labels[i] == EventLabel::undefined;
+}
+
+// Nyström & Holmqvist 2010: saccades and PSOs into `labels` (blinks already there).
+void label_saccades_nh(const Signal& s, const EventParams& p, const std::vector<float>& v, double peak, double onset,
+                       std::vector<EventLabel>& labels) {
+  const size_t n = s.n;
+  const size_t pso_window = static_cast<size_t>(std::lround(p.pso_window_s / s.dt));
+  const size_t noise_window = static_cast<size_t>(std::max(1L, std::lround(p.local_noise_s / s.dt)));
+  const double min_saccade = p.min_saccade_s - 1e-6;
+  auto usable = [&](size_t i) { return free_sample(labels, s, i) && std::isfinite(v[i]); };
+  for (size_t i = 0; i < n; ++i) {
+    if (!usable(i) || !(v[i] > peak)) continue;
+    // A peak: samples above the peak threshold from i
+    size_t p1 = i;
+    while (p1 + 1 < n && usable(p1 + 1) && v[p1 + 1] > peak) ++p1;
+    // Onset: back to the first sample below the onset threshold (the threshold crossing; waiting
+    // for the local minimum as well starts saccades 2 ms early on the IRF data)
+    size_t a = i;
+    while (a > 0 && usable(a - 1) && v[a] >= onset) --a;
+    // Offset threshold from the local noise before the onset
+    double sum = 0, sum2 = 0;
+    size_t count = 0;
+    for (size_t k = a, steps = 0; k > 0 && steps < noise_window && usable(k - 1); --k, ++steps) {
+      sum += v[k - 1];
+      sum2 += double(v[k - 1]) * v[k - 1];
+      ++count;
+    }
+    double offset = onset;
+    if (count >= 2) {
+      const double mean = sum / count, sd = std::sqrt(std::max(0.0, sum2 / count - mean * mean));
+      offset = 0.7 * onset + 0.3 * (mean + 3 * sd);
+    }
+    // Offset: forward to the first sample below the offset threshold, or to the first velocity
+    // trough below the peak threshold, whichever comes first: the oscillation after the trough
+    // is the PSO, not the saccade
+    size_t b = p1;
+    while (b + 1 < n && usable(b + 1) && v[b] >= offset && !(v[b] < peak && v[b + 1] > v[b])) ++b;
+    const double duration = (b - a + 1) * s.dt;
+    if (duration < min_saccade) {
+      i = b;
+      continue;
+    }
+    for (size_t k = a; k <= b; ++k) labels[k] = EventLabel::saccade;
+    // PSO: velocity above the offset threshold again within the window after the offset
+    size_t last_peak = b;
+    for (size_t k = b + 1; k < n && k <= b + pso_window && usable(k); ++k)
+      if (v[k] > offset) last_peak = k;
+    if (last_peak > b) {
+      size_t e = last_peak;
+      while (e + 1 < n && usable(e + 1) && (v[e] >= offset || v[e + 1] < v[e])) ++e;
+      for (size_t k = b + 1; k <= e; ++k) labels[k] = EventLabel::pso;
+      b = e;
+    }
+    i = b;
+  }
+}
+
+// The velocity of a least-squares line over half-width h (= the Savitzky–Golay first derivative)
+// by running sums: O(1) per sample whatever the window, recomputed exactly every 512 samples so
+// that rounding cannot build up; near a run's edges, narrower windows as in savitzky_golay.
+void line_velocity(const Signal& s, int h, std::vector<float>& velocity) {
+  velocity.assign(s.n, NAN);
+  double s2 = 0;
+  for (int k = -h; k <= h; ++k) s2 += double(k) * k;
+  const double scale = kDeg / (s2 * s.dt);
+  const size_t hh = static_cast<size_t>(h);
+  for (size_t start = 0; start < s.n;) {
+    if (!s.valid[start]) {
+      ++start;
+      continue;
+    }
+    const size_t end = s.run_end[start];
+    std::vector<float> narrow;
+    if (end - start > 2 * hh) {
+      // Centres i in [start + h, end − h): full windows
+      glm::dvec3 a(0), b(0);
+      size_t since = 512;
+      for (size_t i = start + hh; i + hh < end; ++i) {
+        if (since >= 512) {
+          a = b = glm::dvec3(0);
+          for (int k = -h; k <= h; ++k) {
+            a += s.dir[i + k];
+            b += double(k) * s.dir[i + k];
+          }
+          since = 0;
+        }
+        velocity[i] = static_cast<float>(scale * glm::length(b));
+        if (i + hh + 1 < end) {  // slide to i + 1
+          b += -a + double(h + 1) * s.dir[i - hh] + double(h) * s.dir[i + hh + 1];
+          a += s.dir[i + hh + 1] - s.dir[i - hh];
+          ++since;
+        }
+      }
+    }
+    // The edges: the largest centred window that fits
+    const SavitzkyGolay sg(h);
+    for (size_t i = start; i < end; ++i) {
+      const size_t hi = std::min<size_t>({hh, i - start, end - 1 - i});
+      if (hi == hh) continue;
+      if (hi < 1) {  // a run's first or last sample: the one-sided difference
+        if (end - start >= 2)
+          velocity[i] = static_cast<float>(kDeg * glm::length(s.dir[i == start ? i + 1 : i - 1] - s.dir[i]) / s.dt);
+        continue;
+      }
+      glm::dvec3 v(0);
+      for (size_t k = 0; k <= 2 * hi; ++k) v += sg.d1[hi][k] * s.dir[i - hi + k];
+      velocity[i] = static_cast<float>(kDeg * glm::length(v) / s.dt);
+    }
+    start = end;
+  }
+}
+
+// Pursuit in the intersaccadic runs (nhp): a least-squares line's velocity over a longer window.
+void label_pursuit(const Signal& s, const EventParams& p, std::vector<EventLabel>& labels) {
+  std::vector<float> slow;
+  line_velocity(s, half_width(p.pursuit_window_s, s.dt), slow);
+  const double min_pursuit = p.min_pursuit_s - 1e-6;
+  for (size_t i = 0; i < s.n;) {
+    if (!(free_sample(labels, s, i) && slow[i] > p.pursuit_velocity_deg_s)) {
+      ++i;
+      continue;
+    }
+    size_t j = i;
+    while (j < s.n && free_sample(labels, s, j) && slow[j] > p.pursuit_velocity_deg_s) ++j;
+    const double duration = (j - i) * s.dt;
+    const double travelled = kDeg * std::atan2(glm::length(glm::cross(s.dir[i], s.dir[j - 1])), glm::dot(s.dir[i], s.dir[j - 1]));
+    if (duration >= min_pursuit && travelled >= 0.5 * p.pursuit_velocity_deg_s * duration)
+      for (size_t k = i; k < j; ++k) labels[k] = EventLabel::pursuit;
+    i = j;
+  }
+}
+
+// The free valid runs left become fixations (those shorter than `min_s` stay undefined).
+void label_fixations(const Signal& s, double min_s, std::vector<EventLabel>& labels) {
+  for (size_t i = 0; i < s.n;) {
+    if (!free_sample(labels, s, i)) {
+      ++i;
+      continue;
+    }
+    size_t j = i;
+    while (j < s.n && free_sample(labels, s, j)) ++j;
+    if ((j - i) * s.dt >= min_s - 1e-6)
+      for (size_t k = i; k < j; ++k) labels[k] = EventLabel::fixation;
+    i = j;
+  }
+}
+
+}  // namespace
+
+namespace {
+
+// The runs of labels as events, with amplitudes, peak velocities and positions.
+void list_events(const Recording& r, const Signal& s, EventDetection& out) {
+  const std::vector<EventLabel>& labels = out.labels;
+  const std::vector<float>& v = out.velocity_deg_s;
+  out.events.clear();
+  // Events: the runs of labels
+  for (size_t i = 0; i < s.n;) {
+    size_t j = i;
+    while (j + 1 < s.n && labels[j + 1] == labels[i]) ++j;
+    if (labels[i] != EventLabel::undefined) {
+      DetectedEvent e;
+      e.label = labels[i];
+      e.first = i;
+      e.last = j;
+      e.onset_s = r.samples[i].t_s;
+      e.duration_s = r.samples[j].t_s - r.samples[i].t_s + s.dt;
+      size_t a = i, b = j;
+      while (a <= j && !s.valid[a]) ++a;
+      while (b > a && !s.valid[b]) --b;
+      e.peak_velocity_deg_s = NAN;
+      e.amplitude_deg = NAN;
+      if (a <= j && s.valid[a] && e.label != EventLabel::blink) {
+        e.amplitude_deg = kDeg * std::atan2(glm::length(glm::cross(s.dir[a], s.dir[b])), glm::dot(s.dir[a], s.dir[b]));
+        const glm::dvec2 start = GazeGeometry::angles_deg(s.dir[a]), end = GazeGeometry::angles_deg(s.dir[b]);
+        e.start_deg = {start.x, -start.y};
+        e.end_deg = {end.x, -end.y};
+        float peak = 0;
+        for (size_t k = a; k <= b; ++k)
+          if (std::isfinite(v[k])) peak = std::max(peak, v[k]);
+        e.peak_velocity_deg_s = peak;
+      }
+      out.events.push_back(e);
+    }
+    i = j + 1;
+  }
+}
+
+}  // namespace
+
+EventDetection events_from_labels(const Recording& r, const GazeGeometry& g, std::vector<EventLabel> labels) {
+  if (labels.size() != r.samples.size()) fail("events_from_labels: {} labels for {} samples", labels.size(), r.samples.size());
+  EventDetection out;
+  const Signal s = prepare(r, g);
+  out.sampling_hz = 1 / s.dt;
+  savitzky_golay(s, half_width(EventParams{}.filter_window_s, s.dt), out.velocity_deg_s, nullptr);
+  out.labels = std::move(labels);
+  list_events(r, s, out);
+  return out;
+}
+
+EventDetection detect_events(const Recording& r, const GazeGeometry& g, EventMethod method, const EventParams& p,
+                             const FixationParams& fixation) {
+  validate(p);
+  EventDetection out;
+  out.method = method;
+  Signal s = prepare(r, g);
+  out.sampling_hz = 1 / s.dt;
+  std::vector<float> acceleration;
+  savitzky_golay(s, half_width(p.filter_window_s, s.dt), out.velocity_deg_s, &acceleration);
+  const std::vector<float>& v = out.velocity_deg_s;
+  out.labels.assign(s.n, EventLabel::undefined);
+  auto& labels = out.labels;
+  const PupilTest pupil(r, p.pupil_deviation);
+
+  switch (method) {
+    case EventMethod::ivt:
+    case EventMethod::idt: {
+      const FixationResult f = method == EventMethod::ivt ? detect_ivt(r, g, fixation) : detect_idt(r, g, fixation);
+      labels = labels_from_fixations(r, f);
+      break;
+    }
+    case EventMethod::nh:
+    case EventMethod::nhp: {
+      // Physiologically impossible samples are noise: out of the threshold's statistics
+      std::vector<float> clean = v;
+      for (size_t i = 0; i < s.n; ++i)
+        if (s.valid[i] && (v[i] > p.max_velocity_deg_s || acceleration[i] > p.max_acceleration_deg_s2)) {
+          s.noise[i] = true;
+          clean[i] = NAN;
+        }
+      const auto [peak, onset] = adaptive_velocity_thresholds(clean, p.initial_peak_deg_s);
+      out.peak_threshold_deg_s = peak;
+      out.onset_threshold_deg_s = onset;
+      // Noise next to a loss is the lid's (a blink); elsewhere it stays undefined
+      label_blinks(r, s, p, [&](size_t i) { return s.noise[i] || !(v[i] < onset) || pupil(r.samples[i]); }, labels);
+      label_saccades_nh(s, p, clean, peak, onset, labels);
+      if (method == EventMethod::nhp) label_pursuit(s, p, labels);
+      label_fixations(s, p.min_fixation_s, labels);
+      break;
+    }
+    case EventMethod::ek: {
+      // Velocities per axis (degrees) from a 5-sample window; thresholds from median estimators
+      std::vector<glm::dvec2> angle(s.n, glm::dvec2(NAN)), vel(s.n, glm::dvec2(NAN));
+      for (size_t i = 0; i < s.n; ++i)
+        if (s.valid[i]) angle[i] = GazeGeometry::angles_deg(s.dir[i]);
+      std::vector<double> vx, vy;
+      vx.reserve(s.n);
+      vy.reserve(s.n);
+      for (size_t i = 0; i < s.n; ++i) {
+        if (!s.valid[i]) continue;
+        const size_t before = i - s.run_start[i], after = s.run_end[i] - 1 - i;
+        if (before >= 2 && after >= 2)
+          vel[i] = (angle[i + 2] + angle[i + 1] - angle[i - 1] - angle[i - 2]) / (6 * s.dt);
+        else if (before >= 1 && after >= 1)
+          vel[i] = (angle[i + 1] - angle[i - 1]) / (2 * s.dt);
+        else if (after >= 1)  // a run's edge (next to a loss): one-sided
+          vel[i] = (angle[i + 1] - angle[i]) / s.dt;
+        else if (before >= 1)
+          vel[i] = (angle[i] - angle[i - 1]) / s.dt;
+        else
+          continue;
+        vx.push_back(vel[i].x);
+        vy.push_back(vel[i].y);
+      }
+      auto median = [](std::vector<double> x) {
+        if (x.empty()) return 0.0;
+        auto mid = x.begin() + x.size() / 2;
+        std::nth_element(x.begin(), mid, x.end());
+        return *mid;
+      };
+      auto sigma = [&](const std::vector<double>& x) {
+        std::vector<double> sq(x.size());
+        for (size_t i = 0; i < x.size(); ++i) sq[i] = x[i] * x[i];
+        const double m = median(x);
+        return std::sqrt(std::max(median(sq) - m * m, 1e-12));
+      };
+      const glm::dvec2 eta = p.ek_lambda * glm::dvec2(sigma(vx), sigma(vy));
+      out.peak_threshold_deg_s = out.onset_threshold_deg_s = 0.5 * (eta.x + eta.y);
+      auto outside = [&](size_t i) {
+        const glm::dvec2 q = vel[i] / eta;
+        return glm::dot(q, q) > 1;  // NaN: false
+      };
+      label_blinks(r, s, p, [&](size_t i) { return outside(i) || pupil(r.samples[i]); }, labels);
+      const size_t min_samples = std::max<size_t>(1, static_cast<size_t>(std::lround(p.ek_min_saccade_s / s.dt)));
+      for (size_t i = 0; i < s.n;) {
+        if (!(free_sample(labels, s, i) && outside(i))) {
+          ++i;
+          continue;
+        }
+        size_t j = i;
+        while (j < s.n && free_sample(labels, s, j) && outside(j)) ++j;
+        if (j - i >= min_samples)
+          for (size_t k = i; k < j; ++k) labels[k] = EventLabel::saccade;
+        i = j;
+      }
+      label_fixations(s, 0, labels);
+      break;
+    }
+  }
+
+  list_events(r, s, out);
+  return out;
+}
+
+std::string events_tsv(const EventDetection& d, const Recording& r) {
+  const double t0 = r.samples.empty() ? 0 : r.samples.front().t_s;
+  auto cell = [](double x) { return std::isfinite(x) ? fmt::format("{:.4f}", x) : std::string("n/a"); };
+  std::string out = "onset\tduration\ttrial_type\tamplitude_deg\tpeak_velocity_deg_s\tstart_x_deg\tstart_y_deg\tend_x_deg\tend_y_deg\n";
+  for (const DetectedEvent& e : d.events)
+    out += fmt::format("{:.6f}\t{:.6f}\t{}\t{}\t{}\t{}\t{}\t{}\t{}\n", e.onset_s - t0, e.duration_s, to_string(e.label), cell(e.amplitude_deg),
+                       std::isfinite(e.peak_velocity_deg_s) ? fmt::format("{:.1f}", e.peak_velocity_deg_s) : "n/a", cell(e.start_deg.x),
+                       cell(e.start_deg.y), cell(e.end_deg.x), cell(e.end_deg.y));
+  return out;
+}
+
+}  // namespace foveal

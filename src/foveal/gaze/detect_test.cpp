@@ -1,0 +1,247 @@
+// The event detectors on synthetic signals with known events: saccades with main-sequence
+// durations and minimum-jerk profiles, a post-saccadic wobble, a pursuit ramp, a blink gap,
+// 0.05° RMS noise; the adaptive thresholds on a known distribution; the BIDS table; the IRF data.
+#include "foveal/gaze/detect.h"
+#include "foveal/util/error.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <random>
+
+using namespace foveal;
+
+namespace {
+
+const Display kDisplay{53.3, 30.1, 56.5, 1920, 1080};
+
+// Degrees from the screen centre (x right, y up) → the direction the readers would give.
+glm::dvec3 direction_deg(glm::dvec2 deg) {
+  return glm::normalize(glm::dvec3(std::tan(glm::radians(deg.x)), -std::tan(glm::radians(deg.y)), 1.0));
+}
+
+struct TrueEvent {
+  EventLabel label;
+  double onset_s, duration_s, amplitude_deg;
+};
+
+// A 1000 Hz horizontal signal along y = 0 built from segments, with its true events.
+struct Synthetic {
+  std::vector<double> x;  // degrees, NaN = lost
+  std::vector<TrueEvent> truth;
+  double rate = 1000;
+  void fixation(double seconds) {
+    const double at = x.empty() ? 0 : x.back();
+    for (int i = 0, n = int(std::lround(seconds * rate)); i < n; ++i) x.push_back(at);
+  }
+  // Minimum-jerk saccade with the main sequence's duration (Carpenter 1988: 2.2 ms/° + 21 ms)
+  void saccade(double amplitude, double pso_deg = 0) {
+    const double from = x.back(), duration = (2.2 * std::abs(amplitude) + 21) / 1000;
+    truth.push_back({EventLabel::saccade, x.size() / rate, duration, std::abs(amplitude)});
+    const int n = int(std::lround(duration * rate));
+    for (int i = 1; i <= n; ++i) {
+      const double u = double(i) / n;
+      x.push_back(from + amplitude * (10 * u * u * u - 15 * u * u * u * u + 6 * u * u * u * u * u));
+    }
+    if (pso_deg > 0) {  // a damped 40 Hz wobble: the lens and iris settling
+      truth.push_back({EventLabel::pso, x.size() / rate, 0.025, 0});
+      const double to = x.back();
+      for (int i = 1; i <= 25; ++i) x.push_back(to + pso_deg * std::exp(-i / 10.0) * std::sin(2 * M_PI * 40 * i / rate));
+    }
+  }
+  void pursuit(double deg_s, double seconds) {
+    truth.push_back({EventLabel::pursuit, x.size() / rate, seconds, std::abs(deg_s) * seconds});
+    const double from = x.back();
+    for (int i = 1, n = int(std::lround(seconds * rate)); i <= n; ++i) x.push_back(from + deg_s * i / rate);
+  }
+  void blink(double seconds) {
+    truth.push_back({EventLabel::blink, x.size() / rate, seconds, 0});
+    const double at = x.back();
+    for (int i = 0, n = int(std::lround(seconds * rate)); i < n; ++i) x.push_back(NAN);
+    x.push_back(at);
+  }
+  Recording recording(double noise_deg, unsigned seed = 7) const {
+    std::mt19937 rng(seed);
+    std::normal_distribution<double> noise(0, noise_deg / std::sqrt(2.0));  // 2-D RMS = noise_deg
+    Recording r;
+    r.screen_px = {1920, 1080};
+    for (size_t i = 0; i < x.size(); ++i) {
+      GazeSample s;
+      s.t_s = 100 + i / rate;  // an arbitrary clock
+      const double nx = noise(rng), ny = noise(rng);
+      if (std::isfinite(x[i])) {
+        s.valid = true;
+        s.direction = direction_deg({x[i] + nx, ny});
+        s.px = {960, 540};
+      }
+      r.samples.push_back(s);
+    }
+    return r;
+  }
+};
+
+Synthetic standard_signal() {
+  Synthetic s;
+  s.x.push_back(-10);
+  s.fixation(0.3);
+  s.saccade(10, 0.4);
+  s.fixation(0.3);
+  s.saccade(5);
+  s.fixation(0.3);
+  s.pursuit(10, 0.5);
+  s.fixation(0.3);
+  s.blink(0.1);
+  s.fixation(0.3);
+  s.saccade(-15, 0.3);
+  s.fixation(0.3);
+  s.saccade(2);
+  s.fixation(0.3);
+  return s;
+}
+
+std::vector<const DetectedEvent*> of(const EventDetection& d, EventLabel label) {
+  std::vector<const DetectedEvent*> out;
+  for (const DetectedEvent& e : d.events)
+    if (e.label == label) out.push_back(&e);
+  return out;
+}
+
+EventDetection run(const Recording& r, EventMethod method) {
+  return detect_events(r, GazeGeometry(kDisplay, r.screen_px), method, EventParams{}, FixationParams{});
+}
+
+}  // namespace
+
+TEST(Detect, AdaptiveThresholdsOfAKnownDistribution) {
+  // Half-normal noise speeds plus a few fast samples: the iteration drops the fast ones and
+  // settles at μ + 6σ of the rest
+  std::mt19937 rng(3);
+  std::normal_distribution<float> normal(0, 1);
+  std::vector<float> v;
+  double sum = 0, sum2 = 0;
+  for (int i = 0; i < 100000; ++i) {
+    const float x = 10 + 2 * normal(rng);
+    v.push_back(x);
+    sum += x;
+    sum2 += double(x) * x;
+  }
+  for (int i = 0; i < 500; ++i) v.push_back(300 + i);  // saccades
+  v.push_back(NAN);
+  const double mean = sum / 100000, sd = std::sqrt(sum2 / 100000 - mean * mean);
+  const auto [peak, onset] = adaptive_velocity_thresholds(v, 100);
+  EXPECT_NEAR(peak, mean + 6 * sd, 0.05);
+  EXPECT_NEAR(onset, mean + 3 * sd, 0.05);
+}
+
+TEST(Detect, NystromHolmqvistFindsSaccadesPsoAndBlinksOnASyntheticSignal) {
+  const Synthetic s = standard_signal();
+  const Recording r = s.recording(0.05);
+  for (EventMethod m : {EventMethod::nh, EventMethod::nhp}) {
+    SCOPED_TRACE(to_string(m));
+    const EventDetection d = run(r, m);
+    const auto saccades = of(d, EventLabel::saccade);
+    std::vector<TrueEvent> true_saccades;
+    for (const TrueEvent& e : s.truth)
+      if (e.label == EventLabel::saccade) true_saccades.push_back(e);
+    ASSERT_EQ(saccades.size(), true_saccades.size());
+    for (size_t k = 0; k < saccades.size(); ++k) {
+      SCOPED_TRACE(k);
+      EXPECT_NEAR(saccades[k]->onset_s - 100, true_saccades[k].onset_s, 0.002);
+      // The amplitude from the saccade's first to last sample: the PSO's wobble is not in it
+      EXPECT_NEAR(saccades[k]->amplitude_deg, true_saccades[k].amplitude_deg, 0.1 + 0.05 * true_saccades[k].amplitude_deg);
+      EXPECT_GT(saccades[k]->peak_velocity_deg_s, 1.5 * true_saccades[k].amplitude_deg / true_saccades[k].duration_s);
+    }
+    // The two wobbles are PSOs, right after their saccades
+    const auto psos = of(d, EventLabel::pso);
+    ASSERT_EQ(psos.size(), 2u);
+    EXPECT_EQ(psos[0]->first, saccades[0]->last + 1);
+    EXPECT_EQ(psos[1]->first, saccades[2]->last + 1);
+    const auto blinks = of(d, EventLabel::blink);
+    ASSERT_EQ(blinks.size(), 1u);
+    EXPECT_NEAR(blinks[0]->onset_s - 100, s.truth[4].onset_s, 0.002);
+    EXPECT_NEAR(blinks[0]->duration_s, 0.1, 0.01);
+    // Pursuit only from nhp, and there as one event covering the ramp
+    const auto pursuits = of(d, EventLabel::pursuit);
+    if (m == EventMethod::nh) {
+      EXPECT_TRUE(pursuits.empty());
+    } else {
+      ASSERT_EQ(pursuits.size(), 1u);
+      EXPECT_NEAR(pursuits[0]->onset_s - 100, s.truth[3].onset_s, 0.025);
+      EXPECT_NEAR(pursuits[0]->duration_s, 0.5, 0.05);
+      EXPECT_NEAR(pursuits[0]->amplitude_deg, 5, 0.5);
+    }
+    // Fixations between them: 7 segments, of which nh joins the two around the pursuit into one
+    EXPECT_EQ(of(d, EventLabel::fixation).size(), m == EventMethod::nh ? 6u : 7u);
+  }
+}
+
+TEST(Detect, EngbertKlieglFindsTheSaccadesAndNoPso) {
+  const Synthetic s = standard_signal();
+  const EventDetection d = run(s.recording(0.05), EventMethod::ek);
+  const auto saccades = of(d, EventLabel::saccade);
+  ASSERT_EQ(saccades.size(), 4u);
+  const double truth[] = {10, 5, 15, 2};
+  for (size_t k = 0; k < 4; ++k) EXPECT_NEAR(saccades[k]->amplitude_deg, truth[k], 0.1 + 0.05 * truth[k]);
+  EXPECT_TRUE(of(d, EventLabel::pso).empty());
+  EXPECT_EQ(of(d, EventLabel::blink).size(), 1u);
+}
+
+TEST(Detect, NoiselessFixationHasNoEvents) {
+  Synthetic s;
+  s.x.push_back(3);
+  s.fixation(2);
+  const EventDetection d = run(s.recording(0.01), EventMethod::nhp);
+  ASSERT_EQ(d.events.size(), 1u);
+  EXPECT_EQ(d.events[0].label, EventLabel::fixation);
+  EXPECT_NEAR(d.events[0].duration_s, 2.001, 1e-9);
+}
+
+TEST(Detect, LongLossIsUndefinedNotABlink) {
+  Synthetic s;
+  s.x.push_back(0);
+  s.fixation(0.5);
+  s.blink(3);  // the eye left the tracker
+  s.fixation(0.5);
+  const EventDetection d = run(s.recording(0.02), EventMethod::nh);
+  EXPECT_TRUE(of(d, EventLabel::blink).empty());
+  EXPECT_EQ(of(d, EventLabel::fixation).size(), 2u);
+}
+
+TEST(Detect, EventsTableIsBidsStyle) {
+  const Synthetic s = standard_signal();
+  const Recording r = s.recording(0.05);
+  const EventDetection d = run(r, EventMethod::nhp);
+  const std::string tsv = events_tsv(d, r);
+  EXPECT_EQ(tsv.substr(0, tsv.find('\n')),
+            "onset\tduration\ttrial_type\tamplitude_deg\tpeak_velocity_deg_s\tstart_x_deg\tstart_y_deg\tend_x_deg\tend_y_deg");
+  EXPECT_EQ(size_t(std::count(tsv.begin(), tsv.end(), '\n')), d.events.size() + 1);
+  // The first event starts at the first sample and is the fixation at (−10, 0)
+  const std::string first = tsv.substr(tsv.find('\n') + 1, tsv.find('\n', tsv.find('\n') + 1) - tsv.find('\n') - 1);
+  EXPECT_EQ(first.substr(0, first.find('\t')), "0.000000");
+  EXPECT_NE(first.find("\tfixation\t"), std::string::npos);
+  EXPECT_NE(first.find("\t-10.0"), std::string::npos) << first;
+  // Blinks have no amplitude
+  EXPECT_NE(tsv.find("\tblink\tn/a\tn/a"), std::string::npos);
+}
+
+TEST(Detect, MethodNamesAndBadParameters) {
+  EXPECT_EQ(parse_event_method("auto"), kRecommendedEventMethod);
+  EXPECT_EQ(parse_event_method("ek"), EventMethod::ek);
+  try {
+    parse_event_method("hmm");
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("--events: unknown detector 'hmm'"), std::string::npos);
+  }
+  EventParams p;
+  p.pursuit_velocity_deg_s = 0;
+  EXPECT_THROW(validate(p), Error);
+}
+
+TEST(Detect, SameLabelsWhateverTheClockOffset) {
+  const Synthetic s = standard_signal();
+  Recording a = s.recording(0.05), b = a;
+  for (GazeSample& x : b.samples) x.t_s += 1e6;
+  EXPECT_EQ(run(a, EventMethod::nhp).labels, run(b, EventMethod::nhp).labels);
+}
