@@ -194,7 +194,7 @@ TEST(GazeCli, EventsAreScoredAgainstExpertLabels) {
   }
   const CliRun r = foveal_test::foveal("gaze " + rec + " --events ivt --evaluate three_labels.csv --samples-out lab.csv --json ev.json --no-scanpath");
   ASSERT_EQ(r.status, 0) << r.err;
-  EXPECT_NE(r.out.find("events    ivt against three_labels.csv"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("scores    ivt against three_labels.csv"), std::string::npos) << r.out;
   const auto j = nlohmann::json::parse(std::ifstream(scratch("ev.json")));
   EXPECT_EQ(j["events"]["classes"]["fixation"]["reference_events"], 1);
   EXPECT_EQ(j["events"]["classes"]["fixation"]["hits"], 1);
@@ -206,7 +206,11 @@ TEST(GazeCli, EventsAreScoredAgainstExpertLabels) {
   for (const auto& [args, expected] : std::vector<std::pair<std::string, std::string>>{
            {"gaze " + rec + " --evaluate three_labels.csv", "need --events"},
            {"gaze " + rec + " --events magic", "unknown detector"},
-           {"gaze " + rec + " --events ivt --evaluate missing_labels.csv", "missing_labels.csv"}}) {
+           {"gaze " + rec + " --events ivt --evaluate missing_labels.csv", "missing_labels.csv"},
+           {"gaze " + rec + " --events-out e.tsv", "need --events"},
+           {"gaze " + rec + " --events ivt --coder2 three_labels.csv", "--coder2 needs --evaluate"},
+           {"gaze " + rec + " --events file:missing_labels.csv", "missing_labels.csv"},
+           {"gaze " + rec + " --events nhp --pursuit-velocity 0", "--pursuit-velocity"}}) {
     const CliRun bad = foveal_test::foveal(args);
     EXPECT_NE(bad.status, 0) << args;
     EXPECT_EQ(lines(bad.err), 1u) << args << "\n" << bad.err;
@@ -230,4 +234,46 @@ TEST(GazeCli, IvtAgainstTheIrfExpert) {
   EXPECT_GT(c["fixation"]["kappa"].get<double>(), 0.6);
   EXPECT_GT(c["saccade"]["f1"].get<double>(), 0.5);
   EXPECT_EQ(c["pso"]["hits"], 0);
+}
+
+// The recommended detector (nhp) on IRF S2: above I-VT in every class the expert marked, PSOs
+// found, a BIDS-style events table; the expert's own labels given as another tool's score
+// perfectly, and a second coder identical to the first sets a ceiling of 1.
+TEST(GazeCli, RecommendedDetectorAgainstTheIrfExpert) {
+  const std::string path = std::string(FOVEAL_DATA_DIR) + "/eye-movements/irf/lookAtPoint_EL_S2.csv";
+  if (!std::filesystem::exists(path)) GTEST_SKIP() << "skipped: " << path << " is absent";
+  const std::string common = "gaze " + path + " --display 53.3,30.1,56.5,1920,1080 --evaluate " + path + " --no-scanpath -q";
+  ASSERT_EQ(foveal_test::foveal(common + " --events ivt --json ivt.json").status, 0);
+  const CliRun r = foveal_test::foveal(common + " --events auto --json nhp.json --events-out s2.tsv --coder2 " + path);
+  ASSERT_EQ(r.status, 0) << r.err;
+  const auto ivt = nlohmann::json::parse(std::ifstream(scratch("ivt.json")))["events"];
+  const auto nhp = nlohmann::json::parse(std::ifstream(scratch("nhp.json")))["events"];
+  EXPECT_EQ(nhp["detector"], "nhp");
+  for (const char* c : {"fixation", "saccade"}) {
+    EXPECT_GT(nhp["classes"][c]["kappa"].get<double>(), ivt["classes"][c]["kappa"].get<double>() + 0.05) << c;
+    EXPECT_GE(nhp["classes"][c]["f1"].get<double>(), ivt["classes"][c]["f1"].get<double>()) << c;
+  }
+  EXPECT_GT(nhp["classes"]["pso"]["kappa"].get<double>(), 0.5);
+  EXPECT_GT(nhp["classes"]["pso"]["f1"].get<double>(), 0.8);
+  EXPECT_EQ(nhp["counts"]["pursuit"], 0);  // a looking-at-points task
+  EXPECT_DOUBLE_EQ(nhp["ceiling"]["kappa"].get<double>(), 1.0);
+  // The table: a header and one row per event, saccade amplitudes in degrees
+  std::ifstream tsv(scratch("s2.tsv"));
+  std::string line;
+  std::getline(tsv, line);
+  EXPECT_EQ(line.rfind("onset\tduration\ttrial_type\tamplitude_deg\tpeak_velocity_deg_s\t", 0), 0u) << line;
+  int rows = 0, saccades = 0;
+  while (std::getline(tsv, line)) {
+    ++rows;
+    if (line.find("\tsaccade\t") != std::string::npos) ++saccades;
+  }
+  int events = 0;
+  for (const auto& [name, count] : nhp["counts"].items()) events += count.get<int>();
+  EXPECT_EQ(rows, events);
+  EXPECT_EQ(saccades, nhp["counts"]["saccade"].get<int>());
+  // The expert's labels as another tool's
+  ASSERT_EQ(foveal_test::foveal(common + " --events file:" + path + " --json self.json").status, 0);
+  const auto self = nlohmann::json::parse(std::ifstream(scratch("self.json")))["events"];
+  EXPECT_DOUBLE_EQ(self["kappa"].get<double>(), 1.0);
+  EXPECT_DOUBLE_EQ(self["classes"]["saccade"]["f1"].get<double>(), 1.0);
 }
