@@ -144,7 +144,8 @@ TEST(Recording, MalformedInputNamesFileLineAndReason) {
       {"", "empty.csv", "empty.csv: empty recording"},
       {"t,x,y\n0,1,2\n1,abc,3\n", "text.csv", "text.csv:3: x 'abc' is not a number"},
       {"t,x,y\n0,1,2\n1,2\n", "short.csv", "short.csv:3: 2 fields, expected 3"},
-      {"t,x,y,pupil\n0,1,2,3\n", "cols.csv", "cols.csv:1: unknown column 'pupil'"},
+      {"t,x,y,azimuth\n0,1,2,3\n", "cols.csv", "cols.csv:1: unknown column 'azimuth'"},
+      {"t,x,y,pupil\n0,1,2,-3\n", "pupil.csv", "pupil.csv:2: pupil size -3 is negative"},
       {"t,x,y\n0,1,2\n-1,2,3\n", "back.csv", "back.csv:3: time -1 is before the previous sample's 0"},
       {"START\t1\tLEFT\tSAMPLES\nSAMPLES\tGAZE\tLEFT\n1\t10.0\n", "trunc.asc", "trunc.asc:3: sample has 2 fields"},
       {"START\t1\tLEFT\tSAMPLES\nSAMPLES\tGAZE\tLEFT\n1\t10.0\tfoo\t100\n", "word.asc", "word.asc:3: gaze y 'foo' is not a number"},
@@ -179,6 +180,17 @@ TEST(Recording, RealEyeLinkMonocular) {
   EXPECT_DOUBLE_EQ(r.samples.front().t_s, 12134.094);
   EXPECT_DOUBLE_EQ(r.samples.back().t_s, 12223.216);
   EXPECT_EQ(r.eyes, "left");
+  EXPECT_FLOAT_EQ(r.samples.front().pupil, 278.0f);  // the sample line's third column
+  for (const GazeSample& s : r.samples)
+    if (!s.valid) EXPECT_TRUE(std::isnan(s.pupil) || s.pupil > 0);  // EyeLink's 0 (no pupil) is NaN, never a size
+}
+
+TEST(Recording, CsvPupilColumn) {
+  const Recording r = parse_recording("t,x,y,pupil\n0,1,2,3.5\n0.001,1,2,0\n0.002,1,2,\n", "p.csv");
+  ASSERT_EQ(r.samples.size(), 3u);
+  EXPECT_FLOAT_EQ(r.samples[0].pupil, 3.5f);
+  EXPECT_TRUE(std::isnan(r.samples[1].pupil));  // 0: no pupil seen
+  EXPECT_TRUE(std::isnan(r.samples[2].pupil));
 }
 
 TEST(Recording, RealEyeLinkBinocular) {
