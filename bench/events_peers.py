@@ -7,7 +7,7 @@ et al. 2018 matching). The peers are installed by this benchmark into their own 
 environment (never a dependency of foveal), pinned, and run with their documented defaults and a
 second setting chosen for this task (a looking-at-points task: no pursuit).
 
-    python3 bench/events_peers.py [--foveal build/foveal] [--data DIR] [--quick] [--out DIR]
+    python3 bench/events_peers.py [--foveal build/foveal] [--data DIR] [--quick] [--out DIR] [--picture PNG]
 
 Writes OUT/events_peers.json and OUT/events_peers.md (the table for BENCHMARKS.md). --quick: S1
 and S2 only. Run times are per 10^6 samples of the detection alone (no file reading), on one core.
@@ -107,6 +107,56 @@ def peer_worker(files, out_dir):
     json.dump({k: [list(x) for x in v] for k, v in timings.items()}, open(Path(out_dir) / "timings.json", "w"))
 
 
+COLOURS = {"fixation": "#4c72b0", "saccade": "#dd8452", "pso": "#c44e52", "pursuit": "#55a868", "blink": "#8c8c8c",
+           "undefined": "#ffffff"}
+
+
+def picture_worker(out_png, recording, start_s, seconds, *streams):
+    """Run inside the peers' environment (matplotlib): a stretch of signal with label bands."""
+    import matplotlib
+    matplotlib.use("agg")
+    import matplotlib.pyplot as plt
+    from matplotlib.patches import Patch
+
+    def read(path, column):
+        rows = list(csv.DictReader(open(path)))
+        return [float(r["t_s"]) for r in rows], [r[column] for r in rows]
+
+    t, x = read(recording, "x_deg")
+    _, y = read(recording, "y_deg")
+    a = next(i for i, ti in enumerate(t) if ti >= float(start_s))
+    b = next((i for i, ti in enumerate(t) if ti >= float(start_s) + float(seconds)), len(t))
+    fig, ax = plt.subplots(figsize=(10, 4.2), dpi=110)
+    ts = t[a:b]
+    ax.plot(ts, [float(v) if v else float("nan") for v in x[a:b]], color="black", lw=0.9, label="x")
+    ax.plot(ts, [float(v) if v else float("nan") for v in y[a:b]], color="0.5", lw=0.9, label="y")
+    names = []
+    low = ax.get_ylim()[0]
+    for k, stream in enumerate(streams):
+        name, path = stream.split("=", 1)
+        _, labels = read(path, "label")
+        codes = {"1": "fixation", "2": "saccade", "3": "pso", "4": "pursuit", "5": "blink", "0": "undefined"}
+        labels = [codes.get(v, v) for v in labels[a:b]]
+        band = low - (k + 1) * 1.6
+        i = 0
+        while i < len(labels):
+            j = i
+            while j < len(labels) and labels[j] == labels[i]:
+                j += 1
+            ax.fill_between([ts[i], ts[j - 1] + 0.001], band, band + 1.3, color=COLOURS[labels[i]], lw=0)
+            i = j
+        names.append((band + 0.65, name))
+    ax.set_yticks([p for p, _ in names] + [v for v in ax.get_yticks() if v >= low])
+    ax.set_yticklabels([n for _, n in names] + [f"{v:g}°" for v in ax.get_yticks()[len(names):]])
+    ax.set_ylim(low - (len(streams) + 0.3) * 1.6, None)
+    ax.set_xlabel("time (s)")
+    ax.set_title(f"{Path(recording).name}: gaze x (black) and y (grey), degrees; labels per sample")
+    ax.legend(handles=[Patch(color=c, label=l) for l, c in COLOURS.items() if l not in ("undefined", "pursuit")],
+              loc="upper right", ncol=4, fontsize=8)
+    fig.tight_layout()
+    fig.savefig(out_png)
+
+
 def ensure_venv(venv):
     python = venv / "bin" / "python"
     if not python.exists():
@@ -125,10 +175,15 @@ def main():
     ap.add_argument("--venv", default="build/bench-events-venv", help="the peers' virtual environment (created if missing)")
     ap.add_argument("--out", default="build/bench-events")
     ap.add_argument("--quick", action="store_true", help="S1 and S2 only")
+    ap.add_argument("--picture", help="also draw a stretch of S1 with the expert's, nhp's and REMoDNaV's labels (PNG)")
     ap.add_argument("--peer-worker", nargs="+", help=argparse.SUPPRESS)
+    ap.add_argument("--picture-worker", nargs="+", help=argparse.SUPPRESS)
     args = ap.parse_args()
     if args.peer_worker:
         peer_worker(args.peer_worker[1:], args.peer_worker[0])
+        return 0
+    if args.picture_worker:
+        picture_worker(*args.picture_worker)
         return 0
 
     data = Path(args.data)
@@ -201,6 +256,14 @@ def main():
     (out / "events_peers.md").write_text(table + "\n")
     print(table)
     print(f"wrote {out / 'events_peers.json'} and {out / 'events_peers.md'}")
+    if args.picture:
+        s1 = files[0]
+        nhp = labels_dir / f"{s1.stem}.nhp-samples.csv"
+        subprocess.run([args.foveal, "gaze", str(s1), "--display", DISPLAY, "--events", "nhp", "--samples-out", str(nhp), "--no-scanpath", "-q"],
+                       check=True)
+        subprocess.run([str(python), os.path.abspath(__file__), "--picture-worker", args.picture, str(s1), "4.6", "0.5",
+                        f"expert={s1}", f"nhp={nhp}", f"REMoDNaV={labels_dir / f'{s1.stem}.remodnav-nopursuit.csv'}"], check=True)
+        print(f"wrote {args.picture}")
     return 0
 
 
