@@ -1,7 +1,9 @@
 // fuzz/fuzz_recording.h — shared body of the recording fuzz targets: parse with one reader, and
-// when that succeeds, run every fixation filter and the summary over what it read.
+// when that succeeds, run every fixation filter, the summary and every event detector (with its
+// events table) over what it read.
 #pragma once
 
+#include "foveal/gaze/detect.h"
 #include "foveal/gaze/summary.h"
 #include "foveal/util/error.h"
 
@@ -19,6 +21,13 @@ inline void fuzz_recording(const uint8_t* data, size_t size, foveal::GazeFormat 
     const foveal::Display display{47.5, 30, 60, r.screen_px.x, r.screen_px.y};
     const foveal::GazeSummary s = foveal::summarize_recording(r, display, {});
     (void)foveal::format_summary(r, s);
+    const foveal::GazeGeometry geometry(display, r.screen_px);
+    for (foveal::EventMethod m : {foveal::EventMethod::ivt, foveal::EventMethod::idt, foveal::EventMethod::ek, foveal::EventMethod::nh,
+                                  foveal::EventMethod::nhp}) {
+      const foveal::EventDetection d = foveal::detect_events(r, geometry, m, {}, {});
+      if (d.labels.size() != r.samples.size()) __builtin_trap();
+      (void)foveal::events_tsv(d, r);
+    }
   } catch (const foveal::Error&) {
   }
 }

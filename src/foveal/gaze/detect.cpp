@@ -181,7 +181,13 @@ void savitzky_golay(const Signal& s, int h, std::vector<float>& velocity, std::v
   }
 }
 
-int half_width(double window_s, double dt) { return std::max(1, static_cast<int>(std::lround(0.5 * window_s / dt))); }
+// A window's half-width in samples: at least 1, at most 256 (a 40 ms window reaches that only above
+// 12.8 kHz; a clock in the wrong unit — microseconds read as seconds — must not make the weights'
+// table, O(h²), and the filter, O(h) per sample, explode).
+int half_width(double window_s, double dt) {
+  const double h = 0.5 * window_s / dt;
+  return std::isfinite(h) ? std::clamp(static_cast<int>(std::lround(std::min(h, 1e6))), 1, 256) : 1;
+}
 
 // Lost runs → blinks (or undefined, when too long), widened over the lid's artefacts: `artefact(i)`
 // says whether a valid sample next to a loss still belongs to it.
@@ -457,7 +463,8 @@ EventDetection detect_events(const Recording& r, const GazeGeometry& g, EventMet
           s.noise[i] = true;
           clean[i] = NAN;
         }
-      const auto [peak, onset] = adaptive_velocity_thresholds(clean, p.initial_peak_deg_s);
+      const std::pair<double, double> thresholds = adaptive_velocity_thresholds(clean, p.initial_peak_deg_s);
+      const double peak = thresholds.first, onset = thresholds.second;  // (clang: no structured bindings in lambdas)
       out.peak_threshold_deg_s = peak;
       out.onset_threshold_deg_s = onset;
       // Noise next to a loss is the lid's (a blink); elsewhere it stays undefined

@@ -245,3 +245,20 @@ TEST(Detect, SameLabelsWhateverTheClockOffset) {
   for (GazeSample& x : b.samples) x.t_s += 1e6;
   EXPECT_EQ(run(a, EventMethod::nhp).labels, run(b, EventMethod::nhp).labels);
 }
+
+// Sample times a thousand times too fine (a clock in µs read as ms): the windows are capped at
+// 256 samples either side instead of asking for millions (found by the recording fuzz target).
+TEST(Detect, TinySamplingIntervalsKeepTheWindowsBounded) {
+  Synthetic s;
+  s.x.push_back(0);
+  s.fixation(0.5);
+  s.saccade(8);
+  s.fixation(0.5);
+  Recording r = s.recording(0.02);
+  for (size_t i = 0; i < r.samples.size(); ++i) r.samples[i].t_s = 1e-9 * i;
+  for (EventMethod m : {EventMethod::ek, EventMethod::nh, EventMethod::nhp}) {
+    const EventDetection d = run(r, m);
+    EXPECT_EQ(d.labels.size(), r.samples.size());
+    EXPECT_NEAR(d.sampling_hz, 1e9, 1e3);
+  }
+}
