@@ -149,6 +149,7 @@ std::function<int()> add_gaze_command(CLI::App& app) {
     }
     const GazeSummary summary = summarize_recording(recording, display, params);
     std::optional<EventDetection> detection;
+    std::string detector;  // the method's name (auto resolved), or file:PATH
     double detect_ms = 0;
     std::optional<Evaluation> evaluation, ceiling;
     if (!o->events.empty()) {
@@ -161,7 +162,8 @@ std::function<int()> add_gaze_command(CLI::App& app) {
       ep.blink_flank_s = o->blink_flank_ms / 1000;
       ep.max_blink_s = o->max_blink_ms / 1000;
       const auto started = std::chrono::steady_clock::now();
-      if (o->events.rfind("file:", 0) == 0) {
+      const bool from_file = o->events.rfind("file:", 0) == 0;
+      if (from_file) {
         // Another tool's labels of these samples: listed and scored like a detector's
         const std::string path = o->events.substr(5);
         const LabelFile file = read_label_file(path);
@@ -172,6 +174,7 @@ std::function<int()> add_gaze_command(CLI::App& app) {
         detection = detect_events(recording, GazeGeometry(display, recording.screen_px), parse_event_method(o->events), ep, params);
       }
       detect_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - started).count();
+      detector = detection->method ? to_string(*detection->method) : o->events;
       const std::vector<EventLabel>& labels = detection->labels;
       if (!o->samples_out.empty()) {
         std::string text = "t_s,x,y,label\n";
@@ -213,7 +216,7 @@ std::function<int()> add_gaze_command(CLI::App& app) {
         nlohmann::json counts = nlohmann::json::object();
         for (EventLabel c : kEventClasses) counts[to_string(c)] = 0;
         for (const DetectedEvent& e : detection->events) counts[to_string(e.label)] = counts[to_string(e.label)].get<int>() + 1;
-        nlohmann::json ev = {{"detector", o->events.rfind("file:", 0) == 0 ? o->events : to_string(detection->method)}, {"detect_ms", detect_ms}, {"sampling_hz", detection->sampling_hz},
+        nlohmann::json ev = {{"detector", detector}, {"detect_ms", detect_ms}, {"sampling_hz", detection->sampling_hz},
                              {"peak_threshold_deg_s", number(detection->peak_threshold_deg_s)},
                              {"onset_threshold_deg_s", number(detection->onset_threshold_deg_s)}, {"counts", counts}};
         if (evaluation) {
@@ -252,7 +255,7 @@ std::function<int()> add_gaze_command(CLI::App& app) {
         const auto k = std::count_if(detection->events.begin(), detection->events.end(), [c](const DetectedEvent& e) { return e.label == c; });
         counts += fmt::format("{}{} {}", counts.empty() ? "" : ", ", k, to_string(c));
       }
-      fmt::print("  events    {} ({:.0f} Hz{}): {}\n", o->events.rfind("file:", 0) == 0 ? o->events : to_string(detection->method), detection->sampling_hz,
+      fmt::print("  events    {} ({:.0f} Hz{}): {}\n", detector, detection->sampling_hz,
                  std::isfinite(detection->peak_threshold_deg_s)
                      ? fmt::format(", thresholds {:.1f}/{:.1f} deg/s", detection->peak_threshold_deg_s, detection->onset_threshold_deg_s)
                      : "",
@@ -266,7 +269,7 @@ std::function<int()> add_gaze_command(CLI::App& app) {
                    to_string(c.label), c.kappa, c.f1, c.hits, c.misses, c.false_alarms, c.rto_ms, c.rtd_ms);
       }
     };
-    if (evaluation) print_scores(*evaluation, fmt::format("scores    {} against {}", o->events, o->evaluate));
+    if (evaluation) print_scores(*evaluation, fmt::format("scores    {} against {}", detector, o->evaluate));
     if (ceiling) print_scores(*ceiling, fmt::format("ceiling   {} against {}", o->coder2, o->evaluate));
     if (!o->no_scanpath) fmt::print("  wrote     {}\n", o->scanpath);
     return 0;

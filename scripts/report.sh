@@ -22,14 +22,10 @@ for arg in "$@"; do
     *) build=$arg ;;
   esac
 done
-foveal="$build/foveal"
-data="$root/../shared/data"
+source "$root/scripts/pictures.sh"
+figures_setup report "$build" ffmpeg jq
 out="$root/docs/report"
 md="$root/docs/report.md"
-work=$(mktemp -d)
-trap 'rm -rf "$work"' EXIT
-[[ -x $foveal ]] || { echo "report: $foveal not built (run scripts/setup.sh)" >&2; exit 1; }
-for tool in ffmpeg jq; do command -v $tool > /dev/null || { echo "report: $tool is needed (scripts/deps.sh installs it)" >&2; exit 1; }; done
 # The tree the report is made from (before the report itself is rewritten)
 commit=$(git -C "$root" describe --always --dirty 2>/dev/null || echo unknown)
 mkdir -p "$out"
@@ -38,7 +34,6 @@ cd "$root"
 start=$(date +%s)
 say() { echo "report: $*" >&2; }
 
-source "$root/scripts/pictures.sh"
 
 cpu=$(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2- | sed 's/^ *//' || true)
 threads=$(nproc)

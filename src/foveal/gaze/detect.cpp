@@ -2,11 +2,13 @@
 #include "foveal/gaze/detect.h"
 
 #include "foveal/util/error.h"
+#include "foveal/util/parse.h"
 
 #include <fmt/format.h>
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 
 namespace foveal {
 
@@ -28,29 +30,24 @@ EventMethod parse_event_method(const std::string& name) {
   fail("--events: unknown detector '{}' (ivt, idt, ek, nh, nhp or auto)", name);
 }
 
+// The parameters the command line sets are named by their option, the others by their field.
 void validate(const EventParams& p) {
-  auto positive = [](double v, const char* option) {
-    if (!(v > 0) || !std::isfinite(v)) fail("{}: must be a positive number, got {}", option, v);
-  };
-  auto non_negative = [](double v, const char* option) {
-    if (!(v >= 0) || !std::isfinite(v)) fail("{}: must be zero or positive, got {}", option, v);
-  };
-  non_negative(p.blink_flank_s, "--blink-flank-ms");
-  positive(p.max_blink_s, "--max-blink-ms");
-  positive(p.pupil_deviation, "--pupil-deviation");
-  positive(p.filter_window_s, "--filter-window-ms");
-  positive(p.initial_peak_deg_s, "--initial-peak");
-  positive(p.max_velocity_deg_s, "--max-velocity");
-  positive(p.max_acceleration_deg_s2, "--max-acceleration");
-  non_negative(p.min_saccade_s, "--min-saccade-ms");
-  non_negative(p.min_fixation_s, "--min-fixation-ms");
-  non_negative(p.pso_window_s, "--pso-window-ms");
-  positive(p.local_noise_s, "--local-noise-ms");
-  positive(p.ek_lambda, "--ek-lambda");
-  non_negative(p.ek_min_saccade_s, "--ek-min-saccade-ms");
-  positive(p.pursuit_window_s, "--pursuit-window-ms");
-  positive(p.pursuit_velocity_deg_s, "--pursuit-velocity");
-  non_negative(p.min_pursuit_s, "--min-pursuit-ms");
+  require_non_negative(p.blink_flank_s, "--blink-flank-ms");
+  require_positive(p.max_blink_s, "--max-blink-ms");
+  require_positive(p.pupil_deviation, "EventParams::pupil_deviation");
+  require_positive(p.filter_window_s, "--filter-window-ms");
+  require_positive(p.initial_peak_deg_s, "EventParams::initial_peak_deg_s");
+  require_positive(p.max_velocity_deg_s, "EventParams::max_velocity_deg_s");
+  require_positive(p.max_acceleration_deg_s2, "EventParams::max_acceleration_deg_s2");
+  require_non_negative(p.min_saccade_s, "EventParams::min_saccade_s");
+  require_non_negative(p.min_fixation_s, "EventParams::min_fixation_s");
+  require_non_negative(p.pso_window_s, "EventParams::pso_window_s");
+  require_positive(p.local_noise_s, "EventParams::local_noise_s");
+  require_positive(p.ek_lambda, "--ek-lambda");
+  require_non_negative(p.ek_min_saccade_s, "EventParams::ek_min_saccade_s");
+  require_positive(p.pursuit_window_s, "--pursuit-window-ms");
+  require_positive(p.pursuit_velocity_deg_s, "--pursuit-velocity");
+  require_non_negative(p.min_pursuit_s, "--min-pursuit-ms");
 }
 
 std::pair<double, double> adaptive_velocity_thresholds(const std::vector<float>& v, double initial) {
@@ -298,6 +295,7 @@ void line_velocity(const Signal& s, int h, std::vector<float>& velocity) {
   for (int k = -h; k <= h; ++k) s2 += double(k) * k;
   const double scale = kDeg / (s2 * s.dt);
   const size_t hh = static_cast<size_t>(h);
+  const SavitzkyGolay sg(h);  // the narrower windows' weights, near the runs' edges
   for (size_t start = 0; start < s.n;) {
     if (!s.valid[start]) {
       ++start;
@@ -327,7 +325,6 @@ void line_velocity(const Signal& s, int h, std::vector<float>& velocity) {
       }
     }
     // The edges: the largest centred window that fits
-    const SavitzkyGolay sg(h);
     for (size_t i = start; i < end; ++i) {
       const size_t hi = std::min<size_t>({hh, i - start, end - 1 - i});
       if (hi == hh) continue;
@@ -357,7 +354,7 @@ void label_pursuit(const Signal& s, const EventParams& p, std::vector<EventLabel
     size_t j = i;
     while (j < s.n && free_sample(labels, s, j) && slow[j] > p.pursuit_velocity_deg_s) ++j;
     const double duration = (j - i) * s.dt;
-    const double travelled = kDeg * std::atan2(glm::length(glm::cross(s.dir[i], s.dir[j - 1])), glm::dot(s.dir[i], s.dir[j - 1]));
+    const double travelled = angle_between_deg(s.dir[i], s.dir[j - 1]);
     if (duration >= min_pursuit && travelled >= 0.5 * p.pursuit_velocity_deg_s * duration)
       for (size_t k = i; k < j; ++k) labels[k] = EventLabel::pursuit;
     i = j;
@@ -385,38 +382,35 @@ namespace {
 
 // The runs of labels as events, with amplitudes, peak velocities and positions.
 void list_events(const Recording& r, const Signal& s, EventDetection& out) {
-  const std::vector<EventLabel>& labels = out.labels;
   const std::vector<float>& v = out.velocity_deg_s;
+  std::vector<double> t(s.n);
+  for (size_t i = 0; i < s.n; ++i) t[i] = r.samples[i].t_s;
   out.events.clear();
-  // Events: the runs of labels
-  for (size_t i = 0; i < s.n;) {
-    size_t j = i;
-    while (j + 1 < s.n && labels[j + 1] == labels[i]) ++j;
-    if (labels[i] != EventLabel::undefined) {
-      DetectedEvent e;
-      e.label = labels[i];
-      e.first = i;
-      e.last = j;
-      e.onset_s = r.samples[i].t_s;
-      e.duration_s = r.samples[j].t_s - r.samples[i].t_s + s.dt;
-      size_t a = i, b = j;
-      while (a <= j && !s.valid[a]) ++a;
-      while (b > a && !s.valid[b]) --b;
-      e.peak_velocity_deg_s = NAN;
-      e.amplitude_deg = NAN;
-      if (a <= j && s.valid[a] && e.label != EventLabel::blink) {
-        e.amplitude_deg = kDeg * std::atan2(glm::length(glm::cross(s.dir[a], s.dir[b])), glm::dot(s.dir[a], s.dir[b]));
-        const glm::dvec2 start = GazeGeometry::angles_deg(s.dir[a]), end = GazeGeometry::angles_deg(s.dir[b]);
-        e.start_deg = {start.x, -start.y};
-        e.end_deg = {end.x, -end.y};
-        float peak = 0;
-        for (size_t k = a; k <= b; ++k)
-          if (std::isfinite(v[k])) peak = std::max(peak, v[k]);
-        e.peak_velocity_deg_s = peak;
-      }
-      out.events.push_back(e);
+  for (const LabelledEvent& run : label_runs(out.labels, t)) {
+    if (run.label == EventLabel::undefined) continue;
+    DetectedEvent e;
+    e.label = run.label;
+    e.first = run.first;
+    e.last = run.last;
+    e.onset_s = run.onset_s;
+    e.duration_s = run.duration_s() + s.dt;
+    e.peak_velocity_deg_s = NAN;
+    e.amplitude_deg = NAN;
+    // The first and last valid sample (blinks have none that count)
+    size_t a = run.first, b = run.last;
+    while (a < b && !s.valid[a]) ++a;
+    while (b > a && !s.valid[b]) --b;
+    if (s.valid[a] && e.label != EventLabel::blink) {
+      e.amplitude_deg = angle_between_deg(s.dir[a], s.dir[b]);
+      const glm::dvec2 start = GazeGeometry::angles_deg(s.dir[a]), end = GazeGeometry::angles_deg(s.dir[b]);
+      e.start_deg = {start.x, -start.y};
+      e.end_deg = {end.x, -end.y};
+      float peak = 0;
+      for (size_t k = a; k <= b; ++k)
+        if (std::isfinite(v[k])) peak = std::max(peak, v[k]);
+      e.peak_velocity_deg_s = peak;
     }
-    i = j + 1;
+    out.events.push_back(e);
   }
 }
 
@@ -440,16 +434,20 @@ EventDetection detect_events(const Recording& r, const GazeGeometry& g, EventMet
   out.method = method;
   Signal s = prepare(r, g);
   out.sampling_hz = 1 / s.dt;
-  std::vector<float> acceleration;
-  savitzky_golay(s, half_width(p.filter_window_s, s.dt), out.velocity_deg_s, &acceleration);
+  const bool adaptive = method == EventMethod::nh || method == EventMethod::nhp;
+  std::vector<float> acceleration;  // nh, nhp: for the noise test
+  savitzky_golay(s, half_width(p.filter_window_s, s.dt), out.velocity_deg_s, adaptive ? &acceleration : nullptr);
   const std::vector<float>& v = out.velocity_deg_s;
   out.labels.assign(s.n, EventLabel::undefined);
   auto& labels = out.labels;
-  const PupilTest pupil(r, p.pupil_deviation);
+  // The blink rule's pupil test (not for ivt/idt, whose lost samples are their blinks)
+  std::optional<PupilTest> pupil;
+  if (method != EventMethod::ivt && method != EventMethod::idt) pupil.emplace(r, p.pupil_deviation);
 
   switch (method) {
     case EventMethod::ivt:
     case EventMethod::idt: {
+      // Run here, not taken from a caller's earlier run, so that a detection (and its time) is self-contained
       const FixationResult f = method == EventMethod::ivt ? detect_ivt(r, g, fixation) : detect_idt(r, g, fixation);
       labels = labels_from_fixations(r, f);
       break;
@@ -468,7 +466,7 @@ EventDetection detect_events(const Recording& r, const GazeGeometry& g, EventMet
       out.peak_threshold_deg_s = peak;
       out.onset_threshold_deg_s = onset;
       // Noise next to a loss is the lid's (a blink); elsewhere it stays undefined
-      label_blinks(r, s, p, [&](size_t i) { return s.noise[i] || !(v[i] < onset) || pupil(r.samples[i]); }, labels);
+      label_blinks(r, s, p, [&](size_t i) { return s.noise[i] || !(v[i] < onset) || (*pupil)(r.samples[i]); }, labels);
       label_saccades_nh(s, p, clean, peak, onset, labels);
       if (method == EventMethod::nhp) label_pursuit(s, p, labels);
       label_fixations(s, p.min_fixation_s, labels);
@@ -516,7 +514,7 @@ EventDetection detect_events(const Recording& r, const GazeGeometry& g, EventMet
         const glm::dvec2 q = vel[i] / eta;
         return glm::dot(q, q) > 1;  // NaN: false
       };
-      label_blinks(r, s, p, [&](size_t i) { return outside(i) || pupil(r.samples[i]); }, labels);
+      label_blinks(r, s, p, [&](size_t i) { return outside(i) || (*pupil)(r.samples[i]); }, labels);
       const size_t min_samples = std::max<size_t>(1, static_cast<size_t>(std::lround(p.ek_min_saccade_s / s.dt)));
       for (size_t i = 0; i < s.n;) {
         if (!(free_sample(labels, s, i) && outside(i))) {

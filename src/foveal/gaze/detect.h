@@ -39,6 +39,7 @@
 
 #include "foveal/gaze/events.h"
 
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -86,7 +87,7 @@ struct DetectedEvent {
 };
 
 struct EventDetection {
-  EventMethod method = EventMethod::nhp;
+  std::optional<EventMethod> method;   // none: labels from elsewhere (events_from_labels)
   std::vector<EventLabel> labels;       // per sample
   std::vector<DetectedEvent> events;    // the runs of labels, undefined runs left out
   std::vector<float> velocity_deg_s;    // per sample (NaN where the eye was lost)

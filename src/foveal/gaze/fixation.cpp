@@ -65,22 +65,16 @@ FixationMethod parse_fixation_method(const std::string& name) {
 }
 
 void validate(const FixationParams& p) {
-  auto positive = [](double v, const char* option) {
-    if (!(v > 0) || !std::isfinite(v)) fail("{}: must be a positive number, got {}", option, v);
-  };
-  auto non_negative = [](double v, const char* option) {
-    if (!(v >= 0) || !std::isfinite(v)) fail("{}: must be zero or positive, got {}", option, v);
-  };
-  positive(p.velocity_threshold_deg_s, "--ivt-threshold");
-  positive(p.velocity_window_s, "--velocity-window-ms");
-  non_negative(p.gap_fill_s, "--gap-fill-ms");
-  non_negative(p.merge_gap_s, "--merge-gap-ms");
-  non_negative(p.merge_angle_deg, "--merge-angle");
-  non_negative(p.min_fixation_s, "--min-fixation-ms");
+  require_positive(p.velocity_threshold_deg_s, "--ivt-threshold");
+  require_positive(p.velocity_window_s, "--velocity-window-ms");
+  require_non_negative(p.gap_fill_s, "--gap-fill-ms");
+  require_non_negative(p.merge_gap_s, "--merge-gap-ms");
+  require_non_negative(p.merge_angle_deg, "--merge-angle");
+  require_non_negative(p.min_fixation_s, "--min-fixation-ms");
   if (p.median_window < 1 || p.median_window > 99 || p.median_window % 2 == 0)
     fail("--median-window: must be an odd number of samples from 1 (off) to 99, got {}", p.median_window);
-  positive(p.dispersion_deg, "--idt-dispersion");
-  non_negative(p.min_duration_s, "--idt-duration-ms");
+  require_positive(p.dispersion_deg, "--idt-dispersion");
+  require_non_negative(p.min_duration_s, "--idt-duration-ms");
 }
 
 // ---------------------------------------------------------------------------------------------

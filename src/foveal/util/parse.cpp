@@ -48,6 +48,14 @@ glm::vec3 parse_vec3(const std::string& option, const std::string& text) {
   return {static_cast<float>(v[0]), static_cast<float>(v[1]), static_cast<float>(v[2])};
 }
 
+void require_positive(double v, const char* option) {
+  if (!(v > 0) || !std::isfinite(v)) fail("{}: must be a positive number, got {}", option, v);
+}
+
+void require_non_negative(double v, const char* option) {
+  if (!(v >= 0) || !std::isfinite(v)) fail("{}: must be zero or positive, got {}", option, v);
+}
+
 float parse_length_or_inf(const std::string& option, const std::string& text) {
   if (text == "inf" || text == "infinity") return std::numeric_limits<float>::infinity();
   const double v = parse_numbers(option, text, 1)[0];

@@ -16,6 +16,9 @@ glm::ivec2 parse_size(const std::string& option, const std::string& text);
 glm::dvec2 parse_vec2(const std::string& option, const std::string& text);
 // "X,Y,Z".
 glm::vec3 parse_vec3(const std::string& option, const std::string& text);
+// Checks of a parameter already parsed: a finite number > 0 / ≥ 0, else Error naming the option.
+void require_positive(double value, const char* option);
+void require_non_negative(double value, const char* option);
 // A positive length or "inf".
 float parse_length_or_inf(const std::string& option, const std::string& text);
 
