@@ -73,7 +73,8 @@ struct GazeOptions {
   std::string format = "auto", screen, eye = "average", time_unit = "s", coords = "px", origin = "top-left";
   std::string fixations_file, blinks_file;
   double min_confidence = 0.6;
-  std::string fixation = "ivt";
+  std::string fixation = to_string(kRecommendedFixationMethod);
+  double pursuit_velocity = 6, pursuit_window_ms = 40, min_pursuit_ms = 80;
   double ivt_threshold = 30, velocity_window_ms = 20, gap_fill_ms = 75, merge_gap_ms = 75, merge_angle = 0.5,
          min_fixation_ms = 60, idt_dispersion = 1.0, idt_duration_ms = 80;
   int median_window = 1;

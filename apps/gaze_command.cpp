@@ -31,9 +31,15 @@ void add_gaze_options(CLI::App& cmd, GazeOptions& o, const std::string& fixation
   cmd.add_option("--fixations", o.fixations_file, "Pupil: the tracker's fixations.csv (default: the one beside the recording)");
   cmd.add_option("--blinks", o.blinks_file, "Pupil: the tracker's blinks.csv (default: the one beside the recording)");
   cmd.add_option("--fixation", o.fixation,
-                 fixation_help.empty() ? "fixation filter: mean (the paper's per-frame mean), ivt (velocity threshold) or idt (dispersion threshold)" : fixation_help)
+                 fixation_help.empty() ? "fixation filter: ivvt (velocity threshold, smooth pursuit followed), mean (the paper's per-frame mean), "
+                                         "ivt (velocity threshold) or idt (dispersion threshold)"
+                                       : fixation_help)
       ->capture_default_str();
-  cmd.add_option("--ivt-threshold", o.ivt_threshold, "I-VT velocity threshold, deg/s")->capture_default_str();
+  cmd.add_option("--ivt-threshold", o.ivt_threshold, "I-VT, I-VVT: saccade velocity threshold, deg/s")->capture_default_str();
+  cmd.add_option("--pursuit-velocity", o.pursuit_velocity, "ivvt, --events nhp: samples slower than saccades but faster than this are pursuit candidates, deg/s")
+      ->capture_default_str();
+  cmd.add_option("--pursuit-window-ms", o.pursuit_window_ms, "ivvt, --events nhp: the pursuit velocity's least-squares window, ms")->capture_default_str();
+  cmd.add_option("--min-pursuit-ms", o.min_pursuit_ms, "ivvt, --events nhp: shortest pursuit, ms")->capture_default_str();
   cmd.add_option("--velocity-window-ms", o.velocity_window_ms, "I-VT velocity window, ms")->capture_default_str();
   cmd.add_option("--gap-fill-ms", o.gap_fill_ms, "invalid gaps up to this long are interpolated, ms")->capture_default_str();
   cmd.add_option("--merge-gap-ms", o.merge_gap_ms, "I-VT: merge fixations less than this apart in time, ms …")->capture_default_str();
@@ -89,6 +95,9 @@ FixationParams resolve_fixation_params(const GazeOptions& o) {
   p.dispersion_deg = o.idt_dispersion;
   p.min_duration_s = o.idt_duration_ms / 1000;
   p.median_window = o.median_window;
+  p.pursuit_velocity_deg_s = o.pursuit_velocity;
+  p.pursuit_window_s = o.pursuit_window_ms / 1000;
+  p.min_pursuit_s = o.min_pursuit_ms / 1000;
   validate(p);
   return p;
 }
@@ -99,7 +108,7 @@ std::function<int()> add_gaze_command(CLI::App& app) {
     std::string recording, json, samples, scanpath = "scanpath.png", display = "47.5,30,60", events, samples_out, events_out, evaluate,
         coder2;
     GazeOptions gaze;
-    double pursuit_velocity = 6, pursuit_window_ms = 40, min_pursuit_ms = 80, filter_window_ms = 6, ek_lambda = 6,
+    double filter_window_ms = 6, detection_window_ms = 20, ek_lambda = 6,
            blink_flank_ms = 100, max_blink_ms = 2000;
     bool no_scanpath = false, quiet = false;
   };
@@ -122,11 +131,10 @@ std::function<int()> add_gaze_command(CLI::App& app) {
                   "--events: score the labels against an expert's (CSV with t/t_s and label columns, e.g. the IRF recordings): "
                   "sample-level Cohen's kappa per class and overall, event F1 (Hooge et al. 2018 matching), RTO/RTD");
   cmd->add_option("--coder2", o->coder2, "--evaluate: a second coder's labels of the same samples: their agreement with the first is the ceiling");
-  cmd->add_option("--pursuit-velocity", o->pursuit_velocity, "nhp: intersaccadic samples faster than this are pursuit candidates, deg/s")
-      ->capture_default_str();
-  cmd->add_option("--pursuit-window-ms", o->pursuit_window_ms, "nhp: the pursuit velocity's least-squares window, ms")->capture_default_str();
-  cmd->add_option("--min-pursuit-ms", o->min_pursuit_ms, "nhp: shortest pursuit, ms")->capture_default_str();
   cmd->add_option("--filter-window-ms", o->filter_window_ms, "nh, nhp: Savitzky-Golay window of the velocity, ms")->capture_default_str();
+  cmd->add_option("--detection-window-ms", o->detection_window_ms,
+                  "nh, nhp: window of the smoother velocity whose peaks also start saccades (small ones in noise), ms (0: off, the paper's)")
+      ->capture_default_str();
   cmd->add_option("--ek-lambda", o->ek_lambda, "ek: threshold in median-based standard deviations of the velocity")->capture_default_str();
   cmd->add_option("--blink-flank-ms", o->blink_flank_ms, "ek, nh, nhp: a blink takes in the lid's artefacts up to this long either side of the loss, ms")
       ->capture_default_str();
@@ -154,10 +162,11 @@ std::function<int()> add_gaze_command(CLI::App& app) {
     std::optional<Evaluation> evaluation, ceiling;
     if (!o->events.empty()) {
       EventParams ep;
-      ep.pursuit_velocity_deg_s = o->pursuit_velocity;
-      ep.pursuit_window_s = o->pursuit_window_ms / 1000;
-      ep.min_pursuit_s = o->min_pursuit_ms / 1000;
+      ep.pursuit_velocity_deg_s = o->gaze.pursuit_velocity;
+      ep.pursuit_window_s = o->gaze.pursuit_window_ms / 1000;
+      ep.min_pursuit_s = o->gaze.min_pursuit_ms / 1000;
       ep.filter_window_s = o->filter_window_ms / 1000;
+      ep.detection_window_s = o->detection_window_ms / 1000;
       ep.ek_lambda = o->ek_lambda;
       ep.blink_flank_s = o->blink_flank_ms / 1000;
       ep.max_blink_s = o->max_blink_ms / 1000;
@@ -244,7 +253,8 @@ std::function<int()> add_gaze_command(CLI::App& app) {
     }
     if (o->quiet) return 0;
     fmt::print("{}", format_summary(recording, summary));
-    if (method == FixationMethod::mean) fmt::print("  (mean is a per-frame average, not a fixation detector: the scan path shows I-VT)\n");
+    if (method == FixationMethod::mean || method == FixationMethod::ivvt)
+      fmt::print("  ({} is a causal filter for the fovea: the scan path shows I-VT's fixations; --events nhp labels pursuit)\n", to_string(method));
     if (!o->json.empty()) fmt::print("  wrote     {}\n", o->json);
     if (!o->samples.empty()) fmt::print("  wrote     {}\n", o->samples);
     if (!o->samples_out.empty()) fmt::print("  wrote     {}\n", o->samples_out);

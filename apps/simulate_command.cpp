@@ -67,6 +67,7 @@ std::function<int()> add_simulate_command(CLI::App& app) {
   auto* gaze_option = cmd->add_option("--gaze", o->gaze_source,
                   "real eye movements instead of simulated saccades: a recording (EyeLink .asc, Pupil gaze_positions.csv, Tobii .tsv, t,x,y CSV; "
                   "one step per fixation, every fixation unless --steps) or a live tracker pupil://HOST:PORT[?surface=NAME] (a step per new fixation)");
+  o->gaze.fixation = "ivt";  // steps go from fixation to fixation
   add_gaze_options(*cmd, o->gaze, "--gaze: where the steps' fixations come from: ivt (velocity threshold), idt (dispersion threshold) or tracker (the recording's own fixation events)");
   cmd->add_option("--display", o->gaze_display, "--gaze: the recording's screen W_CM,H_CM,DIST_CM (angles for the fixation filter)")->capture_default_str()->needs(gaze_option);
   cmd->add_option("--stimulus", o->stimulus, "--gaze: where the render was shown on the recording's screen, X,Y,W,H in screen pixels (default: the whole screen)")->needs(gaze_option);

@@ -31,7 +31,7 @@ std::function<int()> add_view_command(CLI::App& app) {
   auto o = std::make_shared<Options>();
   o->view.eye_option = "--from";
   o->render.mode_option = false;
-  o->gaze.fixation = "ivt";
+  o->gaze.fixation = to_string(kRecommendedFixationMethod);
   add_view_options(*cmd, o->view);
   cmd->add_option("--mode", o->mode, "foveated, reference (n_max rays everywhere), side-by-side (foveated | reference | difference) or vision (the simulated eye)")
       ->capture_default_str();
@@ -40,7 +40,8 @@ std::function<int()> add_view_command(CLI::App& app) {
                   "Tobii .tsv, t,x,y CSV; played in real time) or a live tracker pupil://HOST:PORT[?surface=NAME]")
       ->capture_default_str();
   add_render_options(*cmd, o->render);
-  add_gaze_options(*cmd, o->gaze, "how raw gaze becomes the fixation the render follows: ivt (velocity threshold), idt (dispersion threshold), mean, or none (every sample)");
+  add_gaze_options(*cmd, o->gaze, "how raw gaze becomes the fixation the render follows: ivvt (velocity threshold, smooth pursuit followed), ivt (velocity threshold), "
+                   "idt (dispersion threshold), mean, or none (every sample)");
   cmd->add_option("--stimulus", o->stimulus, "recordings and trackers: where the render is on their screen, X,Y,W,H in screen pixels (default: the whole screen)");
   cmd->add_option("--speed", o->speed, "recordings: playback speed (1 = real time)")->capture_default_str();
   cmd->add_option("--eye", o->eye, "vision mode: healthy, glaucoma[:SEVERITY 0..1], myopia:-D, hyperopia:D, presbyopia:AGE, astigmatism:CYL[@AXIS]; join with '+'")

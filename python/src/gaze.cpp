@@ -188,6 +188,9 @@ void bind_gaze(nb::module_& m) {
         validate(display);
         const FixationMethod fm = parse_fixation_method(method);
         if (fm == FixationMethod::mean) fail("fixations: 'mean' is a per-frame average, not a fixation filter: use ivt or idt");
+        if (fm == FixationMethod::ivvt)
+          fail("fixations: 'ivvt' is the causal filter for the fovea (FixationTracker); for offline fixations use ivt or idt, "
+               "for pursuit the events (method nhp)");
         Recording r = recording_from(t, x, y, confidence, valid, screen, directions);
         if (block_starts && !block_starts->empty()) {
           for (size_t b : *block_starts)

@@ -43,6 +43,8 @@ void validate(const EventParams& p) {
   require_non_negative(p.min_fixation_s, "EventParams::min_fixation_s");
   require_non_negative(p.pso_window_s, "EventParams::pso_window_s");
   require_positive(p.local_noise_s, "EventParams::local_noise_s");
+  require_non_negative(p.detection_window_s, "--detection-window-ms");
+  require_non_negative(p.lid_saccade_s, "EventParams::lid_saccade_s");
   require_positive(p.ek_lambda, "--ek-lambda");
   require_non_negative(p.ek_min_saccade_s, "EventParams::ek_min_saccade_s");
   require_positive(p.pursuit_window_s, "--pursuit-window-ms");
@@ -210,6 +212,34 @@ void label_blinks(const Recording& r, const Signal& s, const EventParams& p, Art
   }
 }
 
+// A saccade or PSO that begins (ends) within the flank after (before) a blink is the lid's
+// movement: the blink takes it in, with the samples between.
+void absorb_lid_saccades(const Signal& s, const EventParams& p, std::vector<EventLabel>& labels) {
+  const size_t flank = static_cast<size_t>(std::lround(p.lid_saccade_s / s.dt));
+  auto moving = [&](size_t k) { return labels[k] == EventLabel::saccade || labels[k] == EventLabel::pso; };
+  for (size_t i = 0; i < s.n;) {
+    if (labels[i] != EventLabel::blink) {
+      ++i;
+      continue;
+    }
+    size_t j = i;
+    while (j < s.n && labels[j] == EventLabel::blink) ++j;
+    // Before: the earliest moving sample within the flank, then back to its run's start
+    size_t first = i;
+    for (size_t k = i, steps = 0; k > 0 && steps < flank && s.valid[k - 1]; --k, ++steps)
+      if (moving(k - 1)) first = k - 1;
+    while (first > 0 && first < i && moving(first - 1)) --first;
+    // After: the last moving sample within the flank, then on to its run's end
+    size_t last = j;  // one past
+    for (size_t k = j, steps = 0; k < s.n && steps < flank && s.valid[k]; ++k, ++steps)
+      if (moving(k)) last = k + 1;
+    while (last > j && last < s.n && moving(last)) ++last;
+    for (size_t k = first; k < i; ++k) labels[k] = EventLabel::blink;
+    for (size_t k = j; k < last; ++k) labels[k] = EventLabel::blink;
+    i = std::max(last, j);
+  }
+}
+
 // Whether a pupil is far from the recording's median (the lid covering it); false without pupils.
 struct PupilTest {
   double median = NAN, deviation = 0;
@@ -233,17 +263,35 @@ bool free_sample(const std::vector<EventLabel>& labels, const Signal& s, size_t 
 
 // Nyström & Holmqvist 2010: saccades and PSOs into `labels` (blinks already there).
 void label_saccades_nh(const Signal& s, const EventParams& p, const std::vector<float>& v, double peak, double onset,
-                       std::vector<EventLabel>& labels) {
+                       const std::vector<float>& coarse, double coarse_peak, std::vector<EventLabel>& labels) {
   const size_t n = s.n;
   const size_t pso_window = static_cast<size_t>(std::lround(p.pso_window_s / s.dt));
   const size_t noise_window = static_cast<size_t>(std::max(1L, std::lround(p.local_noise_s / s.dt)));
   const double min_saccade = p.min_saccade_s - 1e-6;
   auto usable = [&](size_t i) { return free_sample(labels, s, i) && std::isfinite(v[i]); };
   for (size_t i = 0; i < n; ++i) {
-    if (!usable(i) || !(v[i] > peak)) continue;
-    // A peak: samples above the peak threshold from i
+    if (!usable(i)) continue;
     size_t p1 = i;
-    while (p1 + 1 < n && usable(p1 + 1) && v[p1 + 1] > peak) ++p1;
+    if (v[i] > peak) {
+      // A peak: samples above the peak threshold from i
+      while (p1 + 1 < n && usable(p1 + 1) && v[p1 + 1] > peak) ++p1;
+    } else if (coarse[i] > coarse_peak) {
+      // A peak of the smoother velocity only (a small saccade in noise): the saccade is around the
+      // fine velocity's largest sample under it, if that is above the onset threshold
+      size_t c1 = i, m = i;
+      while (c1 + 1 < n && usable(c1 + 1) && coarse[c1 + 1] > coarse_peak) {
+        ++c1;
+        if (v[c1] > v[m]) m = c1;
+      }
+      if (!(v[m] >= onset)) {
+        i = c1;
+        continue;
+      }
+      i = p1 = m;
+      while (p1 + 1 < n && usable(p1 + 1) && v[p1 + 1] > peak) ++p1;
+    } else {
+      continue;
+    }
     // Onset: back to the first sample below the onset threshold (the threshold crossing; waiting
     // for the local minimum as well starts saccades 2 ms early on the IRF data)
     size_t a = i;
@@ -467,7 +515,19 @@ EventDetection detect_events(const Recording& r, const GazeGeometry& g, EventMet
       out.onset_threshold_deg_s = onset;
       // Noise next to a loss is the lid's (a blink); elsewhere it stays undefined
       label_blinks(r, s, p, [&](size_t i) { return s.noise[i] || !(v[i] < onset) || (*pupil)(r.samples[i]); }, labels);
-      label_saccades_nh(s, p, clean, peak, onset, labels);
+      // The smoother velocity that finds small saccades in noise (its own thresholds)
+      std::vector<float> coarse;
+      double coarse_peak = INFINITY;
+      if (p.detection_window_s > 0) {
+        line_velocity(s, half_width(p.detection_window_s, s.dt), coarse);
+        for (size_t i = 0; i < s.n; ++i)
+          if (s.noise[i]) coarse[i] = NAN;
+        coarse_peak = adaptive_velocity_thresholds(coarse, p.initial_peak_deg_s).first;
+      } else {
+        coarse.assign(s.n, NAN);
+      }
+      label_saccades_nh(s, p, clean, peak, onset, coarse, coarse_peak, labels);
+      absorb_lid_saccades(s, p, labels);
       if (method == EventMethod::nhp) label_pursuit(s, p, labels);
       label_fixations(s, p.min_fixation_s, labels);
       break;

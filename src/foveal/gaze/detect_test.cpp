@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <random>
@@ -260,5 +261,65 @@ TEST(Detect, TinySamplingIntervalsKeepTheWindowsBounded) {
     const EventDetection d = run(r, m);
     EXPECT_EQ(d.labels.size(), r.samples.size());
     EXPECT_NEAR(d.sampling_hz, 1e9, 1e3);
+  }
+}
+
+// Saccades of 0.4° in 0.05° RMS noise peak near the 6 ms velocity's peak threshold (about 34 °/s
+// against 39): the paper's detector finds a few; the smoother (20 ms) velocity's own peaks find
+// most, every one a true saccade, with the edges still from the 6 ms velocity.
+TEST(Detect, SmallSaccadesInNoiseAreFoundByTheSmootherVelocity) {
+  Synthetic s;
+  s.x.push_back(0);
+  s.fixation(0.4);
+  for (int k = 0; k < 20; ++k) {
+    s.saccade(k % 2 ? -0.4 : 0.4);
+    s.fixation(0.4);
+  }
+  const Recording r = s.recording(0.05);
+  EventParams paper_params;
+  paper_params.detection_window_s = 0;
+  const EventDetection paper = detect_events(r, GazeGeometry(kDisplay, r.screen_px), EventMethod::nh, paper_params, FixationParams{});
+  const EventDetection d = run(r, EventMethod::nh);
+  const auto saccades = of(d, EventLabel::saccade);
+  EXPECT_LE(of(paper, EventLabel::saccade).size(), 8u);
+  EXPECT_GE(saccades.size(), 10u);
+  for (const DetectedEvent* e : saccades) {
+    // Each found saccade starts inside a true one: a small minimum-jerk saccade crosses the onset
+    // threshold a few ms after it starts and falls below the offset threshold a few ms before it
+    // ends, so its measured amplitude is its central part (waiting for the velocity's local
+    // minima instead lowers the saccades' kappa on the IRF data from 0.887 to 0.862)
+    const double t = e->onset_s - 100;
+    const auto truth = std::find_if(s.truth.begin(), s.truth.end(), [&](const TrueEvent& x) {
+      return t >= x.onset_s - 0.002 && t < x.onset_s + x.duration_s;
+    });
+    ASSERT_NE(truth, s.truth.end()) << "a saccade at " << t << " s where there is none";
+    EXPECT_GT(e->amplitude_deg, 0.4 / 3) << t;
+    EXPECT_LT(e->amplitude_deg, 0.4 + 0.1) << t;
+  }
+}
+
+// A movement within 25 ms of a loss is the lid's, part of the blink; one 100 ms later is a saccade.
+TEST(Detect, LidMovementNextToALossIsPartOfTheBlink) {
+  for (double gap : {0.010, 0.100}) {
+    SCOPED_TRACE(gap);
+    Synthetic s;
+    s.x.push_back(0);
+    s.fixation(0.4);
+    s.blink(0.1);
+    s.fixation(gap);
+    s.saccade(3);
+    s.fixation(0.4);
+    const EventDetection d = run(s.recording(0.05), EventMethod::nhp);
+    const auto blinks = of(d, EventLabel::blink);
+    ASSERT_EQ(blinks.size(), 1u);
+    if (gap < 0.025) {
+      EXPECT_TRUE(of(d, EventLabel::saccade).empty());
+      // The blink runs from the loss to the movement's end
+      EXPECT_GT(blinks[0]->duration_s, 0.1 + gap + 0.015);
+    } else {
+      ASSERT_EQ(of(d, EventLabel::saccade).size(), 1u);
+      EXPECT_NEAR(of(d, EventLabel::saccade)[0]->onset_s - 100, s.truth[1].onset_s, 0.002);
+      EXPECT_NEAR(blinks[0]->duration_s, 0.1, 0.01);
+    }
   }
 }

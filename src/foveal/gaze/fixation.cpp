@@ -54,14 +54,15 @@ const char* to_string(FixationMethod m) {
     case FixationMethod::mean: return "mean";
     case FixationMethod::ivt: return "ivt";
     case FixationMethod::idt: return "idt";
+    case FixationMethod::ivvt: return "ivvt";
   }
   return "?";
 }
 
 FixationMethod parse_fixation_method(const std::string& name) {
-  for (FixationMethod m : {FixationMethod::mean, FixationMethod::ivt, FixationMethod::idt})
+  for (FixationMethod m : {FixationMethod::mean, FixationMethod::ivt, FixationMethod::idt, FixationMethod::ivvt})
     if (name == to_string(m)) return m;
-  fail("--fixation: unknown filter '{}' (expected mean, ivt or idt)", name);
+  fail("--fixation: unknown filter '{}' (expected ivvt, mean, ivt or idt)", name);
 }
 
 void validate(const FixationParams& p) {
@@ -75,6 +76,12 @@ void validate(const FixationParams& p) {
     fail("--median-window: must be an odd number of samples from 1 (off) to 99, got {}", p.median_window);
   require_positive(p.dispersion_deg, "--idt-dispersion");
   require_non_negative(p.min_duration_s, "--idt-duration-ms");
+  require_positive(p.pursuit_velocity_deg_s, "--pursuit-velocity");
+  require_positive(p.pursuit_window_s, "--pursuit-window-ms");
+  require_non_negative(p.min_pursuit_s, "--min-pursuit-ms");
+  if (!(p.pursuit_velocity_deg_s < p.velocity_threshold_deg_s))
+    fail("--pursuit-velocity: must be below the saccade threshold --ivt-threshold ({} deg/s), got {}", p.velocity_threshold_deg_s,
+         p.pursuit_velocity_deg_s);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -332,6 +339,9 @@ FixationTracker::FixationTracker(FixationMethod method, const FixationParams& pa
 void FixationTracker::reset_candidate() {
   window_.clear();
   recent_.clear();
+  line_.clear();
+  in_pursuit_ = false;
+  pursuit_start_t_ = NAN;
   candidate_sum_ = glm::dvec2(0);
   candidate_count_ = 0;
   in_fixation_ = false;
@@ -370,24 +380,22 @@ void FixationTracker::push(const GazeSample& s) {
       break;
     case FixationMethod::ivt: push_ivt(e); break;
     case FixationMethod::idt: push_idt(e); break;
+    case FixationMethod::ivvt: push_ivvt(e); break;
   }
 }
 
-void FixationTracker::push_ivt(const Entry& e) {
+std::optional<double> FixationTracker::window_velocity(const Entry& e) {
   // Velocity from the oldest sample within the window behind this one
   window_.push_back(e);
   while (window_.size() > 2 && reaches(e.t - window_[1].t, params_.velocity_window_s)) window_.pop_front();
-  if (window_.size() < 2) return;
+  if (window_.size() < 2) return std::nullopt;
   const Entry& a = window_.front();
   const double dt = e.t - a.t;
-  if (dt <= 0) return;
-  const double velocity = angle_between_deg(a.dir, e.dir) / dt;
-  if (velocity >= params_.velocity_threshold_deg_s) {  // saccade: hold the last fixation
-    candidate_sum_ = glm::dvec2(0);
-    candidate_count_ = 0;
-    in_fixation_ = false;
-    return;
-  }
+  if (dt <= 0) return std::nullopt;
+  return angle_between_deg(a.dir, e.dir) / dt;
+}
+
+void FixationTracker::add_to_fixation(const Entry& e) {
   if (candidate_count_ == 0) candidate_start_ = e.t;
   candidate_sum_ += e.px;
   ++candidate_count_;
@@ -395,6 +403,22 @@ void FixationTracker::push_ivt(const Entry& e) {
     in_fixation_ = true;
     output_ = candidate_sum_ / static_cast<double>(candidate_count_);
   }
+}
+
+void FixationTracker::end_fixation() {
+  candidate_sum_ = glm::dvec2(0);
+  candidate_count_ = 0;
+  in_fixation_ = false;
+}
+
+void FixationTracker::push_ivt(const Entry& e) {
+  const std::optional<double> velocity = window_velocity(e);
+  if (!velocity) return;
+  if (*velocity >= params_.velocity_threshold_deg_s) {  // saccade: hold the last fixation
+    end_fixation();
+    return;
+  }
+  add_to_fixation(e);
 }
 
 void FixationTracker::push_idt(const Entry& e) {
@@ -433,6 +457,65 @@ void FixationTracker::push_idt(const Entry& e) {
     candidate_count_ = window_.size();
     window_.clear();
     output_ = candidate_sum_ / static_cast<double>(candidate_count_);
+  }
+}
+
+void FixationTracker::push_ivvt(const Entry& e) {
+  // The pursuit window: a least-squares line through the angles (and the pixels) over time
+  line_.push_back(e);
+  while (line_.size() > 2 && !within(e.t - line_.front().t, params_.pursuit_window_s)) line_.pop_front();
+  const std::optional<double> velocity = window_velocity(e);
+  if (!velocity) return;
+  if (*velocity >= params_.velocity_threshold_deg_s) {  // saccade: hold the last fixation or pursuit position
+    end_fixation();
+    in_pursuit_ = false;
+    pursuit_start_t_ = NAN;
+    return;
+  }
+  double st = 0, stt = 0;
+  glm::dvec2 sa(0), sta(0), sp(0), stp(0);
+  const double t0 = line_.front().t;
+  for (const Entry& x : line_) {
+    const double t = x.t - t0;
+    st += t;
+    stt += t * t;
+    sa += x.angles;
+    sta += t * x.angles;
+    sp += x.px;
+    stp += t * x.px;
+  }
+  const double n = static_cast<double>(line_.size()), denom = n * stt - st * st;
+  // The slope only once the window is (nearly: irregular clocks) full; a few samples' slope is noise
+  const bool full = line_.size() >= 3 && reaches(e.t - t0, 0.75 * params_.pursuit_window_s) && denom > 0;
+  const double speed = full ? glm::length((n * sta - st * sa) / denom) : 0;  // deg/s
+  if (!(speed > params_.pursuit_velocity_deg_s)) {
+    // Slow: a fixation sample; a pursuit ends here and a fixation starts anew
+    if (in_pursuit_) {
+      in_pursuit_ = false;
+      end_fixation();
+    }
+    pursuit_start_t_ = NAN;
+    add_to_fixation(e);
+    return;
+  }
+  // Pursuit-fast: not a fixation sample. The run becomes pursuit once it has lasted the minimum
+  // and covered at least half the distance its speeds imply (noise's slopes do not add up)
+  if (std::isnan(pursuit_start_t_)) {
+    pursuit_start_t_ = e.t;
+    pursuit_start_dir_ = e.dir;
+    pursuit_distance_ = 0;
+  } else {
+    pursuit_distance_ += speed * (e.t - pursuit_last_t_);
+  }
+  pursuit_last_t_ = e.t;
+  if (!in_pursuit_ && reaches(e.t - pursuit_start_t_, params_.min_pursuit_s) &&
+      angle_between_deg(pursuit_start_dir_, e.dir) >= 0.5 * pursuit_distance_) {
+    in_pursuit_ = true;
+    end_fixation();
+  }
+  if (in_pursuit_) {  // the line's position at the latest sample
+    const glm::dvec2 slope_px = (n * stp - st * sp) / denom;
+    output_ = (sp - slope_px * st) / n + slope_px * (e.t - t0);
   }
 }
 

@@ -41,9 +41,11 @@ class GazeGeometry {
 // Angle between two unit directions, degrees (exact also for tiny angles).
 double angle_between_deg(glm::dvec3 a, glm::dvec3 b);
 
-enum class FixationMethod { mean, ivt, idt };
+enum class FixationMethod { mean, ivt, idt, ivvt };
 const char* to_string(FixationMethod method);
 FixationMethod parse_fixation_method(const std::string& name);  // throws Error
+// The causal filter foveal recommends for the fovea (replay, view, the live path).
+inline constexpr FixationMethod kRecommendedFixationMethod = FixationMethod::ivvt;
 
 // Filter parameters. I-VT defaults are Tobii Pro's I-VT (fixation) filter (Olsen 2012) without
 // its optional noise reduction; I-DT follows Salvucci & Goldberg (2000), with a 1° dispersion and
@@ -58,6 +60,9 @@ struct FixationParams {
   int median_window = 1;                 // both: moving median over this many samples (odd; 1 = off)
   double dispersion_deg = 1.0;           // I-DT: (max−min) x + (max−min) y of a fixation, degrees
   double min_duration_s = 0.080;         // I-DT: minimum fixation duration (Pupil Labs' default)
+  double pursuit_velocity_deg_s = 6;     // I-VVT: slower than the saccade threshold but faster than this: pursuit …
+  double pursuit_window_s = 0.040;       // … by the slope of a least-squares line over this window …
+  double min_pursuit_s = 0.080;          // … for at least this long
 };
 // Check parameters; throws Error naming the option.
 void validate(const FixationParams& params);
@@ -97,8 +102,15 @@ std::vector<bool> fixation_mask(const FixationResult& result);
 //   ivt:  the running mean of the current fixation once its samples have stayed below the velocity
 //         threshold for the minimum fixation time;
 //   idt:  the centroid of the current window once it has stayed within the dispersion limit for
-//         the minimum duration.
-// Between fixations (saccades, gaps) the last fixation is held.
+//         the minimum duration;
+//   ivvt: I-VVT (Komogortsev & Karpov 2013, "Automated classification and scoring of smooth
+//         pursuit eye movements in the presence of fixations and saccades", BRM 45:203–215):
+//         I-VT's saccades and fixations, and between the two velocity thresholds smooth pursuit —
+//         the slope of a least-squares line over the last pursuit window above the pursuit
+//         velocity for the minimum pursuit time, having covered at least half the distance that
+//         speed implies (the offline nhp's test, made causal). In pursuit the output follows the
+//         eye: the line's position at the latest sample.
+// Between fixations (saccades, gaps) the last fixation (or pursuit position) is held.
 class FixationTracker {
  public:
   FixationTracker(FixationMethod method, const FixationParams& params, const GazeGeometry& geometry);
@@ -108,6 +120,8 @@ class FixationTracker {
   std::optional<glm::dvec2> frame_gaze();
   // Whether the latest sample belongs to an established fixation (mean: whether it was valid).
   bool in_fixation() const { return in_fixation_; }
+  // ivvt: whether the latest sample belongs to an established smooth pursuit.
+  bool in_pursuit() const { return in_pursuit_; }
   // The last output without consuming the frame's samples.
   std::optional<glm::dvec2> current() const { return output_; }
 
@@ -119,8 +133,12 @@ class FixationTracker {
     glm::dvec2 angles;
   };
   void reset_candidate();
+  std::optional<double> window_velocity(const Entry& e);  // I-VT's velocity, once the window has two samples
+  void add_to_fixation(const Entry& e);
+  void end_fixation();
   void push_ivt(const Entry& e);
   void push_idt(const Entry& e);
+  void push_ivvt(const Entry& e);
 
   FixationMethod method_;
   FixationParams params_;
@@ -138,6 +156,13 @@ class FixationTracker {
   size_t candidate_count_ = 0;
   double candidate_start_ = 0;
   glm::dvec2 lo_{0}, hi_{0};  // idt: angular bounds of an established fixation
+  // ivvt
+  std::deque<Entry> line_;    // the pursuit window's samples
+  bool in_pursuit_ = false;
+  double pursuit_start_t_ = NAN;  // the current run of pursuit-fast samples: its start …
+  glm::dvec3 pursuit_start_dir_{0};
+  double pursuit_distance_ = 0;    // … and the sum of its speeds × intervals (the distance implied)
+  double pursuit_last_t_ = NAN;
 };
 
 // Where the render sits on the recording's screen: a rectangle (default: the whole screen, the

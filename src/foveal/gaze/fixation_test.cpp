@@ -8,6 +8,7 @@
 
 #include <cmath>
 #include <filesystem>
+#include <random>
 
 using namespace foveal;
 
@@ -155,7 +156,7 @@ TEST(Fixation, AgreementAndKappaAtKnownValues) {
 TEST(Fixation, CausalTrackerHoldsTheLastFixation) {
   const GazeGeometry g(kDisplay, {1680, 1050});
   const Recording r = synthetic({{300, 300}, {1300, 800}}, {0.300, 0.300}, nullptr);
-  for (FixationMethod m : {FixationMethod::ivt, FixationMethod::idt}) {
+  for (FixationMethod m : {FixationMethod::ivt, FixationMethod::idt, FixationMethod::ivvt}) {
     FixationTracker tracker(m, {}, g);
     std::optional<glm::dvec2> first_fixation;
     for (const GazeSample& s : r.samples) {
@@ -182,6 +183,72 @@ TEST(Fixation, CausalTrackerHoldsTheLastFixation) {
   EXPECT_EQ(*mean.frame_gaze(), glm::dvec2(150, 200));
   mean.push(GazeSample{0.020, {400, 400}, 1, true, {}});
   EXPECT_EQ(*mean.frame_gaze(), glm::dvec2(400, 400));
+}
+
+// 1000 Hz gaze along y = 0 with 0.05° RMS noise: a fixation at −5°, a 10 °/s pursuit for 1 s, a
+// fixation at +5°. I-VVT follows the eye through the pursuit (within 0.3° once established, 120 ms
+// after it starts); I-VT holds a running mean that lags degrees behind.
+TEST(Fixation, IvvtFollowsSmoothPursuit) {
+  const GazeGeometry g(kDisplay, {1680, 1050});
+  std::mt19937 rng(5);
+  std::normal_distribution<double> noise(0, 0.05 / std::sqrt(2.0));
+  auto at = [](double t) { return t < 0.5 ? -5.0 : t < 1.5 ? -5.0 + 10 * (t - 0.5) : 5.0; };
+  // Degrees → screen pixels through the display's geometry (x right, y down)
+  auto px = [&](glm::dvec2 deg) {
+    const glm::dvec2 cm = glm::tan(glm::radians(deg)) * kDisplay.distance_cm;
+    return glm::dvec2(840, 525) + cm / glm::dvec2(kDisplay.width_cm / 1680, kDisplay.height_cm / 1050);
+  };
+  auto deg_x = [&](glm::dvec2 p) { return GazeGeometry::angles_deg(g.direction(p)).x; };
+  FixationTracker ivvt(FixationMethod::ivvt, {}, g), ivt(FixationMethod::ivt, {}, g);
+  double worst_ivvt = 0, worst_ivt_lag = 0;
+  int pursuit_samples = 0, pursuit_outside = 0;
+  for (int i = 0; i < 2000; ++i) {
+    const double t = i / 1000.0;
+    GazeSample s;
+    s.t_s = t;
+    s.valid = true;
+    s.px = px({at(t) + noise(rng), noise(rng)});
+    ivvt.push(s);
+    ivt.push(s);
+    const bool in_pursuit = t >= 0.5 && t < 1.5;
+    pursuit_samples += ivvt.in_pursuit();
+    pursuit_outside += ivvt.in_pursuit() && !(t >= 0.5 && t < 1.56);
+    if (in_pursuit && t >= 0.62) {
+      ASSERT_TRUE(ivvt.in_pursuit()) << t;
+      worst_ivvt = std::max(worst_ivvt, std::abs(deg_x(*ivvt.current()) - at(t)));
+      worst_ivt_lag = std::max(worst_ivt_lag, std::abs(deg_x(*ivt.current()) - at(t)));
+    }
+  }
+  EXPECT_LT(worst_ivvt, 0.3);
+  EXPECT_GT(worst_ivt_lag, 3.0);
+  EXPECT_GT(pursuit_samples, 850);
+  EXPECT_EQ(pursuit_outside, 0);
+  // After the pursuit I-VVT settles on the last fixation; to I-VT (no saccade) it was all one
+  // fixation, whose mean is far from where the eye ended
+  EXPECT_NEAR(deg_x(*ivvt.frame_gaze()), 5, 0.1);
+  EXPECT_GT(std::abs(deg_x(*ivt.frame_gaze()) - 5), 3.0);
+}
+
+// On a noisy fixation I-VVT never calls pursuit and gives I-VT's output.
+TEST(Fixation, IvvtIsIvtWithoutPursuit) {
+  const GazeGeometry g(kDisplay, {1680, 1050});
+  std::mt19937 rng(9);
+  std::normal_distribution<double> noise(0, 1.5);  // pixels: about 0.05° RMS
+  FixationTracker ivvt(FixationMethod::ivvt, {}, g), ivt(FixationMethod::ivt, {}, g);
+  for (int i = 0; i < 3000; ++i) {
+    GazeSample s;
+    s.t_s = i / 1000.0;
+    s.valid = true;
+    s.px = glm::dvec2(700 + noise(rng), 400 + noise(rng));
+    ivvt.push(s);
+    ivt.push(s);
+    ASSERT_FALSE(ivvt.in_pursuit()) << s.t_s;
+    ASSERT_EQ(ivvt.current().has_value(), ivt.current().has_value());
+    if (ivt.current()) ASSERT_EQ(*ivvt.current(), *ivt.current());
+  }
+  FixationParams p;
+  p.pursuit_velocity_deg_s = 40;  // above the saccade threshold
+  EXPECT_THROW(FixationTracker(FixationMethod::ivvt, p, g), Error);
 }
 
 TEST(Fixation, ScreenMapping) {
@@ -257,4 +324,42 @@ TEST(Fixation, ShiftingTheClockChangesNoLabel) {
     const std::vector<bool> ca = causal_fixation_mask(r, m, {}, g), cb = causal_fixation_mask(shifted, m, {}, g);
     EXPECT_TRUE(ca == cb) << to_string(m) << " (causal)";
   }
+}
+
+// Screen-based recordings of fixation tasks (EyeLink's, IRF's looking at points): I-VVT finds
+// (almost) no pursuit in them, so the fovea is I-VT's (to within the slow samples I-VVT leaves out
+// of a fixation's mean).
+TEST(Fixation, IvvtFindsNoPursuitInFixationTasks) {
+  const std::string data = std::string(FOVEAL_DATA_DIR);
+  const std::vector<std::pair<std::string, Display>> cases = {{data + "/gaze/eyelink/monoRemote500.asc", {47.5, 30, 60, 0, 0}},
+                                                              {data + "/gaze/eyelink/bino1000.asc", {47.5, 30, 60, 0, 0}},
+                                                              {data + "/eye-movements/irf/lookAtPoint_EL_S2.csv", {53.3, 30.1, 56.5, 1920, 1080}},
+                                                              {data + "/eye-movements/irf/lookAtPoint_EL_S5.csv", {53.3, 30.1, 56.5, 1920, 1080}}};
+  bool any = false;
+  for (const auto& [path, display] : cases) {
+    if (!std::filesystem::exists(path)) continue;
+    any = true;
+    ReadOptions read;
+    if (display.res_x) read.screen_px = {display.res_x, display.res_y};
+    read.display_width_cm = display.width_cm;
+    read.display_height_cm = display.height_cm;
+    read.display_distance_cm = display.distance_cm;
+    const Recording r = read_recording(path, read);
+    const GazeGeometry g(display, r.screen_px);
+    FixationTracker ivvt(FixationMethod::ivvt, {}, g), ivt(FixationMethod::ivt, {}, g);
+    size_t valid = 0, pursuit = 0, same = 0;
+    for (const GazeSample& s : r.samples) {
+      ivvt.push(s);
+      ivt.push(s);
+      if (!s.valid) continue;
+      ++valid;
+      pursuit += ivvt.in_pursuit();
+      same += ivvt.current() && ivt.current() && angle_between_deg(g.direction(*ivvt.current()), g.direction(*ivt.current())) < 0.1;
+    }
+    std::printf("%s: %.2f %% of valid samples pursuit, %.2f %% with the fovea within 0.1 deg of I-VT's\n", path.c_str(), 100.0 * pursuit / valid,
+                100.0 * same / valid);
+    EXPECT_LT(pursuit, valid / 200) << path;
+    EXPECT_GT(same, valid * 9 / 10) << path;
+  }
+  if (!any) GTEST_SKIP() << "skipped: no recordings under " << data;
 }

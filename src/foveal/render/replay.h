@@ -22,7 +22,7 @@ struct ReplaySettings {
   int frames = 0;              // 0: to the end of the recording (live: 10 s)
   double start_s = 0;          // recordings: seconds after the first sample
   double duration_s = 0;       // 0: everything from the start
-  FixationMethod method = FixationMethod::ivt;
+  FixationMethod method = kRecommendedFixationMethod;
   FixationParams fixation;
   std::string stimulus;        // where the render sits on the screen, "X,Y,W,H" (empty: the whole screen)
   double live_timeout_s = 5;   // live: stop when the tracker stays silent this long

@@ -48,7 +48,7 @@ struct GazeInput {
   std::optional<glm::dvec2> fixed_px;   // no source: this render position (unset: the image centre)
   ScreenMapping mapping;                // source screen → render pixels
   Display display;                      // the source screen's physical size (angles for the filter)
-  std::optional<FixationMethod> filter = FixationMethod::ivt;  // unset: every raw sample is the gaze
+  std::optional<FixationMethod> filter = kRecommendedFixationMethod;  // unset: every raw sample is the gaze
   FixationParams fixation;
 };
 
