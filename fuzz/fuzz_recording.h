@@ -1,5 +1,5 @@
 // fuzz/fuzz_recording.h — shared body of the recording fuzz targets: parse with one reader, and
-// when that succeeds, run every fixation filter, the summary and every event detector (with its
+// when that succeeds, run every fixation filter (offline and causal), the summary and every event detector (with its
 // events table) over what it read.
 #pragma once
 
@@ -7,6 +7,7 @@
 #include "foveal/gaze/summary.h"
 #include "foveal/util/error.h"
 
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <string>
@@ -22,6 +23,14 @@ inline void fuzz_recording(const uint8_t* data, size_t size, foveal::GazeFormat 
     const foveal::GazeSummary s = foveal::summarize_recording(r, display, {});
     (void)foveal::format_summary(r, s);
     const foveal::GazeGeometry geometry(display, r.screen_px);
+    for (foveal::FixationMethod m : {foveal::FixationMethod::mean, foveal::FixationMethod::ivt, foveal::FixationMethod::idt,
+                                     foveal::FixationMethod::ivvt}) {  // the causal filters, as replay and the viewer run them
+      foveal::FixationTracker tracker(m, {}, geometry);
+      for (const foveal::GazeSample& sample : r.samples) {
+        tracker.push(sample);
+        if (const auto g = tracker.current(); g && !(std::isfinite(g->x) && std::isfinite(g->y))) __builtin_trap();
+      }
+    }
     for (foveal::EventMethod m : {foveal::EventMethod::ivt, foveal::EventMethod::idt, foveal::EventMethod::ek, foveal::EventMethod::nh,
                                   foveal::EventMethod::nhp}) {
       const foveal::EventDetection d = foveal::detect_events(r, geometry, m, {}, {});

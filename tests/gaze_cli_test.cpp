@@ -8,6 +8,7 @@
 #include <nlohmann/json.hpp>
 
 #include <fstream>
+#include <map>
 
 using namespace foveal_test;
 namespace fs = std::filesystem;
@@ -94,6 +95,38 @@ TEST(GazeCli, ReplayFollowsTheRecording) {
   const auto j = nlohmann::json::parse(std::ifstream(scratch("seq.json")));
   EXPECT_EQ(j["frames"], 10);
   EXPECT_GT(j["rays"]["ao"].get<uint64_t>(), 0u);
+}
+
+// A fixation, a 0.6 s pursuit at 200 px/s (about 19 °/s on the default display) and a fixation:
+// replay's default filter (I-VVT) moves the fovea with the eye through the pursuit, I-VT holds a
+// lagging mean.
+TEST(GazeCli, ReplayFoveaFollowsAPursuit) {
+  const fs::path path = scratch("pursuit.csv");
+  {
+    std::ofstream out(path);
+    out << "t,x,y,confidence\n";
+    for (int i = 0; i < 600; ++i) {
+      const double t = 0.002 * i, x = t < 0.3 ? 100 : t < 0.9 ? 100 + 200 * (t - 0.3) : 220;
+      out << t << "," << x + 0.3 * std::sin(i) << "," << 150 + 0.3 * std::cos(i) << ",0.9\n";
+    }
+  }
+  std::map<std::string, std::vector<std::vector<std::string>>> frames;
+  for (const std::string filter : {"", "ivt"}) {
+    const CliRun r = foveal_test::foveal("replay --gaze " + path.string() + " --screen 480x300 --scene builtin:plane --size 48x30 --max-rays 1 " +
+                                         "--fps 10 -q -o pursuit" + filter + (filter.empty() ? "" : " --fixation " + filter));
+    ASSERT_EQ(r.status, 0) << r.err;
+    frames[filter] = read_csv(scratch("pursuit" + filter + "/frames.csv"));
+    ASSERT_EQ(frames[filter].size(), 1u + 12u);
+  }
+  // Frames at 0.5, 0.6, 0.7, 0.8 s: the eye at x = 140 … 200 px = 14 … 20 render px
+  for (int k = 5; k <= 8; ++k) {
+    const double eye = (100 + 200 * (0.1 * k - 0.3)) / 10;
+    EXPECT_NEAR(std::stod(frames[""][k + 1][4]), eye, 0.3) << k;       // I-VVT: with the eye
+    EXPECT_LT(std::stod(frames["ivt"][k + 1][4]), eye - 2.0) << k;     // I-VT: behind it
+  }
+  // At 1.1 s the eye rests at 220 px: I-VVT's fovea there, I-VT's still a mean of the whole movement
+  EXPECT_NEAR(std::stod(frames[""][12][4]), 22.0, 0.2);
+  EXPECT_LT(std::stod(frames["ivt"][12][4]), 20.0);
 }
 
 TEST(GazeCli, ReplayWritesAVideo) {

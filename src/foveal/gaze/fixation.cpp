@@ -463,7 +463,9 @@ void FixationTracker::push_idt(const Entry& e) {
 void FixationTracker::push_ivvt(const Entry& e) {
   // The pursuit window: a least-squares line through the angles (and the pixels) over time
   line_.push_back(e);
-  while (line_.size() > 2 && !within(e.t - line_.front().t, params_.pursuit_window_s)) line_.pop_front();
+  // (at most 512 samples: 40 ms at 12.8 kHz; a clock in the wrong unit must not make each sample's
+  // fit cost the whole recording)
+  while (line_.size() > 2 && (!within(e.t - line_.front().t, params_.pursuit_window_s) || line_.size() > 512)) line_.pop_front();
   const std::optional<double> velocity = window_velocity(e);
   if (!velocity) return;
   if (*velocity >= params_.velocity_threshold_deg_s) {  // saccade: hold the last fixation or pursuit position
