@@ -67,8 +67,9 @@ std::function<int()> add_simulate_command(CLI::App& app) {
   auto* gaze_option = cmd->add_option("--gaze", o->gaze_source,
                   "real eye movements instead of simulated saccades: a recording (EyeLink .asc, Pupil gaze_positions.csv, Tobii .tsv, t,x,y CSV; "
                   "one step per fixation, every fixation unless --steps) or a live tracker pupil://HOST:PORT[?surface=NAME] (a step per new fixation)");
-  o->gaze.fixation = "ivt";  // steps go from fixation to fixation
-  add_gaze_options(*cmd, o->gaze, "--gaze: where the steps' fixations come from: ivt (velocity threshold), idt (dispersion threshold) or tracker (the recording's own fixation events)");
+  o->gaze.fixation = "nhp";  // steps go from fixation to fixation
+  add_gaze_options(*cmd, o->gaze, "--gaze: where the steps' fixations come from: nhp (the recommended event detector; pursuit a step every 100 ms; live: I-VVT), "
+                   "ivt (velocity threshold), idt (dispersion threshold) or tracker (the recording's own fixation events)");
   cmd->add_option("--display", o->gaze_display, "--gaze: the recording's screen W_CM,H_CM,DIST_CM (angles for the fixation filter)")->capture_default_str()->needs(gaze_option);
   cmd->add_option("--stimulus", o->stimulus, "--gaze: where the render was shown on the recording's screen, X,Y,W,H in screen pixels (default: the whole screen)")->needs(gaze_option);
   cmd->add_option("--start", o->start, "--gaze recordings: skip the fixations that begin earlier than this many seconds after the first sample")
@@ -129,7 +130,7 @@ std::function<int()> add_simulate_command(CLI::App& app) {
       if (!live && o->gaze_source.find("://") != std::string::npos)
         fail("--gaze: unknown live source '{}' (live trackers: pupil://HOST:PORT[?surface=NAME])", o->gaze_source);
       const StepFixations from = parse_step_fixations(o->gaze.fixation);
-      if (live && from == StepFixations::tracker) fail("--fixation: a live tracker sends gaze, not fixation events: use ivt or idt");
+      if (live && from == StepFixations::tracker) fail("--fixation: a live tracker sends gaze, not fixation events: use nhp, ivt or idt");
       if (!(o->start >= 0) || !std::isfinite(o->start)) fail("--start: must be zero or positive seconds, got {}", o->start);
       if (!(o->live_timeout > 0)) fail("--live-timeout: must be positive seconds, got {}", o->live_timeout);
       const Display display = parse_display(o->gaze_display, Display{});
@@ -138,7 +139,9 @@ std::function<int()> add_simulate_command(CLI::App& app) {
       if (live) {
         tracker = std::make_unique<PupilSource>(o->gaze_source, read.screen_px, read.min_confidence);
         geometry.emplace(display, tracker->screen_px());
-        live_steps = std::make_unique<LiveSteps>(*tracker, from == StepFixations::idt ? FixationMethod::idt : FixationMethod::ivt,
+        live_steps = std::make_unique<LiveSteps>(*tracker, from == StepFixations::idt   ? FixationMethod::idt
+                                                     : from == StepFixations::ivt ? FixationMethod::ivt
+                                                                                  : FixationMethod::ivvt,
                                                  fixation, *geometry);
         gaze_summary = fmt::format("live {} ({} filter)", o->gaze_source, to_string(from));
       } else {

@@ -96,13 +96,14 @@ TEST(PerceiveCli, EightBitImagesAreDecodedFromSrgbAndEncodedBack) {
 }
 
 TEST(PerceiveCli, ARecordingsFixationsMoveTheFieldWithTheFramesTime) {
-  // four frames at 4 fps; a recording fixates x = 100 for 0.5 s, then x = 300
+  // four frames at 4 fps; a recording fixates x = 100 for 0.45 s, then x = 300 (the saccade, one
+  // sample long, well before the third frame at 0.5 s)
   fs::create_directories(scratch("frames"));
   for (int k = 0; k < 4; ++k) foveal::save_image(grating(400, 200), scratch("frames/f" + std::to_string(k) + ".png").string());
   {
     std::ofstream csv(scratch("gaze.csv"));
     csv << "t,x,y\n";
-    for (int i = 0; i < 100; ++i) csv << i * 0.01 << "," << (i < 50 ? 100 : 300) << ",100\n";
+    for (int i = 0; i < 100; ++i) csv << i * 0.01 << "," << (i < 45 ? 100 : 300) << ",100\n";
   }
   const CliRun r = run_cli("perceive frames -o seen --fps 4 --gaze gaze.csv --screen 400x200 --eye field:hemianopia:left:20 --no-optics -q");
   ASSERT_EQ(r.status, 0) << r.err;

@@ -1,6 +1,7 @@
 // foveal/gaze/steps.cpp — fixations of recorded or live gaze as simulation steps.
 #include "foveal/gaze/steps.h"
 
+#include "foveal/gaze/detect.h"
 #include "foveal/util/error.h"
 
 #include <chrono>
@@ -10,16 +11,18 @@
 namespace foveal {
 
 StepFixations parse_step_fixations(const std::string& name) {
+  if (name == "nhp" || name == "auto") return StepFixations::nhp;
   if (name == "ivt") return StepFixations::ivt;
   if (name == "idt") return StepFixations::idt;
   if (name == "tracker") return StepFixations::tracker;
   if (name == "mean")
     fail("--fixation: 'mean' gives a gaze point per frame, not fixations; simulate steps from fixation to fixation: use ivt, idt or tracker");
-  fail("--fixation: unknown filter '{}' (ivt, idt or tracker: the recording's own fixation events)", name);
+  fail("--fixation: unknown filter '{}' (nhp, ivt, idt or tracker: the recording's own fixation events)", name);
 }
 
 const char* to_string(StepFixations source) {
   switch (source) {
+    case StepFixations::nhp: return "nhp";
     case StepFixations::ivt: return "ivt";
     case StepFixations::idt: return "idt";
     case StepFixations::tracker: return "tracker";
@@ -45,8 +48,35 @@ std::vector<GazeEvent> invalid_gap_blinks(const std::vector<GazeSample>& samples
 
 std::vector<GazeStep> recording_steps(const Recording& r, const GazeGeometry& geometry, StepFixations source,
                                       const FixationParams& params) {
-  std::vector<GazeEvent> fixations;
+  std::vector<GazeEvent> fixations, detected_blinks;
   switch (source) {
+    case StepFixations::nhp: {
+      EventParams ep;
+      ep.pursuit_velocity_deg_s = params.pursuit_velocity_deg_s;
+      ep.pursuit_window_s = params.pursuit_window_s;
+      ep.min_pursuit_s = params.min_pursuit_s;
+      const EventDetection d = detect_events(r, geometry, EventMethod::nhp, ep, params);
+      for (const DetectedEvent& e : d.events) {
+        const double end_s = r.samples[e.last].t_s;
+        if (e.label == EventLabel::fixation) {
+          glm::dvec2 sum(0);
+          size_t count = 0;
+          for (size_t i = e.first; i <= e.last; ++i)
+            if (r.samples[i].valid) sum += r.samples[i].px, ++count;
+          if (count) fixations.push_back({r.samples[e.first].t_s, end_s, sum / static_cast<double>(count)});
+        } else if (e.label == EventLabel::pursuit) {
+          // The fovea moves with the eye: a step every pursuit_step_s, where the eye is then
+          size_t i = e.first;
+          for (double t = r.samples[e.first].t_s; t < end_s; t += pursuit_step_s) {
+            while (i < e.last && (r.samples[i].t_s < t || !r.samples[i].valid)) ++i;
+            if (r.samples[i].valid) fixations.push_back({t, std::min(t + pursuit_step_s, end_s), r.samples[i].px});
+          }
+        } else if (e.label == EventLabel::blink) {
+          detected_blinks.push_back({r.samples[e.first].t_s, end_s, glm::dvec2(NAN)});
+        }
+      }
+      break;
+    }
     case StepFixations::ivt:
     case StepFixations::idt: {
       const FixationResult result =
@@ -61,7 +91,9 @@ std::vector<GazeStep> recording_steps(const Recording& r, const GazeGeometry& ge
       fixations = r.fixations;
       break;
   }
-  const std::vector<GazeEvent> blinks = r.blinks.empty() ? invalid_gap_blinks(r.samples) : r.blinks;
+  const std::vector<GazeEvent> blinks = !r.blinks.empty()             ? r.blinks
+                                        : source == StepFixations::nhp ? detected_blinks
+                                                                       : invalid_gap_blinks(r.samples);
   std::vector<GazeStep> steps;
   double previous_end = -INFINITY;
   size_t b = 0;

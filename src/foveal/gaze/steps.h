@@ -1,8 +1,9 @@
 // foveal/gaze/steps.h — real eye movements as the vision simulation's time steps.
 //
 // The simulation's time step is one fixation (the second paper's loop). A recording gives its
-// fixations from a filter (I-VT, I-DT) or the tracker's own fixation events; a live tracker gives
-// one each time its causal filter establishes a new fixation. A blink between two fixations makes
+// fixations from the recommended event detector (nhp: its fixations, and a step every 100 ms of a
+// smooth pursuit, whose fovea moves), a filter (I-VT, I-DT) or the tracker's own fixation events;
+// a live tracker gives one each time its causal filter (nhp: I-VVT) establishes a new fixation. A blink between two fixations makes
 // the sharpness field forget: the tracker's own blink events where the recording has them, else
 // a run of invalid samples lasting a blink's duration (70–500 ms; shorter runs are lost samples,
 // longer ones the eye leaving the tracker).
@@ -18,7 +19,7 @@
 namespace foveal {
 
 // Where the steps' fixations come from.
-enum class StepFixations { ivt, idt, tracker };
+enum class StepFixations { nhp, ivt, idt, tracker };
 StepFixations parse_step_fixations(const std::string& name);  // throws Error naming --fixation
 const char* to_string(StepFixations source);
 
@@ -28,6 +29,9 @@ struct GazeStep {
   double duration_s = 0;       // 0 for live fixations (not over yet when the step runs)
   bool blink_before = false;   // the eye blinked since the previous fixation
 };
+
+// A pursuit becomes a step every this long.
+inline constexpr double pursuit_step_s = 0.100;
 
 // Blink durations: a run of invalid samples within these bounds is a blink.
 inline constexpr double min_blink_s = 0.070, max_blink_s = 0.500;

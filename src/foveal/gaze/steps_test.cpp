@@ -74,7 +74,7 @@ const std::vector<glm::dvec2> kPoints{{300, 300}, {1300, 300}, {800, 800}, {400,
 TEST(GazeSteps, OneStepPerFixationOfEachFilter) {
   const Recording r = gaze(kPoints, 0.300, {0, 0.150, 0});
   const GazeGeometry geometry(kDisplay, r.screen_px);
-  for (StepFixations from : {StepFixations::ivt, StepFixations::idt, StepFixations::tracker}) {
+  for (StepFixations from : {StepFixations::nhp, StepFixations::ivt, StepFixations::idt, StepFixations::tracker}) {
     const std::vector<GazeStep> steps = recording_steps(r, geometry, from, {});
     ASSERT_EQ(steps.size(), kPoints.size()) << to_string(from);
     for (size_t i = 0; i < steps.size(); ++i) {
@@ -155,4 +155,33 @@ TEST(GazeSteps, RealEyeLinkFixationsAndBlinks) {
   const size_t ivt = recording_steps(r, geometry, StepFixations::ivt, {}).size();
   EXPECT_GT(ivt, 270u);
   EXPECT_LT(ivt, 340u);
+}
+
+// nhp's steps: a fixation, a 1 s pursuit at 400 px/s (about 11 °/s on this display), a fixation:
+// the pursuit becomes a step every 100 ms where the eye then is; I-VT makes one "fixation" of it.
+TEST(GazeSteps, NhpStepsFollowAPursuit) {
+  Recording r;
+  r.source = "synthetic";
+  r.screen_px = {1680, 1050};
+  auto eye = [](double t) { return t < 0.4 ? 300.0 : t < 1.4 ? 300 + 400 * (t - 0.4) : 700.0; };
+  for (int k = 0; k < 1800; ++k) {
+    GazeSample s;
+    s.t_s = k * 0.001;
+    s.px = {eye(s.t_s) + 0.4 * std::sin(k * 1.3), 500 + 0.4 * std::cos(k * 2.1)};
+    s.valid = true;
+    r.samples.push_back(s);
+  }
+  const GazeGeometry geometry(kDisplay, r.screen_px);
+  const std::vector<GazeStep> steps = recording_steps(r, geometry, StepFixations::nhp, {});
+  ASSERT_GE(steps.size(), 2u + 8u);
+  EXPECT_NEAR(steps.front().screen_px.x, 300, 1);
+  EXPECT_NEAR(steps.back().screen_px.x, 700, 1);
+  size_t along = 0;
+  for (size_t i = 1; i + 1 < steps.size(); ++i) {
+    EXPECT_GT(steps[i].start_s, steps[i - 1].start_s);
+    EXPECT_NEAR(steps[i].screen_px.x, eye(steps[i].start_s), 2.0) << i;  // where the eye is at the step's start
+    along += steps[i].screen_px.x > 320 && steps[i].screen_px.x < 680;
+  }
+  EXPECT_GE(along, 8u);
+  EXPECT_LE(recording_steps(r, geometry, StepFixations::ivt, {}).size(), 2u);
 }
