@@ -95,9 +95,9 @@ FixationParams resolve_fixation_params(const GazeOptions& o) {
   p.dispersion_deg = o.idt_dispersion;
   p.min_duration_s = o.idt_duration_ms / 1000;
   p.median_window = o.median_window;
-  p.pursuit_velocity_deg_s = o.pursuit_velocity;
-  p.pursuit_window_s = o.pursuit_window_ms / 1000;
-  p.min_pursuit_s = o.min_pursuit_ms / 1000;
+  p.pursuit.velocity_deg_s = o.pursuit_velocity;
+  p.pursuit.window_s = o.pursuit_window_ms / 1000;
+  p.pursuit.min_s = o.min_pursuit_ms / 1000;
   validate(p);
   return p;
 }
@@ -162,9 +162,7 @@ std::function<int()> add_gaze_command(CLI::App& app) {
     std::optional<Evaluation> evaluation, ceiling;
     if (!o->events.empty()) {
       EventParams ep;
-      ep.pursuit_velocity_deg_s = o->gaze.pursuit_velocity;
-      ep.pursuit_window_s = o->gaze.pursuit_window_ms / 1000;
-      ep.min_pursuit_s = o->gaze.min_pursuit_ms / 1000;
+      ep.pursuit = params.pursuit;  // the options --fixation ivvt reads too
       ep.filter_window_s = o->filter_window_ms / 1000;
       ep.detection_window_s = o->detection_window_ms / 1000;
       ep.ek_lambda = o->ek_lambda;

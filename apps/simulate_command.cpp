@@ -130,7 +130,8 @@ std::function<int()> add_simulate_command(CLI::App& app) {
       if (!live && o->gaze_source.find("://") != std::string::npos)
         fail("--gaze: unknown live source '{}' (live trackers: pupil://HOST:PORT[?surface=NAME])", o->gaze_source);
       const StepFixations from = parse_step_fixations(o->gaze.fixation);
-      if (live && from == StepFixations::tracker) fail("--fixation: a live tracker sends gaze, not fixation events: use nhp, ivt or idt");
+      // A live tracker's causal filter, decided before connecting (`tracker` is refused); unused for recordings
+      const FixationMethod live_method = live ? live_filter(from) : FixationMethod::ivt;
       if (!(o->start >= 0) || !std::isfinite(o->start)) fail("--start: must be zero or positive seconds, got {}", o->start);
       if (!(o->live_timeout > 0)) fail("--live-timeout: must be positive seconds, got {}", o->live_timeout);
       const Display display = parse_display(o->gaze_display, Display{});
@@ -139,10 +140,7 @@ std::function<int()> add_simulate_command(CLI::App& app) {
       if (live) {
         tracker = std::make_unique<PupilSource>(o->gaze_source, read.screen_px, read.min_confidence);
         geometry.emplace(display, tracker->screen_px());
-        live_steps = std::make_unique<LiveSteps>(*tracker, from == StepFixations::idt   ? FixationMethod::idt
-                                                     : from == StepFixations::ivt ? FixationMethod::ivt
-                                                                                  : FixationMethod::ivvt,
-                                                 fixation, *geometry);
+        live_steps = std::make_unique<LiveSteps>(*tracker, live_method, fixation, *geometry);
         gaze_summary = fmt::format("live {} ({} filter)", o->gaze_source, to_string(from));
       } else {
         const Recording recording = read_recording_warned(o->gaze_source, read);

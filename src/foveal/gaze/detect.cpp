@@ -47,9 +47,7 @@ void validate(const EventParams& p) {
   require_non_negative(p.lid_saccade_s, "EventParams::lid_saccade_s");
   require_positive(p.ek_lambda, "--ek-lambda");
   require_non_negative(p.ek_min_saccade_s, "EventParams::ek_min_saccade_s");
-  require_positive(p.pursuit_window_s, "--pursuit-window-ms");
-  require_positive(p.pursuit_velocity_deg_s, "--pursuit-velocity");
-  require_non_negative(p.min_pursuit_s, "--min-pursuit-ms");
+  validate(p.pursuit);
 }
 
 std::pair<double, double> adaptive_velocity_thresholds(const std::vector<float>& v, double initial) {
@@ -275,7 +273,7 @@ void label_saccades_nh(const Signal& s, const EventParams& p, const std::vector<
     if (v[i] > peak) {
       // A peak: samples above the peak threshold from i
       while (p1 + 1 < n && usable(p1 + 1) && v[p1 + 1] > peak) ++p1;
-    } else if (coarse[i] > coarse_peak) {
+    } else if (!coarse.empty() && coarse[i] > coarse_peak) {
       // A peak of the smoother velocity only (a small saccade in noise): the saccade is around the
       // fine velocity's largest sample under it, if that is above the onset threshold
       size_t c1 = i, m = i;
@@ -392,18 +390,18 @@ void line_velocity(const Signal& s, int h, std::vector<float>& velocity) {
 // Pursuit in the intersaccadic runs (nhp): a least-squares line's velocity over a longer window.
 void label_pursuit(const Signal& s, const EventParams& p, std::vector<EventLabel>& labels) {
   std::vector<float> slow;
-  line_velocity(s, half_width(p.pursuit_window_s, s.dt), slow);
-  const double min_pursuit = p.min_pursuit_s - 1e-6;
+  line_velocity(s, half_width(p.pursuit.window_s, s.dt), slow);
+  const double min_pursuit = p.pursuit.min_s - 1e-6;
   for (size_t i = 0; i < s.n;) {
-    if (!(free_sample(labels, s, i) && slow[i] > p.pursuit_velocity_deg_s)) {
+    if (!(free_sample(labels, s, i) && slow[i] > p.pursuit.velocity_deg_s)) {
       ++i;
       continue;
     }
     size_t j = i;
-    while (j < s.n && free_sample(labels, s, j) && slow[j] > p.pursuit_velocity_deg_s) ++j;
+    while (j < s.n && free_sample(labels, s, j) && slow[j] > p.pursuit.velocity_deg_s) ++j;
     const double duration = (j - i) * s.dt;
     const double travelled = angle_between_deg(s.dir[i], s.dir[j - 1]);
-    if (duration >= min_pursuit && travelled >= 0.5 * p.pursuit_velocity_deg_s * duration)
+    if (duration >= min_pursuit && travelled >= 0.5 * p.pursuit.velocity_deg_s * duration)
       for (size_t k = i; k < j; ++k) labels[k] = EventLabel::pursuit;
     i = j;
   }
@@ -515,7 +513,7 @@ EventDetection detect_events(const Recording& r, const GazeGeometry& g, EventMet
       out.onset_threshold_deg_s = onset;
       // Noise next to a loss is the lid's (a blink); elsewhere it stays undefined
       label_blinks(r, s, p, [&](size_t i) { return s.noise[i] || !(v[i] < onset) || (*pupil)(r.samples[i]); }, labels);
-      // The smoother velocity that finds small saccades in noise (its own thresholds)
+      // The smoother velocity that finds small saccades in noise (its own thresholds; none when off)
       std::vector<float> coarse;
       double coarse_peak = INFINITY;
       if (p.detection_window_s > 0) {
@@ -523,8 +521,6 @@ EventDetection detect_events(const Recording& r, const GazeGeometry& g, EventMet
         for (size_t i = 0; i < s.n; ++i)
           if (s.noise[i]) coarse[i] = NAN;
         coarse_peak = adaptive_velocity_thresholds(coarse, p.initial_peak_deg_s).first;
-      } else {
-        coarse.assign(s.n, NAN);
       }
       label_saccades_nh(s, p, clean, peak, onset, coarse, coarse_peak, labels);
       absorb_lid_saccades(s, p, labels);

@@ -73,10 +73,7 @@ struct EventParams {
   // Engbert & Kliegl 2003
   double ek_lambda = 6;
   double ek_min_saccade_s = 0.006;
-  // Smooth pursuit (nhp)
-  double pursuit_window_s = 0.040;    // least-squares line over this window
-  double pursuit_velocity_deg_s = 6;  // faster intersaccadic samples are pursuit candidates
-  double min_pursuit_s = 0.080;
+  PursuitParams pursuit;              // nhp: smooth pursuit in the intersaccadic intervals
 };
 // Check parameters; throws Error naming the option.
 void validate(const EventParams& params);

@@ -236,7 +236,7 @@ TEST(Detect, MethodNamesAndBadParameters) {
     EXPECT_NE(std::string(e.what()).find("--events: unknown detector 'hmm'"), std::string::npos);
   }
   EventParams p;
-  p.pursuit_velocity_deg_s = 0;
+  p.pursuit.velocity_deg_s = 0;
   EXPECT_THROW(validate(p), Error);
 }
 

@@ -76,12 +76,16 @@ void validate(const FixationParams& p) {
     fail("--median-window: must be an odd number of samples from 1 (off) to 99, got {}", p.median_window);
   require_positive(p.dispersion_deg, "--idt-dispersion");
   require_non_negative(p.min_duration_s, "--idt-duration-ms");
-  require_positive(p.pursuit_velocity_deg_s, "--pursuit-velocity");
-  require_positive(p.pursuit_window_s, "--pursuit-window-ms");
-  require_non_negative(p.min_pursuit_s, "--min-pursuit-ms");
-  if (!(p.pursuit_velocity_deg_s < p.velocity_threshold_deg_s))
+  validate(p.pursuit);
+  if (!(p.pursuit.velocity_deg_s < p.velocity_threshold_deg_s))
     fail("--pursuit-velocity: must be below the saccade threshold --ivt-threshold ({} deg/s), got {}", p.velocity_threshold_deg_s,
-         p.pursuit_velocity_deg_s);
+         p.pursuit.velocity_deg_s);
+}
+
+void validate(const PursuitParams& p) {
+  require_positive(p.velocity_deg_s, "--pursuit-velocity");
+  require_positive(p.window_s, "--pursuit-window-ms");
+  require_non_negative(p.min_s, "--min-pursuit-ms");
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -465,7 +469,7 @@ void FixationTracker::push_ivvt(const Entry& e) {
   line_.push_back(e);
   // (at most 512 samples: 40 ms at 12.8 kHz; a clock in the wrong unit must not make each sample's
   // fit cost the whole recording)
-  while (line_.size() > 2 && (!within(e.t - line_.front().t, params_.pursuit_window_s) || line_.size() > 512)) line_.pop_front();
+  while (line_.size() > 2 && (!within(e.t - line_.front().t, params_.pursuit.window_s) || line_.size() > 512)) line_.pop_front();
   const std::optional<double> velocity = window_velocity(e);
   if (!velocity) return;
   if (*velocity >= params_.velocity_threshold_deg_s) {  // saccade: hold the last fixation or pursuit position
@@ -488,9 +492,9 @@ void FixationTracker::push_ivvt(const Entry& e) {
   }
   const double n = static_cast<double>(line_.size()), denom = n * stt - st * st;
   // The slope only once the window is (nearly: irregular clocks) full; a few samples' slope is noise
-  const bool full = line_.size() >= 3 && reaches(e.t - t0, 0.75 * params_.pursuit_window_s) && denom > 0;
+  const bool full = line_.size() >= 3 && reaches(e.t - t0, 0.75 * params_.pursuit.window_s) && denom > 0;
   const double speed = full ? glm::length((n * sta - st * sa) / denom) : 0;  // deg/s
-  if (!(speed > params_.pursuit_velocity_deg_s)) {
+  if (!(speed > params_.pursuit.velocity_deg_s)) {
     // Slow: a fixation sample; a pursuit ends here and a fixation starts anew
     if (in_pursuit_) {
       in_pursuit_ = false;
@@ -510,7 +514,7 @@ void FixationTracker::push_ivvt(const Entry& e) {
     pursuit_distance_ += speed * (e.t - pursuit_last_t_);
   }
   pursuit_last_t_ = e.t;
-  if (!in_pursuit_ && reaches(e.t - pursuit_start_t_, params_.min_pursuit_s) &&
+  if (!in_pursuit_ && reaches(e.t - pursuit_start_t_, params_.pursuit.min_s) &&
       angle_between_deg(pursuit_start_dir_, e.dir) >= 0.5 * pursuit_distance_) {
     in_pursuit_ = true;
     end_fixation();

@@ -47,6 +47,17 @@ FixationMethod parse_fixation_method(const std::string& name);  // throws Error
 // The causal filter foveal recommends for the fovea (replay, view, the live path).
 inline constexpr FixationMethod kRecommendedFixationMethod = FixationMethod::ivvt;
 
+// Smooth pursuit, one test for the offline nhp (detect.h) and the causal I-VVT: the slope of a
+// least-squares line over `window_s` faster than `velocity_deg_s` for at least `min_s`, the run
+// covering at least half the distance that speed implies.
+struct PursuitParams {
+  double velocity_deg_s = 6;
+  double window_s = 0.040;
+  double min_s = 0.080;
+};
+// Check parameters; throws Error naming the option.
+void validate(const PursuitParams& params);
+
 // Filter parameters. I-VT defaults are Tobii Pro's I-VT (fixation) filter (Olsen 2012) without
 // its optional noise reduction; I-DT follows Salvucci & Goldberg (2000), with a 1° dispersion and
 // Pupil Labs' 80 ms minimum duration.
@@ -60,9 +71,7 @@ struct FixationParams {
   int median_window = 1;                 // both: moving median over this many samples (odd; 1 = off)
   double dispersion_deg = 1.0;           // I-DT: (max−min) x + (max−min) y of a fixation, degrees
   double min_duration_s = 0.080;         // I-DT: minimum fixation duration (Pupil Labs' default)
-  double pursuit_velocity_deg_s = 6;     // I-VVT: slower than the saccade threshold but faster than this: pursuit …
-  double pursuit_window_s = 0.040;       // … by the slope of a least-squares line over this window …
-  double min_pursuit_s = 0.080;          // … for at least this long
+  PursuitParams pursuit;                 // I-VVT: below the saccade threshold, pursuit by this test
 };
 // Check parameters; throws Error naming the option.
 void validate(const FixationParams& params);

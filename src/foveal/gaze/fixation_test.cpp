@@ -247,7 +247,7 @@ TEST(Fixation, IvvtIsIvtWithoutPursuit) {
     if (ivt.current()) ASSERT_EQ(*ivvt.current(), *ivt.current());
   }
   FixationParams p;
-  p.pursuit_velocity_deg_s = 40;  // above the saccade threshold
+  p.pursuit.velocity_deg_s = 40;  // above the saccade threshold
   EXPECT_THROW(FixationTracker(FixationMethod::ivvt, p, g), Error);
 }
 

@@ -30,6 +30,16 @@ const char* to_string(StepFixations source) {
   return "?";
 }
 
+FixationMethod live_filter(StepFixations source) {
+  switch (source) {
+    case StepFixations::nhp: return FixationMethod::ivvt;
+    case StepFixations::ivt: return FixationMethod::ivt;
+    case StepFixations::idt: return FixationMethod::idt;
+    case StepFixations::tracker: break;
+  }
+  fail("--fixation: a live tracker sends gaze, not fixation events: use nhp, ivt or idt");
+}
+
 std::vector<GazeEvent> invalid_gap_blinks(const std::vector<GazeSample>& samples) {
   std::vector<GazeEvent> blinks;
   double last_valid = NAN;
@@ -52,9 +62,7 @@ std::vector<GazeStep> recording_steps(const Recording& r, const GazeGeometry& ge
   switch (source) {
     case StepFixations::nhp: {
       EventParams ep;
-      ep.pursuit_velocity_deg_s = params.pursuit_velocity_deg_s;
-      ep.pursuit_window_s = params.pursuit_window_s;
-      ep.min_pursuit_s = params.min_pursuit_s;
+      ep.pursuit = params.pursuit;
       const EventDetection d = detect_events(r, geometry, EventMethod::nhp, ep, params);
       for (const DetectedEvent& e : d.events) {
         const double end_s = r.samples[e.last].t_s;

@@ -22,6 +22,9 @@ namespace foveal {
 enum class StepFixations { nhp, ivt, idt, tracker };
 StepFixations parse_step_fixations(const std::string& name);  // throws Error naming --fixation
 const char* to_string(StepFixations source);
+// The causal filter whose fixation onsets are a live tracker's steps (nhp: I-VVT); throws Error
+// for `tracker`, which a live tracker does not send.
+FixationMethod live_filter(StepFixations source);
 
 struct GazeStep {
   glm::dvec2 screen_px{0};     // fixation centre, the recording's screen pixels
