@@ -1,6 +1,7 @@
 // apps/commands.h — the subcommands of the `foveal` executable.
 #pragma once
 
+#include "foveal/cuda/gpu.h"
 #include "foveal/gaze/fixation.h"
 #include "foveal/perception/foveation.h"
 #include "foveal/render/render.h"
@@ -47,10 +48,17 @@ struct RenderOptions {
   uint64_t seed = 1;
   bool shadows = false;
   bool mode_option = true;  // view has its own --mode (foveated, reference, side-by-side, vision)
+  // Quality per ray (AoReuseParams)
+  bool adaptive = false, denoise = false, temporal = false;
+  int adaptive_min_rays = 16, temporal_frames = 4, history_frames = 16, target_rays = 400;
+  double denoise_radius = 1, tolerance = 0.5;
 };
 void add_render_options(CLI::App& command, RenderOptions& options);
 // --device auto|cpu|cuda (see gpu::choose_device).
 void add_device_option(CLI::App& command, std::string& device);
+// The device for a renderer's params: choose_device, except that the quality-per-ray passes
+// (--adaptive, --denoise, --temporal) run on the CPU: auto picks it, cuda is refused.
+gpu::ComputeDevice choose_render_device(const std::string& device, const RenderParams& params);
 // Size, display and renderer options → validated params (gaze unset).
 RenderParams resolve_render_params(const ViewOptions& view, const RenderOptions& options);
 

@@ -1,9 +1,12 @@
 // apps/render_command.cpp — `foveal render`: one frame of foveated (or full-frame) AO.
 #include "commands.h"
+
+#include "foveal/render/reuse.h"
 #include "foveal/cuda/gpu.h"
 #include "foveal/io/image_io.h"
 #include "foveal/io/outputs.h"
 #include "foveal/render/render.h"
+#include "foveal/render/reuse.h"
 #include "foveal/util/error.h"
 #include "foveal/util/parallel.h"
 #include "foveal/util/parse.h"
@@ -70,6 +73,30 @@ void add_render_options(CLI::App& cmd, RenderOptions& o) {
   cmd.add_option("--seed", o.seed, "seed of the AO ray directions")->capture_default_str();
   cmd.add_option("--trace-api", o.trace_api, "how occlusion rays go to Embree: stream, packet8 or single")->capture_default_str();
   cmd.add_flag("--shadows", o.shadows, "cast shadow rays for the lights (off, as in the papers)");
+  // Quality per ray (docs/quality.md, "More quality per ray")
+  const std::string group = "Quality per ray (all off: the paper's method)";
+  cmd.add_flag("--adaptive", o.adaptive, "cast each pixel's rays in doubling rounds and stop once its standard error is below τ(E) (n(E) becomes a maximum)")
+      ->group(group);
+  cmd.add_option("--adaptive-min-rays", o.adaptive_min_rays, "--adaptive: rays of the first round")->capture_default_str()->group(group);
+  cmd.add_flag("--denoise", o.denoise, "edge-stopping filter (depth, normal, albedo) of AO where a pixel is noisier than τ(E)")->group(group);
+  cmd.add_option("--denoise-radius", o.denoise_radius, "--denoise: the footprint is radius·(1/q(E) − 1) pixels, at most 8 (none where q = 1)")
+      ->capture_default_str()->group(group);
+  cmd.add_flag("--temporal", o.temporal, "accumulate AO rays across frames, reprojected with the camera, history rejected on disocclusion")
+      ->group(group);
+  cmd.add_option("--temporal-frames", o.temporal_frames, "--temporal: F, a pixel with n(E) rays of history casts n(E)/F a frame")
+      ->capture_default_str()->group(group);
+  cmd.add_option("--history-frames", o.history_frames, "--temporal: history length where q = 1, frames (max(F, H·q(E)) elsewhere)")
+      ->capture_default_str()->group(group);
+  cmd.add_option("--target-rays", o.target_rays, "the reference whose noise sets τ(E) = 0.5/√N / q(E), rays per pixel")
+      ->capture_default_str()->group(group);
+  cmd.add_option("--tolerance", o.tolerance, "scales τ(E) (above 1: fewer rays, more noise)")->capture_default_str()->group(group);
+}
+
+gpu::ComputeDevice choose_render_device(const std::string& device, const RenderParams& p) {
+  if (!p.reuse.any()) return gpu::choose_device(device);
+  if (device == "cuda") fail("--device cuda: --adaptive, --denoise and --temporal run on the CPU; use --device cpu (or auto)");
+  (void)gpu::choose_device(device);  // an unknown name is still refused
+  return gpu::ComputeDevice::cpu;
 }
 
 RenderParams resolve_render_params(const ViewOptions& view, const RenderOptions& o) {
@@ -85,6 +112,15 @@ RenderParams resolve_render_params(const ViewOptions& view, const RenderOptions&
   else p.ambient_constant = static_cast<float>(parse_numbers("--ambient-constant", o.ambient, 1)[0]);
   p.seed = o.seed;
   p.shadows = o.shadows;
+  p.reuse.adaptive = o.adaptive;
+  p.reuse.adaptive_min_rays = o.adaptive_min_rays;
+  p.reuse.denoise = o.denoise;
+  p.reuse.denoise_radius = o.denoise_radius;
+  p.reuse.temporal = o.temporal;
+  p.reuse.temporal_frames = o.temporal_frames;
+  p.reuse.history_frames = o.history_frames;
+  p.reuse.target_rays = o.target_rays;
+  p.reuse.tolerance = o.tolerance;
   validate(p);
   return p;
 }
@@ -102,6 +138,7 @@ std::function<int()> add_render_command(CLI::App& app) {
     ViewOptions view;
     RenderOptions render;
     std::string gaze, output = "render.png", aov, mask, stats, plot, device = "auto";
+    int frames = 1;
     bool quiet = false;
   };
   auto o = std::make_shared<Options>();
@@ -110,10 +147,12 @@ std::function<int()> add_render_command(CLI::App& app) {
   add_render_options(*cmd, o->render);
   add_device_option(*cmd, o->device);
   cmd->add_option("-o,--output", o->output, "shaded image (.png; .pfm/.exr keep linear floats)")->capture_default_str();
-  cmd->add_option("--aov", o->aov, "float buffers NAME=FILE[,…] as .pfm/.exr; names: ao, depth, position, normal, albedo, budget, quality, blend, eccentricity");
+  cmd->add_option("--aov", o->aov, "float buffers NAME=FILE[,…] as .pfm/.exr; names: ao, depth, position, normal, albedo, budget, quality, blend, eccentricity, traced (AO rays traced this frame)");
   cmd->add_option("--mask", o->mask, "ROI/budget mask of the paper's Figure 5 (PNG): grey = n(E)/n_max, red cross at the gaze");
   cmd->add_option("--acuity-plot", o->plot, "plot of the acuity model (paper's Figure 4) for the display, .svg or .png");
   cmd->add_option("--stats", o->stats, "write timings and ray counts as JSON");
+  cmd->add_option("--frames", o->frames, "with --temporal: render this many frames of the still camera and gaze, each from the last one's history; the last is written")
+      ->capture_default_str()->check(CLI::Range(1, 100000));
   cmd->add_flag("-q,--quiet", o->quiet, "print nothing on success");
 
   return [o] {
@@ -124,7 +163,8 @@ std::function<int()> add_render_command(CLI::App& app) {
     const TraceApi api = parse_trace_api(o->render.trace_api);
     if (!o->plot.empty()) write_acuity_plot(p.display, p.foveation, o->plot);
 
-    const gpu::ComputeDevice device = gpu::choose_device(o->device);
+    const gpu::ComputeDevice device = choose_render_device(o->device, p);
+    if (o->frames > 1 && !p.reuse.temporal) fail("--frames: {} frames of a still view are the same image without --temporal", o->frames);
 
     // Scene, tracer, frame
     const Scene scene = load_scene(o->view.scene);
@@ -145,13 +185,21 @@ std::function<int()> add_render_command(CLI::App& app) {
       const bool show_progress = !o->quiet && isatty(fileno(stderr));
       const Timer clock;
       int shown = -1;
-      frame = render_frame(tracer, scene, camera, p, [&](double fraction) {
-        const int percent = static_cast<int>(fraction * 100);
-        if (!show_progress || percent == shown || clock.ms() < 1000) return;
-        shown = percent;
-        fmt::print(stderr, "\r  AO {:3d}%  {:.1f} s", percent, clock.ms() / 1000);
-      });
-      if (shown >= 0) fmt::print(stderr, "\r{:40}\r", "");
+      AoHistory history;
+      uint64_t ao_rays = 0;
+      for (int k = 0; k < o->frames; ++k) {
+        frame = render_frame(tracer, scene, camera, p, [&](double fraction) {
+          const int percent = static_cast<int>(fraction * 100);
+          if (!show_progress || percent == shown || clock.ms() < 1000) return;
+          shown = percent;
+          if (o->frames > 1) fmt::print(stderr, "\r  frame {}/{}  AO {:3d}%  {:.1f} s", k + 1, o->frames, percent, clock.ms() / 1000);
+          else fmt::print(stderr, "\r  AO {:3d}%  {:.1f} s", percent, clock.ms() / 1000);
+        }, &history);
+        ao_rays += frame.stats.ao_rays;
+      }
+      if (shown >= 0) fmt::print(stderr, "\r{:50}\r", "");
+      if (o->frames > 1 && !o->quiet)
+        fmt::print("  {} frames accumulated: {:.2f} M AO rays in all; the last frame's figures follow\n", o->frames, ao_rays / 1e6);
     }
 
     // Outputs
@@ -173,6 +221,9 @@ std::function<int()> add_render_command(CLI::App& app) {
                s.ao_rays_min, s.ao_rays_max, s.ao_ms > 0 ? s.ao_rays / (s.ao_ms * 1e3) : 0.0);
     fmt::print("  time     primary {:.1f} ms, foveation {:.1f} ms, AO {:.1f} ms, shade {:.1f} ms, total {:.1f} ms\n",
                s.primary_ms, s.foveation_ms, s.ao_ms, s.shade_ms, s.total_ms);
+    if (p.reuse.any())
+      fmt::print("  reuse    {}{}{}, history kept at {} pixels, {} pixels filtered, {:.1f} ms\n", p.reuse.adaptive ? "adaptive " : "",
+                 p.reuse.denoise ? "denoise " : "", p.reuse.temporal ? "temporal" : "", s.history_pixels, s.denoised_pixels, s.reuse_ms);
     fmt::print("  wrote    {}", o->output);
     for (const auto& extra : {o->mask, o->stats, o->plot})
       if (!extra.empty()) fmt::print(", {}", extra);

@@ -24,7 +24,7 @@ constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
 }  // namespace
 
 std::vector<std::string> aov_names() {
-  return {"ao", "depth", "position", "normal", "albedo", "budget", "quality", "blend", "eccentricity"};
+  return {"ao", "depth", "position", "normal", "albedo", "budget", "quality", "blend", "eccentricity", "traced"};
 }
 
 Image aov_image(const Frame& f, const std::string& name) {
@@ -47,6 +47,7 @@ Image aov_image(const Frame& f, const std::string& name) {
       else if (name == "quality") v = f.maps.quality[i];
       else if (name == "blend") v = f.maps.blend[i];
       else if (name == "eccentricity") v = f.maps.eccentricity[i];
+      else if (name == "traced") v = f.ao_traced.empty() ? (hit ? f.maps.rays[i] : 0) : f.ao_traced[i];  // rays traced this frame
       else {
         std::string known;
         for (const auto& n : aov_names()) known += (known.empty() ? "" : ", ") + n;
@@ -183,6 +184,19 @@ nlohmann::json frame_stats_json(const Frame& f, const RenderParams& p, const Sce
                 {"ambient_constant_auto", !p.ambient_constant.has_value()}};
   j["ao_distance"] = std::isfinite(s.ao_distance) ? nlohmann::json(s.ao_distance) : nlohmann::json("inf");
   j["trace_api"] = trace_api;
+  if (p.reuse.any())
+    j["reuse"] = {{"adaptive", p.reuse.adaptive},
+                  {"adaptive_min_rays", p.reuse.adaptive_min_rays},
+                  {"denoise", p.reuse.denoise},
+                  {"denoise_radius", p.reuse.denoise_radius},
+                  {"temporal", p.reuse.temporal},
+                  {"temporal_frames", p.reuse.temporal_frames},
+                  {"history_frames", p.reuse.history_frames},
+                  {"target_rays", p.reuse.target_rays},
+                  {"tolerance", p.reuse.tolerance},
+                  {"history_pixels", s.history_pixels},
+                  {"denoised_pixels", s.denoised_pixels},
+                  {"reuse_ms", s.reuse_ms}};
   j["peak_rss_mib"] = peak_rss_mib();
   return j;
 }

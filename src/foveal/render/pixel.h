@@ -35,6 +35,20 @@ class CameraRays {
     r.tfar = std::numeric_limits<float>::infinity();
     return r;
   }
+  // The render position (pixel centres at +0.5) whose ray passes through `p`, and the distance
+  // from the eye to p; false when p is not in front of the camera.
+  FOVEAL_HD bool project(glm::vec3 p, double& x_px, double& y_px, float& distance) const {
+    const glm::vec3 d = p - eye_;
+    const float z = glm::dot(d, forward_);
+    if (!(z > 0)) return false;
+    const float sx = glm::dot(d, right_) / (z * glm::dot(right_, right_));
+    const float sy = glm::dot(d, up_) / (z * glm::dot(up_, up_));
+    x_px = (static_cast<double>(sx) + 1.0) * 0.5 * width_;
+    y_px = (1.0 - static_cast<double>(sy)) * 0.5 * height_;
+    distance = glm::length(d);
+    return true;
+  }
+  glm::vec3 eye() const { return eye_; }
 
  private:
   glm::vec3 eye_, forward_, right_, up_;  // right_ and up_ scaled to the image plane at distance 1

@@ -1,6 +1,8 @@
 // foveal/render/render.cpp — primary rays, foveation maps, foveated AO and Phong shading.
 #include "foveal/render/render.h"
 
+#include "foveal/render/reuse.h"
+
 #include "foveal/util/error.h"
 #include "foveal/util/sampling.h"
 #include "foveal/util/timer.h"
@@ -61,6 +63,15 @@ void validate(const RenderParams& p) {
     fail("--ambient-constant: must be a number >= 0 or 'auto', got {}", *p.ambient_constant);
   if (p.gaze_px && !(std::isfinite(p.gaze_px->x) && std::isfinite(p.gaze_px->y)))
     fail("--gaze: must be finite render pixels");
+  const AoReuseParams& r = p.reuse;
+  if (r.adaptive_min_rays < 1 || r.adaptive_min_rays > kMaxRaysLimit)
+    fail("--adaptive-min-rays: must be in [1, {}], got {}", kMaxRaysLimit, r.adaptive_min_rays);
+  if (!(r.denoise_radius > 0) || r.denoise_radius > kMaxDenoiseRadius)
+    fail("--denoise-radius: must be in (0, {}] pixels, got {}", kMaxDenoiseRadius, r.denoise_radius);
+  if (r.temporal_frames < 1 || r.temporal_frames > 1024) fail("--temporal-frames: must be in [1, 1024], got {}", r.temporal_frames);
+  if (r.history_frames < 1 || r.history_frames > 4096) fail("--history-frames: must be in [1, 4096], got {}", r.history_frames);
+  if (r.target_rays < 1 || r.target_rays > kMaxRaysLimit) fail("--target-rays: must be in [1, {}], got {}", kMaxRaysLimit, r.target_rays);
+  if (!(r.tolerance > 0) || !std::isfinite(r.tolerance)) fail("--tolerance: must be > 0, got {}", r.tolerance);
 }
 
 CameraRays::CameraRays(const Camera& camera, int width, int height)
@@ -218,21 +229,47 @@ float estimate_visibility(const Tracer& tracer, glm::vec3 position, glm::vec3 no
 int ao_tiles_x(int width) { return (width + kTile - 1) / kTile; }
 int ao_tile_count(int width, int height) { return ao_tiles_x(width) * ((height + kTile - 1) / kTile); }
 
-uint64_t trace_ao(const Tracer& tracer, const GBuffer& g, const FoveationMaps& maps, float ao_distance, float epsilon,
-                  uint64_t seed, std::vector<float>& visibility, const AoPassHooks& hooks) {
-  visibility.assign(static_cast<size_t>(g.width) * g.height, 1.0f);
-  // Per-thread batch of rays from several pixels; each pixel's rays are one contiguous segment
-  struct Segment {
-    size_t pixel;        // index into visibility
-    uint32_t begin, end; // ray range in the current batch
-    int open;            // the pixel's budget n, minus the rays found blocked so far
+AoSampling ao_sampling(const AoReuseParams& reuse, uint32_t frame_index) {
+  AoSampling s;
+  s.adaptive = reuse.adaptive;
+  s.first_round = std::max(1, reuse.adaptive_min_rays);
+  s.tau_fovea = static_cast<float>(reuse.tolerance * 0.5 / std::sqrt(std::max(1, reuse.target_rays)));
+  if (reuse.temporal) {
+    s.temporal_frames = std::max(1, reuse.temporal_frames);
+    s.frame_index = frame_index;
+  }
+  return s;
+}
+
+uint64_t trace_ao_counts(const Tracer& tracer, const GBuffer& g, const FoveationMaps& maps, float ao_distance, float epsilon,
+                         uint64_t seed, const AoSampling& sampling, AoCounts& counts, const AoPassHooks& hooks) {
+  const size_t pixels = static_cast<size_t>(g.width) * g.height;
+  const bool prior = counts.open.size() == pixels && counts.cast.size() == pixels;
+  if (!prior) {
+    counts.open.assign(pixels, 0.0f);
+    counts.cast.assign(pixels, 0.0f);
+  }
+  counts.traced.assign(pixels, 0);
+  // One pixel of a tile: its rays, how many are cast and found blocked, and where this round and the frame end
+  struct Pixel {
+    size_t i;
+    AoPixelRays rays;
+    uint32_t cast, round_end, limit;
+    uint32_t blocked;
+    uint32_t offset;  // index of the first ray in the pixel's sequence this frame
   };
-  struct Batch {
+  struct Segment {
+    uint32_t pixel;       // index into Work::pixels
+    uint32_t begin, end;  // ray range in the current batch
+  };
+  struct Work {
     std::vector<Ray> rays = std::vector<Ray>(kAoBatch);
     std::vector<uint8_t> occluded = std::vector<uint8_t>(kAoBatch);
-    std::vector<Segment> segments;  // pixels with rays in the batch, in order
+    std::vector<Segment> segments;
+    std::vector<Pixel> pixels;
+    std::vector<uint32_t> active, next;
   };
-  tbb::enumerable_thread_specific<Batch> batches;
+  tbb::enumerable_thread_specific<Work> works;
   tbb::enumerable_thread_specific<uint64_t> traced(0);
   const int tiles = ao_tile_count(g.width, g.height);
   if (hooks.tile_ms) hooks.tile_ms->assign(static_cast<size_t>(tiles), 0.0);
@@ -241,48 +278,80 @@ uint64_t trace_ao(const Tracer& tracer, const GBuffer& g, const FoveationMaps& m
   int tiles_reported = 0;  // guarded by progress_mutex
   for_each_tile(g.width, g.height, [&](int x0, int x1, int y0, int y1, int tile) {
     const Timer tile_timer;
-    Batch& b = batches.local();
-    size_t fill = 0;
-    // Trace the batch; count each segment's open rays (a plain sum over a contiguous range)
-    auto flush = [&] {
-      tracer.occluded({b.rays.data(), fill}, {b.occluded.data(), fill});
-      for (Segment& s : b.segments) {
-        int blocked = 0;
-        for (uint32_t k = s.begin; k < s.end; ++k) blocked += b.occluded[k];
-        s.open -= blocked;
-      }
-      traced.local() += fill;
-      fill = 0;
-    };
-    // Pixels whose segments are all traced get V = open / n, an exact ratio in any mode or thread count
-    auto finish = [&](bool keep_last) {
-      const size_t done = keep_last && !b.segments.empty() ? b.segments.size() - 1 : b.segments.size();
-      for (size_t k = 0; k < done; ++k) {
-        const Segment& s = b.segments[k];
-        visibility[s.pixel] = static_cast<float>(s.open) / static_cast<float>(maps.rays[s.pixel]);
-      }
-      b.segments.erase(b.segments.begin(), b.segments.begin() + static_cast<std::ptrdiff_t>(done));
-      if (!b.segments.empty()) b.segments.back().begin = b.segments.back().end = 0;
-    };
+    Work& w = works.local();
+    w.pixels.clear();
+    w.active.clear();
     for (int y = y0; y < y1; ++y)
       for (int x = x0; x < x1; ++x) {
         const size_t i = static_cast<size_t>(y) * g.width + x;
         const int n = maps.rays[i];
         if (!g.hit(i) || n == 0) continue;
-        const AoPixelRays pixel(g.position[i], g.geo_normal[i], epsilon, ao_distance, seed, static_cast<uint32_t>(x),
-                                static_cast<uint32_t>(y), sobol_table_2d());
-        b.segments.push_back({i, static_cast<uint32_t>(fill), static_cast<uint32_t>(fill), n});
-        for (int k = 0; k < n; ++k) {
-          b.rays[fill++] = pixel(static_cast<uint32_t>(k));
-          b.segments.back().end = static_cast<uint32_t>(fill);
+        int limit = n;
+        uint32_t offset = 0;
+        if (sampling.temporal_frames > 0) {
+          // What n lacks after the history, but at least m = n/F (history refreshes over F frames).
+          // A still pixel's rays continue its sequence: frame 0 casts rays [0, F·m), frame f the
+          // next m, so that its history is a prefix of the sequence, stratified as the paper's n.
+          const int refresh = (n + sampling.temporal_frames - 1) / sampling.temporal_frames;
+          const int lack = static_cast<int>(std::ceil(static_cast<float>(n) - counts.cast[i]));
+          limit = std::max(refresh, std::min(n, lack));
+          if (sampling.frame_index > 0)
+            offset = (static_cast<uint32_t>(sampling.temporal_frames) + sampling.frame_index - 1) * static_cast<uint32_t>(refresh);
+        }
+        const int first = sampling.adaptive ? std::min(sampling.first_round, limit) : limit;
+        w.active.push_back(static_cast<uint32_t>(w.pixels.size()));
+        w.pixels.push_back({i,
+                            AoPixelRays(g.position[i], g.geo_normal[i], epsilon, ao_distance, seed, static_cast<uint32_t>(x),
+                                        static_cast<uint32_t>(y), sobol_table_2d()),
+                            0, static_cast<uint32_t>(first), static_cast<uint32_t>(limit), 0, offset});
+      }
+    size_t fill = 0;
+    auto flush = [&] {
+      tracer.occluded({w.rays.data(), fill}, {w.occluded.data(), fill});
+      for (const Segment& s : w.segments) {
+        uint32_t blocked = 0;
+        for (uint32_t k = s.begin; k < s.end; ++k) blocked += w.occluded[k];
+        w.pixels[s.pixel].blocked += blocked;
+      }
+      w.segments.clear();
+      traced.local() += fill;
+      fill = 0;
+    };
+    // Rounds: every active pixel casts up to its round's end; then each is judged on all its rays
+    while (!w.active.empty()) {
+      for (uint32_t a : w.active) {
+        Pixel& p = w.pixels[a];
+        w.segments.push_back({a, static_cast<uint32_t>(fill), static_cast<uint32_t>(fill)});
+        while (p.cast < p.round_end) {
+          w.rays[fill++] = p.rays(p.offset + p.cast++);
+          w.segments.back().end = static_cast<uint32_t>(fill);
           if (fill == kAoBatch) {
-            flush();
-            finish(k + 1 < n);  // a pixel cut by the batch end continues in the next batch
+            flush();  // a pixel cut by the batch end continues in a new segment
+            w.segments.push_back({a, 0, 0});
           }
         }
       }
-    if (fill > 0) flush();
-    finish(false);
+      if (fill > 0) flush();
+      w.segments.clear();
+      w.next.clear();
+      for (uint32_t a : w.active) {
+        Pixel& p = w.pixels[a];
+        if (p.cast >= p.limit) continue;
+        if (sampling.adaptive) {
+          const float cast = counts.cast[p.i] + static_cast<float>(p.cast);
+          const float open = counts.open[p.i] + static_cast<float>(p.cast - p.blocked);
+          if (visibility_standard_error(open, cast) * maps.quality[p.i] <= sampling.tau_fovea) continue;
+        }
+        p.round_end = std::min(p.limit, 2 * p.cast);
+        w.next.push_back(a);
+      }
+      std::swap(w.active, w.next);
+    }
+    for (const Pixel& p : w.pixels) {
+      counts.open[p.i] += static_cast<float>(p.cast - p.blocked);
+      counts.cast[p.i] += static_cast<float>(p.cast);
+      counts.traced[p.i] = static_cast<uint16_t>(p.cast);
+    }
     if (hooks.tile_ms) (*hooks.tile_ms)[static_cast<size_t>(tile)] = tile_timer.ms();
     // Progress: whichever thread finishes a tile reports, one at a time
     if (hooks.progress) {
@@ -299,6 +368,24 @@ uint64_t trace_ao(const Tracer& tracer, const GBuffer& g, const FoveationMaps& m
   uint64_t total = 0;
   for (uint64_t t : traced) total += t;
   return total;
+}
+
+namespace {
+
+// V = open / cast per pixel; 1 where no ray was cast (or nothing hit).
+void visibility_from_counts(const AoCounts& c, std::vector<float>& visibility) {
+  visibility.resize(c.open.size());
+  for (size_t i = 0; i < c.open.size(); ++i) visibility[i] = c.cast[i] > 0 ? c.open[i] / c.cast[i] : 1.0f;
+}
+
+}  // namespace
+
+uint64_t trace_ao(const Tracer& tracer, const GBuffer& g, const FoveationMaps& maps, float ao_distance, float epsilon,
+                  uint64_t seed, std::vector<float>& visibility, const AoPassHooks& hooks) {
+  AoCounts counts;
+  const uint64_t rays = trace_ao_counts(tracer, g, maps, ao_distance, epsilon, seed, AoSampling{}, counts, hooks);
+  visibility_from_counts(counts, visibility);
+  return rays;
 }
 
 void collect_ao_rays(const GBuffer& g, const FoveationMaps& maps, float ao_distance, float epsilon, uint64_t seed,
@@ -409,7 +496,7 @@ void trace_primary_shaded(const Tracer& tracer, const Scene& scene, const Camera
 }
 
 Frame render_frame(const Tracer& tracer, const Scene& scene, const Camera& camera, const RenderParams& params,
-                   const std::function<void(double)>& progress) {
+                   const std::function<void(double)>& progress, AoHistory* history) {
   validate(params);
   Frame f;
   Timer total;
@@ -425,10 +512,30 @@ Frame render_frame(const Tracer& tracer, const Scene& scene, const Camera& camer
   t.reset();
   f.maps = foveation_maps(params, f.gaze_px);
   f.stats.foveation_ms = t.ms();
-  // Foveated AO
-  t.reset();
-  f.stats.ao_rays = trace_ao(tracer, f.gbuffer, f.maps, ao_distance, epsilon, params.seed, f.visibility, {progress});
-  f.stats.ao_ms = t.ms();
+  // Foveated AO: the paper's pass, or with history, adaptive rounds and the filter
+  const AoReuseParams& reuse = params.reuse;
+  if (!reuse.any()) {
+    t.reset();
+    f.stats.ao_rays = trace_ao(tracer, f.gbuffer, f.maps, ao_distance, epsilon, params.seed, f.visibility, {progress});
+    f.stats.ao_ms = t.ms();
+  } else {
+    const bool temporal = reuse.temporal && history;
+    AoCounts counts;
+    t.reset();
+    if (temporal) f.stats.history_pixels = history->reproject(f.gbuffer, camera, counts);
+    f.stats.reuse_ms = t.ms();
+    t.reset();
+    const AoSampling sampling = ao_sampling(reuse, temporal ? history->frames() : 0);
+    f.stats.ao_rays = trace_ao_counts(tracer, f.gbuffer, f.maps, ao_distance, epsilon, params.seed, sampling, counts, {progress});
+    f.stats.ao_ms = t.ms();
+    t.reset();
+    visibility_from_counts(counts, f.visibility);
+    if (reuse.denoise)
+      f.stats.denoised_pixels = denoise_visibility(f.gbuffer, f.maps, counts, reuse, camera.fov_deg, f.visibility);
+    if (temporal) history->store(f.gbuffer, camera, f.maps, reuse, counts);
+    f.ao_traced = std::move(counts.traced);
+    f.stats.reuse_ms += t.ms();
+  }
   // Phong shading with the blended ambient term
   t.reset();
   const float k_const = params.ambient_constant ? *params.ambient_constant

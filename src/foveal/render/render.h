@@ -15,6 +15,8 @@
 
 #include <glm/glm.hpp>
 
+#include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <functional>
 #include <optional>
@@ -28,6 +30,25 @@ enum class RenderMode { foveated, full };
 const char* to_string(RenderMode mode);
 RenderMode parse_render_mode(const std::string& name);  // throws Error for an unknown name
 
+// Quality per ray: how each pixel's AO budget n(E) is spent and reconstructed. All off (the
+// default) is the paper's method, bit-identical. Every threshold is the standard error τ(E) that
+// the acuity model allows a pixel's visibility: τ(E) = tolerance · 0.5/√target_rays / q(E), the
+// worst-case noise of the full-frame reference (target_rays per pixel) where q = 1, growing as
+// acuity falls (the budget n(E) = n_max·q² of γ = 2 has exactly this worst-case noise).
+struct AoReuseParams {
+  bool adaptive = false;        // rays in rounds (doubling); a pixel stops once its standard error ≤ τ(E)
+  int adaptive_min_rays = 16;   // the first round: the fewest rays a pixel with n(E) ≥ it casts
+  bool denoise = false;         // edge-stopping filter of the pixels whose standard error > τ(E)
+  double denoise_radius = 1.0;  // footprint r(E) = radius·(1/q(E) − 1) pixels, at most kMaxDenoiseRadius (none where q = 1)
+  bool temporal = false;        // accumulate rays across frames (render_frame with an AoHistory)
+  int temporal_frames = 4;      // F: a pixel whose history holds n(E) rays casts n(E)/F a frame
+  int history_frames = 16;      // H: history length where q = 1, frames; H(E) = max(F, round(H·q(E)))
+  int target_rays = 400;        // the reference's rays per pixel, whose noise sets τ
+  double tolerance = 0.5;       // scales τ(E) (0.5: measured within the reference's noise in the fovea)
+  bool any() const { return adaptive || denoise || temporal; }
+};
+inline constexpr int kMaxDenoiseRadius = 8;
+
 // Everything that decides one frame besides the scene and camera.
 struct RenderParams {
   int width = 840;                      // render pixels
@@ -40,6 +61,7 @@ struct RenderParams {
   std::optional<float> ambient_constant = 1.0f;  // k_const; unset → mean visibility of the fovea
   uint64_t seed = 1;                    // scrambles every pixel's AO directions
   bool shadows = false;                 // shadow rays for the lights (off, as in the papers)
+  AoReuseParams reuse;                  // adaptive rays, denoising, temporal reuse (all off: the paper)
 };
 
 // Check sizes and model parameters; throws Error naming the option.
@@ -78,6 +100,10 @@ struct FrameStats {
   double primary_ms = 0, foveation_ms = 0, ao_ms = 0, shade_ms = 0, total_ms = 0;
   float ambient_constant = 1; // k_const used
   float ao_distance = 0;      // scene units (may be infinite)
+  // Quality per ray (zero when its option is off)
+  uint64_t history_pixels = 0;   // pixels whose reprojected history was kept (--temporal)
+  uint64_t denoised_pixels = 0;  // pixels the filter changed (--denoise)
+  double reuse_ms = 0;           // reprojection and filtering
 };
 
 // A rendered frame with every intermediate buffer.
@@ -86,6 +112,7 @@ struct Frame {
   GBuffer gbuffer;
   FoveationMaps maps;
   std::vector<float> visibility;  // AO visibility V per pixel (1 where nothing was hit or no ray cast)
+  std::vector<uint16_t> ao_traced; // AO rays traced this frame per pixel (filled with --adaptive/--temporal)
   glm::dvec2 gaze_px{0.0};
   FrameStats stats;
 };
@@ -117,6 +144,37 @@ int ao_tile_count(int width, int height);
 // AO visibility per pixel with maps.rays[i] rays; returns the number of rays traced.
 uint64_t trace_ao(const Tracer& tracer, const GBuffer& gbuffer, const FoveationMaps& maps, float ao_distance,
                   float epsilon, uint64_t seed, std::vector<float>& visibility, const AoPassHooks& hooks = {});
+// How the general AO pass spends each pixel's budget (from AoReuseParams; default: the paper's).
+struct AoSampling {
+  bool adaptive = false;
+  int first_round = 16;        // adaptive: rays of the first round
+  float tau_fovea = 0;         // adaptive: the standard error allowed where q = 1 (τ(E) = tau_fovea / q)
+  int temporal_frames = 0;     // > 0: with history, m = ceil(n/F) rays a frame, or what n lacks
+  uint32_t frame_index = 0;    // temporal: frames before this one; frame f > 0 starts each pixel's
+                               // sequence at (F + f − 1)·m, after frame 0's n = F·m rays
+};
+AoSampling ao_sampling(const AoReuseParams& reuse, uint32_t frame_index);
+// AO ray counts per pixel: rays found open and rays cast, history included (floats: history is
+// rescaled when capped). V = open / cast; cast = 0: no estimate (V = 1).
+struct AoCounts {
+  std::vector<float> open, cast;
+  std::vector<uint16_t> traced;  // rays traced this frame
+};
+// The AO pass with a prior (`counts` on entry: history, or empty for none; on return, prior + this
+// frame). The rays are each pixel's sequence from sample_offset, cast in rounds; the result does
+// not depend on the thread count. Returns the number of rays traced.
+uint64_t trace_ao_counts(const Tracer& tracer, const GBuffer& gbuffer, const FoveationMaps& maps, float ao_distance,
+                         float epsilon, uint64_t seed, const AoSampling& sampling, AoCounts& counts,
+                         const AoPassHooks& hooks = {});
+// Standard error of a visibility estimate from `open` of `cast` rays: the binomial one at the
+// Krichevsky–Trofimov estimate p = (open + ½)/(cast + 1), so that rays that all agree are not
+// taken for an exact answer (with k rays all open it is about 0.71/k, not 0).
+inline float visibility_standard_error(float open, float cast) {
+  if (!(cast > 0)) return 1.0f;
+  const float p = (open + 0.5f) / (cast + 1.0f);
+  return std::sqrt(p * (1.0f - p) / cast);
+}
+
 // Visibility at one point from `rays` cosine-weighted directions of pixel (x, y)'s sequence:
 // the per-pixel function the AO pass runs, exposed for analytic tests.
 float estimate_visibility(const Tracer& tracer, glm::vec3 position, glm::vec3 normal, int rays, float ao_distance,
@@ -141,7 +199,10 @@ void trace_primary_shaded(const Tracer& tracer, const Scene& scene, const Camera
 
 // All passes for one frame.
 // `progress` reports the AO pass, the long one (see trace_ao).
+// With params.reuse.temporal and a `history`, the frame starts from the history reprojected to its
+// surface points and leaves its own counts there for the next frame.
+class AoHistory;
 Frame render_frame(const Tracer& tracer, const Scene& scene, const Camera& camera, const RenderParams& params,
-                   const std::function<void(double)>& progress = {});
+                   const std::function<void(double)>& progress = {}, AoHistory* history = nullptr);
 
 }  // namespace foveal

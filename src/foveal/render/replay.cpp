@@ -1,6 +1,8 @@
 // foveal/render/replay.cpp — gaze-following frame sequences.
 #include "foveal/render/replay.h"
 
+#include "foveal/render/reuse.h"
+
 #include "foveal/util/error.h"
 #include "foveal/util/timer.h"
 
@@ -31,11 +33,12 @@ class FrameMaker {
   const Frame& make(glm::dvec2 gaze, ReplayFrame& info) {
     const Timer clock;
     info.render_gaze = gaze;
-    info.reused = reuse_ && last_gaze_ && *last_gaze_ == gaze;
+    // With temporal reuse every frame adds rays, so none is a copy of the last
+    info.reused = reuse_ && !params_.reuse.temporal && last_gaze_ && *last_gaze_ == gaze;
     if (!info.reused) {
       RenderParams p = params_;
       p.gaze_px = gaze;
-      frame_ = renderer_ ? renderer_(p) : render_frame(tracer_, scene_, camera_, p);
+      frame_ = renderer_ ? renderer_(p) : render_frame(tracer_, scene_, camera_, p, {}, &history_);
       last_gaze_ = gaze;
     }
     info.ao_rays = frame_.stats.ao_rays;
@@ -51,6 +54,7 @@ class FrameMaker {
   bool reuse_;
   const FrameRenderer& renderer_;
   std::optional<glm::dvec2> last_gaze_;
+  AoHistory history_;  // --temporal: the AO rays of the frames so far
   Frame frame_;
 };
 

@@ -1,6 +1,8 @@
 // foveal/ui/session.cpp — see session.h.
 #include "foveal/ui/session.h"
 
+#include "foveal/render/reuse.h"
+
 #include "foveal/impair/profile.h"
 
 #include "foveal/cuda/gpu.h"
@@ -147,6 +149,7 @@ struct ViewSession::Worker {
   std::atomic<double> progress{0};
   std::unique_ptr<VisionSimulation> sim;  // the worker's own
   std::unique_ptr<gpu::Renderer> gpu;     // with settings.cuda: the scene on the GPU, made on first use
+  AoHistory history;                      // --temporal: AO rays of the foveated frames so far
   std::thread thread;
 
   Worker(const Scene& s, const Tracer& t) : scene(s), tracer(t), thread([this] { loop(); }) {}
@@ -226,10 +229,13 @@ struct ViewSession::Worker {
       check(r.generation);
       return f;
     }
+    // --temporal: the full-size foveated frame builds on the history of the ones before (any gaze
+    // or camera; reprojection keeps what still applies); previews and references start afresh
+    const bool final_foveated = mode == RenderMode::foveated && scale == 1 && rays == r.settings.render.foveation.max_rays;
     Frame f = render_frame(tracer, scene, r.camera, p, [&](double fraction) {
       progress = fraction;
       check(r.generation);
-    });
+    }, final_foveated ? &history : nullptr);
     check(r.generation);
     return f;
   }

@@ -1,0 +1,143 @@
+// foveal/render/reuse.cpp — see reuse.h.
+#include "foveal/render/reuse.h"
+
+#include "foveal/render/pixel.h"
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+
+namespace foveal {
+namespace {
+
+// Angle one pixel spans at the image centre, radians (footprint = distance × this).
+float pixel_angle(float fov_deg, int height) { return 2.0f * std::tan(glm::radians(fov_deg) * 0.5f) / static_cast<float>(height); }
+
+constexpr float kSameNormal = 0.9f;  // cos 25.8°: history and filter weights need normals this close
+
+}  // namespace
+
+uint64_t AoHistory::reproject(const GBuffer& g, const Camera& camera, AoCounts& counts) const {
+  const size_t pixels = static_cast<size_t>(g.width) * g.height;
+  counts.open.assign(pixels, 0.0f);
+  counts.cast.assign(pixels, 0.0f);
+  if (empty()) return 0;
+  (void)camera;  // the current camera is implicit in the G-buffer's positions
+  const CameraRays previous(camera_, width_, height_);
+  const float angle = pixel_angle(camera_.fov_deg, height_);
+  std::atomic<uint64_t> kept{0};
+  tbb::parallel_for(0, g.height, [&](int y) {
+    uint64_t row_kept = 0;
+    for (int x = 0; x < g.width; ++x) {
+      const size_t i = static_cast<size_t>(y) * g.width + x;
+      if (!g.hit(i)) continue;
+      double px = 0, py = 0;
+      float distance = 0;
+      if (!previous.project(g.position[i], px, py, distance)) continue;
+      if (!(px >= 0 && py >= 0 && px < width_ && py < height_)) continue;
+      const size_t j = static_cast<size_t>(py) * width_ + static_cast<size_t>(px);
+      if (!hit_[j] || !(cast_[j] > 0)) continue;
+      // The same surface: close normals, and the point on the plane the previous pixel saw
+      if (glm::dot(g.normal[i], normal_[j]) < kSameNormal) continue;
+      const float plane = std::fabs(glm::dot(g.position[i] - position_[j], normal_[j]));
+      if (plane > 2.0f * angle * distance) continue;
+      counts.open[i] = open_[j];
+      counts.cast[i] = cast_[j];
+      ++row_kept;
+    }
+    kept += row_kept;
+  });
+  return kept;
+}
+
+float history_cap_rays(int rays, float quality, const AoReuseParams& reuse) {
+  const int f = std::max(1, reuse.temporal_frames);
+  const int frames = std::max(f, static_cast<int>(std::lround(reuse.history_frames * std::clamp(quality, 0.0f, 1.0f))));
+  return static_cast<float>(frames) * static_cast<float>((rays + f - 1) / f);
+}
+
+void AoHistory::store(const GBuffer& g, const Camera& camera, const FoveationMaps& maps, const AoReuseParams& reuse,
+                      const AoCounts& counts) {
+  width_ = g.width;
+  height_ = g.height;
+  camera_ = camera;
+  position_ = g.position;
+  normal_ = g.normal;
+  const size_t pixels = static_cast<size_t>(g.width) * g.height;
+  hit_.resize(pixels);
+  open_.resize(pixels);
+  cast_.resize(pixels);
+  tbb::parallel_for(size_t(0), pixels, [&](size_t i) {
+    hit_[i] = g.hit(i) ? 1 : 0;
+    const float cap = history_cap_rays(maps.rays[i], maps.quality[i], reuse);
+    const float cast = counts.cast[i];
+    const float scale = cast > cap ? cap / cast : 1.0f;
+    open_[i] = counts.open[i] * scale;
+    cast_[i] = cast * scale;
+  });
+  ++frames_;
+}
+
+int denoise_max_radius(float quality, const AoReuseParams& reuse) {
+  if (!(quality > 0)) return kMaxDenoiseRadius;
+  // The eye resolves cells of 1/q pixels (q = f_c(E)/f_c(0), and at q = 1 every pixel): pooling
+  // within radius·(1/q − 1) pixels of a cell's neighbours, none where q = 1
+  const double r = std::round(reuse.denoise_radius * (1.0 / quality - 1.0));
+  return static_cast<int>(std::clamp(r, 0.0, static_cast<double>(kMaxDenoiseRadius)));
+}
+
+uint64_t denoise_visibility(const GBuffer& g, const FoveationMaps& maps, const AoCounts& c, const AoReuseParams& reuse,
+                            float fov_deg, std::vector<float>& visibility) {
+  const float angle = pixel_angle(fov_deg, g.height);
+  const float tau_fovea = static_cast<float>(reuse.tolerance * 0.5 / std::sqrt(std::max(1, reuse.target_rays)));
+  constexpr float kAlbedoSigma = 0.15f;
+  std::vector<float> out = visibility;
+  std::atomic<uint64_t> changed{0};
+  tbb::parallel_for(0, g.height, [&](int y) {
+    uint64_t row_changed = 0;
+    for (int x = 0; x < g.width; ++x) {
+      const size_t i = static_cast<size_t>(y) * g.width + x;
+      const float cast = c.cast[i];
+      if (!g.hit(i) || !(cast > 0)) continue;
+      // Is the pixel noisier than its eccentricity allows?
+      const float se = visibility_standard_error(c.open[i], cast), spread = se * se * cast;
+      const float tau = maps.quality[i] > 0 ? tau_fovea / maps.quality[i] : INFINITY;
+      if (se <= tau) continue;
+      // Just wide enough to pool the rays it lacks: (2r+1)² pixels of about its own count
+      const float lacking = spread / (tau * tau) / cast;
+      const int widest = denoise_max_radius(maps.quality[i], reuse);
+      if (widest == 0) continue;
+      const int radius = std::clamp(static_cast<int>(std::ceil(0.5f * std::sqrt(lacking))), 1, widest);
+      const float sigma2 = static_cast<float>(radius * radius);
+      const glm::vec3 pi = g.position[i], ni = g.normal[i], ai = g.albedo[i];
+      const float footprint = angle * g.depth[i];
+      float open_sum = 0, cast_sum = 0;
+      for (int v = std::max(0, y - radius); v <= std::min(g.height - 1, y + radius); ++v)
+        for (int u = std::max(0, x - radius); u <= std::min(g.width - 1, x + radius); ++u) {
+          const size_t j = static_cast<size_t>(v) * g.width + u;
+          if (!g.hit(j) || !(c.cast[j] > 0)) continue;
+          // Hard edges: a crease (normals apart) or a depth step (off the pixel's plane)
+          if (glm::dot(ni, g.normal[j]) < kSameNormal) continue;
+          const float d2 = static_cast<float>((u - x) * (u - x) + (v - y) * (v - y));
+          const float plane = std::fabs(glm::dot(g.position[j] - pi, ni));
+          if (plane > 0.5f * footprint * std::max(1.0f, std::sqrt(d2))) continue;
+          const glm::vec3 da = g.albedo[j] - ai;
+          const float w = std::exp(-0.5f * d2 / sigma2 - 0.5f * glm::dot(da, da) / (kAlbedoSigma * kAlbedoSigma));
+          open_sum += w * c.open[j];
+          cast_sum += w * c.cast[j];
+        }
+      const float v = cast_sum > 0 ? open_sum / cast_sum : visibility[i];
+      if (v != visibility[i]) {
+        out[i] = v;
+        ++row_changed;
+      }
+    }
+    changed += row_changed;
+  });
+  visibility.swap(out);
+  return changed;
+}
+
+}  // namespace foveal

@@ -1,0 +1,64 @@
+// foveal/render/reuse.h — more quality per AO ray: temporal history and edge-stopping reconstruction.
+//
+// Both work on the AO pass's ray counts (open and cast rays per pixel, AoCounts), not on
+// visibility: history adds rays, the filter pools them, and each pixel's standard error says
+// whether it needs either. The threshold is the one adaptive sampling stops at (AoReuseParams):
+// τ(E) = tolerance · 0.5/√target_rays / q(E).
+//
+// Temporal reuse follows the reprojection caches of real-time rendering (Nehab et al. 2007,
+// "Accelerating real-time shading with reverse reprojection caching"; the history-length cap of
+// temporal anti-aliasing, Patney et al. 2016 for the foveated case): a pixel's surface point is
+// projected into the previous frame's camera and the counts there are kept when that pixel saw
+// the same surface (normal within 25°, on the same plane within two pixel footprints); otherwise
+// (a disocclusion) the pixel starts afresh. History is stored per pixel of the last frame, not per
+// gaze, so a saccade keeps what the new fovea already has.
+//
+// The filter is a cross-bilateral pooling of rays (Dammertz et al. 2010 and the SVGF family's
+// edge-stopping weights on depth, normal and albedo): V = Σ w·open / Σ w·cast over a window whose
+// radius is what the pixel's rays lack to reach τ(E), at most radius·(1/q(E) − 1): the footprint
+// grows as acuity falls, and is nothing where q = 1, where the eye resolves every pixel. Normal and plane tests are hard: no weight crosses a crease or a depth edge.
+#pragma once
+
+#include "foveal/render/render.h"
+
+#include <cstdint>
+#include <vector>
+
+namespace foveal {
+
+class AoHistory {
+ public:
+  void clear() { *this = AoHistory(); }
+  bool empty() const { return width_ == 0; }
+  uint32_t frames() const { return frames_; }  // frames stored since the last clear
+  // The counts kept for the surface points of `gbuffer` (seen by `camera`): the previous frame's
+  // at the pixel each point projects to, where it saw the same surface; zero elsewhere. Returns
+  // the number of pixels that kept history.
+  uint64_t reproject(const GBuffer& gbuffer, const Camera& camera, AoCounts& counts) const;
+  // Keep a frame's counts for the next, each pixel's capped at H(E) frames of its refresh rays
+  // (scaled down, V unchanged).
+  void store(const GBuffer& gbuffer, const Camera& camera, const FoveationMaps& maps, const AoReuseParams& reuse,
+             const AoCounts& counts);
+
+ private:
+  int width_ = 0, height_ = 0;
+  Camera camera_;
+  std::vector<glm::vec3> position_, normal_;
+  std::vector<uint8_t> hit_;
+  std::vector<float> open_, cast_;
+  uint32_t frames_ = 0;
+};
+
+// The history cap of a pixel, rays: H(E) = max(F, round(H·q)) frames of ceil(n/F) rays.
+float history_cap_rays(int rays, float quality, const AoReuseParams& reuse);
+
+// The footprint radius a pixel may pool over, pixels: round(radius·(1/q − 1)) up to kMaxDenoiseRadius
+// (the eye resolves cells of 1/q pixels; 0 where q = 1: the fovea is never filtered).
+int denoise_max_radius(float quality, const AoReuseParams& reuse);
+
+// Filter `visibility` (V = open / cast on entry) where a pixel's standard error exceeds τ(E);
+// `fov_deg` is the camera's vertical field of view (pixel footprints). Returns the pixels changed.
+uint64_t denoise_visibility(const GBuffer& gbuffer, const FoveationMaps& maps, const AoCounts& counts,
+                            const AoReuseParams& reuse, float fov_deg, std::vector<float>& visibility);
+
+}  // namespace foveal
