@@ -229,6 +229,13 @@ float estimate_visibility(const Tracer& tracer, glm::vec3 position, glm::vec3 no
 int ao_tiles_x(int width) { return (width + kTile - 1) / kTile; }
 int ao_tile_count(int width, int height) { return ao_tiles_x(width) * ((height + kTile - 1) / kTile); }
 
+bool history_contradicted(float history_open, float history_cast, float open, float cast) {
+  if (!(history_cast > 0) || !(cast > 0)) return false;
+  const float p = (history_open + open + 0.5f) / (history_cast + cast + 1.0f);
+  const float se = std::sqrt(p * (1.0f - p) * (1.0f / history_cast + 1.0f / cast));
+  return std::fabs(open / cast - history_open / history_cast) > kHistoryContradiction * se;
+}
+
 AoSampling ao_sampling(const AoReuseParams& reuse, uint32_t frame_index) {
   AoSampling s;
   s.adaptive = reuse.adaptive;
@@ -348,8 +355,12 @@ uint64_t trace_ao_counts(const Tracer& tracer, const GBuffer& g, const Foveation
       std::swap(w.active, w.next);
     }
     for (const Pixel& p : w.pixels) {
-      counts.open[p.i] += static_cast<float>(p.cast - p.blocked);
-      counts.cast[p.i] += static_cast<float>(p.cast);
+      const float open = static_cast<float>(p.cast - p.blocked), cast = static_cast<float>(p.cast);
+      // History this frame's own rays contradict (an occluder that moved) is dropped
+      if (sampling.temporal_frames > 0 && history_contradicted(counts.open[p.i], counts.cast[p.i], open, cast))
+        counts.open[p.i] = counts.cast[p.i] = 0.0f;
+      counts.open[p.i] += open;
+      counts.cast[p.i] += cast;
       counts.traced[p.i] = static_cast<uint16_t>(p.cast);
     }
     if (hooks.tile_ms) (*hooks.tile_ms)[static_cast<size_t>(tile)] = tile_timer.ms();

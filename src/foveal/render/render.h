@@ -160,6 +160,11 @@ struct AoCounts {
   std::vector<float> open, cast;
   std::vector<uint16_t> traced;  // rays traced this frame
 };
+// Whether a pixel's fresh rays contradict its history: their visibilities differ by more than
+// kHistoryContradiction standard errors of the difference (a two-proportion z-test; the pooled
+// proportion Krichevsky–Trofimov smoothed). The pass then drops the history.
+inline constexpr float kHistoryContradiction = 3.0f;
+bool history_contradicted(float history_open, float history_cast, float open, float cast);
 // The AO pass with a prior (`counts` on entry: history, or empty for none; on return, prior + this
 // frame). The rays are each pixel's sequence from sample_offset, cast in rounds; the result does
 // not depend on the thread count. Returns the number of rays traced.

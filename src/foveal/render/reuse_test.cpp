@@ -1,0 +1,274 @@
+// Tests of quality per ray: temporal accumulation, adaptive rays and the edge-stopping filter.
+#include "foveal/render/reuse.h"
+#include "foveal/util/error.h"
+#include "foveal/util/parallel.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+#include <map>
+#include <string>
+
+using namespace foveal;
+
+namespace {
+
+const Scene& scene(const std::string& name) {
+  static std::map<std::string, Scene> scenes;
+  auto it = scenes.find(name);
+  if (it == scenes.end()) it = scenes.emplace(name, make_builtin_scene(name)).first;
+  return it->second;
+}
+
+bool same_bits(const std::vector<float>& a, const std::vector<float>& b) {
+  return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(float)) == 0;
+}
+
+// RMS of (V − truth) over the pixels that hit the scene.
+double rms_error(const Frame& f, const std::vector<float>& truth) {
+  double sum = 0;
+  size_t count = 0;
+  for (size_t i = 0; i < truth.size(); ++i)
+    if (f.gbuffer.hit(i)) {
+      sum += (f.visibility[i] - truth[i]) * (f.visibility[i] - truth[i]);
+      ++count;
+    }
+  return std::sqrt(sum / count);
+}
+
+}  // namespace
+
+TEST(Reuse, FirstTemporalFrameIsThePapersFrame) {
+  // No history: frame 0 casts every pixel's n(E) rays from the start of its sequence
+  const Scene& box = scene("box");
+  const Tracer tracer(box);
+  RenderParams p;
+  p.width = 96, p.height = 60, p.foveation.max_rays = 32, p.gaze_px = glm::dvec2(30, 20);
+  const Frame paper = render_frame(tracer, box, box.cameras.front(), p);
+  p.reuse.temporal = true;
+  AoHistory history;
+  const Frame first = render_frame(tracer, box, box.cameras.front(), p, {}, &history);
+  EXPECT_TRUE(same_bits(first.visibility, paper.visibility));
+  EXPECT_EQ(first.stats.ao_rays, paper.stats.ao_rays);
+  EXPECT_EQ(history.frames(), 1u);
+  // The next frame keeps every pixel's history and casts n/F rays a pixel
+  const Frame second = render_frame(tracer, box, box.cameras.front(), p, {}, &history);
+  size_t hits = 0;
+  for (size_t i = 0; i < second.visibility.size(); ++i) hits += second.gbuffer.hit(i);
+  EXPECT_EQ(second.stats.history_pixels, hits);
+  EXPECT_LT(second.stats.ao_rays, paper.stats.ao_rays / 3);
+  EXPECT_FALSE(same_bits(second.visibility, paper.visibility));
+}
+
+TEST(Reuse, StillViewConvergesToTheReference) {
+  // A still camera and gaze: the error against a 4096-ray truth falls as 1/√rays while history
+  // grows (64 rays, then 16 a frame up to H = 16 frames of 16), below a 64-ray reference's own error
+  const Scene& s = scene("sphere-plane");
+  const Tracer tracer(s);
+  const Camera camera = s.cameras.front();
+  RenderParams p;
+  p.width = 64, p.height = 40, p.mode = RenderMode::full, p.foveation.max_rays = 4096, p.seed = 11;
+  const std::vector<float> truth = render_frame(tracer, s, camera, p).visibility;
+  p.foveation.max_rays = 64, p.seed = 2;
+  const Frame reference = render_frame(tracer, s, camera, p);
+  const double reference_error = rms_error(reference, truth);
+  p.seed = 1;
+  p.reuse.temporal = true;
+  AoHistory history;
+  std::vector<double> errors;
+  for (int k = 0; k < 13; ++k) errors.push_back(rms_error(render_frame(tracer, s, camera, p, {}, &history), truth));
+  // 64 rays, then 80, 96, …, 256 after 13 frames: 1/√4 of the first error, allowing 25 %
+  EXPECT_LT(errors.back(), 0.5 * 1.25 * errors.front());
+  EXPECT_LT(errors[4], errors.front());  // 128 rays
+  EXPECT_LT(errors.back(), errors[4]);
+  EXPECT_LT(errors.back(), reference_error);
+  // The cap: H = 16 frames of 16 rays where q = 1
+  EXPECT_FLOAT_EQ(history_cap_rays(64, 1.0f, p.reuse), 256.0f);
+  EXPECT_FLOAT_EQ(history_cap_rays(64, 0.1f, p.reuse), 64.0f);  // F = 4 frames in the periphery
+}
+
+TEST(Reuse, DisocclusionLeavesNoGhost) {
+  // Frames of a sphere over a plane, then the sphere gone: the pixels that saw the sphere now see
+  // the open plane, reject their history and show V = 1 exactly
+  const Scene& with = scene("sphere-plane");
+  const Scene& without = scene("plane");
+  const Tracer tracer_with(with), tracer_without(without);
+  const Camera camera = with.cameras.front();
+  RenderParams p;
+  p.width = 80, p.height = 50, p.mode = RenderMode::full, p.foveation.max_rays = 32;
+  p.reuse.temporal = true;
+  AoHistory history;
+  Frame before;
+  for (int k = 0; k < 3; ++k) before = render_frame(tracer_with, with, camera, p, {}, &history);
+  const Frame after = render_frame(tracer_without, without, camera, p, {}, &history);
+  size_t revealed = 0, occluded_before = 0;
+  for (size_t i = 0; i < after.visibility.size(); ++i) {
+    if (!after.gbuffer.hit(i) || !before.gbuffer.hit(i)) continue;
+    if (std::fabs(before.gbuffer.position[i].y) < 1e-3f) continue;  // the plane then too
+    ++revealed;
+    occluded_before += before.visibility[i] < 0.99f;
+    EXPECT_EQ(after.visibility[i], 1.0f) << "pixel " << i;
+    EXPECT_EQ(after.ao_traced[i], 32) << "a revealed pixel starts afresh with n rays";
+  }
+  EXPECT_GT(revealed, 200u);
+  EXPECT_GT(occluded_before, 50u);  // the sphere's lower half was dark: a ghost would show
+  // The plane's pixels kept their history except where the sphere's shadow was contradicted
+  EXPECT_GT(after.stats.history_pixels, 0u);
+}
+
+TEST(Reuse, AdaptiveStopsAtTheMinimumOnAnOpenPlane) {
+  // V = 1 everywhere: each pixel stops at the first round whose all-open standard error is below
+  // τ(E), the smallest count the model allows, and its visibility is exactly 1
+  const Scene& s = scene("plane");
+  const Tracer tracer(s);
+  RenderParams p;
+  p.width = 120, p.height = 75, p.foveation.max_rays = 400, p.gaze_px = glm::dvec2(40, 40);
+  p.reuse.adaptive = true;
+  const Frame f = render_frame(tracer, s, s.cameras.front(), p);
+  const AoSampling sampling = ao_sampling(p.reuse, 0);
+  size_t checked = 0, saved = 0;
+  for (size_t i = 0; i < f.visibility.size(); ++i) {
+    if (!f.gbuffer.hit(i) || f.maps.rays[i] == 0) continue;
+    const int n = f.maps.rays[i];
+    int expected = std::min(n, p.reuse.adaptive_min_rays);
+    while (expected < n && visibility_standard_error(static_cast<float>(expected), static_cast<float>(expected)) * f.maps.quality[i] >
+                               sampling.tau_fovea)
+      expected = std::min(n, 2 * expected);
+    ASSERT_EQ(f.ao_traced[i], expected) << "pixel " << i;
+    ASSERT_EQ(f.visibility[i], 1.0f);
+    ++checked;
+    saved += expected < n;
+  }
+  EXPECT_GT(checked, 5000u);
+  EXPECT_GT(saved, checked / 2);
+  EXPECT_LT(f.stats.ao_rays, 64ull * checked);  // at most 64 rays where q = 1 (0.71/k ≤ 0.0125 at k = 64)
+}
+
+TEST(Reuse, AdaptiveKeepsTheSphereOverThePlaneWithinItsError) {
+  // On the plane under a sphere (R = 1, centre at height H = 2) the cosine-weighted occlusion at
+  // horizontal distance d is R²H/(H² + d²)^{3/2}. Each adaptive pixel's error, in units of the
+  // standard error it stopped at (≤ τ(E)), has an RMS of at most 1.
+  const Scene& s = scene("sphere-plane");
+  const Tracer tracer(s);
+  Camera camera{"top", {0.0f, 6.0f, 0.01f}, {0.0f, 0.0f, 0.0f}, {0, 1, 0}, 50.0f};
+  RenderParams p;
+  p.width = 80, p.height = 80, p.foveation.max_rays = 400;
+  p.reuse.adaptive = true;
+  const Frame f = render_frame(tracer, s, camera, p);
+  const float tau_fovea = ao_sampling(p.reuse, 0).tau_fovea;
+  double z2 = 0;
+  size_t count = 0, stopped_early = 0;
+  for (size_t i = 0; i < f.visibility.size(); ++i) {
+    const glm::vec3 x = f.gbuffer.position[i];
+    if (!f.gbuffer.hit(i) || std::fabs(x.y) > 1e-3f || f.maps.rays[i] == 0) continue;
+    const double d2 = x.x * x.x + x.z * x.z;
+    if (d2 < 1.2 * 1.2) continue;  // hidden under the sphere from above
+    const double truth = 1.0 - 2.0 / std::pow(4.0 + d2, 1.5);
+    const double tau = tau_fovea / f.maps.quality[i];
+    z2 += (f.visibility[i] - truth) * (f.visibility[i] - truth) / (tau * tau);
+    ++count;
+    stopped_early += f.ao_traced[i] < f.maps.rays[i];
+  }
+  ASSERT_GT(count, 1000u);
+  EXPECT_GT(stopped_early, count / 8);  // measured 17 %: most of the plane is partly occluded
+  EXPECT_LT(std::sqrt(z2 / count), 1.0) << "RMS error / τ";
+}
+
+TEST(Reuse, FilterNeverMixesAcrossADepthStepOrACrease) {
+  // A hand-made G-buffer: the left half a near plane (V = 0), the right half a far one (V = 1),
+  // both facing the camera; one ray a pixel, q = 0.1 (the widest footprint). Nothing may mix.
+  const int w = 24, h = 12;
+  GBuffer g;
+  g.width = w, g.height = h;
+  const size_t n = static_cast<size_t>(w) * h;
+  FoveationMaps maps;
+  maps.width = w, maps.height = h;
+  maps.quality.assign(n, 0.1f), maps.rays.assign(n, 1), maps.blend.assign(n, 1.0f), maps.eccentricity.assign(n, 30.0f);
+  AoCounts counts;
+  auto build = [&](float far_depth, glm::vec3 far_normal) {
+    g.prim.assign(n, 0), g.position.resize(n), g.normal.resize(n), g.geo_normal.resize(n), g.albedo.assign(n, glm::vec3(0.5f));
+    g.depth.resize(n), g.view.assign(n, glm::vec3(0, 0, -1));
+    counts.open.resize(n), counts.cast.assign(n, 1.0f);
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x) {
+        const size_t i = static_cast<size_t>(y) * w + x;
+        const bool left = x < w / 2;
+        const float depth = left ? 10.0f : far_depth;
+        g.depth[i] = depth;
+        g.position[i] = glm::vec3((x - w / 2) * 0.01f * depth, (y - h / 2) * 0.01f * depth, -depth);
+        g.normal[i] = g.geo_normal[i] = left ? glm::vec3(0, 0, 1) : far_normal;
+        counts.open[i] = left ? 0.0f : 1.0f;
+      }
+  };
+  auto filtered = [&] {
+    std::vector<float> v(n);
+    for (size_t i = 0; i < n; ++i) v[i] = counts.open[i];
+    AoReuseParams reuse;
+    reuse.denoise = true;
+    denoise_visibility(g, maps, counts, reuse, glm::degrees(2.0f * std::atan(0.01f * h / 2)), v);  // 0.01 rad a pixel
+    return v;
+  };
+  build(20.0f, glm::vec3(0, 0, 1));  // a depth step: twice as far
+  for (size_t i = 0; i < n; ++i) EXPECT_EQ(filtered()[i], counts.open[i]) << "depth step, pixel " << i;
+  build(10.0f, glm::vec3(1, 0, 0));  // a crease: the same depth, normals 90° apart
+  std::vector<float> crease = filtered();
+  for (size_t i = 0; i < n; ++i) EXPECT_EQ(crease[i], counts.open[i]) << "crease, pixel " << i;
+  // Control: one continuous plane — the filter does mix across the same boundary
+  build(10.0f, glm::vec3(0, 0, 1));
+  const std::vector<float> plane = filtered();
+  size_t mixed = 0;
+  for (size_t i = 0; i < n; ++i) mixed += plane[i] > 0.0f && plane[i] < 1.0f;
+  EXPECT_GT(mixed, static_cast<size_t>(2 * h));
+}
+
+TEST(Reuse, FilterLeavesTheFoveaAlone) {
+  EXPECT_EQ(denoise_max_radius(1.0f, AoReuseParams{}), 0);
+  EXPECT_EQ(denoise_max_radius(0.5f, AoReuseParams{}), 1);
+  EXPECT_EQ(denoise_max_radius(0.2f, AoReuseParams{}), 4);
+  EXPECT_EQ(denoise_max_radius(0.01f, AoReuseParams{}), kMaxDenoiseRadius);
+}
+
+TEST(Reuse, SameFramesForAnyThreadCount) {
+  const Scene& box = scene("box");
+  const Tracer tracer(box);
+  const Camera a = box.cameras.front();
+  Camera b = a;
+  b.eye += glm::vec3(0.15f, 0.05f, 0.0f);  // the camera moves between the frames
+  RenderParams p;
+  p.width = 96, p.height = 60, p.foveation.max_rays = 64, p.gaze_px = glm::dvec2(40, 30);
+  p.reuse.adaptive = p.reuse.denoise = p.reuse.temporal = true;
+  auto run = [&](int threads) {
+    const ThreadScope scope(threads);
+    AoHistory history;
+    render_frame(tracer, box, a, p, {}, &history);
+    return render_frame(tracer, box, b, p, {}, &history);
+  };
+  const Frame one = run(1);
+  EXPECT_GT(one.stats.history_pixels, 1000u);
+  EXPECT_GT(one.stats.denoised_pixels, 0u);
+  for (int threads : {2, 5}) {
+    const Frame f = run(threads);
+    EXPECT_TRUE(same_bits(f.visibility, one.visibility)) << threads << " threads";
+    EXPECT_TRUE(same_bits(f.color.pixels, one.color.pixels)) << threads << " threads";
+    EXPECT_EQ(f.stats.ao_rays, one.stats.ao_rays);
+  }
+}
+
+TEST(Reuse, RejectsBadParameters) {
+  RenderParams p;
+  p.reuse.adaptive_min_rays = 0;
+  EXPECT_THROW(validate(p), Error);
+  p = RenderParams{};
+  p.reuse.denoise_radius = 9;
+  EXPECT_THROW(validate(p), Error);
+  p = RenderParams{};
+  p.reuse.temporal_frames = 0;
+  EXPECT_THROW(validate(p), Error);
+  p = RenderParams{};
+  p.reuse.tolerance = 0;
+  EXPECT_THROW(validate(p), Error);
+  // The contradiction test: 40 % occluded history against 16 open fresh rays
+  EXPECT_TRUE(history_contradicted(240, 400, 16, 16));
+  EXPECT_FALSE(history_contradicted(380, 400, 16, 16));
+}
