@@ -2,6 +2,7 @@
 // model's parameters (γ, n_max, β), with the Pareto front and the configuration it recommends.
 #include "commands.h"
 #include "foveal/io/outputs.h"
+#include "foveal/quality/sequence.h"
 #include "foveal/quality/sweep.h"
 #include "foveal/render/ao_benchmark.h"
 #include "foveal/trace/tracer.h"
@@ -27,6 +28,9 @@ std::function<int()> add_bench_quality_command(CLI::App& bench) {
     double ellipse = 1.538, max_error = 4, max_flicker = 2, saccade = 5;
     uint64_t seed = 1;
     bool full = false;
+    bool sequence = false;
+    int frames = 24, fixation_frames = 6;
+    double orbit = 3;
   };
   auto o = std::make_shared<Options>();
   cmd->add_option("--scene", o->scene, "scene (default: scenes/dragon-box.json, the paper's dragon in a box; builtin:box when the dragon is absent)");
@@ -61,6 +65,15 @@ std::function<int()> add_bench_quality_command(CLI::App& bench) {
   cmd->add_option("--json", o->json, "write every configuration, gaze point and band as JSON");
   cmd->add_option("--markdown", o->markdown, "write the table as Markdown");
   cmd->add_option("--plot", o->plot, "the Pareto plot: speed-up against the acuity-weighted error (.png or .svg)");
+  cmd->add_flag("--sequence", o->sequence,
+                "sequence mode: the paper's method, adaptive+denoise and temporal reuse (alone, +adaptive, +denoise) along a camera "
+                "orbit with the gaze fixating around the first gaze point (--gazes object), each frame judged against the reference "
+                "at its camera");
+  cmd->add_option("--frames", o->frames, "--sequence: frames")->capture_default_str()->check(CLI::Range(2, 100000));
+  cmd->add_option("--orbit", o->orbit, "--sequence: the camera's orbit about the look point over the frames, degrees")
+      ->capture_default_str()->check(CLI::Range(-360.0, 360.0));
+  cmd->add_option("--fixation-frames", o->fixation_frames, "--sequence: frames per fixation (a 1° saccade between them)")
+      ->capture_default_str()->check(CLI::Range(1, 100000));
 
   return [o, gamma, max_rays, beta, gaze_names] {
     const ThreadScope threads(o->threads);
@@ -111,6 +124,27 @@ std::function<int()> add_bench_quality_command(CLI::App& bench) {
           if (name == "all" || g.first == name) p.gazes.push_back(g), found = true;
         if (!found) fail("--gazes: unknown gaze point '{}' (object, centre, top-left, top-right, bottom-left, bottom-right or all)", name);
       }
+    }
+    if (o->sequence) {
+      QualitySequenceParams q;
+      q.render = p.render;
+      q.reference_rays = o->reference_rays;
+      q.seed = o->seed;
+      q.cameras = orbit_path(camera, o->orbit, o->frames);
+      q.gazes = fixation_path(p.gazes.front().second, p.render, o->frames, o->fixation_frames);
+      fmt::print("foveal bench quality --sequence: {} ({} triangles), camera {} orbiting {:g}° over {} frames, gaze around {} at {:.0f},{:.0f} "
+                 "(a fixation every {} frames), {}x{}, {} threads\n",
+                 spec, tracer.triangles(), p.camera_name, o->orbit, o->frames, p.gazes.front().first, p.gazes.front().second.x,
+                 p.gazes.front().second.y, o->fixation_frames, p.render.width, p.render.height, threads.threads());
+      const QualitySequenceResult result = run_quality_sequence(scene, tracer, q, [](const std::string& line) {
+        fmt::print("  {}\n", line);
+        std::fflush(stdout);
+      });
+      const std::string table = to_markdown(result);
+      fmt::print("\n{}\n", table);
+      if (!o->json.empty()) write_json_file(o->json, to_json(result));
+      if (!o->markdown.empty()) write_text_file(o->markdown, table);
+      return 0;
     }
     fmt::print("foveal bench quality: {} ({} triangles), camera {}, {}x{}, {} threads; {} gamma × {} n_max × {} beta at {} gaze point(s)\n",
                spec, tracer.triangles(), p.camera_name, p.render.width, p.render.height, threads.threads(), p.gammas.size(),

@@ -533,7 +533,7 @@ Frame render_frame(const Tracer& tracer, const Scene& scene, const Camera& camer
     const bool temporal = reuse.temporal && history;
     AoCounts counts;
     t.reset();
-    if (temporal) f.stats.history_pixels = history->reproject(f.gbuffer, camera, counts);
+    if (temporal) f.stats.history_pixels = history->reproject(f.gbuffer, camera, f.maps.quality, counts);
     f.stats.reuse_ms = t.ms();
     t.reset();
     const AoSampling sampling = ao_sampling(reuse, temporal ? history->frames() : 0);

@@ -19,7 +19,7 @@ constexpr float kSameNormal = 0.9f;  // cos 25.8°: history and filter weights n
 
 }  // namespace
 
-uint64_t AoHistory::reproject(const GBuffer& g, const Camera& camera, AoCounts& counts) const {
+uint64_t AoHistory::reproject(const GBuffer& g, const Camera& camera, const std::vector<float>& quality, AoCounts& counts) const {
   const size_t pixels = static_cast<size_t>(g.width) * g.height;
   counts.open.assign(pixels, 0.0f);
   counts.cast.assign(pixels, 0.0f);
@@ -37,6 +37,12 @@ uint64_t AoHistory::reproject(const GBuffer& g, const Camera& camera, AoCounts& 
       float distance = 0;
       if (!previous.project(g.position[i], px, py, distance)) continue;
       if (!(px >= 0 && py >= 0 && px < width_ && py < height_)) continue;
+      // A surface point seen off the previous pixel's centre has another visibility there: the
+      // eye resolves single pixels where q = 1, so history must come from within 0.1 px there,
+      // up to half a pixel (any) where acuity has fallen to half
+      const double dx = px - std::floor(px) - 0.5, dy = py - std::floor(py) - 0.5;
+      const double reach = 0.1 + 0.8 * std::max(0.0, 1.0 - static_cast<double>(quality[i]));
+      if (dx * dx + dy * dy > reach * reach) continue;
       const size_t j = static_cast<size_t>(py) * width_ + static_cast<size_t>(px);
       if (!hit_[j] || !(cast_[j] > 0)) continue;
       // The same surface: close normals, and the point on the plane the previous pixel saw
