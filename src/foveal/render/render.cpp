@@ -240,7 +240,7 @@ AoSampling ao_sampling(const AoReuseParams& reuse, uint32_t frame_index) {
   AoSampling s;
   s.adaptive = reuse.adaptive;
   s.first_round = std::max(1, reuse.adaptive_min_rays);
-  s.tau_fovea = static_cast<float>(reuse.tolerance * 0.5 / std::sqrt(std::max(1, reuse.target_rays)));
+  s.tau_fovea = reuse.tau_fovea();
   if (reuse.temporal) {
     s.temporal_frames = std::max(1, reuse.temporal_frames);
     s.frame_index = frame_index;
@@ -533,7 +533,7 @@ Frame render_frame(const Tracer& tracer, const Scene& scene, const Camera& camer
     const bool temporal = reuse.temporal && history;
     AoCounts counts;
     t.reset();
-    if (temporal) f.stats.history_pixels = history->reproject(f.gbuffer, camera, f.maps.quality, counts);
+    if (temporal) f.stats.history_pixels = history->reproject(f.gbuffer, f.maps.quality, counts);
     f.stats.reuse_ms = t.ms();
     t.reset();
     const AoSampling sampling = ao_sampling(reuse, temporal ? history->frames() : 0);

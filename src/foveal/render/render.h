@@ -46,6 +46,8 @@ struct AoReuseParams {
   int target_rays = 400;        // the reference's rays per pixel, whose noise sets τ
   double tolerance = 0.5;       // scales τ(E) (0.5: measured within the reference's noise in the fovea)
   bool any() const { return adaptive || denoise || temporal; }
+  // τ where q = 1: tolerance · 0.5/√target_rays (τ(E) = this / q(E))
+  float tau_fovea() const { return static_cast<float>(tolerance * 0.5 / std::sqrt(std::max(1, target_rays))); }
 };
 inline constexpr int kMaxDenoiseRadius = 8;
 

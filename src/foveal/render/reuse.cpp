@@ -19,12 +19,11 @@ constexpr float kSameNormal = 0.9f;  // cos 25.8°: history and filter weights n
 
 }  // namespace
 
-uint64_t AoHistory::reproject(const GBuffer& g, const Camera& camera, const std::vector<float>& quality, AoCounts& counts) const {
+uint64_t AoHistory::reproject(const GBuffer& g, const std::vector<float>& quality, AoCounts& counts) const {
   const size_t pixels = static_cast<size_t>(g.width) * g.height;
   counts.open.assign(pixels, 0.0f);
   counts.cast.assign(pixels, 0.0f);
   if (empty()) return 0;
-  (void)camera;  // the current camera is implicit in the G-buffer's positions
   const CameraRays previous(camera_, width_, height_);
   const float angle = pixel_angle(camera_.fov_deg, height_);
   std::atomic<uint64_t> kept{0};
@@ -97,7 +96,7 @@ int denoise_max_radius(float quality, const AoReuseParams& reuse) {
 uint64_t denoise_visibility(const GBuffer& g, const FoveationMaps& maps, const AoCounts& c, const AoReuseParams& reuse,
                             float fov_deg, std::vector<float>& visibility) {
   const float angle = pixel_angle(fov_deg, g.height);
-  const float tau_fovea = static_cast<float>(reuse.tolerance * 0.5 / std::sqrt(std::max(1, reuse.target_rays)));
+  const float tau_fovea = reuse.tau_fovea();
   constexpr float kAlbedoSigma = 0.15f;
   std::vector<float> out = visibility;
   std::atomic<uint64_t> changed{0};

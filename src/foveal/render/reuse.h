@@ -31,12 +31,12 @@ class AoHistory {
   void clear() { *this = AoHistory(); }
   bool empty() const { return width_ == 0; }
   uint32_t frames() const { return frames_; }  // frames stored since the last clear
-  // The counts kept for the surface points of `gbuffer` (seen by `camera`): the previous frame's
-  // at the pixel each point projects to, where it saw the same surface; zero elsewhere. Returns
-  // the number of pixels that kept history.
-  // `quality` is the frame's q(E) per pixel: where q = 1 only a point within 0.1 px of the previous
-  // pixel's centre keeps its history (0.1 + 0.8·(1 − q) px elsewhere).
-  uint64_t reproject(const GBuffer& gbuffer, const Camera& camera, const std::vector<float>& quality, AoCounts& counts) const;
+  // The counts kept for the surface points of `gbuffer` (its world positions stand for the current
+  // camera): the previous frame's at the pixel each point projects to, where it saw the same
+  // surface; zero elsewhere. `quality` is the frame's q(E) per pixel: where q = 1 only a point
+  // within 0.1 px of the previous pixel's centre keeps its history (0.1 + 0.8·(1 − q) px elsewhere).
+  // Returns the number of pixels that kept history.
+  uint64_t reproject(const GBuffer& gbuffer, const std::vector<float>& quality, AoCounts& counts) const;
   // Keep a frame's counts for the next, each pixel's capped at H(E) frames of its refresh rays
   // (scaled down, V unchanged).
   void store(const GBuffer& gbuffer, const Camera& camera, const FoveationMaps& maps, const AoReuseParams& reuse,
