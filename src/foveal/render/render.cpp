@@ -264,6 +264,8 @@ uint64_t trace_ao_counts(const Tracer& tracer, const GBuffer& g, const Foveation
     uint32_t cast, round_end, limit;
     uint32_t blocked;
     uint32_t offset;  // index of the first ray in the pixel's sequence this frame
+    uint32_t n;       // the pixel's n(E)
+    uint32_t dropped; // rays cast this frame before its history was dropped
   };
   struct Segment {
     uint32_t pixel;       // index into Work::pixels
@@ -295,6 +297,7 @@ uint64_t trace_ao_counts(const Tracer& tracer, const GBuffer& g, const Foveation
         if (!g.hit(i) || n == 0) continue;
         int limit = n;
         uint32_t offset = 0;
+        uint64_t pixel_rays_seed = seed;
         if (sampling.temporal_frames > 0) {
           // What n lacks after the history, but at least m = n/F (history refreshes over F frames).
           // A still pixel's rays continue its sequence: frame 0 casts rays [0, F·m), frame f the
@@ -302,15 +305,24 @@ uint64_t trace_ao_counts(const Tracer& tracer, const GBuffer& g, const Foveation
           const int refresh = (n + sampling.temporal_frames - 1) / sampling.temporal_frames;
           const int lack = static_cast<int>(std::ceil(static_cast<float>(n) - counts.cast[i]));
           limit = std::max(refresh, std::min(n, lack));
-          if (sampling.frame_index > 0)
-            offset = (static_cast<uint32_t>(sampling.temporal_frames) + sampling.frame_index - 1) * static_cast<uint32_t>(refresh);
+          // A pixel without history (a disocclusion, the first frame) casts the paper's first n
+          // rays. One whose history falls short of n (weighed down, or adaptive stopped early)
+          // casts the start of a sequence scrambled for this frame: a later stretch of its own
+          // sequence is less evenly spread than any sequence's start (measured: ~1.3× the
+          // reference's noise in the fovea of a moving camera).
+          if (sampling.frame_index > 0 && counts.cast[i] > 0) {
+            if (limit > refresh)
+              pixel_rays_seed = seed ^ (static_cast<uint64_t>(hash32(0x7e4b0000U + sampling.frame_index)) << 32);
+            else
+              offset = (static_cast<uint32_t>(sampling.temporal_frames) + sampling.frame_index - 1) * static_cast<uint32_t>(refresh);
+          }
         }
         const int first = sampling.adaptive ? std::min(sampling.first_round, limit) : limit;
         w.active.push_back(static_cast<uint32_t>(w.pixels.size()));
         w.pixels.push_back({i,
-                            AoPixelRays(g.position[i], g.geo_normal[i], epsilon, ao_distance, seed, static_cast<uint32_t>(x),
+                            AoPixelRays(g.position[i], g.geo_normal[i], epsilon, ao_distance, pixel_rays_seed, static_cast<uint32_t>(x),
                                         static_cast<uint32_t>(y), sobol_table_2d()),
-                            0, static_cast<uint32_t>(first), static_cast<uint32_t>(limit), 0, offset});
+                            0, static_cast<uint32_t>(first), static_cast<uint32_t>(limit), 0, offset, static_cast<uint32_t>(n), 0});
       }
     size_t fill = 0;
     auto flush = [&] {
@@ -343,6 +355,20 @@ uint64_t trace_ao_counts(const Tracer& tracer, const GBuffer& g, const Foveation
       w.next.clear();
       for (uint32_t a : w.active) {
         Pixel& p = w.pixels[a];
+        // History this frame's rays contradict (an occluder that moved, another surface) is dropped,
+        // with them: the pixel starts again as a pixel without history, the paper's first n rays
+        if (sampling.temporal_frames > 0 &&
+            history_contradicted(counts.open[p.i], counts.cast[p.i], static_cast<float>(p.cast - p.blocked),
+                                 static_cast<float>(p.cast))) {
+          counts.open[p.i] = counts.cast[p.i] = 0.0f;
+          if (!counts.origin_sum.empty()) counts.origin_sum[p.i] = glm::vec3(0.0f);
+          p.dropped += p.cast;
+          p.cast = p.blocked = p.offset = 0;
+          p.limit = p.n;
+          p.round_end = sampling.adaptive ? std::min(static_cast<uint32_t>(sampling.first_round), p.n) : p.n;
+          w.next.push_back(a);
+          continue;
+        }
         if (p.cast >= p.limit) continue;
         if (sampling.adaptive) {
           const float cast = counts.cast[p.i] + static_cast<float>(p.cast);
@@ -355,13 +381,10 @@ uint64_t trace_ao_counts(const Tracer& tracer, const GBuffer& g, const Foveation
       std::swap(w.active, w.next);
     }
     for (const Pixel& p : w.pixels) {
-      const float open = static_cast<float>(p.cast - p.blocked), cast = static_cast<float>(p.cast);
-      // History this frame's own rays contradict (an occluder that moved) is dropped
-      if (sampling.temporal_frames > 0 && history_contradicted(counts.open[p.i], counts.cast[p.i], open, cast))
-        counts.open[p.i] = counts.cast[p.i] = 0.0f;
-      counts.open[p.i] += open;
-      counts.cast[p.i] += cast;
-      counts.traced[p.i] = static_cast<uint16_t>(p.cast);
+      counts.open[p.i] += static_cast<float>(p.cast - p.blocked);
+      counts.cast[p.i] += static_cast<float>(p.cast);
+      if (!counts.origin_sum.empty()) counts.origin_sum[p.i] += static_cast<float>(p.cast) * g.position[p.i];
+      counts.traced[p.i] = static_cast<uint16_t>(std::min<uint32_t>(p.dropped + p.cast, UINT16_MAX));
     }
     if (hooks.tile_ms) (*hooks.tile_ms)[static_cast<size_t>(tile)] = tile_timer.ms();
     // Progress: whichever thread finishes a tile reports, one at a time
@@ -533,7 +556,7 @@ Frame render_frame(const Tracer& tracer, const Scene& scene, const Camera& camer
     const bool temporal = reuse.temporal && history;
     AoCounts counts;
     t.reset();
-    if (temporal) f.stats.history_pixels = history->reproject(f.gbuffer, f.maps.quality, counts);
+    if (temporal) f.stats.history_pixels = history->reproject(f.gbuffer, f.maps, reuse, counts);
     f.stats.reuse_ms = t.ms();
     t.reset();
     const AoSampling sampling = ao_sampling(reuse, temporal ? history->frames() : 0);

@@ -152,8 +152,9 @@ struct AoSampling {
   int first_round = 16;        // adaptive: rays of the first round
   float tau_fovea = 0;         // adaptive: the standard error allowed where q = 1 (τ(E) = tau_fovea / q)
   int temporal_frames = 0;     // > 0: with history, m = ceil(n/F) rays a frame, or what n lacks
-  uint32_t frame_index = 0;    // temporal: frames before this one; frame f > 0 starts each pixel's
-                               // sequence at (F + f − 1)·m, after frame 0's n = F·m rays
+  uint32_t frame_index = 0;    // temporal: frames before this one; frame f > 0 starts the sequence
+                               // of a pixel with history at (F + f − 1)·m, after frame 0's n = F·m
+                               // rays (one without starts at 0, as the paper's pixel)
 };
 AoSampling ao_sampling(const AoReuseParams& reuse, uint32_t frame_index);
 // AO ray counts per pixel: rays found open and rays cast, history included (floats: history is
@@ -161,6 +162,9 @@ AoSampling ao_sampling(const AoReuseParams& reuse, uint32_t frame_index);
 struct AoCounts {
   std::vector<float> open, cast;
   std::vector<uint16_t> traced;  // rays traced this frame
+  // With history only (else empty): Σ over the counted rays of their origin, the surface point of
+  // the pixel that cast each (origin_sum / cast: where the estimate stands). The pass adds its own.
+  std::vector<glm::vec3> origin_sum;
 };
 // Whether a pixel's fresh rays contradict its history: their visibilities differ by more than
 // kHistoryContradiction standard errors of the difference (a two-proportion z-test; the pooled

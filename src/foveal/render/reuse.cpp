@@ -19,13 +19,26 @@ constexpr float kSameNormal = 0.9f;  // cos 25.8°: history and filter weights n
 
 }  // namespace
 
-uint64_t AoHistory::reproject(const GBuffer& g, const std::vector<float>& quality, AoCounts& counts) const {
+float history_normal_cos(float quality) {
+  const double q = std::clamp(static_cast<double>(quality), 0.01, 1.0);
+  return static_cast<float>(std::cos(glm::radians(std::min(25.8, 5.7 / q))));
+}
+
+double history_reach_px(float quality) {
+  const double q = std::clamp(static_cast<double>(quality), 1.0 / (1.0 + kMaxDenoiseRadius), 1.0);
+  return 0.1 + 0.8 * (1.0 / q - 1.0);
+}
+
+uint64_t AoHistory::reproject(const GBuffer& g, const FoveationMaps& maps, const AoReuseParams& reuse,
+                              AoCounts& counts) const {
   const size_t pixels = static_cast<size_t>(g.width) * g.height;
   counts.open.assign(pixels, 0.0f);
   counts.cast.assign(pixels, 0.0f);
+  counts.origin_sum.assign(pixels, glm::vec3(0.0f));
   if (empty()) return 0;
   const CameraRays previous(camera_, width_, height_);
   const float angle = pixel_angle(camera_.fov_deg, height_);
+  const int f = std::max(1, reuse.temporal_frames);
   std::atomic<uint64_t> kept{0};
   tbb::parallel_for(0, g.height, [&](int y) {
     uint64_t row_kept = 0;
@@ -36,20 +49,51 @@ uint64_t AoHistory::reproject(const GBuffer& g, const std::vector<float>& qualit
       float distance = 0;
       if (!previous.project(g.position[i], px, py, distance)) continue;
       if (!(px >= 0 && py >= 0 && px < width_ && py < height_)) continue;
-      // A surface point seen off the previous pixel's centre has another visibility there: the
-      // eye resolves single pixels where q = 1, so history must come from within 0.1 px there,
-      // up to half a pixel (any) where acuity has fallen to half
-      const double dx = px - std::floor(px) - 0.5, dy = py - std::floor(py) - 0.5;
-      const double reach = 0.1 + 0.8 * std::max(0.0, 1.0 - static_cast<double>(quality[i]));
-      if (dx * dx + dy * dy > reach * reach) continue;
-      const size_t j = static_cast<size_t>(py) * width_ + static_cast<size_t>(px);
-      if (!hit_[j] || !(cast_[j] > 0)) continue;
-      // The same surface: close normals, and the point on the plane the previous pixel saw
-      if (glm::dot(g.normal[i], normal_[j]) < kSameNormal) continue;
-      const float plane = std::fabs(glm::dot(g.position[i] - position_[j], normal_[j]));
-      if (plane > 2.0f * angle * distance) continue;
-      counts.open[i] = open_[j];
-      counts.cast[i] = cast_[j];
+      // The four previous pixels around the point, bilinearly weighted, those that saw the same
+      // surface (close normals, the point on their plane): their mean origin is the point's
+      // own to first order, where one nearest pixel's is up to 0.7 px off
+      const float footprint = angle * distance;
+      const float normal_cos = history_normal_cos(maps.quality[i]);
+      const double fx = px - 0.5, fy = py - 0.5;
+      const int x0 = static_cast<int>(std::floor(fx)), y0 = static_cast<int>(std::floor(fy));
+      const double ax = fx - x0, ay = fy - y0;
+      double weight = 0, open = 0, cast = 0;
+      glm::dvec3 origin_sum(0.0);
+      for (int k = 0; k < 4; ++k) {
+        const int u = x0 + (k & 1), v = y0 + (k >> 1);
+        if (u < 0 || v < 0 || u >= width_ || v >= height_) continue;
+        const size_t j = static_cast<size_t>(v) * width_ + u;
+        if (!hit_[j] || !(cast_[j] > 0)) continue;
+        if (glm::dot(g.geo_normal[i], normal_[j]) < normal_cos) continue;
+        if (std::fabs(glm::dot(g.position[i] - position_[j], normal_[j])) > 2.0f * footprint) continue;
+        const double b = ((k & 1) ? ax : 1.0 - ax) * ((k >> 1) ? ay : 1.0 - ay);
+        if (!(b > 0)) continue;
+        weight += b;
+        open += b * open_[j];
+        cast += b * cast_[j];
+        origin_sum += b * glm::dvec3(origin_[j]);
+      }
+      if (!(weight > 0)) continue;
+      open /= weight;
+      cast /= weight;
+      origin_sum /= weight;
+      // Where the history's rays were cast from: their mean origin, which drifts from the point
+      // as the camera moves. To first order the estimate's bias is that offset times the
+      // gradient of V, so the history is weighed down until the mean origin after this frame's
+      // m = n/F rays at the point lies within the reach the eye allows: 0.1 px where q = 1,
+      // growing as the cells it resolves (1/q px) grow.
+      const glm::vec3 origin = glm::vec3(origin_sum / cast);
+      const double d = glm::length(g.position[i] - origin) / std::max(footprint, 1e-12f);
+      const double reach = history_reach_px(maps.quality[i]);
+      float scale = 1.0f;
+      if (d > reach) {
+        const double m = static_cast<double>((maps.rays[i] + f - 1) / f);
+        scale = static_cast<float>(std::min(1.0, m * reach / ((d - reach) * cast)));
+        if (!(scale * cast >= 1.0)) continue;  // less than a ray: none
+      }
+      counts.open[i] = static_cast<float>(scale * open);
+      counts.cast[i] = static_cast<float>(scale * cast);
+      counts.origin_sum[i] = glm::vec3(static_cast<double>(scale) * origin_sum);
       ++row_kept;
     }
     kept += row_kept;
@@ -69,11 +113,12 @@ void AoHistory::store(const GBuffer& g, const Camera& camera, const FoveationMap
   height_ = g.height;
   camera_ = camera;
   position_ = g.position;
-  normal_ = g.normal;
+  normal_ = g.geo_normal;
   const size_t pixels = static_cast<size_t>(g.width) * g.height;
   hit_.resize(pixels);
   open_.resize(pixels);
   cast_.resize(pixels);
+  origin_.resize(pixels);
   tbb::parallel_for(size_t(0), pixels, [&](size_t i) {
     hit_[i] = g.hit(i) ? 1 : 0;
     const float cap = history_cap_rays(maps.rays[i], maps.quality[i], reuse);
@@ -81,6 +126,7 @@ void AoHistory::store(const GBuffer& g, const Camera& camera, const FoveationMap
     const float scale = cast > cap ? cap / cast : 1.0f;
     open_[i] = counts.open[i] * scale;
     cast_[i] = cast * scale;
+    origin_[i] = counts.origin_sum.size() == pixels ? counts.origin_sum[i] * scale : cast * scale * g.position[i];
   });
   ++frames_;
 }

@@ -8,15 +8,19 @@
 // Temporal reuse follows the reprojection caches of real-time rendering (Nehab et al. 2007,
 // "Accelerating real-time shading with reverse reprojection caching"; the history-length cap of
 // temporal anti-aliasing, Patney et al. 2016 for the foveated case): a pixel's surface point is
-// projected into the previous frame's camera and the counts there are kept when that pixel saw
-// the same surface (normal within 25°, on the same plane within two pixel footprints); otherwise
-// (a disocclusion) the pixel starts afresh. History is stored per pixel of the last frame, not per
+// projected into the previous frame's camera and the counts of the four pixels around it are
+// blended bilinearly, those that saw the same surface (geometric normal within 5.7°/q(E), on the
+// same plane within two pixel footprints); where none did (a disocclusion) the pixel starts
+// afresh. The history carries the mean origin of its rays: bilinear blending keeps it on the
+// point to first order as the camera moves, and where it still drifts beyond what the eye
+// resolves the history is weighed down. History is stored per pixel of the last frame, not per
 // gaze, so a saccade keeps what the new fovea already has.
 //
 // The filter is a cross-bilateral pooling of rays (Dammertz et al. 2010 and the SVGF family's
 // edge-stopping weights on depth, normal and albedo): V = Σ w·open / Σ w·cast over a window whose
 // radius is what the pixel's rays lack to reach τ(E), at most radius·(1/q(E) − 1): the footprint
-// grows as acuity falls, and is nothing where q = 1, where the eye resolves every pixel. Normal and plane tests are hard: no weight crosses a crease or a depth edge.
+// grows as acuity falls, and is nothing where q = 1, where the eye resolves every pixel. Normal
+// and plane tests are hard: no weight crosses a crease or a depth edge.
 #pragma once
 
 #include "foveal/render/render.h"
@@ -33,10 +37,12 @@ class AoHistory {
   uint32_t frames() const { return frames_; }  // frames stored since the last clear
   // The counts kept for the surface points of `gbuffer` (its world positions stand for the current
   // camera): the previous frame's at the pixel each point projects to, where it saw the same
-  // surface; zero elsewhere. `quality` is the frame's q(E) per pixel: where q = 1 only a point
-  // within 0.1 px of the previous pixel's centre keeps its history (0.1 + 0.8·(1 − q) px elsewhere).
-  // Returns the number of pixels that kept history.
-  uint64_t reproject(const GBuffer& gbuffer, const std::vector<float>& quality, AoCounts& counts) const;
+  // surface; zero elsewhere. The history's rays were cast from points around this one (their mean,
+  // AoCounts::origin_sum, drifts as the camera moves); where that mean is farther than
+  // history_reach_px(q(E)) the history is weighed down so that, with this frame's n(E)/F rays, it
+  // comes back within reach. Returns the number of pixels that kept history.
+  uint64_t reproject(const GBuffer& gbuffer, const FoveationMaps& maps, const AoReuseParams& reuse,
+                     AoCounts& counts) const;
   // Keep a frame's counts for the next, each pixel's capped at H(E) frames of its refresh rays
   // (scaled down, V unchanged).
   void store(const GBuffer& gbuffer, const Camera& camera, const FoveationMaps& maps, const AoReuseParams& reuse,
@@ -48,8 +54,19 @@ class AoHistory {
   std::vector<glm::vec3> position_, normal_;
   std::vector<uint8_t> hit_;
   std::vector<float> open_, cast_;
+  std::vector<glm::vec3> origin_;  // Σ of the counted rays' origins
   uint32_t frames_ = 0;
 };
+
+// How far the mean origin of a pixel's history rays may lie from its surface point, in pixel
+// footprints: 0.1 where q = 1 (the eye resolves single pixels there), 0.1 + 0.8·(1/q − 1) as the
+// cells it resolves grow (1/q pixels), at most that at the filter's widest footprint.
+double history_reach_px(float quality);
+// The cosine of the widest angle between the geometric normal a pixel's history was cast about
+// and its own: 5.7° where q = 1 (a facet tilted more biases AO beyond the reference's noise,
+// measured on the dragon), 5.7°/q up to 25.8° as acuity falls.
+float history_normal_cos(float quality);
+
 
 // The history cap of a pixel, rays: H(E) = max(F, round(H·q)) frames of ceil(n/F) rays.
 float history_cap_rays(int rays, float quality, const AoReuseParams& reuse);
