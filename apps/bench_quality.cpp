@@ -5,6 +5,7 @@
 #include "foveal/quality/sequence.h"
 #include "foveal/quality/sweep.h"
 #include "foveal/render/ao_benchmark.h"
+#include "foveal/render/replay.h"
 #include "foveal/trace/tracer.h"
 #include "foveal/util/error.h"
 #include "foveal/util/parallel.h"
@@ -16,6 +17,30 @@
 #include <memory>
 
 namespace foveal::app {
+
+namespace {
+
+// The gaze a replay of the recording renders at each of `frames` frames (the fixation filter's
+// output, the image centre before the first fixation), without rendering them.
+std::vector<glm::dvec2> recording_gaze_path(const std::string& path, const RenderParams& params, double start_s, double fps,
+                                            int frames) {
+  const Recording recording = read_recording_warned(path, ReadOptions{});
+  ReplaySettings settings;
+  settings.fps = fps;
+  settings.frames = frames;
+  settings.start_s = start_s;
+  if (start_s > recording.duration_s())
+    fail("--start: {} s is past the end of {} ({:.3f} s long)", start_s, path, recording.duration_s());
+  std::vector<glm::dvec2> gazes;
+  const Scene none;
+  const Tracer tracer(none);
+  const FrameRenderer no_render = [](const RenderParams&) { return Frame{}; };
+  replay_recording(recording, params.display, tracer, none, Camera{}, params, settings,
+                   [&](const ReplayFrame& f, const Frame&) { gazes.push_back(f.render_gaze); }, {}, no_render);
+  return gazes;
+}
+
+}  // namespace
 
 std::function<int()> add_bench_quality_command(CLI::App& bench) {
   auto* cmd = bench.add_subcommand(
@@ -31,6 +56,8 @@ std::function<int()> add_bench_quality_command(CLI::App& bench) {
     bool sequence = false;
     int frames = 24, fixation_frames = 6;
     double orbit = 3;
+    std::string recording;
+    double start = 0, fps = 30;
   };
   auto o = std::make_shared<Options>();
   cmd->add_option("--scene", o->scene, "scene (default: scenes/dragon-box.json, the paper's dragon in a box; builtin:box when the dragon is absent)");
@@ -74,6 +101,12 @@ std::function<int()> add_bench_quality_command(CLI::App& bench) {
       ->capture_default_str()->check(CLI::Range(-360.0, 360.0));
   cmd->add_option("--fixation-frames", o->fixation_frames, "--sequence: frames per fixation (a 1° saccade between them)")
       ->capture_default_str()->check(CLI::Range(1, 100000));
+  cmd->add_option("--recording", o->recording,
+                  "--sequence: the gaze of a recording (EyeLink .asc, Pupil gaze_positions.csv, Tobii .tsv, t,x,y CSV) instead of "
+                  "the synthetic fixations, as `replay` follows it: the causal fixation filter's output at each frame, the "
+                  "recording's screen mapped onto the render");
+  cmd->add_option("--start", o->start, "--recording: start this many seconds after its first sample")->capture_default_str()->check(CLI::Range(0.0, 1e9));
+  cmd->add_option("--fps", o->fps, "--recording: frames per second of gaze time")->capture_default_str()->check(CLI::Range(0.1, 10000.0));
 
   return [o, gamma, max_rays, beta, gaze_names] {
     const ThreadScope threads(o->threads);
@@ -125,17 +158,25 @@ std::function<int()> add_bench_quality_command(CLI::App& bench) {
         if (!found) fail("--gazes: unknown gaze point '{}' (object, centre, top-left, top-right, bottom-left, bottom-right or all)", name);
       }
     }
+    if (!o->sequence && !o->recording.empty()) fail("--recording: only with --sequence");
     if (o->sequence) {
       QualitySequenceParams q;
       q.render = p.render;
       q.reference_rays = o->reference_rays;
       q.seed = o->seed;
       q.cameras = orbit_path(camera, o->orbit, o->frames);
-      q.gazes = fixation_path(p.gazes.front().second, p.render, o->frames, o->fixation_frames);
-      fmt::print("foveal bench quality --sequence: {} ({} triangles), camera {} orbiting {:g}° over {} frames, gaze around {} at {:.0f},{:.0f} "
-                 "(a fixation every {} frames), {}x{}, {} threads\n",
-                 spec, tracer.triangles(), p.camera_name, o->orbit, o->frames, p.gazes.front().first, p.gazes.front().second.x,
-                 p.gazes.front().second.y, o->fixation_frames, p.render.width, p.render.height, threads.threads());
+      std::string gaze_text;
+      if (o->recording.empty()) {
+        q.gazes = fixation_path(p.gazes.front().second, p.render, o->frames, o->fixation_frames);
+        gaze_text = fmt::format("gaze around {} at {:.0f},{:.0f} (a fixation every {} frames)", p.gazes.front().first,
+                                p.gazes.front().second.x, p.gazes.front().second.y, o->fixation_frames);
+      } else {
+        q.gazes = recording_gaze_path(o->recording, p.render, o->start, o->fps, o->frames);
+        gaze_text = fmt::format("gaze of {} from {:g} s at {:g} fps", o->recording, o->start, o->fps);
+      }
+      fmt::print("foveal bench quality --sequence: {} ({} triangles), camera {} orbiting {:g}° over {} frames, {}, {}x{}, {} threads\n",
+                 spec, tracer.triangles(), p.camera_name, o->orbit, o->frames, gaze_text, p.render.width, p.render.height,
+                 threads.threads());
       const QualitySequenceResult result = run_quality_sequence(scene, tracer, q, [](const std::string& line) {
         fmt::print("  {}\n", line);
         std::fflush(stdout);

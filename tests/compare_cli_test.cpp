@@ -123,7 +123,9 @@ TEST(BenchQualityCli, BadOptionsAreOneClearLine) {
            {base + "--beta -1", "--beta"},
            {base + "--gamma x", "--gamma"},
            {base + "--gazes nowhere", "nowhere"},
-           {base + "--gaze 3", "--gaze"}})
+           {base + "--gaze 3", "--gaze"},
+           {base + "--recording x.csv", "--sequence"},
+           {base + "--sequence --recording missing.csv", "missing.csv"}})
     expect_one_line_error(args, expected);
 }
 

@@ -129,6 +129,31 @@ TEST(GazeCli, ReplayFoveaFollowsAPursuit) {
   EXPECT_LT(std::stod(frames["ivt"][12][4]), 20.0);
 }
 
+TEST(BenchQualityCli, SequenceFollowsARecordingAsReplayDoes) {
+  // The sequence's gaze at each frame is the one `replay` renders for the same recording and fps
+  const std::string rec = write_three_fixations("sequence_gaze.csv");
+  const CliRun replay = foveal_test::foveal("replay --gaze " + rec + " --scene builtin:sphere-plane --size 48x30 --max-rays 1 --fps 10 -q -o seqgaze");
+  ASSERT_EQ(replay.status, 0) << replay.err;
+  const auto rows = read_csv(scratch("seqgaze/frames.csv"));
+  ASSERT_EQ(rows.size(), 1u + 10u);
+  const CliRun r = foveal_test::foveal("bench quality --sequence --recording " + rec + " --fps 10 --frames 10 --orbit 0 --scene builtin:sphere-plane "
+                          "--size 48x30 --reference-rays 8 --json sequence.json");
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_NE(r.out.find("gaze of"), std::string::npos) << r.out;
+  const auto j = nlohmann::json::parse(std::ifstream(scratch("sequence.json")));
+  ASSERT_EQ(j["gazes"].size(), 10u);
+  int fixated = 0;
+  for (size_t k = 0; k < 10; ++k) {
+    const auto& row = rows[k + 1];
+    const double x = row[4].empty() ? 24.0 : std::stod(row[4]), y = row[5].empty() ? 15.0 : std::stod(row[5]);
+    fixated += !row[4].empty();
+    EXPECT_NEAR(j["gazes"][k][0].get<double>(), x, 0.006) << k;  // frames.csv: 2 decimals
+    EXPECT_NEAR(j["gazes"][k][1].get<double>(), y, 0.006) << k;
+  }
+  EXPECT_GE(fixated, 8);  // the recording's fixations, not the synthetic ones
+  ASSERT_EQ(j["configs"].size(), 5u);
+}
+
 TEST(GazeCli, ReplayWritesAVideo) {
   if (std::system("ffmpeg -version > /dev/null 2>&1") != 0) GTEST_SKIP() << "skipped: ffmpeg absent";
   const std::string rec = write_three_fixations("video.csv");

@@ -82,6 +82,7 @@ QualitySequenceResult run_quality_sequence(const Scene& scene, const Tracer& tra
   result.width = params.render.width;
   result.height = params.render.height;
   result.frames = frames;
+  result.gazes = params.gazes;
   result.reference_rays = params.reference_rays;
   result.threads = static_cast<int>(tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism));
   for (const Band& b : default_bands()) result.band_names.push_back(b.name);
@@ -161,7 +162,9 @@ nlohmann::json to_json(const QualitySequenceResult& r) {
   auto number = [](double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); };
   nlohmann::json j = {{"scene", r.scene},        {"width", r.width},     {"height", r.height},
                       {"frames", r.frames},      {"threads", r.threads}, {"reference_rays", r.reference_rays},
-                      {"reference_ms", r.reference_ms}, {"bands", r.band_names}, {"configs", nlohmann::json::array()}};
+                      {"reference_ms", r.reference_ms}, {"bands", r.band_names}, {"configs", nlohmann::json::array()},
+                      {"gazes", nlohmann::json::array()}};
+  for (const glm::dvec2& g : r.gazes) j["gazes"].push_back({g.x, g.y});
   for (const SequenceConfigResult& c : r.configs) {
     nlohmann::json b = nlohmann::json::array();
     for (double v : c.band_ratio) b.push_back(number(v));

@@ -50,6 +50,7 @@ struct QualitySequenceResult {
   std::string scene;
   int width = 0, height = 0, frames = 0, reference_rays = 0, threads = 0;
   double reference_ms = 0;       // mean full-frame time
+  std::vector<glm::dvec2> gazes; // per frame, render pixels
   std::vector<std::string> band_names;
   std::vector<SequenceConfigResult> configs;
 };
