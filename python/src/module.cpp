@@ -12,6 +12,7 @@
 #include "foveal/io/outputs.h"
 #include "foveal/quality/compare.h"
 #include "foveal/render/render.h"
+#include "foveal/render/reuse.h"
 #include "foveal/util/error.h"
 #include "foveal/util/parallel.h"
 #include "foveal/util/timer.h"
@@ -83,6 +84,7 @@ struct PyRenderer {
   std::unique_ptr<gpu::Renderer> gpu;
   int threads = 0;
   double build_ms = 0;
+  AoHistory history;  // temporal=True: the AO rays of the frames so far
 
   PyRenderer(const PyScene& s, const std::string& device_name, int threads_) : scene(s.scene), threads(threads_) {
     if (threads < 0) fail("threads: must be 0 (all cores) or more, got {}", threads);
@@ -102,7 +104,7 @@ struct PyRenderer {
                                   std::optional<std::array<double, 2>> gaze, const std::string& mode, int max_rays,
                                   int min_rays, double gamma, double beta, uint64_t seed, std::optional<Display> display,
                                   double ellipse, std::optional<double> ao_distance, std::optional<double> ambient_constant,
-                                  bool shadows) {
+                                  bool shadows, bool adaptive, bool denoise, bool temporal, int temporal_frames, double tolerance) {
     auto out = std::make_unique<PyFrame>();
     RenderParams& p = out->params;
     std::tie(p.width, p.height) = size_of(size, "size");
@@ -115,7 +117,14 @@ struct PyRenderer {
     p.seed = seed;
     p.shadows = shadows;
     if (gaze) p.gaze_px = glm::dvec2((*gaze)[0], (*gaze)[1]);
+    p.reuse.adaptive = adaptive;
+    p.reuse.denoise = denoise;
+    p.reuse.temporal = temporal;
+    p.reuse.temporal_frames = temporal_frames;
+    p.reuse.tolerance = tolerance;
     validate(p);
+    if (gpu && (adaptive || denoise || temporal))
+      fail("adaptive, denoise and temporal run on the CPU only: make the Renderer with device='cpu'");
     const Camera camera = resolve_camera(*scene, camera_arg);
     out->scene = scene;
     out->build_ms = build_ms;
@@ -130,7 +139,7 @@ struct PyRenderer {
         out->triangles = scene->triangles.size();
         out->trace_api = "bvh2";
       } else {
-        out->frame = render_frame(*tracer, *scene, camera, p);
+        out->frame = render_frame(*tracer, *scene, camera, p, {}, temporal ? &history : nullptr);
         out->triangles = tracer->triangles();
         out->trace_api = to_string(TraceApi::stream);
       }
@@ -347,11 +356,16 @@ NB_MODULE(_core, m) {
       .def("render", &PyRenderer::render, "size"_a = std::array<int, 2>{840, 525}, "camera"_a = nb::none(), "gaze"_a = nb::none(),
            "mode"_a = "foveated", "max_rays"_a = 400, "min_rays"_a = 0, "gamma"_a = 2.0, "beta"_a = 0.0, "seed"_a = 1,
            "display"_a = nb::none(), "ellipse"_a = 1.538, "ao_distance"_a = nb::none(), "ambient_constant"_a = 1.0,
-           "shadows"_a = false,
+           "shadows"_a = false, "adaptive"_a = false, "denoise"_a = false, "temporal"_a = false, "temporal_frames"_a = 4,
+           "tolerance"_a = 0.5,
            "Render one frame. `gaze` (x, y) in render pixels, origin top-left (default: the centre); mode 'foveated' "
            "(the AO budget follows the gaze) or 'full' (max_rays everywhere: the reference); `camera` a Camera, a "
            "camera name or None (the scene's first); `ambient_constant` None = the fovea's mean visibility. "
-           "The GIL is released while rendering.")
+           "More quality per ray (the CLI's --adaptive, --denoise, --temporal, --temporal-frames, --tolerance; CPU "
+           "only): `temporal` builds on the AO rays of this Renderer's earlier temporal frames, reprojected to the "
+           "new camera (reset_history() starts afresh). The GIL is released while rendering.")
+      .def("reset_history", [](PyRenderer& r) { r.history.clear(); },
+           "Forget the AO rays kept for temporal=True: the next temporal frame is the paper's frame.")
       .def_prop_ro("device", [](const PyRenderer& r) { return std::string(gpu::to_string(r.device)); })
       .def_prop_ro("device_description", [](const PyRenderer& r) { return gpu::describe_device(r.device); });
 

@@ -109,3 +109,27 @@ def test_stats_and_gaze(box):
     budget = frame.aov("budget")
     assert budget.max() == 16 and budget.min() >= 2
     assert frame.library_ms > 0
+
+
+def test_quality_per_ray_options_equal_the_command_lines(cli, box, tmp_path):
+    # Three temporal frames of a still view with adaptive rays and the filter: the CLI's
+    # `render --frames 3` image bit for bit; after reset_history() the first temporal frame is the paper's
+    out = tmp_path / "reuse.pfm"
+    common = dict(size=(160, 100), gaze=(60, 40), max_rays=64)
+    run_cli(cli, "render", "--scene", "builtin:box", "--size", "160x100", "--gaze", "60,40", "--max-rays", 64, "--device", "cpu",
+            "--adaptive", "--denoise", "--temporal", "--frames", 3, "-o", out, "-q")
+    renderer = foveal.Renderer(box, device="cpu")
+    for _ in range(3):
+        frame = renderer.render(adaptive=True, denoise=True, temporal=True, **common)
+    assert np.array_equal(frame.image.view(np.uint32), read_pfm(out).view(np.uint32)), "pixels differ from the CLI's"
+    assert frame.stats["reuse"]["history_pixels"] > 0
+    renderer.reset_history()
+    first = renderer.render(temporal=True, **common)
+    paper = renderer.render(**common)
+    assert np.array_equal(first.image, paper.image)
+    assert first.stats["rays"]["ao"] == paper.stats["rays"]["ao"]
+    second = renderer.render(temporal=True, **common)
+    assert second.stats["rays"]["ao"] < paper.stats["rays"]["ao"] / 2  # n/F rays where history was kept
+    with pytest.raises(ValueError) as e:
+        renderer.render(temporal=True, temporal_frames=0)
+    assert str(e.value) == cli_error(cli, "render", "--temporal", "--temporal-frames", "0", "-o", tmp_path / "x.png")
