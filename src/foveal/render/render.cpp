@@ -356,7 +356,7 @@ uint64_t trace_ao_counts(const Tracer& tracer, const GBuffer& g, const Foveation
       for (uint32_t a : w.active) {
         Pixel& p = w.pixels[a];
         // History this frame's rays contradict (an occluder that moved, another surface) is dropped,
-        // with them: the pixel starts again as a pixel without history, the paper's first n rays
+        // with them: the pixel starts again without history, n(E) rays from its sequence's start
         if (sampling.temporal_frames > 0 &&
             history_contradicted(counts.open[p.i], counts.cast[p.i], static_cast<float>(p.cast - p.blocked),
                                  static_cast<float>(p.cast))) {
