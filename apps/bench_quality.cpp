@@ -22,8 +22,8 @@ namespace {
 
 // The gaze a replay of the recording renders at each of `frames` frames (the fixation filter's
 // output, the image centre before the first fixation), without rendering them.
-std::vector<glm::dvec2> recording_gaze_path(const std::string& path, const RenderParams& params, double start_s, double fps,
-                                            int frames) {
+std::vector<glm::dvec2> recording_gaze_path(const std::string& path, const Scene& scene, const Tracer& tracer,
+                                            const RenderParams& params, double start_s, double fps, int frames) {
   const Recording recording = read_recording_warned(path, ReadOptions{});
   ReplaySettings settings;
   settings.fps = fps;
@@ -32,10 +32,8 @@ std::vector<glm::dvec2> recording_gaze_path(const std::string& path, const Rende
   if (start_s > recording.duration_s())
     fail("--start: {} s is past the end of {} ({:.3f} s long)", start_s, path, recording.duration_s());
   std::vector<glm::dvec2> gazes;
-  const Scene none;
-  const Tracer tracer(none);
-  const FrameRenderer no_render = [](const RenderParams&) { return Frame{}; };
-  replay_recording(recording, params.display, tracer, none, Camera{}, params, settings,
+  const FrameRenderer no_render = [](const RenderParams&) { return Frame{}; };  // the tracer is never used
+  replay_recording(recording, params.display, tracer, scene, Camera{}, params, settings,
                    [&](const ReplayFrame& f, const Frame&) { gazes.push_back(f.render_gaze); }, {}, no_render);
   return gazes;
 }
@@ -171,7 +169,7 @@ std::function<int()> add_bench_quality_command(CLI::App& bench) {
         gaze_text = fmt::format("gaze around {} at {:.0f},{:.0f} (a fixation every {} frames)", p.gazes.front().first,
                                 p.gazes.front().second.x, p.gazes.front().second.y, o->fixation_frames);
       } else {
-        q.gazes = recording_gaze_path(o->recording, p.render, o->start, o->fps, o->frames);
+        q.gazes = recording_gaze_path(o->recording, scene, tracer, p.render, o->start, o->fps, o->frames);
         gaze_text = fmt::format("gaze of {} from {:g} s at {:g} fps", o->recording, o->start, o->fps);
       }
       fmt::print("foveal bench quality --sequence: {} ({} triangles), camera {} orbiting {:g}° over {} frames, {}, {}x{}, {} threads\n",
