@@ -28,6 +28,7 @@
 #include <cstring>
 #include <filesystem>
 #include <memory>
+#include <mutex>
 
 namespace foveal::python {
 
@@ -84,7 +85,8 @@ struct PyRenderer {
   std::unique_ptr<gpu::Renderer> gpu;
   int threads = 0;
   double build_ms = 0;
-  AoHistory history;  // temporal=True: the AO rays of the frames so far
+  AoHistory history;        // temporal=True: the AO rays of the frames so far
+  std::mutex history_mutex;  // temporal frames from several Python threads take turns (the GIL is released)
 
   PyRenderer(const PyScene& s, const std::string& device_name, int threads_) : scene(s.scene), threads(threads_) {
     if (threads < 0) fail("threads: must be 0 (all cores) or more, got {}", threads);
@@ -139,6 +141,8 @@ struct PyRenderer {
         out->triangles = scene->triangles.size();
         out->trace_api = "bvh2";
       } else {
+        std::unique_lock<std::mutex> lock(history_mutex, std::defer_lock);
+        if (temporal) lock.lock();
         out->frame = render_frame(*tracer, *scene, camera, p, {}, temporal ? &history : nullptr);
         out->triangles = tracer->triangles();
         out->trace_api = to_string(TraceApi::stream);
@@ -364,7 +368,12 @@ NB_MODULE(_core, m) {
            "More quality per ray (the CLI's --adaptive, --denoise, --temporal, --temporal-frames, --tolerance; CPU "
            "only): `temporal` builds on the AO rays of this Renderer's earlier temporal frames, reprojected to the "
            "new camera (reset_history() starts afresh). The GIL is released while rendering.")
-      .def("reset_history", [](PyRenderer& r) { r.history.clear(); },
+      .def("reset_history",
+           [](PyRenderer& r) {
+             nb::gil_scoped_release release;
+             const std::lock_guard<std::mutex> lock(r.history_mutex);
+             r.history.clear();
+           },
            "Forget the AO rays kept for temporal=True: the next temporal frame is the paper's frame.")
       .def_prop_ro("device", [](const PyRenderer& r) { return std::string(gpu::to_string(r.device)); })
       .def_prop_ro("device_description", [](const PyRenderer& r) { return gpu::describe_device(r.device); });

@@ -48,7 +48,6 @@ class CameraRays {
     distance = glm::length(d);
     return true;
   }
-  glm::vec3 eye() const { return eye_; }
 
  private:
   glm::vec3 eye_, forward_, right_, up_;  // right_ and up_ scaled to the image plane at distance 1

@@ -302,7 +302,7 @@ uint64_t trace_ao_counts(const Tracer& tracer, const GBuffer& g, const Foveation
           // What n lacks after the history, but at least m = n/F (history refreshes over F frames).
           // A still pixel's rays continue its sequence: frame 0 casts rays [0, F·m), frame f the
           // next m, so that its history is a prefix of the sequence, stratified as the paper's n.
-          const int refresh = (n + sampling.temporal_frames - 1) / sampling.temporal_frames;
+          const int refresh = refresh_rays(n, sampling.temporal_frames);
           const int lack = static_cast<int>(std::ceil(static_cast<float>(n) - counts.cast[i]));
           limit = std::max(refresh, std::min(n, lack));
           // A pixel without history (a disocclusion, the first frame) casts the paper's first n

@@ -50,6 +50,11 @@ struct AoReuseParams {
   float tau_fovea() const { return static_cast<float>(tolerance * 0.5 / std::sqrt(std::max(1, target_rays))); }
 };
 inline constexpr int kMaxDenoiseRadius = 8;
+// m = ceil(n/F): the rays a pixel with n(E) = n casts a frame once its history holds n (F = temporal_frames).
+inline int refresh_rays(int n, int temporal_frames) {
+  const int f = std::max(1, temporal_frames);
+  return (n + f - 1) / f;
+}
 
 // Everything that decides one frame besides the scene and camera.
 struct RenderParams {

@@ -15,7 +15,7 @@ namespace {
 // Angle one pixel spans at the image centre, radians (footprint = distance × this).
 float pixel_angle(float fov_deg, int height) { return 2.0f * std::tan(glm::radians(fov_deg) * 0.5f) / static_cast<float>(height); }
 
-constexpr float kSameNormal = 0.9f;  // cos 25.8°: history and filter weights need normals this close
+constexpr float kSameNormal = 0.9f;  // cos 25.8°: the filter pools only pixels whose normals are this close
 
 }  // namespace
 
@@ -38,7 +38,6 @@ uint64_t AoHistory::reproject(const GBuffer& g, const FoveationMaps& maps, const
   if (empty()) return 0;
   const CameraRays previous(camera_, width_, height_);
   const float angle = pixel_angle(camera_.fov_deg, height_);
-  const int f = std::max(1, reuse.temporal_frames);
   std::atomic<uint64_t> kept{0};
   tbb::parallel_for(0, g.height, [&](int y) {
     uint64_t row_kept = 0;
@@ -87,7 +86,7 @@ uint64_t AoHistory::reproject(const GBuffer& g, const FoveationMaps& maps, const
       const double reach = history_reach_px(maps.quality[i]);
       float scale = 1.0f;
       if (d > reach) {
-        const double m = static_cast<double>((maps.rays[i] + f - 1) / f);
+        const double m = refresh_rays(maps.rays[i], reuse.temporal_frames);
         scale = static_cast<float>(std::min(1.0, m * reach / ((d - reach) * cast)));
         if (!(scale * cast >= 1.0)) continue;  // less than a ray: none
       }
@@ -104,7 +103,7 @@ uint64_t AoHistory::reproject(const GBuffer& g, const FoveationMaps& maps, const
 float history_cap_rays(int rays, float quality, const AoReuseParams& reuse) {
   const int f = std::max(1, reuse.temporal_frames);
   const int frames = std::max(f, static_cast<int>(std::lround(reuse.history_frames * std::clamp(quality, 0.0f, 1.0f))));
-  return static_cast<float>(frames) * static_cast<float>((rays + f - 1) / f);
+  return static_cast<float>(frames) * static_cast<float>(refresh_rays(rays, f));
 }
 
 void AoHistory::store(const GBuffer& g, const Camera& camera, const FoveationMaps& maps, const AoReuseParams& reuse,

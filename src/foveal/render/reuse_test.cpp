@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstring>
 #include <map>
+#include <optional>
 #include <string>
 
 using namespace foveal;
@@ -35,6 +36,18 @@ double rms_error(const Frame& f, const std::vector<float>& truth) {
       ++count;
     }
   return std::sqrt(sum / count);
+}
+
+// builtin:sphere-plane seen from above, and the analytic AO on its plane: under a sphere of
+// R = 1 whose centre is at height H = 2, the cosine-weighted occlusion at horizontal distance d is
+// R²H/(H² + d²)^{3/2}. No value where pixel i misses the plane or lies under the sphere from above.
+const Camera kTopCamera{"top", {0.0f, 6.0f, 0.01f}, {0.0f, 0.0f, 0.0f}, {0, 1, 0}, 50.0f};
+std::optional<double> plane_visibility(const Frame& f, size_t i) {
+  const glm::vec3 x = f.gbuffer.position[i];
+  if (!f.gbuffer.hit(i) || std::fabs(x.y) > 1e-3f) return std::nullopt;
+  const double d2 = x.x * x.x + x.z * x.z;
+  if (d2 < 1.2 * 1.2) return std::nullopt;
+  return 1.0 - 2.0 / std::pow(4.0 + d2, 1.5);
 }
 
 }  // namespace
@@ -96,7 +109,7 @@ TEST(Reuse, MovingCameraConvergesWithoutDrift) {
   // own. Nearest-pixel history drifted a fraction of a pixel a frame and lost the fovea.
   const Scene& s = scene("sphere-plane");
   const Tracer tracer(s);
-  const Camera start{"top", {0.0f, 6.0f, 0.01f}, {0.0f, 0.0f, 0.0f}, {0, 1, 0}, 50.0f};
+  const Camera start = kTopCamera;
   RenderParams p;
   p.width = 80, p.height = 80, p.mode = RenderMode::full, p.foveation.max_rays = 64;
   const float pixel = 2.0f * std::tan(glm::radians(start.fov_deg) * 0.5f) * 6.0f / static_cast<float>(p.height);
@@ -106,17 +119,14 @@ TEST(Reuse, MovingCameraConvergesWithoutDrift) {
     c.look.x += 0.3f * pixel * static_cast<float>(k);
     return c;
   };
-  // RMS of V − 1 + R²H/(H² + d²)^{3/2} over the plane outside the sphere's shadow from above
+  // RMS error against the analytic V over the plane outside the sphere's shadow from above
   auto plane_error = [](const Frame& f) {
     double sum = 0;
     size_t count = 0;
     for (size_t i = 0; i < f.visibility.size(); ++i) {
-      const glm::vec3 x = f.gbuffer.position[i];
-      if (!f.gbuffer.hit(i) || std::fabs(x.y) > 1e-3f) continue;
-      const double d2 = x.x * x.x + x.z * x.z;
-      if (d2 < 1.2 * 1.2) continue;
-      const double e = f.visibility[i] - (1.0 - 2.0 / std::pow(4.0 + d2, 1.5));
-      sum += e * e;
+      const std::optional<double> truth = plane_visibility(f, i);
+      if (!truth) continue;
+      sum += (f.visibility[i] - *truth) * (f.visibility[i] - *truth);
       ++count;
     }
     return std::sqrt(sum / static_cast<double>(count));
@@ -137,7 +147,7 @@ TEST(Reuse, MovingCameraConvergesWithoutDrift) {
       const Frame probe = render_frame(tracer, s, camera_at(k), plain);
       AoCounts counts;
       history.reproject(probe.gbuffer, probe.maps, p.reuse, counts);
-      const float m = static_cast<float>((p.foveation.max_rays + p.reuse.temporal_frames - 1) / p.reuse.temporal_frames);
+      const float m = static_cast<float>(refresh_rays(p.foveation.max_rays, p.reuse.temporal_frames));
       size_t kept = 0, plane = 0;
       for (size_t i = 0; i < counts.cast.size(); ++i) {
         if (!probe.gbuffer.hit(i) || std::fabs(probe.gbuffer.position[i].y) > 1e-3f) continue;
@@ -221,7 +231,7 @@ TEST(Reuse, AdaptiveKeepsTheSphereOverThePlaneWithinItsError) {
   // standard error it stopped at (≤ τ(E)), has an RMS of at most 1.
   const Scene& s = scene("sphere-plane");
   const Tracer tracer(s);
-  Camera camera{"top", {0.0f, 6.0f, 0.01f}, {0.0f, 0.0f, 0.0f}, {0, 1, 0}, 50.0f};
+  const Camera camera = kTopCamera;
   RenderParams p;
   p.width = 80, p.height = 80, p.foveation.max_rays = 400;
   p.reuse.adaptive = true;
@@ -230,13 +240,10 @@ TEST(Reuse, AdaptiveKeepsTheSphereOverThePlaneWithinItsError) {
   double z2 = 0;
   size_t count = 0, stopped_early = 0;
   for (size_t i = 0; i < f.visibility.size(); ++i) {
-    const glm::vec3 x = f.gbuffer.position[i];
-    if (!f.gbuffer.hit(i) || std::fabs(x.y) > 1e-3f || f.maps.rays[i] == 0) continue;
-    const double d2 = x.x * x.x + x.z * x.z;
-    if (d2 < 1.2 * 1.2) continue;  // hidden under the sphere from above
-    const double truth = 1.0 - 2.0 / std::pow(4.0 + d2, 1.5);
+    const std::optional<double> truth = plane_visibility(f, i);
+    if (!truth || f.maps.rays[i] == 0) continue;
     const double tau = tau_fovea / f.maps.quality[i];
-    z2 += (f.visibility[i] - truth) * (f.visibility[i] - truth) / (tau * tau);
+    z2 += (f.visibility[i] - *truth) * (f.visibility[i] - *truth) / (tau * tau);
     ++count;
     stopped_early += f.ao_traced[i] < f.maps.rays[i];
   }
