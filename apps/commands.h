@@ -51,7 +51,7 @@ struct RenderOptions {
   // Quality per ray (AoReuseParams)
   bool adaptive = false, denoise = false, temporal = false;
   int adaptive_min_rays = 16, temporal_frames = 4, history_frames = 16, target_rays = 400;
-  double denoise_radius = 1, tolerance = 0.5;
+  double denoise_radius = 1, tolerance = AoReuseParams{}.tolerance;
 };
 void add_render_options(CLI::App& command, RenderOptions& options);
 // --device auto|cpu|cuda (see gpu::choose_device).

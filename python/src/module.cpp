@@ -361,7 +361,7 @@ NB_MODULE(_core, m) {
            "mode"_a = "foveated", "max_rays"_a = 400, "min_rays"_a = 0, "gamma"_a = 2.0, "beta"_a = 0.0, "seed"_a = 1,
            "display"_a = nb::none(), "ellipse"_a = 1.538, "ao_distance"_a = nb::none(), "ambient_constant"_a = 1.0,
            "shadows"_a = false, "adaptive"_a = false, "denoise"_a = false, "temporal"_a = false, "temporal_frames"_a = 4,
-           "tolerance"_a = 0.5,
+           "tolerance"_a = foveal::AoReuseParams{}.tolerance,
            "Render one frame. `gaze` (x, y) in render pixels, origin top-left (default: the centre); mode 'foveated' "
            "(the AO budget follows the gaze) or 'full' (max_rays everywhere: the reference); `camera` a Camera, a "
            "camera name or None (the scene's first); `ambient_constant` None = the fovea's mean visibility. "

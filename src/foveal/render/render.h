@@ -44,7 +44,7 @@ struct AoReuseParams {
   int temporal_frames = 4;      // F: a pixel whose history holds n(E) rays casts n(E)/F a frame
   int history_frames = 16;      // H: history length where q = 1, frames; H(E) = max(F, round(H·q(E)))
   int target_rays = 400;        // the reference's rays per pixel, whose noise sets τ
-  double tolerance = 0.5;       // scales τ(E) (0.5: measured within the reference's noise in the fovea)
+  double tolerance = 0.35;      // scales τ(E) (0.35: the fovea within the reference's noise in every frame, measured on the dragon)
   bool any() const { return adaptive || denoise || temporal; }
   // τ where q = 1: tolerance · 0.5/√target_rays (τ(E) = this / q(E))
   float tau_fovea() const { return static_cast<float>(tolerance * 0.5 / std::sqrt(std::max(1, target_rays))); }

@@ -235,6 +235,7 @@ TEST(Reuse, AdaptiveKeepsTheSphereOverThePlaneWithinItsError) {
   RenderParams p;
   p.width = 80, p.height = 80, p.foveation.max_rays = 400;
   p.reuse.adaptive = true;
+  p.reuse.tolerance = 0.5;  // a looser τ than the default, so that many pixels stop early
   const Frame f = render_frame(tracer, s, camera, p);
   const float tau_fovea = ao_sampling(p.reuse, 0).tau_fovea;
   double z2 = 0;
@@ -248,7 +249,7 @@ TEST(Reuse, AdaptiveKeepsTheSphereOverThePlaneWithinItsError) {
     stopped_early += f.ao_traced[i] < f.maps.rays[i];
   }
   ASSERT_GT(count, 1000u);
-  EXPECT_GT(stopped_early, count / 8);  // measured 17 %: most of the plane is partly occluded
+  EXPECT_GT(stopped_early, count / 8);  // measured 17 % at tolerance 0.5: most of the plane is partly occluded
   EXPECT_LT(std::sqrt(z2 / count), 1.0) << "RMS error / τ";
 }
 
