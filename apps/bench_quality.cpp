@@ -42,13 +42,15 @@ std::vector<glm::dvec2> recording_gaze_path(const std::string& path, const Scene
 
 std::function<int()> add_bench_quality_command(CLI::App& bench) {
   auto* cmd = bench.add_subcommand(
-      "quality", "speed–quality trade-off: sweeps γ, n_max and β, times each against the full frame, measures its error per band, and draws the Pareto front");
+      "quality", "speed–quality trade-off: sweeps γ, n_max, β and the methods (the paper's, adaptive rays, denoising; temporal "
+      "reuse with --sequence), times each against the full frame, measures its error per band, and draws the Pareto front");
   struct Options {
     std::string scene, camera, size = "840x525", display = "47.5,30,60,1680,1050", ambient = "1", json, markdown, plot;
     std::string gamma = "1,2,3,4", max_rays = "100,200,400", beta = "0,0.5,1,2", gaze_names = "object,centre";
+    std::string configs = "paper,adaptive+denoise";
     std::vector<std::string> gazes;
     int reference_rays = 400, threads = 0, repeats = 1;
-    double ellipse = 1.538, max_error = 4, max_flicker = 2, saccade = 5;
+    double ellipse = 1.538, max_error = 4, max_flicker = 2, saccade = 5, tolerance = AoReuseParams{}.tolerance;
     uint64_t seed = 1;
     bool full = false;
     bool sequence = false;
@@ -65,6 +67,13 @@ std::function<int()> add_bench_quality_command(CLI::App& bench) {
   auto* gamma = cmd->add_option("--gamma", o->gamma, "γ values to sweep, comma-separated")->capture_default_str();
   auto* max_rays = cmd->add_option("--max-rays", o->max_rays, "n_max values to sweep, comma-separated")->capture_default_str();
   auto* beta = cmd->add_option("--beta", o->beta, "β values to sweep, comma-separated")->capture_default_str();
+  auto* configs = cmd->add_option("--configs", o->configs,
+                  "methods, comma-separated: paper (the paper's), or adaptive, denoise, temporal joined by '+' (temporal only "
+                  "with --sequence; --sequence's default: paper,adaptive+denoise,temporal,temporal+adaptive,temporal+adaptive+denoise; "
+                  "--full's: paper,adaptive,denoise,adaptive+denoise)")
+      ->capture_default_str();
+  cmd->add_option("--tolerance", o->tolerance, "every method's τ(E) scale (adaptive rays and denoising; as render --tolerance)")
+      ->capture_default_str()->check(CLI::PositiveNumber);
   auto* gaze_names = cmd->add_option("--gazes", o->gaze_names,
                   "gaze points by name, comma-separated: object (the pixel nearest the object's centroid), centre, top-left, "
                   "top-right, bottom-left, bottom-right, or all")
@@ -84,12 +93,12 @@ std::function<int()> add_bench_quality_command(CLI::App& bench) {
   cmd->add_option("--saccade", o->saccade, "flicker: the saccade between the two frames compared, degrees (horizontal)")
       ->capture_default_str()->check(CLI::Range(0.0, 90.0));
   cmd->add_flag("--full", o->full,
-                "full run: γ 1,1.5,2,2.5,3,4 × n_max 50,100,200,300,400 × β 0,0.25,0.5,1,2,4 at all six gaze points, 3 frames "
-                "each (default: a quick grid at two gaze points)");
+                "full run: γ 1,1.5,2,2.5,3,4 × n_max 50,100,200,300,400 × β 0,0.25,0.5,1,2,4 × four methods at all six gaze "
+                "points, 3 frames each (default: a quick grid at two gaze points)");
   cmd->add_option("--threads", o->threads, "worker threads (0 = all cores)")->capture_default_str()->check(CLI::Range(0, 4096));
   cmd->add_option("--json", o->json, "write every configuration, gaze point and band as JSON");
   cmd->add_option("--markdown", o->markdown, "write the table as Markdown");
-  cmd->add_option("--plot", o->plot, "the Pareto plot: speed-up against the acuity-weighted error (.png or .svg)");
+  cmd->add_option("--plot", o->plot, "the Pareto plot: speed-up against the acuity-weighted error and the flicker (.png or .svg; with --sequence, its configurations)");
   cmd->add_flag("--sequence", o->sequence,
                 "sequence mode: the paper's method, adaptive+denoise and temporal reuse (alone, +adaptive, +denoise) along a camera "
                 "orbit with the gaze fixating around the first gaze point (--gazes object), each frame judged against the reference "
@@ -106,7 +115,7 @@ std::function<int()> add_bench_quality_command(CLI::App& bench) {
   cmd->add_option("--start", o->start, "--recording: start this many seconds after its first sample")->capture_default_str()->check(CLI::Range(0.0, 1e9));
   cmd->add_option("--fps", o->fps, "--recording: frames per second of gaze time")->capture_default_str()->check(CLI::Range(0.1, 10000.0));
 
-  return [o, gamma, max_rays, beta, gaze_names] {
+  return [o, gamma, max_rays, beta, gaze_names, configs] {
     const ThreadScope threads(o->threads);
     if (o->full) {
       // The full grid replaces the quick one's defaults, not values the user gave
@@ -114,8 +123,17 @@ std::function<int()> add_bench_quality_command(CLI::App& bench) {
       if (!max_rays->count()) o->max_rays = "50,100,200,300,400";
       if (!beta->count()) o->beta = "0,0.25,0.5,1,2,4";
       if (!gaze_names->count()) o->gaze_names = "all";
+      if (!configs->count()) o->configs = "paper,adaptive,denoise,adaptive+denoise";
       o->repeats = std::max(o->repeats, 3);
     }
+    // The options that need no scene, checked before it loads
+    if (!o->sequence && !o->recording.empty()) fail("--recording: only with --sequence");
+    if (o->sequence && !configs->count()) o->configs = "paper,adaptive+denoise,temporal,temporal+adaptive,temporal+adaptive+denoise";
+    std::vector<ReuseConfig> methods = parse_reuse_configs("--configs", o->configs);
+    for (ReuseConfig& m : methods) m.reuse.tolerance = o->tolerance;
+    if (!o->sequence)
+      for (const ReuseConfig& m : methods)
+        if (m.reuse.temporal) fail("--configs: {} reuses earlier frames, a single frame has none (add --sequence)", m.name);
     std::string spec = o->scene;
     const Scene scene = load_paper_scene(spec, "bench quality");
     ViewOptions view;
@@ -156,13 +174,13 @@ std::function<int()> add_bench_quality_command(CLI::App& bench) {
         if (!found) fail("--gazes: unknown gaze point '{}' (object, centre, top-left, top-right, bottom-left, bottom-right or all)", name);
       }
     }
-    if (!o->sequence && !o->recording.empty()) fail("--recording: only with --sequence");
     if (o->sequence) {
       QualitySequenceParams q;
       q.render = p.render;
       q.reference_rays = o->reference_rays;
       q.seed = o->seed;
       q.cameras = orbit_path(camera, o->orbit, o->frames);
+      q.configs = methods;
       std::string gaze_text;
       if (o->recording.empty()) {
         q.gazes = fixation_path(p.gazes.front().second, p.render, o->frames, o->fixation_frames);
@@ -183,11 +201,14 @@ std::function<int()> add_bench_quality_command(CLI::App& bench) {
       fmt::print("\n{}\n", table);
       if (!o->json.empty()) write_json_file(o->json, to_json(result));
       if (!o->markdown.empty()) write_text_file(o->markdown, table);
+      const FoveationParams& f = p.render.foveation;
+      if (!o->plot.empty()) write_pareto_plot(sequence_points(result, f), o->plot, f.gamma, f.max_rays, f.beta);
       return 0;
     }
-    fmt::print("foveal bench quality: {} ({} triangles), camera {}, {}x{}, {} threads; {} gamma × {} n_max × {} beta at {} gaze point(s)\n",
+    p.methods = methods;
+    fmt::print("foveal bench quality: {} ({} triangles), camera {}, {}x{}, {} threads; {} gamma × {} n_max × {} method(s) × {} beta at {} gaze point(s)\n",
                spec, tracer.triangles(), p.camera_name, p.render.width, p.render.height, threads.threads(), p.gammas.size(),
-               p.max_rays.size(), p.betas.size(), p.gazes.size());
+               p.max_rays.size(), p.methods.size(), p.betas.size(), p.gazes.size());
     for (const auto& [label, g] : p.gazes) fmt::print("  gaze {} at {:.0f},{:.0f}\n", label, g.x, g.y);
     const QualitySweepResult result = run_quality_sweep(scene, tracer, camera, p, [](const std::string& line) {
       fmt::print("  {}\n", line);
@@ -201,15 +222,15 @@ std::function<int()> add_bench_quality_command(CLI::App& bench) {
                                          o->max_error, o->max_flicker);
     if (pick >= 0) {
       const QualityPoint& q = result.points[pick];
-      fmt::print("recommended ({}): gamma {:g}, n_max {}, beta {:g} — {:.2f}× faster, error {:.2f}×, flicker {:.2f}× noise\n", rule,
-                 q.gamma, q.max_rays, q.beta, q.speedup, q.weighted_ratio, q.flicker_ratio);
+      fmt::print("recommended ({}): {}, gamma {:g}, n_max {}, beta {:g} — {:.2f}× faster, error {:.2f}×, flicker {:.2f}× noise\n", rule,
+                 q.method, q.gamma, q.max_rays, q.beta, q.speedup, q.weighted_ratio, q.flicker_ratio);
     } else {
       fmt::print("recommended: none ({})\n", rule);
     }
     for (const QualityPoint& q : result.points)
       if (q.gamma == defaults.gamma && q.max_rays == defaults.max_rays && q.beta == defaults.beta)
-        fmt::print("the defaults (gamma {:g}, n_max {}, beta {:g}): {:.2f}× faster, error {:.2f}×, flicker {:.2f}× noise, fovea {}, {}\n",
-                   q.gamma, q.max_rays, q.beta, q.speedup, q.weighted_ratio, q.flicker_ratio,
+        fmt::print("{} at the defaults (gamma {:g}, n_max {}, beta {:g}): {:.2f}× faster, error {:.2f}×, flicker {:.2f}× noise, fovea {}, {}\n",
+                   q.method, q.gamma, q.max_rays, q.beta, q.speedup, q.weighted_ratio, q.flicker_ratio,
                    q.fovea_within_noise ? "within noise" : "outside noise", q.pareto ? "on the Pareto front" : "not on the Pareto front");
     if (!o->json.empty()) {
       auto j = to_json(result);

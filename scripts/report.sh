@@ -178,7 +178,7 @@ repeats=(); [[ $full == 1 ]] && repeats=(--full)
 say "the speed-quality sweep (bench quality)"
 "$foveal" bench quality "${repeats[@]}" --json "$work/quality.json" --markdown "$work/quality.md" --plot "$out/pareto.png" > "$work/quality.log"
 {
-  echo "### The speed–quality trade-off: γ, n_max and β"
+  echo "### The speed–quality trade-off: γ, n_max, β and the method"
   echo
   echo "\`foveal bench quality$([[ $full == 1 ]] && echo " --full")\`: each configuration is timed against the full-frame reference of the same run"
   echo "and judged against it in units of the reference's own noise, as a still image (acuity-weighted"
@@ -190,7 +190,7 @@ say "the speed-quality sweep (bench quality)"
   echo
   cat "$work/quality.md"
   echo
-  grep -E '^(recommended|the defaults)' "$work/quality.log" | sed 's/^/- /'
+  grep -E '^(recommended|[a-z+]+ at the defaults)' "$work/quality.log" | sed 's/^/- /'
   echo
 } >> "$md"
 

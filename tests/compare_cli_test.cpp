@@ -94,7 +94,10 @@ TEST(BenchQualityCli, SweepTableJsonAndPlot) {
                           "--beta 1 --gaze 30,40 --gaze 90,20 --json q.json --markdown q.md --plot q.png");
   ASSERT_EQ(r.status, 0) << r.err;
   const auto j = nlohmann::json::parse(std::ifstream(scratch("q.json")));
-  ASSERT_EQ(j["points"].size(), 4u);  // 2 γ × 2 n_max × 1 β
+  ASSERT_EQ(j["points"].size(), 8u);  // 2 γ × 2 n_max × 2 methods (paper, adaptive+denoise) × 1 β
+  EXPECT_EQ(j["points"][0]["method"], "paper");
+  EXPECT_EQ(j["points"][1]["method"], "adaptive+denoise");
+  EXPECT_EQ(j["fovea_floors"].size(), 2u);  // one per gaze
   bool any_front = false;
   for (const auto& p : j["points"]) {
     ASSERT_EQ(p["gazes"].size(), 2u);
@@ -103,15 +106,34 @@ TEST(BenchQualityCli, SweepTableJsonAndPlot) {
   }
   EXPECT_TRUE(any_front);
   // More rays at the same γ: a smaller ray ratio
-  EXPECT_GT(j["points"][0]["ray_ratio"].get<double>(), j["points"][1]["ray_ratio"].get<double>());
+  EXPECT_GT(j["points"][0]["ray_ratio"].get<double>(), j["points"][2]["ray_ratio"].get<double>());
   std::stringstream md;
   md << std::ifstream(scratch("q.md")).rdbuf();
   const std::string table = md.str();
-  EXPECT_EQ(std::count(table.begin(), table.end(), '\n'), 2 + 2 + 4);  // preface, blank, header, rule, 4 rows
+  // preface, blank, the fovea's floor, blank, header, rule, 8 rows
+  EXPECT_EQ(std::count(table.begin(), table.end(), '\n'), 2 + 2 + 2 + 8);
+  EXPECT_NE(table.find("| adaptive+denoise | 3 | 16 | 1 |"), std::string::npos) << table;
   const foveal::Image plot = foveal::load_image(scratch("q.png").string());
   EXPECT_EQ(plot.width, 1300);  // two panels: still error and flicker
   EXPECT_EQ(r.out.find("the defaults"), std::string::npos);  // not in the grid: no line about them
   EXPECT_NE(r.out.find("recommended"), std::string::npos) << r.out;
+}
+
+TEST(BenchQualityCli, SequenceRunsTheConfigurationsAskedForAndPlotsThem) {
+  const CliRun r = foveal("bench quality --sequence --scene builtin:box --size 60x40 --frames 3 --reference-rays 8 "
+                          "--configs denoise+temporal,paper --json s.json --markdown s.md --plot s.png");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const auto j = nlohmann::json::parse(std::ifstream(scratch("s.json")));
+  ASSERT_EQ(j["configs"].size(), 2u);  // in the order given, named canonically
+  EXPECT_EQ(j["configs"][0]["name"], "temporal+denoise");
+  EXPECT_TRUE(j["configs"][0]["temporal"].get<bool>() && j["configs"][0]["denoise"].get<bool>());
+  EXPECT_FALSE(j["configs"][0]["adaptive"].get<bool>());
+  EXPECT_EQ(j["configs"][1]["name"], "paper");
+  std::stringstream md;
+  md << std::ifstream(scratch("s.md")).rdbuf();
+  EXPECT_NE(md.str().find("| temporal+denoise |"), std::string::npos) << md.str();
+  const foveal::Image plot = foveal::load_image(scratch("s.png").string());
+  EXPECT_EQ(plot.width, 1300);
 }
 
 TEST(BenchQualityCli, BadOptionsAreOneClearLine) {
@@ -125,7 +147,10 @@ TEST(BenchQualityCli, BadOptionsAreOneClearLine) {
            {base + "--gazes nowhere", "nowhere"},
            {base + "--gaze 3", "--gaze"},
            {base + "--recording x.csv", "--sequence"},
-           {base + "--sequence --recording missing.csv", "missing.csv"}})
+           {base + "--sequence --recording missing.csv", "missing.csv"},
+           {base + "--configs paper,temporal", "--sequence"},
+           {base + "--configs adaptive+sharpen", "sharpen"},
+           {base + "--sequence --configs paper,paper", "paper is listed twice"}})
     expect_one_line_error(args, expected);
 }
 

@@ -1,6 +1,7 @@
 // foveal/quality/sequence.cpp — see sequence.h.
 #include "foveal/quality/sequence.h"
 
+#include "foveal/gaze/text.h"
 #include "foveal/quality/compare.h"
 #include "foveal/render/reuse.h"
 #include "foveal/trace/tracer.h"
@@ -11,11 +12,13 @@
 #include <tbb/global_control.h>
 
 #include <cmath>
+#include <string_view>
+#include <utility>
 
 namespace foveal {
 
-std::vector<SequenceConfig> default_sequence_configs() {
-  std::vector<SequenceConfig> c(5);
+std::vector<ReuseConfig> default_sequence_configs() {
+  std::vector<ReuseConfig> c(5);
   c[0].name = "paper";
   c[1].name = "adaptive+denoise";
   c[1].reuse.adaptive = c[1].reuse.denoise = true;
@@ -26,6 +29,39 @@ std::vector<SequenceConfig> default_sequence_configs() {
   c[4].name = "temporal+adaptive+denoise";
   c[4].reuse.temporal = c[4].reuse.adaptive = c[4].reuse.denoise = true;
   return c;
+}
+
+std::vector<ReuseConfig> parse_reuse_configs(const std::string& option, const std::string& list) {
+  std::vector<ReuseConfig> configs;
+  for (const std::string_view entry : text::split(list, ',')) {
+    ReuseConfig c;
+    bool paper = false;
+    for (const std::string_view raw : text::split(entry, '+')) {
+      const std::string_view word = text::trim(raw);
+      bool* flag = word == "adaptive" ? &c.reuse.adaptive : word == "denoise" ? &c.reuse.denoise : word == "temporal" ? &c.reuse.temporal : nullptr;
+      if (word == "paper") {
+        if (paper) fail("{}: '{}' names paper twice", option, entry);
+        paper = true;
+      } else if (!flag) {
+        fail("{}: unknown configuration '{}' in '{}' (paper, or adaptive, denoise, temporal joined by '+')", option, word, entry);
+      } else if (*flag) {
+        fail("{}: '{}' names {} twice", option, entry, word);
+      } else {
+        *flag = true;
+      }
+    }
+    if (paper && c.reuse.any()) fail("{}: '{}' joins paper (no option) with options", option, entry);
+    for (const auto& [on, word] : {std::pair{c.reuse.temporal, "temporal"}, {c.reuse.adaptive, "adaptive"}, {c.reuse.denoise, "denoise"}})
+      if (on) {
+        if (!c.name.empty()) c.name += '+';
+        c.name += word;
+      }
+    if (c.name.empty()) c.name = "paper";
+    for (const ReuseConfig& o : configs)
+      if (o.name == c.name) fail("{}: {} is listed twice", option, c.name);
+    configs.push_back(c);
+  }
+  return configs;
 }
 
 std::vector<Camera> orbit_path(const Camera& camera, double degrees, int frames) {
@@ -72,9 +108,10 @@ QualitySequenceResult run_quality_sequence(const Scene& scene, const Tracer& tra
   if (params.gazes.size() != params.cameras.size()) fail("bench quality --sequence: {} gaze points for {} frames", params.gazes.size(), frames);
   if (params.configs.empty()) fail("bench quality --sequence: no configuration");
   validate(params.render);
-  for (const SequenceConfig& c : params.configs) {
+  for (const ReuseConfig& c : params.configs) {
     RenderParams check = params.render;
     check.reuse = c.reuse;
+    check.reuse.target_rays = params.reference_rays;
     validate(check);
   }
   QualitySequenceResult result;
@@ -110,7 +147,7 @@ QualitySequenceResult run_quality_sequence(const Scene& scene, const Tracer& tra
   say(fmt::format("reference: {:.0f} ms a frame", result.reference_ms));
 
   const size_t bands = result.band_names.size();
-  for (const SequenceConfig& config : params.configs) {
+  for (const ReuseConfig& config : params.configs) {
     SequenceConfigResult r;
     r.name = config.name;
     r.reuse = config.reuse;
@@ -124,6 +161,7 @@ QualitySequenceResult run_quality_sequence(const Scene& scene, const Tracer& tra
       p.mode = RenderMode::foveated;
       p.gaze_px = params.gazes[k];
       p.reuse = config.reuse;
+      p.reuse.target_rays = params.reference_rays;  // τ(E) from the noise of the reference judged against
       p.seed = params.seed;
       const Timer clock;
       Frame f = render_frame(tracer, scene, params.cameras[k], p, {}, &history);

@@ -16,18 +16,23 @@ namespace foveal {
 
 class Tracer;
 
-struct SequenceConfig {
-  std::string name;
+// One way of spending the AO rays: the paper's method, or the reuse options on top of it.
+struct ReuseConfig {
+  std::string name;  // "paper", or its options joined by '+' in the order temporal, adaptive, denoise
   AoReuseParams reuse;
 };
 // paper, adaptive+denoise, temporal, temporal+adaptive, temporal+adaptive+denoise.
-std::vector<SequenceConfig> default_sequence_configs();
+std::vector<ReuseConfig> default_sequence_configs();
+// A comma-separated list of configurations, each "paper" or options joined by '+' (adaptive,
+// denoise, temporal, in any order; the name is given back in the canonical order). Throws Error
+// naming `option` and the bad entry.
+std::vector<ReuseConfig> parse_reuse_configs(const std::string& option, const std::string& list);
 
 struct QualitySequenceParams {
   RenderParams render;              // size, display, model; gaze and reuse set per frame and configuration
   std::vector<Camera> cameras;      // one per frame
   std::vector<glm::dvec2> gazes;    // one per frame, render pixels
-  std::vector<SequenceConfig> configs = default_sequence_configs();
+  std::vector<ReuseConfig> configs = default_sequence_configs();
   int reference_rays = 400;
   uint64_t seed = 1;                // the configurations' seed; references seed + 1 and seed + 2
 };

@@ -37,3 +37,39 @@ TEST(QualitySequence, TemporalReuseCastsFewerRaysAtTheSameErrorOnAStillCamera) {
   q.cameras.resize(1);
   EXPECT_THROW(run_quality_sequence(box, tracer, q), Error);
 }
+
+TEST(QualitySequence, ConfigurationListsAreReadInAnyOrderAndBadOnesNamed) {
+  const auto c = parse_reuse_configs("--configs", "paper, denoise+adaptive ,temporal+denoise+adaptive,adaptive");
+  ASSERT_EQ(c.size(), 4u);
+  EXPECT_EQ(c[0].name, "paper");
+  EXPECT_FALSE(c[0].reuse.any());
+  EXPECT_EQ(c[1].name, "adaptive+denoise");
+  EXPECT_TRUE(c[1].reuse.adaptive && c[1].reuse.denoise && !c[1].reuse.temporal);
+  EXPECT_EQ(c[2].name, "temporal+adaptive+denoise");
+  EXPECT_TRUE(c[2].reuse.adaptive && c[2].reuse.denoise && c[2].reuse.temporal);
+  EXPECT_EQ(c[3].name, "adaptive");
+  EXPECT_TRUE(c[3].reuse.adaptive && !c[3].reuse.denoise);
+  // The defaults are what the names say
+  for (const ReuseConfig& d : default_sequence_configs()) {
+    const auto again = parse_reuse_configs("--configs", d.name);
+    ASSERT_EQ(again.size(), 1u);
+    EXPECT_EQ(again[0].name, d.name);
+    EXPECT_EQ(again[0].reuse.adaptive, d.reuse.adaptive);
+    EXPECT_EQ(again[0].reuse.denoise, d.reuse.denoise);
+    EXPECT_EQ(again[0].reuse.temporal, d.reuse.temporal);
+  }
+  auto message = [](const std::string& list) {
+    try {
+      parse_reuse_configs("--configs", list);
+    } catch (const Error& e) {
+      return std::string(e.what());
+    }
+    return std::string("accepted");
+  };
+  EXPECT_NE(message("adaptive+blur").find("unknown configuration 'blur' in 'adaptive+blur'"), std::string::npos);
+  EXPECT_NE(message("adaptive+adaptive").find("names adaptive twice"), std::string::npos);
+  EXPECT_NE(message("paper+denoise").find("joins paper"), std::string::npos);
+  EXPECT_NE(message("denoise,denoise").find("denoise is listed twice"), std::string::npos);
+  EXPECT_NE(message("paper,,denoise").find("unknown configuration ''"), std::string::npos);
+  EXPECT_NE(message("").find("--configs"), std::string::npos);
+}

@@ -33,8 +33,10 @@ QualitySweepResult run_quality_sweep(const Scene& scene, const Tracer& tracer, c
     if (progress) progress(line);
   };
   if (params.gazes.empty()) fail("bench quality: no gaze point");
-  if (params.gammas.empty() || params.max_rays.empty() || params.betas.empty())
-    fail("bench quality: --gamma, --max-rays and --beta need at least one value each");
+  if (params.gammas.empty() || params.max_rays.empty() || params.betas.empty() || params.methods.empty())
+    fail("bench quality: --gamma, --max-rays, --beta and --configs need at least one value each");
+  for (const ReuseConfig& m : params.methods)
+    if (m.reuse.temporal) fail("bench quality: {} reuses earlier frames; single frames have none (use --sequence)", m.name);
   for (int n : params.max_rays)
     if (n < 1) fail("--max-rays: every value must be at least 1, got {}", n);
   RenderParams base = params.render;
@@ -55,6 +57,12 @@ QualitySweepResult run_quality_sweep(const Scene& scene, const Tracer& tracer, c
     RenderParams check = base;
     check.foveation.max_rays = n;
     check.foveation.min_rays = std::min(check.foveation.min_rays, n);
+    validate(check);
+  }
+  for (const ReuseConfig& m : params.methods) {
+    RenderParams check = base;
+    check.reuse = m.reuse;
+    check.reuse.target_rays = params.reference_rays;
     validate(check);
   }
 
@@ -82,67 +90,88 @@ QualitySweepResult run_quality_sweep(const Scene& scene, const Tracer& tracer, c
   const ReferenceNoise noise = reference_noise(render_frame(tracer, scene, camera, full).color, reference.color);
   say(fmt::format("reference: full frame, {} rays per pixel, {:.0f} ms, {:.1f} M AO rays", params.reference_rays,
                   result.reference_ms, reference.stats.ao_rays * 1e-6));
+  for (const auto& [label, gaze] : params.gazes) {
+    const FoveationMaps maps = foveation_maps(base, gaze);
+    FoveaFloor f;
+    f.gaze_label = label;
+    double sum_sigma = 0, sum_variance = 0;
+    for (size_t i = 0; i < maps.quality.size(); ++i) {
+      if (maps.quality[i] < 1.0f || reference.gbuffer.prim[i] == Hit::kNoHit) continue;
+      ++f.fovea_pixels;
+      const double v = reference.visibility[i];
+      if (v > 0.0 && v < 1.0) ++f.partly_occluded;
+      sum_sigma += std::sqrt(v * (1.0 - v));
+      sum_variance += v * (1.0 - v);
+    }
+    f.min_rays = sum_variance > 0 ? params.reference_rays * sum_sigma * sum_sigma / sum_variance : 0.0;
+    f.ray_ratio_bound = f.min_rays > 0 ? static_cast<double>(result.reference_ao_rays) / f.min_rays
+                                       : std::numeric_limits<double>::infinity();
+    result.fovea_floors.push_back(f);
+  }
 
   const Bounds bounds = scene.bounds();
   const float epsilon = surface_epsilon(bounds);
   for (double gamma : params.gammas)
-    for (int n_max : params.max_rays) {
-      const size_t first = result.points.size();
-      for (double beta : params.betas) {
-        QualityPoint q;
-        q.gamma = gamma, q.max_rays = n_max, q.beta = beta;
-        result.points.push_back(q);
-      }
-      for (const auto& [label, gaze] : params.gazes) {
-        RenderParams p = base;
-        p.mode = RenderMode::foveated;
-        p.gaze_px = gaze;
-        p.foveation.gamma = gamma;
-        p.foveation.max_rays = n_max;
-        p.foveation.min_rays = std::min(p.foveation.min_rays, n_max);
-        p.foveation.beta = params.betas.front();
-        double ms = 0;
-        const Frame frame = timed_frame(tracer, scene, camera, p, params.repeats, ms);
-        // The frame after a saccade to the right (to the left when that leaves the image)
-        const double shift = params.saccade_deg * pixels_per_degree(p.display) * p.width / p.display.res_x;
-        RenderParams after = p;
-        after.gaze_px = glm::dvec2(gaze.x + shift <= p.width ? gaze.x + shift : gaze.x - shift, gaze.y);
-        const Frame next = render_frame(tracer, scene, camera, after);
-        for (size_t k = 0; k < params.betas.size(); ++k) {
-          p.foveation.beta = after.foveation.beta = params.betas[k];
-          // Another β: the same rays and visibility, another blend (the maps' blend is the only change)
-          Image image, image_after;
-          if (k == 0) {
-            image = frame.color;
-            image_after = next.color;
-          } else {
-            image = shade(tracer, scene, camera, frame.gbuffer, foveation_maps(p, gaze), frame.visibility,
-                          frame.stats.ambient_constant, p.shadows, epsilon);
-            image_after = shade(tracer, scene, camera, next.gbuffer, foveation_maps(after, *after.gaze_px), next.visibility,
-                                next.stats.ambient_constant, p.shadows, epsilon);
-          }
-          const Comparison c = compare_images(image, reference.color, noise, p.display, gaze, p.foveation);
-          const double flicker = acuity_weighted_rmse(image_after, image, c.quality);
-          QualityGazeResult g;
-          g.gaze_label = label;
-          g.gaze_px = gaze;
-          g.ms = ms;
-          g.ao_rays = frame.stats.ao_rays;
-          g.weighted_rmse = c.weighted_rmse;
-          g.weighted_ratio = c.weighted_ratio();
-          g.weighted_noise_rmse = c.weighted_noise_rmse;
-          g.flicker_rmse = flicker;
-          g.flicker_ratio = c.weighted_noise_rmse > 0 ? flicker / c.weighted_noise_rmse : 0.0;
-          g.bands = c.bands;
-          g.whole = c.whole;
-          result.points[first + k].per_gaze.push_back(g);
+    for (int n_max : params.max_rays)
+      for (const ReuseConfig& method : params.methods) {
+        const size_t first = result.points.size();
+        for (double beta : params.betas) {
+          QualityPoint q;
+          q.gamma = gamma, q.max_rays = n_max, q.beta = beta, q.method = method.name;
+          result.points.push_back(q);
         }
+        for (const auto& [label, gaze] : params.gazes) {
+          RenderParams p = base;
+          p.mode = RenderMode::foveated;
+          p.gaze_px = gaze;
+          p.foveation.gamma = gamma;
+          p.foveation.max_rays = n_max;
+          p.foveation.min_rays = std::min(p.foveation.min_rays, n_max);
+          p.foveation.beta = params.betas.front();
+          p.reuse = method.reuse;
+          p.reuse.target_rays = params.reference_rays;  // τ(E) from the noise of the reference judged against
+          double ms = 0;
+          const Frame frame = timed_frame(tracer, scene, camera, p, params.repeats, ms);
+          // The frame after a saccade to the right (to the left when that leaves the image)
+          const double shift = params.saccade_deg * pixels_per_degree(p.display) * p.width / p.display.res_x;
+          RenderParams after = p;
+          after.gaze_px = glm::dvec2(gaze.x + shift <= p.width ? gaze.x + shift : gaze.x - shift, gaze.y);
+          const Frame next = render_frame(tracer, scene, camera, after);
+          for (size_t k = 0; k < params.betas.size(); ++k) {
+            p.foveation.beta = after.foveation.beta = params.betas[k];
+            // Another β: the same rays and visibility, another blend (the maps' blend is the only change)
+            Image image, image_after;
+            if (k == 0) {
+              image = frame.color;
+              image_after = next.color;
+            } else {
+              image = shade(tracer, scene, camera, frame.gbuffer, foveation_maps(p, gaze), frame.visibility,
+                            frame.stats.ambient_constant, p.shadows, epsilon);
+              image_after = shade(tracer, scene, camera, next.gbuffer, foveation_maps(after, *after.gaze_px), next.visibility,
+                                  next.stats.ambient_constant, p.shadows, epsilon);
+            }
+            const Comparison c = compare_images(image, reference.color, noise, p.display, gaze, p.foveation);
+            const double flicker = acuity_weighted_rmse(image_after, image, c.quality);
+            QualityGazeResult g;
+            g.gaze_label = label;
+            g.gaze_px = gaze;
+            g.ms = ms;
+            g.ao_rays = frame.stats.ao_rays;
+            g.weighted_rmse = c.weighted_rmse;
+            g.weighted_ratio = c.weighted_ratio();
+            g.weighted_noise_rmse = c.weighted_noise_rmse;
+            g.flicker_rmse = flicker;
+            g.flicker_ratio = c.weighted_noise_rmse > 0 ? flicker / c.weighted_noise_rmse : 0.0;
+            g.bands = c.bands;
+            g.whole = c.whole;
+            result.points[first + k].per_gaze.push_back(g);
+          }
+        }
+        double mean_ms = 0;
+        for (const QualityGazeResult& g : result.points[first].per_gaze) mean_ms += g.ms / params.gazes.size();
+        say(fmt::format("gamma {:g}, n_max {}, {}: {:.0f} ms per frame (mean over {} gaze point(s)), {} betas judged", gamma, n_max,
+                        method.name, mean_ms, params.gazes.size(), params.betas.size()));
       }
-      double mean_ms = 0;
-      for (const QualityGazeResult& g : result.points[first].per_gaze) mean_ms += g.ms / params.gazes.size();
-      say(fmt::format("gamma {:g}, n_max {}: {:.0f} ms per frame (mean over {} gaze point(s)), {} betas judged", gamma, n_max,
-                      mean_ms, params.gazes.size(), params.betas.size()));
-    }
 
   // Means over the gaze points
   const size_t bands = result.band_names.size();
@@ -220,11 +249,19 @@ nlohmann::json to_json(const QualitySweepResult& r) {
                       {"reference_ao_rays", r.reference_ao_rays},
                       {"reference_noise_weighted_rmse", r.reference_noise_weighted_rmse},
                       {"bands", r.band_names},
+                      {"fovea_floors", nlohmann::json::array()},
                       {"points", nlohmann::json::array()}};
+  for (const FoveaFloor& f : r.fovea_floors)
+    j["fovea_floors"].push_back({{"gaze", f.gaze_label},
+                                 {"fovea_pixels", f.fovea_pixels},
+                                 {"partly_occluded", f.partly_occluded},
+                                 {"min_rays", f.min_rays},
+                                 {"ray_ratio_bound", number(f.ray_ratio_bound)}});
   for (const QualityPoint& q : r.points) {
     nlohmann::json p = {{"gamma", q.gamma},
                         {"max_rays", q.max_rays},
                         {"beta", q.beta},
+                        {"method", q.method},
                         {"ms", q.ms},
                         {"speedup", q.speedup},
                         {"ray_ratio", number(q.ray_ratio)},
@@ -276,8 +313,22 @@ std::string to_markdown(const QualitySweepResult& r) {
       "flicker); ✓ = the q(E) = 1 region within the reference's noise at every gaze point.\n\n",
       r.scene, r.triangles, r.camera.empty() ? "(default)" : r.camera, r.width, r.height, r.reference_rays, r.reference_ms,
       r.threads, r.saccade_deg);
-  out += "| γ | n_max | β | ms | speed-up | AO ray ratio | acuity-weighted × noise | flicker × noise | q(E) = 1 |";
-  std::string rule = "|---:|---:|---:|---:|---:|---:|---:|---:|---|";
+  bool methods = false;
+  for (const QualityPoint& q : r.points) methods |= q.method != "paper";
+  if (!r.fovea_floors.empty()) {
+    out += "No method that leaves the fovea unfiltered and keeps it within the reference's noise casts fewer rays than the "
+           "q(E) = 1 region's N·(Σσ)²/Σσ² (σ² = V(1 − V) of the reference's pixels there, rays spread ∝ σ): its AO ray ratio is "
+           "at most ";
+    for (size_t k = 0; k < r.fovea_floors.size(); ++k) {
+      const FoveaFloor& f = r.fovea_floors[k];
+      out += fmt::format("{}{:.2f} at {} ({} of {} pixels partly occluded)", k ? ", " : "", f.ray_ratio_bound, f.gaze_label,
+                         f.partly_occluded, f.fovea_pixels);
+    }
+    out += ".\n\n";
+  }
+  out += methods ? "| method | γ | n_max | β |" : "| γ | n_max | β |";
+  out += " ms | speed-up | AO ray ratio | acuity-weighted × noise | flicker × noise | q(E) = 1 |";
+  std::string rule = methods ? "|---|---:|---:|---:|---:|---:|---:|---:|---:|---|" : "|---:|---:|---:|---:|---:|---:|---:|---:|---|";
   std::vector<size_t> shown;
   for (size_t k = 0; k < r.band_names.size(); ++k)
     if (r.band_names[k] != "q=1") {
@@ -289,6 +340,7 @@ std::string to_markdown(const QualitySweepResult& r) {
   const int fovea = band_index(r.band_names, "q=1");
   for (const QualityPoint& q : r.points) {
     auto ratio = [](double v) { return std::isfinite(v) ? fmt::format("{:.2f}", v) : std::string("–"); };
+    if (methods) out += fmt::format("| {} ", q.method);
     out += fmt::format("| {:g} | {} | {:g} | {:.0f} | {:.2f} | {:.2f} | {:.2f} | {:.2f} | {} {} |", q.gamma, q.max_rays, q.beta, q.ms,
                        q.speedup, q.ray_ratio, q.weighted_ratio, q.flicker_ratio, fovea >= 0 ? ratio(q.band_ratio[fovea]) : "",
                        q.fovea_within_noise ? "✓" : "✗");
@@ -299,6 +351,43 @@ std::string to_markdown(const QualitySweepResult& r) {
 }
 
 namespace {
+
+// A point's marker: a circle for the first method, then a square, a triangle, a diamond, a pentagon.
+Stroke marker(size_t method, glm::vec2 c, float radius, glm::vec3 colour, float width) {
+  struct Shape {
+    int corners;
+    float turn;  // radians
+  };
+  constexpr Shape shapes[] = {{16, 0.0f}, {4, 0.785398f}, {3, -1.570796f}, {4, 0.0f}, {5, -1.570796f}};
+  const Shape shape = shapes[method % std::size(shapes)];
+  Stroke s{{}, colour, width, false};
+  const int corners = shape.corners;
+  const float turn = shape.turn;
+  const float r = method == 0 ? radius : radius * 1.25f;
+  for (int k = 0; k <= corners; ++k) {
+    const float a = turn + 6.283185f * k / corners;
+    s.points.push_back(c + r * glm::vec2(std::cos(a), std::sin(a)));
+  }
+  return s;
+}
+
+std::vector<std::string> method_names(const QualitySweepResult& r) {
+  std::vector<std::string> names;
+  for (const QualityPoint& q : r.points)
+    if (std::find(names.begin(), names.end(), q.method) == names.end()) names.push_back(q.method);
+  return names;
+}
+
+// "g2 n400 b0", then the method's options by initial ("t+a+d" for temporal+adaptive+denoise).
+std::string point_label(const QualityPoint& q) {
+  std::string label = fmt::format("g{:g} n{} b{:g}", q.gamma, q.max_rays, q.beta);
+  if (q.method == "paper") return label;
+  label += ' ';
+  for (size_t k = 0; k < q.method.size(); ++k)
+    if (k == 0 || q.method[k - 1] == '+') label += q.method[k];
+    else if (q.method[k] == '+') label += '+';
+  return label;
+}
 
 // One panel of the Pareto plot: speed-up (x) against `error(point)` (y), both on log scales, at
 // horizontal offset `x0`; the two-way front of this panel joined.
@@ -335,16 +424,13 @@ void pareto_panel(Plot& plot, float x0, const QualitySweepResult& r, const std::
   // The reference's own noise (1) and the full frame's speed (1)
   plot.strokes.push_back({{px(x_lo, 1), px(x_hi, 1)}, grey, 1, true});
   plot.strokes.push_back({{px(1, y_lo), px(1, y_hi)}, grey, 1, true});
-  auto ring = [](glm::vec2 c, float radius, glm::vec3 colour, float width) {
-    Stroke s{{}, colour, width, false};
-    for (int k = 0; k <= 16; ++k) s.points.push_back(c + radius * glm::vec2(std::cos(k * 0.3927f), std::sin(k * 0.3927f)));
-    return s;
-  };
+  const std::vector<std::string> methods = method_names(r);
   for (const QualityPoint& q : r.points) {
     const glm::vec2 c = px(q.speedup, error(q));
-    plot.strokes.push_back(ring(c, 4, beta_colour(q.beta), 2));
+    const size_t m = std::find(methods.begin(), methods.end(), q.method) - methods.begin();
+    plot.strokes.push_back(marker(m, c, 4, beta_colour(q.beta), 2));
     if (!q.fovea_within_noise) plot.strokes.push_back({{c - glm::vec2(3, 3), c + glm::vec2(3, 3)}, black, 1, false});
-    if (q.gamma == hg && q.max_rays == hn && q.beta == hb) plot.strokes.push_back(ring(c, 9, black, 1.5f));
+    if (q.method == "paper" && q.gamma == hg && q.max_rays == hn && q.beta == hb) plot.strokes.push_back(marker(0, c, 9, black, 1.5f));
   }
   // This panel's front (speed-up against its error), joined in order of speed-up and labelled
   std::vector<const QualityPoint*> front;
@@ -360,7 +446,7 @@ void pareto_panel(Plot& plot, float x0, const QualitySweepResult& r, const std::
     const glm::vec2 at = px(front[k]->speedup, error(*front[k]));
     line.points.push_back(at);
     const glm::vec2 offset = k % 2 ? glm::vec2(-20, 22) : glm::vec2(-20, -12);  // alternate above and below
-    plot.labels.push_back({at + offset, fmt::format("g{:g} n{} b{:g}", front[k]->gamma, front[k]->max_rays, front[k]->beta), 10, false});
+    plot.labels.push_back({at + offset, point_label(*front[k]), 10, false});
   }
   plot.strokes.push_back(line);
   plot.labels.push_back({glm::vec2((left + right) / 2, bottom + 48), "speed-up over the full-frame reference (log)", 14, true});
@@ -385,31 +471,61 @@ void write_pareto_plot(const QualitySweepResult& r, const std::string& path, dou
   pareto_panel(plot, 0, r, [](const QualityPoint& q) { return q.weighted_ratio; },
                "still image: acuity-weighted error / reference noise (log)", hg, hn, hb, beta_colour);
   pareto_panel(plot, 560, r, [](const QualityPoint& q) { return q.flicker_ratio; },
-               fmt::format("flicker after a {:g} deg saccade / reference noise (log)", r.saccade_deg), hg, hn, hb, beta_colour);
+               r.saccade_deg > 0 ? fmt::format("flicker after a {:g} deg saccade / reference noise (log)", r.saccade_deg)
+                                 : std::string("flicker between consecutive frames / reference noise (log)"),
+               hg, hn, hb, beta_colour);
   // Legend
   const float x = 1130;
   float y = 60;
-  auto ring = [](glm::vec2 c, float radius, glm::vec3 colour, float width) {
-    Stroke s{{}, colour, width, false};
-    for (int k = 0; k <= 16; ++k) s.points.push_back(c + radius * glm::vec2(std::cos(k * 0.3927f), std::sin(k * 0.3927f)));
-    return s;
-  };
   for (double b : betas) {
-    plot.strokes.push_back(ring(glm::vec2(x, y - 4), 4, beta_colour(b), 2));
+    plot.strokes.push_back(marker(0, glm::vec2(x, y - 4), 4, beta_colour(b), 2));
     plot.labels.push_back({glm::vec2(x + 12, y), fmt::format("beta = {:g}", b), 12, false});
     y += 20;
   }
-  plot.strokes.push_back(ring(glm::vec2(x, y - 4), 9, glm::vec3(0), 1.5f));
+  const std::vector<std::string> methods = method_names(r);
+  if (methods.size() > 1)
+    for (size_t m = 0; m < methods.size(); ++m) {
+      plot.strokes.push_back(marker(m, glm::vec2(x, y - 4), 4, glm::vec3(0.3f), 2));
+      plot.labels.push_back({glm::vec2(x + 12, y), methods[m], 10, false});
+      y += 20;
+    }
+  plot.strokes.push_back(marker(0, glm::vec2(x, y - 4), 9, glm::vec3(0), 1.5f));
   plot.labels.push_back({glm::vec2(x + 14, y), fmt::format("default g{:g} n{} b{:g}", hg, hn, hb), 11, false});
   y += 22;
   plot.strokes.push_back({{glm::vec2(x - 3, y - 7), glm::vec2(x + 3, y - 1)}, glm::vec3(0), 1, false});
   plot.labels.push_back({glm::vec2(x + 12, y), "fovea outside noise", 11, false});
-  y += 20;
+  y += 24;
   plot.labels.push_back({glm::vec2(x - 10, y), "line: each panel's", 11, false});
   plot.labels.push_back({glm::vec2(x - 10, y + 16), "Pareto front", 11, false});
   plot.labels.push_back({glm::vec2(x - 10, y + 40), "g = gamma, n = n_max", 11, false});
   plot.labels.push_back({glm::vec2(x - 10, y + 56), "b = beta", 11, false});
+  if (methods.size() > 1) {
+    plot.labels.push_back({glm::vec2(x - 10, y + 72), "a = adaptive, d = denoise,", 11, false});
+    plot.labels.push_back({glm::vec2(x - 10, y + 88), "t = temporal", 11, false});
+  }
   save_plot(plot, path);
+}
+
+QualitySweepResult sequence_points(const QualitySequenceResult& sequence, const FoveationParams& foveation) {
+  QualitySweepResult r;
+  r.scene = sequence.scene;
+  r.width = sequence.width;
+  r.height = sequence.height;
+  r.reference_rays = sequence.reference_rays;
+  r.threads = sequence.threads;
+  r.reference_ms = sequence.reference_ms;
+  r.band_names = sequence.band_names;
+  for (const SequenceConfigResult& c : sequence.configs) {
+    QualityPoint q;
+    q.gamma = foveation.gamma, q.max_rays = foveation.max_rays, q.beta = foveation.beta, q.method = c.name;
+    q.ms = c.ms, q.speedup = c.speedup, q.ray_ratio = c.ray_ratio;
+    q.weighted_ratio = c.weighted_ratio, q.flicker_ratio = c.flicker_ratio;
+    q.band_ratio = c.band_ratio;
+    q.fovea_within_noise = c.fovea_within >= 1.0;
+    r.points.push_back(q);
+  }
+  mark_pareto_front(r.points);
+  return r;
 }
 
 }  // namespace foveal

@@ -4,11 +4,15 @@
 // against the reference's own seed-to-seed noise, and marks the Pareto front (fastest for its
 // error) of speed-up against the acuity-weighted error.
 //
+// Each (γ, n_max) is rendered with every method: the paper's, and the single-frame options of
+// quality per ray (adaptive rays, denoising; temporal reuse needs a sequence, see sequence.h).
+//
 // β changes no ray (only how AO and the constant ambient term are mixed): the frames of one
-// (γ, n_max) share their AO pass and are timed as one frame; each β is shaded and judged apart.
+// (γ, n_max, method) share their AO pass and are timed as one frame; each β is shaded and judged apart.
 #pragma once
 
 #include "foveal/quality/compare.h"
+#include "foveal/quality/sequence.h"
 #include "foveal/render/render.h"
 
 #include <nlohmann/json.hpp>
@@ -29,6 +33,7 @@ struct QualitySweepParams {
   std::vector<double> gammas{1, 1.5, 2, 3, 4};
   std::vector<int> max_rays{100, 200, 400};
   std::vector<double> betas{0.5, 1, 2};
+  std::vector<ReuseConfig> methods{ReuseConfig{"paper", {}}};  // single-frame ones only (no temporal)
   int reference_rays = 400;  // the full-frame reference's rays per pixel
   uint64_t seed = 1;         // the foveated frames' seed; the references use seed + 1 and seed + 2
   int repeats = 1;           // timed frames per (γ, n_max) and for the reference (median)
@@ -55,6 +60,7 @@ struct QualityGazeResult {
 struct QualityPoint {
   double gamma = 2, beta = 1;
   int max_rays = 400;
+  std::string method = "paper";  // ReuseConfig::name
   double ms = 0;            // mean frame time over the gaze points
   double speedup = 0;       // reference time / ms
   double ray_ratio = 0;     // reference AO rays / mean AO rays
@@ -68,6 +74,20 @@ struct QualityPoint {
   std::vector<QualityGazeResult> per_gaze;
 };
 
+// The fewest rays any method that leaves the fovea unfiltered can cast at one gaze with the fovea
+// within the reference's noise. An unbiased estimate of pixel i from n_i rays differs from the
+// reference (N rays) by σ_i²/n_i + σ_i²/N in the mean square (σ_i² = V(1 − V)), the reference's
+// seed-to-seed difference by 2σ_i²/N: the q(E) = 1 region is within noise when Σσ_i²/n_i ≤ Σσ_i²/N,
+// and the fewest rays that do it are spread as n_i ∝ σ_i (Neyman's allocation), in all
+// N·(Σσ_i)²/Σσ_i². σ_i is taken from the reference's visibility; shading weights are left out.
+struct FoveaFloor {
+  std::string gaze_label;
+  uint64_t fovea_pixels = 0;      // q(E) = 1 pixels that hit the scene
+  uint64_t partly_occluded = 0;   // … of which 0 < V < 1 in the reference
+  double min_rays = 0;            // N·(Σσ)²/Σσ² over them
+  double ray_ratio_bound = 0;     // reference AO rays / min_rays: no such method's ray ratio exceeds it
+};
+
 struct QualitySweepResult {
   std::string scene, camera;
   int width = 0, height = 0, reference_rays = 0, threads = 0;
@@ -77,7 +97,8 @@ struct QualitySweepResult {
   uint64_t reference_ao_rays = 0;
   double reference_noise_weighted_rmse = 0;  // mean over gazes of the references' acuity-weighted seed-to-seed RMSE
   std::vector<std::string> band_names;
-  std::vector<QualityPoint> points;  // in grid order: γ, then n_max, then β
+  std::vector<QualityPoint> points;  // in grid order: γ, then n_max, then method, then β
+  std::vector<FoveaFloor> fovea_floors;  // per gaze point
 };
 
 // Run the sweep; `progress` receives a line per finished (γ, n_max).
@@ -96,9 +117,13 @@ int recommended_point(const std::vector<QualityPoint>& points, double max_weight
 nlohmann::json to_json(const QualitySweepResult& result);
 // The table (one row per configuration, the Pareto front marked) as Markdown.
 std::string to_markdown(const QualitySweepResult& result);
-// Two panels, speed-up against the still error ratio and against the flicker ratio: every point,
-// each panel's two-way front joined, the default configuration (`highlight`: γ, n_max, β) ringed; .png or .svg.
+// Two panels, speed-up against the still error ratio and against the flicker ratio: every point
+// (β by colour, method by marker), each panel's two-way front joined, the paper's method at the
+// default configuration (`highlight`: γ, n_max, β) ringed; .png or .svg.
 void write_pareto_plot(const QualitySweepResult& result, const std::string& path, double highlight_gamma,
                        int highlight_max_rays, double highlight_beta);
+// A sequence's configurations as points of the plot (γ, n_max, β those of `foveation`; flicker
+// the change between consecutive frames, saccade_deg 0; fovea within noise where it is in every frame).
+QualitySweepResult sequence_points(const QualitySequenceResult& sequence, const FoveationParams& foveation);
 
 }  // namespace foveal

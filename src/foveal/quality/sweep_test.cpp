@@ -6,6 +6,7 @@
 #include "foveal/trace/tracer.h"
 #include "foveal/util/error.h"
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -98,6 +99,64 @@ TEST(QualitySweep, ReferenceLikeConfigurationIsWithinNoiseEverywhere) {
                    (b.speedup > a.speedup || b.weighted_ratio < a.weighted_ratio);
     EXPECT_EQ(a.pareto, !dominated);
   }
+}
+
+TEST(QualitySweep, MethodsAreSweptLikeParametersAndTheFoveaFloorBoundsTheRays) {
+  const Scene scene = load_scene("builtin:box");
+  const Tracer tracer(scene);
+  const Camera camera = default_camera(scene);
+  QualitySweepParams p;
+  p.render.width = 160;
+  p.render.height = 100;
+  p.reference_rays = 64;
+  p.gazes = {{"centre", {80, 50}}};
+  p.gammas = {2};
+  p.max_rays = {64};
+  p.betas = {0, 1};
+  p.methods = parse_reuse_configs("--configs", "paper,adaptive,adaptive+denoise");
+  const QualitySweepResult r = run_quality_sweep(scene, tracer, camera, p);
+  // γ, n_max, then method, then β
+  ASSERT_EQ(r.points.size(), 6u);
+  const char* names[] = {"paper", "paper", "adaptive", "adaptive", "adaptive+denoise", "adaptive+denoise"};
+  for (size_t k = 0; k < r.points.size(); ++k) {
+    EXPECT_EQ(r.points[k].method, names[k]);
+    EXPECT_EQ(r.points[k].beta, k % 2 ? 1.0 : 0.0);
+  }
+  // Adaptive rays stop early where the estimate is certain: fewer rays than the paper's budget;
+  // the filter casts none, so adaptive+denoise casts what adaptive casts
+  EXPECT_GT(r.points[2].ray_ratio, r.points[0].ray_ratio);
+  EXPECT_EQ(r.points[4].ray_ratio, r.points[2].ray_ratio);
+  // ... and pools rays where a pixel is noisier than its eccentricity allows: less error than adaptive alone
+  EXPECT_LT(r.points[4].weighted_ratio, r.points[2].weighted_ratio);
+  // The floor: N·(Σσ)²/Σσ² lies between N (one noisy pixel's worth) and N per partly occluded pixel
+  // (Cauchy–Schwarz), and the paper's frame, which casts N at every q = 1 pixel, is no faster in rays
+  ASSERT_EQ(r.fovea_floors.size(), 1u);
+  const FoveaFloor& f = r.fovea_floors[0];
+  EXPECT_GT(f.fovea_pixels, 100u);
+  EXPECT_GT(f.partly_occluded, 0u);
+  EXPECT_LE(f.partly_occluded, f.fovea_pixels);
+  EXPECT_GE(f.min_rays, p.reference_rays);
+  EXPECT_LE(f.min_rays, double(p.reference_rays) * f.partly_occluded * (1 + 1e-9));
+  EXPECT_NEAR(f.ray_ratio_bound, double(r.reference_ao_rays) / f.min_rays, 1e-9 * f.ray_ratio_bound);
+  EXPECT_LE(r.points[0].ray_ratio, f.ray_ratio_bound);
+  // The table names the methods and the floor; the JSON carries both
+  const std::string md = to_markdown(r);
+  EXPECT_NE(md.find("| adaptive+denoise | 2 | 64 | 1 |"), std::string::npos);
+  EXPECT_NE(md.find(fmt::format("at most {:.2f} at centre", f.ray_ratio_bound)), std::string::npos);
+  const auto j = to_json(r);
+  EXPECT_EQ(j["points"][4]["method"], "adaptive+denoise");
+  EXPECT_EQ(j["fovea_floors"][0]["partly_occluded"], f.partly_occluded);
+  // Temporal reuse has no earlier frame to reuse in a single frame
+  p.methods = parse_reuse_configs("--configs", "temporal");
+  EXPECT_THROW(run_quality_sweep(scene, tracer, camera, p), Error);
+  // An open plane: nothing occluded in the fovea, no floor
+  const Scene plane = load_scene("builtin:plane");
+  const Tracer plane_tracer(plane);
+  p.methods = parse_reuse_configs("--configs", "paper");
+  p.betas = {0};
+  const QualitySweepResult open = run_quality_sweep(plane, plane_tracer, default_camera(plane), p);
+  EXPECT_EQ(open.fovea_floors[0].partly_occluded, 0u);
+  EXPECT_TRUE(std::isinf(open.fovea_floors[0].ray_ratio_bound));
 }
 
 TEST(QualitySweep, BadGridIsRefused) {
