@@ -46,14 +46,20 @@ TEST(QualitySweep, ParetoFrontIsTheNonDominatedSet) {
   EXPECT_EQ(recommended_point(pts, 0.5, 1), -1);
 }
 
+// A 160×100 sweep of the built-in box against a reference of `reference_rays` rays.
+QualitySweepParams small_sweep(int reference_rays) {
+  QualitySweepParams p;
+  p.render.width = 160;
+  p.render.height = 100;
+  p.reference_rays = reference_rays;
+  return p;
+}
+
 TEST(QualitySweep, ReferenceLikeConfigurationIsWithinNoiseEverywhere) {
   const Scene scene = load_scene("builtin:box");
   const Tracer tracer(scene);
   const Camera camera = default_camera(scene);
-  QualitySweepParams p;
-  p.render.width = 160;
-  p.render.height = 100;
-  p.reference_rays = 32;
+  QualitySweepParams p = small_sweep(32);
   p.gazes = {{"centre", {80, 50}}, {"left", {20, 60}}};
   // γ → 0: every pixel gets the reference's 32 rays; β = 0: AO everywhere, no constant term.
   // γ = 2, β = 1: the papers' blend; γ = 4: fewer rays still.
@@ -105,10 +111,7 @@ TEST(QualitySweep, MethodsAreSweptLikeParametersAndTheFoveaFloorBoundsTheRays) {
   const Scene scene = load_scene("builtin:box");
   const Tracer tracer(scene);
   const Camera camera = default_camera(scene);
-  QualitySweepParams p;
-  p.render.width = 160;
-  p.render.height = 100;
-  p.reference_rays = 64;
+  QualitySweepParams p = small_sweep(64);
   p.gazes = {{"centre", {80, 50}}};
   p.gammas = {2};
   p.max_rays = {64};
