@@ -50,7 +50,8 @@ std::function<int()> add_bench_quality_command(CLI::App& bench) {
     std::string configs = "paper,adaptive+denoise";
     std::vector<std::string> gazes;
     int reference_rays = 400, threads = 0, repeats = 1;
-    double ellipse = 1.538, max_error = 4, max_flicker = 2, saccade = 5, tolerance = AoReuseParams{}.tolerance;
+    double ellipse = 1.538, max_error = 4, max_flicker = 2, saccade = 5, tolerance = AoReuseParams{}.tolerance,
+           denoise_radius = AoReuseParams{}.denoise_radius;
     uint64_t seed = 1;
     bool full = false;
     bool sequence = false;
@@ -74,6 +75,8 @@ std::function<int()> add_bench_quality_command(CLI::App& bench) {
       ->capture_default_str();
   cmd->add_option("--tolerance", o->tolerance, "every method's τ(E) scale (adaptive rays and denoising; as render --tolerance)")
       ->capture_default_str()->check(CLI::PositiveNumber);
+  cmd->add_option("--denoise-radius", o->denoise_radius, "every method's filter footprint factor (as render --denoise-radius)")
+      ->capture_default_str()->check(CLI::Range(0.0, 100.0));
   auto* gaze_names = cmd->add_option("--gazes", o->gaze_names,
                   "gaze points by name, comma-separated: object (the pixel nearest the object's centroid), centre, top-left, "
                   "top-right, bottom-left, bottom-right, or all")
@@ -130,7 +133,7 @@ std::function<int()> add_bench_quality_command(CLI::App& bench) {
     if (!o->sequence && !o->recording.empty()) fail("--recording: only with --sequence");
     if (o->sequence && !configs->count()) o->configs = "paper,adaptive+denoise,temporal,temporal+adaptive,temporal+adaptive+denoise";
     std::vector<ReuseConfig> methods = parse_reuse_configs("--configs", o->configs);
-    for (ReuseConfig& m : methods) m.reuse.tolerance = o->tolerance;
+    for (ReuseConfig& m : methods) m.reuse.tolerance = o->tolerance, m.reuse.denoise_radius = o->denoise_radius;
     if (!o->sequence)
       for (const ReuseConfig& m : methods)
         if (m.reuse.temporal) fail("--configs: {} reuses earlier frames, a single frame has none (add --sequence)", m.name);

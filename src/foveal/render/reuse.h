@@ -17,10 +17,12 @@
 // gaze, so a saccade keeps what the new fovea already has.
 //
 // The filter is a cross-bilateral pooling of rays (Dammertz et al. 2010 and the SVGF family's
-// edge-stopping weights on depth, normal and albedo): V = Σ w·open / Σ w·cast over a window whose
-// radius is what the pixel's rays lack to reach τ(E), at most radius·(1/q(E) − 1): the footprint
-// grows as acuity falls, and is nothing where q = 1, where the eye resolves every pixel. Normal
-// and plane tests are hard: no weight crosses a crease or a depth edge.
+// edge-stopping weights on depth, normal and albedo, and on the estimate itself, normalised by its
+// variance as SVGF's luminance weight, Schied et al. 2017): V = Σ w·open / Σ w·cast over a window
+// whose radius is what the pixel's rays lack to reach τ(E), at most radius·(1/q(E) − 1): the
+// footprint grows as acuity falls, and is nothing where q = 1, where the eye resolves every pixel.
+// Normal and plane tests are hard: no weight crosses a crease or a depth edge; the range weight
+// keeps a crevice's AO apart from the open surface around it.
 #pragma once
 
 #include "foveal/render/render.h"

@@ -7,6 +7,7 @@
 
 #include <cmath>
 #include <cstring>
+#include <functional>
 #include <map>
 #include <optional>
 #include <string>
@@ -253,9 +254,11 @@ TEST(Reuse, AdaptiveKeepsTheSphereOverThePlaneWithinItsError) {
   EXPECT_LT(std::sqrt(z2 / count), 1.0) << "RMS error / τ";
 }
 
-TEST(Reuse, FilterNeverMixesAcrossADepthStepOrACrease) {
-  // A hand-made G-buffer: the left half a near plane (V = 0), the right half a far one (V = 1),
-  // both facing the camera; one ray a pixel, q = 0.1 (the widest footprint). Nothing may mix.
+TEST(Reuse, FilterNeverMixesAcrossADepthStepACreaseOrAnotherAo) {
+  // A hand-made G-buffer: the left half a near plane, the right half a far one, both facing the
+  // camera, q = 0.1 (the widest footprint). Nothing may mix across a depth step or a crease;
+  // on one plane, what differs by far more than its noise (a crevice's AO beside the open
+  // surface) stays apart, and what differs by less (noise) is pooled.
   const int w = 24, h = 12;
   GBuffer g;
   g.width = w, g.height = h;
@@ -264,10 +267,11 @@ TEST(Reuse, FilterNeverMixesAcrossADepthStepOrACrease) {
   maps.width = w, maps.height = h;
   maps.quality.assign(n, 0.1f), maps.rays.assign(n, 1), maps.blend.assign(n, 1.0f), maps.eccentricity.assign(n, 30.0f);
   AoCounts counts;
-  auto build = [&](float far_depth, glm::vec3 far_normal) {
+  // `open(x, y)` of `cast` rays at each pixel
+  auto build = [&](float far_depth, glm::vec3 far_normal, float cast, const std::function<float(int, int)>& open) {
     g.prim.assign(n, 0), g.position.resize(n), g.normal.resize(n), g.geo_normal.resize(n), g.albedo.assign(n, glm::vec3(0.5f));
     g.depth.resize(n), g.view.assign(n, glm::vec3(0, 0, -1));
-    counts.open.resize(n), counts.cast.assign(n, 1.0f);
+    counts.open.resize(n), counts.cast.assign(n, cast);
     for (int y = 0; y < h; ++y)
       for (int x = 0; x < w; ++x) {
         const size_t i = static_cast<size_t>(y) * w + x;
@@ -276,28 +280,44 @@ TEST(Reuse, FilterNeverMixesAcrossADepthStepOrACrease) {
         g.depth[i] = depth;
         g.position[i] = glm::vec3((x - w / 2) * 0.01f * depth, (y - h / 2) * 0.01f * depth, -depth);
         g.normal[i] = g.geo_normal[i] = left ? glm::vec3(0, 0, 1) : far_normal;
-        counts.open[i] = left ? 0.0f : 1.0f;
+        counts.open[i] = open(x, y);
       }
+  };
+  auto halves = [&](float left_open, float right_open) {
+    return [=](int x, int) { return x < w / 2 ? left_open : right_open; };
   };
   auto filtered = [&] {
     std::vector<float> v(n);
-    for (size_t i = 0; i < n; ++i) v[i] = counts.open[i];
+    for (size_t i = 0; i < n; ++i) v[i] = counts.open[i] / counts.cast[i];
     AoReuseParams reuse;
     reuse.denoise = true;
     denoise_visibility(g, maps, counts, reuse, glm::degrees(2.0f * std::atan(0.01f * h / 2)), v);  // 0.01 rad a pixel
     return v;
   };
-  build(20.0f, glm::vec3(0, 0, 1));  // a depth step: twice as far
+  build(20.0f, glm::vec3(0, 0, 1), 1, halves(0, 1));  // a depth step: twice as far; one ray a pixel
   for (size_t i = 0; i < n; ++i) EXPECT_EQ(filtered()[i], counts.open[i]) << "depth step, pixel " << i;
-  build(10.0f, glm::vec3(1, 0, 0));  // a crease: the same depth, normals 90° apart
+  build(10.0f, glm::vec3(1, 0, 0), 1, halves(0, 1));  // a crease: the same depth, normals 90° apart
   std::vector<float> crease = filtered();
   for (size_t i = 0; i < n; ++i) EXPECT_EQ(crease[i], counts.open[i]) << "crease, pixel " << i;
-  // Control: one continuous plane — the filter does mix across the same boundary
-  build(10.0f, glm::vec3(0, 0, 1));
+  // Control: one continuous plane — one ray a pixel is all noise, and the filter mixes across the boundary
+  build(10.0f, glm::vec3(0, 0, 1), 1, halves(0, 1));
   const std::vector<float> plane = filtered();
   size_t mixed = 0;
   for (size_t i = 0; i < n; ++i) mixed += plane[i] > 0.0f && plane[i] < 1.0f;
   EXPECT_GT(mixed, static_cast<size_t>(2 * h));
+  // One plane, V = 0.2 beside V = 0.8 from 20 rays a pixel (each noisier than τ there, so filtered):
+  // 0.6 apart is over four standard errors of the difference — two AOs, kept apart
+  build(10.0f, glm::vec3(0, 0, 1), 20, halves(4, 16));
+  const std::vector<float> step = filtered();
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x)
+      EXPECT_NEAR(step[static_cast<size_t>(y) * w + x], x < w / 2 ? 0.2f : 0.8f, 0.01f) << "AO step, pixel " << x << "," << y;
+  // One plane, 0.45 and 0.55 in a checkerboard (less than one standard error apart): noise, pooled
+  build(10.0f, glm::vec3(0, 0, 1), 20, [](int x, int y) { return (x + y) % 2 ? 11.0f : 9.0f; });
+  const std::vector<float> checker = filtered();
+  double off = 0;
+  for (float v : checker) off += std::fabs(v - 0.5f) / static_cast<double>(n);
+  EXPECT_LT(off, 0.025) << "mean |V - 0.5| (0.05 before the filter)";
 }
 
 TEST(Reuse, FilterLeavesTheFoveaAlone) {
