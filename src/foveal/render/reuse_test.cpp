@@ -305,8 +305,10 @@ TEST(Reuse, FilterNeverMixesAcrossADepthStepACreaseOrAnotherAo) {
   size_t mixed = 0;
   for (size_t i = 0; i < n; ++i) mixed += plane[i] > 0.0f && plane[i] < 1.0f;
   EXPECT_GT(mixed, static_cast<size_t>(2 * h));
-  // One plane, V = 0.2 beside V = 0.8 from 20 rays a pixel (each noisier than τ there, so filtered):
-  // 0.6 apart is over four standard errors of the difference — two AOs, kept apart
+  // One plane at q = 0.5 (a 3×3 window; the range weight's k(E) = 1/√q = 1.4), V = 0.2 beside
+  // V = 0.8 from 20 rays a pixel (each noisier than τ there, so filtered): 0.6 apart is 4.6
+  // standard errors of the difference, over three k(E) — two AOs, kept apart
+  maps.quality.assign(n, 0.5f);
   build(10.0f, glm::vec3(0, 0, 1), 20, halves(4, 16));
   const std::vector<float> step = filtered();
   for (int y = 0; y < h; ++y)
