@@ -56,9 +56,6 @@ struct RenderOptions {
 void add_render_options(CLI::App& command, RenderOptions& options);
 // --device auto|cpu|cuda (see gpu::choose_device).
 void add_device_option(CLI::App& command, std::string& device);
-// The device for a renderer's params: choose_device, except that the quality-per-ray passes
-// (--adaptive, --denoise, --temporal) run on the CPU: auto picks it, cuda is refused.
-gpu::ComputeDevice choose_render_device(const std::string& device, const RenderParams& params);
 // Size, display and renderer options → validated params (gaze unset).
 RenderParams resolve_render_params(const ViewOptions& view, const RenderOptions& options);
 

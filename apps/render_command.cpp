@@ -92,13 +92,6 @@ void add_render_options(CLI::App& cmd, RenderOptions& o) {
   cmd.add_option("--tolerance", o.tolerance, "scales τ(E) (above 1: fewer rays, more noise)")->capture_default_str()->group(group);
 }
 
-gpu::ComputeDevice choose_render_device(const std::string& device, const RenderParams& p) {
-  if (!p.reuse.any()) return gpu::choose_device(device);
-  if (device == "cuda") fail("--device cuda: --adaptive, --denoise and --temporal run on the CPU; use --device cpu (or auto)");
-  (void)gpu::choose_device(device);  // an unknown name is still refused
-  return gpu::ComputeDevice::cpu;
-}
-
 RenderParams resolve_render_params(const ViewOptions& view, const RenderOptions& o) {
   RenderParams p;
   const glm::ivec2 size = parse_size("--size", view.size);
@@ -163,7 +156,7 @@ std::function<int()> add_render_command(CLI::App& app) {
     const TraceApi api = parse_trace_api(o->render.trace_api);
     if (!o->plot.empty()) write_acuity_plot(p.display, p.foveation, o->plot);
 
-    const gpu::ComputeDevice device = choose_render_device(o->device, p);
+    const gpu::ComputeDevice device = gpu::choose_device(o->device);
     if (o->frames > 1 && !p.reuse.temporal) fail("--frames: {} frames of a still view are the same image without --temporal", o->frames);
 
     // Scene, tracer, frame
@@ -172,11 +165,15 @@ std::function<int()> add_render_command(CLI::App& app) {
     Frame frame;
     size_t triangles = 0;
     double build_ms = 0;
+    uint64_t ao_rays = 0;
     if (device == gpu::ComputeDevice::cuda) {
-      gpu::Renderer renderer(scene);
+      gpu::Renderer renderer(scene);  // keeps the --temporal history between its frames
       triangles = scene.triangles.size();
       build_ms = renderer.bvh().build_ms;
-      frame = renderer.render(camera, p);
+      for (int k = 0; k < o->frames; ++k) {
+        frame = renderer.render(camera, p);
+        ao_rays += frame.stats.ao_rays;
+      }
     } else {
       const Tracer tracer(scene, api);
       triangles = tracer.triangles();
@@ -186,7 +183,6 @@ std::function<int()> add_render_command(CLI::App& app) {
       const Timer clock;
       int shown = -1;
       AoHistory history;
-      uint64_t ao_rays = 0;
       for (int k = 0; k < o->frames; ++k) {
         frame = render_frame(tracer, scene, camera, p, [&](double fraction) {
           const int percent = static_cast<int>(fraction * 100);
@@ -198,9 +194,9 @@ std::function<int()> add_render_command(CLI::App& app) {
         ao_rays += frame.stats.ao_rays;
       }
       if (shown >= 0) fmt::print(stderr, "\r{:50}\r", "");
-      if (o->frames > 1 && !o->quiet)
-        fmt::print("  {} frames accumulated: {:.2f} M AO rays in all; the last frame's figures follow\n", o->frames, ao_rays / 1e6);
     }
+    if (o->frames > 1 && !o->quiet)
+      fmt::print("  {} frames accumulated: {:.2f} M AO rays in all; the last frame's figures follow\n", o->frames, ao_rays / 1e6);
 
     // Outputs
     save_image(frame.color, o->output);

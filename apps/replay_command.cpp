@@ -89,7 +89,7 @@ std::function<int()> add_replay_command(CLI::App& app) {
     const Camera camera = resolve_camera(scene, o->view);
     const Tracer tracer(scene, parse_trace_api(o->render.trace_api));
     // The frames on the GPU when one is chosen (only the image comes back: the sink needs nothing else)
-    const gpu::ComputeDevice device = choose_render_device(o->device, params);
+    const gpu::ComputeDevice device = gpu::choose_device(o->device);
     std::unique_ptr<gpu::Renderer> gpu_renderer;
     FrameRenderer renderer;
     if (device == gpu::ComputeDevice::cuda) {

@@ -65,7 +65,7 @@ std::function<int()> add_view_command(CLI::App& app) {
     const ThreadScope threads(o->view.threads);
     ViewSettings s;
     s.render = resolve_render_params(o->view, o->render);
-    const gpu::ComputeDevice device = choose_render_device(o->device, s.render);
+    const gpu::ComputeDevice device = gpu::choose_device(o->device);
     s.cuda = device == gpu::ComputeDevice::cuda;
     s.mode = parse_view_mode(o->mode);
     s.eye = o->eye;

@@ -36,6 +36,20 @@ TEST(DeviceCli, UnknownOrUnavailableDeviceIsOneLine) {
   expect_one_line_error("view --scene builtin:box --device cuda", "--device cuda: unavailable");
 }
 
+// Quality per ray runs on either device: auto picks the GPU where there is one, cuda is refused
+// only for want of a GPU, and a temporal sequence builds on its history on both.
+TEST(DeviceCli, QualityPerRayRunsOnTheChosenDevice) {
+  const std::string options = "render --scene builtin:box --size 80x50 --max-rays 16 --adaptive --denoise --temporal --frames 3 ";
+  const CliRun r = foveal(options + "--stats dev_reuse.json -o dev_reuse.png");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const bool cuda = foveal::gpu::availability().usable;
+  EXPECT_NE(r.out.find(cuda ? "device   cuda (" : "device   cpu ("), std::string::npos) << r.out;
+  const auto j = nlohmann::json::parse(std::ifstream(scratch("dev_reuse.json")));
+  EXPECT_EQ(j["device"], cuda ? "cuda" : "cpu");
+  EXPECT_GT(j["reuse"]["history_pixels"].get<int>(), 1000);
+  if (!cuda) expect_one_line_error(options + "-o dev_reuse_cuda.png --device cuda", "--device cuda: unavailable");
+}
+
 // The vision simulation and its benchmark name their device; on a GPU the benchmark runs the CPU
 // beside it and reports the ratio and how far the two agree.
 TEST(DeviceCli, SimulateAndBenchVisionNameTheirDevice) {

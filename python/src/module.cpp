@@ -85,8 +85,8 @@ struct PyRenderer {
   std::unique_ptr<gpu::Renderer> gpu;
   int threads = 0;
   double build_ms = 0;
-  AoHistory history;        // temporal=True: the AO rays of the frames so far
-  std::mutex history_mutex;  // temporal frames from several Python threads take turns (the GIL is released)
+  AoHistory history;        // temporal=True on the CPU: the AO rays of the frames so far (the GPU keeps its own)
+  std::mutex history_mutex;  // temporal frames, and GPU frames, from several Python threads take turns (the GIL is released)
 
   PyRenderer(const PyScene& s, const std::string& device_name, int threads_) : scene(s.scene), threads(threads_) {
     if (threads < 0) fail("threads: must be 0 (all cores) or more, got {}", threads);
@@ -125,8 +125,6 @@ struct PyRenderer {
     p.reuse.temporal_frames = temporal_frames;
     p.reuse.tolerance = tolerance;
     validate(p);
-    if (gpu && (adaptive || denoise || temporal))
-      fail("adaptive, denoise and temporal run on the CPU only: make the Renderer with device='cpu'");
     const Camera camera = resolve_camera(*scene, camera_arg);
     out->scene = scene;
     out->build_ms = build_ms;
@@ -137,6 +135,8 @@ struct PyRenderer {
       out->threads = scope.threads();
       const Timer clock;
       if (gpu) {
+        // One frame at a time on the GPU's buffers, which also hold the temporal history
+        const std::lock_guard lock(history_mutex);
         out->frame = gpu->render(camera, p);
         out->triangles = scene->triangles.size();
         out->trace_api = "bvh2";
@@ -365,14 +365,15 @@ NB_MODULE(_core, m) {
            "Render one frame. `gaze` (x, y) in render pixels, origin top-left (default: the centre); mode 'foveated' "
            "(the AO budget follows the gaze) or 'full' (max_rays everywhere: the reference); `camera` a Camera, a "
            "camera name or None (the scene's first); `ambient_constant` None = the fovea's mean visibility. "
-           "More quality per ray (the CLI's --adaptive, --denoise, --temporal, --temporal-frames, --tolerance; CPU "
-           "only): `temporal` builds on the AO rays of this Renderer's earlier temporal frames, reprojected to the "
+           "More quality per ray (the CLI's --adaptive, --denoise, --temporal, --temporal-frames, --tolerance; on the CPU "
+           "and the GPU): `temporal` builds on the AO rays of this Renderer's earlier temporal frames, reprojected to the "
            "new camera (reset_history() starts afresh). The GIL is released while rendering.")
       .def("reset_history",
            [](PyRenderer& r) {
              nb::gil_scoped_release release;
              const std::lock_guard<std::mutex> lock(r.history_mutex);
              r.history.clear();
+             if (r.gpu) r.gpu->reset_history();
            },
            "Forget the AO rays kept for temporal=True: the next temporal frame is the paper's frame.")
       .def_prop_ro("device", [](const PyRenderer& r) { return std::string(gpu::to_string(r.device)); })

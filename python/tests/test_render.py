@@ -111,14 +111,18 @@ def test_stats_and_gaze(box):
     assert frame.library_ms > 0
 
 
-def test_quality_per_ray_options_equal_the_command_lines(cli, box, tmp_path):
+@pytest.mark.parametrize("device", ["cpu", "cuda"])
+def test_quality_per_ray_options_equal_the_command_lines(cli, box, tmp_path, device):
     # Three temporal frames of a still view with adaptive rays and the filter: the CLI's
-    # `render --frames 3` image bit for bit; after reset_history() the first temporal frame is the paper's
+    # `render --frames 3` image on the same device bit for bit; after reset_history() the first
+    # temporal frame is the paper's
+    if device == "cuda" and not foveal.device_available():
+        pytest.skip("no usable GPU")
     out = tmp_path / "reuse.pfm"
     common = dict(size=(160, 100), gaze=(60, 40), max_rays=64)
-    run_cli(cli, "render", "--scene", "builtin:box", "--size", "160x100", "--gaze", "60,40", "--max-rays", 64, "--device", "cpu",
+    run_cli(cli, "render", "--scene", "builtin:box", "--size", "160x100", "--gaze", "60,40", "--max-rays", 64, "--device", device,
             "--adaptive", "--denoise", "--temporal", "--frames", 3, "-o", out, "-q")
-    renderer = foveal.Renderer(box, device="cpu")
+    renderer = foveal.Renderer(box, device=device)
     for _ in range(3):
         frame = renderer.render(adaptive=True, denoise=True, temporal=True, **common)
     assert np.array_equal(frame.image.view(np.uint32), read_pfm(out).view(np.uint32)), "pixels differ from the CLI's"

@@ -63,6 +63,7 @@ struct FrameOutputs {
 // GPU times of one frame's passes, milliseconds (CUDA events).
 struct GpuPassTimes {
   double primary_ms = 0, foveation_ms = 0, scan_ms = 0, ao_ms = 0, shade_ms = 0, total_ms = 0;
+  double reuse_ms = 0;     // quality per ray: reprojection, visibility, filter and history (not AO)
   double download_ms = 0;  // copying the asked-for buffers back (host clock)
 };
 
@@ -75,8 +76,17 @@ class Renderer {
   Renderer(const Renderer&) = delete;
   Renderer& operator=(const Renderer&) = delete;
 
-  // One frame, as render_frame() on the CPU: the same RenderParams, the same Frame.
+  // One frame, as render_frame() on the CPU: the same RenderParams, the same Frame. With
+  // params.reuse (adaptive rays, the filter, temporal reuse) the CPU's passes run as kernels over
+  // the same per-pixel functions (render/reuse_pixel.h), the AO pass one thread per pixel whatever
+  // the schedule; with params.reuse.temporal the frame builds on the history the Renderer keeps
+  // from its last temporal frame (render_frame's AoHistory) and leaves its own there. Frames
+  // without temporal neither read nor change it. outputs.visibility also brings back
+  // Frame::ao_traced when params.reuse is on.
   Frame render(const Camera& camera, const RenderParams& params, const FrameOutputs& outputs = {});
+  // Forget the temporal history: the next temporal frame is the paper's frame.
+  void reset_history();
+  uint32_t history_frames() const;  // temporal frames stored since the last reset
   const GpuPassTimes& last_times() const;
 
   void set_ao_schedule(AoSchedule schedule);

@@ -65,7 +65,12 @@ struct FrameCounters {
   unsigned long long fovea_pixels;  // pixels with q = 1, a hit and rays
   unsigned long long shadow_rays;
   int min_rays, max_rays;           // over pixels that hit the scene
+  // Quality per ray (zero without it)
+  unsigned long long fovea_visibility;  // Σ V over the q = 1 pixels in units of 2⁻³² (exact, any order)
+  unsigned long long history_pixels;    // pixels whose reprojected history was kept
+  unsigned long long denoised_pixels;   // pixels the filter changed
 };
+inline constexpr double kFoveaVisibilityUnit = 4294967296.0;  // 2³²
 
 // The `auto` ambient constant: the mean visibility of the q = 1 pixels, all of which trace n_max
 // rays, from the frame's integer sums (exact, and the same in any summation order).
@@ -73,6 +78,14 @@ __host__ __device__ inline float fovea_mean_visibility(const FrameCounters& f, i
   return f.fovea_pixels > 0 && max_rays > 0
              ? static_cast<float>(static_cast<double>(f.fovea_open) / (static_cast<double>(f.fovea_pixels) * max_rays))
              : 1.0f;
+}
+
+// The `auto` ambient constant of a frame with quality per ray, whose visibilities are not open / n_max:
+// the mean of the q = 1 pixels' V from their fixed-point sum.
+__host__ __device__ inline float fovea_mean_reused_visibility(const FrameCounters& f) {
+  return f.fovea_pixels > 0 ? static_cast<float>(static_cast<double>(f.fovea_visibility) / kFoveaVisibilityUnit /
+                                                  static_cast<double>(f.fovea_pixels))
+                            : 1.0f;
 }
 
 struct GBufferPtrs {
@@ -89,7 +102,7 @@ inline unsigned blocks_for(size_t count, unsigned threads) { return static_cast<
 
 // Events that time the passes of one frame on the default stream.
 struct PassEvents {
-  cudaEvent_t e[6] = {};
+  cudaEvent_t e[8] = {};
   PassEvents() {
     for (auto& ev : e) FOVEAL_CUDA_CHECK(cudaEventCreate(&ev));
   }
@@ -147,6 +160,20 @@ struct Renderer::Impl {
   DeviceArray<uint8_t> scan_temp;
   size_t scan_temp_bytes = 0;
 
+  // Quality per ray (cuda/gpu_reuse.cu): the frame's AO ray counts, the filter's output, and the
+  // history of the last temporal frame, kept on the GPU between frames
+  DeviceArray<float> count_open, count_cast, filtered;
+  DeviceArray<glm::vec3> count_origin;
+  DeviceArray<uint16_t> traced;
+  struct History {
+    DeviceArray<glm::vec3> position, normal, origin;
+    DeviceArray<uint8_t> hit;
+    DeviceArray<float> open, cast;
+    Camera camera;
+    int width = 0, height = 0;
+    uint32_t frames = 0;  // stored since the last reset
+  } history;
+
   // Raw tracing
   DeviceArray<Ray> raw_rays;
   DeviceArray<Hit> raw_hits;
@@ -166,6 +193,23 @@ struct Renderer::Impl {
     return v;
   }
 };
+
+namespace detail {
+
+// The reuse passes of one frame (cuda/gpu_reuse.cu), after the primary rays and the foveation
+// maps: reprojection of the history, the AO pass in adaptive rounds on the history, visibility,
+// the filter, and the history kept for the next frame. Leaves V in the returned device buffer,
+// the frame's counters on the GPU, and records events 2 (start), 3 (after reprojection), 4 (after AO)
+// and 5 (after visibility, filter and history).
+struct ReuseFrame {
+  const Camera* camera;
+  const RenderParams* params;
+  float ao_distance;
+  size_t pixels;
+};
+float* run_reuse_passes(Renderer::Impl& m, const ReuseFrame& frame);
+
+}  // namespace detail
 
 namespace {
 

@@ -152,6 +152,7 @@ struct ShadeArgs {
   int light_count;
   glm::vec3 ambient;
   bool auto_constant;
+  bool reused;             // quality per ray: the `auto` constant from the fovea's Σ V
   float ambient_constant;  // when not auto
   int max_rays;
   bool shadows;
@@ -167,7 +168,9 @@ __global__ void shade_kernel(ShadeArgs a) {
   const size_t i = static_cast<size_t>(y) * a.width + x;
   glm::vec3 c = background_colour();
   if (a.prim[i] != Hit::kNoHit) {
-    const float k_const = a.auto_constant ? fovea_mean_visibility(*a.counters, a.max_rays) : a.ambient_constant;
+    const float k_const = !a.auto_constant ? a.ambient_constant
+                          : a.reused     ? fovea_mean_reused_visibility(*a.counters)
+                                         : fovea_mean_visibility(*a.counters, a.max_rays);
     const float b = a.blend[i];
     const float ka = b * a.visibility[i] + (1.0f - b) * k_const;
     uint32_t shadow_rays = 0;
@@ -311,6 +314,8 @@ Renderer::Renderer(const Scene& scene) {
 Renderer::~Renderer() = default;
 
 void Renderer::set_ao_schedule(AoSchedule schedule) { impl_->schedule = schedule; }
+void Renderer::reset_history() { impl_->history.frames = 0; }
+uint32_t Renderer::history_frames() const { return impl_->history.frames; }
 AoSchedule Renderer::ao_schedule() const { return impl_->schedule; }
 const Bvh& Renderer::bvh() const { return impl_->bvh; }
 const GpuPassTimes& Renderer::last_times() const { return impl_->times; }
@@ -357,40 +362,50 @@ Frame Renderer::render(const Camera& camera, const RenderParams& params, const F
                                         m.prim.get(), maps, m.counters.get());
   FOVEAL_CUDA_LAUNCHED("foveation model");
   ev.record(2);
-  // Prefix sum of the ray counts; the total goes straight into the counters
-  temp_bytes = m.scan_temp_bytes;
-  FOVEAL_CUDA_CHECK(cub::DeviceScan::ExclusiveSum(m.scan_temp.get(), temp_bytes, m.ray_count.get(), m.offset.get(), n));
-  total_kernel<<<1, 1>>>(m.offset.get(), m.ray_count.get(), n, m.counters.get());
-  FOVEAL_CUDA_LAUNCHED("ray total");
-  ev.record(3);
-  // Foveated AO
-  AoArgs ao{m.bvh_view(), m.position.get(), m.geo_normal.get(), m.offset.get(), m.ray_count.get(), m.sobol.get(),
-            m.blocked.get(), m.counters.get(), n, w, ao_distance, m.epsilon, params.seed};
-  if (m.schedule == AoSchedule::balanced)
-    ao_balanced_kernel<<<m.ao_grid, 128>>>(ao);
-  else
-    ao_per_pixel_kernel<<<blocks_for(n, 128), 128>>>(ao);
-  FOVEAL_CUDA_LAUNCHED("ambient occlusion");
-  ev.record(4);
-  // Visibility, then Phong shading with the blended ambient term
-  visibility_kernel<<<blocks_for(n, 256), 256>>>(n, m.ray_count.get(), m.quality.get(), m.blocked.get(),
-                                                  m.visibility.get(), m.counters.get());
-  FOVEAL_CUDA_LAUNCHED("visibility");
+  const bool reuse = params.reuse.any();
+  float* visibility = m.visibility.get();
+  int last = 5;  // the event after shading
+  if (!reuse) {
+    // Prefix sum of the ray counts; the total goes straight into the counters
+    temp_bytes = m.scan_temp_bytes;
+    FOVEAL_CUDA_CHECK(cub::DeviceScan::ExclusiveSum(m.scan_temp.get(), temp_bytes, m.ray_count.get(), m.offset.get(), n));
+    total_kernel<<<1, 1>>>(m.offset.get(), m.ray_count.get(), n, m.counters.get());
+    FOVEAL_CUDA_LAUNCHED("ray total");
+    ev.record(3);
+    // Foveated AO
+    AoArgs ao{m.bvh_view(), m.position.get(), m.geo_normal.get(), m.offset.get(), m.ray_count.get(), m.sobol.get(),
+              m.blocked.get(), m.counters.get(), n, w, ao_distance, m.epsilon, params.seed};
+    if (m.schedule == AoSchedule::balanced)
+      ao_balanced_kernel<<<m.ao_grid, 128>>>(ao);
+    else
+      ao_per_pixel_kernel<<<blocks_for(n, 128), 128>>>(ao);
+    FOVEAL_CUDA_LAUNCHED("ambient occlusion");
+    ev.record(4);
+    visibility_kernel<<<blocks_for(n, 256), 256>>>(n, m.ray_count.get(), m.quality.get(), m.blocked.get(),
+                                                    m.visibility.get(), m.counters.get());
+    FOVEAL_CUDA_LAUNCHED("visibility");
+  } else {
+    // Quality per ray: history, adaptive rounds, the filter (events 3, 4 and 5)
+    visibility = run_reuse_passes(m, {&camera, &params, ao_distance, n});
+    last = 6;
+  }
+  // Phong shading with the blended ambient term
   ShadeArgs sh{m.bvh_view(), m.prim.get(), m.material_ids.get(), m.materials.get(), g, m.blend.get(),
-               m.visibility.get(), m.lights.get(), static_cast<int>(lights.size()), m.ambient,
-               !params.ambient_constant.has_value(), params.ambient_constant.value_or(1.0f), params.foveation.max_rays,
+               visibility, m.lights.get(), static_cast<int>(lights.size()), m.ambient,
+               !params.ambient_constant.has_value(), reuse, params.ambient_constant.value_or(1.0f), params.foveation.max_rays,
                params.shadows, m.epsilon, w, h, m.color.get(), m.counters.get()};
   shade_kernel<<<grid2d, block2d>>>(sh);
   FOVEAL_CUDA_LAUNCHED("shading");
-  ev.record(5);
-  FOVEAL_CUDA_CHECK(cudaEventSynchronize(ev.e[5]));
+  ev.record(last);
+  FOVEAL_CUDA_CHECK(cudaEventSynchronize(ev.e[last]));
   FOVEAL_CUDA_CHECK(cudaGetLastError());  // a fault inside a kernel
   m.times.primary_ms = ev.ms(0, 1);
   m.times.foveation_ms = ev.ms(1, 2);
-  m.times.scan_ms = ev.ms(2, 3);
+  m.times.scan_ms = reuse ? 0.0 : ev.ms(2, 3);
+  m.times.reuse_ms = reuse ? ev.ms(2, 3) + ev.ms(4, 5) : 0.0;
   m.times.ao_ms = ev.ms(3, 4);
-  m.times.shade_ms = ev.ms(4, 5);
-  m.times.total_ms = ev.ms(0, 5);
+  m.times.shade_ms = ev.ms(last - 1, last);
+  m.times.total_ms = ev.ms(0, last);
   // Copy back what was asked for
   const Timer download;
   FrameCounters counters{};
@@ -400,7 +415,11 @@ Frame Renderer::render(const Camera& camera, const RenderParams& params, const F
   m.color.download(reinterpret_cast<glm::vec3*>(f.color.pixels.data()), n);
   if (outputs.visibility) {
     f.visibility.resize(n);
-    m.visibility.download(f.visibility.data(), n);
+    FOVEAL_CUDA_CHECK(cudaMemcpy(f.visibility.data(), visibility, n * sizeof(float), cudaMemcpyDeviceToHost));
+    if (reuse) {
+      f.ao_traced.resize(n);
+      m.traced.download(f.ao_traced.data(), n);
+    }
   }
   if (outputs.maps) {
     f.maps.width = w;
@@ -443,8 +462,12 @@ Frame Renderer::render(const Camera& camera, const RenderParams& params, const F
   s.ao_rays_mean = static_cast<double>(s.ao_rays) / static_cast<double>(n);
   s.ao_rays_min = counters.min_rays == std::numeric_limits<int>::max() ? 0 : counters.min_rays;
   s.ao_rays_max = counters.max_rays;
-  s.ambient_constant =
-      params.ambient_constant ? *params.ambient_constant : fovea_mean_visibility(counters, params.foveation.max_rays);
+  s.ambient_constant = params.ambient_constant ? *params.ambient_constant
+                       : reuse                   ? fovea_mean_reused_visibility(counters)
+                                                 : fovea_mean_visibility(counters, params.foveation.max_rays);
+  s.history_pixels = counters.history_pixels;
+  s.denoised_pixels = counters.denoised_pixels;
+  s.reuse_ms = m.times.reuse_ms;
   s.ao_distance = ao_distance;
   return f;
 }

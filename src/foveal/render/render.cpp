@@ -229,13 +229,6 @@ float estimate_visibility(const Tracer& tracer, glm::vec3 position, glm::vec3 no
 int ao_tiles_x(int width) { return (width + kTile - 1) / kTile; }
 int ao_tile_count(int width, int height) { return ao_tiles_x(width) * ((height + kTile - 1) / kTile); }
 
-bool history_contradicted(float history_open, float history_cast, float open, float cast) {
-  if (!(history_cast > 0) || !(cast > 0)) return false;
-  const float p = (history_open + open + 0.5f) / (history_cast + cast + 1.0f);
-  const float se = std::sqrt(p * (1.0f - p) * (1.0f / history_cast + 1.0f / cast));
-  return std::fabs(open / cast - history_open / history_cast) > kHistoryContradiction * se;
-}
-
 AoSampling ao_sampling(const AoReuseParams& reuse, uint32_t frame_index) {
   AoSampling s;
   s.adaptive = reuse.adaptive;
@@ -257,15 +250,13 @@ uint64_t trace_ao_counts(const Tracer& tracer, const GBuffer& g, const Foveation
     counts.cast.assign(pixels, 0.0f);
   }
   counts.traced.assign(pixels, 0);
-  // One pixel of a tile: its rays, how many are cast and found blocked, and where this round and the frame end
+  const CountsView view = counts_view(counts);
+  // One pixel of a tile: its rays, and its rounds (how many are cast and found blocked, where this
+  // round and the frame end)
   struct Pixel {
     size_t i;
     AoPixelRays rays;
-    uint32_t cast, round_end, limit;
-    uint32_t blocked;
-    uint32_t offset;  // index of the first ray in the pixel's sequence this frame
-    uint32_t n;       // the pixel's n(E)
-    uint32_t dropped; // rays cast this frame before its history was dropped
+    AoPixelRounds rounds;
   };
   struct Segment {
     uint32_t pixel;       // index into Work::pixels
@@ -295,34 +286,12 @@ uint64_t trace_ao_counts(const Tracer& tracer, const GBuffer& g, const Foveation
         const size_t i = static_cast<size_t>(y) * g.width + x;
         const int n = maps.rays[i];
         if (!g.hit(i) || n == 0) continue;
-        int limit = n;
-        uint32_t offset = 0;
-        uint64_t pixel_rays_seed = seed;
-        if (sampling.temporal_frames > 0) {
-          // What n lacks after the history, but at least m = n/F (history refreshes over F frames).
-          // A still pixel's rays continue its sequence: frame 0 casts rays [0, F·m), frame f the
-          // next m, so that its history is a prefix of the sequence, stratified as the paper's n.
-          const int refresh = refresh_rays(n, sampling.temporal_frames);
-          const int lack = static_cast<int>(std::ceil(static_cast<float>(n) - counts.cast[i]));
-          limit = std::max(refresh, std::min(n, lack));
-          // A pixel without history (a disocclusion, the first frame) casts the paper's first n
-          // rays. One whose history falls short of n (weighed down, or adaptive stopped early)
-          // casts the start of a sequence scrambled for this frame: a later stretch of its own
-          // sequence is less evenly spread than any sequence's start (measured: ~1.3× the
-          // reference's noise in the fovea of a moving camera).
-          if (sampling.frame_index > 0 && counts.cast[i] > 0) {
-            if (limit > refresh)
-              pixel_rays_seed = seed ^ (static_cast<uint64_t>(hash32(0x7e4b0000U + sampling.frame_index)) << 32);
-            else
-              offset = (static_cast<uint32_t>(sampling.temporal_frames) + sampling.frame_index - 1) * static_cast<uint32_t>(refresh);
-          }
-        }
-        const int first = sampling.adaptive ? std::min(sampling.first_round, limit) : limit;
+        const AoPixelPlan plan = plan_ao_pixel(n, counts.cast[i], sampling, seed);
         w.active.push_back(static_cast<uint32_t>(w.pixels.size()));
         w.pixels.push_back({i,
-                            AoPixelRays(g.position[i], g.geo_normal[i], epsilon, ao_distance, pixel_rays_seed, static_cast<uint32_t>(x),
+                            AoPixelRays(g.position[i], g.geo_normal[i], epsilon, ao_distance, plan.seed, static_cast<uint32_t>(x),
                                         static_cast<uint32_t>(y), sobol_table_2d()),
-                            0, static_cast<uint32_t>(first), static_cast<uint32_t>(limit), 0, offset, static_cast<uint32_t>(n), 0});
+                            AoPixelRounds(plan, n)});
       }
     size_t fill = 0;
     auto flush = [&] {
@@ -330,7 +299,7 @@ uint64_t trace_ao_counts(const Tracer& tracer, const GBuffer& g, const Foveation
       for (const Segment& s : w.segments) {
         uint32_t blocked = 0;
         for (uint32_t k = s.begin; k < s.end; ++k) blocked += w.occluded[k];
-        w.pixels[s.pixel].blocked += blocked;
+        w.pixels[s.pixel].rounds.blocked += blocked;
       }
       w.segments.clear();
       traced.local() += fill;
@@ -340,9 +309,10 @@ uint64_t trace_ao_counts(const Tracer& tracer, const GBuffer& g, const Foveation
     while (!w.active.empty()) {
       for (uint32_t a : w.active) {
         Pixel& p = w.pixels[a];
+        AoPixelRounds& r = p.rounds;
         w.segments.push_back({a, static_cast<uint32_t>(fill), static_cast<uint32_t>(fill)});
-        while (p.cast < p.round_end) {
-          w.rays[fill++] = p.rays(p.offset + p.cast++);
+        while (r.cast < r.round_end) {
+          w.rays[fill++] = p.rays(r.offset + r.cast++);
           w.segments.back().end = static_cast<uint32_t>(fill);
           if (fill == kAoBatch) {
             flush();  // a pixel cut by the batch end continues in a new segment
@@ -353,39 +323,11 @@ uint64_t trace_ao_counts(const Tracer& tracer, const GBuffer& g, const Foveation
       if (fill > 0) flush();
       w.segments.clear();
       w.next.clear();
-      for (uint32_t a : w.active) {
-        Pixel& p = w.pixels[a];
-        // History this frame's rays contradict (an occluder that moved, another surface) is dropped,
-        // with them: the pixel starts again without history, n(E) rays from its sequence's start
-        if (sampling.temporal_frames > 0 &&
-            history_contradicted(counts.open[p.i], counts.cast[p.i], static_cast<float>(p.cast - p.blocked),
-                                 static_cast<float>(p.cast))) {
-          counts.open[p.i] = counts.cast[p.i] = 0.0f;
-          if (!counts.origin_sum.empty()) counts.origin_sum[p.i] = glm::vec3(0.0f);
-          p.dropped += p.cast;
-          p.cast = p.blocked = p.offset = 0;
-          p.limit = p.n;
-          p.round_end = sampling.adaptive ? std::min(static_cast<uint32_t>(sampling.first_round), p.n) : p.n;
-          w.next.push_back(a);
-          continue;
-        }
-        if (p.cast >= p.limit) continue;
-        if (sampling.adaptive) {
-          const float cast = counts.cast[p.i] + static_cast<float>(p.cast);
-          const float open = counts.open[p.i] + static_cast<float>(p.cast - p.blocked);
-          if (visibility_standard_error(open, cast) * maps.quality[p.i] <= sampling.tau_fovea) continue;
-        }
-        p.round_end = std::min(p.limit, 2 * p.cast);
-        w.next.push_back(a);
-      }
+      for (uint32_t a : w.active)
+        if (w.pixels[a].rounds.next_round(view, w.pixels[a].i, maps.quality[w.pixels[a].i], sampling)) w.next.push_back(a);
       std::swap(w.active, w.next);
     }
-    for (const Pixel& p : w.pixels) {
-      counts.open[p.i] += static_cast<float>(p.cast - p.blocked);
-      counts.cast[p.i] += static_cast<float>(p.cast);
-      if (!counts.origin_sum.empty()) counts.origin_sum[p.i] += static_cast<float>(p.cast) * g.position[p.i];
-      counts.traced[p.i] = static_cast<uint16_t>(std::min<uint32_t>(p.dropped + p.cast, UINT16_MAX));
-    }
+    for (const Pixel& p : w.pixels) counts.traced[p.i] = p.rounds.finish(view, p.i, g.position[p.i]);
     if (hooks.tile_ms) (*hooks.tile_ms)[static_cast<size_t>(tile)] = tile_timer.ms();
     // Progress: whichever thread finishes a tile reports, one at a time
     if (hooks.progress) {

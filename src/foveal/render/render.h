@@ -9,6 +9,7 @@
 
 #include "foveal/perception/foveation.h"
 #include "foveal/render/pixel.h"
+#include "foveal/render/reuse_pixel.h"
 #include "foveal/scene/scene.h"
 #include "foveal/trace/tracer.h"
 #include "foveal/util/image.h"
@@ -49,13 +50,6 @@ struct AoReuseParams {
   // τ where q = 1: tolerance · 0.5/√target_rays (τ(E) = this / q(E))
   float tau_fovea() const { return static_cast<float>(tolerance * 0.5 / std::sqrt(std::max(1, target_rays))); }
 };
-inline constexpr int kMaxDenoiseRadius = 8;
-// m = ceil(n/F): the rays a pixel with n(E) = n casts a frame once its history holds n (F = temporal_frames).
-inline int refresh_rays(int n, int temporal_frames) {
-  const int f = std::max(1, temporal_frames);
-  return (n + f - 1) / f;
-}
-
 // Everything that decides one frame besides the scene and camera.
 struct RenderParams {
   int width = 840;                      // render pixels
@@ -151,16 +145,12 @@ int ao_tile_count(int width, int height);
 // AO visibility per pixel with maps.rays[i] rays; returns the number of rays traced.
 uint64_t trace_ao(const Tracer& tracer, const GBuffer& gbuffer, const FoveationMaps& maps, float ao_distance,
                   float epsilon, uint64_t seed, std::vector<float>& visibility, const AoPassHooks& hooks = {});
-// How the general AO pass spends each pixel's budget (from AoReuseParams; default: the paper's).
-struct AoSampling {
-  bool adaptive = false;
-  int first_round = 16;        // adaptive: rays of the first round
-  float tau_fovea = 0;         // adaptive: the standard error allowed where q = 1 (τ(E) = tau_fovea / q)
-  int temporal_frames = 0;     // > 0: with history, m = ceil(n/F) rays a frame, or what n lacks
-  uint32_t frame_index = 0;    // temporal: frames before this one; frame f > 0 starts the sequence
-                               // of a pixel with history at (F + f − 1)·m, after frame 0's n = F·m
-                               // rays (one without starts at 0, as the paper's pixel)
-};
+// How the general AO pass spends each pixel's budget (from AoReuseParams; default: the paper's):
+// adaptive rounds from first_round rays, stopping at the standard error tau_fovea / q(E); with
+// temporal_frames F > 0 and history, m = ceil(n/F) rays a frame, or what n lacks; frame_index:
+// frames before this one — frame f > 0 starts the sequence of a pixel with history at
+// (F + f − 1)·m, after frame 0's n = F·m rays (one without starts at 0, as the paper's pixel).
+using AoSampling = AoPixelSampling;
 AoSampling ao_sampling(const AoReuseParams& reuse, uint32_t frame_index);
 // AO ray counts per pixel: rays found open and rays cast, history included (floats: history is
 // rescaled when capped). V = open / cast; cast = 0: no estimate (V = 1).
@@ -171,25 +161,20 @@ struct AoCounts {
   // the pixel that cast each (origin_sum / cast: where the estimate stands). The pass adds its own.
   std::vector<glm::vec3> origin_sum;
 };
-// Whether a pixel's fresh rays contradict its history: their visibilities differ by more than
-// kHistoryContradiction standard errors of the difference (a two-proportion z-test; the pooled
-// proportion Krichevsky–Trofimov smoothed). The pass then drops the history.
-inline constexpr float kHistoryContradiction = 3.0f;
-bool history_contradicted(float history_open, float history_cast, float open, float cast);
+// Views of the buffers for the per-pixel functions of reuse_pixel.h.
+inline SurfaceView surface_view(const GBuffer& g) {
+  return {g.prim.data(), g.position.data(), g.normal.data(), g.geo_normal.data(), g.albedo.data(), g.depth.data(), g.width, g.height};
+}
+inline CountsView counts_view(AoCounts& c) {
+  return {c.open.data(), c.cast.data(), c.origin_sum.empty() ? nullptr : c.origin_sum.data()};
+}
 // The AO pass with a prior (`counts` on entry: history, or empty for none; on return, prior + this
 // frame). The rays are each pixel's sequence from sample_offset, cast in rounds; the result does
 // not depend on the thread count. Returns the number of rays traced.
 uint64_t trace_ao_counts(const Tracer& tracer, const GBuffer& gbuffer, const FoveationMaps& maps, float ao_distance,
                          float epsilon, uint64_t seed, const AoSampling& sampling, AoCounts& counts,
                          const AoPassHooks& hooks = {});
-// Standard error of a visibility estimate from `open` of `cast` rays: the binomial one at the
-// Krichevsky–Trofimov estimate p = (open + ½)/(cast + 1), so that rays that all agree are not
-// taken for an exact answer (with k rays all open it is about 0.71/k, not 0).
-inline float visibility_standard_error(float open, float cast) {
-  if (!(cast > 0)) return 1.0f;
-  const float p = (open + 0.5f) / (cast + 1.0f);
-  return std::sqrt(p * (1.0f - p) / cast);
-}
+// visibility_standard_error(), history_contradicted(): reuse_pixel.h.
 
 // Visibility at one point from `rays` cosine-weighted directions of pixel (x, y)'s sequence:
 // the per-pixel function the AO pass runs, exposed for analytic tests.

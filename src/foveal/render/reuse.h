@@ -37,6 +37,8 @@ class AoHistory {
   void clear() { *this = AoHistory(); }
   bool empty() const { return width_ == 0; }
   uint32_t frames() const { return frames_; }  // frames stored since the last clear
+  // The stored frame for the per-pixel functions (reuse_pixel.h); valid until the next store().
+  HistoryView view() const;
   // The counts kept for the surface points of `gbuffer` (its world positions stand for the current
   // camera): the previous frame's at the pixel each point projects to, where it saw the same
   // surface; zero elsewhere. The history's rays were cast from points around this one (their mean,
@@ -60,22 +62,16 @@ class AoHistory {
   uint32_t frames_ = 0;
 };
 
-// How far the mean origin of a pixel's history rays may lie from its surface point, in pixel
-// footprints: 0.1 where q = 1 (the eye resolves single pixels there), 0.1 + 0.8·(1/q − 1) as the
-// cells it resolves grow (1/q pixels), at most that at the filter's widest footprint.
-double history_reach_px(float quality);
-// The cosine of the widest angle between the geometric normal a pixel's history was cast about
-// and its own: 5.7° where q = 1 (a facet tilted more biases AO beyond the reference's noise,
-// measured on the dragon), 5.7°/q up to 25.8° as acuity falls.
-float history_normal_cos(float quality);
-
+// history_reach_px(), history_normal_cos(): reuse_pixel.h.
 
 // The history cap of a pixel, rays: H(E) = max(F, round(H·q)) frames of ceil(n/F) rays.
-float history_cap_rays(int rays, float quality, const AoReuseParams& reuse);
+inline float history_cap_rays(int rays, float quality, const AoReuseParams& reuse) {
+  return history_cap_rays(rays, quality, reuse.temporal_frames, reuse.history_frames);
+}
 
 // The footprint radius a pixel may pool over, pixels: round(radius·(1/q − 1)) up to kMaxDenoiseRadius
 // (the eye resolves cells of 1/q pixels; 0 where q = 1: the fovea is never filtered).
-int denoise_max_radius(float quality, const AoReuseParams& reuse);
+inline int denoise_max_radius(float quality, const AoReuseParams& reuse) { return denoise_max_radius(quality, reuse.denoise_radius); }
 
 // Filter `visibility` (V = open / cast on entry) where a pixel's standard error exceeds τ(E);
 // `fov_deg` is the camera's vertical field of view (pixel footprints). Returns the pixels changed.

@@ -223,15 +223,16 @@ struct ViewSession::Worker {
     p.foveation.max_rays = std::min(p.foveation.max_rays, rays);
     p.foveation.min_rays = std::min(p.foveation.min_rays, p.foveation.max_rays);
     progress = 0;
+    // --temporal: the full-size foveated frame builds on the history of the ones before (any gaze
+    // or camera; reprojection keeps what still applies); previews and references start afresh
+    const bool final_foveated = mode == RenderMode::foveated && scale == 1 && rays == r.settings.render.foveation.max_rays;
     if (r.settings.cuda) {  // a GPU frame takes milliseconds: no progress, cancelled between stages
-      if (!gpu) gpu = std::make_unique<gpu::Renderer>(scene);
+      if (!gpu) gpu = std::make_unique<gpu::Renderer>(scene);  // keeps the history of the final frames
+      if (!final_foveated) p.reuse.temporal = false;
       Frame f = gpu->render(r.camera, p, gpu::FrameOutputs{false, false, false});
       check(r.generation);
       return f;
     }
-    // --temporal: the full-size foveated frame builds on the history of the ones before (any gaze
-    // or camera; reprojection keeps what still applies); previews and references start afresh
-    const bool final_foveated = mode == RenderMode::foveated && scale == 1 && rays == r.settings.render.foveation.max_rays;
     Frame f = render_frame(tracer, scene, r.camera, p, [&](double fraction) {
       progress = fraction;
       check(r.generation);
