@@ -1,6 +1,7 @@
 // apps/bench_quality.cpp — `foveal bench quality`: the speed–quality trade-off of the foveation
 // model's parameters (γ, n_max, β), with the Pareto front and the configuration it recommends.
 #include "commands.h"
+#include "foveal/cuda/gpu.h"
 #include "foveal/io/outputs.h"
 #include "foveal/quality/sequence.h"
 #include "foveal/quality/sweep.h"
@@ -55,6 +56,7 @@ std::function<int()> add_bench_quality_command(CLI::App& bench) {
     uint64_t seed = 1;
     bool full = false;
     bool sequence = false;
+    std::string device = "cpu";
     int frames = 24, fixation_frames = 6;
     double orbit = 3;
     std::string recording;
@@ -106,6 +108,10 @@ std::function<int()> add_bench_quality_command(CLI::App& bench) {
                 "sequence mode: the paper's method, adaptive+denoise and temporal reuse (alone, +adaptive, +denoise) along a camera "
                 "orbit with the gaze fixating around the first gaze point (--gazes object), each frame judged against the reference "
                 "at its camera");
+  cmd->add_option("--device", o->device,
+                  "--sequence: where every frame, the references too, is rendered: cpu, cuda (the GPU renderer; refused with "
+                  "the reason where there is none) or auto (the GPU where one is usable); the single-frame sweep runs on the CPU")
+      ->capture_default_str();
   cmd->add_option("--frames", o->frames, "--sequence: frames")->capture_default_str()->check(CLI::Range(2, 100000));
   cmd->add_option("--orbit", o->orbit, "--sequence: the camera's orbit about the look point over the frames, degrees")
       ->capture_default_str()->check(CLI::Range(-360.0, 360.0));
@@ -131,6 +137,9 @@ std::function<int()> add_bench_quality_command(CLI::App& bench) {
     }
     // The options that need no scene, checked before it loads
     if (!o->sequence && !o->recording.empty()) fail("--recording: only with --sequence");
+    const gpu::ComputeDevice device = gpu::choose_device(o->device);
+    if (!o->sequence && device == gpu::ComputeDevice::cuda)
+      fail("--device {}: the single-frame sweep runs on the CPU; the GPU measures --sequence", o->device);
     if (o->sequence && !configs->count()) o->configs = "paper,adaptive+denoise,temporal,temporal+adaptive,temporal+adaptive+denoise";
     std::vector<ReuseConfig> methods = parse_reuse_configs("--configs", o->configs);
     for (ReuseConfig& m : methods) m.reuse.tolerance = o->tolerance, m.reuse.denoise_radius = o->denoise_radius;
@@ -184,6 +193,7 @@ std::function<int()> add_bench_quality_command(CLI::App& bench) {
       q.seed = o->seed;
       q.cameras = orbit_path(camera, o->orbit, o->frames);
       q.configs = methods;
+      q.cuda = device == gpu::ComputeDevice::cuda;
       std::string gaze_text;
       if (o->recording.empty()) {
         q.gazes = fixation_path(p.gazes.front().second, p.render, o->frames, o->fixation_frames);
@@ -193,9 +203,9 @@ std::function<int()> add_bench_quality_command(CLI::App& bench) {
         q.gazes = recording_gaze_path(o->recording, scene, tracer, p.render, o->start, o->fps, o->frames);
         gaze_text = fmt::format("gaze of {} from {:g} s at {:g} fps", o->recording, o->start, o->fps);
       }
-      fmt::print("foveal bench quality --sequence: {} ({} triangles), camera {} orbiting {:g}° over {} frames, {}, {}x{}, {} threads\n",
+      fmt::print("foveal bench quality --sequence: {} ({} triangles), camera {} orbiting {:g}° over {} frames, {}, {}x{}, {}\n",
                  spec, tracer.triangles(), p.camera_name, o->orbit, o->frames, gaze_text, p.render.width, p.render.height,
-                 threads.threads());
+                 q.cuda ? "device " + gpu::describe_device(device) : fmt::format("{} threads", threads.threads()));
       const QualitySequenceResult result = run_quality_sequence(scene, tracer, q, [](const std::string& line) {
         fmt::print("  {}\n", line);
         std::fflush(stdout);

@@ -1,5 +1,6 @@
 // `foveal compare` as a user runs it on two renders.
 #include "cli_helpers.h"
+#include "foveal/cuda/gpu.h"
 #include "foveal/io/image_io.h"
 
 #include <gtest/gtest.h>
@@ -129,6 +130,7 @@ TEST(BenchQualityCli, SequenceRunsTheConfigurationsAskedForAndPlotsThem) {
   EXPECT_TRUE(j["configs"][0]["temporal"].get<bool>() && j["configs"][0]["denoise"].get<bool>());
   EXPECT_FALSE(j["configs"][0]["adaptive"].get<bool>());
   EXPECT_EQ(j["configs"][1]["name"], "paper");
+  EXPECT_EQ(j["device"], "cpu");  // the default, the same as --device cpu
   std::stringstream md;
   md << std::ifstream(scratch("s.md")).rdbuf();
   EXPECT_NE(md.str().find("| temporal+denoise |"), std::string::npos) << md.str();
@@ -150,8 +152,14 @@ TEST(BenchQualityCli, BadOptionsAreOneClearLine) {
            {base + "--sequence --recording missing.csv", "missing.csv"},
            {base + "--configs paper,temporal", "--sequence"},
            {base + "--configs adaptive+sharpen", "sharpen"},
-           {base + "--sequence --configs paper,paper", "paper is listed twice"}})
+           {base + "--sequence --configs paper,paper", "paper is listed twice"},
+           {base + "--sequence --device opencl", "--device: unknown device 'opencl'"}})
     expect_one_line_error(args, expected);
+  // The GPU measures sequences; without one, --device cuda says why
+  if (foveal::gpu::availability().usable)
+    expect_one_line_error(base + "--device cuda", "the single-frame sweep runs on the CPU");
+  else
+    expect_one_line_error(base + "--sequence --device cuda", "--device cuda: unavailable");
 }
 
 }  // namespace

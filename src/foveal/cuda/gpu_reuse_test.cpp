@@ -6,6 +6,7 @@
 // against itself (the first temporal frame is the paper's frame; repeats are identical).
 #include "foveal/cuda/gpu.h"
 #include "foveal/cuda/reuse_kernels.h"
+#include "foveal/quality/sequence.h"
 #include "foveal/render/reuse.h"
 #include "foveal/util/sampling.h"
 
@@ -239,6 +240,32 @@ TEST(Gpu, FirstTemporalFrameIsThePapersFrameAndRepeats) {
   EXPECT_EQ(a2.visibility, b2.visibility);
   EXPECT_EQ(a2.color.pixels, b2.color.pixels);
   EXPECT_EQ(a2.ao_traced, b2.ao_traced);
+}
+
+// bench quality --sequence on the GPU: the same configurations judged the same way, every frame
+// and reference on the GPU, the figures close to the CPU's.
+TEST(Gpu, QualitySequenceRunsOnTheGpu) {
+  FOVEAL_NEED_GPU();
+  const Scene scene = make_builtin_scene("box");
+  const Tracer tracer(scene);
+  QualitySequenceParams q;
+  q.render.width = 160;
+  q.render.height = 100;
+  q.reference_rays = 64;
+  q.render.foveation.max_rays = 64;
+  q.cameras = orbit_path(first_camera(scene), 1.0, 6);
+  q.gazes = fixation_path(glm::dvec2(60, 40), q.render, 6, 3);
+  const QualitySequenceResult cpu = run_quality_sequence(scene, tracer, q);
+  q.cuda = true;
+  const QualitySequenceResult gpu = run_quality_sequence(scene, tracer, q);
+  EXPECT_EQ(cpu.device, "cpu");
+  EXPECT_NE(gpu.device.find(gpu::availability().name), std::string::npos) << gpu.device;
+  ASSERT_EQ(gpu.configs.size(), cpu.configs.size());
+  for (size_t c = 0; c < cpu.configs.size(); ++c) {
+    EXPECT_EQ(gpu.configs[c].name, cpu.configs[c].name);
+    EXPECT_NEAR(gpu.configs[c].ray_ratio, cpu.configs[c].ray_ratio, 0.03 * cpu.configs[c].ray_ratio) << cpu.configs[c].name;
+    EXPECT_NEAR(gpu.configs[c].weighted_ratio, cpu.configs[c].weighted_ratio, 0.15 * cpu.configs[c].weighted_ratio) << cpu.configs[c].name;
+  }
 }
 
 }  // namespace

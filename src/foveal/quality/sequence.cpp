@@ -1,6 +1,7 @@
 // foveal/quality/sequence.cpp — see sequence.h.
 #include "foveal/quality/sequence.h"
 
+#include "foveal/cuda/gpu.h"
 #include "foveal/gaze/text.h"
 #include "foveal/quality/compare.h"
 #include "foveal/render/reuse.h"
@@ -122,6 +123,15 @@ QualitySequenceResult run_quality_sequence(const Scene& scene, const Tracer& tra
   result.gazes = params.gazes;
   result.reference_rays = params.reference_rays;
   result.threads = static_cast<int>(tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism));
+  // Every frame on one device: the CPU renderer with its history, or the GPU's, which keeps its own
+  std::unique_ptr<gpu::Renderer> gpu_renderer;
+  if (params.cuda) gpu_renderer = std::make_unique<gpu::Renderer>(scene);
+  result.device = params.cuda ? gpu::describe_device(gpu::ComputeDevice::cuda) : "cpu";
+  AoHistory history;
+  const auto render = [&](const Camera& camera, const RenderParams& p) {
+    return gpu_renderer ? gpu_renderer->render(camera, p, gpu::FrameOutputs{false, false, false})
+                        : render_frame(tracer, scene, camera, p, {}, &history);
+  };
   for (const Band& b : default_bands()) result.band_names.push_back(b.name);
 
   // The references at every frame (and their noise), rendered first: the same for every configuration
@@ -136,11 +146,11 @@ QualitySequenceResult run_quality_sequence(const Scene& scene, const Tracer& tra
   for (int k = 0; k < frames; ++k) {
     full.seed = params.seed + 1;
     const Timer clock;
-    Frame r = render_frame(tracer, scene, params.cameras[k], full);
+    Frame r = render(params.cameras[k], full);
     result.reference_ms += clock.ms() / frames;
     reference_rays += r.stats.ao_rays;
     full.seed = params.seed + 2;
-    noises.push_back(reference_noise(render_frame(tracer, scene, params.cameras[k], full).color, r.color));
+    noises.push_back(reference_noise(render(params.cameras[k], full).color, r.color));
     references.push_back(std::move(r.color));
     say(fmt::format("reference frame {}/{}", k + 1, frames));
   }
@@ -153,7 +163,8 @@ QualitySequenceResult run_quality_sequence(const Scene& scene, const Tracer& tra
     r.reuse = config.reuse;
     r.band_ratio.assign(bands, 0.0);
     std::vector<int> band_frames(bands, 0);
-    AoHistory history;
+    history.clear();
+    if (gpu_renderer) gpu_renderer->reset_history();
     Image previous;
     uint64_t rays = 0;
     for (int k = 0; k < frames; ++k) {
@@ -164,7 +175,7 @@ QualitySequenceResult run_quality_sequence(const Scene& scene, const Tracer& tra
       p.reuse.target_rays = params.reference_rays;  // τ(E) from the noise of the reference judged against
       p.seed = params.seed;
       const Timer clock;
-      Frame f = render_frame(tracer, scene, params.cameras[k], p, {}, &history);
+      Frame f = render(params.cameras[k], p);
       r.ms += clock.ms() / frames;
       rays += f.stats.ao_rays;
       const Comparison c = compare_images(f.color, references[k], noises[k], p.display, params.gazes[k], p.foveation);
@@ -199,7 +210,7 @@ QualitySequenceResult run_quality_sequence(const Scene& scene, const Tracer& tra
 nlohmann::json to_json(const QualitySequenceResult& r) {
   auto number = [](double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); };
   nlohmann::json j = {{"scene", r.scene},        {"width", r.width},     {"height", r.height},
-                      {"frames", r.frames},      {"threads", r.threads}, {"reference_rays", r.reference_rays},
+                      {"frames", r.frames},      {"threads", r.threads}, {"device", r.device}, {"reference_rays", r.reference_rays},
                       {"reference_ms", r.reference_ms}, {"bands", r.band_names}, {"configs", nlohmann::json::array()},
                       {"gazes", nlohmann::json::array()}};
   for (const glm::dvec2& g : r.gazes) j["gazes"].push_back({g.x, g.y});
@@ -225,11 +236,12 @@ nlohmann::json to_json(const QualitySequenceResult& r) {
 
 std::string to_markdown(const QualitySequenceResult& r) {
   std::string out = fmt::format(
-      "{}, {}x{}, {} frames; reference: full frame with {} rays per pixel at every frame's camera, {:.0f} ms a frame ({} threads). "
+      "{}, {}x{}, {} frames; reference: full frame with {} rays per pixel at every frame's camera, {:.0f} ms a frame ({}). "
       "Speed-up = reference time / the configuration's mean frame time; errors are acuity-weighted RMSE against each frame's "
       "reference in units of that reference's own seed-to-seed noise (mean over frames); flicker = the acuity-weighted change of the "
       "error between consecutive frames, same unit.\n\n",
-      r.scene, r.width, r.height, r.frames, r.reference_rays, r.reference_ms, r.threads);
+      r.scene, r.width, r.height, r.frames, r.reference_rays, r.reference_ms,
+      r.device == "cpu" || r.device.empty() ? fmt::format("{} threads", r.threads) : "GPU: " + r.device);
   out += "| configuration | ms | speed-up | AO ray ratio | acuity-weighted × noise | flicker × noise | q(E) = 1 × noise | frames within |";
   std::string rule = "|---|---:|---:|---:|---:|---:|---:|---:|";
   for (const std::string& b : r.band_names)

@@ -35,6 +35,7 @@ struct QualitySequenceParams {
   std::vector<ReuseConfig> configs = default_sequence_configs();
   int reference_rays = 400;
   uint64_t seed = 1;                // the configurations' seed; references seed + 1 and seed + 2
+  bool cuda = false;                // every frame, references too, on the CUDA backend (gpu::Renderer)
 };
 
 struct SequenceConfigResult {
@@ -54,6 +55,7 @@ struct SequenceConfigResult {
 struct QualitySequenceResult {
   std::string scene;
   int width = 0, height = 0, frames = 0, reference_rays = 0, threads = 0;
+  std::string device;            // "cpu", or the GPU's description
   double reference_ms = 0;       // mean full-frame time
   std::vector<glm::dvec2> gazes; // per frame, render pixels
   std::vector<std::string> band_names;
