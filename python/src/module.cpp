@@ -86,7 +86,7 @@ struct PyRenderer {
   int threads = 0;
   double build_ms = 0;
   AoHistory history;        // temporal=True on the CPU: the AO rays of the frames so far (the GPU keeps its own)
-  std::mutex history_mutex;  // temporal frames, and GPU frames, from several Python threads take turns (the GIL is released)
+  std::mutex render_mutex;  // temporal frames, and GPU frames, from several Python threads take turns (the GIL is released)
 
   PyRenderer(const PyScene& s, const std::string& device_name, int threads_) : scene(s.scene), threads(threads_) {
     if (threads < 0) fail("threads: must be 0 (all cores) or more, got {}", threads);
@@ -136,12 +136,12 @@ struct PyRenderer {
       const Timer clock;
       if (gpu) {
         // One frame at a time on the GPU's buffers, which also hold the temporal history
-        const std::lock_guard lock(history_mutex);
+        const std::lock_guard lock(render_mutex);
         out->frame = gpu->render(camera, p);
         out->triangles = scene->triangles.size();
         out->trace_api = "bvh2";
       } else {
-        std::unique_lock<std::mutex> lock(history_mutex, std::defer_lock);
+        std::unique_lock<std::mutex> lock(render_mutex, std::defer_lock);
         if (temporal) lock.lock();
         out->frame = render_frame(*tracer, *scene, camera, p, {}, temporal ? &history : nullptr);
         out->triangles = tracer->triangles();
@@ -371,7 +371,7 @@ NB_MODULE(_core, m) {
       .def("reset_history",
            [](PyRenderer& r) {
              nb::gil_scoped_release release;
-             const std::lock_guard<std::mutex> lock(r.history_mutex);
+             const std::lock_guard<std::mutex> lock(r.render_mutex);
              r.history.clear();
              if (r.gpu) r.gpu->reset_history();
            },

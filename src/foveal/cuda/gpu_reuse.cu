@@ -77,16 +77,13 @@ float* run_reuse_passes(Renderer::Impl& m, const ReuseFrame& frame) {
   const unsigned blocks = blocks_for(n, 128);
   // The history reprojected to this frame's surface points, or none
   if (temporal && history.frames > 0) {
-    const HistoryView view{CameraRays(history.camera, history.width, history.height),
-                           pixel_angle(history.camera.fov_deg, history.height),
-                           history.width,
-                           history.height,
-                           history.position.get(),
-                           history.normal.get(),
-                           history.hit.get(),
-                           history.open.get(),
-                           history.cast.get(),
-                           history.origin.get()};
+    HistoryView view = history_view(history.camera, history.width, history.height);
+    view.position = history.position.get();
+    view.normal = history.normal.get();
+    view.hit = history.hit.get();
+    view.open = history.open.get();
+    view.cast = history.cast.get();
+    view.origin = history.origin.get();
     reproject_kernel<<<blocks, 128>>>(view, g, m.quality.get(), m.rays.get(), reuse.temporal_frames, counts, m.counters.get());
     FOVEAL_CUDA_LAUNCHED("reprojection");
   } else {

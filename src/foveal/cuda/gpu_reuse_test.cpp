@@ -62,8 +62,13 @@ struct KernelsOnTheCpu {
     const CountsView counts{open.data(), cast.data(), origin.data()};
     rays = kept = changed = 0;
     if (frames > 0) {
-      const HistoryView view{CameraRays(h_camera, h_width, h_height), pixel_angle(h_camera.fov_deg, h_height), h_width, h_height,
-                             h_position.data(), h_normal.data(), h_hit.data(), h_open.data(), h_cast.data(), h_origin.data()};
+      HistoryView view = history_view(h_camera, h_width, h_height);
+      view.position = h_position.data();
+      view.normal = h_normal.data();
+      view.hit = h_hit.data();
+      view.open = h_open.data();
+      view.cast = h_cast.data();
+      view.origin = h_origin.data();
       for (size_t i = 0; i < n; ++i) kept += gpu::reproject_body(view, g, quality, budget, p.reuse.temporal_frames, counts, i);
     }
     const Bounds bounds = scene.bounds();

@@ -29,7 +29,7 @@ struct AoReuseArgs {
   const uint32_t* sobol;  // sobol_table_2d() or its device copy
   CountsView counts;      // history on entry (zero without), history + this frame's rays on return
   uint16_t* traced;
-  AoPixelSampling sampling;
+  AoSampling sampling;
   float ao_distance, epsilon;
   uint64_t seed;
 };

@@ -145,12 +145,7 @@ int ao_tile_count(int width, int height);
 // AO visibility per pixel with maps.rays[i] rays; returns the number of rays traced.
 uint64_t trace_ao(const Tracer& tracer, const GBuffer& gbuffer, const FoveationMaps& maps, float ao_distance,
                   float epsilon, uint64_t seed, std::vector<float>& visibility, const AoPassHooks& hooks = {});
-// How the general AO pass spends each pixel's budget (from AoReuseParams; default: the paper's):
-// adaptive rounds from first_round rays, stopping at the standard error tau_fovea / q(E); with
-// temporal_frames F > 0 and history, m = ceil(n/F) rays a frame, or what n lacks; frame_index:
-// frames before this one — frame f > 0 starts the sequence of a pixel with history at
-// (F + f − 1)·m, after frame 0's n = F·m rays (one without starts at 0, as the paper's pixel).
-using AoSampling = AoPixelSampling;
+// AoSampling (how the AO pass spends each pixel's budget): reuse_pixel.h.
 AoSampling ao_sampling(const AoReuseParams& reuse, uint32_t frame_index);
 // AO ray counts per pixel: rays found open and rays cast, history included (floats: history is
 // rescaled when capped). V = open / cast; cast = 0: no estimate (V = 1).

@@ -33,8 +33,14 @@ uint64_t AoHistory::reproject(const GBuffer& g, const FoveationMaps& maps, const
 }
 
 HistoryView AoHistory::view() const {
-  return {CameraRays(camera_, width_, height_), pixel_angle(camera_.fov_deg, height_), width_, height_, position_.data(),
-          normal_.data(), hit_.data(), open_.data(), cast_.data(), origin_.data()};
+  HistoryView h = history_view(camera_, width_, height_);
+  h.position = position_.data();
+  h.normal = normal_.data();
+  h.hit = hit_.data();
+  h.open = open_.data();
+  h.cast = cast_.data();
+  h.origin = origin_.data();
+  return h;
 }
 
 void AoHistory::store(const GBuffer& g, const Camera& camera, const FoveationMaps& maps, const AoReuseParams& reuse,

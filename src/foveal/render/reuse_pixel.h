@@ -42,13 +42,16 @@ struct CountsView {
   glm::vec3* origin_sum = nullptr;
 };
 
-// How one pixel's rays are spent this frame (AoSampling of render.h, as plain values).
-struct AoPixelSampling {
+// How the AO pass spends each pixel's budget (render.h's ao_sampling() makes it from
+// AoReuseParams; the default is the paper's).
+struct AoSampling {
   bool adaptive = false;
-  int first_round = 16;
-  float tau_fovea = 0;
-  int temporal_frames = 0;  // > 0: with history
-  uint32_t frame_index = 0;
+  int first_round = 16;      // adaptive: rays of the first round
+  float tau_fovea = 0;       // adaptive: the standard error allowed where q = 1 (τ(E) = tau_fovea / q)
+  int temporal_frames = 0;   // > 0: with history, m = ceil(n/F) rays a frame, or what n lacks
+  uint32_t frame_index = 0;  // temporal: frames before this one; frame f > 0 starts the sequence
+                             // of a pixel with history at (F + f − 1)·m, after frame 0's n = F·m
+                             // rays (one without starts at 0, as the paper's pixel)
 };
 
 // m = ceil(n/F): the rays a pixel with n(E) = n casts a frame once its history holds n (F = temporal_frames).
@@ -88,7 +91,7 @@ struct AoPixelPlan {
 };
 
 // A pixel with n(E) = n rays and `history_cast` rays of history.
-FOVEAL_HD inline AoPixelPlan plan_ao_pixel(int n, float history_cast, const AoPixelSampling& s, uint64_t seed) {
+FOVEAL_HD inline AoPixelPlan plan_ao_pixel(int n, float history_cast, const AoSampling& s, uint64_t seed) {
   int limit = n;
   AoPixelPlan plan;
   plan.seed = seed;
@@ -130,7 +133,7 @@ struct AoPixelRounds {
       : round_end(plan.first), limit(plan.limit), offset(plan.offset), n(static_cast<uint32_t>(rays)) {}
 
   // After a round, pixel i of `c` (its history): true when it casts another round (round_end moved on).
-  FOVEAL_HD bool next_round(const CountsView& c, size_t i, float quality, const AoPixelSampling& s) {
+  FOVEAL_HD bool next_round(const CountsView& c, size_t i, float quality, const AoSampling& s) {
     // History this frame's rays contradict (an occluder that moved, another surface) is dropped,
     // with them: the pixel starts again without history, n(E) rays from its sequence's start
     if (s.temporal_frames > 0 &&
@@ -206,6 +209,15 @@ struct HistoryView {
   const float* cast = nullptr;
   const glm::vec3* origin = nullptr;  // Σ of the counted rays' origins
 };
+
+// The view of a history stored for `camera` at width × height, its arrays still to be set (host).
+inline HistoryView history_view(const Camera& camera, int width, int height) {
+  HistoryView h{CameraRays(camera, width, height)};
+  h.angle = pixel_angle(camera.fov_deg, height);
+  h.width = width;
+  h.height = height;
+  return h;
+}
 
 // The history of surface pixel i of `g` (a hit) into `out` (zero on entry); true when kept.
 // `rays` and `quality`: the pixel's n(E) and q(E).
