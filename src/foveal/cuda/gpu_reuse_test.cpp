@@ -3,7 +3,9 @@
 // Everywhere: the bodies of its kernels (reuse_kernels.h) run on the CPU over host memory, in the
 // order gpu_reuse.cu launches them, with the BVH2 traversal the GPU uses, against render_frame
 // on the same G-buffer with Embree. With a GPU: the Renderer against the CPU renderer, and
-// against itself (the first temporal frame is the paper's frame; repeats are identical).
+// against itself (the first temporal frame is the paper's frame; repeats are identical). The GPU
+// tests' margins against the CPU follow the paper's pass (gpu_test.cpp, measured on an H100); they
+// have not yet run on a GPU with these passes.
 #include "foveal/cuda/gpu.h"
 #include "foveal/cuda/reuse_kernels.h"
 #include "foveal/quality/sequence.h"
