@@ -1,9 +1,9 @@
 // apps/bench_command.cpp — `foveal bench ao`: the first paper's Table 1 on this machine.
 #include "commands.h"
 #include "foveal/cuda/gpu.h"
-#include "foveal/cuda/gpu_benchmark.h"
+#include "foveal/experiments/gpu_benchmark.h"
 #include "foveal/io/outputs.h"
-#include "foveal/render/ao_benchmark.h"
+#include "foveal/experiments/ao_benchmark.h"
 #include "foveal/util/error.h"
 #include "foveal/util/parallel.h"
 #include "foveal/util/parse.h"
@@ -75,8 +75,8 @@ std::function<int()> add_bench_command(CLI::App& app) {
     const ThreadScope threads(o->threads);
     std::string spec = o->scene;
     const Scene scene = load_paper_scene(spec, "bench ao");
-    const gpu::ComputeDevice device = gpu::choose_device(o->device);
-    fmt::print("foveal bench ao: device {}\n", gpu::describe_device(device));
+    const ComputeDevice device = choose_device(o->device);
+    fmt::print("foveal bench ao: device {}\n", describe_device(device));
     AoBenchParams p;
     const glm::ivec2 size = parse_size("--size", o->size);
     p.render.width = size.x;
@@ -88,7 +88,7 @@ std::function<int()> add_bench_command(CLI::App& app) {
     p.cameras = o->cameras;
     p.repeats = o->full ? std::max(o->repeats, 5) : o->repeats;
     validate(p.render);
-    if (device == gpu::ComputeDevice::cuda) {
+    if (device == ComputeDevice::cuda) {
       // The GPU table, with the CPU measured in the same run
       gpu::BenchParams g;
       g.render = p.render;

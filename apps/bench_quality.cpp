@@ -1,17 +1,17 @@
 // apps/bench_quality.cpp — `foveal bench quality`: the speed–quality trade-off of the foveation
 // model's parameters (γ, n_max, β), with the Pareto front and the configuration it recommends.
 #include "commands.h"
-#include "foveal/cuda/gpu.h"
+#include "foveal/render/frame_renderer.h"
 #include "foveal/io/outputs.h"
-#include "foveal/quality/sequence.h"
-#include "foveal/quality/sweep.h"
-#include "foveal/render/ao_benchmark.h"
-#include "foveal/render/replay.h"
+#include "foveal/experiments/sequence.h"
+#include "foveal/experiments/sweep.h"
+#include "foveal/experiments/ao_benchmark.h"
+#include "foveal/experiments/replay.h"
 #include "foveal/trace/tracer.h"
 #include "foveal/util/error.h"
 #include "foveal/util/parallel.h"
 #include "foveal/util/parse.h"
-#include "foveal/gaze/text.h"
+#include "foveal/util/text.h"
 
 #include <fmt/core.h>
 
@@ -23,8 +23,8 @@ namespace {
 
 // The gaze a replay of the recording renders at each of `frames` frames (the fixation filter's
 // output, the image centre before the first fixation), without rendering them.
-std::vector<glm::dvec2> recording_gaze_path(const std::string& path, const Scene& scene, const Tracer& tracer,
-                                            const RenderParams& params, double start_s, double fps, int frames) {
+std::vector<glm::dvec2> recording_gaze_path(const std::string& path, const RenderParams& params, double start_s, double fps,
+                                            int frames) {
   const Recording recording = read_recording_warned(path, ReadOptions{});
   ReplaySettings settings;
   settings.fps = fps;
@@ -33,9 +33,7 @@ std::vector<glm::dvec2> recording_gaze_path(const std::string& path, const Scene
   if (start_s > recording.duration_s())
     fail("--start: {} s is past the end of {} ({:.3f} s long)", start_s, path, recording.duration_s());
   std::vector<glm::dvec2> gazes;
-  const FrameRenderer no_render = [](const RenderParams&) { return Frame{}; };  // the tracer is never used
-  replay_recording(recording, params.display, tracer, scene, Camera{}, params, settings,
-                   [&](const ReplayFrame& f, const Frame&) { gazes.push_back(f.render_gaze); }, {}, no_render);
+  for (const ReplayFrame& f : replay_gazes(recording, params.display, params, settings)) gazes.push_back(f.render_gaze);
   return gazes;
 }
 
@@ -137,8 +135,8 @@ std::function<int()> add_bench_quality_command(CLI::App& bench) {
     }
     // The options that need no scene, checked before it loads
     if (!o->sequence && !o->recording.empty()) fail("--recording: only with --sequence");
-    const gpu::ComputeDevice device = gpu::choose_device(o->device);
-    if (!o->sequence && device == gpu::ComputeDevice::cuda)
+    const ComputeDevice device = choose_device(o->device);
+    if (!o->sequence && device == ComputeDevice::cuda)
       fail("--device {}: the single-frame sweep runs on the CPU; the GPU measures --sequence", o->device);
     if (o->sequence && !configs->count()) o->configs = "paper,adaptive+denoise,temporal,temporal+adaptive,temporal+adaptive+denoise";
     std::vector<ReuseConfig> methods = parse_reuse_configs("--configs", o->configs);
@@ -193,20 +191,21 @@ std::function<int()> add_bench_quality_command(CLI::App& bench) {
       q.seed = o->seed;
       q.cameras = orbit_path(camera, o->orbit, o->frames);
       q.configs = methods;
-      q.cuda = device == gpu::ComputeDevice::cuda;
       std::string gaze_text;
       if (o->recording.empty()) {
         q.gazes = fixation_path(p.gazes.front().second, p.render, o->frames, o->fixation_frames);
         gaze_text = fmt::format("gaze around {} at {:.0f},{:.0f} (a fixation every {} frames)", p.gazes.front().first,
                                 p.gazes.front().second.x, p.gazes.front().second.y, o->fixation_frames);
       } else {
-        q.gazes = recording_gaze_path(o->recording, scene, tracer, p.render, o->start, o->fps, o->frames);
+        q.gazes = recording_gaze_path(o->recording, p.render, o->start, o->fps, o->frames);
         gaze_text = fmt::format("gaze of {} from {:g} s at {:g} fps", o->recording, o->start, o->fps);
       }
       fmt::print("foveal bench quality --sequence: {} ({} triangles), camera {} orbiting {:g}° over {} frames, {}, {}x{}, {}\n",
                  spec, tracer.triangles(), p.camera_name, o->orbit, o->frames, gaze_text, p.render.width, p.render.height,
-                 q.cuda ? "device " + gpu::describe_device(device) : fmt::format("{} threads", threads.threads()));
-      const QualitySequenceResult result = run_quality_sequence(scene, tracer, q, [](const std::string& line) {
+                 device == ComputeDevice::cuda ? "device " + describe_device(device) : fmt::format("{} threads", threads.threads()));
+      // Every frame, the references too, on the chosen device (the CPU's shares the tracer above)
+      const std::unique_ptr<FrameRenderer> renderer = make_frame_renderer(scene, device, tracer);
+      const QualitySequenceResult result = run_quality_sequence(scene, *renderer, q, [](const std::string& line) {
         fmt::print("  {}\n", line);
         std::fflush(stdout);
       });

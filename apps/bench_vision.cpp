@@ -292,8 +292,8 @@ std::function<int()> add_bench_vision_command(CLI::App& bench) {
 
   return [o] {
     const ThreadScope threads(o->threads);
-    const gpu::ComputeDevice device = gpu::choose_device(o->device);
-    const bool cuda = device == gpu::ComputeDevice::cuda;
+    const ComputeDevice device = choose_device(o->device);
+    const bool cuda = device == ComputeDevice::cuda;
     std::vector<std::string> scenes = o->scenes;
     if (scenes.empty()) {
       if (const std::string conference = repository_scene("conference.json", kConferenceObj); !conference.empty())
@@ -310,7 +310,7 @@ std::function<int()> add_bench_vision_command(CLI::App& bench) {
                                         "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
     fmt::print("foveal bench vision: {} steps per case (median of steps 2…), features every step, eye {}, {} threads\n", o->steps,
                o->eye, threads.threads());
-    fmt::print("  device   {}\n", gpu::describe_device(device));
+    fmt::print("  device   {}\n", describe_device(device));
     for (const std::string& spec : scenes) {
       const Scene scene = load_scene(spec);
       const Tracer tracer(scene);
@@ -345,7 +345,7 @@ std::function<int()> add_bench_vision_command(CLI::App& bench) {
                    scene.source, size_text, c.trace, c.features, c.sharpness, c.blur, c.total, ratio, "", "", rate(c.trace) / 1e6, trace_vs_raw,
                    cuda ? "GPU" : "Embree", raw / 1e6);
         nlohmann::json row = {{"scene", scene.source}, {"triangles", tracer.triangles()}, {"size", size_text}, {"steps", o->steps - 1},
-                              {"device", gpu::to_string(device)},
+                              {"device", to_string(device)},
                               {"time_ms", {{"trace", c.trace}, {"features", c.features}, {"sharpness", c.sharpness}, {"blur", c.blur}, {"total", c.total}}},
                               {"non_tracing_over_trace", ratio},
                               {"impairments", impair.describe()},
@@ -395,14 +395,14 @@ std::function<int()> add_bench_vision_command(CLI::App& bench) {
                                         : fmt::format("{} ({}/{} corners, {} grey px)", g.first_corner_difference, g.corners_differing,
                                                       g.corners_total, g.grey_px_differing);
           md += fmt::format("| {} | {} | {} | {:.2f} | {:.2f} | {:.2f} | {:.2f} | {:.2f} | {:.1f} | {:.1f} | {:.2f} | {:.2f} | {}/{} | {} | {:.1e} |\n",
-                            scene.source, size_text, gpu::availability().name, c.trace, c.features, c.sharpness, c.blur, c.total, cpu.total,
+                            scene.source, size_text, availability().name, c.trace, c.features, c.sharpness, c.blur, c.total, cpu.total,
                             speedup, trace_vs_raw, cpu_trace_vs_raw, g.same_fixations, g.steps, first, g.perceived_mean_abs_diff);
         }
         rows.push_back(row);
       }
     }
     if (!o->json.empty())
-      write_json_file(o->json, {{"threads", threads.threads()}, {"eye", o->eye}, {"device", gpu::describe_device(device)}, {"rows", rows}});
+      write_json_file(o->json, {{"threads", threads.threads()}, {"eye", o->eye}, {"device", describe_device(device)}, {"rows", rows}});
     if (!o->markdown.empty()) write_text_file(o->markdown, md);
     return 0;
   };

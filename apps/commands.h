@@ -1,7 +1,7 @@
 // apps/commands.h — the subcommands of the `foveal` executable.
 #pragma once
 
-#include "foveal/cuda/gpu.h"
+#include "foveal/util/device.h"
 #include "foveal/gaze/fixation.h"
 #include "foveal/perception/foveation.h"
 #include "foveal/render/render.h"
@@ -54,7 +54,7 @@ struct RenderOptions {
   double denoise_radius = 1, tolerance = AoReuseParams{}.tolerance;
 };
 void add_render_options(CLI::App& command, RenderOptions& options);
-// --device auto|cpu|cuda (see gpu::choose_device).
+// --device auto|cpu|cuda (see choose_device).
 void add_device_option(CLI::App& command, std::string& device);
 // Size, display and renderer options → validated params (gaze unset).
 RenderParams resolve_render_params(const ViewOptions& view, const RenderOptions& options);

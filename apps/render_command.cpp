@@ -1,12 +1,10 @@
 // apps/render_command.cpp — `foveal render`: one frame of foveated (or full-frame) AO.
 #include "commands.h"
 
-#include "foveal/render/reuse.h"
-#include "foveal/cuda/gpu.h"
 #include "foveal/io/image_io.h"
 #include "foveal/io/outputs.h"
+#include "foveal/render/frame_renderer.h"
 #include "foveal/render/render.h"
-#include "foveal/render/reuse.h"
 #include "foveal/util/error.h"
 #include "foveal/util/parallel.h"
 #include "foveal/util/parse.h"
@@ -156,45 +154,34 @@ std::function<int()> add_render_command(CLI::App& app) {
     const TraceApi api = parse_trace_api(o->render.trace_api);
     if (!o->plot.empty()) write_acuity_plot(p.display, p.foveation, o->plot);
 
-    const gpu::ComputeDevice device = gpu::choose_device(o->device);
+    const ComputeDevice device = choose_device(o->device);
     if (o->frames > 1 && !p.reuse.temporal) fail("--frames: {} frames of a still view are the same image without --temporal", o->frames);
 
-    // Scene, tracer, frame
+    // Scene, renderer (it keeps the --temporal history between its frames), frames
     const Scene scene = load_scene(o->view.scene);
     const Camera camera = resolve_camera(scene, o->view);
+    const std::unique_ptr<FrameRenderer> renderer = make_frame_renderer(scene, device, api);
+    // A progress line on a terminal, for renders long enough to wait for
+    const bool show_progress = !o->quiet && isatty(fileno(stderr));
+    const Timer clock;
+    int shown = -1;
     Frame frame;
-    size_t triangles = 0;
-    double build_ms = 0;
     uint64_t ao_rays = 0;
-    if (device == gpu::ComputeDevice::cuda) {
-      gpu::Renderer renderer(scene);  // keeps the --temporal history between its frames
-      triangles = scene.triangles.size();
-      build_ms = renderer.bvh().build_ms;
-      for (int k = 0; k < o->frames; ++k) {
-        frame = renderer.render(camera, p);
-        ao_rays += frame.stats.ao_rays;
-      }
-    } else {
-      const Tracer tracer(scene, api);
-      triangles = tracer.triangles();
-      build_ms = tracer.build_ms();
-      // A progress line on a terminal, for renders long enough to wait for
-      const bool show_progress = !o->quiet && isatty(fileno(stderr));
-      const Timer clock;
-      int shown = -1;
-      AoHistory history;
-      for (int k = 0; k < o->frames; ++k) {
-        frame = render_frame(tracer, scene, camera, p, [&](double fraction) {
-          const int percent = static_cast<int>(fraction * 100);
-          if (!show_progress || percent == shown || clock.ms() < 1000) return;
-          shown = percent;
-          if (o->frames > 1) fmt::print(stderr, "\r  frame {}/{}  AO {:3d}%  {:.1f} s", k + 1, o->frames, percent, clock.ms() / 1000);
-          else fmt::print(stderr, "\r  AO {:3d}%  {:.1f} s", percent, clock.ms() / 1000);
-        }, &history);
-        ao_rays += frame.stats.ao_rays;
-      }
-      if (shown >= 0) fmt::print(stderr, "\r{:50}\r", "");
+    for (int k = 0; k < o->frames; ++k) {
+      FrameOptions options;
+      options.progress = [&](double fraction) {
+        const int percent = static_cast<int>(fraction * 100);
+        if (!show_progress || percent == shown || clock.ms() < 1000) return;
+        shown = percent;
+        if (o->frames > 1) fmt::print(stderr, "\r  frame {}/{}  AO {:3d}%  {:.1f} s", k + 1, o->frames, percent, clock.ms() / 1000);
+        else fmt::print(stderr, "\r  AO {:3d}%  {:.1f} s", percent, clock.ms() / 1000);
+      };
+      frame = renderer->render(camera, p, options);
+      ao_rays += frame.stats.ao_rays;
     }
+    if (shown >= 0) fmt::print(stderr, "\r{:50}\r", "");
+    const size_t triangles = renderer->triangles();
+    const double build_ms = renderer->build_ms();
     if (o->frames > 1 && !o->quiet)
       fmt::print("  {} frames accumulated: {:.2f} M AO rays in all; the last frame's figures follow\n", o->frames, ao_rays / 1e6);
 
@@ -203,8 +190,7 @@ std::function<int()> add_render_command(CLI::App& app) {
     if (!o->aov.empty()) write_aovs(frame, o->aov);
     if (!o->mask.empty()) save_image(budget_mask(frame, p.foveation.max_rays), o->mask, false);
     if (!o->stats.empty()) write_json_file(o->stats, frame_stats_json(frame, p, scene, triangles, build_ms, threads.threads(),
-                                                                   gpu::to_string(device),
-                                                                   device == gpu::ComputeDevice::cuda ? "bvh2" : to_string(api)));
+                                                                   to_string(device), renderer->trace_api()));
     if (o->quiet) return 0;
     const FrameStats& s = frame.stats;
     fmt::print("foveal render: {} ({} triangles{}, BVH {:.0f} ms), camera '{}', {}x{}, {} mode, gaze ({:.0f}, {:.0f}), {} threads\n",
@@ -212,7 +198,7 @@ std::function<int()> add_render_command(CLI::App& app) {
                scene.skipped_triangles ? fmt::format(", {} degenerate skipped", scene.skipped_triangles) : "",
                build_ms, camera.name, p.width, p.height, to_string(p.mode), frame.gaze_px.x, frame.gaze_px.y,
                threads.threads());
-    fmt::print("  device   {}\n", gpu::describe_device(device));
+    fmt::print("  device   {}\n", renderer->describe());
     fmt::print("  AO rays  {:.2f} M ({:.1f} per pixel, {}..{}), {:.1f} Mrays/s\n", s.ao_rays / 1e6, s.ao_rays_mean,
                s.ao_rays_min, s.ao_rays_max, s.ao_ms > 0 ? s.ao_rays / (s.ao_ms * 1e3) : 0.0);
     fmt::print("  time     primary {:.1f} ms, foveation {:.1f} ms, AO {:.1f} ms, shade {:.1f} ms, total {:.1f} ms\n",

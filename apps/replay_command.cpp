@@ -1,11 +1,10 @@
 // apps/replay_command.cpp — `foveal replay`: a foveated-AO sequence that follows a recording or
 // a live tracker; frames (PNG), frames.csv, optionally a video and stats JSON.
 #include "commands.h"
-#include "foveal/cuda/gpu.h"
 #include "foveal/io/image_io.h"
 #include "foveal/io/outputs.h"
 #include "foveal/io/video.h"
-#include "foveal/render/replay.h"
+#include "foveal/experiments/replay.h"
 #include "foveal/util/error.h"
 #include "foveal/util/parallel.h"
 #include "foveal/util/parse.h"
@@ -87,15 +86,8 @@ std::function<int()> add_replay_command(CLI::App& app) {
 
     const Scene scene = load_scene(o->view.scene);
     const Camera camera = resolve_camera(scene, o->view);
-    const Tracer tracer(scene, parse_trace_api(o->render.trace_api));
-    // The frames on the GPU when one is chosen (only the image comes back: the sink needs nothing else)
-    const gpu::ComputeDevice device = gpu::choose_device(o->device);
-    std::unique_ptr<gpu::Renderer> gpu_renderer;
-    FrameRenderer renderer;
-    if (device == gpu::ComputeDevice::cuda) {
-      gpu_renderer = std::make_unique<gpu::Renderer>(scene);
-      renderer = [&](const RenderParams& p) { return gpu_renderer->render(camera, p, gpu::FrameOutputs{false, false, false}); };
-    }
+    const ComputeDevice device = choose_device(o->device);
+    const std::unique_ptr<FrameRenderer> renderer = make_frame_renderer(scene, device, parse_trace_api(o->render.trace_api));
 
     namespace fs = std::filesystem;
     std::error_code ec;
@@ -136,9 +128,9 @@ std::function<int()> add_replay_command(CLI::App& app) {
     std::string source_name = o->source;
     if (live) {
       PupilSource source(o->source, read.screen_px, read.min_confidence);
-      summary = replay_live(source, gaze_display, tracer, scene, camera, params, settings, sink, progress, renderer);
+      summary = replay_live(source, gaze_display, *renderer, camera, params, settings, sink, progress);
     } else {
-      summary = replay_recording(*recording, gaze_display, tracer, scene, camera, params, settings, sink, progress, renderer);
+      summary = replay_recording(*recording, gaze_display, *renderer, camera, params, settings, sink, progress);
     }
     if (shown) fmt::print(stderr, "\r{:80}\r", "");
     csv.close();
@@ -155,8 +147,8 @@ std::function<int()> add_replay_command(CLI::App& app) {
                           {"mode", to_string(params.mode)},
                           {"seed", params.seed},
                           {"threads", threads.threads()},
-                          {"device", gpu::to_string(device)},
-                          {"scene", {{"source", scene.source}, {"triangles", tracer.triangles()}, {"build_ms", tracer.build_ms()}}},
+                          {"device", to_string(device)},
+                          {"scene", {{"source", scene.source}, {"triangles", renderer->triangles()}, {"build_ms", renderer->build_ms()}}},
                           {"rays", {{"ao", summary.ao_rays}}},
                           {"time_ms", {{"frames", summary.render_ms}, {"total", summary.wall_ms},
                                        {"per_rendered_frame", summary.frames > summary.reused ? summary.render_ms / (summary.frames - summary.reused) : 0.0}}},
@@ -171,7 +163,7 @@ std::function<int()> add_replay_command(CLI::App& app) {
     fmt::print("foveal replay: {} → {} frames at {:g} fps ({} rendered, {} reused: gaze unchanged), {}x{}, {} filter, {} threads\n",
                source_name, summary.frames, o->fps, summary.frames - summary.reused, summary.reused, params.width, params.height,
                o->gaze.fixation, threads.threads());
-    fmt::print("  device   {}\n", gpu::describe_device(device));
+    fmt::print("  device   {}\n", renderer->describe());
     fmt::print("  time     {:.1f} s ({:.0f} ms per rendered frame), {:.1f} M AO rays\n", summary.wall_ms / 1000,
                summary.frames > summary.reused ? summary.render_ms / (summary.frames - summary.reused) : 0.0, summary.ao_rays / 1e6);
     fmt::print("  wrote    {}/frame_00000.png … , {}", o->output, csv_path);

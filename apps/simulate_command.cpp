@@ -1,7 +1,6 @@
 // apps/simulate_command.cpp — `foveal simulate`: the second paper's temporal simulation of vision.
 #include "commands.h"
 
-#include "foveal/cuda/gpu.h"
 #include "foveal/gaze/steps.h"
 #include "foveal/io/image_io.h"
 #include "foveal/io/outputs.h"
@@ -87,8 +86,8 @@ std::function<int()> add_simulate_command(CLI::App& app) {
   return [o, steps_option] {
     const ThreadScope threads(o->view.threads);
     SimulateParams p;
-    const gpu::ComputeDevice device = gpu::choose_device(o->device);
-    p.cuda = device == gpu::ComputeDevice::cuda;
+    const ComputeDevice device = choose_device(o->device);
+    p.cuda = device == ComputeDevice::cuda;
     const glm::ivec2 size = parse_size("--size", o->view.size);
     p.width = size.x;
     p.height = size.y;
@@ -229,7 +228,7 @@ std::function<int()> add_simulate_command(CLI::App& app) {
       j["impairments"] = p.impair.describe();
       j["seed"] = p.seed;
       j["threads"] = threads.threads();
-      j["device"] = gpu::to_string(device);
+      j["device"] = to_string(device);
       j["scene"] = {{"source", scene.source}, {"triangles", tracer.triangles()}, {"build_ms", tracer.build_ms()}};
       j["pixels_per_degree"] = sim.pixels_per_degree();
       j["field"] = {{"voxel", sim.field().voxel()}, {"cells", sim.field().cells()}, {"starvation", p.starvation}};
@@ -263,7 +262,7 @@ std::function<int()> add_simulate_command(CLI::App& app) {
                scene.source, tracer.triangles(), path ? "path " + path->name : camera.name, p.width, p.height, o->eye, range.near_point_m(),
                std::isfinite(range.far_point_m()) ? fmt::format("{:.2f} m", range.far_point_m()) : "infinity", steps.size(),
                threads.threads());
-    fmt::print("  device   {}\n", gpu::describe_device(device));
+    fmt::print("  device   {}\n", describe_device(device));
     if (p.impair.any())
       fmt::print("  impaired {} ({:.1f} ms per step; on the CPU{})\n", p.impair.describe(), stage_impair(&ImpairTimes::total_ms),
                  p.cuda ? ", after the GPU's passes" : "");

@@ -1,6 +1,5 @@
 // apps/view_command.cpp — `foveal view`: the interactive viewer (GLFW + Dear ImGui).
 #include "commands.h"
-#include "foveal/cuda/gpu.h"
 #include "foveal/ui/session.h"
 #include "foveal/ui/window.h"
 #include "foveal/util/error.h"
@@ -65,8 +64,8 @@ std::function<int()> add_view_command(CLI::App& app) {
     const ThreadScope threads(o->view.threads);
     ViewSettings s;
     s.render = resolve_render_params(o->view, o->render);
-    const gpu::ComputeDevice device = gpu::choose_device(o->device);
-    s.cuda = device == gpu::ComputeDevice::cuda;
+    const ComputeDevice device = choose_device(o->device);
+    s.cuda = device == ComputeDevice::cuda;
     s.mode = parse_view_mode(o->mode);
     s.eye = o->eye;
     s.vision.eye.pupil_diameter_mm = o->pupil;
@@ -125,7 +124,7 @@ std::function<int()> add_view_command(CLI::App& app) {
       const ViewStatus st = session.status();
       fmt::print("foveal view: {} mode, {}x{}, gaze {}, {} → {} ({}, {:.0f} ms)\n", to_string(s.mode), s.render.width,
                  s.render.height, source_name, st.stage, o->screenshot, st.converged ? "converged" : "not converged", st.render_ms);
-      fmt::print("  device   {}\n", gpu::describe_device(device));
+      fmt::print("  device   {}\n", describe_device(device));
     }
     return 0;
   };

@@ -156,7 +156,7 @@ TEST(BenchQualityCli, BadOptionsAreOneClearLine) {
            {base + "--sequence --device opencl", "--device: unknown device 'opencl'"}})
     expect_one_line_error(args, expected);
   // The GPU measures sequences; without one, --device cuda says why
-  if (foveal::gpu::availability().usable)
+  if (foveal::availability().usable)
     expect_one_line_error(base + "--device cuda", "the single-frame sweep runs on the CPU");
   else
     expect_one_line_error(base + "--sequence --device cuda", "--device cuda: unavailable");

@@ -17,16 +17,16 @@ TEST(DeviceCli, CpuRunsAndTheChoiceIsPrinted) {
   // auto picks what is there and says so
   const CliRun a = foveal("render --scene builtin:box --size 80x50 --max-rays 8 -o dev_auto.png");
   ASSERT_EQ(a.status, 0) << a.err;
-  EXPECT_NE(a.out.find(foveal::gpu::availability().usable ? "device   cuda (" : "device   cpu (no GPU: "), std::string::npos)
+  EXPECT_NE(a.out.find(foveal::availability().usable ? "device   cuda (" : "device   cpu (no GPU: "), std::string::npos)
       << a.out;
 }
 
 TEST(DeviceCli, UnknownOrUnavailableDeviceIsOneLine) {
   expect_one_line_error("render --scene builtin:box --device opencl", "--device: unknown device 'opencl' (known: auto, cpu, cuda)");
   expect_one_line_error("bench ao --scene builtin:box --device tpu", "--device: unknown device 'tpu'");
-  if (foveal::gpu::availability().usable) GTEST_SKIP() << "a GPU is usable here: --device cuda is not refused";
+  if (foveal::availability().usable) GTEST_SKIP() << "a GPU is usable here: --device cuda is not refused";
   expect_one_line_error("render --scene builtin:box --device cuda",
-                        "--device cuda: unavailable: " + foveal::gpu::availability().reason);
+                        "--device cuda: unavailable: " + foveal::availability().reason);
   expect_one_line_error("bench ao --scene builtin:box --device cuda", "--device cuda: unavailable");
   const std::string recording = write_three_fixations("device_three.csv");
   expect_one_line_error("replay --gaze " + recording + " --screen 480x300 --scene builtin:box --size 48x30 --frames 2 -o dev_replay --device cuda",
@@ -42,7 +42,7 @@ TEST(DeviceCli, QualityPerRayRunsOnTheChosenDevice) {
   const std::string options = "render --scene builtin:box --size 80x50 --max-rays 16 --adaptive --denoise --temporal --frames 3 ";
   const CliRun r = foveal(options + "--stats dev_reuse.json -o dev_reuse.png");
   ASSERT_EQ(r.status, 0) << r.err;
-  const bool cuda = foveal::gpu::availability().usable;
+  const bool cuda = foveal::availability().usable;
   EXPECT_NE(r.out.find(cuda ? "device   cuda (" : "device   cpu ("), std::string::npos) << r.out;
   const auto j = nlohmann::json::parse(std::ifstream(scratch("dev_reuse.json")));
   EXPECT_EQ(j["device"], cuda ? "cuda" : "cpu");
@@ -62,7 +62,7 @@ TEST(DeviceCli, SimulateAndBenchVisionNameTheirDevice) {
   const auto j = nlohmann::json::parse(std::ifstream(scratch("dev_vision.json")));
   ASSERT_EQ(j["rows"].size(), 1u);
   const auto& row = j["rows"][0];
-  if (!foveal::gpu::availability().usable) {
+  if (!foveal::availability().usable) {
     EXPECT_EQ(row["device"], "cpu");
     EXPECT_FALSE(row.contains("cpu_over_gpu"));
     return;

@@ -6,13 +6,12 @@
 // library works, so that other Python threads (a tracker's, a window's) run meanwhile.
 #include "bindings.h"
 
-#include "foveal/cuda/gpu.h"
 #include "foveal/impair/profile.h"
 #include "foveal/io/image_io.h"
 #include "foveal/io/outputs.h"
 #include "foveal/quality/compare.h"
 #include "foveal/render/render.h"
-#include "foveal/render/reuse.h"
+#include "foveal/render/frame_renderer.h"
 #include "foveal/util/error.h"
 #include "foveal/util/parallel.h"
 #include "foveal/util/timer.h"
@@ -80,26 +79,17 @@ struct PyFrame {
 
 struct PyRenderer {
   std::shared_ptr<const Scene> scene;
-  gpu::ComputeDevice device = gpu::ComputeDevice::cpu;
-  std::unique_ptr<Tracer> tracer;
-  std::unique_ptr<gpu::Renderer> gpu;
+  ComputeDevice device = ComputeDevice::cpu;
+  std::unique_ptr<FrameRenderer> renderer;  // keeps the AO rays of the temporal=True frames so far
   int threads = 0;
-  double build_ms = 0;
-  AoHistory history;        // temporal=True on the CPU: the AO rays of the frames so far (the GPU keeps its own)
   std::mutex render_mutex;  // temporal frames, and GPU frames, from several Python threads take turns (the GIL is released)
 
   PyRenderer(const PyScene& s, const std::string& device_name, int threads_) : scene(s.scene), threads(threads_) {
     if (threads < 0) fail("threads: must be 0 (all cores) or more, got {}", threads);
-    device = gpu::choose_device(device_name);
+    device = choose_device(device_name);
     nb::gil_scoped_release release;
-    if (device == gpu::ComputeDevice::cuda) {
-      gpu = std::make_unique<gpu::Renderer>(*scene);
-      build_ms = gpu->bvh().build_ms;
-    } else {
-      const ThreadScope scope(threads);
-      tracer = std::make_unique<Tracer>(*scene);
-      build_ms = tracer->build_ms();
-    }
+    const ThreadScope scope(threads);
+    renderer = make_frame_renderer(*scene, device);
   }
 
   std::unique_ptr<PyFrame> render(const std::array<int, 2>& size, const nb::object& camera_arg,
@@ -127,26 +117,19 @@ struct PyRenderer {
     validate(p);
     const Camera camera = resolve_camera(*scene, camera_arg);
     out->scene = scene;
-    out->build_ms = build_ms;
-    out->device = gpu::to_string(device);
+    out->build_ms = renderer->build_ms();
+    out->device = to_string(device);
     {
       nb::gil_scoped_release release;
       const ThreadScope scope(threads);
       out->threads = scope.threads();
       const Timer clock;
-      if (gpu) {
-        // One frame at a time on the GPU's buffers, which also hold the temporal history
-        const std::lock_guard lock(render_mutex);
-        out->frame = gpu->render(camera, p);
-        out->triangles = scene->triangles.size();
-        out->trace_api = "bvh2";
-      } else {
-        std::unique_lock<std::mutex> lock(render_mutex, std::defer_lock);
-        if (temporal) lock.lock();
-        out->frame = render_frame(*tracer, *scene, camera, p, {}, temporal ? &history : nullptr);
-        out->triangles = tracer->triangles();
-        out->trace_api = to_string(TraceApi::stream);
-      }
+      // One frame at a time on the GPU's buffers, and on the temporal history on either device
+      std::unique_lock<std::mutex> lock(render_mutex, std::defer_lock);
+      if (temporal || device == ComputeDevice::cuda) lock.lock();
+      out->frame = renderer->render(camera, p);
+      out->triangles = renderer->triangles();
+      out->trace_api = renderer->trace_api();
       out->wall_ms = clock.ms();
     }
     return out;
@@ -187,7 +170,7 @@ std::unique_ptr<PyVision> make_vision(const PyScene& s, const std::string& eye, 
   p.features_every_step = features_every_step;
   if (threads < 0) fail("threads: must be 0 (all cores) or more, got {}", threads);
   v->threads = threads;
-  p.cuda = gpu::choose_device(device) == gpu::ComputeDevice::cuda;
+  p.cuda = choose_device(device) == ComputeDevice::cuda;
   validate(p);
   v->camera = resolve_camera(*v->scene, camera);
   nb::gil_scoped_release release;
@@ -372,12 +355,11 @@ NB_MODULE(_core, m) {
            [](PyRenderer& r) {
              nb::gil_scoped_release release;
              const std::lock_guard<std::mutex> lock(r.render_mutex);
-             r.history.clear();
-             if (r.gpu) r.gpu->reset_history();
+             r.renderer->reset_history();
            },
            "Forget the AO rays kept for temporal=True: the next temporal frame is the paper's frame.")
-      .def_prop_ro("device", [](const PyRenderer& r) { return std::string(gpu::to_string(r.device)); })
-      .def_prop_ro("device_description", [](const PyRenderer& r) { return gpu::describe_device(r.device); });
+      .def_prop_ro("device", [](const PyRenderer& r) { return std::string(to_string(r.device)); })
+      .def_prop_ro("device_description", [](const PyRenderer& r) { return r.renderer->describe(); });
 
   nb::class_<PyVisionStep>(m, "VisionStep", "One step of the vision simulation (arrays are the step's own copies).")
       .def_ro("perceived", &PyVisionStep::perceived, "What the eye perceives: float32 H×W×3, linear RGB.")
@@ -441,8 +423,8 @@ NB_MODULE(_core, m) {
   m.def("save_image", [](const nb::ndarray<const float, nb::ndim<3>, nb::c_contig, nb::device::cpu>& a, const std::string& path) {
     save_image(image_from(a), path);
   }, "image"_a, "path"_a, "Write a linear float32 H×W×3 image as the CLI does (.png sRGB; .pfm/.exr exact).");
-  m.def("device_available", [] { return gpu::availability().usable; }, "Whether a usable NVIDIA GPU answered.");
-  m.def("device_description", [] { return gpu::availability().describe(); }, "The GPU, or why there is none.");
+  m.def("device_available", [] { return availability().usable; }, "Whether a usable NVIDIA GPU answered.");
+  m.def("device_description", [] { return availability().describe(); }, "The GPU, or why there is none.");
 
   bind_gaze(m);
 }

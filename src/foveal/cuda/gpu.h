@@ -1,7 +1,7 @@
 // foveal/cuda/gpu.h — the CUDA backend: both pipelines' passes on an NVIDIA GPU.
 //
 // This header has no CUDA types, so every part of foveal includes it whether or not the build
-// found a CUDA toolkit. Without one (or without a GPU at run time) gpu::availability() says why,
+// found a CUDA toolkit. Without one (or without a GPU at run time) availability() says why,
 // and constructing a gpu::Renderer throws an Error with that reason.
 //
 // The GPU renderer runs the CPU renderer's passes (render.h) as kernels over device memory:
@@ -11,11 +11,14 @@
 // buffers stay on the GPU between passes, and only what the caller asks for is copied back.
 #pragma once
 
+#include "foveal/render/frame_renderer.h"
 #include "foveal/render/render.h"
 #include "foveal/trace/bvh.h"
+#include "foveal/util/device.h"
 #include "foveal/vision/blur.h"
 #include "foveal/vision/coc.h"
 #include "foveal/vision/features.h"
+#include "foveal/vision/passes.h"
 #include "foveal/vision/sharpness.h"
 
 #include <memory>
@@ -24,41 +27,12 @@
 
 namespace foveal::gpu {
 
-// Where a command runs its passes.
-enum class ComputeDevice { cpu, cuda };
-const char* to_string(ComputeDevice device);
-// "auto" → cuda when a GPU is usable, else cpu; "cpu"; "cuda" → Error with the reason when it is
-// unusable. Throws Error for any other name.
-ComputeDevice choose_device(const std::string& name);
-// One line for the user: "device: cuda (NVIDIA H100 …)" or "device: cpu (no GPU: reason)".
-std::string describe_device(ComputeDevice device);
-
-// What the process can use, found once; never throws.
-struct Availability {
-  bool compiled = false;  // this build has the CUDA backend
-  bool usable = false;    // and a GPU answered
-  std::string reason;     // why not, when not usable
-  std::string name;       // the GPU's name
-  int compute_major = 0, compute_minor = 0;
-  int multiprocessors = 0;
-  double memory_gib = 0;
-  std::string describe() const;  // "NVIDIA H100 80GB HBM3 (compute 9.0, 132 SMs, 79.1 GiB)" or the reason
-};
-const Availability& availability();
-
 // How the AO pass spreads rays over GPU threads.
 enum class AoSchedule {
   balanced,   // every thread traces the same number of rays (a prefix sum over the per-pixel counts)
   per_pixel,  // one thread per pixel loops over its own n(E) rays (the papers' OptiX layout)
 };
 const char* to_string(AoSchedule schedule);
-
-// Which buffers render() copies back into the Frame (the colour always).
-struct FrameOutputs {
-  bool visibility = true;
-  bool maps = true;
-  bool gbuffer = true;
-};
 
 // GPU times of one frame's passes, milliseconds (CUDA events).
 struct GpuPassTimes {
@@ -83,6 +57,7 @@ class Renderer {
   // from its last temporal frame (render_frame's AoHistory) and leaves its own there. Frames
   // without temporal neither read nor change it. outputs.visibility also brings back
   // Frame::ao_traced when params.reuse is on.
+  // FrameOutputs (render/frame_renderer.h): which buffers come back besides the colour.
   Frame render(const Camera& camera, const RenderParams& params, const FrameOutputs& outputs = {});
   // Forget the temporal history: the next temporal frame is the paper's frame.
   void reset_history();
@@ -108,10 +83,6 @@ class Renderer {
   std::unique_ptr<Impl> impl_;
 };
 
-// GPU times of one vision step's passes, milliseconds (CUDA events); copies back on the host clock.
-struct VisionPassTimes {
-  double trace_ms = 0, features_ms = 0, sharpness_ms = 0, blur_ms = 0, download_ms = 0;
-};
 
 // The second paper's passes for one scene on the GPU: the ray-cast image, FAST corners, the
 // sharpness field (kept on the GPU), each pixel's CoC and the variable blur. VisionSimulation

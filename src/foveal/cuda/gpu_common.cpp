@@ -1,9 +1,9 @@
-// foveal/cuda/gpu_common.cpp — choosing the device; the same with and without the CUDA backend.
-#include "foveal/cuda/gpu.h"
+// foveal/cuda/gpu_common.cpp — choosing the device (util/device.h); the same with and without the CUDA backend.
+#include "foveal/util/device.h"
 
 #include "foveal/util/error.h"
 
-namespace foveal::gpu {
+namespace foveal {
 
 const char* to_string(ComputeDevice device) { return device == ComputeDevice::cuda ? "cuda" : "cpu"; }
 
@@ -23,4 +23,4 @@ std::string describe_device(ComputeDevice device) {
   return a.usable ? "cpu" : "cpu (no GPU: " + a.reason + ")";
 }
 
-}  // namespace foveal::gpu
+}  // namespace foveal

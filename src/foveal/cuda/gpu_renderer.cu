@@ -206,7 +206,11 @@ __global__ void total_kernel(const unsigned long long* offset, const unsigned lo
 
 }  // namespace
 
-// ---- Availability ----------------------------------------------------------------------------
+}  // namespace foveal::gpu
+
+// ---- Availability (util/device.h) ---------------------------------------------------------
+
+namespace foveal {
 
 const Availability& availability() {
   static const Availability found = [] {
@@ -255,10 +259,6 @@ const Availability& availability() {
   return found;
 }
 
-// ---- Renderer --------------------------------------------------------------------------------
-
-const char* to_string(AoSchedule schedule) { return schedule == AoSchedule::balanced ? "balanced" : "per-pixel"; }
-
 std::string Availability::describe() const {
   if (!usable) return reason;
   char text[256];
@@ -266,6 +266,15 @@ std::string Availability::describe() const {
                 multiprocessors, memory_gib);
   return text;
 }
+
+}  // namespace foveal
+
+namespace foveal::gpu {
+
+// ---- Renderer --------------------------------------------------------------------------------
+
+const char* to_string(AoSchedule schedule) { return schedule == AoSchedule::balanced ? "balanced" : "per-pixel"; }
+
 
 Renderer::Renderer(const Scene& scene) {
   const Availability& a = availability();

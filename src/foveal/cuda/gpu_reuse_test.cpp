@@ -8,7 +8,7 @@
 // have not yet run on a GPU with these passes.
 #include "foveal/cuda/gpu.h"
 #include "foveal/cuda/reuse_kernels.h"
-#include "foveal/quality/sequence.h"
+#include "foveal/experiments/sequence.h"
 #include "foveal/render/reuse.h"
 #include "foveal/util/sampling.h"
 
@@ -174,7 +174,7 @@ TEST(GpuReuseKernels, EqualTheCpuRendererExactlyOnAnOpenPlane) {
 
 #define FOVEAL_NEED_GPU()                                                                      \
   do {                                                                                         \
-    if (!gpu::availability().usable) GTEST_SKIP() << "skipped: " << gpu::availability().reason; \
+    if (!availability().usable) GTEST_SKIP() << "skipped: " << availability().reason; \
   } while (0)
 
 // The GPU's frames against the CPU renderer's over the same moving sequence: the same maps; AO
@@ -262,11 +262,10 @@ TEST(Gpu, QualitySequenceRunsOnTheGpu) {
   q.render.foveation.max_rays = 64;
   q.cameras = orbit_path(first_camera(scene), 1.0, 6);
   q.gazes = fixation_path(glm::dvec2(60, 40), q.render, 6, 3);
-  const QualitySequenceResult cpu = run_quality_sequence(scene, tracer, q);
-  q.cuda = true;
-  const QualitySequenceResult gpu = run_quality_sequence(scene, tracer, q);
+  const QualitySequenceResult cpu = run_quality_sequence(scene, *make_frame_renderer(scene, ComputeDevice::cpu, tracer), q);
+  const QualitySequenceResult gpu = run_quality_sequence(scene, *make_frame_renderer(scene, ComputeDevice::cuda), q);
   EXPECT_EQ(cpu.device, "cpu");
-  EXPECT_NE(gpu.device.find(gpu::availability().name), std::string::npos) << gpu.device;
+  EXPECT_NE(gpu.device.find(availability().name), std::string::npos) << gpu.device;
   ASSERT_EQ(gpu.configs.size(), cpu.configs.size());
   for (size_t c = 0; c < cpu.configs.size(); ++c) {
     EXPECT_EQ(gpu.configs[c].name, cpu.configs[c].name);

@@ -3,7 +3,7 @@
 
 #include "foveal/util/error.h"
 
-namespace foveal::gpu {
+namespace foveal {
 
 const Availability& availability() {
   static const Availability none = [] {
@@ -16,6 +16,11 @@ const Availability& availability() {
 }
 
 std::string Availability::describe() const { return usable ? name : reason; }
+
+}  // namespace foveal
+
+namespace foveal::gpu {
+
 const char* to_string(AoSchedule schedule) { return schedule == AoSchedule::balanced ? "balanced" : "per-pixel"; }
 
 struct Renderer::Impl {};

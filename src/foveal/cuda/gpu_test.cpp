@@ -1,7 +1,7 @@
 // The CUDA backend against the CPU renderer. Tests that need a GPU skip with the reason where
 // none is usable (CI has none); the device choice is tested everywhere.
 #include "foveal/cuda/gpu.h"
-#include "foveal/cuda/gpu_benchmark.h"
+#include "foveal/experiments/gpu_benchmark.h"
 #include "foveal/perception/eye.h"
 #include "foveal/util/error.h"
 #include "foveal/vision/simulate.h"
@@ -20,23 +20,23 @@ namespace {
 
 #define FOVEAL_NEED_GPU()                                                                      \
   do {                                                                                         \
-    if (!gpu::availability().usable) GTEST_SKIP() << "skipped: " << gpu::availability().reason; \
+    if (!availability().usable) GTEST_SKIP() << "skipped: " << availability().reason; \
   } while (0)
 
 TEST(GpuDevice, ChoiceFollowsAvailability) {
-  const gpu::Availability& a = gpu::availability();
-  EXPECT_EQ(gpu::choose_device("cpu"), gpu::ComputeDevice::cpu);
-  EXPECT_EQ(gpu::choose_device("auto"), a.usable ? gpu::ComputeDevice::cuda : gpu::ComputeDevice::cpu);
-  EXPECT_THROW(gpu::choose_device("opencl"), Error);
+  const Availability& a = availability();
+  EXPECT_EQ(choose_device("cpu"), ComputeDevice::cpu);
+  EXPECT_EQ(choose_device("auto"), a.usable ? ComputeDevice::cuda : ComputeDevice::cpu);
+  EXPECT_THROW(choose_device("opencl"), Error);
   if (a.usable) {
-    EXPECT_EQ(gpu::choose_device("cuda"), gpu::ComputeDevice::cuda);
+    EXPECT_EQ(choose_device("cuda"), ComputeDevice::cuda);
     EXPECT_FALSE(a.name.empty());
     EXPECT_GT(a.multiprocessors, 0);
   } else {
     // Unusable: a reason, and `cuda` refused with it
     EXPECT_FALSE(a.reason.empty());
     try {
-      gpu::choose_device("cuda");
+      choose_device("cuda");
       ADD_FAILURE() << "--device cuda accepted without a GPU";
     } catch (const Error& e) {
       EXPECT_NE(std::string(e.what()).find(a.reason), std::string::npos) << e.what();
@@ -180,7 +180,7 @@ TEST(Gpu, RawTracingMatchesTheSharedTraversalOnTheCpu) {
 // ---- The second paper's passes ---------------------------------------------------------------
 
 TEST(GpuDevice, VisionPassesRefusedWithoutAGpu) {
-  if (gpu::availability().usable) GTEST_SKIP() << "skipped: a GPU is present";
+  if (availability().usable) GTEST_SKIP() << "skipped: a GPU is present";
   const Scene scene = make_builtin_scene("box");
   const Tracer tracer(scene);
   SimulateParams p;
@@ -191,7 +191,7 @@ TEST(GpuDevice, VisionPassesRefusedWithoutAGpu) {
     VisionSimulation sim(tracer, scene, p);
     ADD_FAILURE() << "a GPU simulation was made without a GPU";
   } catch (const Error& e) {
-    EXPECT_NE(std::string(e.what()).find(gpu::availability().reason), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find(availability().reason), std::string::npos) << e.what();
   }
 }
 

@@ -3,6 +3,7 @@
 
 #include "foveal/util/error.h"
 #include "foveal/util/parse.h"
+#include "foveal/util/units.h"
 
 #include <fmt/format.h>
 
@@ -73,8 +74,6 @@ std::pair<double, double> adaptive_velocity_thresholds(const std::vector<float>&
 }
 
 namespace {
-
-constexpr double kDeg = 57.29577951308232;
 
 // Savitzky–Golay derivative weights for a centred window of half-width h (order 2: the first
 // derivative's weights equal the least-squares line's, k/Σk²; the second derivative's are

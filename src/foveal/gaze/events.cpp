@@ -1,7 +1,7 @@
 // foveal/gaze/events.cpp — labels, runs, the expert-label reader and the evaluation (see events.h).
 #include "foveal/gaze/events.h"
 
-#include "foveal/gaze/text.h"
+#include "foveal/util/text.h"
 #include "foveal/util/error.h"
 
 #include <cmath>

@@ -5,7 +5,7 @@
 // which eyes are recorded and which extra columns (VEL, RES, HTARGET, INPUT) follow; a "." is a
 // missing value (the eye was lost, e.g. in a blink), read as an invalid sample.
 #include "foveal/gaze/recording.h"
-#include "foveal/gaze/text.h"
+#include "foveal/util/text.h"
 #include "foveal/util/error.h"
 
 #include <algorithm>

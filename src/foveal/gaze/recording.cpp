@@ -1,7 +1,7 @@
 // foveal/gaze/recording.cpp — format names, detection, statistics, Pupil and plain-CSV readers.
 #include "foveal/gaze/recording.h"
 
-#include "foveal/gaze/text.h"
+#include "foveal/util/text.h"
 #include "foveal/util/error.h"
 
 #include <algorithm>

@@ -1,7 +1,7 @@
 // Recording readers: every real recording against its data README, hand-made files of each
 // format, and malformed input that must fail with file, line and reason (or read as invalid).
 #include "foveal/gaze/recording.h"
-#include "foveal/gaze/text.h"
+#include "foveal/util/text.h"
 #include "foveal/util/error.h"
 
 #include <gtest/gtest.h>

@@ -9,7 +9,7 @@
 // which becomes the recording's tracker fixations. Rows of other sensors are skipped; cells may
 // be empty; a decimal comma is accepted.
 #include "foveal/gaze/recording.h"
-#include "foveal/gaze/text.h"
+#include "foveal/util/text.h"
 #include "foveal/util/error.h"
 
 #include <cmath>

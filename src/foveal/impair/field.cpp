@@ -1,8 +1,9 @@
 // foveal/impair/field.cpp — perimetry files, standard grids, generators, interpolation, the loss map.
 #include "foveal/impair/field.h"
 
-#include "foveal/gaze/text.h"
+#include "foveal/util/text.h"
 #include "foveal/util/error.h"
+#include "foveal/util/units.h"
 
 #include <algorithm>
 #include <cmath>
@@ -89,8 +90,7 @@ void check_range(const std::string& where, FieldValue kind, double v) {
 
 std::vector<PerimetryField> parse_field_csv(const std::string& raw, const std::string& name, const std::string& grid,
                                             Eye default_eye, double age, const NormalModel& normal) {
-  std::string_view text(raw);
-  if (text.substr(0, 3) == "\xEF\xBB\xBF") text.remove_prefix(3);  // a UTF-8 byte-order mark
+  const std::string_view text = text::strip_bom(raw);
   text::Lines lines(text);
   std::string_view line;
   Header h;
@@ -317,7 +317,6 @@ std::function<double(double, double)> generated_defect(const std::string& spec, 
   };
   // eye-relative defects are described for OD (nasal = x < 0) and mirrored for OS
   const double nasal_sign = eye == Eye::od ? -1.0 : 1.0;
-  constexpr double kDeg = 180.0 / std::numbers::pi;
   if (kind == "arcuate" || kind == "nasal-step" || kind == "paracentral" || kind == "altitudinal") {
     const double depth = depth_at(1);
     const double up = side(2, "superior", {"superior", "inferior"}) == "superior" ? 1.0 : -1.0;

@@ -1,7 +1,7 @@
 // foveal/impair/profile.cpp — `--eye` presets and JSON eye profiles.
 #include "foveal/impair/profile.h"
 
-#include "foveal/gaze/text.h"
+#include "foveal/util/text.h"
 #include "foveal/util/error.h"
 
 #include <nlohmann/json.hpp>
@@ -181,9 +181,7 @@ class Reader {
 EyeSpec parse_eye_profile(const std::string& text, const std::string& name, const std::string& base_dir) {
   json j;
   try {
-    std::string_view body(text);
-    if (body.substr(0, 3) == "\xEF\xBB\xBF") body.remove_prefix(3);
-    j = json::parse(body);
+    j = json::parse(text::strip_bom(text));
   } catch (const json::parse_error& e) {
     fail("{}: not valid JSON (byte {}): {}", name, e.byte, e.what());
   } catch (const json::exception& e) {  // e.g. a number beyond double's range

@@ -1,7 +1,7 @@
 // foveal/io/video.cpp — runs ffmpeg as a child process (no shell), its messages to a log file.
 #include "foveal/io/video.h"
 
-#include "foveal/gaze/text.h"
+#include "foveal/util/text.h"
 #include "foveal/util/error.h"
 
 #include <fmt/format.h>

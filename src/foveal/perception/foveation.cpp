@@ -10,9 +10,6 @@
 #include <vector>
 
 namespace foveal {
-namespace {
-constexpr double kDeg = 180.0 / std::numbers::pi;
-}
 
 Display parse_display(const std::string& text, Display defaults) {
   std::vector<double> values;

@@ -8,6 +8,7 @@
 #pragma once
 
 #include "foveal/util/hd.h"
+#include "foveal/util/units.h"
 
 #include <glm/glm.hpp>
 
@@ -103,7 +104,6 @@ class FoveationModel {
   FOVEAL_HD FoveaSample evaluate(int x, int y) const { return evaluate_at(x + 0.5, y + 0.5); }
   // The model at a render position (pixel centres are at +0.5).
   FOVEAL_HD FoveaSample evaluate_at(double x_px, double y_px) const {
-    constexpr double kDeg = 180.0 / std::numbers::pi;
     FoveaSample s;
     const glm::dvec3 p = glm::normalize(eye_ray(x_px, y_px));
     // Exact angle between the two eye rays, split along the gaze's tangent-plane axes

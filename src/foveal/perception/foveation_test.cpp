@@ -9,10 +9,6 @@
 
 using namespace foveal;
 
-namespace {
-constexpr double kDeg = 180.0 / std::numbers::pi;
-}
-
 TEST(Display, PaperLabDisplayGeometry) {
   const Display d;  // 47.5 × 30 cm, 60 cm, 1680 × 1050
   EXPECT_NEAR(field_of_view_x_deg(d), 2 * std::atan(23.75 / 60) * kDeg, 1e-12);

@@ -2,6 +2,7 @@
 // lights, meters_per_unit and ao_distance. Unknown keys are errors, so typos do not pass silently.
 #include "foveal/scene/scene.h"
 #include "foveal/util/error.h"
+#include "foveal/util/text.h"
 
 #include <glm/gtc/matrix_transform.hpp>
 #include <nlohmann/json.hpp>
@@ -136,7 +137,7 @@ void mesh(Scene& scene, const Ctx& ctx, const json& m, const std::string& base_d
 }  // namespace
 
 Scene parse_scene_json(const std::string& text, const std::string& path, const std::string& base_dir) {
-  if (text.substr(0, 3) == "\xEF\xBB\xBF") return parse_scene_json(text.substr(3), path, base_dir);  // a UTF-8 byte-order mark
+  if (text::has_bom(text)) return parse_scene_json(std::string(text::strip_bom(text)), path, base_dir);
   json root;
   try {
     root = json::parse(text);

@@ -1,16 +1,12 @@
 // foveal/ui/session.cpp — see session.h.
 #include "foveal/ui/session.h"
 
-#include "foveal/render/reuse.h"
-
-#include "foveal/impair/profile.h"
-
-#include "foveal/cuda/gpu.h"
-
 #include "foveal/gaze/steps.h"
+#include "foveal/impair/profile.h"
 #include "foveal/io/image_io.h"
 #include "foveal/io/outputs.h"
 #include "foveal/perception/eye.h"
+#include "foveal/render/frame_renderer.h"
 #include "foveal/util/error.h"
 #include "foveal/util/timer.h"
 
@@ -148,8 +144,9 @@ struct ViewSession::Worker {
   std::atomic<uint64_t> wanted{0};
   std::atomic<double> progress{0};
   std::unique_ptr<VisionSimulation> sim;  // the worker's own
-  std::unique_ptr<gpu::Renderer> gpu;     // with settings.cuda: the scene on the GPU, made on first use
-  AoHistory history;                      // --temporal: AO rays of the foveated frames so far
+  // The frames' renderer on the settings' device, made on first use; with --temporal it keeps the
+  // AO rays of the full-size foveated frames so far
+  std::unique_ptr<FrameRenderer> renderer;
   std::thread thread;
 
   Worker(const Scene& s, const Tracer& t) : scene(s), tracer(t), thread([this] { loop(); }) {}
@@ -226,17 +223,17 @@ struct ViewSession::Worker {
     // --temporal: the full-size foveated frame builds on the history of the ones before (any gaze
     // or camera; reprojection keeps what still applies); previews and references start afresh
     const bool final_foveated = mode == RenderMode::foveated && scale == 1 && rays == r.settings.render.foveation.max_rays;
-    if (r.settings.cuda) {  // a GPU frame takes milliseconds: no progress, cancelled between stages
-      if (!gpu) gpu = std::make_unique<gpu::Renderer>(scene);  // keeps the history of the final frames
-      if (!final_foveated) p.reuse.temporal = false;
-      Frame f = gpu->render(r.camera, p, gpu::FrameOutputs{false, false, false});
-      check(r.generation);
-      return f;
-    }
-    Frame f = render_frame(tracer, scene, r.camera, p, [&](double fraction) {
+    if (!renderer) renderer = make_frame_renderer(scene, r.settings.cuda ? ComputeDevice::cuda : ComputeDevice::cpu, tracer);
+    FrameOptions options;
+    options.outputs = FrameOutputs::colour_only();
+    options.use_history = final_foveated;
+    // The CPU reports the AO pass (and is cancelled inside it); a GPU frame takes milliseconds and
+    // is cancelled between stages
+    options.progress = [&](double fraction) {
       progress = fraction;
       check(r.generation);
-    }, final_foveated ? &history : nullptr);
+    };
+    Frame f = renderer->render(r.camera, p, options);
     check(r.generation);
     return f;
   }

@@ -275,7 +275,7 @@ TEST(ViewSession, BadSettingsAreRefusedWithTheReason) {
 // The view on the GPU (`--device cuda`): the finished panes are the GPU renderer's frames and a
 // vision step is the GPU simulation's step. Skipped where no GPU is usable.
 TEST(Gpu, ViewShowsTheGpusFramesAndVisionSteps) {
-  if (!gpu::availability().usable) GTEST_SKIP() << "skipped: " << gpu::availability().reason;
+  if (!availability().usable) GTEST_SKIP() << "skipped: " << availability().reason;
   const Camera camera = default_camera(box());
   ViewSettings s = small_settings(ViewMode::side_by_side);
   s.cuda = true;

@@ -3,7 +3,7 @@
 
 #include "foveal/vision/thin_lens.h"
 
-#include "foveal/cuda/gpu.h"
+#include "foveal/vision/passes.h"
 
 #include "foveal/util/error.h"
 #include "foveal/util/sampling.h"
@@ -44,153 +44,6 @@ bool same_camera(const Camera& a, const Camera& b) {
 
 }  // namespace
 
-// What a step asks of a device. Images, CoCs and timings stay with the passes; on the GPU they
-// are copied back only when asked for.
-class VisionSimulation::Passes {
- public:
-  virtual ~Passes() = default;
-  // Ray-cast colour and depth (Phong with a constant ambient term, textures where present)
-  virtual void trace(const Camera& camera, int width, int height, float ambient) = 0;
-  // FAST-9 corners of the traced image, non-maximum suppressed, by row then column
-  virtual std::vector<Corner> corners(int threshold) = 0;
-  // The hit distance along pixel (x, y)'s ray (infinity for the background), and the ray
-  virtual float depth_at(int x, int y, glm::vec3* view) = 0;
-  virtual void blink() = 0;
-  // This step's CoC per pixel, the field's update (unless `update` is false), the blur's CoC in
-  // pixels; returns how many pixels are sharp
-  virtual size_t sharpness(const CocModel& model, uint32_t step, bool update, float ppd, float sharp_px) = 0;
-  virtual void blur(float axis_deg) = 0;
-  virtual const Image& color() = 0;
-  virtual const Image& perceived() = 0;
-  virtual const std::vector<float>& coc_px() = 0;
-  // The last trace/corners/sharpness/blur's times, milliseconds
-  virtual const gpu::VisionPassTimes& times() const = 0;
-};
-
-namespace {
-
-// The passes on the CPU: Embree rays, cv::FAST, the field in pixel order, the blur with oneTBB.
-class CpuPasses final : public VisionSimulation::Passes {
- public:
-  CpuPasses(const Tracer& tracer, const Scene& scene, SharpnessField& field, const BlurParams& blur)
-      : tracer_(tracer), scene_(scene), field_(field), blur_(blur), epsilon_(surface_epsilon(scene.bounds())) {}
-
-  void trace(const Camera& camera, int width, int height, float ambient) override {
-    const Timer t;
-    trace_primary_shaded(tracer_, scene_, camera, width, height, ambient, epsilon_, gbuffer_, color_);
-    times_ = {};
-    times_.trace_ms = t.ms();
-  }
-
-  std::vector<Corner> corners(int threshold) override {
-    const Timer t;
-    std::vector<Corner> found = detect_corners(color_, threshold, true);
-    times_.features_ms = t.ms();
-    return found;
-  }
-
-  float depth_at(int x, int y, glm::vec3* view) override {
-    const size_t i = size_t(y) * gbuffer_.width + x;
-    if (view) *view = gbuffer_.view[i];
-    return gbuffer_.hit(i) ? gbuffer_.depth[i] : INFINITY;
-  }
-
-  void blink() override { field_.blink(); }
-
-  size_t sharpness(const CocModel& model, uint32_t step, bool update, float ppd, float sharp_px) override {
-    const Timer t;
-    const int w = gbuffer_.width, h = gbuffer_.height;
-    const size_t n = size_t(w) * h;
-    astigmatic_ = model.astigmatic;
-    if (astigmatic_) shape_.scale.resize(n);
-    now_deg_.resize(n);  // this step's CoC (the ellipse's larger diameter), degrees
-    cells_.resize(n);    // each pixel's field cell (−1: background)
-    tbb::parallel_for(tbb::blocked_range<int>(0, h, 8), [&](const tbb::blocked_range<int>& rows) {
-      for (int y = rows.begin(); y < rows.end(); ++y)
-        for (int x = 0; x < w; ++x) {
-          const size_t i = size_t(y) * w + x;
-          const bool hit = gbuffer_.hit(i);
-          cells_[i] = hit ? field_.cell(gbuffer_.position[i]) : -1;
-          const PixelCoc c = model(hit, gbuffer_.depth[i], gbuffer_.view[i]);
-          now_deg_[i] = c.major_deg;
-          if (astigmatic_) shape_.scale[i] = c.scale;
-        }
-    });
-    // Pixels share cells, so the update runs in pixel order on one thread (deterministic)
-    if (update)
-      for (size_t i = 0; i < n; ++i) field_.update(cells_[i], now_deg_[i], step);
-    // The blur's CoC: the field's memory where there is geometry, this step's CoC for the background
-    coc_.resize(n);
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 4096), [&](const tbb::blocked_range<size_t>& r) {
-      for (size_t i = r.begin(); i < r.end(); ++i)
-        coc_[i] = (cells_[i] >= 0 ? field_.effective(cells_[i], step) : now_deg_[i]) * ppd;
-    });
-    const size_t sharp = std::count_if(coc_.begin(), coc_.end(), [&](float c) { return c < sharp_px; });
-    times_.sharpness_ms = t.ms();
-    return sharp;
-  }
-
-  void blur(float axis_deg) override {
-    const Timer t;
-    shape_.axis_deg = axis_deg;
-    perceived_ = variable_blur(color_, coc_, blur_, astigmatic_ ? &shape_ : nullptr);
-    times_.blur_ms = t.ms();
-  }
-
-  const Image& color() override { return color_; }
-  const Image& perceived() override { return perceived_; }
-  const std::vector<float>& coc_px() override { return coc_; }
-  const gpu::VisionPassTimes& times() const override { return times_; }
-
- private:
-  const Tracer& tracer_;
-  const Scene& scene_;
-  SharpnessField& field_;
-  BlurParams blur_;
-  float epsilon_;
-  GBuffer gbuffer_;
-  Image color_, perceived_;
-  std::vector<float> now_deg_, coc_;
-  std::vector<int64_t> cells_;
-  CocShape shape_;  // astigmatism: this step's ellipse per pixel
-  bool astigmatic_ = false;
-  gpu::VisionPassTimes times_;
-};
-
-// The passes on the GPU (gpu::VisionPasses keeps its own field); the images come back when first
-// asked for after a step.
-class GpuPasses final : public VisionSimulation::Passes {
- public:
-  GpuPasses(const Scene& scene, const SharpnessField& field, const BlurParams& blur) : gpu_(scene, field, blur) {}
-
-  void trace(const Camera& camera, int width, int height, float ambient) override {
-    gpu_.trace(camera, width, height, ambient);
-    color_ = std::nullopt;  // each pass drops the copy of what it changed
-  }
-  std::vector<Corner> corners(int threshold) override { return gpu_.corners(threshold, true); }
-  float depth_at(int x, int y, glm::vec3* view) override { return gpu_.depth_at(x, y, view); }
-  void blink() override { gpu_.blink(); }
-  size_t sharpness(const CocModel& model, uint32_t step, bool update, float ppd, float sharp_px) override {
-    coc_ = std::nullopt;
-    return gpu_.sharpness(model, step, update, ppd, sharp_px);
-  }
-  void blur(float axis_deg) override {
-    gpu_.blur(axis_deg);
-    perceived_ = std::nullopt;
-  }
-  const Image& color() override { return color_ ? *color_ : color_.emplace(gpu_.color()); }
-  const Image& perceived() override { return perceived_ ? *perceived_ : perceived_.emplace(gpu_.perceived()); }
-  const std::vector<float>& coc_px() override { return coc_ ? *coc_ : coc_.emplace(gpu_.coc_px()); }
-  const gpu::VisionPassTimes& times() const override { return gpu_.last_times(); }
-
- private:
-  gpu::VisionPasses gpu_;
-  std::optional<Image> color_, perceived_;
-  std::optional<std::vector<float>> coc_;
-};
-
-}  // namespace
-
 VisionSimulation::VisionSimulation(const Tracer& tracer, const Scene& scene, const SimulateParams& params)
     : tracer_(tracer),
       scene_(scene),
@@ -200,9 +53,9 @@ VisionSimulation::VisionSimulation(const Tracer& tracer, const Scene& scene, con
       saccades_(saccade_params_for(params.eye, params.saccades), params.height / 40.0, params.seed) {
   if (params_.impair.any()) impair_ = std::make_unique<ImpairmentPasses>(params_.impair);
   if (params_.cuda)
-    passes_ = std::make_unique<GpuPasses>(scene, field_, params_.blur);  // Error with the reason when no GPU answers
+    passes_ = make_cuda_vision_passes(scene, field_, params_.blur);  // Error with the reason when no GPU answers
   else
-    passes_ = std::make_unique<CpuPasses>(tracer, scene, field_, params_.blur);
+    passes_ = make_cpu_vision_passes(tracer, scene, field_, params_.blur);
 }
 
 VisionSimulation::~VisionSimulation() = default;
@@ -288,7 +141,7 @@ StepStats VisionSimulation::step(const Camera& camera, std::optional<glm::vec2> 
   StepStats s;
   s.step = static_cast<int>(++step_);
   const int w = params_.width, h = params_.height;
-  Passes& passes = *passes_;
+  VisionStepPasses& passes = *passes_;
 
   // 1. Ray-cast colour and depth
   passes.trace(camera, w, h, params_.ambient);
@@ -342,7 +195,7 @@ StepStats VisionSimulation::step(const Camera& camera, std::optional<glm::vec2> 
     s.impair.total_ms = timer.ms();  // with the retinotopy
   }
 
-  const gpu::VisionPassTimes& t = passes.times();
+  const VisionPassTimes& t = passes.times();
   s.trace_ms = t.trace_ms;
   s.features_ms = (detect ? t.features_ms : 0.0) + choose_ms;  // the saccade's choice counts with the features
   s.sharpness_ms = t.sharpness_ms;

@@ -17,6 +17,8 @@
 
 namespace foveal {
 
+class VisionStepPasses;
+
 // The eye sits at the camera: the camera's field of view, not a display, sets the visual angles.
 struct SimulateParams {
   int width = 1024, height = 768;
@@ -31,7 +33,7 @@ struct SimulateParams {
   float ambient = 0.3f;           // constant Phong ambient factor of the colour image
   BlurParams blur;
   uint64_t seed = 1;
-  bool cuda = false;              // run the passes on the GPU (gpu::VisionPasses); the saccades stay on the CPU
+  bool cuda = false;              // run the passes on the GPU (make_cuda_vision_passes); the saccades stay on the CPU
   // After the optics: ocular media, the retina (metamorphopsia, field loss centred on the fixation),
   // colour vision (impair/impairments.h); on the CPU, also after the GPU's passes
   Impairments impair;
@@ -86,10 +88,6 @@ class VisionSimulation {
   bool on_gpu() const { return params_.cuda; }
   double pixels_per_degree() const { return ppd_; }  // the camera's, at the image centre (after a step)
 
-  // One step's passes on one device (simulate.cpp: the CPU's, and gpu::VisionPasses behind the
-  // same calls); step() runs the same sequence with either.
-  class Passes;
-
  private:
   // The per-pixel CoC of this step: the camera's axis, the fixation's ray, the accommodation
   CocModel coc_model(const Camera& camera, glm::vec3 gaze_dir, double focus_vergence) const;
@@ -102,7 +100,7 @@ class VisionSimulation {
   SaccadeModel saccades_;
   std::optional<Camera> last_camera_;
   std::vector<Corner> corners_;
-  std::unique_ptr<Passes> passes_;
+  std::unique_ptr<VisionStepPasses> passes_;  // one step's passes on one device (vision/passes.h)
   std::unique_ptr<ImpairmentPasses> impair_;  // with params.impair.any()
   Image impaired_;                            // this step's perceived image through the impairments
   bool blink_due(int step);  // a blink every blink_every steps, or one asked for (consumed)

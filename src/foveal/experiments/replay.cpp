@@ -1,7 +1,5 @@
-// foveal/render/replay.cpp — gaze-following frame sequences.
-#include "foveal/render/replay.h"
-
-#include "foveal/render/reuse.h"
+// foveal/experiments/replay.cpp — gaze-following frame sequences.
+#include "foveal/experiments/replay.h"
 
 #include "foveal/util/error.h"
 #include "foveal/util/timer.h"
@@ -26,9 +24,8 @@ namespace {
 // Renders frames, reusing the last one when the gaze has not moved.
 class FrameMaker {
  public:
-  FrameMaker(const Tracer& tracer, const Scene& scene, const Camera& camera, const RenderParams& params, bool reuse,
-             const FrameRenderer& renderer)
-      : tracer_(tracer), scene_(scene), camera_(camera), params_(params), reuse_(reuse), renderer_(renderer) {}
+  FrameMaker(FrameRenderer& renderer, const Camera& camera, const RenderParams& params, bool reuse)
+      : renderer_(renderer), camera_(camera), params_(params), reuse_(reuse) {}
 
   const Frame& make(glm::dvec2 gaze, ReplayFrame& info) {
     const Timer clock;
@@ -38,7 +35,9 @@ class FrameMaker {
     if (!info.reused) {
       RenderParams p = params_;
       p.gaze_px = gaze;
-      frame_ = renderer_ ? renderer_(p) : render_frame(tracer_, scene_, camera_, p, {}, &history_);
+      FrameOptions options;
+      options.outputs = FrameOutputs::colour_only();  // the sink needs nothing else
+      frame_ = renderer_.render(camera_, p, options);
       last_gaze_ = gaze;
     }
     info.ao_rays = frame_.stats.ao_rays;
@@ -47,16 +46,45 @@ class FrameMaker {
   }
 
  private:
-  const Tracer& tracer_;
-  const Scene& scene_;
+  FrameRenderer& renderer_;
   const Camera& camera_;
   const RenderParams& params_;
   bool reuse_;
-  const FrameRenderer& renderer_;
   std::optional<glm::dvec2> last_gaze_;
-  AoHistory history_;  // --temporal: the AO rays of the frames so far
   Frame frame_;
 };
+
+// Walks a recording's frames: for each, the samples up to t_k through the causal fixation filter,
+// then `frame(info)` with the frame's record (gaze, fixation, state) filled in.
+template <typename OnFrame>
+void walk_recording(const Recording& r, const Display& display, const RenderParams& params, const ReplaySettings& s,
+                    OnFrame&& frame) {
+  validate(s);
+  if (r.samples.empty()) fail("{}: no samples to replay", r.source);
+  const GazeGeometry geometry(display, r.screen_px);
+  const ScreenMapping mapping = make_screen_mapping(r.screen_px, {params.width, params.height}, s.stimulus);
+  FixationTracker tracker(s.method, s.fixation, geometry);
+  const int count = replay_frame_count(r, s);
+  const double first = r.samples.front().t_s, t0 = first + s.start_s;
+  const glm::dvec2 centre(0.5 * params.width, 0.5 * params.height);
+  size_t next = 0;
+  for (int k = 0; k < count; ++k) {
+    const double t = t0 + k / s.fps;
+    const GazeSample* latest = nullptr;
+    while (next < r.samples.size() && r.samples[next].t_s <= t) {
+      tracker.push(r.samples[next]);
+      latest = &r.samples[next++];
+    }
+    ReplayFrame info;
+    info.index = k;
+    info.t_s = t - first;
+    info.state = next >= r.samples.size() ? SourceState::ended : next == 0 ? SourceState::waiting : SourceState::live;
+    if (latest && latest->valid) info.gaze = mapping.to_render(latest->px);
+    if (const auto f = tracker.frame_gaze()) info.fixation = mapping.to_render(*f);
+    info.render_gaze = info.fixation.value_or(centre);
+    frame(info, k, count);
+  }
+}
 
 void account(ReplaySummary& summary, const ReplayFrame& f) {
   ++summary.frames;
@@ -75,53 +103,39 @@ int replay_frame_count(const Recording& r, const ReplaySettings& s) {
   return static_cast<int>(std::floor(span * s.fps + 1e-9)) + 1;
 }
 
-ReplaySummary replay_recording(const Recording& r, const Display& display, const Tracer& tracer, const Scene& scene,
-                               const Camera& camera, const RenderParams& params, const ReplaySettings& s,
-                               const ReplaySink& sink, const ReplayProgress& progress, const FrameRenderer& renderer) {
-  validate(s);
-  if (r.samples.empty()) fail("{}: no samples to replay", r.source);
+ReplaySummary replay_recording(const Recording& r, const Display& display, FrameRenderer& renderer, const Camera& camera,
+                               const RenderParams& params, const ReplaySettings& s, const ReplaySink& sink,
+                               const ReplayProgress& progress) {
   const Timer wall;
-  const GazeGeometry geometry(display, r.screen_px);
-  const ScreenMapping mapping = make_screen_mapping(r.screen_px, {params.width, params.height}, s.stimulus);
-  FixationTracker tracker(s.method, s.fixation, geometry);
-  FrameMaker maker(tracer, scene, camera, params, s.reuse, renderer);
-  const int count = replay_frame_count(r, s);
-  const double first = r.samples.front().t_s, t0 = first + s.start_s;
-  const glm::dvec2 centre(0.5 * params.width, 0.5 * params.height);
+  FrameMaker maker(renderer, camera, params, s.reuse);
   ReplaySummary summary;
-  size_t next = 0;
-  for (int k = 0; k < count; ++k) {
-    const double t = t0 + k / s.fps;
-    const GazeSample* latest = nullptr;
-    while (next < r.samples.size() && r.samples[next].t_s <= t) {
-      tracker.push(r.samples[next]);
-      latest = &r.samples[next++];
-    }
-    ReplayFrame info;
-    info.index = k;
-    info.t_s = t - first;
-    info.state = next >= r.samples.size() ? SourceState::ended : next == 0 ? SourceState::waiting : SourceState::live;
-    if (latest && latest->valid) info.gaze = mapping.to_render(latest->px);
-    if (const auto f = tracker.frame_gaze()) info.fixation = mapping.to_render(*f);
-    const Frame& frame = maker.make(info.fixation.value_or(centre), info);
+  walk_recording(r, display, params, s, [&](ReplayFrame& info, int k, int count) {
+    const Frame& frame = maker.make(info.render_gaze, info);
     account(summary, info);
     sink(info, frame);
     if (progress) progress(k + 1, count);
-  }
+  });
   summary.wall_ms = wall.ms();
   return summary;
 }
 
-ReplaySummary replay_live(GazeSource& source, const Display& display, const Tracer& tracer, const Scene& scene,
-                          const Camera& camera, const RenderParams& params, const ReplaySettings& s,
-                          const ReplaySink& sink, const ReplayProgress& progress, const FrameRenderer& renderer) {
+std::vector<ReplayFrame> replay_gazes(const Recording& r, const Display& display, const RenderParams& params,
+                                      const ReplaySettings& s) {
+  std::vector<ReplayFrame> frames;
+  walk_recording(r, display, params, s, [&](ReplayFrame& info, int, int) { frames.push_back(info); });
+  return frames;
+}
+
+ReplaySummary replay_live(GazeSource& source, const Display& display, FrameRenderer& renderer, const Camera& camera,
+                          const RenderParams& params, const ReplaySettings& s, const ReplaySink& sink,
+                          const ReplayProgress& progress) {
   validate(s);
   const Timer wall;
   const glm::ivec2 screen = source.screen_px();
   const GazeGeometry geometry(display, screen);
   const ScreenMapping mapping = make_screen_mapping(screen, {params.width, params.height}, s.stimulus);
   FixationTracker tracker(s.method, s.fixation, geometry);
-  FrameMaker maker(tracer, scene, camera, params, s.reuse, renderer);
+  FrameMaker maker(renderer, camera, params, s.reuse);
   const int count = s.frames > 0 ? s.frames : static_cast<int>(std::ceil((s.duration_s > 0 ? s.duration_s : 10.0) * s.fps));
   const glm::dvec2 centre(0.5 * params.width, 0.5 * params.height);
   ReplaySummary summary;

@@ -1,4 +1,5 @@
-// foveal/gaze/text.h — line and field splitting for the recording readers, with exact numbers.
+// foveal/util/text.h — line and field splitting for every text reader (recordings, label files, visual
+// fields, eye profiles, scenes), with exact numbers, and the one rule for a byte-order mark.
 #pragma once
 
 #include <optional>
@@ -35,5 +36,7 @@ std::string read_file(const std::string& path);
 // A UTF-8 byte-order mark at the start (spreadsheet programs on Windows write one): every text
 // reader drops it.
 inline bool has_bom(std::string_view text) { return text.substr(0, 3) == "\xEF\xBB\xBF"; }
+// The text without its byte-order mark, if it has one.
+inline std::string_view strip_bom(std::string_view text) { return has_bom(text) ? text.substr(3) : text; }
 
 }  // namespace foveal::text

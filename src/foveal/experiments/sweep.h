@@ -1,4 +1,4 @@
-// foveal/quality/sweep.h — the speed–quality trade-off of foveated AO: renders a grid of the
+// foveal/experiments/sweep.h — the speed–quality trade-off of foveated AO: renders a grid of the
 // model's parameters (γ, n_max, β) at several gaze points, times each frame against the full-frame
 // reference of the same run, measures its error per eccentricity band against that reference and
 // against the reference's own seed-to-seed noise, and marks the Pareto front (fastest for its
@@ -12,7 +12,7 @@
 #pragma once
 
 #include "foveal/quality/compare.h"
-#include "foveal/quality/sequence.h"
+#include "foveal/experiments/sequence.h"
 #include "foveal/render/render.h"
 
 #include <nlohmann/json.hpp>

@@ -1,4 +1,4 @@
-// foveal/quality/sequence.h — quality per ray over a sequence: each configuration of the reuse
+// foveal/experiments/sequence.h — quality per ray over a sequence: each configuration of the reuse
 // options (adaptive rays, denoising, temporal accumulation) rendered along a camera path with a
 // moving gaze, every frame judged against the full-frame reference rendered at the same camera in
 // the same run, in units of that reference's own seed-to-seed noise.
@@ -14,7 +14,7 @@
 
 namespace foveal {
 
-class Tracer;
+class FrameRenderer;
 
 // One way of spending the AO rays: the paper's method, or the reuse options on top of it.
 struct ReuseConfig {
@@ -35,7 +35,6 @@ struct QualitySequenceParams {
   std::vector<ReuseConfig> configs = default_sequence_configs();
   int reference_rays = 400;
   uint64_t seed = 1;                // the configurations' seed; references seed + 1 and seed + 2
-  bool cuda = false;                // every frame, references too, on the CUDA backend (gpu::Renderer)
 };
 
 struct SequenceConfigResult {
@@ -68,7 +67,9 @@ std::vector<Camera> orbit_path(const Camera& camera, double degrees, int frames)
 // frames, the offsets cycling through (0, 0), (1, 0.5), (−1, 0), (0.5, −1) degrees.
 std::vector<glm::dvec2> fixation_path(glm::dvec2 centre, const RenderParams& params, int frames, int frames_per_fixation);
 
-QualitySequenceResult run_quality_sequence(const Scene& scene, const Tracer& tracer, const QualitySequenceParams& params,
+// Every frame, the references too, rendered by `renderer` (any device; its history is reset for
+// each configuration); `scene` is the one it renders (its name goes into the result).
+QualitySequenceResult run_quality_sequence(const Scene& scene, FrameRenderer& renderer, const QualitySequenceParams& params,
                                            const std::function<void(const std::string&)>& progress = {});
 
 nlohmann::json to_json(const QualitySequenceResult& result);

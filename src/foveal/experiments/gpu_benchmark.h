@@ -1,4 +1,4 @@
-// foveal/cuda/gpu_benchmark.h — the first paper's Table 1 on the GPU, with the CPU in the same run.
+// foveal/experiments/gpu_benchmark.h — the first paper's Table 1 on the GPU, with the CPU in the same run.
 //
 // For each camera: the full-frame reference and the six gaze points of `bench ao`, each timed
 // on the GPU (CUDA events around the passes) and on the CPU (render_frame, oneTBB + Embree), with

@@ -1,5 +1,5 @@
-// foveal/gaze/text.cpp — line and field splitting.
-#include "foveal/gaze/text.h"
+// foveal/util/text.cpp — line and field splitting.
+#include "foveal/util/text.h"
 
 #include "foveal/util/error.h"
 

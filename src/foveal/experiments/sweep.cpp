@@ -1,8 +1,8 @@
-// foveal/quality/sweep.cpp — see sweep.h.
-#include "foveal/quality/sweep.h"
+// foveal/experiments/sweep.cpp — see sweep.h.
+#include "foveal/experiments/sweep.h"
 
 #include "foveal/io/plot.h"
-#include "foveal/render/ao_benchmark.h"
+#include "foveal/experiments/ao_benchmark.h"
 #include "foveal/trace/tracer.h"
 #include "foveal/util/error.h"
 #include <tbb/global_control.h>

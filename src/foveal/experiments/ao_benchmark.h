@@ -1,4 +1,4 @@
-// foveal/render/ao_benchmark.h — the first paper's Table 1: full-frame vs foveated AO speed for
+// foveal/experiments/ao_benchmark.h — the first paper's Table 1: full-frame vs foveated AO speed for
 // several cameras and gaze points, with the renderer's AO rate against raw Embree throughput.
 #pragma once
 

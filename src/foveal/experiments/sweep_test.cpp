@@ -2,7 +2,7 @@
 // no constant ambient term is indistinguishable from the reference's own noise in every band; the
 // ray budget falls as γ grows; the Pareto front is exactly the non-dominated set; the
 // recommendation follows its definition; the acuity-weighted RMSE is the weighted mean it claims.
-#include "foveal/quality/sweep.h"
+#include "foveal/experiments/sweep.h"
 #include "foveal/trace/tracer.h"
 #include "foveal/util/error.h"
 

@@ -1,5 +1,5 @@
-// foveal/render/ao_benchmark.cpp — the paper's speed-up table, measured.
-#include "foveal/render/ao_benchmark.h"
+// foveal/experiments/ao_benchmark.cpp — the paper's speed-up table, measured.
+#include "foveal/experiments/ao_benchmark.h"
 
 #include "foveal/util/error.h"
 #include "foveal/util/timer.h"

@@ -1,7 +1,7 @@
-// foveal/cuda/gpu_benchmark.cpp — GPU against CPU on the first paper's Table 1 setting.
-#include "foveal/cuda/gpu_benchmark.h"
+// foveal/experiments/gpu_benchmark.cpp — GPU against CPU on the first paper's Table 1 setting.
+#include "foveal/experiments/gpu_benchmark.h"
 
-#include "foveal/render/ao_benchmark.h"
+#include "foveal/experiments/ao_benchmark.h"
 #include "foveal/util/error.h"
 #include "foveal/util/stats.h"
 

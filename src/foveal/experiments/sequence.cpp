@@ -1,12 +1,10 @@
-// foveal/quality/sequence.cpp — see sequence.h.
-#include "foveal/quality/sequence.h"
+// foveal/experiments/sequence.cpp — see sequence.h.
+#include "foveal/experiments/sequence.h"
 
-#include "foveal/cuda/gpu.h"
-#include "foveal/gaze/text.h"
 #include "foveal/quality/compare.h"
-#include "foveal/render/reuse.h"
-#include "foveal/trace/tracer.h"
+#include "foveal/render/frame_renderer.h"
 #include "foveal/util/error.h"
+#include "foveal/util/text.h"
 #include "foveal/util/timer.h"
 
 #include <fmt/format.h>
@@ -99,7 +97,7 @@ Image add_sub(const Image& a, const Image& b, const Image& c) {
 
 }  // namespace
 
-QualitySequenceResult run_quality_sequence(const Scene& scene, const Tracer& tracer, const QualitySequenceParams& params,
+QualitySequenceResult run_quality_sequence(const Scene& scene, FrameRenderer& renderer, const QualitySequenceParams& params,
                                            const std::function<void(const std::string&)>& progress) {
   auto say = [&](const std::string& line) {
     if (progress) progress(line);
@@ -123,14 +121,12 @@ QualitySequenceResult run_quality_sequence(const Scene& scene, const Tracer& tra
   result.gazes = params.gazes;
   result.reference_rays = params.reference_rays;
   result.threads = static_cast<int>(tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism));
-  // Every frame on one device: the CPU renderer with its history, or the GPU's, which keeps its own
-  std::unique_ptr<gpu::Renderer> gpu_renderer;
-  if (params.cuda) gpu_renderer = std::make_unique<gpu::Renderer>(scene);
-  result.device = params.cuda ? gpu::describe_device(gpu::ComputeDevice::cuda) : "cpu";
-  AoHistory history;
+  // Every frame on the renderer's device, with the history it keeps
+  result.device = renderer.device() == ComputeDevice::cuda ? renderer.describe() : "cpu";
   const auto render = [&](const Camera& camera, const RenderParams& p) {
-    return gpu_renderer ? gpu_renderer->render(camera, p, gpu::FrameOutputs{false, false, false})
-                        : render_frame(tracer, scene, camera, p, {}, &history);
+    FrameOptions options;
+    options.outputs = FrameOutputs::colour_only();
+    return renderer.render(camera, p, options);
   };
   for (const Band& b : default_bands()) result.band_names.push_back(b.name);
 
@@ -163,8 +159,7 @@ QualitySequenceResult run_quality_sequence(const Scene& scene, const Tracer& tra
     r.reuse = config.reuse;
     r.band_ratio.assign(bands, 0.0);
     std::vector<int> band_frames(bands, 0);
-    history.clear();
-    if (gpu_renderer) gpu_renderer->reset_history();
+    renderer.reset_history();
     Image previous;
     uint64_t rays = 0;
     for (int k = 0; k < frames; ++k) {

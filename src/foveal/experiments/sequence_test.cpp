@@ -1,6 +1,6 @@
 // Tests of the sequence mode of `bench quality`.
-#include "foveal/quality/sequence.h"
-#include "foveal/trace/tracer.h"
+#include "foveal/experiments/sequence.h"
+#include "foveal/render/frame_renderer.h"
 #include "foveal/util/error.h"
 
 #include <gtest/gtest.h>
@@ -9,7 +9,7 @@ using namespace foveal;
 
 TEST(QualitySequence, TemporalReuseCastsFewerRaysAtTheSameErrorOnAStillCamera) {
   const Scene box = make_builtin_scene("box");
-  const Tracer tracer(box);
+  const std::unique_ptr<FrameRenderer> renderer = make_frame_renderer(box, ComputeDevice::cpu);
   QualitySequenceParams q;
   q.render.width = 80, q.render.height = 50, q.render.foveation.max_rays = 32;
   q.reference_rays = 32;
@@ -18,7 +18,7 @@ TEST(QualitySequence, TemporalReuseCastsFewerRaysAtTheSameErrorOnAStillCamera) {
   ASSERT_EQ(q.gazes.size(), 6u);
   EXPECT_EQ(q.gazes[0], q.gazes[2]);
   EXPECT_NE(q.gazes[2], q.gazes[3]);  // the fixation moves after 3 frames
-  const QualitySequenceResult r = run_quality_sequence(box, tracer, q);
+  const QualitySequenceResult r = run_quality_sequence(box, *renderer, q);
   ASSERT_EQ(r.configs.size(), 5u);
   const SequenceConfigResult& paper = r.configs[0];
   const SequenceConfigResult& temporal = r.configs[2];
@@ -35,7 +35,7 @@ TEST(QualitySequence, TemporalReuseCastsFewerRaysAtTheSameErrorOnAStillCamera) {
   EXPECT_NEAR(glm::dot(path[1].eye - c.look, c.eye - c.look), (c.eye.y - c.look.y) * (c.eye.y - c.look.y), 1e-3);
   // Bad input
   q.cameras.resize(1);
-  EXPECT_THROW(run_quality_sequence(box, tracer, q), Error);
+  EXPECT_THROW(run_quality_sequence(box, *renderer, q), Error);
 }
 
 TEST(QualitySequence, ConfigurationListsAreReadInAnyOrderAndBadOnesNamed) {

@@ -1,4 +1,4 @@
-// foveal/render/replay.h — foveated-AO sequences that follow recorded or live gaze.
+// foveal/experiments/replay.h — foveated-AO sequences that follow recorded or live gaze.
 //
 // Frame k starts at t_k = t_0 + k / fps. The gaze samples up to t_k go through the causal
 // fixation filter (exactly as they would arrive from a tracker), and the filter's output at t_k,
@@ -9,6 +9,7 @@
 
 #include "foveal/gaze/fixation.h"
 #include "foveal/gaze/source.h"
+#include "foveal/render/frame_renderer.h"
 #include "foveal/render/render.h"
 
 #include <functional>
@@ -52,22 +53,26 @@ struct ReplaySummary {
 
 using ReplaySink = std::function<void(const ReplayFrame&, const Frame&)>;
 using ReplayProgress = std::function<void(int done, int total)>;
-// Renders one frame for the params (gaze set); empty: render_frame on the CPU with the given tracer.
-// The sink reads the frame's colour and stats only, so a renderer may leave the other buffers empty.
-using FrameRenderer = std::function<Frame(const RenderParams&)>;
 
 // Frames at which a recording replay renders (t_0 and count) for the settings.
 int replay_frame_count(const Recording& recording, const ReplaySettings& settings);
 
-// Replay a recording. `display` gives the angles for the filter (its physical size; the recording's screen pixels).
-ReplaySummary replay_recording(const Recording& recording, const Display& display, const Tracer& tracer, const Scene& scene,
+// Replay a recording: each frame rendered by `renderer` (any device; with params.reuse.temporal it
+// builds on the renderer's history). The sink reads the frame's colour and stats only.
+// `display` gives the angles for the filter (its physical size; the recording's screen pixels).
+ReplaySummary replay_recording(const Recording& recording, const Display& display, FrameRenderer& renderer,
                                const Camera& camera, const RenderParams& params, const ReplaySettings& settings,
-                               const ReplaySink& sink, const ReplayProgress& progress = {}, const FrameRenderer& renderer = {});
+                               const ReplaySink& sink, const ReplayProgress& progress = {});
+
+// The gaze replay_recording() renders each frame with (the fixation filter's output, the image
+// centre before the first fixation), without rendering: the frames' records, render_gaze set.
+std::vector<ReplayFrame> replay_gazes(const Recording& recording, const Display& display, const RenderParams& params,
+                                      const ReplaySettings& settings);
 
 // Follow a live source in real time. Stops after the frames (or 10 s), or — with `stopped` set —
 // when the source has been silent or disconnected for live_timeout_s.
-ReplaySummary replay_live(GazeSource& source, const Display& display, const Tracer& tracer, const Scene& scene,
-                          const Camera& camera, const RenderParams& params, const ReplaySettings& settings,
-                          const ReplaySink& sink, const ReplayProgress& progress = {}, const FrameRenderer& renderer = {});
+ReplaySummary replay_live(GazeSource& source, const Display& display, FrameRenderer& renderer, const Camera& camera,
+                          const RenderParams& params, const ReplaySettings& settings, const ReplaySink& sink,
+                          const ReplayProgress& progress = {});
 
 }  // namespace foveal

@@ -1,0 +1,45 @@
+// foveal/render/frame_renderer.cpp — the CPU's FrameRenderer: render_frame() over an Embree tracer,
+// with the temporal history it keeps between frames.
+#include "foveal/render/frame_renderer.h"
+
+#include "foveal/render/reuse.h"
+
+namespace foveal {
+
+namespace {
+
+class CpuFrameRenderer final : public FrameRenderer {
+ public:
+  CpuFrameRenderer(const Scene& scene, TraceApi api) : scene_(scene), owned_(std::make_unique<Tracer>(scene, api)), tracer_(*owned_) {}
+  CpuFrameRenderer(const Scene& scene, const Tracer& tracer) : scene_(scene), tracer_(tracer) {}
+
+  Frame render(const Camera& camera, const RenderParams& params, const FrameOptions& options) override {
+    return render_frame(tracer_, scene_, camera, params, options.progress, options.use_history ? &history_ : nullptr);
+  }
+  void reset_history() override { history_.clear(); }
+  uint32_t history_frames() const override { return history_.frames(); }
+  ComputeDevice device() const override { return ComputeDevice::cpu; }
+  size_t triangles() const override { return tracer_.triangles(); }
+  double build_ms() const override { return tracer_.build_ms(); }
+  std::string trace_api() const override { return to_string(tracer_.occlusion_api()); }
+
+ private:
+  const Scene& scene_;
+  std::unique_ptr<Tracer> owned_;
+  const Tracer& tracer_;
+  AoHistory history_;
+};
+
+}  // namespace
+
+std::unique_ptr<FrameRenderer> make_frame_renderer(const Scene& scene, ComputeDevice device, TraceApi api) {
+  if (device == ComputeDevice::cuda) return make_cuda_frame_renderer(scene);
+  return std::make_unique<CpuFrameRenderer>(scene, api);
+}
+
+std::unique_ptr<FrameRenderer> make_frame_renderer(const Scene& scene, ComputeDevice device, const Tracer& tracer) {
+  if (device == ComputeDevice::cuda) return make_cuda_frame_renderer(scene);
+  return std::make_unique<CpuFrameRenderer>(scene, tracer);
+}
+
+}  // namespace foveal

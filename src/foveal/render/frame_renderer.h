@@ -1,0 +1,69 @@
+// foveal/render/frame_renderer.h — one renderer for every device.
+//
+// A FrameRenderer holds a scene ready to trace on one device (the CPU with Embree and oneTBB, or
+// the CUDA backend), runs render_frame()'s passes for a camera and RenderParams, and keeps the
+// temporal history that params.reuse.temporal frames build on. Every caller — render, replay,
+// view, the quality sequences, the Python Renderer — renders through it and never branches on the
+// device. The CUDA implementation lives in cuda/ (make_cuda_frame_renderer) and is reached only
+// through make_frame_renderer(): no header of this module includes the backend.
+#pragma once
+
+#include "foveal/render/render.h"
+#include "foveal/util/device.h"
+
+#include <functional>
+#include <memory>
+#include <string>
+
+namespace foveal {
+
+// Which buffers a frame must bring back besides the colour and the stats. The CPU fills every
+// buffer whatever is asked (they are its working memory); the GPU copies back only these.
+struct FrameOutputs {
+  bool visibility = true;  // Frame::visibility, and Frame::ao_traced with params.reuse
+  bool maps = true;        // Frame::maps
+  bool gbuffer = true;     // Frame::gbuffer
+  static FrameOutputs colour_only() { return {false, false, false}; }
+};
+
+// How one frame is made, besides the camera and the params.
+struct FrameOptions {
+  FrameOutputs outputs;
+  // The AO pass's finished fraction in (0, 1], from one thread at a time (the CPU reports it; a
+  // GPU frame takes milliseconds and does not). It may throw to abandon the frame.
+  std::function<void(double)> progress;
+  // With params.reuse.temporal: build on the kept history and leave this frame's rays there.
+  // false: a frame apart (a preview, a reference) that neither reads nor changes the history.
+  bool use_history = true;
+};
+
+class FrameRenderer {
+ public:
+  virtual ~FrameRenderer() = default;
+  // One frame: render_frame()'s passes on this renderer's device.
+  virtual Frame render(const Camera& camera, const RenderParams& params, const FrameOptions& options = {}) = 0;
+  // Forget the temporal history: the next temporal frame is the paper's frame.
+  virtual void reset_history() = 0;
+  // Temporal frames stored since the last reset.
+  virtual uint32_t history_frames() const = 0;
+
+  virtual ComputeDevice device() const = 0;
+  // One line for the user: "cpu", or "cuda (NVIDIA H100 …)".
+  std::string describe() const { return describe_device(device()); }
+  virtual size_t triangles() const = 0;          // triangles traced
+  virtual double build_ms() const = 0;           // the acceleration structure's build time
+  virtual std::string trace_api() const = 0;     // how rays are traced: "stream", "packet8", "single" (Embree) or "bvh2" (the GPU)
+};
+
+// A renderer for the scene on `device`; throws Error with the reason when the CUDA backend is
+// chosen and unavailable. The scene must outlive the renderer. On the CPU, `api` is how occlusion
+// rays are handed to Embree.
+std::unique_ptr<FrameRenderer> make_frame_renderer(const Scene& scene, ComputeDevice device, TraceApi api = TraceApi::stream);
+// The same on the CPU over a tracer the caller already has (it must outlive the renderer); the
+// CUDA backend builds its own BVH and ignores it.
+std::unique_ptr<FrameRenderer> make_frame_renderer(const Scene& scene, ComputeDevice device, const Tracer& tracer);
+// The CUDA backend's implementation (cuda/gpu_frame_renderer.cpp): the GPU's passes over the same
+// per-pixel functions; throws Error with the reason when the backend is unavailable.
+std::unique_ptr<FrameRenderer> make_cuda_frame_renderer(const Scene& scene);
+
+}  // namespace foveal
