@@ -2,7 +2,7 @@
 #include "commands.h"
 #include "foveal/cuda/gpu.h"
 #include "foveal/experiments/gpu_benchmark.h"
-#include "foveal/io/outputs.h"
+#include "foveal/render/outputs.h"
 #include "foveal/experiments/ao_benchmark.h"
 #include "foveal/util/error.h"
 #include "foveal/util/parallel.h"

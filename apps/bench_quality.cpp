@@ -2,7 +2,7 @@
 // model's parameters (γ, n_max, β), with the Pareto front and the configuration it recommends.
 #include "commands.h"
 #include "foveal/render/frame_renderer.h"
-#include "foveal/io/outputs.h"
+#include "foveal/render/outputs.h"
 #include "foveal/experiments/sequence.h"
 #include "foveal/experiments/sweep.h"
 #include "foveal/experiments/ao_benchmark.h"

@@ -3,7 +3,7 @@
 #include "commands.h"
 #include "foveal/cuda/gpu.h"
 #include "foveal/impair/profile.h"
-#include "foveal/io/outputs.h"
+#include "foveal/render/outputs.h"
 #include "foveal/util/error.h"
 #include "foveal/util/parallel.h"
 #include "foveal/util/parse.h"

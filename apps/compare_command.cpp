@@ -2,7 +2,7 @@
 // reference, over the whole image and per eccentricity band around the gaze.
 #include "commands.h"
 #include "foveal/io/image_io.h"
-#include "foveal/io/outputs.h"
+#include "foveal/render/outputs.h"
 #include "foveal/quality/compare.h"
 #include "foveal/util/error.h"
 #include "foveal/util/parse.h"

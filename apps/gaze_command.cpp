@@ -4,7 +4,7 @@
 #include "foveal/gaze/detect.h"
 #include "foveal/gaze/events.h"
 #include "foveal/gaze/summary.h"
-#include "foveal/io/outputs.h"
+#include "foveal/render/outputs.h"
 #include "foveal/io/scanpath.h"
 #include "foveal/util/error.h"
 #include "foveal/util/parse.h"

@@ -2,7 +2,7 @@
 #include "commands.h"
 
 #include "foveal/io/image_io.h"
-#include "foveal/io/outputs.h"
+#include "foveal/render/outputs.h"
 #include "foveal/render/frame_renderer.h"
 #include "foveal/render/render.h"
 #include "foveal/util/error.h"

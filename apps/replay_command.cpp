@@ -2,7 +2,7 @@
 // a live tracker; frames (PNG), frames.csv, optionally a video and stats JSON.
 #include "commands.h"
 #include "foveal/io/image_io.h"
-#include "foveal/io/outputs.h"
+#include "foveal/render/outputs.h"
 #include "foveal/io/video.h"
 #include "foveal/experiments/replay.h"
 #include "foveal/util/error.h"

@@ -3,7 +3,7 @@
 
 #include "foveal/gaze/steps.h"
 #include "foveal/io/image_io.h"
-#include "foveal/io/outputs.h"
+#include "foveal/render/outputs.h"
 #include "foveal/io/scanpath.h"
 #include "foveal/io/video.h"
 #include "foveal/util/error.h"

@@ -8,7 +8,7 @@
 
 #include "foveal/impair/profile.h"
 #include "foveal/io/image_io.h"
-#include "foveal/io/outputs.h"
+#include "foveal/render/outputs.h"
 #include "foveal/quality/compare.h"
 #include "foveal/render/render.h"
 #include "foveal/render/frame_renderer.h"

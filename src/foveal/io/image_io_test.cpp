@@ -1,6 +1,6 @@
 // Tests of image and AOV files: PFM, EXR and PNG round trips, bad files, the contract's NaN/1 rule.
 #include "foveal/io/image_io.h"
-#include "foveal/io/outputs.h"
+#include "foveal/render/outputs.h"
 #include "foveal/util/error.h"
 
 #include <gtest/gtest.h>

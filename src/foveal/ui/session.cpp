@@ -4,7 +4,7 @@
 #include "foveal/gaze/steps.h"
 #include "foveal/impair/profile.h"
 #include "foveal/io/image_io.h"
-#include "foveal/io/outputs.h"
+#include "foveal/render/outputs.h"
 #include "foveal/perception/eye.h"
 #include "foveal/render/frame_renderer.h"
 #include "foveal/util/error.h"

@@ -1,5 +1,5 @@
-// foveal/io/outputs.cpp — AOVs, budget mask, acuity plot and stats JSON.
-#include "foveal/io/outputs.h"
+// foveal/render/outputs.cpp — AOVs, budget mask, acuity plot and stats JSON.
+#include "foveal/render/outputs.h"
 
 #include "foveal/io/image_io.h"
 #include "foveal/io/plot.h"

@@ -1,4 +1,4 @@
-// foveal/io/outputs.h — what `render` writes besides the image: AOVs, the budget mask of the
+// foveal/render/outputs.h — what `render` writes besides the image: AOVs, the budget mask of the
 // paper's Figure 5, the acuity plot of its Figure 4, and the stats JSON of the CLI contract.
 #pragma once
 
