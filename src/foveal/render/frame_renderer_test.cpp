@@ -1,0 +1,122 @@
+// Tests of the device-neutral FrameRenderer: the CPU's is render_frame() with its own history, bit
+// for bit, and a frame apart leaves that history alone; the CUDA backend is refused with a reason
+// where there is none.
+#include "foveal/render/frame_renderer.h"
+
+#include "foveal/render/reuse.h"
+#include "foveal/util/error.h"
+
+#include <gtest/gtest.h>
+
+#include <cstring>
+
+using namespace foveal;
+
+namespace {
+
+bool same_bits(const std::vector<float>& a, const std::vector<float>& b) {
+  return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(float)) == 0;
+}
+
+void expect_same_frame(const Frame& a, const Frame& b, int k) {
+  EXPECT_TRUE(same_bits(a.color.pixels, b.color.pixels)) << "frame " << k;
+  EXPECT_TRUE(same_bits(a.visibility, b.visibility)) << "frame " << k;
+  EXPECT_EQ(a.ao_traced, b.ao_traced) << "frame " << k;
+  EXPECT_TRUE(same_bits(a.gbuffer.depth, b.gbuffer.depth)) << "frame " << k;
+  EXPECT_EQ(a.maps.rays, b.maps.rays) << "frame " << k;
+  EXPECT_EQ(a.stats.ao_rays, b.stats.ao_rays) << "frame " << k;
+  EXPECT_EQ(a.stats.history_pixels, b.stats.history_pixels) << "frame " << k;
+  EXPECT_EQ(a.stats.denoised_pixels, b.stats.denoised_pixels) << "frame " << k;
+  EXPECT_EQ(a.stats.ambient_constant, b.stats.ambient_constant) << "frame " << k;
+}
+
+// A camera sliding sideways, so that the history is reprojected and partly dropped.
+Camera moved(const Camera& c, int k) {
+  Camera m = c;
+  m.eye += glm::vec3(0.04f * k, 0.01f * k, 0.0f);
+  return m;
+}
+
+}  // namespace
+
+// A temporal sequence with every option on, the gaze moving, through the renderer equals the same
+// sequence through render_frame() with an AoHistory of the caller's: the refactor changes no output.
+TEST(FrameRenderer, CpuIsRenderFrameWithItsHistoryBitForBit) {
+  const Scene box = make_builtin_scene("box");
+  const Tracer tracer(box);
+  const std::unique_ptr<FrameRenderer> renderer = make_frame_renderer(box, ComputeDevice::cpu);
+  EXPECT_EQ(renderer->device(), ComputeDevice::cpu);
+  EXPECT_EQ(renderer->trace_api(), "stream");
+  EXPECT_EQ(renderer->triangles(), tracer.triangles());
+  EXPECT_EQ(renderer->describe().rfind("cpu", 0), 0u) << renderer->describe();
+  RenderParams p;
+  p.width = 96, p.height = 60, p.foveation.max_rays = 64;
+  p.reuse.adaptive = p.reuse.denoise = p.reuse.temporal = true;
+  AoHistory history;
+  for (int k = 0; k < 4; ++k) {
+    p.gaze_px = glm::dvec2(30 + 8 * k, 25);
+    const Frame expected = render_frame(tracer, box, moved(box.cameras.front(), k), p, {}, &history);
+    const Frame got = renderer->render(moved(box.cameras.front(), k), p);
+    expect_same_frame(got, expected, k);
+    if (k > 0) EXPECT_GT(got.stats.history_pixels, 0u);
+  }
+  EXPECT_EQ(renderer->history_frames(), 4u);
+  // Reset: the next temporal frame is the paper's frame again
+  renderer->reset_history();
+  EXPECT_EQ(renderer->history_frames(), 0u);
+  history.clear();
+  const Frame first = renderer->render(box.cameras.front(), p);
+  expect_same_frame(first, render_frame(tracer, box, box.cameras.front(), p, {}, &history), 0);
+  EXPECT_EQ(first.stats.history_pixels, 0u);
+}
+
+// A frame apart (a preview, a reference) neither reads nor changes the history: the next frame is
+// the one the sequence would have had without it. The renderer over a borrowed tracer is the same.
+TEST(FrameRenderer, AFrameApartLeavesTheHistoryAlone) {
+  const Scene box = make_builtin_scene("box");
+  const Tracer tracer(box);
+  const std::unique_ptr<FrameRenderer> plain = make_frame_renderer(box, ComputeDevice::cpu);
+  const std::unique_ptr<FrameRenderer> borrowed = make_frame_renderer(box, ComputeDevice::cpu, tracer);
+  RenderParams p;
+  p.width = 80, p.height = 50, p.foveation.max_rays = 32, p.gaze_px = glm::dvec2(40, 25);
+  p.reuse.temporal = true;
+  const Camera c = box.cameras.front();
+  plain->render(c, p);
+  borrowed->render(c, p);
+  FrameOptions apart;
+  apart.use_history = false;
+  int progress_calls = 0;
+  apart.progress = [&](double fraction) {
+    EXPECT_GT(fraction, 0.0);
+    EXPECT_LE(fraction, 1.0);
+    ++progress_calls;
+  };
+  RenderParams preview = p;
+  preview.width = 20, preview.height = 12, preview.gaze_px = glm::dvec2(10, 6);
+  const Frame small = borrowed->render(c, preview, apart);
+  EXPECT_EQ(small.stats.history_pixels, 0u);  // it did not read the history either
+  EXPECT_GT(progress_calls, 0);
+  EXPECT_EQ(borrowed->history_frames(), 1u);
+  const Frame a = plain->render(moved(c, 1), p), b = borrowed->render(moved(c, 1), p);
+  expect_same_frame(b, a, 1);
+  EXPECT_GT(b.stats.history_pixels, 0u);
+}
+
+// Without a usable GPU the CUDA backend is refused with the reason, through the same factory; with
+// one, it reports its device.
+TEST(FrameRenderer, CudaIsRefusedWithTheReasonWhereThereIsNone) {
+  const Scene box = make_builtin_scene("box");
+  if (availability().usable) {
+    const std::unique_ptr<FrameRenderer> gpu = make_frame_renderer(box, ComputeDevice::cuda);
+    EXPECT_EQ(gpu->device(), ComputeDevice::cuda);
+    EXPECT_EQ(gpu->trace_api(), "bvh2");
+    EXPECT_NE(gpu->describe().find(availability().name), std::string::npos);
+    return;
+  }
+  try {
+    make_frame_renderer(box, ComputeDevice::cuda);
+    FAIL() << "a CUDA renderer was made without a usable GPU";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find(availability().reason), std::string::npos) << e.what();
+  }
+}
