@@ -268,6 +268,7 @@ std::function<int()> add_bench_vision_command(CLI::App& bench) {
   struct Options {
     std::vector<std::string> scenes, sizes{"1024x768", "1280x720"};
     std::string json, markdown, eye = "healthy", device = "auto";
+    std::optional<double> pupil;  // not given: the eye's (a profile's pupil_mm, else 3.5)
     std::string impairments = "cataract:0.5+field:arcuate:20+metamorphopsia:0.3+cvd:deutan:0.6";
     int steps = 20, threads = 0;
     uint64_t seed = 1;
@@ -277,7 +278,8 @@ std::function<int()> add_bench_vision_command(CLI::App& bench) {
   cmd->add_option("--size", o->sizes, "sizes WxH")->delimiter(',')->capture_default_str();
   cmd->add_option("--steps", o->steps, "steps per case (median reported; the first is left out as warm-up)")
       ->capture_default_str()->check(CLI::Range(2, 10000));
-  cmd->add_option("--eye", o->eye, "eye preset (the optics; as for simulate)")->capture_default_str();
+  cmd->add_option("--eye", o->eye, "the eye's optics: presets or a profile .json, as for simulate")->capture_default_str();
+  cmd->add_option("--pupil", o->pupil, "pupil diameter, mm (overrides a profile's pupil_mm; default: the profile's, else 3.5)");
   cmd->add_option("--impairments", o->impairments,
                   "impairments timed after the optics in every step (presets as for simulate --eye; 'none' for the paper's step alone)")
       ->capture_default_str();
@@ -300,7 +302,7 @@ std::function<int()> add_bench_vision_command(CLI::App& bench) {
         scenes.push_back(conference);
       scenes.push_back("builtin:box");
     }
-    const EyeSpec eye_spec = parse_eye_spec(o->eye);
+    const EyeSpec eye_spec = resolve_eye(o->eye, {o->pupil, std::nullopt});
     const Impairments impair = o->impairments == "none" ? Impairments{} : parse_eye_spec(o->impairments).impair;
     nlohmann::json rows = nlohmann::json::array();
     std::string md = cuda ? std::string("| scene | size | device | trace ms | features ms | sharpness ms | blur ms | step ms | CPU step ms | CPU / GPU | GPU trace / raw | CPU trace / raw | same fixations | corners first differ at step | perceived mean abs diff |\n"
@@ -402,7 +404,7 @@ std::function<int()> add_bench_vision_command(CLI::App& bench) {
       }
     }
     if (!o->json.empty())
-      write_json_file(o->json, {{"threads", threads.threads()}, {"eye", o->eye}, {"device", describe_device(device)}, {"rows", rows}});
+      write_json_file(o->json, {{"threads", threads.threads()}, {"eye", o->eye}, {"optics", optics_json(eye_spec.eye)}, {"device", describe_device(device)}, {"rows", rows}});
     if (!o->markdown.empty()) write_text_file(o->markdown, md);
     return 0;
   };

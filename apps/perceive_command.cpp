@@ -152,7 +152,8 @@ std::function<int()> add_perceive_command(CLI::App& app) {
                                              "gaze-contingent (optics, media, visual field, colour vision)");
   struct Options {
     std::string input, output, eye = "healthy", gaze, depth, display = "47.5,30,60", stimulus, amsler, field_map;
-    double pupil = 0, fps = 30, start = 0;
+    double fps = 30, start = 0;
+    std::optional<double> pupil;  // not given: the eye's (a profile's pupil_mm, else 3.5)
     int threads = 0, taps = 64;
     bool no_optics = false, quiet = false;
     GazeOptions gaze_options;
@@ -175,7 +176,7 @@ std::function<int()> add_perceive_command(CLI::App& app) {
   cmd->add_option("--stimulus", o->stimulus, "X,Y,W,H: where the stimulus was shown on the recording's screen (default: the whole screen)");
   cmd->add_option("--fps", o->fps, "frame rate of a folder of frames (a video's own rate is used)")->capture_default_str();
   cmd->add_option("--start", o->start, "the recording's time, s from its first sample, at the first frame")->capture_default_str();
-  cmd->add_option("--pupil", o->pupil, "pupil diameter, mm (default: the eye's, 3.5)");
+  cmd->add_option("--pupil", o->pupil, "pupil diameter, mm (overrides a profile's pupil_mm; default: the profile's, else 3.5)");
   cmd->add_option("--blur-taps", o->taps, "most blur taps per pixel")->capture_default_str()->check(CLI::Range(1, 1024));
   cmd->add_flag("--no-optics", o->no_optics, "skip the defocus blur (the media, field and colour only)");
   cmd->add_option("--amsler", o->amsler, "also write the Amsler grid as this eye sees it (PNG)");
@@ -190,11 +191,7 @@ std::function<int()> add_perceive_command(CLI::App& app) {
   return [o] {
     const ThreadScope threads(o->threads);
     Perceiver p;
-    p.eye = parse_eye_spec(o->eye);
-    if (o->pupil != 0) {
-      p.eye.eye.pupil_diameter_mm = o->pupil;
-      validate(p.eye.eye);
-    }
+    p.eye = resolve_eye(o->eye, {o->pupil, std::nullopt});
     p.optics = !o->no_optics;
     p.blur.taps = o->taps;
     p.display = parse_display(o->display);

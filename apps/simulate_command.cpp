@@ -36,7 +36,8 @@ std::function<int()> add_simulate_command(CLI::App& app) {
     bool no_gaze_blinks = false;
     std::string eye = "healthy", save_steps = "1,4,20", output, stats, video, path;
     int steps = 20, fast_threshold = 20, blink_every = 0, taps = 64;
-    double pupil = 3.5, image_distance = 25, starvation = 0.015, voxel = 0, saccade_max = 15, saccade_min = 2, ambient = 0.3;
+    std::optional<double> pupil, image_distance;  // not given: the profile's or presets', else the default
+    double starvation = 0.015, voxel = 0, saccade_max = 15, saccade_min = 2, ambient = 0.3;
     uint64_t seed = 1;
     bool quiet = false;
     std::string device = "auto";
@@ -52,8 +53,8 @@ std::function<int()> add_simulate_command(CLI::App& app) {
                   "age:Y, cataract[:S], glare, cvd:TYPE[:S], achromatopsia, field:FILE.csv|GRID:FILE|DEFECT, field-view:OD|OS|both, "
                   "field-mode:contrast|blur|grey|fill, amd[:R[:A]], metamorphopsia:A[:R]; join with '+'; or a profile .json")
       ->capture_default_str();
-  cmd->add_option("--pupil", o->pupil, "pupil diameter A, mm")->capture_default_str();
-  cmd->add_option("--image-distance", o->image_distance, "lens-to-retina distance I, mm")->capture_default_str();
+  cmd->add_option("--pupil", o->pupil, "pupil diameter A, mm (overrides a profile's pupil_mm; default: the profile's, else 3.5)");
+  cmd->add_option("--image-distance", o->image_distance, "lens-to-retina distance I, mm (default 25)");
   cmd->add_option("--starvation", o->starvation, "s: remembered CoCs grow by this fraction per step")->capture_default_str();
   cmd->add_option("--voxel", o->voxel, "sharpness-field cell edge, scene units (0: scene diagonal / 256)")->capture_default_str();
   cmd->add_option("--blink-every", o->blink_every, "a blink (the field forgets) every N steps; 0 = never")->capture_default_str();
@@ -91,11 +92,9 @@ std::function<int()> add_simulate_command(CLI::App& app) {
     const glm::ivec2 size = parse_size("--size", o->view.size);
     p.width = size.x;
     p.height = size.y;
-    const EyeSpec eye_spec = parse_eye_spec(o->eye);
+    const EyeSpec eye_spec = resolve_eye(o->eye, {o->pupil, o->image_distance});
     p.eye = eye_spec.eye;
     p.impair = eye_spec.impair;
-    if (!o->eye.ends_with(".json") || o->pupil != 3.5) p.eye.pupil_diameter_mm = o->pupil;
-    p.eye.image_distance_mm = o->image_distance;
     p.starvation = o->starvation;
     p.voxel = static_cast<float>(o->voxel);
     if (o->voxel < 0) fail("--voxel: must be zero (automatic) or positive, got {}", o->voxel);
@@ -225,6 +224,7 @@ std::function<int()> add_simulate_command(CLI::App& app) {
       j["width"] = p.width;
       j["height"] = p.height;
       j["eye"] = o->eye;
+      j["optics"] = optics_json(p.eye);
       j["impairments"] = p.impair.describe();
       j["seed"] = p.seed;
       j["threads"] = threads.threads();

@@ -21,7 +21,8 @@ std::function<int()> add_view_command(CLI::App& app) {
     RenderOptions render;
     GazeOptions gaze;
     std::string mode = "foveated", source = "mouse", stimulus, overlays = "gaze", screenshot, window_screenshot, eye = "healthy";
-    double speed = 1, pupil = 3.5, starvation = 0.015, timeout = 600;
+    double speed = 1, starvation = 0.015, timeout = 600;
+    std::optional<double> pupil;  // not given: the eye's (a profile's pupil_mm, else 3.5)
     float diff_gain = 8;
     int frames = 0, blink_every = 0;
     bool no_panel = false, no_progressive = false;
@@ -45,7 +46,7 @@ std::function<int()> add_view_command(CLI::App& app) {
   cmd->add_option("--speed", o->speed, "recordings: playback speed (1 = real time)")->capture_default_str();
   cmd->add_option("--eye", o->eye, "vision mode: healthy, glaucoma[:SEVERITY 0..1], myopia:-D, hyperopia:D, presbyopia:AGE, astigmatism:CYL[@AXIS]; join with '+'")
       ->capture_default_str();
-  cmd->add_option("--pupil", o->pupil, "vision mode: pupil diameter, mm")->capture_default_str();
+  cmd->add_option("--pupil", o->pupil, "vision mode: pupil diameter, mm (overrides a profile's pupil_mm; default: the profile's, else 3.5)");
   cmd->add_option("--starvation", o->starvation, "vision mode: remembered CoCs grow by this fraction per step")->capture_default_str();
   cmd->add_option("--blink-every", o->blink_every, "vision mode: a blink (the field forgets) every N steps; 0 = never")->capture_default_str();
   cmd->add_option("--overlays", o->overlays, "drawn over the image: gaze, contours (q = 1, 0.5, 0.25), budget (AO heat map), scanpath, sharp (vision); comma-separated, all or none")
@@ -68,7 +69,7 @@ std::function<int()> add_view_command(CLI::App& app) {
     s.cuda = device == ComputeDevice::cuda;
     s.mode = parse_view_mode(o->mode);
     s.eye = o->eye;
-    s.vision.eye.pupil_diameter_mm = o->pupil;
+    s.eye_overrides.pupil_diameter_mm = o->pupil;
     s.vision.starvation = o->starvation;
     s.vision.blink_every = o->blink_every;
     s.diff_gain = o->diff_gain;

@@ -160,10 +160,9 @@ std::unique_ptr<PyVision> make_vision(const PyScene& s, const std::string& eye, 
   v->scene = s.scene;
   SimulateParams& p = v->params;
   std::tie(p.width, p.height) = size_of(size, "size");
-  const EyeSpec spec = parse_eye_spec(eye);
+  const EyeSpec spec = resolve_eye(eye, {pupil_mm, std::nullopt});  // the CLI's rule: pupil_mm, if given, beats the eye's
   p.eye = spec.eye;
   p.impair = spec.impair;
-  if (pupil_mm) p.eye.pupil_diameter_mm = *pupil_mm;
   p.seed = seed;
   p.blink_every = blink_every;
   p.starvation = starvation;
@@ -381,12 +380,16 @@ NB_MODULE(_core, m) {
            "device"_a = "auto", "threads"_a = 0, "blink_every"_a = 0, "pupil_mm"_a = nb::none(), "starvation"_a = 0.015,
            "features_every_step"_a = false,
            "A simulation of `eye` (the CLI's --eye: presets joined with '+', e.g. 'myopia:-2+cvd:deutan:0.6', or a profile "
-           ".json) looking at `scene` through `camera`.")
+           ".json) looking at `scene` through `camera`. `pupil_mm` (the CLI's --pupil), when given, overrides the eye's pupil "
+           "(a profile's pupil_mm, else 3.5 mm).")
       .def("step", &vision_step, "fixation"_a = nb::none(), "camera"_a = nb::none(),
            "One step: the next fixation (simulated saccade, or `fixation` (x, y) in render pixels from real gaze), "
            "accommodation, the sharpness field, the blur and the impairments. Returns a VisionStep.")
       .def("blink", [](PyVision& v) { v.sim->blink_before_next_step(); }, "The eye blinks before the next step (the field forgets).")
-      .def_prop_ro("on_gpu", [](const PyVision& v) { return v.sim->on_gpu(); });
+      .def_prop_ro("on_gpu", [](const PyVision& v) { return v.sim->on_gpu(); })
+      .def_prop_ro("optics", [](const PyVision& v) { return to_python(optics_json(v.params.eye)); },
+                   "The eye's optics as resolved (as `simulate --stats` writes them): preset, pupil_mm, image_distance_mm, "
+                   "refraction_d, cylinder_d, axis_deg, age_years, glaucoma.");
 
   m.def(
       "_compare",

@@ -37,6 +37,21 @@ def test_vision_takes_the_command_lines_eye_and_its_impairments(box):
         foveal.VisionSimulation(box, eye="cvd:purple")
 
 
+def test_a_profiles_pupil_is_kept_and_pupil_mm_overrides_it_as_on_the_command_line(cli, tmp_path):
+    """The one rule for an eye: pupil_mm, when given (3.5, the default's value, too), beats the
+    profile's pupil_mm, which beats the default; simulate --stats reports the same optics."""
+    profile = tmp_path / "patient.json"
+    profile.write_text('{"age": 40, "eyes": {"OD": {"pupil_mm": 5.5, "refraction": -1}}}')
+    plane = foveal.Scene("builtin:plane")
+    kept = foveal.VisionSimulation(plane, eye=str(profile), size=(48, 32), device="cpu")
+    assert kept.optics["pupil_mm"] == 5.5 and kept.optics["refraction_d"] == -1
+    assert foveal.VisionSimulation(plane, eye=str(profile), size=(48, 32), device="cpu", pupil_mm=3.5).optics["pupil_mm"] == 3.5
+    assert foveal.VisionSimulation(plane, size=(48, 32), device="cpu").optics["pupil_mm"] == 3.5
+    run_cli(cli, "simulate", "--scene", "builtin:plane", "--size", "48x32", "--steps", "1", "-q", "--eye", profile,
+            "-o", tmp_path / "sim", "--stats", tmp_path / "sim.json")
+    assert json.loads((tmp_path / "sim.json").read_text())["optics"] == kept.optics
+
+
 def test_compare_equals_foveal_compare(cli, box, tmp_path):
     renderer = foveal.Renderer(box, device="cpu")
     fov = renderer.render(size=(160, 100), gaze=(40, 50), max_rays=32, seed=1)

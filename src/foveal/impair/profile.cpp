@@ -283,4 +283,18 @@ EyeSpec read_eye_profile(const std::string& path) {
                                            : std::filesystem::path(path).parent_path().string());
 }
 
+EyeSpec resolve_eye(const std::string& spec, const EyeOverrides& overrides) {
+  EyeSpec eye = parse_eye_spec(spec);
+  if (overrides.pupil_diameter_mm) eye.eye.pupil_diameter_mm = *overrides.pupil_diameter_mm;
+  if (overrides.image_distance_mm) eye.eye.image_distance_mm = *overrides.image_distance_mm;
+  validate(eye.eye);
+  return eye;
+}
+
+json optics_json(const EyeParams& e) {
+  return {{"preset", e.preset},           {"pupil_mm", e.pupil_diameter_mm}, {"image_distance_mm", e.image_distance_mm},
+          {"refraction_d", e.refraction_d}, {"cylinder_d", e.cylinder_d},     {"axis_deg", e.cylinder_axis_deg},
+          {"age_years", e.age_years},     {"glaucoma", e.glaucoma}};
+}
+
 }  // namespace foveal

@@ -5,6 +5,9 @@
 #include "foveal/impair/impairments.h"
 #include "foveal/perception/eye.h"
 
+#include <nlohmann/json_fwd.hpp>
+
+#include <optional>
 #include <string>
 
 namespace foveal {
@@ -33,5 +36,22 @@ EyeSpec parse_eye_spec(const std::string& text);
 // Files it names are relative to the profile.
 EyeSpec read_eye_profile(const std::string& path);
 EyeSpec parse_eye_profile(const std::string& json_text, const std::string& name, const std::string& base_dir = ".");
+
+// What a user states explicitly about an eye besides its presets or profile; unset = not given.
+struct EyeOverrides {
+  std::optional<double> pupil_diameter_mm;  // A, mm (a profile's "pupil_mm")
+  std::optional<double> image_distance_mm; // I, lens to retina, mm
+};
+
+// The one rule for an eye, the same in simulate, view, perceive, bench vision and Python: `spec`
+// (presets joined with '+', or a profile .json) gives the eye, and every override that is given
+// replaces what the spec says — whatever its value, the default's included. Where neither says,
+// EyeParams' defaults hold. So: explicit option > profile or presets > default. Validated (errors
+// name the parameter, e.g. "pupil_diameter_mm: …").
+EyeSpec resolve_eye(const std::string& spec, const EyeOverrides& overrides = {});
+
+// The optics of an eye as written to stats files: preset, pupil_mm, image_distance_mm,
+// refraction_d, cylinder_d, axis_deg, age_years, glaucoma.
+nlohmann::json optics_json(const EyeParams& eye);
 
 }  // namespace foveal

@@ -42,12 +42,9 @@ ViewMode parse_view_mode(const std::string& name) {
 
 void resolve(ViewSettings& s) {
   validate(s.render);
-  const double pupil = s.vision.eye.pupil_diameter_mm, image_distance = s.vision.eye.image_distance_mm;
-  const EyeSpec spec = parse_eye_spec(s.eye);  // optics and impairments (presets or a profile)
+  const EyeSpec spec = resolve_eye(s.eye, s.eye_overrides);  // optics and impairments (presets or a profile)
   s.vision.eye = spec.eye;
   s.vision.impair = spec.impair;
-  s.vision.eye.pupil_diameter_mm = pupil;
-  s.vision.eye.image_distance_mm = image_distance;
   s.vision.width = s.render.width;
   s.vision.height = s.render.height;
   validate(s.vision);

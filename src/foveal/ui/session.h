@@ -11,6 +11,7 @@
 
 #include "foveal/gaze/fixation.h"
 #include "foveal/gaze/source.h"
+#include "foveal/impair/profile.h"
 #include "foveal/render/render.h"
 #include "foveal/ui/overlays.h"
 #include "foveal/vision/simulate.h"
@@ -33,13 +34,15 @@ ViewMode parse_view_mode(const std::string& name);  // throws Error for an unkno
 struct ViewSettings {
   ViewMode mode = ViewMode::foveated;
   RenderParams render;        // size, display, n_max, n_min, γ, β, ellipse ratio, seed, AO distance, k_const
-  SimulateParams vision;      // eye, pupil, starvation, blink interval, … (its size is the render's)
-  std::string eye = "healthy";  // the eye preset text (vision.eye is parsed from it, then pupil applied)
+  SimulateParams vision;      // starvation, blink interval, … (its size is the render's; its eye and impairments resolve() sets)
+  std::string eye = "healthy";  // the eye: presets joined with '+', or a profile .json
+  EyeOverrides eye_overrides;   // the pupil and image distance the user set (they override the eye's)
   float diff_gain = 8;        // side by side: |foveated − reference| × this gain
   bool progressive = true;    // a cheap quarter-resolution frame before the full one
   bool cuda = false;          // frames and vision steps on the GPU (gpu::Renderer, gpu::VisionPasses)
 };
-// Parse `eye` into vision.eye (keeping the pupil and image distance) and check everything; throws Error.
+// Resolve `eye` with `eye_overrides` into vision.eye and vision.impair (resolve_eye, the one rule for
+// an eye) and check everything; throws Error.
 void resolve(ViewSettings& settings);
 
 // Where the gaze comes from.

@@ -104,7 +104,7 @@ TEST(ViewSession, SideBySideShowsFoveatedReferenceAndTheirDifference) {
 TEST(ViewSession, VisionModeIsTheSimulationsStep) {
   const Camera camera = default_camera(box());
   ViewSettings s = small_settings(ViewMode::vision);
-  s.vision.eye.pupil_diameter_mm = 8;
+  s.eye_overrides.pupil_diameter_mm = 8;
   ViewSession session(box(), box_tracer(), camera, s, fixed({40, 50}));
   ASSERT_TRUE(session.wait_until_converged(120, kNone));
   ViewSettings resolved = s;
@@ -293,7 +293,7 @@ TEST(Gpu, ViewShowsTheGpusFramesAndVisionSteps) {
   EXPECT_EQ(session.status().ao_rays, reference.stats.ao_rays);
 
   ViewSettings v = small_settings(ViewMode::vision);
-  v.vision.eye.pupil_diameter_mm = 8;
+  v.eye_overrides.pupil_diameter_mm = 8;
   v.cuda = true;
   ViewSession vision(box(), box_tracer(), camera, v, fixed({40, 50}));
   ASSERT_TRUE(vision.wait_until_converged(120, kNone));

@@ -226,7 +226,9 @@ int run_window(ViewSession& session, WindowOptions options) {
           std::snprintf(eye_text, sizeof eye_text, "%s", kEyePresets[preset]);
         ImGui::InputText("eye", eye_text, sizeof eye_text);
         edit.eye = eye_text;
-        ImGui::InputDouble("pupil mm", &edit.vision.eye.pupil_diameter_mm, 0.5, 1, "%.1f");
+        // The pupil shown is the eye's until the user sets one, which then overrides the eye's
+        double pupil = edit.eye_overrides.pupil_diameter_mm.value_or(session.settings().vision.eye.pupil_diameter_mm);
+        if (ImGui::InputDouble("pupil mm", &pupil, 0.5, 1, "%.1f")) edit.eye_overrides.pupil_diameter_mm = pupil;
         ImGui::InputDouble("starvation", &edit.vision.starvation, 0.005, 0.05, "%.3f");
         ImGui::InputInt("blink every", &edit.vision.blink_every, 1, 5);
       }
