@@ -1,35 +1,68 @@
 #!/usr/bin/env bash
-# Build and run the whole test suite: a Release build, the Python package's tests (pip install .
-# into .venv, pytest), then the C++ tests under AddressSanitizer
-# and UndefinedBehaviorSanitizer, then each fuzz target for a bounded time.
-# Usage: scripts/test.sh   (FUZZ_SECONDS=N to change each target's fuzzing time, default 20; 0 skips fuzzing)
+# The whole test suite, printing how long each part took:
+#   1. the Release build (set-up's own, continued: the command line, the Python module, the tests)
+#      and its tests, the layer check among them;
+#   2. the Python package's tests (pytest) against that build's module and command line, and the
+#      module's install rules (what `pip install .` packs);
+#   3. the C++ tests under AddressSanitizer and UndefinedBehaviorSanitizer (with the CUDA backend
+#      compiled, where nvcc is found and the Release build has not compiled it already);
+#   4. each libFuzzer target for a bounded time.
+# Usage: scripts/test.sh   (FUZZ_SECONDS=N per fuzz target, default 20, 0 skips fuzzing)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 jobs="$(nproc)"
+start=$(date +%s)
+last=$start
+times=()
+phase() {  # phase NAME: the time since the last phase
+  local now
+  now=$(date +%s)
+  times+=("$1 $((now - last)) s")
+  echo "   ($1: $((now - last)) s)"
+  last=$now
+}
 
-echo "== Release build and tests"
-cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release >/dev/null
-cmake --build build --parallel "$jobs"
-ctest --test-dir build --output-on-failure --parallel "$jobs"
-
-echo "== Python package: pip install . into .venv, then its tests (against the command line just built)"
+echo "== Python environment (.venv; a no-op where set-up made it)"
 scripts/python-env.sh
+source scripts/build-config.sh
+phase "Python environment"
+
+echo "== Release build (CUDA backend: $CUDA_HERE) and tests"
+cmake -S . -B build "${RELEASE_FLAGS[@]}" > /dev/null
+cmake --build build --parallel "$jobs"
+phase "Release build"
+ctest --test-dir build --output-on-failure --parallel "$jobs"
+phase "Release tests"
+
+echo "== Python package: its tests (the module of the Release build, against its command line) and install rules"
 FOVEAL_CLI="$PWD/build/foveal" .venv/bin/python -m pytest -q python/tests
+rm -rf build/python-install
+cmake --install build --component python --prefix build/python-install > /dev/null
+PYTHONPATH="$PWD/build/python-install" .venv/bin/python -c "import foveal; assert '/python-install/' in foveal.__file__, foveal.__file__; \
+foveal.Scene('builtin:plane'); print('  the installed package imports:', foveal.__file__)"
+phase "Python tests"
 
 echo "== AddressSanitizer + UndefinedBehaviorSanitizer build and tests"
-cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DFOVEAL_SANITIZE=ON -DFOVEAL_BUILD_BENCH=OFF >/dev/null
+sanitizer_cuda=ON
+[ "$CUDA_HERE" = ON ] && sanitizer_cuda=OFF  # compiled once per run: the Release build has it
+cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g1 -DNDEBUG" \
+  -DFOVEAL_SANITIZE=ON -DFOVEAL_BUILD_BENCH=OFF -DFOVEAL_CUDA=$sanitizer_cuda > /dev/null
 cmake --build build-asan --parallel "$jobs"
+phase "sanitizer build"
 ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
   ctest --test-dir build-asan --output-on-failure --parallel "$jobs"
+phase "sanitizer tests"
 
 seconds="${FUZZ_SECONDS:-20}"
 if [ "$seconds" != 0 ]; then
   echo "== libFuzzer targets, ${seconds}s each"
-  cmake -S . -B build-fuzz -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_COMPILER=clang++ \
-    -DFOVEAL_FUZZ=ON -DFOVEAL_CUDA=OFF -DFOVEAL_BUILD_TESTS=OFF -DFOVEAL_BUILD_BENCH=OFF >/dev/null
+  cmake -S . -B build-fuzz -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g1 -DNDEBUG" \
+    -DCMAKE_CXX_COMPILER=clang++ -DFOVEAL_FUZZ=ON -DFOVEAL_CUDA=OFF -DFOVEAL_BUILD_TESTS=OFF -DFOVEAL_BUILD_BENCH=OFF \
+    -DFOVEAL_BUILD_APPS=OFF > /dev/null
   targets=$(cd fuzz && ls fuzz_*.cpp | sed 's/\.cpp$//')
   # shellcheck disable=SC2086
   cmake --build build-fuzz --parallel "$jobs" --target $targets
+  phase "fuzz build"
   for target in $targets; do
     mkdir -p "build-fuzz/corpus/$target"
     cp fuzz/corpus/"$target"/* "build-fuzz/corpus/$target/" 2>/dev/null || true
@@ -41,5 +74,8 @@ if [ "$seconds" != 0 ]; then
     fi
     tail -n 1 "build-fuzz/$target.log"
   done
+  phase "fuzzing"
 fi
+total=$(($(date +%s) - start))
+echo "the test command took $((total / 60)) min $((total % 60)) s: $(IFS=,; echo "${times[*]}" | sed 's/,/, /g')"
 echo "all tests passed"
