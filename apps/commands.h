@@ -27,6 +27,9 @@ std::function<int()> add_bench_vision_command(CLI::App& bench);
 std::function<int()> add_bench_blur_command(CLI::App& bench);
 std::function<int()> add_bench_quality_command(CLI::App& bench);
 
+// A library error (util/error.h: it names parameters) in the command line's words: its options.
+std::string cli_words(const std::string& message);
+
 // Options shared by the commands that render: parsed text, turned into params by each command.
 struct ViewOptions {
   std::string scene = "builtin:box";

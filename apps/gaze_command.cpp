@@ -85,6 +85,15 @@ Recording read_recording_warned(const std::string& path, const ReadOptions& opti
 }
 
 FixationParams resolve_fixation_params(const GazeOptions& o) {
+  // The options in milliseconds are checked here, in the command line's words and unit; the
+  // library checks its seconds (errors naming its fields, which the front ends rename)
+  require_positive(o.velocity_window_ms, "--velocity-window-ms");
+  require_non_negative(o.gap_fill_ms, "--gap-fill-ms");
+  require_non_negative(o.merge_gap_ms, "--merge-gap-ms");
+  require_non_negative(o.min_fixation_ms, "--min-fixation-ms");
+  require_non_negative(o.idt_duration_ms, "--idt-duration-ms");
+  require_positive(o.pursuit_window_ms, "--pursuit-window-ms");
+  require_non_negative(o.min_pursuit_ms, "--min-pursuit-ms");
   FixationParams p;
   p.velocity_threshold_deg_s = o.ivt_threshold;
   p.velocity_window_s = o.velocity_window_ms / 1000;
@@ -161,6 +170,10 @@ std::function<int()> add_gaze_command(CLI::App& app) {
     double detect_ms = 0;
     std::optional<Evaluation> evaluation, ceiling;
     if (!o->events.empty()) {
+      require_positive(o->filter_window_ms, "--filter-window-ms");
+      require_non_negative(o->detection_window_ms, "--detection-window-ms");
+      require_non_negative(o->blink_flank_ms, "--blink-flank-ms");
+      require_positive(o->max_blink_ms, "--max-blink-ms");
       EventParams ep;
       ep.pursuit = params.pursuit;  // the options --fixation ivvt reads too
       ep.filter_window_s = o->filter_window_ms / 1000;

@@ -46,7 +46,7 @@ int main(int argc, char** argv) {
     if (app.got_subcommand("perceive")) return perceive();
     return 2;
   } catch (const foveal::Error& e) {
-    fmt::print(stderr, "foveal: error: {}\n", e.what());
+    fmt::print(stderr, "foveal: error: {}\n", foveal::app::cli_words(e.what()));  // the library's parameters as options
   } catch (const std::bad_alloc&) {
     fmt::print(stderr, "foveal: error: out of memory\n");
   } catch (const std::exception& e) {

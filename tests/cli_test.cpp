@@ -164,3 +164,26 @@ TEST(Cli, PeakMemoryPerTriangleOfALargeMesh) {
   EXPECT_LE(per_triangle, 150.0);
 #endif
 }
+
+// The library names its parameters (util/error.h); the command line says them as its options, in
+// the options' units, and never lets a library name through.
+TEST(Cli, LibraryErrorsNameTheOptionsTheUserTyped) {
+  const std::pair<std::string, std::string> cases[] = {
+      {"render --size 40x30 --ellipse -1 -o e.png", "--ellipse: must be > 0, got -1"},
+      {"render --size 40x30 --max-rays 20 --min-rays 30 -o e.png", "--min-rays: must be in [0, --max-rays = 20], got 30"},
+      {"render --size 40x30 --gaze nan,1 -o e.png", "--gaze: "},
+      {"simulate --scene builtin:plane --size 40x30 --steps 1 -o e --pupil 20", "--pupil: must be in (0, 10] mm, got 20"},
+      {"simulate --scene builtin:plane --size 40x30 --steps 1 -o e --saccade-max 0", "--saccade-max: must be positive degrees, got 0"},
+      {"gaze ../x.csv --gap-fill-ms -5", "--gap-fill-ms: must be zero or positive, got -5"},  // in ms, as typed
+      {"gaze ../x.csv --pursuit-velocity 40", "--pursuit-velocity: must be below the saccade threshold --ivt-threshold (30 deg/s), got 40"},
+  };
+  for (const auto& [args, expected] : cases) {
+    const CliRun r = foveal(args);
+    EXPECT_EQ(r.status, 1) << args;
+    EXPECT_EQ(lines(r.err), 1u) << args << "\n" << r.err;
+    EXPECT_NE(r.err.find("foveal: error: " + expected), std::string::npos) << args << "\n" << r.err;
+    for (const char* library : {"ellipse_ratio", "min_rays", "max_rays", "gaze_px", "pupil_diameter_mm", "saccade_max_deg", "gap_fill_s",
+                                "pursuit_velocity_deg_s", "velocity_threshold_deg_s"})
+      EXPECT_EQ(r.err.find(library), std::string::npos) << args << "\n" << r.err;
+  }
+}

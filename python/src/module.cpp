@@ -220,18 +220,22 @@ using namespace foveal::python;
 NB_MODULE(_core, m) {
   m.doc() = "foveal's C++ core: scenes, the foveated AO renderer, the vision simulation, gaze, image comparison";
 
-  // Every library error is one line naming the file, line or option, as the CLI prints it
+  // Every library error is one line naming the file and line, or the parameter — here as the
+  // keyword argument a Python caller passed (util/error.h: the library names its own fields)
   nb::register_exception_translator([](const std::exception_ptr& p, void*) {
     try {
       std::rethrow_exception(p);
     } catch (const Error& e) {
-      const std::string what = e.what();
+      static constexpr ParameterName kKeywords[] = {
+          {"pupil_diameter_mm", "pupil_mm"}, {"ellipse_ratio", "ellipse"}, {"gaze_px", "gaze"}, {"gaze_eye", "eye"},
+          {"device cuda", "device='cuda'"}};
+      const std::string what = in_words(e.what(), kKeywords);
       // A file that is not there (the readers say "no such file", or "cannot open" a path that does not exist)
       const size_t cannot = what.find(": cannot open");
       const bool missing = what.find(": no such ") != std::string::npos || what.ends_with(" not found") ||
                            (cannot != std::string::npos && what.find("for writing") == std::string::npos &&
                             !std::filesystem::exists(what.substr(0, cannot)));
-      const bool device = what.find("--device") != std::string::npos && what.find("cuda") != std::string::npos;
+      const bool device = what.rfind("device='cuda'", 0) == 0;
       PyErr_SetString(missing ? PyExc_FileNotFoundError : device ? PyExc_RuntimeError : PyExc_ValueError, what.c_str());
     }
   });

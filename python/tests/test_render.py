@@ -57,7 +57,7 @@ def test_scene_cameras_and_named_camera(box, tmp_path, cli):
     assert not np.array_equal(frame.image, f2.image)
 
 
-def test_errors_carry_the_command_lines_message(cli, box, tmp_path):
+def test_errors_carry_the_command_lines_message_in_pythons_words(cli, box, tmp_path):
     missing = str(tmp_path / "missing.obj")
     with pytest.raises(FileNotFoundError) as e:
         foveal.Scene(missing)
@@ -65,7 +65,8 @@ def test_errors_carry_the_command_lines_message(cli, box, tmp_path):
     renderer = foveal.Renderer(box, device="cpu")
     with pytest.raises(ValueError) as e:
         renderer.render(mode="sideways")
-    assert str(e.value) == cli_error(cli, "render", "--mode", "sideways", "-o", tmp_path / "x.png")
+    assert str(e.value).startswith("mode: unknown mode 'sideways'")  # the keyword argument, not the CLI's --mode
+    assert str(e.value) == cli_error(cli, "render", "--mode", "sideways", "-o", tmp_path / "x.png").replace("--mode", "mode", 1)
     with pytest.raises(ValueError) as e:
         renderer.render(camera="nowhere")
     assert str(e.value) == cli_error(cli, "render", "--camera", "nowhere", "-o", tmp_path / "x.png")
@@ -136,4 +137,24 @@ def test_quality_per_ray_options_equal_the_command_lines(cli, box, tmp_path, dev
     assert second.stats["rays"]["ao"] < paper.stats["rays"]["ao"] / 2  # n/F rays where history was kept
     with pytest.raises(ValueError) as e:
         renderer.render(temporal=True, temporal_frames=0)
-    assert str(e.value) == cli_error(cli, "render", "--temporal", "--temporal-frames", "0", "-o", tmp_path / "x.png")
+    assert str(e.value) == cli_error(cli, "render", "--temporal", "--temporal-frames", "0", "-o", tmp_path / "x.png").replace(
+        "--temporal-frames", "temporal_frames")
+
+
+@pytest.mark.parametrize("call, keyword, cli_args, option", [
+    (lambda box: foveal.Renderer(box, device="cpu").render(size=(40, 30), ellipse=-1), "ellipse", ["--ellipse", "-1"], "--ellipse"),
+    (lambda box: foveal.Renderer(box, device="cpu").render(size=(40, 30), gaze=(float("nan"), 1.0)), "gaze", None, None),
+    (lambda box: foveal.Renderer(box, device="cpu").render(size=(40, 30), gamma=0), "gamma", ["--gamma", "0"], "--gamma"),
+    (lambda box: foveal.Renderer(box, device="cpu").render(size=(40, 30), max_rays=-3), "max_rays", ["--max-rays", "-3"], "--max-rays"),
+    (lambda box: foveal.VisionSimulation(box, size=(40, 30), device="cpu", pupil_mm=20), "pupil_mm", None, None),
+])
+def test_errors_name_the_keyword_argument_and_the_command_line_its_option(cli, box, tmp_path, call, keyword, cli_args, option):
+    """The library names its parameters; Python says them as keyword arguments, the command line as options."""
+    with pytest.raises(ValueError) as e:
+        call(box)
+    assert str(e.value).startswith(keyword + ":"), str(e.value)
+    assert "--" not in str(e.value)
+    if cli_args:
+        message = cli_error(cli, "render", "--size", "40x30", *cli_args, "-o", tmp_path / "x.png")
+        assert message.startswith(option + ":"), message
+        assert message[len(option):] == str(e.value)[len(keyword):]

@@ -11,10 +11,10 @@ ComputeDevice choose_device(const std::string& name) {
   if (name == "cpu") return ComputeDevice::cpu;
   if (name == "auto") return availability().usable ? ComputeDevice::cuda : ComputeDevice::cpu;
   if (name == "cuda") {
-    if (!availability().usable) fail("--device cuda: unavailable: {}", availability().reason);
+    if (!availability().usable) fail("device cuda: unavailable: {}", availability().reason);
     return ComputeDevice::cuda;
   }
-  fail("--device: unknown device '{}' (known: auto, cpu, cuda)", name);
+  fail("device: unknown device '{}' (known: auto, cpu, cuda)", name);
 }
 
 std::string describe_device(ComputeDevice device) {

@@ -278,7 +278,7 @@ const char* to_string(AoSchedule schedule) { return schedule == AoSchedule::bala
 
 Renderer::Renderer(const Scene& scene) {
   const Availability& a = availability();
-  if (!a.usable) throw Error("--device cuda: " + a.reason);
+  if (!a.usable) throw Error("device cuda: " + a.reason);
   impl_ = std::make_unique<Impl>();  // CUDA events and buffers: only once a GPU answered
   Impl& m = *impl_;
   m.bvh = build_bvh(scene);

@@ -8,8 +8,7 @@ namespace foveal {
 const Availability& availability() {
   static const Availability none = [] {
     Availability a;
-    a.reason = "this build of foveal has no CUDA backend (no CUDA toolkit was found when it was built; install one "
-               "and rebuild)";
+    a.reason = FOVEAL_NO_CUDA_REASON;  // from the build's configuration (src/foveal/CMakeLists.txt)
     return a;
   }();
   return none;
@@ -25,7 +24,7 @@ const char* to_string(AoSchedule schedule) { return schedule == AoSchedule::bala
 
 struct Renderer::Impl {};
 
-Renderer::Renderer(const Scene&) { fail("--device cuda: {}", availability().reason); }
+Renderer::Renderer(const Scene&) { fail("device cuda: {}", availability().reason); }
 Renderer::~Renderer() = default;
 Frame Renderer::render(const Camera&, const RenderParams&, const FrameOutputs&) { fail("no CUDA backend"); }
 const GpuPassTimes& Renderer::last_times() const { fail("no CUDA backend"); }
@@ -42,7 +41,7 @@ double Renderer::measure_intersection_rate(std::span<const Ray>, int) { fail("no
 struct VisionPasses::Impl {};
 
 VisionPasses::VisionPasses(const Scene&, const SharpnessField&, const BlurParams&) {
-  fail("--device cuda: {}", availability().reason);
+  fail("device cuda: {}", availability().reason);
 }
 VisionPasses::~VisionPasses() = default;
 void VisionPasses::trace(const Camera&, int, int, float) { fail("no CUDA backend"); }

@@ -11,11 +11,11 @@
 namespace foveal {
 
 void validate(const ReplaySettings& s) {
-  if (!(s.fps > 0 && s.fps <= 1000)) fail("--fps: must be in (0, 1000], got {}", s.fps);
-  if (s.frames < 0) fail("--frames: must be zero (all) or positive, got {}", s.frames);
-  if (!(s.start_s >= 0) || !std::isfinite(s.start_s)) fail("--start: must be zero or positive seconds, got {}", s.start_s);
-  if (!(s.duration_s >= 0) || !std::isfinite(s.duration_s)) fail("--duration: must be zero (all) or positive seconds, got {}", s.duration_s);
-  if (!(s.live_timeout_s > 0)) fail("--live-timeout: must be positive seconds, got {}", s.live_timeout_s);
+  if (!(s.fps > 0 && s.fps <= 1000)) fail("fps: must be in (0, 1000], got {}", s.fps);
+  if (s.frames < 0) fail("frames: must be zero (all) or positive, got {}", s.frames);
+  if (!(s.start_s >= 0) || !std::isfinite(s.start_s)) fail("start_s: must be zero or positive seconds, got {}", s.start_s);
+  if (!(s.duration_s >= 0) || !std::isfinite(s.duration_s)) fail("duration_s: must be zero (all) or positive seconds, got {}", s.duration_s);
+  if (!(s.live_timeout_s > 0)) fail("live_timeout_s: must be positive seconds, got {}", s.live_timeout_s);
   validate(s.fixation);
 }
 
@@ -99,7 +99,7 @@ int replay_frame_count(const Recording& r, const ReplaySettings& s) {
   if (s.frames > 0) return s.frames;
   double span = r.duration_s() - s.start_s;
   if (s.duration_s > 0) span = std::min(span, s.duration_s);
-  if (span < 0) fail("--start: {} s is past the end of the recording ({:.3f} s long)", s.start_s, r.duration_s());
+  if (span < 0) fail("start_s: {} s is past the end of the recording ({:.3f} s long)", s.start_s, r.duration_s());
   return static_cast<int>(std::floor(span * s.fps + 1e-9)) + 1;
 }
 

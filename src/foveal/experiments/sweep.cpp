@@ -38,7 +38,7 @@ QualitySweepResult run_quality_sweep(const Scene& scene, const Tracer& tracer, c
   for (const ReuseConfig& m : params.methods)
     if (m.reuse.temporal) fail("bench quality: {} reuses earlier frames; single frames have none (use --sequence)", m.name);
   for (int n : params.max_rays)
-    if (n < 1) fail("--max-rays: every value must be at least 1, got {}", n);
+    if (n < 1) fail("max_rays: every value must be at least 1, got {}", n);
   RenderParams base = params.render;
   base.seed = params.seed;
   validate(base);

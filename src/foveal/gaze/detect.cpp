@@ -28,26 +28,26 @@ EventMethod parse_event_method(const std::string& name) {
   if (name == "auto") return kRecommendedEventMethod;
   for (EventMethod m : {EventMethod::ivt, EventMethod::idt, EventMethod::ek, EventMethod::nh, EventMethod::nhp})
     if (name == to_string(m)) return m;
-  fail("--events: unknown detector '{}' (ivt, idt, ek, nh, nhp or auto)", name);
+  fail("events: unknown detector '{}' (ivt, idt, ek, nh, nhp or auto)", name);
 }
 
-// The parameters the command line sets are named by their option, the others by their field.
+// Errors name the parameter by its field (the command line names its own options: apps/).
 void validate(const EventParams& p) {
-  require_non_negative(p.blink_flank_s, "--blink-flank-ms");
-  require_positive(p.max_blink_s, "--max-blink-ms");
-  require_positive(p.pupil_deviation, "EventParams::pupil_deviation");
-  require_positive(p.filter_window_s, "--filter-window-ms");
-  require_positive(p.initial_peak_deg_s, "EventParams::initial_peak_deg_s");
-  require_positive(p.max_velocity_deg_s, "EventParams::max_velocity_deg_s");
-  require_positive(p.max_acceleration_deg_s2, "EventParams::max_acceleration_deg_s2");
-  require_non_negative(p.min_saccade_s, "EventParams::min_saccade_s");
-  require_non_negative(p.min_fixation_s, "EventParams::min_fixation_s");
-  require_non_negative(p.pso_window_s, "EventParams::pso_window_s");
-  require_positive(p.local_noise_s, "EventParams::local_noise_s");
-  require_non_negative(p.detection_window_s, "--detection-window-ms");
-  require_non_negative(p.lid_saccade_s, "EventParams::lid_saccade_s");
-  require_positive(p.ek_lambda, "--ek-lambda");
-  require_non_negative(p.ek_min_saccade_s, "EventParams::ek_min_saccade_s");
+  require_non_negative(p.blink_flank_s, "blink_flank_s");
+  require_positive(p.max_blink_s, "max_blink_s");
+  require_positive(p.pupil_deviation, "pupil_deviation");
+  require_positive(p.filter_window_s, "filter_window_s");
+  require_positive(p.initial_peak_deg_s, "initial_peak_deg_s");
+  require_positive(p.max_velocity_deg_s, "max_velocity_deg_s");
+  require_positive(p.max_acceleration_deg_s2, "max_acceleration_deg_s2");
+  require_non_negative(p.min_saccade_s, "min_saccade_s");
+  require_non_negative(p.min_fixation_s, "min_fixation_s");
+  require_non_negative(p.pso_window_s, "pso_window_s");
+  require_positive(p.local_noise_s, "local_noise_s");
+  require_non_negative(p.detection_window_s, "detection_window_s");
+  require_non_negative(p.lid_saccade_s, "lid_saccade_s");
+  require_positive(p.ek_lambda, "ek_lambda");
+  require_non_negative(p.ek_min_saccade_s, "ek_min_saccade_s");
   validate(p.pursuit);
 }
 

@@ -233,7 +233,7 @@ TEST(Detect, MethodNamesAndBadParameters) {
     parse_event_method("hmm");
     FAIL();
   } catch (const Error& e) {
-    EXPECT_NE(std::string(e.what()).find("--events: unknown detector 'hmm'"), std::string::npos);
+    EXPECT_NE(std::string(e.what()).find("events: unknown detector 'hmm'"), std::string::npos);
   }
   EventParams p;
   p.pursuit.velocity_deg_s = 0;

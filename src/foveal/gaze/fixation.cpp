@@ -62,30 +62,30 @@ const char* to_string(FixationMethod m) {
 FixationMethod parse_fixation_method(const std::string& name) {
   for (FixationMethod m : {FixationMethod::mean, FixationMethod::ivt, FixationMethod::idt, FixationMethod::ivvt})
     if (name == to_string(m)) return m;
-  fail("--fixation: unknown filter '{}' (expected ivvt, mean, ivt or idt)", name);
+  fail("fixation: unknown filter '{}' (expected ivvt, mean, ivt or idt)", name);
 }
 
 void validate(const FixationParams& p) {
-  require_positive(p.velocity_threshold_deg_s, "--ivt-threshold");
-  require_positive(p.velocity_window_s, "--velocity-window-ms");
-  require_non_negative(p.gap_fill_s, "--gap-fill-ms");
-  require_non_negative(p.merge_gap_s, "--merge-gap-ms");
-  require_non_negative(p.merge_angle_deg, "--merge-angle");
-  require_non_negative(p.min_fixation_s, "--min-fixation-ms");
+  require_positive(p.velocity_threshold_deg_s, "velocity_threshold_deg_s");
+  require_positive(p.velocity_window_s, "velocity_window_s");
+  require_non_negative(p.gap_fill_s, "gap_fill_s");
+  require_non_negative(p.merge_gap_s, "merge_gap_s");
+  require_non_negative(p.merge_angle_deg, "merge_angle_deg");
+  require_non_negative(p.min_fixation_s, "min_fixation_s");
   if (p.median_window < 1 || p.median_window > 99 || p.median_window % 2 == 0)
-    fail("--median-window: must be an odd number of samples from 1 (off) to 99, got {}", p.median_window);
-  require_positive(p.dispersion_deg, "--idt-dispersion");
-  require_non_negative(p.min_duration_s, "--idt-duration-ms");
+    fail("median_window: must be an odd number of samples from 1 (off) to 99, got {}", p.median_window);
+  require_positive(p.dispersion_deg, "dispersion_deg");
+  require_non_negative(p.min_duration_s, "min_duration_s");
   validate(p.pursuit);
   if (!(p.pursuit.velocity_deg_s < p.velocity_threshold_deg_s))
-    fail("--pursuit-velocity: must be below the saccade threshold --ivt-threshold ({} deg/s), got {}", p.velocity_threshold_deg_s,
+    fail("pursuit_velocity_deg_s: must be below the saccade threshold velocity_threshold_deg_s ({} deg/s), got {}", p.velocity_threshold_deg_s,
          p.pursuit.velocity_deg_s);
 }
 
 void validate(const PursuitParams& p) {
-  require_positive(p.velocity_deg_s, "--pursuit-velocity");
-  require_positive(p.window_s, "--pursuit-window-ms");
-  require_non_negative(p.min_s, "--min-pursuit-ms");
+  require_positive(p.velocity_deg_s, "pursuit_velocity_deg_s");
+  require_positive(p.window_s, "pursuit_window_s");
+  require_non_negative(p.min_s, "pursuit_min_s");
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -547,8 +547,8 @@ ScreenMapping make_screen_mapping(glm::ivec2 screen_px, glm::ivec2 render_px, co
   m.render_px = render_px;
   m.rect = {0, 0, screen_px.x, screen_px.y};
   if (!rect.empty()) {
-    const auto v = parse_numbers("--stimulus", rect, 4);
-    if (!(v[2] > 0 && v[3] > 0)) fail("--stimulus: width and height must be positive, got '{}'", rect);
+    const auto v = parse_numbers("stimulus", rect, 4);
+    if (!(v[2] > 0 && v[3] > 0)) fail("stimulus: width and height must be positive, got '{}'", rect);
     m.rect = {v[0], v[1], v[2], v[3]};
   }
   return m;

@@ -25,14 +25,14 @@ const char* to_string(GazeFormat format) {
 GazeFormat parse_gaze_format(const std::string& name) {
   for (GazeFormat f : {GazeFormat::automatic, GazeFormat::asc, GazeFormat::pupil, GazeFormat::tobii, GazeFormat::csv})
     if (name == to_string(f)) return f;
-  fail("--format: unknown recording format '{}' (expected auto, asc, pupil, tobii or csv)", name);
+  fail("format: unknown recording format '{}' (expected auto, asc, pupil, tobii or csv)", name);
 }
 
 EyeSelection parse_eye_selection(const std::string& name) {
   if (name == "average") return EyeSelection::average;
   if (name == "left") return EyeSelection::left;
   if (name == "right") return EyeSelection::right;
-  fail("--gaze-eye: unknown eye '{}' (expected average, left or right)", name);
+  fail("gaze_eye: unknown eye '{}' (expected average, left or right)", name);
 }
 
 size_t Recording::valid_count() const {

@@ -16,8 +16,8 @@ StepFixations parse_step_fixations(const std::string& name) {
   if (name == "idt") return StepFixations::idt;
   if (name == "tracker") return StepFixations::tracker;
   if (name == "mean")
-    fail("--fixation: 'mean' gives a gaze point per frame, not fixations; simulate steps from fixation to fixation: use ivt, idt or tracker");
-  fail("--fixation: unknown filter '{}' (nhp, ivt, idt or tracker: the recording's own fixation events)", name);
+    fail("fixation: 'mean' gives a gaze point per frame, not fixations; simulate steps from fixation to fixation: use ivt, idt or tracker");
+  fail("fixation: unknown filter '{}' (nhp, ivt, idt or tracker: the recording's own fixation events)", name);
 }
 
 const char* to_string(StepFixations source) {
@@ -37,7 +37,7 @@ FixationMethod live_filter(StepFixations source) {
     case StepFixations::idt: return FixationMethod::idt;
     case StepFixations::tracker: break;
   }
-  fail("--fixation: a live tracker sends gaze, not fixation events: use nhp, ivt or idt");
+  fail("fixation: a live tracker sends gaze, not fixation events: use nhp, ivt or idt");
 }
 
 std::vector<GazeEvent> invalid_gap_blinks(const std::vector<GazeSample>& samples) {
@@ -94,7 +94,7 @@ std::vector<GazeStep> recording_steps(const Recording& r, const GazeGeometry& ge
     }
     case StepFixations::tracker:
       if (r.fixations.empty())
-        fail("{}: --fixation tracker: the recording has no fixation events of its tracker{} (use ivt or idt)", r.source,
+        fail("{}: fixation tracker: the recording has no fixation events of its tracker{} (use ivt or idt)", r.source,
              r.has_tracker_fixations ? "" : fmt::format(" ({} exports none)", r.tracker));
       fixations = r.fixations;
       break;
@@ -119,7 +119,7 @@ std::vector<GazeStep> recording_steps(const Recording& r, const GazeGeometry& ge
 
 LiveSteps::LiveSteps(GazeSource& source, FixationMethod method, const FixationParams& params, const GazeGeometry& geometry)
     : source_(source), tracker_(method, params, geometry) {
-  if (method == FixationMethod::mean) fail("--fixation: live steps need fixations (ivt or idt), not the per-frame mean");
+  if (method == FixationMethod::mean) fail("fixation: live steps need fixations (ivt or idt), not the per-frame mean");
 }
 
 std::optional<GazeStep> LiveSteps::next(double timeout_s) {

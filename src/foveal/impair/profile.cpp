@@ -21,8 +21,8 @@ bool is_optics(const std::string& name) {
 
 double number_in(const std::string& part, const std::string& value, double lo, double hi, const char* what) {
   const auto v = text::to_number(value);
-  if (!v) fail("--eye: '{}': {} '{}' is not a number", part, what, value);
-  if (!(*v >= lo && *v <= hi)) fail("--eye: '{}': {} must be in [{}, {}], got {}", part, what, lo, hi, *v);
+  if (!v) fail("eye: '{}': {} '{}' is not a number", part, what, value);
+  if (!(*v >= lo && *v <= hi)) fail("eye: '{}': {} must be in [{}, {}], got {}", part, what, lo, hi, *v);
   return *v;
 }
 
@@ -59,7 +59,7 @@ EyeSpec parse_eye_spec(const std::string& text) {
   if (text.ends_with(".json")) return read_eye_profile(text);
   EyeSpec spec;
   spec.source = text;
-  if (text.empty()) fail("--eye: empty (expected presets such as healthy, glaucoma:0.5, cataract:0.5, cvd:deutan:0.6, field:arcuate:20, or a profile .json)");
+  if (text.empty()) fail("eye: empty (expected presets such as healthy, glaucoma:0.5, cataract:0.5, cvd:deutan:0.6, field:arcuate:20, or a profile .json)");
   std::string joined = text;  // a sign right after ':' ("hyperopia:+2") belongs to the number
   for (size_t at = joined.find(":+"); at != std::string::npos; at = joined.find(":+")) joined.erase(at + 1, 1);
   std::string optics;
@@ -87,13 +87,13 @@ EyeSpec parse_eye_spec(const std::string& text) {
       const auto c = rest.find(':');
       im.cvd.type = parse_cvd_type(rest.substr(0, c));
       const bool anomalous = im.cvd.type == CvdType::protan || im.cvd.type == CvdType::deutan || im.cvd.type == CvdType::tritan;
-      if (c != std::string::npos && !anomalous) fail("--eye: '{}': {} takes no severity", part, to_string(im.cvd.type));
+      if (c != std::string::npos && !anomalous) fail("eye: '{}': {} takes no severity", part, to_string(im.cvd.type));
       im.cvd.severity = c == std::string::npos ? 1.0 : number_in(part, rest.substr(c + 1), 0, 1, "severity");
     } else if (name == "field") {
-      if (value.empty()) fail("--eye: 'field' needs a file or a defect (field:FILE.csv, field:24-2:FILE.csv, field:arcuate:20)");
+      if (value.empty()) fail("eye: 'field' needs a file or a defect (field:FILE.csv, field:24-2:FILE.csv, field:arcuate:20)");
       add_field(im.field, value, ".", age, std::nullopt, reads);
     } else if (name == "field-view") {
-      if (value != "OD" && value != "OS" && value != "both") fail("--eye: '{}': expected field-view:OD, OS or both", part);
+      if (value != "OD" && value != "OS" && value != "both") fail("eye: '{}': expected field-view:OD, OS or both", part);
       im.field.view = value;
     } else if (name == "field-mode") {
       im.field_mode = parse_field_mode(value);
@@ -111,11 +111,11 @@ EyeSpec parse_eye_spec(const std::string& text) {
       std::string a, r;
       std::getline(v, a, ':');
       std::getline(v, r, ':');
-      if (a.empty()) fail("--eye: '{}': needs a distortion in degrees (metamorphopsia:0.5)", part);
+      if (a.empty()) fail("eye: '{}': needs a distortion in degrees (metamorphopsia:0.5)", part);
       im.metamorphopsia.amplitude_deg = number_in(part, a, 0, 5, "distortion");
       if (!r.empty()) im.metamorphopsia.radius_deg = number_in(part, r, 1, 30, "radius");
     } else {
-      fail("--eye: unknown preset '{}' in '{}' (expected healthy, glaucoma[:S], myopia:-D, hyperopia:D, presbyopia:AGE, "
+      fail("eye: unknown preset '{}' in '{}' (expected healthy, glaucoma[:S], myopia:-D, hyperopia:D, presbyopia:AGE, "
            "astigmatism:CYL[@AXIS], age:Y, cataract[:S], glare, cvd:TYPE[:S], achromatopsia, field:…, field-view:…, "
            "field-mode:…, amd[:R[:A]], metamorphopsia:A[:R], or a profile .json)", name, text);
     }

@@ -14,7 +14,7 @@ namespace foveal {
 namespace {
 
 double number(const std::string& preset, const std::string& text) {
-  return parse_numbers(fmt::format("--eye '{}'", preset), text, 1)[0];
+  return parse_numbers(fmt::format("eye '{}'", preset), text, 1)[0];
 }
 
 }  // namespace
@@ -22,7 +22,7 @@ double number(const std::string& preset, const std::string& text) {
 EyeParams parse_eye_preset(const std::string& text) {
   EyeParams eye;
   eye.preset = text;
-  if (text.empty()) fail("--eye: empty preset (expected healthy, glaucoma[:S], myopia:-D, hyperopia:+D, presbyopia:AGE, astigmatism:CYL[@AXIS])");
+  if (text.empty()) fail("eye: empty preset (expected healthy, glaucoma[:S], myopia:-D, hyperopia:+D, presbyopia:AGE, astigmatism:CYL[@AXIS])");
   // '+' joins presets; a sign right after ':' ("hyperopia:+2") belongs to the number
   std::string joined = text;
   for (size_t at = joined.find(":+"); at != std::string::npos; at = joined.find(":+")) joined.erase(at + 1, 1);
@@ -38,7 +38,7 @@ EyeParams parse_eye_preset(const std::string& text) {
       const double d = number(text, value);
       eye.refraction_d = -std::abs(d);  // "myopia:3" and "myopia:-3" both mean −3 D
     } else if (name == "hyperopia") {
-      if (value.empty()) fail("--eye: '{}': hyperopia needs dioptres, e.g. hyperopia:2", text);
+      if (value.empty()) fail("eye: '{}': hyperopia needs dioptres, e.g. hyperopia:2", text);
       eye.refraction_d = std::abs(number(text, value));
     } else if (name == "presbyopia") {
       eye.age_years = number(text, value);
@@ -47,7 +47,7 @@ EyeParams parse_eye_preset(const std::string& text) {
       eye.cylinder_d = std::abs(number(text, value.substr(0, at)));
       if (at != std::string::npos) eye.cylinder_axis_deg = number(text, value.substr(at + 1));
     } else {
-      fail("--eye: unknown preset '{}' in '{}' (expected healthy, glaucoma[:S], myopia:-D, hyperopia:D, presbyopia:AGE, astigmatism:CYL[@AXIS])",
+      fail("eye: unknown preset '{}' in '{}' (expected healthy, glaucoma[:S], myopia:-D, hyperopia:D, presbyopia:AGE, astigmatism:CYL[@AXIS])",
            name, text);
     }
   }
@@ -56,13 +56,13 @@ EyeParams parse_eye_preset(const std::string& text) {
 }
 
 void validate(const EyeParams& e) {
-  if (!(e.pupil_diameter_mm > 0 && e.pupil_diameter_mm <= 10)) fail("--pupil: diameter must be in (0, 10] mm, got {}", e.pupil_diameter_mm);
-  if (!(e.image_distance_mm > 0 && e.image_distance_mm <= 50)) fail("--image-distance: must be in (0, 50] mm, got {}", e.image_distance_mm);
-  if (!(std::abs(e.refraction_d) <= 30)) fail("--eye: refraction must be within ±30 D, got {}", e.refraction_d);
-  if (!(e.age_years >= 0 && e.age_years <= 120)) fail("--eye: age must be in [0, 120] years, got {}", e.age_years);
-  if (!(e.cylinder_d >= 0 && e.cylinder_d <= 10)) fail("--eye: cylinder must be in [0, 10] D, got {}", e.cylinder_d);
-  if (!std::isfinite(e.cylinder_axis_deg)) fail("--eye: astigmatism axis must be a number of degrees");
-  if (!(e.glaucoma >= 0 && e.glaucoma <= 1)) fail("--eye: glaucoma severity must be in [0, 1], got {}", e.glaucoma);
+  if (!(e.pupil_diameter_mm > 0 && e.pupil_diameter_mm <= 10)) fail("pupil_diameter_mm: must be in (0, 10] mm, got {}", e.pupil_diameter_mm);
+  if (!(e.image_distance_mm > 0 && e.image_distance_mm <= 50)) fail("image_distance_mm: must be in (0, 50] mm, got {}", e.image_distance_mm);
+  if (!(std::abs(e.refraction_d) <= 30)) fail("eye: refraction must be within ±30 D, got {}", e.refraction_d);
+  if (!(e.age_years >= 0 && e.age_years <= 120)) fail("eye: age must be in [0, 120] years, got {}", e.age_years);
+  if (!(e.cylinder_d >= 0 && e.cylinder_d <= 10)) fail("eye: cylinder must be in [0, 10] D, got {}", e.cylinder_d);
+  if (!std::isfinite(e.cylinder_axis_deg)) fail("eye: astigmatism axis must be a number of degrees");
+  if (!(e.glaucoma >= 0 && e.glaucoma <= 1)) fail("eye: glaucoma severity must be in [0, 1], got {}", e.glaucoma);
 }
 
 double accommodation_amplitude_d(double age) { return std::max(0.0, 18.5 - 0.3 * age); }

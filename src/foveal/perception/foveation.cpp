@@ -21,11 +21,11 @@ Display parse_display(const std::string& text, Display defaults) {
       values.push_back(std::stod(item, &used));
       if (used != item.size()) throw std::invalid_argument(item);
     } catch (const std::exception&) {
-      fail("--display: '{}' is not a number (expected W_CM,H_CM,DIST_CM[,RES_X,RES_Y])", item);
+      fail("display: '{}' is not a number (expected W_CM,H_CM,DIST_CM[,RES_X,RES_Y])", item);
     }
   }
   if (values.size() != 3 && values.size() != 5)
-    fail("--display: expected 3 or 5 comma-separated values W_CM,H_CM,DIST_CM[,RES_X,RES_Y], got {}",
+    fail("display: expected 3 or 5 comma-separated values W_CM,H_CM,DIST_CM[,RES_X,RES_Y], got {}",
          values.size());
   Display d = defaults;
   d.width_cm = values[0];
@@ -34,7 +34,7 @@ Display parse_display(const std::string& text, Display defaults) {
   if (values.size() == 5) {
     if (values[3] != std::floor(values[3]) || values[4] != std::floor(values[4]) || values[3] > 1e6 ||
         values[4] > 1e6 || values[3] < 1 || values[4] < 1)
-      fail("--display: resolution {}x{} must be whole pixels between 1 and 1000000", values[3], values[4]);
+      fail("display: resolution {}x{} must be whole pixels between 1 and 1000000", values[3], values[4]);
     d.res_x = static_cast<int>(values[3]);
     d.res_y = static_cast<int>(values[4]);
   }

@@ -83,7 +83,7 @@ const char* to_string(SsimBorder border) { return border == SsimBorder::valid ? 
 SsimBorder parse_ssim_border(const std::string& name) {
   if (name == "reflect") return SsimBorder::reflect;
   if (name == "valid") return SsimBorder::valid;
-  fail("--ssim-border: unknown convention '{}' (known: reflect, valid)", name);
+  fail("ssim_border: unknown convention '{}' (known: reflect, valid)", name);
 }
 
 std::vector<float> ssim_map(const Image& a, const Image& b, SsimBorder border) {

@@ -51,7 +51,7 @@ Image aov_image(const Frame& f, const std::string& name) {
       else {
         std::string known;
         for (const auto& n : aov_names()) known += (known.empty() ? "" : ", ") + n;
-        fail("--aov: unknown buffer '{}' (known: {})", name, known);
+        fail("aov: unknown buffer '{}' (known: {})", name, known);
       }
       image.at(x, y) = v;
     }
@@ -64,10 +64,10 @@ void write_aovs(const Frame& frame, const std::string& spec) {
   while (std::getline(stream, item, ',')) {
     const auto eq = item.find('=');
     if (eq == std::string::npos || eq == 0 || eq + 1 == item.size())
-      fail("--aov: expected NAME=FILE[,NAME=FILE…], got '{}'", item);
+      fail("aov: expected NAME=FILE[,NAME=FILE…], got '{}'", item);
     const std::string name = item.substr(0, eq), path = item.substr(eq + 1);
     const std::string ext = std::filesystem::path(path).extension().string();
-    if (ext != ".pfm" && ext != ".exr") fail("--aov: {}: float buffers are written as .pfm or .exr", path);
+    if (ext != ".pfm" && ext != ".exr") fail("aov: {}: float buffers are written as .pfm or .exr", path);
     save_image(aov_image(frame, name), path);
   }
 }

@@ -45,33 +45,33 @@ const char* to_string(RenderMode mode) { return mode == RenderMode::full ? "full
 RenderMode parse_render_mode(const std::string& name) {
   if (name == "foveated") return RenderMode::foveated;
   if (name == "full") return RenderMode::full;
-  fail("--mode: unknown mode '{}' (known: foveated, full)", name);
+  fail("mode: unknown mode '{}' (known: foveated, full)", name);
 }
 
 void validate(const RenderParams& p) {
-  if (p.width < 1 || p.height < 1) fail("--size: image must be at least 1x1, got {}x{}", p.width, p.height);
-  if (p.width > 16384 || p.height > 16384) fail("--size: {}x{} is larger than 16384x16384", p.width, p.height);
+  if (p.width < 1 || p.height < 1) fail("size: image must be at least 1x1, got {}x{}", p.width, p.height);
+  if (p.width > 16384 || p.height > 16384) fail("size: {}x{} is larger than 16384x16384", p.width, p.height);
   validate(p.display);
   const auto& f = p.foveation;
-  if (f.max_rays < 0 || f.max_rays > kMaxRaysLimit) fail("--max-rays: must be in [0, {}], got {}", kMaxRaysLimit, f.max_rays);
-  if (f.min_rays < 0 || f.min_rays > f.max_rays) fail("--min-rays: must be in [0, max-rays = {}], got {}", f.max_rays, f.min_rays);
-  if (!(f.gamma > 0) || !std::isfinite(f.gamma)) fail("--gamma: must be > 0, got {}", f.gamma);
-  if (!(f.beta >= 0) || !std::isfinite(f.beta)) fail("--beta: must be >= 0, got {}", f.beta);
-  if (!(f.ellipse_ratio > 0) || !std::isfinite(f.ellipse_ratio)) fail("--ellipse: must be > 0, got {}", f.ellipse_ratio);
-  if (p.ao_distance && !(*p.ao_distance > 0)) fail("--ao-distance: must be > 0 or inf, got {}", *p.ao_distance);
+  if (f.max_rays < 0 || f.max_rays > kMaxRaysLimit) fail("max_rays: must be in [0, {}], got {}", kMaxRaysLimit, f.max_rays);
+  if (f.min_rays < 0 || f.min_rays > f.max_rays) fail("min_rays: must be in [0, max_rays = {}], got {}", f.max_rays, f.min_rays);
+  if (!(f.gamma > 0) || !std::isfinite(f.gamma)) fail("gamma: must be > 0, got {}", f.gamma);
+  if (!(f.beta >= 0) || !std::isfinite(f.beta)) fail("beta: must be >= 0, got {}", f.beta);
+  if (!(f.ellipse_ratio > 0) || !std::isfinite(f.ellipse_ratio)) fail("ellipse_ratio: must be > 0, got {}", f.ellipse_ratio);
+  if (p.ao_distance && !(*p.ao_distance > 0)) fail("ao_distance: must be > 0 or inf, got {}", *p.ao_distance);
   if (p.ambient_constant && !(*p.ambient_constant >= 0 && std::isfinite(*p.ambient_constant)))
-    fail("--ambient-constant: must be a number >= 0 or 'auto', got {}", *p.ambient_constant);
+    fail("ambient_constant: must be a number >= 0 or 'auto', got {}", *p.ambient_constant);
   if (p.gaze_px && !(std::isfinite(p.gaze_px->x) && std::isfinite(p.gaze_px->y)))
-    fail("--gaze: must be finite render pixels");
+    fail("gaze_px: must be finite render pixels");
   const AoReuseParams& r = p.reuse;
   if (r.adaptive_min_rays < 1 || r.adaptive_min_rays > kMaxRaysLimit)
-    fail("--adaptive-min-rays: must be in [1, {}], got {}", kMaxRaysLimit, r.adaptive_min_rays);
+    fail("adaptive_min_rays: must be in [1, {}], got {}", kMaxRaysLimit, r.adaptive_min_rays);
   if (!(r.denoise_radius > 0) || r.denoise_radius > kMaxDenoiseRadius)
-    fail("--denoise-radius: must be in (0, {}] pixels, got {}", kMaxDenoiseRadius, r.denoise_radius);
-  if (r.temporal_frames < 1 || r.temporal_frames > 1024) fail("--temporal-frames: must be in [1, 1024], got {}", r.temporal_frames);
-  if (r.history_frames < 1 || r.history_frames > 4096) fail("--history-frames: must be in [1, 4096], got {}", r.history_frames);
-  if (r.target_rays < 1 || r.target_rays > kMaxRaysLimit) fail("--target-rays: must be in [1, {}], got {}", kMaxRaysLimit, r.target_rays);
-  if (!(r.tolerance > 0) || !std::isfinite(r.tolerance)) fail("--tolerance: must be > 0, got {}", r.tolerance);
+    fail("denoise_radius: must be in (0, {}] pixels, got {}", kMaxDenoiseRadius, r.denoise_radius);
+  if (r.temporal_frames < 1 || r.temporal_frames > 1024) fail("temporal_frames: must be in [1, 1024], got {}", r.temporal_frames);
+  if (r.history_frames < 1 || r.history_frames > 4096) fail("history_frames: must be in [1, 4096], got {}", r.history_frames);
+  if (r.target_rays < 1 || r.target_rays > kMaxRaysLimit) fail("target_rays: must be in [1, {}], got {}", kMaxRaysLimit, r.target_rays);
+  if (!(r.tolerance > 0) || !std::isfinite(r.tolerance)) fail("tolerance: must be > 0, got {}", r.tolerance);
 }
 
 CameraRays::CameraRays(const Camera& camera, int width, int height)

@@ -36,7 +36,7 @@ Overlays parse_overlays(const std::string& text) {
     else if (name == "budget") o.budget = true;
     else if (name == "scanpath") o.scanpath = true;
     else if (name == "sharp") o.sharp = true;
-    else fail("--overlays: unknown overlay '{}' (gaze, contours, budget, scanpath, sharp, all or none)", name);
+    else fail("overlays: unknown overlay '{}' (gaze, contours, budget, scanpath, sharp, all or none)", name);
   }
   return o;
 }

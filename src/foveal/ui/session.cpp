@@ -37,7 +37,7 @@ const char* to_string(ViewMode mode) {
 ViewMode parse_view_mode(const std::string& name) {
   for (ViewMode m : {ViewMode::foveated, ViewMode::reference, ViewMode::side_by_side, ViewMode::vision})
     if (name == to_string(m)) return m;
-  fail("--mode: unknown view mode '{}' (foveated, reference, side-by-side or vision)", name);
+  fail("mode: unknown view mode '{}' (foveated, reference, side-by-side or vision)", name);
 }
 
 void resolve(ViewSettings& s) {
@@ -48,7 +48,7 @@ void resolve(ViewSettings& s) {
   s.vision.width = s.render.width;
   s.vision.height = s.render.height;
   validate(s.vision);
-  if (!(s.diff_gain > 0)) fail("--diff-gain: must be positive, got {}", s.diff_gain);
+  if (!(s.diff_gain > 0)) fail("diff_gain: must be positive, got {}", s.diff_gain);
 }
 
 namespace {

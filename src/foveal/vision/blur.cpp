@@ -33,7 +33,7 @@ void ellipse_axes(float axis_deg, glm::vec2* along, glm::vec2* across) {
 }
 
 TapPattern make_tap_pattern(int taps) {
-  if (taps < 1 || taps > 4096) fail("--blur-taps: must be in [1, 4096], got {}", taps);
+  if (taps < 1 || taps > 4096) fail("blur_taps: must be in [1, 4096], got {}", taps);
   TapPattern t;
   t.offset.push_back({0, 0});
   const double golden = std::numbers::pi * (3.0 - std::sqrt(5.0));

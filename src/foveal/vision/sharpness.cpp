@@ -8,13 +8,13 @@
 namespace foveal {
 
 SharpnessField::SharpnessField(const Bounds& bounds, float voxel, double starvation) : starvation_(starvation) {
-  if (!(voxel > 0) || !std::isfinite(voxel)) fail("--voxel: must be a positive size, got {}", voxel);
-  if (!(starvation >= 0 && starvation < 10)) fail("--starvation: must be in [0, 10), got {}", starvation);
+  if (!(voxel > 0) || !std::isfinite(voxel)) fail("voxel: must be a positive size, got {}", voxel);
+  if (!(starvation >= 0 && starvation < 10)) fail("starvation: must be in [0, 10), got {}", starvation);
   const glm::vec3 size = bounds.hi - bounds.lo;
   if (!(size.x >= 0 && size.y >= 0 && size.z >= 0)) fail("sharpness field: empty scene bounds");
   const glm::dvec3 cells = glm::ceil(glm::dvec3(size) / double(voxel)) + 1.0;
   if (cells.x * cells.y * cells.z > double(size_t(1) << 28))
-    fail("--voxel: {} gives {:.0f} cells (more than 2^28); choose a larger voxel", voxel, cells.x * cells.y * cells.z);
+    fail("voxel: {} gives {:.0f} cells (more than 2^28); choose a larger voxel", voxel, cells.x * cells.y * cells.z);
   SharpnessFieldView& v = view_;
   v.origin = bounds.lo - glm::vec3(0.5f * voxel);
   v.voxel = voxel;

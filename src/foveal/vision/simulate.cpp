@@ -20,13 +20,13 @@ namespace foveal {
 
 void validate(const SimulateParams& p) {
   if (p.width < 8 || p.height < 8 || p.width > 16384 || p.height > 16384)
-    fail("--size: the simulation needs at least 8x8 pixels, got {}x{}", p.width, p.height);
+    fail("size: the simulation needs at least 8x8 pixels, got {}x{}", p.width, p.height);
   validate(p.eye);
-  if (p.fast_threshold < 1 || p.fast_threshold > 255) fail("--fast-threshold: must be in [1, 255], got {}", p.fast_threshold);
-  if (p.blink_every < 0) fail("--blink-every: must be zero (never) or positive, got {}", p.blink_every);
-  if (!(p.sharp_px > 0)) fail("--sharp-px: must be positive, got {}", p.sharp_px);
-  if (!(p.saccades.max_amplitude_deg > 0)) fail("--saccade-max: must be positive degrees, got {}", p.saccades.max_amplitude_deg);
-  if (!(p.saccades.min_distance_deg >= 0)) fail("--saccade-min: must be zero or positive degrees, got {}", p.saccades.min_distance_deg);
+  if (p.fast_threshold < 1 || p.fast_threshold > 255) fail("fast_threshold: must be in [1, 255], got {}", p.fast_threshold);
+  if (p.blink_every < 0) fail("blink_every: must be zero (never) or positive, got {}", p.blink_every);
+  if (!(p.sharp_px > 0)) fail("sharp_px: must be positive, got {}", p.sharp_px);
+  if (!(p.saccades.max_amplitude_deg > 0)) fail("saccade_max_deg: must be positive degrees, got {}", p.saccades.max_amplitude_deg);
+  if (!(p.saccades.min_distance_deg >= 0)) fail("saccade_min_deg: must be zero or positive degrees, got {}", p.saccades.min_distance_deg);
 }
 
 SaccadeParams saccade_params_for(const EyeParams& eye, SaccadeParams base) {

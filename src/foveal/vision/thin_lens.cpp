@@ -17,8 +17,8 @@ namespace {
 
 void check(const ThinLensParams& p) {
   if (p.width < 1 || p.height < 1) fail("thin lens: empty image");
-  if (p.samples < 1 || p.samples > 65536) fail("--lens-samples: must be in [1, 65536], got {}", p.samples);
-  if (!(p.pupil_diameter_mm > 0)) fail("--pupil: must be positive, got {}", p.pupil_diameter_mm);
+  if (p.samples < 1 || p.samples > 65536) fail("lens_samples: must be in [1, 65536], got {}", p.samples);
+  if (!(p.pupil_diameter_mm > 0)) fail("pupil_diameter_mm: must be positive, got {}", p.pupil_diameter_mm);
 }
 
 }  // namespace
