@@ -5,15 +5,7 @@
 # the CUDA backend, which is otherwise built only where a GPU driver is present)
 set -euo pipefail
 cd "$(dirname "$0")/.."
-start=$(date +%s)
-last=$start
-times=()
-phase() {  # phase NAME: the time since the last phase
-  local now
-  now=$(date +%s)
-  times+=("$1 $((now - last)) s")
-  last=$now
-}
+source scripts/timing.sh
 
 [ "${SKIP_APT:-0}" = 1 ] || scripts/deps.sh
 phase "packages"
@@ -34,6 +26,5 @@ mkdir -p out
 .venv/bin/python -c "import foveal; print('  python   import foveal: ' + foveal.__file__)"
 phase "first picture"
 
-total=$(($(date +%s) - start))
-echo "set-up took $((total / 60)) min $((total % 60)) s: $(IFS=,; echo "${times[*]}" | sed 's/,/, /g')"
+timing_summary "set-up"
 echo "pictures: out/render.png (the foveated frame), out/mask.png (its AO budget), out/acuity.png (the acuity model)"

@@ -11,16 +11,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 jobs="$(nproc)"
-start=$(date +%s)
-last=$start
-times=()
-phase() {  # phase NAME: the time since the last phase
-  local now
-  now=$(date +%s)
-  times+=("$1 $((now - last)) s")
-  echo "   ($1: $((now - last)) s)"
-  last=$now
-}
+source scripts/timing.sh
 
 echo "== Python environment (.venv; a no-op where set-up made it)"
 scripts/python-env.sh
@@ -76,6 +67,5 @@ if [ "$seconds" != 0 ]; then
   done
   phase "fuzzing"
 fi
-total=$(($(date +%s) - start))
-echo "the test command took $((total / 60)) min $((total % 60)) s: $(IFS=,; echo "${times[*]}" | sed 's/,/, /g')"
+timing_summary "the test command"
 echo "all tests passed"

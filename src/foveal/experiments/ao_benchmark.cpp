@@ -78,9 +78,147 @@ std::vector<uint64_t> tile_rays(const Frame& f) {
 
 }  // namespace
 
+void run_ao_table(const Scene& scene, const std::vector<std::string>& camera_names, const RenderParams& base, AoTableDevice& device) {
+  validate(base);
+  std::vector<Camera> cameras;
+  if (camera_names.empty()) cameras = scene.cameras.empty() ? std::vector<Camera>{default_camera(scene)} : scene.cameras;
+  for (const auto& name : camera_names) cameras.push_back(find_camera(scene, name));
+  for (const Camera& camera : cameras) {
+    RenderParams full = base;
+    full.mode = RenderMode::full;
+    const Frame reference = device.reference(camera, full);
+    for (const auto& [label, gaze] : benchmark_gazes(scene, reference)) {
+      AoTableCase c{label, gaze, base};
+      c.params.mode = RenderMode::foveated;
+      c.params.gaze_px = gaze;
+      device.gaze_case(camera, c, reference);
+    }
+  }
+}
+
+FoveaCheck fovea_check(const Frame& frame, const Frame& reference) {
+  FoveaCheck check;
+  for (size_t i = 0; i < frame.maps.quality.size(); ++i)
+    if (frame.maps.quality[i] >= 1.0f) {
+      ++check.pixels;
+      check.identical &= std::memcmp(&frame.color.pixels[3 * i], &reference.color.pixels[3 * i], 3 * sizeof(float)) == 0;
+    }
+  return check;
+}
+
+namespace {
+
+// The table on the CPU: render_frame over Embree, each camera's AO pass against raw Embree on the
+// same rays, and the cost each kept ray had in its tile of the reference.
+class CpuTable final : public AoTableDevice {
+ public:
+  CpuTable(const Scene& scene, const Tracer& tracer, const AoBenchParams& params, AoBenchResult& result,
+           const std::function<void(const std::string&)>& say)
+      : scene_(scene), tracer_(tracer), params_(params), result_(result), say_(say) {}
+
+  Frame reference(const Camera& camera, const RenderParams& full) override {
+    AoBenchCamera& cam = result_.cameras.emplace_back();
+    cam.name = camera.name;
+    Frame reference = timed_frame(tracer_, scene_, camera, full, params_.repeats, cam.full_ms);
+    cam.full_fps = 1000.0 / cam.full_ms;
+    cam.full_ao_rays_per_pixel = reference.stats.ao_rays_mean;
+    cam.full_ao_rays_per_second = reference.stats.ao_rays / (reference.stats.ao_ms / 1000.0);
+    say_(fmt::format("{}: full frame {:.0f} ms ({:.2f} fps), {:.1f} Mrays/s", camera.name, cam.full_ms, cam.full_fps,
+                     cam.full_ao_rays_per_second / 1e6));
+    measure_raw(camera, reference, cam);
+    return reference;
+  }
+
+  void gaze_case(const Camera& camera, const AoTableCase& t, const Frame& reference) override {
+    AoBenchCamera& cam = result_.cameras.back();
+    AoBenchCase c;
+    c.camera = camera.name;
+    c.gaze_label = t.label;
+    c.gaze_px = t.gaze_px;
+    const Frame frame = timed_frame(tracer_, scene_, camera, t.params, params_.repeats, c.foveated_ms);
+    c.foveated_fps = 1000.0 / c.foveated_ms;
+    c.speedup = cam.full_ms / c.foveated_ms;
+    c.speedup_pct = (c.foveated_fps - cam.full_fps) / cam.full_fps * 100.0;
+    c.ao_rays_per_pixel = frame.stats.ao_rays_mean;
+    c.ao_rays_per_second = frame.stats.ao_ms > 0 ? frame.stats.ao_rays / (frame.stats.ao_ms / 1000.0) : 0;
+    c.ao_ray_ratio = frame.stats.ao_rays > 0 ? static_cast<double>(reference.stats.ao_rays) / frame.stats.ao_rays : 0;
+    c.efficiency = c.ao_ray_ratio > 0 ? c.speedup / c.ao_ray_ratio : 0;
+    // Expected foveated time if each kept ray cost what it cost in the reference's tile
+    const std::vector<uint64_t> rays = tile_rays(frame);
+    double expected_ao_ms = 0;
+    for (size_t k = 0; k < tile_cost_.size(); ++k)
+      if (reference_tile_rays_[k] > 0) expected_ao_ms += tile_cost_[k] * rays[k] / static_cast<double>(reference_tile_rays_[k]);
+    const double fixed_ms = frame.stats.total_ms - frame.stats.ao_ms;
+    c.cost_ratio = cam.full_ms / (expected_ao_ms + fixed_ms);
+    c.cost_efficiency = c.speedup / c.cost_ratio;
+    const FoveaCheck fovea = fovea_check(frame, reference);
+    c.fovea_identical = fovea.identical;
+    c.fovea_pixels = fovea.pixels;
+    say_(fmt::format("{} / {}: {:.0f} ms ({:.2f} fps), speed-up {:.2f}x, {:.1f} rays/px, fovea {} ({} px)", camera.name,
+                     t.label, c.foveated_ms, c.foveated_fps, c.speedup, c.ao_rays_per_pixel,
+                     c.fovea_identical ? "identical" : "DIFFERS", c.fovea_pixels));
+    cam.cases.push_back(c);
+  }
+
+ private:
+  // Raw Embree throughput on the same rays (a sample of the reference's pixels), interleaved with
+  // the renderer's AO pass on the reference frame so both see the same machine load
+  void measure_raw(const Camera& camera, const Frame& reference, AoBenchCamera& cam) {
+    std::vector<Ray> sample;
+    const float ao_distance = reference.stats.ao_distance, epsilon = surface_epsilon(scene_.bounds());
+    collect_ao_rays(reference.gbuffer, reference.maps, ao_distance, epsilon, params_.render.seed, params_.raw_stride, sample);
+    std::vector<double> raw[3], pass_ms;
+    std::vector<std::vector<double>> tile_ms;  // per round, per tile
+    std::vector<float> visibility;
+    uint64_t pass_rays = 0;
+    for (int round = 0; round < std::max(5, params_.repeats); ++round) {
+      for (TraceApi api : {TraceApi::single, TraceApi::packet8, TraceApi::stream})
+        raw[static_cast<int>(api)].push_back(measure_raw_occlusion(tracer_, sample, api).rays_per_second);
+      const Timer timer;
+      AoPassHooks hooks;
+      hooks.tile_ms = &tile_ms.emplace_back();
+      pass_rays = trace_ao(tracer_, reference.gbuffer, reference.maps, ao_distance, epsilon, params_.render.seed, visibility, hooks);
+      pass_ms.push_back(timer.ms());
+    }
+    for (int api = 0; api < 3; ++api) cam.raw_rays_per_second[api] = median(raw[api]);
+    cam.ao_pass_rays_per_second = pass_rays / (median(pass_ms) / 1000.0);
+    // Cost of each tile's rays in the reference: median over rounds, scaled so tiles add up to the pass's wall time
+    const size_t tiles = tile_ms.front().size();
+    tile_cost_.assign(tiles, 0.0);
+    for (size_t t = 0; t < tiles; ++t) {
+      std::vector<double> v;
+      for (const auto& round : tile_ms) v.push_back(round[t]);
+      tile_cost_[t] = median(v);
+    }
+    double cost_sum = 0;
+    for (double c : tile_cost_) cost_sum += c;
+    for (double& c : tile_cost_) c *= median(pass_ms) / cost_sum;
+    reference_tile_rays_ = tile_rays(reference);
+    // The ratio of each round, then the median: load that drifts between rounds cancels out
+    std::vector<double> ratios;
+    const auto& raw_same_api = raw[static_cast<int>(tracer_.occlusion_api())];
+    for (size_t r = 0; r < pass_ms.size(); ++r) ratios.push_back(pass_rays / (pass_ms[r] / 1000.0) / raw_same_api[r]);
+    cam.renderer_vs_raw = median(ratios);
+    say_(fmt::format("{}: raw Embree occlusion on {} rays: single {:.1f}, packet8 {:.1f}, stream {:.1f} Mrays/s; "
+                     "renderer AO pass {:.1f} Mrays/s, renderer/raw {:.3f}",
+                     camera.name, sample.size(), cam.raw_rays_per_second[0] / 1e6, cam.raw_rays_per_second[1] / 1e6,
+                     cam.raw_rays_per_second[2] / 1e6, cam.ao_pass_rays_per_second / 1e6, cam.renderer_vs_raw));
+  }
+
+  const Scene& scene_;
+  const Tracer& tracer_;
+  const AoBenchParams& params_;
+  AoBenchResult& result_;
+  const std::function<void(const std::string&)>& say_;
+  std::vector<double> tile_cost_;               // the reference's AO cost per tile, ms
+  std::vector<uint64_t> reference_tile_rays_;   // and its rays per tile
+};
+
+}  // namespace
+
 AoBenchResult run_ao_benchmark(const Scene& scene, const Tracer& tracer, const AoBenchParams& params,
                                const std::function<void(const std::string&)>& progress) {
-  auto say = [&](const std::string& line) {
+  const std::function<void(const std::string&)> say = [&](const std::string& line) {
     if (progress) progress(line);
   };
   AoBenchResult result;
@@ -89,107 +227,8 @@ AoBenchResult run_ao_benchmark(const Scene& scene, const Tracer& tracer, const A
   result.build_ms = tracer.build_ms();
   result.threads = static_cast<int>(tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism));
   result.trace_api = to_string(tracer.occlusion_api());
-  std::vector<Camera> cameras;
-  if (params.cameras.empty()) cameras = scene.cameras.empty() ? std::vector<Camera>{default_camera(scene)} : scene.cameras;
-  for (const auto& name : params.cameras) cameras.push_back(find_camera(scene, name));
-
-  const RenderParams base = params.render;
-  validate(base);
-  for (const Camera& camera : cameras) {
-    AoBenchCamera cam;
-    cam.name = camera.name;
-    // Full-frame reference
-    RenderParams full = base;
-    full.mode = RenderMode::full;
-    const Frame reference = timed_frame(tracer, scene, camera, full, params.repeats, cam.full_ms);
-    cam.full_fps = 1000.0 / cam.full_ms;
-    cam.full_ao_rays_per_pixel = reference.stats.ao_rays_mean;
-    cam.full_ao_rays_per_second = reference.stats.ao_rays / (reference.stats.ao_ms / 1000.0);
-    say(fmt::format("{}: full frame {:.0f} ms ({:.2f} fps), {:.1f} Mrays/s", camera.name, cam.full_ms, cam.full_fps,
-                    cam.full_ao_rays_per_second / 1e6));
-
-    // Raw Embree throughput on the same rays (a sample of the reference's pixels), interleaved
-    // with the renderer's AO pass on the reference frame so both see the same machine load
-    std::vector<Ray> sample;
-    const float ao_distance = reference.stats.ao_distance, epsilon = surface_epsilon(scene.bounds());
-    collect_ao_rays(reference.gbuffer, reference.maps, ao_distance, epsilon, base.seed, params.raw_stride, sample);
-    std::vector<double> raw[3], pass_ms;
-    std::vector<std::vector<double>> tile_ms;  // per round, per tile
-    std::vector<float> visibility;
-    uint64_t pass_rays = 0;
-    for (int round = 0; round < std::max(5, params.repeats); ++round) {
-      for (TraceApi api : {TraceApi::single, TraceApi::packet8, TraceApi::stream})
-        raw[static_cast<int>(api)].push_back(measure_raw_occlusion(tracer, sample, api).rays_per_second);
-      const Timer timer;
-      AoPassHooks hooks;
-      hooks.tile_ms = &tile_ms.emplace_back();
-      pass_rays = trace_ao(tracer, reference.gbuffer, reference.maps, ao_distance, epsilon, base.seed, visibility, hooks);
-      pass_ms.push_back(timer.ms());
-    }
-    for (int api = 0; api < 3; ++api) cam.raw_rays_per_second[api] = median(raw[api]);
-    cam.ao_pass_rays_per_second = pass_rays / (median(pass_ms) / 1000.0);
-    // Cost of each tile's rays in the reference: median over rounds, scaled so tiles add up to the pass's wall time
-    const size_t tiles = tile_ms.front().size();
-    std::vector<double> tile_cost(tiles);
-    for (size_t t = 0; t < tiles; ++t) {
-      std::vector<double> v;
-      for (const auto& round : tile_ms) v.push_back(round[t]);
-      tile_cost[t] = median(v);
-    }
-    double cost_sum = 0;
-    for (double c : tile_cost) cost_sum += c;
-    for (double& c : tile_cost) c *= median(pass_ms) / cost_sum;
-    const std::vector<uint64_t> reference_tile_rays = tile_rays(reference);
-    // The ratio of each round, then the median: load that drifts between rounds cancels out
-    std::vector<double> ratios;
-    const auto& raw_same_api = raw[static_cast<int>(tracer.occlusion_api())];
-    for (size_t r = 0; r < pass_ms.size(); ++r) ratios.push_back(pass_rays / (pass_ms[r] / 1000.0) / raw_same_api[r]);
-    cam.renderer_vs_raw = median(ratios);
-    say(fmt::format("{}: raw Embree occlusion on {} rays: single {:.1f}, packet8 {:.1f}, stream {:.1f} Mrays/s; "
-                    "renderer AO pass {:.1f} Mrays/s, renderer/raw {:.3f}",
-                    camera.name, sample.size(), cam.raw_rays_per_second[0] / 1e6, cam.raw_rays_per_second[1] / 1e6,
-                    cam.raw_rays_per_second[2] / 1e6, cam.ao_pass_rays_per_second / 1e6, cam.renderer_vs_raw));
-
-    // Gaze points: centre, the four corners, and on the object
-    const auto gazes = benchmark_gazes(scene, reference);
-    for (const auto& [label, gaze] : gazes) {
-      RenderParams fov = base;
-      fov.mode = RenderMode::foveated;
-      fov.gaze_px = gaze;
-      AoBenchCase c;
-      c.camera = camera.name;
-      c.gaze_label = label;
-      c.gaze_px = gaze;
-      const Frame frame = timed_frame(tracer, scene, camera, fov, params.repeats, c.foveated_ms);
-      c.foveated_fps = 1000.0 / c.foveated_ms;
-      c.speedup = cam.full_ms / c.foveated_ms;
-      c.speedup_pct = (c.foveated_fps - cam.full_fps) / cam.full_fps * 100.0;
-      c.ao_rays_per_pixel = frame.stats.ao_rays_mean;
-      c.ao_rays_per_second = frame.stats.ao_ms > 0 ? frame.stats.ao_rays / (frame.stats.ao_ms / 1000.0) : 0;
-      c.ao_ray_ratio = frame.stats.ao_rays > 0 ? static_cast<double>(reference.stats.ao_rays) / frame.stats.ao_rays : 0;
-      c.efficiency = c.ao_ray_ratio > 0 ? c.speedup / c.ao_ray_ratio : 0;
-      // Expected foveated time if each kept ray cost what it cost in the reference's tile
-      const std::vector<uint64_t> rays = tile_rays(frame);
-      double expected_ao_ms = 0;
-      for (size_t t = 0; t < tile_cost.size(); ++t)
-        if (reference_tile_rays[t] > 0) expected_ao_ms += tile_cost[t] * rays[t] / static_cast<double>(reference_tile_rays[t]);
-      const double fixed_ms = frame.stats.total_ms - frame.stats.ao_ms;
-      c.cost_ratio = cam.full_ms / (expected_ao_ms + fixed_ms);
-      c.cost_efficiency = c.speedup / c.cost_ratio;
-      // Fovea check: every q = 1 pixel equal, bit for bit, to the reference
-      c.fovea_identical = true;
-      for (size_t i = 0; i < frame.maps.quality.size(); ++i)
-        if (frame.maps.quality[i] >= 1.0f) {
-          ++c.fovea_pixels;
-          c.fovea_identical &= std::memcmp(&frame.color.pixels[3 * i], &reference.color.pixels[3 * i], 3 * sizeof(float)) == 0;
-        }
-      say(fmt::format("{} / {}: {:.0f} ms ({:.2f} fps), speed-up {:.2f}x, {:.1f} rays/px, fovea {} ({} px)", camera.name,
-                      label, c.foveated_ms, c.foveated_fps, c.speedup, c.ao_rays_per_pixel,
-                      c.fovea_identical ? "identical" : "DIFFERS", c.fovea_pixels));
-      cam.cases.push_back(c);
-    }
-    result.cameras.push_back(std::move(cam));
-  }
+  CpuTable table(scene, tracer, params, result, say);
+  run_ao_table(scene, params.cameras, params.render, table);
   return result;
 }
 

@@ -67,6 +67,31 @@ Frame timed_frame(const Tracer& tracer, const Scene& scene, const Camera& camera
 std::vector<std::pair<std::string, glm::dvec2>> benchmark_gazes(const Scene& scene, const Frame& reference);
 glm::dvec2 object_gaze(const Scene& scene, const Frame& reference);
 
+// One harness for the table on either device (this file's CPU benchmark, gpu_benchmark.h's GPU
+// one): for each camera (`camera_names`, or every camera of the scene when empty) its full-frame
+// reference, then the gaze points of benchmark_gazes() foveated, each judged against it.
+struct AoTableCase {
+  std::string label;       // the gaze point's name
+  glm::dvec2 gaze_px{0.0};
+  RenderParams params;     // foveated at the gaze
+};
+class AoTableDevice {
+ public:
+  virtual ~AoTableDevice() = default;
+  // A camera's full-frame reference (params in full mode), measured; returns its frame.
+  virtual Frame reference(const Camera& camera, const RenderParams& full) = 0;
+  // One gaze point, measured and judged against the camera's reference frame.
+  virtual void gaze_case(const Camera& camera, const AoTableCase& c, const Frame& reference) = 0;
+};
+void run_ao_table(const Scene& scene, const std::vector<std::string>& camera_names, const RenderParams& base, AoTableDevice& device);
+// The first paper's claim about the fovea: every q = 1 pixel of a foveated frame bit-identical to
+// the full-frame reference's.
+struct FoveaCheck {
+  bool identical = true;
+  size_t pixels = 0;  // the q = 1 pixels compared
+};
+FoveaCheck fovea_check(const Frame& frame, const Frame& reference);
+
 // Run the benchmark; `progress` receives one line per finished measurement.
 AoBenchResult run_ao_benchmark(const Scene& scene, const Tracer& tracer, const AoBenchParams& params,
                                const std::function<void(const std::string&)>& progress = {});

@@ -12,6 +12,7 @@
 #include <cmath>
 #include <cstring>
 #include <fstream>
+#include <memory>
 
 namespace foveal::gpu {
 namespace {
@@ -64,9 +65,114 @@ Agreement compare_frames(const Frame& gpu, const Frame& cpu) {
   return a;
 }
 
-BenchResult run_benchmark(const Scene& scene, const BenchParams& params,
-                          const std::function<void(const std::string&)>& progress) {
-  auto say = [&](const std::string& line) {
+namespace {
+
+// The table on the GPU (gpu::Renderer, CUDA events), each case also on the CPU in the same run.
+class GpuTable final : public AoTableDevice {
+ public:
+  GpuTable(const Scene& scene, const BenchParams& params, BenchResult& result, const std::function<void(const std::string&)>& say)
+      : scene_(scene), params_(params), result_(result), say_(say), gpu_(scene) {
+    if (params.cpu) tracer_ = std::make_unique<Tracer>(scene);
+  }
+  const Renderer& gpu() const { return gpu_; }
+
+  Frame reference(const Camera& camera, const RenderParams& full) override {
+    BenchCamera& cam = result_.cameras.emplace_back();
+    cam.name = camera.name;
+    BenchCase fc;
+    fc.label = "(full frame)";
+    Frame reference = measure(camera, full, fc);
+    fc.speedup_vs_full = 1;
+    fc.ray_ratio = 1;
+    say_(fmt::format("{}: full frame GPU {:.2f} ms ({:.1f} fps), CPU {:.0f} ms, GPU/CPU speed {:.1f}x, {:.0f} Mrays/s", camera.name,
+                     fc.gpu_ms, fc.gpu_fps, fc.cpu_ms, fc.gpu_speedup_over_cpu, fc.ao_rays_per_second / 1e6));
+    cam.cases.push_back(fc);
+    // The GPU's raw occlusion rate on a sample of the reference's own AO rays
+    std::vector<Ray> sample;
+    collect_ao_rays(reference.gbuffer, reference.maps, reference.stats.ao_distance, surface_epsilon(scene_.bounds()),
+                    params_.render.seed, params_.raw_stride, sample);
+    cam.raw_sample = sample.size();
+    cam.raw_rays_per_second = gpu_.measure_occlusion_rate(sample, std::max(3, params_.repeats));
+    cam.renderer_ao_rays_per_second = fc.ao_rays_per_second;
+    cam.renderer_vs_raw = cam.raw_rays_per_second > 0 ? cam.renderer_ao_rays_per_second / cam.raw_rays_per_second : 0;
+    say_(fmt::format("{}: raw GPU occlusion {:.0f} Mrays/s on {} rays, renderer AO pass {:.0f} Mrays/s, ratio {:.2f}",
+                     camera.name, cam.raw_rays_per_second / 1e6, sample.size(), cam.renderer_ao_rays_per_second / 1e6,
+                     cam.renderer_vs_raw));
+    return reference;
+  }
+
+  void gaze_case(const Camera& camera, const AoTableCase& t, const Frame& reference) override {
+    BenchCamera& cam = result_.cameras.back();
+    const BenchCase& fc = cam.cases.front();
+    BenchCase c;
+    c.label = t.label;
+    c.gaze_px = t.gaze_px;
+    const Frame frame = measure(camera, t.params, c);
+    c.speedup_vs_full = fc.gpu_ms / c.gpu_ms;
+    c.ray_ratio = frame.stats.ao_rays > 0 ? static_cast<double>(reference.stats.ao_rays) / frame.stats.ao_rays : 0;
+    c.fovea_identical = fovea_check(frame, reference).identical;
+    say_(fmt::format("{} / {}: GPU {:.2f} ms ({:.0f} fps), CPU {:.0f} ms, GPU/CPU {:.1f}x, vs full {:.2f}x (rays {:.2f}x), "
+                     "AO balanced {:.2f} ms vs per-pixel {:.2f} ms",
+                     camera.name, t.label, c.gpu_ms, c.gpu_fps, c.cpu_ms, c.gpu_speedup_over_cpu, c.speedup_vs_full,
+                     c.ray_ratio, c.passes.ao_ms, c.per_pixel_ao_ms));
+    cam.cases.push_back(c);
+  }
+
+ private:
+  // One case: GPU frames (median), the per-pixel schedule's AO pass, the CPU frame; returns the GPU's frame
+  Frame measure(const Camera& camera, const RenderParams& p, BenchCase& c) {
+    std::vector<double> ms, ao_ms;
+    std::vector<GpuPassTimes> passes;
+    Frame frame;
+    gpu_.set_ao_schedule(AoSchedule::balanced);
+    gpu_.render(camera, p);  // warm-up (buffers, caches)
+    for (int r = 0; r < std::max(1, params_.repeats); ++r) {
+      frame = gpu_.render(camera, p);
+      ms.push_back(gpu_.last_times().total_ms);
+      passes.push_back(gpu_.last_times());
+    }
+    c.gpu_ms = median(ms);
+    c.gpu_fps = 1000.0 / c.gpu_ms;
+    const auto mid = std::min_element(passes.begin(), passes.end(), [&](const GpuPassTimes& a, const GpuPassTimes& b) {
+      return std::abs(a.total_ms - c.gpu_ms) < std::abs(b.total_ms - c.gpu_ms);
+    });
+    c.passes = *mid;
+    c.ao_rays_per_pixel = frame.stats.ao_rays_mean;
+    c.ao_rays_per_second = c.passes.ao_ms > 0 ? frame.stats.ao_rays / (c.passes.ao_ms * 1e-3) : 0;
+    gpu_.set_ao_schedule(AoSchedule::per_pixel);
+    for (int r = 0; r < std::max(1, params_.repeats); ++r) {
+      gpu_.render(camera, p, FrameOutputs::colour_only());
+      ao_ms.push_back(gpu_.last_times().ao_ms);
+    }
+    c.per_pixel_ao_ms = median(ao_ms);
+    gpu_.set_ao_schedule(AoSchedule::balanced);
+    if (tracer_) {
+      std::vector<double> cpu_ms;
+      Frame cpu_frame;
+      for (int r = 0; r < std::max(1, params_.cpu_repeats); ++r) {
+        cpu_frame = render_frame(*tracer_, scene_, camera, p);
+        cpu_ms.push_back(cpu_frame.stats.total_ms);
+      }
+      c.cpu_ms = median(cpu_ms);
+      c.cpu_fps = 1000.0 / c.cpu_ms;
+      c.gpu_speedup_over_cpu = c.cpu_ms / c.gpu_ms;
+      c.vs_cpu = compare_frames(frame, cpu_frame);
+    }
+    return frame;
+  }
+
+  const Scene& scene_;
+  const BenchParams& params_;
+  BenchResult& result_;
+  const std::function<void(const std::string&)>& say_;
+  Renderer gpu_;
+  std::unique_ptr<Tracer> tracer_;  // with params.cpu: the CPU's frames of the same cases
+};
+
+}  // namespace
+
+BenchResult run_benchmark(const Scene& scene, const BenchParams& params, const std::function<void(const std::string&)>& progress) {
+  const std::function<void(const std::string&)> say = [&](const std::string& line) {
     if (progress) progress(line);
   };
   validate(params.render);
@@ -78,109 +184,13 @@ BenchResult run_benchmark(const Scene& scene, const BenchParams& params,
   result.width = params.render.width;
   result.height = params.render.height;
   result.max_rays = params.render.foveation.max_rays;
-  Renderer gpu(scene);
+  GpuTable table(scene, params, result, say);
   result.triangles = scene.triangles.size();
-  result.bvh_nodes = gpu.bvh().nodes.size();
-  result.bvh_depth = gpu.bvh().depth;
-  result.bvh_build_ms = gpu.bvh().build_ms;
-  result.bvh_sah_cost = gpu.bvh().sah_cost;
-  std::unique_ptr<Tracer> tracer;
-  if (params.cpu) tracer = std::make_unique<Tracer>(scene);
-
-  std::vector<Camera> cameras;
-  if (params.cameras.empty()) cameras = scene.cameras.empty() ? std::vector<Camera>{default_camera(scene)} : scene.cameras;
-  for (const auto& name : params.cameras) cameras.push_back(find_camera(scene, name));
-
-  // One case: GPU frames (median), the per-pixel schedule's AO pass, the CPU frame
-  auto measure = [&](const Camera& camera, const RenderParams& p, BenchCase& c, Frame* keep) {
-    std::vector<double> ms, ao_ms;
-    std::vector<GpuPassTimes> passes;
-    Frame frame;
-    gpu.set_ao_schedule(AoSchedule::balanced);
-    gpu.render(camera, p);  // warm-up (buffers, caches)
-    for (int r = 0; r < std::max(1, params.repeats); ++r) {
-      frame = gpu.render(camera, p);
-      ms.push_back(gpu.last_times().total_ms);
-      passes.push_back(gpu.last_times());
-    }
-    c.gpu_ms = median(ms);
-    c.gpu_fps = 1000.0 / c.gpu_ms;
-    const auto mid = std::min_element(passes.begin(), passes.end(), [&](const GpuPassTimes& a, const GpuPassTimes& b) {
-      return std::abs(a.total_ms - c.gpu_ms) < std::abs(b.total_ms - c.gpu_ms);
-    });
-    c.passes = *mid;
-    c.ao_rays_per_pixel = frame.stats.ao_rays_mean;
-    c.ao_rays_per_second = c.passes.ao_ms > 0 ? frame.stats.ao_rays / (c.passes.ao_ms * 1e-3) : 0;
-    gpu.set_ao_schedule(AoSchedule::per_pixel);
-    for (int r = 0; r < std::max(1, params.repeats); ++r) {
-      gpu.render(camera, p, {false, false, false});
-      ao_ms.push_back(gpu.last_times().ao_ms);
-    }
-    c.per_pixel_ao_ms = median(ao_ms);
-    gpu.set_ao_schedule(AoSchedule::balanced);
-    if (tracer) {
-      std::vector<double> cpu_ms;
-      Frame cpu_frame;
-      for (int r = 0; r < std::max(1, params.cpu_repeats); ++r) {
-        cpu_frame = render_frame(*tracer, scene, camera, p);
-        cpu_ms.push_back(cpu_frame.stats.total_ms);
-      }
-      c.cpu_ms = median(cpu_ms);
-      c.cpu_fps = 1000.0 / c.cpu_ms;
-      c.gpu_speedup_over_cpu = c.cpu_ms / c.gpu_ms;
-      c.vs_cpu = compare_frames(frame, cpu_frame);
-    }
-    if (keep) *keep = std::move(frame);
-  };
-
-  for (const Camera& camera : cameras) {
-    BenchCamera cam;
-    cam.name = camera.name;
-    RenderParams full = params.render;
-    full.mode = RenderMode::full;
-    BenchCase fc;
-    fc.label = "(full frame)";
-    Frame reference;
-    measure(camera, full, fc, &reference);
-    fc.speedup_vs_full = 1;
-    fc.ray_ratio = 1;
-    const double full_rays = reference.stats.ao_rays;
-    say(fmt::format("{}: full frame GPU {:.2f} ms ({:.1f} fps), CPU {:.0f} ms, GPU/CPU speed {:.1f}x, {:.0f} Mrays/s", camera.name,
-                    fc.gpu_ms, fc.gpu_fps, fc.cpu_ms, fc.gpu_speedup_over_cpu, fc.ao_rays_per_second / 1e6));
-    cam.cases.push_back(fc);
-    // The GPU's raw occlusion rate on a sample of the reference's own AO rays
-    std::vector<Ray> sample;
-    collect_ao_rays(reference.gbuffer, reference.maps, reference.stats.ao_distance, surface_epsilon(scene.bounds()),
-                    params.render.seed, params.raw_stride, sample);
-    cam.raw_sample = sample.size();
-    cam.raw_rays_per_second = gpu.measure_occlusion_rate(sample, std::max(3, params.repeats));
-    cam.renderer_ao_rays_per_second = fc.ao_rays_per_second;
-    cam.renderer_vs_raw = cam.raw_rays_per_second > 0 ? cam.renderer_ao_rays_per_second / cam.raw_rays_per_second : 0;
-    say(fmt::format("{}: raw GPU occlusion {:.0f} Mrays/s on {} rays, renderer AO pass {:.0f} Mrays/s, ratio {:.2f}",
-                    camera.name, cam.raw_rays_per_second / 1e6, sample.size(), cam.renderer_ao_rays_per_second / 1e6,
-                    cam.renderer_vs_raw));
-    for (const auto& [label, gaze] : benchmark_gazes(scene, reference)) {
-      RenderParams p = params.render;
-      p.mode = RenderMode::foveated;
-      p.gaze_px = gaze;
-      BenchCase c;
-      c.label = label;
-      c.gaze_px = gaze;
-      Frame frame;
-      measure(camera, p, c, &frame);
-      c.speedup_vs_full = fc.gpu_ms / c.gpu_ms;
-      c.ray_ratio = frame.stats.ao_rays > 0 ? full_rays / frame.stats.ao_rays : 0;
-      for (size_t i = 0; i < frame.maps.quality.size(); ++i)
-        if (frame.maps.quality[i] >= 1.0f)
-          c.fovea_identical &= std::memcmp(&frame.color.pixels[3 * i], &reference.color.pixels[3 * i], 3 * sizeof(float)) == 0;
-      say(fmt::format("{} / {}: GPU {:.2f} ms ({:.0f} fps), CPU {:.0f} ms, GPU/CPU {:.1f}x, vs full {:.2f}x (rays {:.2f}x), "
-                      "AO balanced {:.2f} ms vs per-pixel {:.2f} ms",
-                      camera.name, label, c.gpu_ms, c.gpu_fps, c.cpu_ms, c.gpu_speedup_over_cpu, c.speedup_vs_full,
-                      c.ray_ratio, c.passes.ao_ms, c.per_pixel_ao_ms));
-      cam.cases.push_back(c);
-    }
-    result.cameras.push_back(std::move(cam));
-  }
+  result.bvh_nodes = table.gpu().bvh().nodes.size();
+  result.bvh_depth = table.gpu().bvh().depth;
+  result.bvh_build_ms = table.gpu().bvh().build_ms;
+  result.bvh_sah_cost = table.gpu().bvh().sah_cost;
+  run_ao_table(scene, params.cameras, params.render, table);
   return result;
 }
 
