@@ -26,23 +26,284 @@
 
 namespace foveal::app {
 
+namespace {
+
+// The command's options as typed.
+struct SimulateOptions {
+  ViewOptions view;
+  GazeOptions gaze;
+  std::string gaze_source, gaze_display = "47.5,30,60", stimulus;
+  double start = 0, live_timeout = 5;
+  bool no_gaze_blinks = false;
+  std::string eye = "healthy", save_steps = "1,4,20", output, stats, video, path;
+  int steps = 20, fast_threshold = 20, blink_every = 0, taps = 64;
+  std::optional<double> pupil, image_distance;  // not given: the profile's or presets', else the default
+  double starvation = 0.015, voxel = 0, saccade_max = 15, saccade_min = 2, ambient = 0.3;
+  uint64_t seed = 1;
+  bool quiet = false;
+  std::string device = "auto";
+  bool steps_given = false;  // --steps was on the command line (else a recording gives every fixation)
+};
+
+// Options → the simulation's parameters, all checked before any work.
+SimulateParams simulate_params(const SimulateOptions& o, ComputeDevice device) {
+  SimulateParams p;
+  p.cuda = device == ComputeDevice::cuda;
+  const glm::ivec2 size = parse_size("--size", o.view.size);
+  p.width = size.x;
+  p.height = size.y;
+  const EyeSpec eye_spec = resolve_eye(o.eye, {o.pupil, o.image_distance});
+  p.eye = eye_spec.eye;
+  p.impair = eye_spec.impair;
+  p.starvation = o.starvation;
+  p.voxel = static_cast<float>(o.voxel);
+  if (o.voxel < 0) fail("--voxel: must be zero (automatic) or positive, got {}", o.voxel);
+  p.blink_every = o.blink_every;
+  p.fast_threshold = o.fast_threshold;
+  p.saccades.max_amplitude_deg = o.saccade_max;
+  p.saccades.min_distance_deg = o.saccade_min;
+  p.blur.taps = o.taps;
+  p.ambient = static_cast<float>(o.ambient);
+  p.seed = o.seed;
+  validate(p);
+  return p;
+}
+
+// --save-steps: the steps whose perceived image is saved (`all`: every step).
+struct SavedSteps {
+  bool all = false;
+  std::set<int> steps;
+  bool operator()(int k) const { return all || steps.count(k); }
+  bool any() const { return all || !steps.empty(); }
+};
+SavedSteps saved_steps(const std::string& text) {
+  SavedSteps save;
+  save.all = text == "all";
+  if (!save.all && !text.empty())
+    for (double v : parse_numbers("--save-steps", text)) {
+      if (v < 1 || v != std::floor(v)) fail("--save-steps: steps are whole numbers from 1, got {}", v);
+      save.steps.insert(static_cast<int>(v));
+    }
+  return save;
+}
+
+// Real gaze (--gaze): the fixations of a recording, or a live tracker's, mapped into render pixels.
+struct GazeSteps {
+  bool live = false;
+  std::optional<GazeGeometry> geometry;
+  std::optional<ScreenMapping> mapping;
+  std::vector<GazeStep> recorded;
+  std::unique_ptr<PupilSource> tracker;
+  std::unique_ptr<LiveSteps> steps;
+  std::string summary;
+  // The next step's fixation (nullopt: the live tracker stopped, `why` says why)
+  std::optional<GazeStep> next(int k, double timeout_s, std::string& why) {
+    if (!steps) return recorded[size_t(k - 1)];
+    std::optional<GazeStep> g = steps->next(timeout_s);
+    if (!g) why = steps->why();
+    return g;
+  }
+};
+
+// Opens --gaze; for a recording `step_count` becomes its fixation count unless --steps asked for fewer.
+std::unique_ptr<GazeSteps> open_gaze(const SimulateOptions& o, const SimulateParams& p, int& step_count) {
+  auto g = std::make_unique<GazeSteps>();
+  g->live = o.gaze_source.rfind("pupil://", 0) == 0;
+  if (!g->live && o.gaze_source.find("://") != std::string::npos)
+    fail("--gaze: unknown live source '{}' (live trackers: pupil://HOST:PORT[?surface=NAME])", o.gaze_source);
+  const StepFixations from = parse_step_fixations(o.gaze.fixation);
+  // A live tracker's causal filter, decided before connecting (`tracker` is refused); unused for recordings
+  const FixationMethod live_method = g->live ? live_filter(from) : FixationMethod::ivt;
+  if (!(o.start >= 0) || !std::isfinite(o.start)) fail("--start: must be zero or positive seconds, got {}", o.start);
+  if (!(o.live_timeout > 0)) fail("--live-timeout: must be positive seconds, got {}", o.live_timeout);
+  const Display display = parse_display(o.gaze_display, Display{});
+  const ReadOptions read = resolve_read_options(o.gaze, display);
+  const FixationParams fixation = resolve_fixation_params(o.gaze);
+  if (g->live) {
+    g->tracker = std::make_unique<PupilSource>(o.gaze_source, read.screen_px, read.min_confidence);
+    g->geometry.emplace(display, g->tracker->screen_px());
+    g->steps = std::make_unique<LiveSteps>(*g->tracker, live_method, fixation, *g->geometry);
+    g->summary = fmt::format("live {} ({} filter)", o.gaze_source, to_string(from));
+  } else {
+    const Recording recording = read_recording_warned(o.gaze_source, read);
+    if (recording.samples.empty()) fail("{}: no samples", recording.source);
+    g->geometry.emplace(display, recording.screen_px);
+    const double t0 = recording.samples.front().t_s + o.start;
+    for (const GazeStep& step : recording_steps(recording, *g->geometry, from, fixation))
+      if (step.start_s >= t0) g->recorded.push_back(step);
+    if (g->recorded.empty())
+      fail("{}: no fixations{} ({} filter)", recording.source, o.start > 0 ? fmt::format(" after --start {} s", o.start) : "",
+           to_string(from));
+    // Every fixation unless --steps asks for fewer
+    if (!o.steps_given || step_count > int(g->recorded.size())) step_count = static_cast<int>(g->recorded.size());
+    const auto blinks = std::count_if(g->recorded.begin(), g->recorded.begin() + step_count, [](const GazeStep& s) { return s.blink_before; });
+    g->summary = fmt::format("{} ({} fixations by {}, {} blinks{})", recording.source, g->recorded.size(), to_string(from),
+                             o.no_gaze_blinks ? 0 : blinks, o.no_gaze_blinks ? " ignored" : "");
+  }
+  g->mapping = make_screen_mapping(g->geometry->screen_px(), {p.width, p.height}, o.stimulus);
+  return g;
+}
+
+// What the steps gave.
+struct SimulateRun {
+  std::vector<StepStats> steps;
+  std::vector<glm::vec2> fixations;
+  std::vector<GazeStep> gaze_steps;
+  std::string stopped;  // why a live tracker stopped the run early
+  double path_px() const {
+    double px = 0;
+    for (size_t k = 1; k < fixations.size(); ++k) px += glm::length(fixations[k] - fixations[k - 1]);
+    return px;
+  }
+  // The median over steps of a stage's time (of the impairments' with `impair`)
+  double median_ms(double StepStats::*field) const {
+    std::vector<double> v;
+    for (const StepStats& s : steps) v.push_back(s.*field);
+    return median(v);
+  }
+  double median_ms(double ImpairTimes::*field) const {
+    std::vector<double> v;
+    for (const StepStats& s : steps) v.push_back(s.impair.*field);
+    return median(v);
+  }
+};
+
+// The steps, each saved as asked, with a progress line on a terminal.
+SimulateRun run_steps(const SimulateOptions& o, VisionSimulation& sim, const Camera& camera, const CameraPath* path,
+                      GazeSteps* gaze, int step_count, const SavedSteps& save, const std::filesystem::path& dir) {
+  const bool show = !o.quiet && isatty(fileno(stderr));
+  const Timer clock;
+  SimulateRun run;
+  for (int k = 1; k <= step_count; ++k) {
+    std::optional<glm::vec2> fixation;
+    if (gaze) {
+      const std::optional<GazeStep> g = gaze->next(k, o.live_timeout, run.stopped);
+      if (!g) break;
+      if (g->blink_before && !o.no_gaze_blinks) sim.blink_before_next_step();
+      fixation = glm::vec2(gaze->mapping->to_render(g->screen_px));
+      run.gaze_steps.push_back(*g);
+    }
+    const StepStats s = sim.step(path ? path->at(k) : camera, fixation);
+    run.steps.push_back(s);
+    run.fixations.push_back(s.focus_px);
+    if (save(k)) save_image(sim.perceived(), (dir / fmt::format("step_{:04d}.png", k)).string());
+    if (!o.video.empty()) save_image(sim.perceived(), (dir / fmt::format("frame_{:05d}.png", k - 1)).string());
+    if (show && clock.ms() > 1000)
+      fmt::print(stderr, "\r  step {}/{}  sharp {:.1f}%  {:.0f} ms/step ", k, step_count, 100 * s.sharp_fraction, s.total_ms);
+  }
+  if (show && clock.ms() > 1000) fmt::print(stderr, "\r{:70}\r", "");
+  if (run.steps.empty()) fail("{}", run.stopped);
+  return run;
+}
+
+// The last step's images, the scan path and the video.
+void write_pictures(const SimulateOptions& o, const VisionSimulation& sim, const SimulateRun& run, const std::filesystem::path& dir) {
+  save_image(sim.color(), (dir / "sharp.png").string());
+  save_image(sim.perceived(), (dir / "perceived.png").string());
+  std::vector<glm::vec2> corner_points;
+  for (const Corner& c : sim.corners()) corner_points.push_back(c.px);
+  write_fixation_picture(sim.color(), run.fixations, corner_points, (dir / "scanpath.png").string());
+  if (!o.video.empty()) encode_video((dir / "frame_%05d.png").string(), 10, o.video);
+}
+
+// --stats: the run, the eye, the field, median stage times and every step.
+nlohmann::json simulate_stats_json(const SimulateOptions& o, const SimulateParams& p, const Scene& scene, const Tracer& tracer,
+                                   const VisionSimulation& sim, const SimulateRun& run, int threads, ComputeDevice device,
+                                   bool live) {
+  nlohmann::json j;
+  j["width"] = p.width;
+  j["height"] = p.height;
+  j["eye"] = o.eye;
+  j["optics"] = optics_json(p.eye);
+  j["impairments"] = p.impair.describe();
+  j["seed"] = p.seed;
+  j["threads"] = threads;
+  j["device"] = to_string(device);
+  j["scene"] = {{"source", scene.source}, {"triangles", tracer.triangles()}, {"build_ms", tracer.build_ms()}};
+  j["pixels_per_degree"] = sim.pixels_per_degree();
+  j["field"] = {{"voxel", sim.field().voxel()}, {"cells", sim.field().cells()}, {"starvation", p.starvation}};
+  j["time_ms"] = {{"trace", run.median_ms(&StepStats::trace_ms)},
+                  {"features", run.median_ms(&StepStats::features_ms)},
+                  {"sharpness", run.median_ms(&StepStats::sharpness_ms)},
+                  {"blur", run.median_ms(&StepStats::blur_ms)},
+                  {"impairments", run.median_ms(&ImpairTimes::total_ms)},
+                  {"media", run.median_ms(&ImpairTimes::media_ms)},
+                  {"retina", run.median_ms(&ImpairTimes::field_ms)},
+                  {"colour", run.median_ms(&ImpairTimes::colour_ms)},
+                  {"total", run.median_ms(&StepStats::total_ms)},
+                  {"statistic", "median over steps"}};
+  j["scan_path_px"] = run.path_px();
+  const bool gaze = !o.gaze_source.empty();
+  if (gaze) j["gaze"] = {{"source", o.gaze_source}, {"live", live}, {"fixation", o.gaze.fixation}, {"stopped", run.stopped}};
+  for (const StepStats& s : run.steps) {
+    j["steps"].push_back(step_stats_json(s));
+    if (gaze) {
+      const GazeStep& g = run.gaze_steps[size_t(s.step - 1)];
+      j["steps"].back()["gaze"] = {{"t_s", g.start_s}, {"duration_s", g.duration_s}, {"screen_px", {g.screen_px.x, g.screen_px.y}},
+                                   {"blink_before", g.blink_before}};
+    }
+  }
+  return j;
+}
+
+// The summary on stdout.
+void print_summary(const SimulateOptions& o, const SimulateParams& p, const Scene& scene, const Tracer& tracer, const Camera& camera,
+                   const CameraPath* path, const SimulateRun& run, int threads, ComputeDevice device, const GazeSteps* gaze,
+                   const SavedSteps& save) {
+  const FocusRange range = focus_range(p.eye);
+  fmt::print("foveal simulate: {} ({} triangles), camera '{}', {}x{}, eye {} (focus {:.2f} m … {}), {} steps, {} threads\n",
+             scene.source, tracer.triangles(), path ? "path " + path->name : camera.name, p.width, p.height, o.eye, range.near_point_m(),
+             std::isfinite(range.far_point_m()) ? fmt::format("{:.2f} m", range.far_point_m()) : "infinity", run.steps.size(), threads);
+  fmt::print("  device   {}\n", describe_device(device));
+  if (p.impair.any())
+    fmt::print("  impaired {} ({:.1f} ms per step; on the CPU{})\n", p.impair.describe(), run.median_ms(&ImpairTimes::total_ms),
+               p.cuda ? ", after the GPU's passes" : "");
+  if (gaze) fmt::print("  gaze     {}\n", gaze->summary);
+  fmt::print("  sharp    {:.1f}% of the image after the last step; scan path {:.0f} px over {} fixations\n",
+             100 * run.steps.back().sharp_fraction, run.path_px(), run.fixations.size());
+  fmt::print("  time     per step (median): trace {:.1f} ms, features {:.1f} ms, sharpness {:.1f} ms, blur {:.1f} ms, total {:.1f} ms\n",
+             run.median_ms(&StepStats::trace_ms), run.median_ms(&StepStats::features_ms), run.median_ms(&StepStats::sharpness_ms),
+             run.median_ms(&StepStats::blur_ms), run.median_ms(&StepStats::total_ms));
+  fmt::print("  wrote    {}/perceived.png, sharp.png, scanpath.png{}{}\n", o.output, save.any() ? ", step_NNNN.png" : "",
+             o.stats.empty() ? "" : ", " + o.stats);
+}
+
+int run_simulate(const SimulateOptions& o) {
+  const ThreadScope threads(o.view.threads);
+  const ComputeDevice device = choose_device(o.device);
+  const SimulateParams p = simulate_params(o, device);
+  const SavedSteps save = saved_steps(o.save_steps);
+  int step_count = o.steps;
+  std::unique_ptr<GazeSteps> gaze;
+  if (!o.gaze_source.empty()) gaze = open_gaze(o, p, step_count);
+
+  const Scene scene = load_scene(o.view.scene);
+  const Camera camera = resolve_camera(scene, o.view);
+  const CameraPath* path = o.path.empty() ? nullptr : &find_camera_path(scene, o.path);
+  const Tracer tracer(scene);
+  VisionSimulation sim(tracer, scene, p);
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  fs::create_directories(o.output, ec);
+  if (ec) fail("{}: cannot create the output folder: {}", o.output, ec.message());
+  const fs::path dir(o.output);
+
+  const SimulateRun run = run_steps(o, sim, camera, path, gaze.get(), step_count, save, dir);
+  write_pictures(o, sim, run, dir);
+  if (!o.stats.empty())
+    write_json_file(o.stats, simulate_stats_json(o, p, scene, tracer, sim, run, threads.threads(), device, gaze && gaze->live));
+  // A live tracker that went away: everything so far is written; say why it stopped
+  if (!run.stopped.empty()) fail("{} (stopped after {} steps; the outputs so far are written)", run.stopped, run.steps.size());
+  if (!o.quiet) print_summary(o, p, scene, tracer, camera, path, run, threads.threads(), device, gaze.get(), save);
+  return 0;
+}
+
+}  // namespace
+
 std::function<int()> add_simulate_command(CLI::App& app) {
   auto* cmd = app.add_subcommand("simulate", "simulate human vision over time: fixations, accommodation, a sharpness field that remembers, variable blur");
-  struct Options {
-    ViewOptions view;
-    GazeOptions gaze;
-    std::string gaze_source, gaze_display = "47.5,30,60", stimulus;
-    double start = 0, live_timeout = 5;
-    bool no_gaze_blinks = false;
-    std::string eye = "healthy", save_steps = "1,4,20", output, stats, video, path;
-    int steps = 20, fast_threshold = 20, blink_every = 0, taps = 64;
-    std::optional<double> pupil, image_distance;  // not given: the profile's or presets', else the default
-    double starvation = 0.015, voxel = 0, saccade_max = 15, saccade_min = 2, ambient = 0.3;
-    uint64_t seed = 1;
-    bool quiet = false;
-    std::string device = "auto";
-  };
-  auto o = std::make_shared<Options>();
+
+  auto o = std::make_shared<SimulateOptions>();
   o->view.size = "1024x768";
   o->view.eye_option = "--from";
   o->view.display_option = false;
@@ -85,196 +346,8 @@ std::function<int()> add_simulate_command(CLI::App& app) {
   add_device_option(*cmd, o->device);
 
   return [o, steps_option] {
-    const ThreadScope threads(o->view.threads);
-    SimulateParams p;
-    const ComputeDevice device = choose_device(o->device);
-    p.cuda = device == ComputeDevice::cuda;
-    const glm::ivec2 size = parse_size("--size", o->view.size);
-    p.width = size.x;
-    p.height = size.y;
-    const EyeSpec eye_spec = resolve_eye(o->eye, {o->pupil, o->image_distance});
-    p.eye = eye_spec.eye;
-    p.impair = eye_spec.impair;
-    p.starvation = o->starvation;
-    p.voxel = static_cast<float>(o->voxel);
-    if (o->voxel < 0) fail("--voxel: must be zero (automatic) or positive, got {}", o->voxel);
-    p.blink_every = o->blink_every;
-    p.fast_threshold = o->fast_threshold;
-    p.saccades.max_amplitude_deg = o->saccade_max;
-    p.saccades.min_distance_deg = o->saccade_min;
-    p.blur.taps = o->taps;
-    p.ambient = static_cast<float>(o->ambient);
-    p.seed = o->seed;
-    validate(p);
-    std::set<int> save;
-    const bool save_all = o->save_steps == "all";
-    if (!save_all && !o->save_steps.empty())
-      for (double v : parse_numbers("--save-steps", o->save_steps)) {
-        if (v < 1 || v != std::floor(v)) fail("--save-steps: steps are whole numbers from 1, got {}", v);
-        save.insert(static_cast<int>(v));
-      }
-
-    int step_count = o->steps;
-    // Real gaze: the fixations of a recording, or a live tracker's
-    const bool gaze = !o->gaze_source.empty();
-    const bool live = o->gaze_source.rfind("pupil://", 0) == 0;
-    std::optional<GazeGeometry> geometry;
-    std::optional<ScreenMapping> mapping;
-    std::vector<GazeStep> recorded;
-    std::unique_ptr<PupilSource> tracker;
-    std::unique_ptr<LiveSteps> live_steps;
-    std::string gaze_summary;
-    if (gaze) {
-      if (!live && o->gaze_source.find("://") != std::string::npos)
-        fail("--gaze: unknown live source '{}' (live trackers: pupil://HOST:PORT[?surface=NAME])", o->gaze_source);
-      const StepFixations from = parse_step_fixations(o->gaze.fixation);
-      // A live tracker's causal filter, decided before connecting (`tracker` is refused); unused for recordings
-      const FixationMethod live_method = live ? live_filter(from) : FixationMethod::ivt;
-      if (!(o->start >= 0) || !std::isfinite(o->start)) fail("--start: must be zero or positive seconds, got {}", o->start);
-      if (!(o->live_timeout > 0)) fail("--live-timeout: must be positive seconds, got {}", o->live_timeout);
-      const Display display = parse_display(o->gaze_display, Display{});
-      const ReadOptions read = resolve_read_options(o->gaze, display);
-      const FixationParams fixation = resolve_fixation_params(o->gaze);
-      if (live) {
-        tracker = std::make_unique<PupilSource>(o->gaze_source, read.screen_px, read.min_confidence);
-        geometry.emplace(display, tracker->screen_px());
-        live_steps = std::make_unique<LiveSteps>(*tracker, live_method, fixation, *geometry);
-        gaze_summary = fmt::format("live {} ({} filter)", o->gaze_source, to_string(from));
-      } else {
-        const Recording recording = read_recording_warned(o->gaze_source, read);
-        if (recording.samples.empty()) fail("{}: no samples", recording.source);
-        geometry.emplace(display, recording.screen_px);
-        const double t0 = recording.samples.front().t_s + o->start;
-        for (const GazeStep& g : recording_steps(recording, *geometry, from, fixation))
-          if (g.start_s >= t0) recorded.push_back(g);
-        if (recorded.empty())
-          fail("{}: no fixations{} ({} filter)", recording.source, o->start > 0 ? fmt::format(" after --start {} s", o->start) : "",
-               to_string(from));
-        // Every fixation unless --steps asks for fewer
-        if (steps_option->count() == 0 || step_count > int(recorded.size())) step_count = static_cast<int>(recorded.size());
-        const auto blinks = std::count_if(recorded.begin(), recorded.begin() + step_count, [](const GazeStep& g) { return g.blink_before; });
-        gaze_summary = fmt::format("{} ({} fixations by {}, {} blinks{})", recording.source, recorded.size(), to_string(from),
-                                   o->no_gaze_blinks ? 0 : blinks, o->no_gaze_blinks ? " ignored" : "");
-      }
-      mapping = make_screen_mapping(geometry->screen_px(), {p.width, p.height}, o->stimulus);
-    }
-
-    const Scene scene = load_scene(o->view.scene);
-    const Camera camera = resolve_camera(scene, o->view);
-    const CameraPath* path = o->path.empty() ? nullptr : &find_camera_path(scene, o->path);
-    const Tracer tracer(scene);
-    VisionSimulation sim(tracer, scene, p);
-
-    namespace fs = std::filesystem;
-    std::error_code ec;
-    fs::create_directories(o->output, ec);
-    if (ec) fail("{}: cannot create the output folder: {}", o->output, ec.message());
-    const fs::path dir(o->output);
-    const bool show = !o->quiet && isatty(fileno(stderr));
-    const Timer clock;
-    std::vector<StepStats> steps;
-    std::vector<glm::vec2> fixations;
-    std::vector<GazeStep> gaze_steps;
-    std::string stopped;
-    for (int k = 1; k <= step_count; ++k) {
-      std::optional<glm::vec2> fixation;
-      if (gaze) {
-        std::optional<GazeStep> g;
-        if (live_steps) g = live_steps->next(o->live_timeout);
-        else g = recorded[k - 1];
-        if (!g) {
-          stopped = live_steps->why();
-          break;
-        }
-        if (g->blink_before && !o->no_gaze_blinks) sim.blink_before_next_step();
-        fixation = glm::vec2(mapping->to_render(g->screen_px));
-        gaze_steps.push_back(*g);
-      }
-      const StepStats s = sim.step(path ? path->at(k) : camera, fixation);
-      steps.push_back(s);
-      fixations.push_back(s.focus_px);
-      if (save_all || save.count(k)) save_image(sim.perceived(), (dir / fmt::format("step_{:04d}.png", k)).string());
-      if (!o->video.empty()) save_image(sim.perceived(), (dir / fmt::format("frame_{:05d}.png", k - 1)).string());
-      if (show && clock.ms() > 1000)
-        fmt::print(stderr, "\r  step {}/{}  sharp {:.1f}%  {:.0f} ms/step ", k, step_count, 100 * s.sharp_fraction, s.total_ms);
-    }
-    if (show && clock.ms() > 1000) fmt::print(stderr, "\r{:70}\r", "");
-    if (steps.empty()) fail("{}", stopped);
-    save_image(sim.color(), (dir / "sharp.png").string());
-    save_image(sim.perceived(), (dir / "perceived.png").string());
-    std::vector<glm::vec2> corner_points;
-    for (const Corner& c : sim.corners()) corner_points.push_back(c.px);
-    write_fixation_picture(sim.color(), fixations, corner_points, (dir / "scanpath.png").string());
-    if (!o->video.empty()) encode_video((dir / "frame_%05d.png").string(), 10, o->video);
-
-    auto stage = [&](double StepStats::*field) {
-      std::vector<double> v;
-      for (const StepStats& s : steps) v.push_back(s.*field);
-      return median(v);
-    };
-    auto stage_impair = [&](double ImpairTimes::*field) {
-      std::vector<double> v;
-      for (const StepStats& s : steps) v.push_back(s.impair.*field);
-      return median(v);
-    };
-    double path_px = 0;
-    for (size_t k = 1; k < fixations.size(); ++k) path_px += glm::length(fixations[k] - fixations[k - 1]);
-    if (!o->stats.empty()) {
-      nlohmann::json j;
-      j["width"] = p.width;
-      j["height"] = p.height;
-      j["eye"] = o->eye;
-      j["optics"] = optics_json(p.eye);
-      j["impairments"] = p.impair.describe();
-      j["seed"] = p.seed;
-      j["threads"] = threads.threads();
-      j["device"] = to_string(device);
-      j["scene"] = {{"source", scene.source}, {"triangles", tracer.triangles()}, {"build_ms", tracer.build_ms()}};
-      j["pixels_per_degree"] = sim.pixels_per_degree();
-      j["field"] = {{"voxel", sim.field().voxel()}, {"cells", sim.field().cells()}, {"starvation", p.starvation}};
-      j["time_ms"] = {{"trace", stage(&StepStats::trace_ms)},
-                      {"features", stage(&StepStats::features_ms)},
-                      {"sharpness", stage(&StepStats::sharpness_ms)},
-                      {"blur", stage(&StepStats::blur_ms)},
-                      {"impairments", stage_impair(&ImpairTimes::total_ms)},
-                      {"media", stage_impair(&ImpairTimes::media_ms)},
-                      {"retina", stage_impair(&ImpairTimes::field_ms)},
-                      {"colour", stage_impair(&ImpairTimes::colour_ms)},
-                      {"total", stage(&StepStats::total_ms)},
-                      {"statistic", "median over steps"}};
-      j["scan_path_px"] = path_px;
-      if (gaze) j["gaze"] = {{"source", o->gaze_source}, {"live", live}, {"fixation", o->gaze.fixation}, {"stopped", stopped}};
-      for (const StepStats& s : steps) {
-        j["steps"].push_back(step_stats_json(s));
-        if (gaze) {
-          const GazeStep& g = gaze_steps[size_t(s.step - 1)];
-          j["steps"].back()["gaze"] = {{"t_s", g.start_s}, {"duration_s", g.duration_s}, {"screen_px", {g.screen_px.x, g.screen_px.y}},
-                                       {"blink_before", g.blink_before}};
-        }
-      }
-      write_json_file(o->stats, j);
-    }
-    // A live tracker that went away: everything so far is written; say why it stopped
-    if (!stopped.empty()) fail("{} (stopped after {} steps; the outputs so far are written)", stopped, steps.size());
-    if (o->quiet) return 0;
-    const FocusRange range = focus_range(p.eye);
-    fmt::print("foveal simulate: {} ({} triangles), camera '{}', {}x{}, eye {} (focus {:.2f} m … {}), {} steps, {} threads\n",
-               scene.source, tracer.triangles(), path ? "path " + path->name : camera.name, p.width, p.height, o->eye, range.near_point_m(),
-               std::isfinite(range.far_point_m()) ? fmt::format("{:.2f} m", range.far_point_m()) : "infinity", steps.size(),
-               threads.threads());
-    fmt::print("  device   {}\n", describe_device(device));
-    if (p.impair.any())
-      fmt::print("  impaired {} ({:.1f} ms per step; on the CPU{})\n", p.impair.describe(), stage_impair(&ImpairTimes::total_ms),
-                 p.cuda ? ", after the GPU's passes" : "");
-    if (gaze) fmt::print("  gaze     {}\n", gaze_summary);
-    fmt::print("  sharp    {:.1f}% of the image after the last step; scan path {:.0f} px over {} fixations\n",
-               100 * steps.back().sharp_fraction, path_px, fixations.size());
-    fmt::print("  time     per step (median): trace {:.1f} ms, features {:.1f} ms, sharpness {:.1f} ms, blur {:.1f} ms, total {:.1f} ms\n",
-               stage(&StepStats::trace_ms), stage(&StepStats::features_ms), stage(&StepStats::sharpness_ms),
-               stage(&StepStats::blur_ms), stage(&StepStats::total_ms));
-    fmt::print("  wrote    {}/perceived.png, sharp.png, scanpath.png{}{}\n", o->output, save.empty() && !save_all ? "" : ", step_NNNN.png",
-               o->stats.empty() ? "" : ", " + o->stats);
-    return 0;
+    o->steps_given = steps_option->count() > 0;
+    return run_simulate(*o);
   };
 }
 
