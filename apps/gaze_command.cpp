@@ -111,17 +111,189 @@ FixationParams resolve_fixation_params(const GazeOptions& o) {
   return p;
 }
 
+namespace {
+
+// The command's options as typed.
+struct GazeCommandOptions {
+  std::string recording, json, samples, scanpath = "scanpath.png", display = "47.5,30,60", events, samples_out, events_out, evaluate,
+      coder2;
+  GazeOptions gaze;
+  double filter_window_ms = 6, detection_window_ms = 20, ek_lambda = 6,
+         blink_flank_ms = 100, max_blink_ms = 2000;
+  bool no_scanpath = false, quiet = false;
+};
+
+// --events: the labels of every sample (a detector's, or another tool's from a file), scored
+// against an expert coder's with --evaluate (and a second coder's ceiling with --coder2).
+struct EventsRun {
+  std::optional<EventDetection> detection;
+  std::string detector;  // the method's name (auto resolved), or file:PATH
+  double detect_ms = 0;
+  std::optional<Evaluation> evaluation, ceiling;
+};
+
+EventsRun detect_and_score(const GazeCommandOptions& o, const Recording& recording, const Display& display, const FixationParams& params) {
+  EventsRun run;
+  if (o.events.empty()) {
+    if (!o.samples_out.empty() || !o.evaluate.empty() || !o.events_out.empty()) fail("--samples-out, --events-out and --evaluate need --events");
+    if (!o.coder2.empty() && o.evaluate.empty()) fail("--coder2 needs --evaluate (the first coder's labels)");
+    return run;
+  }
+  require_positive(o.filter_window_ms, "--filter-window-ms");
+  require_non_negative(o.detection_window_ms, "--detection-window-ms");
+  require_non_negative(o.blink_flank_ms, "--blink-flank-ms");
+  require_positive(o.max_blink_ms, "--max-blink-ms");
+  EventParams ep;
+  ep.pursuit = params.pursuit;  // the options --fixation ivvt reads too
+  ep.filter_window_s = o.filter_window_ms / 1000;
+  ep.detection_window_s = o.detection_window_ms / 1000;
+  ep.ek_lambda = o.ek_lambda;
+  ep.blink_flank_s = o.blink_flank_ms / 1000;
+  ep.max_blink_s = o.max_blink_ms / 1000;
+  auto read_labels = [&](const std::string& path) {  // labels of exactly this recording's samples
+    LabelFile file = read_label_file(path);
+    if (file.label.size() != recording.samples.size())
+      fail("{}: {} labelled samples, but the recording has {} samples", path, file.label.size(), recording.samples.size());
+    return file;
+  };
+  const auto started = std::chrono::steady_clock::now();
+  const GazeGeometry geometry(display, recording.screen_px);
+  if (o.events.rfind("file:", 0) == 0)  // another tool's labels of these samples: listed and scored like a detector's
+    run.detection = events_from_labels(recording, geometry, read_labels(o.events.substr(5)).label);
+  else
+    run.detection = detect_events(recording, geometry, parse_event_method(o.events), ep, params);
+  run.detect_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - started).count();
+  run.detector = run.detection->method ? to_string(*run.detection->method) : o.events;
+  if (!o.evaluate.empty()) {
+    std::vector<double> t(recording.samples.size());
+    for (size_t i = 0; i < t.size(); ++i) t[i] = recording.samples[i].t_s;
+    const LabelFile expert = read_labels(o.evaluate);
+    run.evaluation = evaluate_labels(run.detection->labels, expert.label, t);
+    if (!o.coder2.empty()) run.ceiling = evaluate_labels(read_labels(o.coder2).label, expert.label, t);
+  }
+  if (!o.coder2.empty() && o.evaluate.empty()) fail("--coder2 needs --evaluate (the first coder's labels)");
+  return run;
+}
+
+// --samples-out (each sample's label) and --events-out (BIDS-style events.tsv).
+void write_event_files(const GazeCommandOptions& o, const Recording& recording, const EventsRun& run) {
+  if (!run.detection) return;
+  const std::vector<EventLabel>& labels = run.detection->labels;
+  if (!o.samples_out.empty()) {
+    std::string text = "t_s,x,y,label\n";
+    for (size_t i = 0; i < labels.size(); ++i)
+      text += fmt::format("{:.17g},{:.17g},{:.17g},{}\n", recording.samples[i].t_s, recording.samples[i].px.x,
+                          recording.samples[i].px.y, to_string(labels[i]));
+    write_text_file(o.samples_out, text);
+  }
+  if (!o.events_out.empty()) write_text_file(o.events_out, events_tsv(*run.detection, recording));
+}
+
+// The "events" entry of --json: detector, thresholds, counts per class, and the scores.
+nlohmann::json events_json(const GazeCommandOptions& o, const EventsRun& run) {
+  auto number = [](double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); };
+  auto scores = [&](const Evaluation& e) {
+    nlohmann::json classes = nlohmann::json::object();
+    for (const ClassScore& c : e.classes)
+      classes[to_string(c.label)] = {{"kappa", number(c.kappa)}, {"f1", number(c.f1)}, {"hits", c.hits}, {"misses", c.misses},
+                                     {"false_alarms", c.false_alarms}, {"reference_events", c.reference_events},
+                                     {"test_events", c.test_events}, {"rto_ms", c.rto_ms}, {"rtd_ms", c.rtd_ms}};
+    return nlohmann::json{{"samples", e.samples}, {"kappa", number(e.kappa)}, {"accuracy", e.accuracy}, {"classes", classes}};
+  };
+  const EventDetection& d = *run.detection;
+  nlohmann::json counts = nlohmann::json::object();
+  for (EventLabel c : kEventClasses) counts[to_string(c)] = 0;
+  for (const DetectedEvent& e : d.events) counts[to_string(e.label)] = counts[to_string(e.label)].get<int>() + 1;
+  nlohmann::json ev = {{"detector", run.detector}, {"detect_ms", run.detect_ms}, {"sampling_hz", d.sampling_hz},
+                       {"peak_threshold_deg_s", number(d.peak_threshold_deg_s)},
+                       {"onset_threshold_deg_s", number(d.onset_threshold_deg_s)}, {"counts", counts}};
+  if (run.evaluation) {
+    ev.update(scores(*run.evaluation));
+    ev["labels"] = o.evaluate;
+    ev["matching"] = "Hooge et al. 2018: earliest overlapping event of the same class";
+  }
+  if (run.ceiling) ev["ceiling"] = scores(*run.ceiling), ev["ceiling"]["labels"] = o.coder2;
+  return ev;
+}
+
+// --samples: the samples as read.
+void write_samples_csv(const std::string& path, const Recording& recording) {
+  std::string text = "t_s,x,y,confidence,valid\n";
+  for (const GazeSample& s : recording.samples)
+    text += fmt::format("{:.17g},{:.17g},{:.17g},{:.9g},{}\n", s.t_s, s.px.x, s.px.y, s.confidence, s.valid ? 1 : 0);
+  write_text_file(path, text);
+}
+
+// The summary, the event counts and the scores on stdout.
+void print_gaze(const GazeCommandOptions& o, const Recording& recording, const GazeSummary& summary, FixationMethod method,
+                const EventsRun& run) {
+  fmt::print("{}", format_summary(recording, summary));
+  if (method == FixationMethod::mean || method == FixationMethod::ivvt)
+    fmt::print("  ({} is a causal filter for the fovea: the scan path shows I-VT's fixations; --events nhp labels pursuit)\n", to_string(method));
+  for (const std::string* written : {&o.json, &o.samples, &o.samples_out, &o.events_out})
+    if (!written->empty()) fmt::print("  wrote     {}\n", *written);
+  if (run.detection) {
+    const EventDetection& d = *run.detection;
+    std::string counts;
+    for (EventLabel c : kEventClasses) {
+      const auto k = std::count_if(d.events.begin(), d.events.end(), [c](const DetectedEvent& e) { return e.label == c; });
+      counts += fmt::format("{}{} {}", counts.empty() ? "" : ", ", k, to_string(c));
+    }
+    fmt::print("  events    {} ({:.0f} Hz{}): {}\n", run.detector, d.sampling_hz,
+               std::isfinite(d.peak_threshold_deg_s) ? fmt::format(", thresholds {:.1f}/{:.1f} deg/s", d.peak_threshold_deg_s, d.onset_threshold_deg_s)
+                                                     : "",
+               counts);
+  }
+  auto print_scores = [](const Evaluation& e, const std::string& what) {
+    fmt::print("  {}: sample kappa {:.3f} (accuracy {:.3f})\n", what, e.kappa, e.accuracy);
+    for (const ClassScore& c : e.classes) {
+      if (c.reference_samples == 0 && c.test_samples == 0) continue;
+      fmt::print("    {:<9} kappa {:6.3f}  events F1 {:5.3f} ({} hits, {} misses, {} false alarms)  RTO {:+.1f} ms  RTD {:+.1f} ms\n",
+                 to_string(c.label), c.kappa, c.f1, c.hits, c.misses, c.false_alarms, c.rto_ms, c.rtd_ms);
+    }
+  };
+  if (run.evaluation) print_scores(*run.evaluation, fmt::format("scores    {} against {}", run.detector, o.evaluate));
+  if (run.ceiling) print_scores(*run.ceiling, fmt::format("ceiling   {} against {}", o.coder2, o.evaluate));
+  if (!o.no_scanpath) fmt::print("  wrote     {}\n", o.scanpath);
+}
+
+int run_gaze(const GazeCommandOptions& o) {
+  Display display = parse_display(o.display, Display{});
+  const bool display_has_resolution = parse_numbers("--display", o.display).size() == 5;
+  const ReadOptions read = resolve_read_options(o.gaze, display);
+  const FixationParams params = resolve_fixation_params(o.gaze);
+  const FixationMethod method = parse_fixation_method(o.gaze.fixation);
+  const Recording recording = read_recording_warned(o.recording, read);
+  if (!display_has_resolution) {
+    display.res_x = recording.screen_px.x;
+    display.res_y = recording.screen_px.y;
+  }
+  const GazeSummary summary = summarize_recording(recording, display, params);
+  const EventsRun run = detect_and_score(o, recording, display, params);
+  write_event_files(o, recording, run);
+  if (!o.json.empty()) {
+    nlohmann::json j = summary.json;
+    if (run.detection) j["events"] = events_json(o, run);
+    write_json_file(o.json, j);
+  }
+  if (!o.samples.empty()) write_samples_csv(o.samples, recording);
+  if (!o.no_scanpath) {
+    const FixationResult& shown = method == FixationMethod::idt ? summary.filters[1].result : summary.filters[0].result;
+    ScanpathStyle style;
+    style.title = fmt::format("{} - {} fixations ({})", std::filesystem::path(recording.source).filename().string(),
+                              shown.fixations.size(), method == FixationMethod::idt ? "I-DT" : "I-VT");
+    write_scanpath(recording, shown, o.scanpath, style);
+  }
+  if (!o.quiet) print_gaze(o, recording, summary, method, run);
+  return 0;
+}
+
+}  // namespace
+
 std::function<int()> add_gaze_command(CLI::App& app) {
   auto* cmd = app.add_subcommand("gaze", "summarise an eye-tracker recording: samples, fixations (I-VT, I-DT), agreement with the tracker, scan path");
-  struct Options {
-    std::string recording, json, samples, scanpath = "scanpath.png", display = "47.5,30,60", events, samples_out, events_out, evaluate,
-        coder2;
-    GazeOptions gaze;
-    double filter_window_ms = 6, detection_window_ms = 20, ek_lambda = 6,
-           blink_flank_ms = 100, max_blink_ms = 2000;
-    bool no_scanpath = false, quiet = false;
-  };
-  auto o = std::make_shared<Options>();
+
+  auto o = std::make_shared<GazeCommandOptions>();
   cmd->add_option("RECORDING", o->recording, "EyeLink .asc, Pupil gaze_positions.csv, Tobii .tsv or a t,x,y CSV")->required();
   add_gaze_options(*cmd, o->gaze);
   cmd->add_option("--display", o->display, "the recording's screen W_CM,H_CM,DIST_CM[,RES_X,RES_Y] (angles for the filters); the resolution defaults to the recording's screen")
@@ -153,148 +325,7 @@ std::function<int()> add_gaze_command(CLI::App& app) {
   cmd->add_flag("--no-scanpath", o->no_scanpath, "do not draw the scan path");
   cmd->add_flag("-q,--quiet", o->quiet, "print nothing on success");
 
-  return [o] {
-    Display display = parse_display(o->display, Display{});
-    const bool display_has_resolution = parse_numbers("--display", o->display).size() == 5;
-    const ReadOptions read = resolve_read_options(o->gaze, display);
-    const FixationParams params = resolve_fixation_params(o->gaze);
-    const FixationMethod method = parse_fixation_method(o->gaze.fixation);
-    const Recording recording = read_recording_warned(o->recording, read);
-    if (!display_has_resolution) {
-      display.res_x = recording.screen_px.x;
-      display.res_y = recording.screen_px.y;
-    }
-    const GazeSummary summary = summarize_recording(recording, display, params);
-    std::optional<EventDetection> detection;
-    std::string detector;  // the method's name (auto resolved), or file:PATH
-    double detect_ms = 0;
-    std::optional<Evaluation> evaluation, ceiling;
-    if (!o->events.empty()) {
-      require_positive(o->filter_window_ms, "--filter-window-ms");
-      require_non_negative(o->detection_window_ms, "--detection-window-ms");
-      require_non_negative(o->blink_flank_ms, "--blink-flank-ms");
-      require_positive(o->max_blink_ms, "--max-blink-ms");
-      EventParams ep;
-      ep.pursuit = params.pursuit;  // the options --fixation ivvt reads too
-      ep.filter_window_s = o->filter_window_ms / 1000;
-      ep.detection_window_s = o->detection_window_ms / 1000;
-      ep.ek_lambda = o->ek_lambda;
-      ep.blink_flank_s = o->blink_flank_ms / 1000;
-      ep.max_blink_s = o->max_blink_ms / 1000;
-      const auto started = std::chrono::steady_clock::now();
-      const bool from_file = o->events.rfind("file:", 0) == 0;
-      if (from_file) {
-        // Another tool's labels of these samples: listed and scored like a detector's
-        const std::string path = o->events.substr(5);
-        const LabelFile file = read_label_file(path);
-        if (file.label.size() != recording.samples.size())
-          fail("{}: {} labelled samples, but the recording has {} samples", path, file.label.size(), recording.samples.size());
-        detection = events_from_labels(recording, GazeGeometry(display, recording.screen_px), file.label);
-      } else {
-        detection = detect_events(recording, GazeGeometry(display, recording.screen_px), parse_event_method(o->events), ep, params);
-      }
-      detect_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - started).count();
-      detector = detection->method ? to_string(*detection->method) : o->events;
-      const std::vector<EventLabel>& labels = detection->labels;
-      if (!o->samples_out.empty()) {
-        std::string text = "t_s,x,y,label\n";
-        for (size_t i = 0; i < labels.size(); ++i)
-          text += fmt::format("{:.17g},{:.17g},{:.17g},{}\n", recording.samples[i].t_s, recording.samples[i].px.x,
-                              recording.samples[i].px.y, to_string(labels[i]));
-        write_text_file(o->samples_out, text);
-      }
-      if (!o->events_out.empty()) write_text_file(o->events_out, events_tsv(*detection, recording));
-      if (!o->evaluate.empty()) {
-        std::vector<double> t(labels.size());
-        for (size_t i = 0; i < t.size(); ++i) t[i] = recording.samples[i].t_s;
-        auto read_labels = [&](const std::string& path) {
-          LabelFile file = read_label_file(path);
-          if (file.label.size() != labels.size())
-            fail("{}: {} labelled samples, but the recording has {} samples", path, file.label.size(), labels.size());
-          return file;
-        };
-        const LabelFile expert = read_labels(o->evaluate);
-        evaluation = evaluate_labels(labels, expert.label, t);
-        if (!o->coder2.empty()) ceiling = evaluate_labels(read_labels(o->coder2).label, expert.label, t);
-      }
-    } else if (!o->samples_out.empty() || !o->evaluate.empty() || !o->events_out.empty()) {
-      fail("--samples-out, --events-out and --evaluate need --events");
-    }
-    if (!o->coder2.empty() && o->evaluate.empty()) fail("--coder2 needs --evaluate (the first coder's labels)");
-    if (!o->json.empty()) {
-      nlohmann::json j = summary.json;
-      if (detection) {
-        auto number = [](double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); };
-        auto scores = [&](const Evaluation& e) {
-          nlohmann::json classes = nlohmann::json::object();
-          for (const ClassScore& c : e.classes)
-            classes[to_string(c.label)] = {{"kappa", number(c.kappa)}, {"f1", number(c.f1)}, {"hits", c.hits}, {"misses", c.misses},
-                                           {"false_alarms", c.false_alarms}, {"reference_events", c.reference_events},
-                                           {"test_events", c.test_events}, {"rto_ms", c.rto_ms}, {"rtd_ms", c.rtd_ms}};
-          return nlohmann::json{{"samples", e.samples}, {"kappa", number(e.kappa)}, {"accuracy", e.accuracy}, {"classes", classes}};
-        };
-        nlohmann::json counts = nlohmann::json::object();
-        for (EventLabel c : kEventClasses) counts[to_string(c)] = 0;
-        for (const DetectedEvent& e : detection->events) counts[to_string(e.label)] = counts[to_string(e.label)].get<int>() + 1;
-        nlohmann::json ev = {{"detector", detector}, {"detect_ms", detect_ms}, {"sampling_hz", detection->sampling_hz},
-                             {"peak_threshold_deg_s", number(detection->peak_threshold_deg_s)},
-                             {"onset_threshold_deg_s", number(detection->onset_threshold_deg_s)}, {"counts", counts}};
-        if (evaluation) {
-          ev.update(scores(*evaluation));
-          ev["labels"] = o->evaluate;
-          ev["matching"] = "Hooge et al. 2018: earliest overlapping event of the same class";
-        }
-        if (ceiling) ev["ceiling"] = scores(*ceiling), ev["ceiling"]["labels"] = o->coder2;
-        j["events"] = ev;
-      }
-      write_json_file(o->json, j);
-    }
-    if (!o->samples.empty()) {
-      std::string text = "t_s,x,y,confidence,valid\n";
-      for (const GazeSample& s : recording.samples)
-        text += fmt::format("{:.17g},{:.17g},{:.17g},{:.9g},{}\n", s.t_s, s.px.x, s.px.y, s.confidence, s.valid ? 1 : 0);
-      write_text_file(o->samples, text);
-    }
-    if (!o->no_scanpath) {
-      const FixationResult& shown = method == FixationMethod::idt ? summary.filters[1].result : summary.filters[0].result;
-      ScanpathStyle style;
-      style.title = fmt::format("{} - {} fixations ({})", std::filesystem::path(recording.source).filename().string(),
-                                shown.fixations.size(), method == FixationMethod::idt ? "I-DT" : "I-VT");
-      write_scanpath(recording, shown, o->scanpath, style);
-    }
-    if (o->quiet) return 0;
-    fmt::print("{}", format_summary(recording, summary));
-    if (method == FixationMethod::mean || method == FixationMethod::ivvt)
-      fmt::print("  ({} is a causal filter for the fovea: the scan path shows I-VT's fixations; --events nhp labels pursuit)\n", to_string(method));
-    if (!o->json.empty()) fmt::print("  wrote     {}\n", o->json);
-    if (!o->samples.empty()) fmt::print("  wrote     {}\n", o->samples);
-    if (!o->samples_out.empty()) fmt::print("  wrote     {}\n", o->samples_out);
-    if (!o->events_out.empty()) fmt::print("  wrote     {}\n", o->events_out);
-    if (detection) {
-      std::string counts;
-      for (EventLabel c : kEventClasses) {
-        const auto k = std::count_if(detection->events.begin(), detection->events.end(), [c](const DetectedEvent& e) { return e.label == c; });
-        counts += fmt::format("{}{} {}", counts.empty() ? "" : ", ", k, to_string(c));
-      }
-      fmt::print("  events    {} ({:.0f} Hz{}): {}\n", detector, detection->sampling_hz,
-                 std::isfinite(detection->peak_threshold_deg_s)
-                     ? fmt::format(", thresholds {:.1f}/{:.1f} deg/s", detection->peak_threshold_deg_s, detection->onset_threshold_deg_s)
-                     : "",
-                 counts);
-    }
-    auto print_scores = [](const Evaluation& e, const std::string& what) {
-      fmt::print("  {}: sample kappa {:.3f} (accuracy {:.3f})\n", what, e.kappa, e.accuracy);
-      for (const ClassScore& c : e.classes) {
-        if (c.reference_samples == 0 && c.test_samples == 0) continue;
-        fmt::print("    {:<9} kappa {:6.3f}  events F1 {:5.3f} ({} hits, {} misses, {} false alarms)  RTO {:+.1f} ms  RTD {:+.1f} ms\n",
-                   to_string(c.label), c.kappa, c.f1, c.hits, c.misses, c.false_alarms, c.rto_ms, c.rtd_ms);
-      }
-    };
-    if (evaluation) print_scores(*evaluation, fmt::format("scores    {} against {}", detector, o->evaluate));
-    if (ceiling) print_scores(*ceiling, fmt::format("ceiling   {} against {}", o->coder2, o->evaluate));
-    if (!o->no_scanpath) fmt::print("  wrote     {}\n", o->scanpath);
-    return 0;
-  };
+  return [o] { return run_gaze(*o); };
 }
 
 }  // namespace foveal::app
