@@ -147,18 +147,186 @@ struct Perceiver {
 
 }  // namespace
 
+namespace {
+
+// The command's options as typed.
+struct PerceiveOptions {
+  std::string input, output, eye = "healthy", gaze, depth, display = "47.5,30,60", stimulus, amsler, field_map;
+  double fps = 30, start = 0;
+  std::optional<double> pupil;  // not given: the eye's (a profile's pupil_mm, else 3.5)
+  int threads = 0, taps = 64;
+  bool no_optics = false, quiet = false;
+  GazeOptions gaze_options;
+};
+
+// The eye, the display and the passes, from the options.
+Perceiver make_perceiver(const PerceiveOptions& o) {
+  Perceiver p;
+  p.eye = resolve_eye(o.eye, {o.pupil, std::nullopt});
+  p.optics = !o.no_optics;
+  p.blur.taps = o.taps;
+  p.display = parse_display(o.display);
+  if (std::count(o.display.begin(), o.display.end(), ',') == 2) p.display.res_x = p.display.res_y = 0;  // the input's size
+  if (!(o.fps > 0 && std::isfinite(o.fps))) fail("--fps: must be positive, got {}", o.fps);
+  if (!o.depth.empty()) p.depth = load_image(o.depth);
+  p.passes = std::make_unique<ImpairmentPasses>(p.eye.impair.any() ? p.eye.impair : Impairments{});
+  return p;
+}
+
+// The frames: one image, a folder, a video's frames, or a built-in card.
+struct PerceiveInput {
+  std::vector<fs::path> frames;
+  std::string frame_dir;  // a video's decoded frames (removed at the end)
+  double fps = 30;
+  bool amsler = false, lamps = false, folder = false, video = false;
+};
+
+PerceiveInput open_input(const PerceiveOptions& o) {
+  PerceiveInput in;
+  in.fps = o.fps;
+  in.amsler = o.input == "builtin:amsler";
+  in.lamps = o.input == "builtin:lamps";
+  in.folder = !in.amsler && fs::is_directory(o.input);
+  in.video = !in.amsler && !in.folder && is_video(o.input);
+  if (in.folder && fs::exists(o.output) && !fs::is_directory(o.output)) fail("-o {}: a folder of images needs a folder as output", o.output);
+  if (in.video && !is_video(o.output)) fail("-o {}: a video needs a video file as output (.mp4, .mkv, .mov, .webm)", o.output);
+  if (in.amsler) {
+    if (!o.gaze.empty()) fail("--gaze: the Amsler grid is always fixated at its centre");
+  } else if (in.folder) {
+    for (const auto& e : fs::directory_iterator(o.input))
+      if (e.is_regular_file() && is_image(e.path())) in.frames.push_back(e.path());
+    std::sort(in.frames.begin(), in.frames.end());
+    if (in.frames.empty()) fail("{}: no images (PNG, JPEG, BMP, TIFF, EXR, PFM) in the folder", o.input);
+  } else if (in.video) {
+    in.frame_dir = (fs::temp_directory_path() / fmt::format("foveal-perceive-{}", getpid())).string();
+    fs::create_directories(in.frame_dir);
+    in.fps = decode_video(o.input, in.frame_dir + "/in_%06d.png");
+    for (const auto& e : fs::directory_iterator(in.frame_dir)) in.frames.push_back(e.path());
+    std::sort(in.frames.begin(), in.frames.end());
+    if (in.frames.empty()) fail("{}: the video has no frames", o.input);
+  } else if (in.lamps) {
+    in.frames.push_back("builtin:lamps");
+  } else {
+    if (!fs::is_regular_file(o.input)) fail("{}: no such image, folder or video", o.input);
+    if (!is_image(o.input)) fail("{}: not an image perceive reads (PNG, JPEG, BMP, TIFF, EXR, PFM), a folder or a video", o.input);
+    in.frames.push_back(o.input);
+  }
+  return in;
+}
+
+// The gaze: a point, or a recording's fixation at each frame's time.
+struct PerceiveGaze {
+  std::optional<glm::dvec2> fixed;
+  std::vector<GazeStep> fixations;
+  std::optional<ScreenMapping> mapping;
+  double t0 = 0;
+  // Frame k's gaze in an image of w × h: the fixation under way at the frame's time (the last one
+  // begun; the centre before the first), or the fixed point, or the centre
+  glm::dvec2 at(size_t k, double fps, int w, int h) const {
+    glm::dvec2 gaze = fixed.value_or(glm::dvec2(w / 2.0, h / 2.0));
+    const double time = t0 + k / fps;
+    const GazeStep* now = nullptr;
+    for (const GazeStep& g : fixations)
+      if (g.start_s <= time) now = &g;
+    if (now) {
+      ScreenMapping m = *mapping;
+      m.render_px = {w, h};
+      gaze = m.to_render(now->screen_px);
+    }
+    return gaze;
+  }
+};
+
+PerceiveGaze open_gaze(const PerceiveOptions& o, const PerceiveInput& in) {
+  PerceiveGaze g;
+  const bool recording_gaze = !o.gaze.empty() && !std::isdigit(static_cast<unsigned char>(o.gaze[0])) && o.gaze[0] != '-' && o.gaze[0] != '.';
+  if (!recording_gaze) {
+    if (!o.gaze.empty()) g.fixed = parse_vec2("--gaze", o.gaze);
+    return g;
+  }
+  if (o.gaze.find("://") != std::string::npos)
+    fail("--gaze: a live tracker drives the real-time commands (foveal view, simulate); perceive takes a point or a recording");
+  if (!in.folder && !in.video)
+    fail("--gaze {}: a recording's gaze needs a video or a folder of frames (one fixation per frame's time); for one image give --gaze X,Y",
+         o.gaze);
+  const Display screen = parse_display(o.display, Display{});
+  const ReadOptions read = resolve_read_options(o.gaze_options, screen);
+  const Recording recording = read_recording_warned(o.gaze, read);
+  if (recording.samples.empty()) fail("{}: no samples", recording.source);
+  const GazeGeometry geometry(screen, recording.screen_px);
+  g.fixations = recording_steps(recording, geometry, parse_step_fixations(o.gaze_options.fixation), resolve_fixation_params(o.gaze_options));
+  if (g.fixations.empty()) fail("{}: no fixations", recording.source);
+  g.t0 = recording.samples.front().t_s + o.start;
+  g.mapping = make_screen_mapping(recording.screen_px, {0, 0}, o.stimulus);
+  return g;
+}
+
+// Every frame seen by the eye and written (a video's through ffmpeg); returns the time, ms.
+double see_frames(const PerceiveOptions& o, const Perceiver& p, const PerceiveInput& in, const PerceiveGaze& gaze) {
+  const fs::path out_dir = in.folder ? fs::path(o.output) : in.video ? fs::path(in.frame_dir) : fs::path();
+  if (in.folder) {
+    std::error_code ec;
+    fs::create_directories(out_dir, ec);
+    if (ec) fail("{}: cannot create the output folder: {}", o.output, ec.message());
+  }
+  const bool show = !o.quiet && isatty(fileno(stderr));
+  const Timer clock;
+  double frame_ms = 0;
+  if (in.amsler) save_image(amsler_grid(*p.passes, 20), o.output);
+  for (size_t k = 0; k < in.frames.size(); ++k) {
+    const Timer t;
+    const Image image = in.lamps ? lamps_card() : load_linear(in.frames[k].string());
+    const Image seen = p.see(image, gaze.at(k, in.fps, image.width, image.height));
+    std::string target;
+    if (in.folder) target = (out_dir / in.frames[k].filename()).string();
+    else if (in.video) target = (out_dir / fmt::format("out_{:06d}.png", k)).string();
+    else target = o.output;
+    save_image(seen, target, !is_float_format(target));
+    frame_ms += t.ms();
+    if (show && clock.ms() > 1000) fmt::print(stderr, "\r  frame {}/{} ", k + 1, in.frames.size());
+  }
+  if (show && clock.ms() > 1000) fmt::print(stderr, "\r{:40}\r", "");
+  if (in.video) {
+    encode_video((fs::path(in.frame_dir) / "out_%06d.png").string(), in.fps, o.output);
+    fs::remove_all(in.frame_dir);
+  }
+  return frame_ms;
+}
+
+void print_perceive(const PerceiveOptions& o, const Perceiver& p, const PerceiveInput& in, double frame_ms) {
+  const size_t frames = in.amsler ? 1 : in.frames.size();
+  fmt::print("foveal perceive: {} ({} frame{}{}), eye {}\n", o.input, frames, frames == 1 ? "" : "s",
+             in.video ? fmt::format(" at {:.3g} fps", in.fps) : "", p.eye.source);
+  const FocusRange range = focus_range(p.eye.eye);
+  auto point = [](double m) { return m < 1e9 ? fmt::format("{:.2f} m", m) : std::string("infinity"); };
+  fmt::print("  optics   {}\n", p.optics ? fmt::format("focus {} … {}, pupil {} mm, viewing distance {} cm{}", point(range.near_point_m()),
+                                                         point(range.far_point_m()), p.eye.eye.pupil_diameter_mm,
+                                                         p.display.distance_cm, p.depth ? ", depth map" : "")
+                                             : std::string("off"));
+  fmt::print("  impaired {}\n", p.eye.impair.describe());
+  if (!in.amsler) fmt::print("  time     {:.1f} ms per frame\n", frame_ms / in.frames.size());
+  fmt::print("  wrote    {}{}{}\n", o.output, o.amsler.empty() ? "" : ", " + o.amsler, o.field_map.empty() ? "" : ", " + o.field_map);
+}
+
+int run_perceive(const PerceiveOptions& o) {
+  const ThreadScope threads(o.threads);
+  const Perceiver p = make_perceiver(o);
+  if (!o.amsler.empty()) save_image(amsler_grid(*p.passes, 20), o.amsler);
+  if (!o.field_map.empty()) write_field_picture(p.eye.impair.field, p.passes->field_map(), o.field_map);
+  const PerceiveInput in = open_input(o);
+  const PerceiveGaze gaze = open_gaze(o, in);
+  const double frame_ms = see_frames(o, p, in, gaze);
+  if (!o.quiet) print_perceive(o, p, in, frame_ms);
+  return 0;
+}
+
+}  // namespace
+
 std::function<int()> add_perceive_command(CLI::App& app) {
   auto* cmd = app.add_subcommand("perceive", "a person's eye applied to your own stimuli: an image, a folder of images or a video, "
                                              "gaze-contingent (optics, media, visual field, colour vision)");
-  struct Options {
-    std::string input, output, eye = "healthy", gaze, depth, display = "47.5,30,60", stimulus, amsler, field_map;
-    double fps = 30, start = 0;
-    std::optional<double> pupil;  // not given: the eye's (a profile's pupil_mm, else 3.5)
-    int threads = 0, taps = 64;
-    bool no_optics = false, quiet = false;
-    GazeOptions gaze_options;
-  };
-  auto o = std::make_shared<Options>();
+
+  auto o = std::make_shared<PerceiveOptions>();
   cmd->add_option("input", o->input, "a PNG/JPEG/EXR/PFM image, a folder of images, a video (ffmpeg), builtin:amsler (an Amsler grid) or builtin:lamps "
                                    "(a glare test card: bright lamps in a dark room, linear HDR)")
       ->required();
@@ -188,138 +356,7 @@ std::function<int()> add_perceive_command(CLI::App& app) {
                    "where the fixations come from: nhp (the recommended event detector; pursuit a step every 100 ms), ivt (velocity threshold), "
                    "idt (dispersion threshold) or tracker (the recording's own fixation events)");
 
-  return [o] {
-    const ThreadScope threads(o->threads);
-    Perceiver p;
-    p.eye = resolve_eye(o->eye, {o->pupil, std::nullopt});
-    p.optics = !o->no_optics;
-    p.blur.taps = o->taps;
-    p.display = parse_display(o->display);
-    if (std::count(o->display.begin(), o->display.end(), ',') == 2) p.display.res_x = p.display.res_y = 0;  // the input's size
-    if (!(o->fps > 0 && std::isfinite(o->fps))) fail("--fps: must be positive, got {}", o->fps);
-    if (!o->depth.empty()) p.depth = load_image(o->depth);
-    if (p.eye.impair.any()) p.passes = std::make_unique<ImpairmentPasses>(p.eye.impair);
-    const ImpairmentPasses& passes = p.passes ? *p.passes : *(p.passes = std::make_unique<ImpairmentPasses>(Impairments{}));
-
-    if (!o->amsler.empty()) save_image(amsler_grid(passes, 20), o->amsler);
-    if (!o->field_map.empty()) write_field_picture(p.eye.impair.field, passes.field_map(), o->field_map);
-
-    // The frames: one image, a folder, a video's frames, or the Amsler grid
-    std::vector<fs::path> frames;
-    std::string frame_dir;  // a video's decoded frames (removed at the end)
-    double fps = o->fps;
-    const bool amsler_input = o->input == "builtin:amsler", lamps_input = o->input == "builtin:lamps";
-    const bool folder = !amsler_input && fs::is_directory(o->input);
-    const bool video = !amsler_input && !folder && is_video(o->input);
-    if (folder || video) {
-      if (fs::exists(o->output) && !fs::is_directory(o->output) && folder)
-        fail("-o {}: a folder of images needs a folder as output", o->output);
-      if (video && !is_video(o->output)) fail("-o {}: a video needs a video file as output (.mp4, .mkv, .mov, .webm)", o->output);
-    }
-    if (amsler_input) {
-      if (!o->gaze.empty()) fail("--gaze: the Amsler grid is always fixated at its centre");
-    } else if (folder) {
-      for (const auto& e : fs::directory_iterator(o->input))
-        if (e.is_regular_file() && is_image(e.path())) frames.push_back(e.path());
-      std::sort(frames.begin(), frames.end());
-      if (frames.empty()) fail("{}: no images (PNG, JPEG, BMP, TIFF, EXR, PFM) in the folder", o->input);
-    } else if (video) {
-      frame_dir = (fs::temp_directory_path() / fmt::format("foveal-perceive-{}", getpid())).string();
-      fs::create_directories(frame_dir);
-      fps = decode_video(o->input, frame_dir + "/in_%06d.png");
-      for (const auto& e : fs::directory_iterator(frame_dir)) frames.push_back(e.path());
-      std::sort(frames.begin(), frames.end());
-      if (frames.empty()) fail("{}: the video has no frames", o->input);
-    } else if (lamps_input) {
-      frames.push_back("builtin:lamps");
-    } else {
-      if (!fs::is_regular_file(o->input)) fail("{}: no such image, folder or video", o->input);
-      if (!is_image(o->input)) fail("{}: not an image perceive reads (PNG, JPEG, BMP, TIFF, EXR, PFM), a folder or a video", o->input);
-      frames.push_back(o->input);
-    }
-
-    // The gaze: a point, or a recording's fixation at each frame's time
-    std::optional<glm::dvec2> fixed_gaze;
-    std::vector<GazeStep> fixations;
-    std::optional<ScreenMapping> mapping;
-    double t0 = 0;
-    const bool recording_gaze = !o->gaze.empty() && !std::isdigit(static_cast<unsigned char>(o->gaze[0])) && o->gaze[0] != '-' &&
-                                o->gaze[0] != '.';
-    if (recording_gaze) {
-      if (o->gaze.find("://") != std::string::npos)
-        fail("--gaze: a live tracker drives the real-time commands (foveal view, simulate); perceive takes a point or a recording");
-      if (!folder && !video) fail("--gaze {}: a recording's gaze needs a video or a folder of frames (one fixation per frame's time); "
-                                  "for one image give --gaze X,Y", o->gaze);
-      const Display screen = parse_display(o->display, Display{});
-      const ReadOptions read = resolve_read_options(o->gaze_options, screen);
-      const Recording recording = read_recording_warned(o->gaze, read);
-      if (recording.samples.empty()) fail("{}: no samples", recording.source);
-      const GazeGeometry geometry(screen, recording.screen_px);
-      fixations = recording_steps(recording, geometry, parse_step_fixations(o->gaze_options.fixation),
-                                  resolve_fixation_params(o->gaze_options));
-      if (fixations.empty()) fail("{}: no fixations", recording.source);
-      t0 = recording.samples.front().t_s + o->start;
-      mapping = make_screen_mapping(recording.screen_px, {0, 0}, o->stimulus);
-    } else if (!o->gaze.empty()) {
-      fixed_gaze = parse_vec2("--gaze", o->gaze);
-    }
-
-    const fs::path out_dir = folder ? fs::path(o->output) : video ? fs::path(frame_dir) : fs::path();
-    if (folder) {
-      std::error_code ec;
-      fs::create_directories(out_dir, ec);
-      if (ec) fail("{}: cannot create the output folder: {}", o->output, ec.message());
-    }
-    const bool show = !o->quiet && isatty(fileno(stderr));
-    const Timer clock;
-    double frame_ms = 0;
-    if (amsler_input) {
-      save_image(amsler_grid(passes, 20), o->output);
-    }
-    for (size_t k = 0; k < frames.size(); ++k) {
-      const Timer t;
-      const Image in = lamps_input ? lamps_card() : load_linear(frames[k].string());
-      glm::dvec2 gaze = fixed_gaze.value_or(glm::dvec2(in.width / 2.0, in.height / 2.0));
-      if (!fixations.empty()) {
-        // the fixation under way at the frame's time (the last one begun; the centre before the first)
-        const double time = t0 + k / fps;
-        const GazeStep* now = nullptr;
-        for (const GazeStep& g : fixations)
-          if (g.start_s <= time) now = &g;
-        if (now) {
-          ScreenMapping m = *mapping;
-          m.render_px = {in.width, in.height};
-          gaze = m.to_render(now->screen_px);
-        }
-      }
-      const Image seen = p.see(in, gaze);
-      std::string target;
-      if (folder) target = (out_dir / frames[k].filename()).string();
-      else if (video) target = (out_dir / fmt::format("out_{:06d}.png", k)).string();
-      else target = o->output;
-      save_image(seen, target, !is_float_format(target));
-      frame_ms += t.ms();
-      if (show && clock.ms() > 1000) fmt::print(stderr, "\r  frame {}/{} ", k + 1, frames.size());
-    }
-    if (show && clock.ms() > 1000) fmt::print(stderr, "\r{:40}\r", "");
-    if (video) {
-      encode_video((fs::path(frame_dir) / "out_%06d.png").string(), fps, o->output);
-      fs::remove_all(frame_dir);
-    }
-    if (!o->quiet) {
-      fmt::print("foveal perceive: {} ({} frame{}{}), eye {}\n", o->input, amsler_input ? 1 : frames.size(),
-                 frames.size() == 1 || amsler_input ? "" : "s", video ? fmt::format(" at {:.3g} fps", fps) : "", p.eye.source);
-      fmt::print("  optics   {}\n", p.optics ? fmt::format("focus {} … {}, pupil {} mm, viewing distance {} cm{}",
-                                                             focus_range(p.eye.eye).near_point_m() < 1e9 ? fmt::format("{:.2f} m", focus_range(p.eye.eye).near_point_m()) : "infinity",
-                                                             focus_range(p.eye.eye).far_point_m() < 1e9 ? fmt::format("{:.2f} m", focus_range(p.eye.eye).far_point_m()) : "infinity",
-                                                             p.eye.eye.pupil_diameter_mm, p.display.distance_cm, p.depth ? ", depth map" : "")
-                                                 : std::string("off"));
-      fmt::print("  impaired {}\n", p.eye.impair.describe());
-      if (!amsler_input) fmt::print("  time     {:.1f} ms per frame\n", frame_ms / frames.size());
-      fmt::print("  wrote    {}{}{}\n", o->output, o->amsler.empty() ? "" : ", " + o->amsler, o->field_map.empty() ? "" : ", " + o->field_map);
-    }
-    return 0;
-  };
+  return [o] { return run_perceive(*o); };
 }
 
 }  // namespace foveal::app
