@@ -261,19 +261,174 @@ VisionCase run_vision_case(const Tracer& tracer, const Scene& scene, const Camer
   return c;
 }
 
+// The command's options as typed.
+struct BenchVisionOptions {
+  std::vector<std::string> scenes, sizes{"1024x768", "1280x720"};
+  std::string json, markdown, eye = "healthy", device = "auto";
+  std::optional<double> pupil;  // not given: the eye's (a profile's pupil_mm, else 3.5)
+  std::string impairments = "cataract:0.5+field:arcuate:20+metamorphopsia:0.3+cvd:deutan:0.6";
+  int steps = 20, threads = 0;
+  uint64_t seed = 1;
+};
+
+// One row of the table: a scene at a size, on the chosen device (and on the CPU beside the GPU).
+struct VisionRow {
+  std::string scene, size;
+  size_t triangles = 0, rays = 0;  // the primary rays of a step
+  VisionCase vc;
+  double raw = 0, raw_cpu = 0;     // raw closest-hit rays per second on the device, and on Embree
+  double rate(double ms) const { return ms > 0 ? rays / (ms * 1e-3) : 0.0; }
+  double ratio() const { const StageTimes& c = vc.times; return c.trace > 0 ? (c.features + c.sharpness + c.blur) / c.trace : 0; }
+  double trace_vs_raw() const { return raw > 0 ? rate(vc.times.trace) / raw : 0; }
+  double cpu_trace_vs_raw() const { return raw_cpu > 0 ? rate(vc.cpu.trace) / raw_cpu : 0; }
+  double speedup() const { return vc.times.total > 0 ? vc.cpu.total / vc.times.total : 0; }
+};
+
+std::string vision_table_header(bool cuda) {
+  return cuda ? std::string("| scene | size | device | trace ms | features ms | sharpness ms | blur ms | step ms | CPU step ms | CPU / GPU | GPU trace / raw | CPU trace / raw | same fixations | corners first differ at step | perceived mean abs diff |\n"
+                            "|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n")
+              : std::string("| scene | size | trace ms | features ms | sharpness ms | blur ms | impairments ms (media + retina + colour) | total ms | (features+sharpness+blur) / trace | "
+                            "impairments / trace | trace / raw Embree |\n"
+                            "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
+}
+
+// The row on stdout.
+void print_vision_row(const VisionRow& r, const Impairments& impair, bool cuda) {
+  const StageTimes& c = r.vc.times;
+  if (impair.any())
+    fmt::print("  {:<28} {:>9}  impairments {:6.2f} ms (media {:.2f}, retina {:.2f}, colour {:.2f}) = {:.2f} of the trace stage\n",
+               r.scene, r.size, c.impair.total_ms, c.impair.media_ms, c.impair.field_ms, c.impair.colour_ms,
+               c.trace > 0 ? c.impair.total_ms / c.trace : 0.0);
+  fmt::print("  {:<28} {:>9}  trace {:6.2f}  features {:6.2f}  sharpness {:6.2f}  blur {:6.2f}  total {:6.2f} ms  (rest/trace {:.2f})\n"
+             "  {:<28} {:>9}  trace {:.0f} Mrays/s = {:.2f} of raw {} closest-hit tracing of the same rays ({:.0f} Mrays/s)\n",
+             r.scene, r.size, c.trace, c.features, c.sharpness, c.blur, c.total, r.ratio(), "", "", r.rate(c.trace) / 1e6, r.trace_vs_raw(),
+             cuda ? "GPU" : "Embree", r.raw / 1e6);
+  if (!cuda) return;
+  // The same case on the CPU, step for step in the same run: the ratio, and how far the devices agree
+  const StageTimes& cpu = r.vc.cpu;
+  const Agreement& g = r.vc.agreement;
+  const std::string parted =
+      g.first_corner_difference == 0
+          ? std::string("the corners identical at every step")
+          : fmt::format("the corners first differ at step {} ({} of {} corners; {} of {} grey pixels differ)", g.first_corner_difference,
+                        g.corners_differing, g.corners_total, g.grey_px_differing, g.grey_px);
+  fmt::print("  {:<28} {:>9}  CPU: trace {:6.2f}  features {:6.2f}  sharpness {:6.2f}  blur {:6.2f}  total {:6.2f} ms  → GPU {:.1f}× faster\n"
+             "  {:<28} {:>9}  CPU: trace {:.0f} Mrays/s = {:.2f} of raw Embree closest-hit tracing of the same rays ({:.0f} Mrays/s)\n"
+             "  {:<28} {:>9}  same fixations for {}/{} steps, {}; perceived mean |diff| ≤ {:.2e} while the same\n",
+             "", "", cpu.trace, cpu.features, cpu.sharpness, cpu.blur, cpu.total, r.speedup(), "", "", r.rate(cpu.trace) / 1e6,
+             r.cpu_trace_vs_raw(), r.raw_cpu / 1e6, "", "", g.same_fixations, g.steps, parted, g.perceived_mean_abs_diff);
+}
+
+// The row in the JSON (--json's "rows").
+nlohmann::json vision_row_json(const VisionRow& r, const Impairments& impair, ComputeDevice device, int steps, int threads) {
+  const StageTimes& c = r.vc.times;
+  nlohmann::json row = {{"scene", r.scene}, {"triangles", r.triangles}, {"size", r.size}, {"steps", steps - 1},
+                        {"device", to_string(device)},
+                        {"time_ms", {{"trace", c.trace}, {"features", c.features}, {"sharpness", c.sharpness}, {"blur", c.blur}, {"total", c.total}}},
+                        {"non_tracing_over_trace", r.ratio()},
+                        {"impairments", impair.describe()},
+                        {"impairments_ms", {{"media", c.impair.media_ms}, {"retina", c.impair.field_ms}, {"colour", c.impair.colour_ms},
+                                            {"total", c.impair.total_ms}}},
+                        {"impairments_over_trace", c.trace > 0 ? c.impair.total_ms / c.trace : 0.0},
+                        {"trace_rays_per_second", r.rate(c.trace)},
+                        {"raw_closest_hit_rays_per_second", r.raw},
+                        {"trace_over_raw", r.trace_vs_raw()}};
+  if (device != ComputeDevice::cuda) return row;
+  const StageTimes& cpu = r.vc.cpu;
+  const Agreement& g = r.vc.agreement;
+  row["cpu"] = {{"time_ms", {{"trace", cpu.trace}, {"features", cpu.features}, {"sharpness", cpu.sharpness}, {"blur", cpu.blur}, {"total", cpu.total}}},
+                {"threads", threads},
+                {"trace_rays_per_second", r.rate(cpu.trace)},
+                {"raw_closest_hit_rays_per_second", r.raw_cpu},
+                {"trace_over_raw", r.cpu_trace_vs_raw()}};
+  row["cpu_over_gpu"] = r.speedup();
+  row["agreement"] = {{"steps", g.steps},
+                      {"same_fixations", g.same_fixations},
+                      {"first_corner_difference_step", g.first_corner_difference},
+                      {"corners_differing", g.corners_differing},
+                      {"corners_gpu", g.corners_total},
+                      {"grey_px_differing", g.grey_px_differing},
+                      {"grey_px", g.grey_px},
+                      {"perceived_mean_abs_diff", g.perceived_mean_abs_diff}};
+  return row;
+}
+
+// The row in the Markdown table.
+std::string vision_row_markdown(const VisionRow& r, bool cuda) {
+  const StageTimes& c = r.vc.times;
+  if (!cuda)
+    return fmt::format("| {} | {} | {:.1f} | {:.1f} | {:.1f} | {:.1f} | {:.1f} ({:.1f} + {:.1f} + {:.1f}) | {:.1f} | {:.2f} | {:.2f} | {:.2f} |\n",
+                       r.scene, r.size, c.trace, c.features, c.sharpness, c.blur, c.impair.total_ms, c.impair.media_ms,
+                       c.impair.field_ms, c.impair.colour_ms, c.total, r.ratio(), c.trace > 0 ? c.impair.total_ms / c.trace : 0.0,
+                       r.trace_vs_raw());
+  const Agreement& g = r.vc.agreement;
+  const std::string first = g.first_corner_difference == 0
+                                ? std::string("–")
+                                : fmt::format("{} ({}/{} corners, {} grey px)", g.first_corner_difference, g.corners_differing,
+                                              g.corners_total, g.grey_px_differing);
+  return fmt::format("| {} | {} | {} | {:.2f} | {:.2f} | {:.2f} | {:.2f} | {:.2f} | {:.1f} | {:.1f} | {:.2f} | {:.2f} | {}/{} | {} | {:.1e} |\n",
+                     r.scene, r.size, availability().name, c.trace, c.features, c.sharpness, c.blur, c.total, r.vc.cpu.total, r.speedup(),
+                     r.trace_vs_raw(), r.cpu_trace_vs_raw(), g.same_fixations, g.steps, first, g.perceived_mean_abs_diff);
+}
+
+int run_bench_vision(const BenchVisionOptions& o) {
+  const ThreadScope threads(o.threads);
+  const ComputeDevice device = choose_device(o.device);
+  const bool cuda = device == ComputeDevice::cuda;
+  std::vector<std::string> scenes = o.scenes;
+  if (scenes.empty()) {
+    if (const std::string conference = repository_scene("conference.json", kConferenceObj); !conference.empty())
+      scenes.push_back(conference);
+    scenes.push_back("builtin:box");
+  }
+  const EyeSpec eye_spec = resolve_eye(o.eye, {o.pupil, std::nullopt});
+  const Impairments impair = o.impairments == "none" ? Impairments{} : parse_eye_spec(o.impairments).impair;
+  nlohmann::json rows = nlohmann::json::array();
+  std::string md = vision_table_header(cuda);
+  fmt::print("foveal bench vision: {} steps per case (median of steps 2…), features every step, eye {}, {} threads\n", o.steps, o.eye,
+             threads.threads());
+  fmt::print("  device   {}\n", describe_device(device));
+  for (const std::string& spec : scenes) {
+    const Scene scene = load_scene(spec);
+    const Tracer tracer(scene);
+    const Camera camera = first_camera(scene);
+    std::unique_ptr<gpu::Renderer> raw_gpu;  // the GPU's raw closest-hit baseline (its own copy of the scene)
+    if (cuda) raw_gpu = std::make_unique<gpu::Renderer>(scene);
+    for (const std::string& size_text : o.sizes) {
+      const glm::ivec2 size = parse_size("--size", size_text);
+      SimulateParams p;
+      p.width = size.x;
+      p.height = size.y;
+      p.eye = eye_spec.eye;
+      p.impair = impair;
+      p.seed = o.seed;
+      p.features_every_step = true;  // the paper's timing: corners every step
+      p.cuda = cuda;
+      VisionRow r{scene.source, size_text, tracer.triangles()};
+      r.vc = run_vision_case(tracer, scene, camera, p, o.steps, cuda);
+      // The trace stage's primary-ray rate against raw closest-hit tracing of the same rays
+      const std::vector<Ray> rays = primary_rays_in_tiles(camera, size.x, size.y);
+      r.rays = rays.size();
+      r.raw_cpu = raw_embree_rate(tracer, rays);
+      r.raw = cuda ? raw_gpu->measure_intersection_rate(rays, 5) : r.raw_cpu;
+      print_vision_row(r, impair, cuda);
+      rows.push_back(vision_row_json(r, impair, device, o.steps, threads.threads()));
+      md += vision_row_markdown(r, cuda);
+    }
+  }
+  if (!o.json.empty())
+    write_json_file(o.json, {{"threads", threads.threads()}, {"eye", o.eye}, {"optics", optics_json(eye_spec.eye)},
+                             {"device", describe_device(device)}, {"rows", rows}});
+  if (!o.markdown.empty()) write_text_file(o.markdown, md);
+  return 0;
+}
+
 }  // namespace
 
 std::function<int()> add_bench_vision_command(CLI::App& bench) {
   auto* cmd = bench.add_subcommand("vision", "the second paper's Table 1: milliseconds per stage of a simulation step");
-  struct Options {
-    std::vector<std::string> scenes, sizes{"1024x768", "1280x720"};
-    std::string json, markdown, eye = "healthy", device = "auto";
-    std::optional<double> pupil;  // not given: the eye's (a profile's pupil_mm, else 3.5)
-    std::string impairments = "cataract:0.5+field:arcuate:20+metamorphopsia:0.3+cvd:deutan:0.6";
-    int steps = 20, threads = 0;
-    uint64_t seed = 1;
-  };
-  auto o = std::make_shared<Options>();
+
+  auto o = std::make_shared<BenchVisionOptions>();
   cmd->add_option("--scene", o->scenes, "scenes (default: scenes/conference.json when ../shared/data has it, and builtin:box)")->delimiter(',');
   cmd->add_option("--size", o->sizes, "sizes WxH")->delimiter(',')->capture_default_str();
   cmd->add_option("--steps", o->steps, "steps per case (median reported; the first is left out as warm-up)")
@@ -292,122 +447,7 @@ std::function<int()> add_bench_vision_command(CLI::App& bench) {
                   "the agreement), or auto (cuda when a usable NVIDIA GPU is present)")
       ->capture_default_str();
 
-  return [o] {
-    const ThreadScope threads(o->threads);
-    const ComputeDevice device = choose_device(o->device);
-    const bool cuda = device == ComputeDevice::cuda;
-    std::vector<std::string> scenes = o->scenes;
-    if (scenes.empty()) {
-      if (const std::string conference = repository_scene("conference.json", kConferenceObj); !conference.empty())
-        scenes.push_back(conference);
-      scenes.push_back("builtin:box");
-    }
-    const EyeSpec eye_spec = resolve_eye(o->eye, {o->pupil, std::nullopt});
-    const Impairments impair = o->impairments == "none" ? Impairments{} : parse_eye_spec(o->impairments).impair;
-    nlohmann::json rows = nlohmann::json::array();
-    std::string md = cuda ? std::string("| scene | size | device | trace ms | features ms | sharpness ms | blur ms | step ms | CPU step ms | CPU / GPU | GPU trace / raw | CPU trace / raw | same fixations | corners first differ at step | perceived mean abs diff |\n"
-                                        "|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n")
-                          : std::string("| scene | size | trace ms | features ms | sharpness ms | blur ms | impairments ms (media + retina + colour) | total ms | (features+sharpness+blur) / trace | "
-                                        "impairments / trace | trace / raw Embree |\n"
-                                        "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
-    fmt::print("foveal bench vision: {} steps per case (median of steps 2…), features every step, eye {}, {} threads\n", o->steps,
-               o->eye, threads.threads());
-    fmt::print("  device   {}\n", describe_device(device));
-    for (const std::string& spec : scenes) {
-      const Scene scene = load_scene(spec);
-      const Tracer tracer(scene);
-      const Camera camera = first_camera(scene);
-      std::unique_ptr<gpu::Renderer> raw_gpu;  // the GPU's raw closest-hit baseline (its own copy of the scene)
-      if (cuda) raw_gpu = std::make_unique<gpu::Renderer>(scene);
-      for (const std::string& size_text : o->sizes) {
-        const glm::ivec2 size = parse_size("--size", size_text);
-        SimulateParams p;
-        p.width = size.x;
-        p.height = size.y;
-        p.eye = eye_spec.eye;
-        p.impair = impair;
-        p.seed = o->seed;
-        p.features_every_step = true;  // the paper's timing: corners every step
-        p.cuda = cuda;
-        const VisionCase vc = run_vision_case(tracer, scene, camera, p, o->steps, cuda);
-        const StageTimes& c = vc.times;
-        const double ratio = c.trace > 0 ? (c.features + c.sharpness + c.blur) / c.trace : 0;
-        // The trace stage's primary-ray rate against raw closest-hit tracing of the same rays
-        const std::vector<Ray> rays = primary_rays_in_tiles(camera, size.x, size.y);
-        auto rate = [&](double ms) { return ms > 0 ? rays.size() / (ms * 1e-3) : 0.0; };
-        const double raw_cpu = raw_embree_rate(tracer, rays);
-        const double raw = cuda ? raw_gpu->measure_intersection_rate(rays, 5) : raw_cpu;
-        const double trace_vs_raw = raw > 0 ? rate(c.trace) / raw : 0;
-        if (impair.any())
-          fmt::print("  {:<28} {:>9}  impairments {:6.2f} ms (media {:.2f}, retina {:.2f}, colour {:.2f}) = {:.2f} of the trace stage\n",
-                     scene.source, size_text, c.impair.total_ms, c.impair.media_ms, c.impair.field_ms, c.impair.colour_ms,
-                     c.trace > 0 ? c.impair.total_ms / c.trace : 0.0);
-        fmt::print("  {:<28} {:>9}  trace {:6.2f}  features {:6.2f}  sharpness {:6.2f}  blur {:6.2f}  total {:6.2f} ms  (rest/trace {:.2f})\n"
-                   "  {:<28} {:>9}  trace {:.0f} Mrays/s = {:.2f} of raw {} closest-hit tracing of the same rays ({:.0f} Mrays/s)\n",
-                   scene.source, size_text, c.trace, c.features, c.sharpness, c.blur, c.total, ratio, "", "", rate(c.trace) / 1e6, trace_vs_raw,
-                   cuda ? "GPU" : "Embree", raw / 1e6);
-        nlohmann::json row = {{"scene", scene.source}, {"triangles", tracer.triangles()}, {"size", size_text}, {"steps", o->steps - 1},
-                              {"device", to_string(device)},
-                              {"time_ms", {{"trace", c.trace}, {"features", c.features}, {"sharpness", c.sharpness}, {"blur", c.blur}, {"total", c.total}}},
-                              {"non_tracing_over_trace", ratio},
-                              {"impairments", impair.describe()},
-                              {"impairments_ms", {{"media", c.impair.media_ms}, {"retina", c.impair.field_ms}, {"colour", c.impair.colour_ms},
-                                                  {"total", c.impair.total_ms}}},
-                              {"impairments_over_trace", c.trace > 0 ? c.impair.total_ms / c.trace : 0.0},
-                              {"trace_rays_per_second", rate(c.trace)},
-                              {"raw_closest_hit_rays_per_second", raw},
-                              {"trace_over_raw", trace_vs_raw}};
-        if (!cuda) {
-          md += fmt::format("| {} | {} | {:.1f} | {:.1f} | {:.1f} | {:.1f} | {:.1f} ({:.1f} + {:.1f} + {:.1f}) | {:.1f} | {:.2f} | {:.2f} | {:.2f} |\n",
-                            scene.source, size_text, c.trace, c.features, c.sharpness, c.blur, c.impair.total_ms, c.impair.media_ms,
-                            c.impair.field_ms, c.impair.colour_ms, c.total, ratio, c.trace > 0 ? c.impair.total_ms / c.trace : 0.0,
-                            trace_vs_raw);
-        } else {
-          // The same case on the CPU, step for step in the same run: the ratio, and how far the devices agree
-          const StageTimes& cpu = vc.cpu;
-          const Agreement& g = vc.agreement;
-          const double speedup = c.total > 0 ? cpu.total / c.total : 0;
-          const double cpu_trace_vs_raw = raw_cpu > 0 ? rate(cpu.trace) / raw_cpu : 0;
-          const std::string parted =
-              g.first_corner_difference == 0
-                  ? std::string("the corners identical at every step")
-                  : fmt::format("the corners first differ at step {} ({} of {} corners; {} of {} grey pixels differ)", g.first_corner_difference,
-                                g.corners_differing, g.corners_total, g.grey_px_differing, g.grey_px);
-          fmt::print("  {:<28} {:>9}  CPU: trace {:6.2f}  features {:6.2f}  sharpness {:6.2f}  blur {:6.2f}  total {:6.2f} ms  → GPU {:.1f}× faster\n"
-                     "  {:<28} {:>9}  CPU: trace {:.0f} Mrays/s = {:.2f} of raw Embree closest-hit tracing of the same rays ({:.0f} Mrays/s)\n"
-                     "  {:<28} {:>9}  same fixations for {}/{} steps, {}; perceived mean |diff| ≤ {:.2e} while the same\n",
-                     "", "", cpu.trace, cpu.features, cpu.sharpness, cpu.blur, cpu.total, speedup, "", "", rate(cpu.trace) / 1e6, cpu_trace_vs_raw,
-                     raw_cpu / 1e6, "", "", g.same_fixations, g.steps, parted, g.perceived_mean_abs_diff);
-          row["cpu"] = {{"time_ms", {{"trace", cpu.trace}, {"features", cpu.features}, {"sharpness", cpu.sharpness}, {"blur", cpu.blur}, {"total", cpu.total}}},
-                        {"threads", threads.threads()},
-                        {"trace_rays_per_second", rate(cpu.trace)},
-                        {"raw_closest_hit_rays_per_second", raw_cpu},
-                        {"trace_over_raw", cpu_trace_vs_raw}};
-          row["cpu_over_gpu"] = speedup;
-          row["agreement"] = {{"steps", g.steps},
-                              {"same_fixations", g.same_fixations},
-                              {"first_corner_difference_step", g.first_corner_difference},
-                              {"corners_differing", g.corners_differing},
-                              {"corners_gpu", g.corners_total},
-                              {"grey_px_differing", g.grey_px_differing},
-                              {"grey_px", g.grey_px},
-                              {"perceived_mean_abs_diff", g.perceived_mean_abs_diff}};
-          const std::string first = g.first_corner_difference == 0
-                                        ? std::string("–")
-                                        : fmt::format("{} ({}/{} corners, {} grey px)", g.first_corner_difference, g.corners_differing,
-                                                      g.corners_total, g.grey_px_differing);
-          md += fmt::format("| {} | {} | {} | {:.2f} | {:.2f} | {:.2f} | {:.2f} | {:.2f} | {:.1f} | {:.1f} | {:.2f} | {:.2f} | {}/{} | {} | {:.1e} |\n",
-                            scene.source, size_text, availability().name, c.trace, c.features, c.sharpness, c.blur, c.total, cpu.total,
-                            speedup, trace_vs_raw, cpu_trace_vs_raw, g.same_fixations, g.steps, first, g.perceived_mean_abs_diff);
-        }
-        rows.push_back(row);
-      }
-    }
-    if (!o->json.empty())
-      write_json_file(o->json, {{"threads", threads.threads()}, {"eye", o->eye}, {"optics", optics_json(eye_spec.eye)}, {"device", describe_device(device)}, {"rows", rows}});
-    if (!o->markdown.empty()) write_text_file(o->markdown, md);
-    return 0;
-  };
+  return [o] { return run_bench_vision(*o); };
 }
 
 }  // namespace foveal::app
