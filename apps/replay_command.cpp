@@ -27,21 +27,176 @@ std::string cell(const std::optional<glm::dvec2>& p, int axis) {
   return p ? fmt::format("{:.2f}", (*p)[axis]) : std::string();
 }
 
+// The command's options as typed.
+struct ReplayOptions {
+  ViewOptions view;
+  RenderOptions render;
+  GazeOptions gaze;
+  std::string source, output, video, stats, stimulus;
+  double fps = 30, start = 0, duration = 0, live_timeout = 5;
+  int frames = 0;
+  bool no_reuse = false, mark = false, quiet = false;
+  std::string device = "auto";
+};
+
+// The sequence's settings from the options (checked).
+ReplaySettings replay_settings(const ReplayOptions& o) {
+  ReplaySettings settings;
+  settings.fps = o.fps;
+  settings.frames = o.frames;
+  settings.start_s = o.start;
+  settings.duration_s = o.duration;
+  settings.method = parse_fixation_method(o.gaze.fixation);
+  settings.fixation = resolve_fixation_params(o.gaze);
+  settings.stimulus = o.stimulus;
+  settings.live_timeout_s = o.live_timeout;
+  settings.reuse = !o.no_reuse;
+  validate(settings);
+  return settings;
+}
+
+// The frames' writer: frame_NNNNN.png (the gaze marked with --mark) and a line of frames.csv each.
+class FrameWriter {
+ public:
+  FrameWriter(const ReplayOptions& o) : o_(o), dir_(o.output) {
+    std::error_code ec;
+    std::filesystem::create_directories(dir_, ec);
+    if (ec) fail("{}: cannot create the output folder: {}", o.output, ec.message());
+    csv_path_ = (dir_ / "frames.csv").string();
+    csv_.open(csv_path_);
+    if (!csv_) fail("{}: cannot write", csv_path_);
+    csv_ << "frame,t_s,gaze_x,gaze_y,fix_x,fix_y,ao_rays,ms,reused,source_state\n";
+  }
+  void operator()(const ReplayFrame& f, const Frame& frame) {
+    const std::string path = (dir_ / fmt::format("frame_{:05d}.png", f.index)).string();
+    if (o_.mark) {
+      Image marked = frame.color;
+      mark_gaze(marked, f.render_gaze);
+      save_image(marked, path);
+    } else {
+      save_image(frame.color, path);
+    }
+    csv_ << fmt::format("{},{:.6f},{},{},{},{},{},{:.3f},{},{}\n", f.index, f.t_s, cell(f.gaze, 0), cell(f.gaze, 1), cell(f.fixation, 0),
+                        cell(f.fixation, 1), f.ao_rays, f.ms, f.reused ? 1 : 0, to_string(f.state));
+    csv_.flush();
+  }
+  void close() { csv_.close(); }
+  const std::string& csv_path() const { return csv_path_; }
+  std::string pattern() const { return (dir_ / "frame_%05d.png").string(); }
+
+ private:
+  const ReplayOptions& o_;
+  std::filesystem::path dir_;
+  std::string csv_path_;
+  std::ofstream csv_;
+};
+
+// A progress bar on a terminal for sequences that take a while.
+struct ProgressBar {
+  bool show = false, shown = false;
+  Timer clock;
+  void operator()(int done, int total) {
+    if (!show || clock.ms() < 1000) return;
+    shown = true;
+    const double rate = done / (clock.ms() / 1000);
+    const int width = 30, filled = total > 0 ? width * done / total : 0;
+    fmt::print(stderr, "\r  [{:<{}}] {}/{} frames  {:.1f} frames/s  ETA {:.0f} s ", std::string(filled, '#'), width, done, total, rate,
+               rate > 0 ? (total - done) / rate : 0.0);
+  }
+  ~ProgressBar() {
+    if (shown) fmt::print(stderr, "\r{:80}\r", "");
+  }
+};
+
+// --stats: the sequence's totals.
+nlohmann::json replay_stats_json(const ReplayOptions& o, const ReplaySummary& summary, const RenderParams& params,
+                                 const FrameRenderer& renderer, const Scene& scene, const std::optional<Recording>& recording, bool live,
+                                 int threads, ComputeDevice device) {
+  const std::string& source_name = o.source;
+  nlohmann::json j = {{"gaze_source", source_name},
+                    {"live", live},
+                    {"fixation", o.gaze.fixation},
+                    {"fps", o.fps},
+                    {"frames", summary.frames},
+                    {"reused_frames", summary.reused},
+                    {"width", params.width},
+                    {"height", params.height},
+                    {"mode", to_string(params.mode)},
+                    {"seed", params.seed},
+                    {"threads", threads},
+                    {"device", to_string(device)},
+                    {"scene", {{"source", scene.source}, {"triangles", renderer.triangles()}, {"build_ms", renderer.build_ms()}}},
+                    {"rays", {{"ao", summary.ao_rays}}},
+                    {"time_ms", {{"frames", summary.render_ms}, {"total", summary.wall_ms},
+                                 {"per_rendered_frame", summary.frames > summary.reused ? summary.render_ms / (summary.frames - summary.reused) : 0.0}}},
+                    {"stopped", summary.stopped},
+                    {"peak_rss_mib", peak_rss_mib()}};
+  if (recording) j["recording"] = {{"format", to_string(recording->format)}, {"screen_px", {recording->screen_px.x, recording->screen_px.y}},
+                                   {"samples", recording->samples.size()}};
+  return j;
+}
+
+void print_replay(const ReplayOptions& o, const ReplaySummary& summary, const RenderParams& params, const FrameRenderer& renderer,
+                  const std::string& csv_path, int threads) {
+  const std::string& source_name = o.source;
+  fmt::print("foveal replay: {} → {} frames at {:g} fps ({} rendered, {} reused: gaze unchanged), {}x{}, {} filter, {} threads\n",
+             source_name, summary.frames, o.fps, summary.frames - summary.reused, summary.reused, params.width, params.height,
+             o.gaze.fixation, threads);
+  fmt::print("  device   {}\n", renderer.describe());
+  fmt::print("  time     {:.1f} s ({:.0f} ms per rendered frame), {:.1f} M AO rays\n", summary.wall_ms / 1000,
+             summary.frames > summary.reused ? summary.render_ms / (summary.frames - summary.reused) : 0.0, summary.ao_rays / 1e6);
+  fmt::print("  wrote    {}/frame_00000.png … , {}", o.output, csv_path);
+  if (!o.video.empty()) fmt::print(", {}", o.video);
+  if (!o.stats.empty()) fmt::print(", {}", o.stats);
+  fmt::print("\n");
+}
+
+int run_replay(const ReplayOptions& o) {
+  const ThreadScope threads(o.view.threads);
+  const RenderParams params = resolve_render_params(o.view, o.render);
+  // The gaze screen's physical size: --display without its resolution (which is for the render)
+  const Display gaze_display = params.display;
+  const ReplaySettings settings = replay_settings(o);
+  const ReadOptions read = resolve_read_options(o.gaze, gaze_display);
+  const bool live = o.source.rfind("pupil://", 0) == 0;
+  if (!live && o.source.find("://") != std::string::npos)
+    fail("--gaze: unknown live source '{}' (live trackers: pupil://HOST:PORT[?surface=NAME])", o.source);
+  std::optional<Recording> recording;
+  if (!live) recording = read_recording_warned(o.source, read);
+
+  const Scene scene = load_scene(o.view.scene);
+  const Camera camera = resolve_camera(scene, o.view);
+  const ComputeDevice device = choose_device(o.device);
+  const std::unique_ptr<FrameRenderer> renderer = make_frame_renderer(scene, device, parse_trace_api(o.render.trace_api));
+  FrameWriter writer(o);
+  ReplaySummary summary;
+  {
+    ProgressBar progress;
+    progress.show = !o.quiet && isatty(fileno(stderr));
+    const ReplaySink sink = [&](const ReplayFrame& f, const Frame& frame) { writer(f, frame); };
+    const ReplayProgress bar = [&](int done, int total) { progress(done, total); };
+    if (live) {
+      PupilSource source(o.source, read.screen_px, read.min_confidence);
+      summary = replay_live(source, gaze_display, *renderer, camera, params, settings, sink, bar);
+    } else {
+      summary = replay_recording(*recording, gaze_display, *renderer, camera, params, settings, sink, bar);
+    }
+  }
+  writer.close();
+  if (!o.video.empty() && summary.frames > 0) encode_video(writer.pattern(), o.fps, o.video);
+  if (!o.stats.empty())
+    write_json_file(o.stats, replay_stats_json(o, summary, params, *renderer, scene, recording, live, threads.threads(), device));
+  if (!summary.stopped.empty()) fail("{}", summary.stopped);
+  if (!o.quiet) print_replay(o, summary, params, *renderer, writer.csv_path(), threads.threads());
+  return 0;
+}
+
 }  // namespace
 
 std::function<int()> add_replay_command(CLI::App& app) {
   auto* cmd = app.add_subcommand("replay", "render a foveated-AO sequence that follows a gaze recording or a live tracker");
-  struct Options {
-    ViewOptions view;
-    RenderOptions render;
-    GazeOptions gaze;
-    std::string source, output, video, stats, stimulus;
-    double fps = 30, start = 0, duration = 0, live_timeout = 5;
-    int frames = 0;
-    bool no_reuse = false, mark = false, quiet = false;
-    std::string device = "auto";
-  };
-  auto o = std::make_shared<Options>();
+
+  auto o = std::make_shared<ReplayOptions>();
   cmd->add_option("--gaze", o->source, "a recording (EyeLink .asc, Pupil gaze_positions.csv, Tobii .tsv, t,x,y CSV) or a live tracker: pupil://HOST:PORT[?surface=NAME]")
       ->required();
   add_view_options(*cmd, o->view);
@@ -61,117 +216,7 @@ std::function<int()> add_replay_command(CLI::App& app) {
   cmd->add_option("--stats", o->stats, "write a summary of the sequence as JSON");
   cmd->add_flag("-q,--quiet", o->quiet, "print nothing on success");
 
-  return [o] {
-    const ThreadScope threads(o->view.threads);
-    const RenderParams params = resolve_render_params(o->view, o->render);
-    // The gaze screen's physical size: --display without its resolution (which is for the render)
-    const Display gaze_display = params.display;
-    ReplaySettings settings;
-    settings.fps = o->fps;
-    settings.frames = o->frames;
-    settings.start_s = o->start;
-    settings.duration_s = o->duration;
-    settings.method = parse_fixation_method(o->gaze.fixation);
-    settings.fixation = resolve_fixation_params(o->gaze);
-    settings.stimulus = o->stimulus;
-    settings.live_timeout_s = o->live_timeout;
-    settings.reuse = !o->no_reuse;
-    validate(settings);
-    const ReadOptions read = resolve_read_options(o->gaze, gaze_display);
-    const bool live = o->source.rfind("pupil://", 0) == 0;
-    if (!live && o->source.find("://") != std::string::npos)
-      fail("--gaze: unknown live source '{}' (live trackers: pupil://HOST:PORT[?surface=NAME])", o->source);
-    std::optional<Recording> recording;
-    if (!live) recording = read_recording_warned(o->source, read);
-
-    const Scene scene = load_scene(o->view.scene);
-    const Camera camera = resolve_camera(scene, o->view);
-    const ComputeDevice device = choose_device(o->device);
-    const std::unique_ptr<FrameRenderer> renderer = make_frame_renderer(scene, device, parse_trace_api(o->render.trace_api));
-
-    namespace fs = std::filesystem;
-    std::error_code ec;
-    fs::create_directories(o->output, ec);
-    if (ec) fail("{}: cannot create the output folder: {}", o->output, ec.message());
-    const std::string csv_path = (fs::path(o->output) / "frames.csv").string();
-    std::ofstream csv(csv_path);
-    if (!csv) fail("{}: cannot write", csv_path);
-    csv << "frame,t_s,gaze_x,gaze_y,fix_x,fix_y,ao_rays,ms,reused,source_state\n";
-    const std::string pattern = (fs::path(o->output) / "frame_%05d.png").string();
-    auto sink = [&](const ReplayFrame& f, const Frame& frame) {
-      const std::string path = (fs::path(o->output) / fmt::format("frame_{:05d}.png", f.index)).string();
-      if (o->mark) {
-        Image marked = frame.color;
-        mark_gaze(marked, f.render_gaze);
-        save_image(marked, path);
-      } else {
-        save_image(frame.color, path);
-      }
-      csv << fmt::format("{},{:.6f},{},{},{},{},{},{:.3f},{},{}\n", f.index, f.t_s, cell(f.gaze, 0), cell(f.gaze, 1), cell(f.fixation, 0),
-                         cell(f.fixation, 1), f.ao_rays, f.ms, f.reused ? 1 : 0, to_string(f.state));
-      csv.flush();
-    };
-    // A progress bar on a terminal for sequences that take a while
-    const bool show = !o->quiet && isatty(fileno(stderr));
-    const Timer clock;
-    bool shown = false;
-    auto progress = [&](int done, int total) {
-      if (!show || clock.ms() < 1000) return;
-      shown = true;
-      const double rate = done / (clock.ms() / 1000);
-      const int width = 30, filled = total > 0 ? width * done / total : 0;
-      fmt::print(stderr, "\r  [{:<{}}] {}/{} frames  {:.1f} frames/s  ETA {:.0f} s ", std::string(filled, '#'), width, done, total,
-                 rate, rate > 0 ? (total - done) / rate : 0.0);
-    };
-
-    ReplaySummary summary;
-    std::string source_name = o->source;
-    if (live) {
-      PupilSource source(o->source, read.screen_px, read.min_confidence);
-      summary = replay_live(source, gaze_display, *renderer, camera, params, settings, sink, progress);
-    } else {
-      summary = replay_recording(*recording, gaze_display, *renderer, camera, params, settings, sink, progress);
-    }
-    if (shown) fmt::print(stderr, "\r{:80}\r", "");
-    csv.close();
-    if (!o->video.empty() && summary.frames > 0) encode_video(pattern, o->fps, o->video);
-    if (!o->stats.empty()) {
-      nlohmann::json j = {{"gaze_source", source_name},
-                          {"live", live},
-                          {"fixation", o->gaze.fixation},
-                          {"fps", o->fps},
-                          {"frames", summary.frames},
-                          {"reused_frames", summary.reused},
-                          {"width", params.width},
-                          {"height", params.height},
-                          {"mode", to_string(params.mode)},
-                          {"seed", params.seed},
-                          {"threads", threads.threads()},
-                          {"device", to_string(device)},
-                          {"scene", {{"source", scene.source}, {"triangles", renderer->triangles()}, {"build_ms", renderer->build_ms()}}},
-                          {"rays", {{"ao", summary.ao_rays}}},
-                          {"time_ms", {{"frames", summary.render_ms}, {"total", summary.wall_ms},
-                                       {"per_rendered_frame", summary.frames > summary.reused ? summary.render_ms / (summary.frames - summary.reused) : 0.0}}},
-                          {"stopped", summary.stopped},
-                          {"peak_rss_mib", peak_rss_mib()}};
-      if (recording) j["recording"] = {{"format", to_string(recording->format)}, {"screen_px", {recording->screen_px.x, recording->screen_px.y}},
-                                       {"samples", recording->samples.size()}};
-      write_json_file(o->stats, j);
-    }
-    if (!summary.stopped.empty()) fail("{}", summary.stopped);
-    if (o->quiet) return 0;
-    fmt::print("foveal replay: {} → {} frames at {:g} fps ({} rendered, {} reused: gaze unchanged), {}x{}, {} filter, {} threads\n",
-               source_name, summary.frames, o->fps, summary.frames - summary.reused, summary.reused, params.width, params.height,
-               o->gaze.fixation, threads.threads());
-    fmt::print("  device   {}\n", renderer->describe());
-    fmt::print("  time     {:.1f} s ({:.0f} ms per rendered frame), {:.1f} M AO rays\n", summary.wall_ms / 1000,
-               summary.frames > summary.reused ? summary.render_ms / (summary.frames - summary.reused) : 0.0, summary.ao_rays / 1e6);
-    fmt::print("  wrote    {}/frame_00000.png … , {}", o->output, csv_path);
-    if (!o->video.empty()) fmt::print(", {}", o->video);
-    if (!o->stats.empty()) fmt::print(", {}", o->stats);
-    fmt::print("\n");
-    return 0;
-  };
+  return [o] { return run_replay(*o); };
 }
 
 }  // namespace foveal::app
