@@ -123,16 +123,92 @@ Display resolve_display(const std::string& text, glm::ivec2 size) {
   return parse_display(text, defaults);
 }
 
+namespace {
+
+// The command's options as typed.
+struct RenderCommandOptions {
+  ViewOptions view;
+  RenderOptions render;
+  std::string gaze, output = "render.png", aov, mask, stats, plot, device = "auto";
+  int frames = 1;
+  bool quiet = false;
+};
+
+// Options → params (all checked before any work), the frames through the device-neutral renderer, the outputs.
+int run_render(const RenderCommandOptions& o) {
+  const ThreadScope threads(o.view.threads);
+  // Options → params (all validated before any work)
+  RenderParams p = resolve_render_params(o.view, o.render);
+  if (!o.gaze.empty()) p.gaze_px = parse_vec2("--gaze", o.gaze);
+  const TraceApi api = parse_trace_api(o.render.trace_api);
+  if (!o.plot.empty()) write_acuity_plot(p.display, p.foveation, o.plot);
+
+  const ComputeDevice device = choose_device(o.device);
+  if (o.frames > 1 && !p.reuse.temporal) fail("--frames: {} frames of a still view are the same image without --temporal", o.frames);
+
+  // Scene, renderer (it keeps the --temporal history between its frames), frames
+  const Scene scene = load_scene(o.view.scene);
+  const Camera camera = resolve_camera(scene, o.view);
+  const std::unique_ptr<FrameRenderer> renderer = make_frame_renderer(scene, device, api);
+  // A progress line on a terminal, for renders long enough to wait for
+  const bool show_progress = !o.quiet && isatty(fileno(stderr));
+  const Timer clock;
+  int shown = -1;
+  Frame frame;
+  uint64_t ao_rays = 0;
+  for (int k = 0; k < o.frames; ++k) {
+    FrameOptions options;
+    options.progress = [&](double fraction) {
+      const int percent = static_cast<int>(fraction * 100);
+      if (!show_progress || percent == shown || clock.ms() < 1000) return;
+      shown = percent;
+      if (o.frames > 1) fmt::print(stderr, "\r  frame {}/{}  AO {:3d}%  {:.1f} s", k + 1, o.frames, percent, clock.ms() / 1000);
+      else fmt::print(stderr, "\r  AO {:3d}%  {:.1f} s", percent, clock.ms() / 1000);
+    };
+    frame = renderer->render(camera, p, options);
+    ao_rays += frame.stats.ao_rays;
+  }
+  if (shown >= 0) fmt::print(stderr, "\r{:50}\r", "");
+  const size_t triangles = renderer->triangles();
+  const double build_ms = renderer->build_ms();
+  if (o.frames > 1 && !o.quiet)
+    fmt::print("  {} frames accumulated: {:.2f} M AO rays in all; the last frame's figures follow\n", o.frames, ao_rays / 1e6);
+
+  // Outputs
+  save_image(frame.color, o.output);
+  if (!o.aov.empty()) write_aovs(frame, o.aov);
+  if (!o.mask.empty()) save_image(budget_mask(frame, p.foveation.max_rays), o.mask, false);
+  if (!o.stats.empty()) write_json_file(o.stats, frame_stats_json(frame, p, scene, triangles, build_ms, threads.threads(),
+                                                                 to_string(device), renderer->trace_api()));
+  if (o.quiet) return 0;
+  const FrameStats& s = frame.stats;
+  fmt::print("foveal render: {} ({} triangles{}, BVH {:.0f} ms), camera '{}', {}x{}, {} mode, gaze ({:.0f}, {:.0f}), {} threads\n",
+             scene.source, triangles,
+             scene.skipped_triangles ? fmt::format(", {} degenerate skipped", scene.skipped_triangles) : "",
+             build_ms, camera.name, p.width, p.height, to_string(p.mode), frame.gaze_px.x, frame.gaze_px.y,
+             threads.threads());
+  fmt::print("  device   {}\n", renderer->describe());
+  fmt::print("  AO rays  {:.2f} M ({:.1f} per pixel, {}..{}), {:.1f} Mrays/s\n", s.ao_rays / 1e6, s.ao_rays_mean,
+             s.ao_rays_min, s.ao_rays_max, s.ao_ms > 0 ? s.ao_rays / (s.ao_ms * 1e3) : 0.0);
+  fmt::print("  time     primary {:.1f} ms, foveation {:.1f} ms, AO {:.1f} ms, shade {:.1f} ms, total {:.1f} ms\n",
+             s.primary_ms, s.foveation_ms, s.ao_ms, s.shade_ms, s.total_ms);
+  if (p.reuse.any())
+    fmt::print("  reuse    {}{}{}, history kept at {} pixels, {} pixels filtered, {:.1f} ms\n", p.reuse.adaptive ? "adaptive " : "",
+               p.reuse.denoise ? "denoise " : "", p.reuse.temporal ? "temporal" : "", s.history_pixels, s.denoised_pixels, s.reuse_ms);
+  fmt::print("  wrote    {}", o.output);
+  for (const auto& extra : {o.mask, o.stats, o.plot})
+    if (!extra.empty()) fmt::print(", {}", extra);
+  if (!o.aov.empty()) fmt::print(", AOVs {}", o.aov);
+  fmt::print("\n");
+  return 0;
+}
+
+}  // namespace
+
 std::function<int()> add_render_command(CLI::App& app) {
   auto* cmd = app.add_subcommand("render", "render one frame with gaze-dependent ambient occlusion");
-  struct Options {
-    ViewOptions view;
-    RenderOptions render;
-    std::string gaze, output = "render.png", aov, mask, stats, plot, device = "auto";
-    int frames = 1;
-    bool quiet = false;
-  };
-  auto o = std::make_shared<Options>();
+
+  auto o = std::make_shared<RenderCommandOptions>();
   add_view_options(*cmd, o->view);
   cmd->add_option("--gaze", o->gaze, "gaze point X,Y in render pixels, origin top-left (default: image centre; may lie off the image)");
   add_render_options(*cmd, o->render);
@@ -146,73 +222,7 @@ std::function<int()> add_render_command(CLI::App& app) {
       ->capture_default_str()->check(CLI::Range(1, 100000));
   cmd->add_flag("-q,--quiet", o->quiet, "print nothing on success");
 
-  return [o] {
-    const ThreadScope threads(o->view.threads);
-    // Options → params (all validated before any work)
-    RenderParams p = resolve_render_params(o->view, o->render);
-    if (!o->gaze.empty()) p.gaze_px = parse_vec2("--gaze", o->gaze);
-    const TraceApi api = parse_trace_api(o->render.trace_api);
-    if (!o->plot.empty()) write_acuity_plot(p.display, p.foveation, o->plot);
-
-    const ComputeDevice device = choose_device(o->device);
-    if (o->frames > 1 && !p.reuse.temporal) fail("--frames: {} frames of a still view are the same image without --temporal", o->frames);
-
-    // Scene, renderer (it keeps the --temporal history between its frames), frames
-    const Scene scene = load_scene(o->view.scene);
-    const Camera camera = resolve_camera(scene, o->view);
-    const std::unique_ptr<FrameRenderer> renderer = make_frame_renderer(scene, device, api);
-    // A progress line on a terminal, for renders long enough to wait for
-    const bool show_progress = !o->quiet && isatty(fileno(stderr));
-    const Timer clock;
-    int shown = -1;
-    Frame frame;
-    uint64_t ao_rays = 0;
-    for (int k = 0; k < o->frames; ++k) {
-      FrameOptions options;
-      options.progress = [&](double fraction) {
-        const int percent = static_cast<int>(fraction * 100);
-        if (!show_progress || percent == shown || clock.ms() < 1000) return;
-        shown = percent;
-        if (o->frames > 1) fmt::print(stderr, "\r  frame {}/{}  AO {:3d}%  {:.1f} s", k + 1, o->frames, percent, clock.ms() / 1000);
-        else fmt::print(stderr, "\r  AO {:3d}%  {:.1f} s", percent, clock.ms() / 1000);
-      };
-      frame = renderer->render(camera, p, options);
-      ao_rays += frame.stats.ao_rays;
-    }
-    if (shown >= 0) fmt::print(stderr, "\r{:50}\r", "");
-    const size_t triangles = renderer->triangles();
-    const double build_ms = renderer->build_ms();
-    if (o->frames > 1 && !o->quiet)
-      fmt::print("  {} frames accumulated: {:.2f} M AO rays in all; the last frame's figures follow\n", o->frames, ao_rays / 1e6);
-
-    // Outputs
-    save_image(frame.color, o->output);
-    if (!o->aov.empty()) write_aovs(frame, o->aov);
-    if (!o->mask.empty()) save_image(budget_mask(frame, p.foveation.max_rays), o->mask, false);
-    if (!o->stats.empty()) write_json_file(o->stats, frame_stats_json(frame, p, scene, triangles, build_ms, threads.threads(),
-                                                                   to_string(device), renderer->trace_api()));
-    if (o->quiet) return 0;
-    const FrameStats& s = frame.stats;
-    fmt::print("foveal render: {} ({} triangles{}, BVH {:.0f} ms), camera '{}', {}x{}, {} mode, gaze ({:.0f}, {:.0f}), {} threads\n",
-               scene.source, triangles,
-               scene.skipped_triangles ? fmt::format(", {} degenerate skipped", scene.skipped_triangles) : "",
-               build_ms, camera.name, p.width, p.height, to_string(p.mode), frame.gaze_px.x, frame.gaze_px.y,
-               threads.threads());
-    fmt::print("  device   {}\n", renderer->describe());
-    fmt::print("  AO rays  {:.2f} M ({:.1f} per pixel, {}..{}), {:.1f} Mrays/s\n", s.ao_rays / 1e6, s.ao_rays_mean,
-               s.ao_rays_min, s.ao_rays_max, s.ao_ms > 0 ? s.ao_rays / (s.ao_ms * 1e3) : 0.0);
-    fmt::print("  time     primary {:.1f} ms, foveation {:.1f} ms, AO {:.1f} ms, shade {:.1f} ms, total {:.1f} ms\n",
-               s.primary_ms, s.foveation_ms, s.ao_ms, s.shade_ms, s.total_ms);
-    if (p.reuse.any())
-      fmt::print("  reuse    {}{}{}, history kept at {} pixels, {} pixels filtered, {:.1f} ms\n", p.reuse.adaptive ? "adaptive " : "",
-                 p.reuse.denoise ? "denoise " : "", p.reuse.temporal ? "temporal" : "", s.history_pixels, s.denoised_pixels, s.reuse_ms);
-    fmt::print("  wrote    {}", o->output);
-    for (const auto& extra : {o->mask, o->stats, o->plot})
-      if (!extra.empty()) fmt::print(", {}", extra);
-    if (!o->aov.empty()) fmt::print(", AOVs {}", o->aov);
-    fmt::print("\n");
-    return 0;
-  };
+  return [o] { return run_render(*o); };
 }
 
 }  // namespace foveal::app

@@ -14,21 +14,98 @@
 
 namespace foveal::app {
 
+namespace {
+
+// The command's options as typed.
+struct ViewCommandOptions {
+  ViewOptions view;
+  RenderOptions render;
+  GazeOptions gaze;
+  std::string mode = "foveated", source = "mouse", stimulus, overlays = "gaze", screenshot, window_screenshot, eye = "healthy";
+  double speed = 1, starvation = 0.015, timeout = 600;
+  std::optional<double> pupil;  // not given: the eye's (a profile's pupil_mm, else 3.5)
+  float diff_gain = 8;
+  int frames = 0, blink_every = 0;
+  bool no_panel = false, no_progressive = false;
+  std::string device = "auto";
+};
+
+// Options → the session's settings, the gaze input and the window; runs until the window closes.
+int run_view(const ViewCommandOptions& o) {
+  const ThreadScope threads(o.view.threads);
+  ViewSettings s;
+  s.render = resolve_render_params(o.view, o.render);
+  const ComputeDevice device = choose_device(o.device);
+  s.cuda = device == ComputeDevice::cuda;
+  s.mode = parse_view_mode(o.mode);
+  s.eye = o.eye;
+  s.eye_overrides.pupil_diameter_mm = o.pupil;
+  s.vision.starvation = o.starvation;
+  s.vision.blink_every = o.blink_every;
+  s.diff_gain = o.diff_gain;
+  s.progressive = !o.no_progressive;
+  resolve(s);
+  WindowOptions w;
+  w.overlays = parse_overlays(o.overlays);
+  w.frames = o.frames;
+  w.screenshot = o.screenshot;
+  w.window_screenshot = o.window_screenshot;
+  w.panel = !o.no_panel;
+  w.converge_timeout_s = o.timeout;
+  if (o.frames > 0 && o.screenshot.empty() && o.window_screenshot.empty()) fail("--frames: give --screenshot or --window-screenshot too (what the run is for)");
+  if (o.frames == 0 && !o.window_screenshot.empty()) fail("--window-screenshot: needs --frames");
+  if (!(o.speed > 0)) fail("--speed: must be positive, got {}", o.speed);
+  if (!(o.timeout > 0)) fail("--timeout: must be positive seconds, got {}", o.timeout);
+
+  // The gaze: the mouse, a fixed point, a recording or a tracker
+  GazeInput gaze;
+  const glm::ivec2 render_px(s.render.width, s.render.height);
+  gaze.display = s.render.display;
+  if (o.gaze.fixation == "none") gaze.filter.reset();
+  else gaze.filter = parse_fixation_method(o.gaze.fixation);
+  gaze.fixation = resolve_fixation_params(o.gaze);
+  std::string source_name = o.source;
+  if (o.source == "mouse") {
+    gaze.source = std::make_unique<MouseSource>(render_px);
+    gaze.mapping = make_screen_mapping(render_px, render_px);
+  } else if (o.source.find("://") != std::string::npos) {
+    if (o.source.rfind("pupil://", 0) != 0)
+      fail("--gaze: unknown live source '{}' (live trackers: pupil://HOST:PORT[?surface=NAME])", o.source);
+    const ReadOptions read = resolve_read_options(o.gaze, s.render.display);
+    gaze.source = std::make_unique<PupilSource>(o.source, read.screen_px, read.min_confidence);
+    gaze.mapping = make_screen_mapping(gaze.source->screen_px(), render_px, o.stimulus);
+  } else if (std::regex_match(o.source, std::regex(R"(\s*[-+0-9.eE]+\s*,\s*[-+0-9.eE]+\s*)")) && !std::filesystem::exists(o.source)) {
+    gaze.fixed_px = parse_vec2("--gaze", o.source);
+  } else {
+    const ReadOptions read = resolve_read_options(o.gaze, s.render.display);
+    Recording recording = read_recording_warned(o.source, read);
+    if (recording.samples.empty()) fail("{}: no samples", recording.source);
+    const glm::ivec2 screen = recording.screen_px;
+    gaze.source = std::make_unique<RecordingPlayback>(std::move(recording), o.speed);
+    gaze.mapping = make_screen_mapping(screen, render_px, o.stimulus);
+  }
+
+  const Scene scene = load_scene(o.view.scene);
+  const Camera camera = resolve_camera(scene, o.view);
+  const Tracer tracer(scene, parse_trace_api(o.render.trace_api));
+  ViewSession session(scene, tracer, camera, s, std::move(gaze));
+  w.title = fmt::format("foveal view — {} ({} triangles)", scene.source, tracer.triangles());
+  run_window(session, w);
+  if (!o.screenshot.empty() && o.frames > 0) {
+    const ViewStatus st = session.status();
+    fmt::print("foveal view: {} mode, {}x{}, gaze {}, {} → {} ({}, {:.0f} ms)\n", to_string(s.mode), s.render.width,
+               s.render.height, source_name, st.stage, o.screenshot, st.converged ? "converged" : "not converged", st.render_ms);
+    fmt::print("  device   {}\n", describe_device(device));
+  }
+  return 0;
+}
+
+}  // namespace
+
 std::function<int()> add_view_command(CLI::App& app) {
   auto* cmd = app.add_subcommand("view", "interactive viewer: foveated AO, the reference, both side by side, or the simulated eye, following the mouse, a recording or a live tracker");
-  struct Options {
-    ViewOptions view;
-    RenderOptions render;
-    GazeOptions gaze;
-    std::string mode = "foveated", source = "mouse", stimulus, overlays = "gaze", screenshot, window_screenshot, eye = "healthy";
-    double speed = 1, starvation = 0.015, timeout = 600;
-    std::optional<double> pupil;  // not given: the eye's (a profile's pupil_mm, else 3.5)
-    float diff_gain = 8;
-    int frames = 0, blink_every = 0;
-    bool no_panel = false, no_progressive = false;
-    std::string device = "auto";
-  };
-  auto o = std::make_shared<Options>();
+
+  auto o = std::make_shared<ViewCommandOptions>();
   o->view.eye_option = "--from";
   o->render.mode_option = false;
   o->gaze.fixation = to_string(kRecommendedFixationMethod);
@@ -61,74 +138,7 @@ std::function<int()> add_view_command(CLI::App& app) {
   cmd->add_flag("--no-panel", o->no_panel, "start with the parameter panel hidden (Tab toggles it)");
 
   add_device_option(*cmd, o->device);
-  return [o] {
-    const ThreadScope threads(o->view.threads);
-    ViewSettings s;
-    s.render = resolve_render_params(o->view, o->render);
-    const ComputeDevice device = choose_device(o->device);
-    s.cuda = device == ComputeDevice::cuda;
-    s.mode = parse_view_mode(o->mode);
-    s.eye = o->eye;
-    s.eye_overrides.pupil_diameter_mm = o->pupil;
-    s.vision.starvation = o->starvation;
-    s.vision.blink_every = o->blink_every;
-    s.diff_gain = o->diff_gain;
-    s.progressive = !o->no_progressive;
-    resolve(s);
-    WindowOptions w;
-    w.overlays = parse_overlays(o->overlays);
-    w.frames = o->frames;
-    w.screenshot = o->screenshot;
-    w.window_screenshot = o->window_screenshot;
-    w.panel = !o->no_panel;
-    w.converge_timeout_s = o->timeout;
-    if (o->frames > 0 && o->screenshot.empty() && o->window_screenshot.empty()) fail("--frames: give --screenshot or --window-screenshot too (what the run is for)");
-    if (o->frames == 0 && !o->window_screenshot.empty()) fail("--window-screenshot: needs --frames");
-    if (!(o->speed > 0)) fail("--speed: must be positive, got {}", o->speed);
-    if (!(o->timeout > 0)) fail("--timeout: must be positive seconds, got {}", o->timeout);
-
-    // The gaze: the mouse, a fixed point, a recording or a tracker
-    GazeInput gaze;
-    const glm::ivec2 render_px(s.render.width, s.render.height);
-    gaze.display = s.render.display;
-    if (o->gaze.fixation == "none") gaze.filter.reset();
-    else gaze.filter = parse_fixation_method(o->gaze.fixation);
-    gaze.fixation = resolve_fixation_params(o->gaze);
-    std::string source_name = o->source;
-    if (o->source == "mouse") {
-      gaze.source = std::make_unique<MouseSource>(render_px);
-      gaze.mapping = make_screen_mapping(render_px, render_px);
-    } else if (o->source.find("://") != std::string::npos) {
-      if (o->source.rfind("pupil://", 0) != 0)
-        fail("--gaze: unknown live source '{}' (live trackers: pupil://HOST:PORT[?surface=NAME])", o->source);
-      const ReadOptions read = resolve_read_options(o->gaze, s.render.display);
-      gaze.source = std::make_unique<PupilSource>(o->source, read.screen_px, read.min_confidence);
-      gaze.mapping = make_screen_mapping(gaze.source->screen_px(), render_px, o->stimulus);
-    } else if (std::regex_match(o->source, std::regex(R"(\s*[-+0-9.eE]+\s*,\s*[-+0-9.eE]+\s*)")) && !std::filesystem::exists(o->source)) {
-      gaze.fixed_px = parse_vec2("--gaze", o->source);
-    } else {
-      const ReadOptions read = resolve_read_options(o->gaze, s.render.display);
-      Recording recording = read_recording_warned(o->source, read);
-      if (recording.samples.empty()) fail("{}: no samples", recording.source);
-      const glm::ivec2 screen = recording.screen_px;
-      gaze.source = std::make_unique<RecordingPlayback>(std::move(recording), o->speed);
-      gaze.mapping = make_screen_mapping(screen, render_px, o->stimulus);
-    }
-
-    const Scene scene = load_scene(o->view.scene);
-    const Camera camera = resolve_camera(scene, o->view);
-    const Tracer tracer(scene, parse_trace_api(o->render.trace_api));
-    ViewSession session(scene, tracer, camera, s, std::move(gaze));
-    w.title = fmt::format("foveal view — {} ({} triangles)", scene.source, tracer.triangles());
-    run_window(session, w);
-    if (!o->screenshot.empty() && o->frames > 0) {
-      const ViewStatus st = session.status();
-      fmt::print("foveal view: {} mode, {}x{}, gaze {}, {} → {} ({}, {:.0f} ms)\n", to_string(s.mode), s.render.width,
-                 s.render.height, source_name, st.stage, o->screenshot, st.converged ? "converged" : "not converged", st.render_ms);
-      fmt::print("  device   {}\n", describe_device(device));
-    }
-    return 0;
-  };
+  return [o] { return run_view(*o); };
 }
 
 }  // namespace foveal::app
