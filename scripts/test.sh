@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
 # The whole test suite, printing how long each part took:
+#   0. the sources' format (.clang-format);
 #   1. the Release build (set-up's own, continued: the command line, the Python module, the tests)
 #      and its tests, the layer check among them;
 #   2. the Python package's tests (pytest) against that build's module and command line, and the
@@ -12,6 +13,10 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 jobs="$(nproc)"
 source scripts/timing.sh
+
+echo "== Format (.clang-format)"
+scripts/check-format.sh
+phase "format"
 
 echo "== Python environment (.venv; a no-op where set-up made it)"
 scripts/python-env.sh
