@@ -41,8 +41,7 @@ namespace {
 
 // bench ao's options as typed.
 struct BenchAoOptions {
-  std::string scene, size = "840x525", display = "47.5,30,60,1680,1050", json, markdown, trace_api = "stream",
-              device = "auto";
+  std::string scene, size = "840x525", display = "47.5,30,60,1680,1050", json, markdown, trace_api = "stream", device = "auto";
   std::vector<std::string> cameras;
   int max_rays = 400, threads = 0, repeats = 1;
   double gamma = 2;
@@ -75,8 +74,8 @@ int run_bench_ao(const BenchAoOptions& o) {
     g.cameras = p.cameras;
     g.repeats = o.full ? 20 : 5;
     g.cpu_repeats = p.repeats;
-    fmt::print("foveal bench ao: {}, {}x{}, n_max {}, gamma {:g}; GPU {} frames per case (median), CPU {} ({} threads)\n",
-               spec, size.x, size.y, o.max_rays, o.gamma, g.repeats, g.cpu_repeats, threads.threads());
+    fmt::print("foveal bench ao: {}, {}x{}, n_max {}, gamma {:g}; GPU {} frames per case (median), CPU {} ({} threads)\n", spec, size.x,
+               size.y, o.max_rays, o.gamma, g.repeats, g.cpu_repeats, threads.threads());
     const gpu::BenchResult result =
         gpu::run_benchmark(scene, g, [](const std::string& line) { fmt::print("  {}\n", line), std::fflush(stdout); });
     const std::string table = gpu::to_markdown(result);
@@ -109,7 +108,8 @@ std::function<int()> add_bench_command(CLI::App& app) {
   auto* ao = bench->add_subcommand("ao", "the first paper's Table 1: full-frame vs foveated AO for 3 cameras × 6 gaze points");
 
   auto o = std::make_shared<BenchAoOptions>();
-  ao->add_option("--scene", o->scene, "scene (default: scenes/dragon-box.json, the paper's dragon in a box; builtin:box when the dragon is absent)");
+  ao->add_option("--scene", o->scene,
+                 "scene (default: scenes/dragon-box.json, the paper's dragon in a box; builtin:box when the dragon is absent)");
   ao->add_option("--camera", o->cameras, "camera names to measure (default: all of the scene's)")->delimiter(',');
   ao->add_option("--size", o->size, "render size WxH")->capture_default_str();
   ao->add_option("--display", o->display, "display W_CM,H_CM,DIST_CM[,RES_X,RES_Y]")->capture_default_str();

@@ -23,15 +23,13 @@ namespace {
 
 // The gaze a replay of the recording renders at each of `frames` frames (the fixation filter's
 // output, the image centre before the first fixation), without rendering them.
-std::vector<glm::dvec2> recording_gaze_path(const std::string& path, const RenderParams& params, double start_s, double fps,
-                                            int frames) {
+std::vector<glm::dvec2> recording_gaze_path(const std::string& path, const RenderParams& params, double start_s, double fps, int frames) {
   const Recording recording = read_recording_warned(path, ReadOptions{});
   ReplaySettings settings;
   settings.fps = fps;
   settings.frames = frames;
   settings.start_s = start_s;
-  if (start_s > recording.duration_s())
-    fail("--start: {} s is past the end of {} ({:.3f} s long)", start_s, path, recording.duration_s());
+  if (start_s > recording.duration_s()) fail("--start: {} s is past the end of {} ({:.3f} s long)", start_s, path, recording.duration_s());
   std::vector<glm::dvec2> gazes;
   for (const ReplayFrame& f : replay_gazes(recording, params.display, params, settings)) gazes.push_back(f.render_gaze);
   return gazes;
@@ -147,8 +145,8 @@ int run_sequence(const BenchQualityOptions& o, const Scene& scene, const Tracer&
   std::string gaze_text;
   if (o.recording.empty()) {
     q.gazes = fixation_path(p.gazes.front().second, p.render, o.frames, o.fixation_frames);
-    gaze_text = fmt::format("gaze around {} at {:.0f},{:.0f} (a fixation every {} frames)", p.gazes.front().first,
-                            p.gazes.front().second.x, p.gazes.front().second.y, o.fixation_frames);
+    gaze_text = fmt::format("gaze around {} at {:.0f},{:.0f} (a fixation every {} frames)", p.gazes.front().first, p.gazes.front().second.x,
+                            p.gazes.front().second.y, o.fixation_frames);
   } else {
     q.gazes = recording_gaze_path(o.recording, p.render, o.start, o.fps, o.frames);
     gaze_text = fmt::format("gaze of {} from {:g} s at {:g} fps", o.recording, o.start, o.fps);
@@ -171,17 +169,19 @@ int run_sequence(const BenchQualityOptions& o, const Scene& scene, const Tracer&
 // The single-frame sweep with its Pareto front and the recommended configuration.
 int run_sweep(const BenchQualityOptions& o, const Scene& scene, const Tracer& tracer, const Camera& camera, const std::string& spec,
               const QualitySweepParams& p, int threads) {
-  fmt::print("foveal bench quality: {} ({} triangles), camera {}, {}x{}, {} threads; {} gamma × {} n_max × {} method(s) × {} beta at {} gaze point(s)\n",
-             spec, tracer.triangles(), p.camera_name, p.render.width, p.render.height, threads, p.gammas.size(), p.max_rays.size(),
-             p.methods.size(), p.betas.size(), p.gazes.size());
+  fmt::print(
+      "foveal bench quality: {} ({} triangles), camera {}, {}x{}, {} threads; {} gamma × {} n_max × {} method(s) × {} beta at {} gaze "
+      "point(s)\n",
+      spec, tracer.triangles(), p.camera_name, p.render.width, p.render.height, threads, p.gammas.size(), p.max_rays.size(),
+      p.methods.size(), p.betas.size(), p.gazes.size());
   for (const auto& [label, g] : p.gazes) fmt::print("  gaze {} at {:.0f},{:.0f}\n", label, g.x, g.y);
   const QualitySweepResult result = run_quality_sweep(scene, tracer, camera, p, print_line);
   const std::string table = to_markdown(result);
   fmt::print("\n{}\n", table);
   const FoveationParams defaults;
   const int pick = recommended_point(result.points, o.max_error, o.max_flicker);
-  const std::string rule =
-      fmt::format("fastest with the fovea within noise, acuity-weighted error ≤ {:g}× and flicker ≤ {:g}× noise", o.max_error, o.max_flicker);
+  const std::string rule = fmt::format("fastest with the fovea within noise, acuity-weighted error ≤ {:g}× and flicker ≤ {:g}× noise",
+                                       o.max_error, o.max_flicker);
   if (pick >= 0) {
     const QualityPoint& q = result.points[pick];
     fmt::print("recommended ({}): {}, gamma {:g}, n_max {}, beta {:g} — {:.2f}× faster, error {:.2f}×, flicker {:.2f}× noise\n", rule,
@@ -191,9 +191,10 @@ int run_sweep(const BenchQualityOptions& o, const Scene& scene, const Tracer& tr
   }
   for (const QualityPoint& q : result.points)
     if (q.gamma == defaults.gamma && q.max_rays == defaults.max_rays && q.beta == defaults.beta)
-      fmt::print("{} at the defaults (gamma {:g}, n_max {}, beta {:g}): {:.2f}× faster, error {:.2f}×, flicker {:.2f}× noise, fovea {}, {}\n",
-                 q.method, q.gamma, q.max_rays, q.beta, q.speedup, q.weighted_ratio, q.flicker_ratio,
-                 q.fovea_within_noise ? "within noise" : "outside noise", q.pareto ? "on the Pareto front" : "not on the Pareto front");
+      fmt::print(
+          "{} at the defaults (gamma {:g}, n_max {}, beta {:g}): {:.2f}× faster, error {:.2f}×, flicker {:.2f}× noise, fovea {}, {}\n",
+          q.method, q.gamma, q.max_rays, q.beta, q.speedup, q.weighted_ratio, q.flicker_ratio,
+          q.fovea_within_noise ? "within noise" : "outside noise", q.pareto ? "on the Pareto front" : "not on the Pareto front");
   if (!o.json.empty()) {
     auto j = to_json(result);
     j["repeats"] = p.repeats;
@@ -227,34 +228,43 @@ int run_bench_quality(BenchQualityOptions& o) {
 
 std::function<int()> add_bench_quality_command(CLI::App& bench) {
   auto* cmd = bench.add_subcommand(
-      "quality", "speed–quality trade-off: sweeps γ, n_max, β and the methods (the paper's, adaptive rays, denoising; temporal "
+      "quality",
+      "speed–quality trade-off: sweeps γ, n_max, β and the methods (the paper's, adaptive rays, denoising; temporal "
       "reuse with --sequence), times each against the full frame, measures its error per band, and draws the Pareto front");
 
   auto o = std::make_shared<BenchQualityOptions>();
-  cmd->add_option("--scene", o->scene, "scene (default: scenes/dragon-box.json, the paper's dragon in a box; builtin:box when the dragon is absent)");
+  cmd->add_option("--scene", o->scene,
+                  "scene (default: scenes/dragon-box.json, the paper's dragon in a box; builtin:box when the dragon is absent)");
   cmd->add_option("--camera", o->camera, "camera of the scene (default: its first)");
   cmd->add_option("--size", o->size, "render size WxH")->capture_default_str();
   cmd->add_option("--display", o->display, "display W_CM,H_CM,DIST_CM[,RES_X,RES_Y]")->capture_default_str();
   auto* gamma = cmd->add_option("--gamma", o->gamma, "γ values to sweep, comma-separated")->capture_default_str();
   auto* max_rays = cmd->add_option("--max-rays", o->max_rays, "n_max values to sweep, comma-separated")->capture_default_str();
   auto* beta = cmd->add_option("--beta", o->beta, "β values to sweep, comma-separated")->capture_default_str();
-  auto* configs = cmd->add_option("--configs", o->configs,
-                  "methods, comma-separated: paper (the paper's), or adaptive, denoise, temporal joined by '+' (temporal only "
-                  "with --sequence; --sequence's default: paper,adaptive+denoise,temporal,temporal+adaptive,temporal+adaptive+denoise; "
-                  "--full's: paper,adaptive,denoise,adaptive+denoise)")
-      ->capture_default_str();
+  auto* configs =
+      cmd->add_option("--configs", o->configs,
+                      "methods, comma-separated: paper (the paper's), or adaptive, denoise, temporal joined by '+' (temporal only "
+                      "with --sequence; --sequence's default: paper,adaptive+denoise,temporal,temporal+adaptive,temporal+adaptive+denoise; "
+                      "--full's: paper,adaptive,denoise,adaptive+denoise)")
+          ->capture_default_str();
   cmd->add_option("--tolerance", o->tolerance, "every method's τ(E) scale (adaptive rays and denoising; as render --tolerance)")
-      ->capture_default_str()->check(CLI::PositiveNumber);
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
   cmd->add_option("--denoise-radius", o->denoise_radius, "every method's filter footprint factor (as render --denoise-radius)")
-      ->capture_default_str()->check(CLI::Range(0.0, 100.0));
-  auto* gaze_names = cmd->add_option("--gazes", o->gaze_names,
-                  "gaze points by name, comma-separated: object (the pixel nearest the object's centroid), centre, top-left, "
-                  "top-right, bottom-left, bottom-right, or all")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 100.0));
+  auto* gaze_names =
+      cmd->add_option("--gazes", o->gaze_names,
+                      "gaze points by name, comma-separated: object (the pixel nearest the object's centroid), centre, top-left, "
+                      "top-right, bottom-left, bottom-right, or all")
+          ->capture_default_str();
   cmd->add_option("--gaze", o->gazes, "an explicit gaze point X,Y in render pixels (repeatable; replaces --gazes)");
-  cmd->add_option("--reference-rays", o->reference_rays, "rays per pixel of the full-frame reference")->capture_default_str()->check(CLI::Range(1, 4096));
+  cmd->add_option("--reference-rays", o->reference_rays, "rays per pixel of the full-frame reference")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 4096));
   cmd->add_option("--ellipse", o->ellipse, "horizontal:vertical ratio a of the elliptical ROI")->capture_default_str();
-  cmd->add_option("--ambient-constant", o->ambient, "k_const away from the gaze: a number, or auto (mean AO visibility of the fovea)")->capture_default_str();
+  cmd->add_option("--ambient-constant", o->ambient, "k_const away from the gaze: a number, or auto (mean AO visibility of the fovea)")
+      ->capture_default_str();
   cmd->add_option("--seed", o->seed, "seed of the foveated frames (the references use seed+1 and seed+2)")->capture_default_str();
   cmd->add_option("--repeats", o->repeats, "timed frames per configuration (median)")->capture_default_str()->check(CLI::Range(1, 100));
   cmd->add_option("--max-error", o->max_error,
@@ -264,14 +274,17 @@ std::function<int()> add_bench_quality_command(CLI::App& bench) {
   cmd->add_option("--max-flicker", o->max_flicker, "… and whose flicker after a saccade is at most this many times the reference's noise")
       ->capture_default_str();
   cmd->add_option("--saccade", o->saccade, "flicker: the saccade between the two frames compared, degrees (horizontal)")
-      ->capture_default_str()->check(CLI::Range(0.0, 90.0));
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 90.0));
   cmd->add_flag("--full", o->full,
                 "full run: γ 1,1.5,2,2.5,3,4 × n_max 50,100,200,300,400 × β 0,0.25,0.5,1,2,4 × four methods at all six gaze "
                 "points, 3 frames each (default: a quick grid at two gaze points)");
   cmd->add_option("--threads", o->threads, "worker threads (0 = all cores)")->capture_default_str()->check(CLI::Range(0, 4096));
   cmd->add_option("--json", o->json, "write every configuration, gaze point and band as JSON");
   cmd->add_option("--markdown", o->markdown, "write the table as Markdown");
-  cmd->add_option("--plot", o->plot, "the Pareto plot: speed-up against the acuity-weighted error and the flicker (.png or .svg; with --sequence, its configurations)");
+  cmd->add_option(
+      "--plot", o->plot,
+      "the Pareto plot: speed-up against the acuity-weighted error and the flicker (.png or .svg; with --sequence, its configurations)");
   cmd->add_flag("--sequence", o->sequence,
                 "sequence mode: the paper's method, adaptive+denoise and temporal reuse (alone, +adaptive, +denoise) along a camera "
                 "orbit with the gaze fixating around the first gaze point (--gazes object), each frame judged against the reference "
@@ -282,14 +295,18 @@ std::function<int()> add_bench_quality_command(CLI::App& bench) {
       ->capture_default_str();
   cmd->add_option("--frames", o->frames, "--sequence: frames")->capture_default_str()->check(CLI::Range(2, 100000));
   cmd->add_option("--orbit", o->orbit, "--sequence: the camera's orbit about the look point over the frames, degrees")
-      ->capture_default_str()->check(CLI::Range(-360.0, 360.0));
+      ->capture_default_str()
+      ->check(CLI::Range(-360.0, 360.0));
   cmd->add_option("--fixation-frames", o->fixation_frames, "--sequence: frames per fixation (a 1° saccade between them)")
-      ->capture_default_str()->check(CLI::Range(1, 100000));
+      ->capture_default_str()
+      ->check(CLI::Range(1, 100000));
   cmd->add_option("--recording", o->recording,
                   "--sequence: the gaze of a recording (EyeLink .asc, Pupil gaze_positions.csv, Tobii .tsv, t,x,y CSV) instead of "
                   "the synthetic fixations, as `replay` follows it: the causal fixation filter's output at each frame, the "
                   "recording's screen mapped onto the render");
-  cmd->add_option("--start", o->start, "--recording: start this many seconds after its first sample")->capture_default_str()->check(CLI::Range(0.0, 1e9));
+  cmd->add_option("--start", o->start, "--recording: start this many seconds after its first sample")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 1e9));
   cmd->add_option("--fps", o->fps, "--recording: frames per second of gaze time")->capture_default_str()->check(CLI::Range(0.1, 10000.0));
 
   return [o, gamma, max_rays, beta, gaze_names, configs] {

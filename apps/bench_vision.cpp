@@ -57,7 +57,8 @@ ImageError compare_images(const Image& a, const Image& b) {
 }  // namespace
 
 std::function<int()> add_bench_blur_command(CLI::App& bench) {
-  auto* cmd = bench.add_subcommand("blur", "the variable blur against a distributed-ray-traced thin lens, for near, middle and far fixations");
+  auto* cmd =
+      bench.add_subcommand("blur", "the variable blur against a distributed-ray-traced thin lens, for near, middle and far fixations");
   struct Options {
     std::string scene, size = "512x384", json, images;
     int samples = 256, threads = 0;
@@ -111,9 +112,15 @@ std::function<int()> add_bench_blur_command(CLI::App& bench) {
       const Image reference = thin_lens_reference(tracer, scene, camera, p);
       const Image approximation = thin_lens_approximation(tracer, scene, camera, p);
       const ImageError e = compare_images(approximation, reference), none = compare_images(sharp, reference);
-      fmt::print("  {:<6} focus {:6.2f} m: approximation vs reference mean {:.4f}, p95 {:.4f}, PSNR {:.1f} dB   (pinhole vs reference: mean {:.4f}, PSNR {:.1f} dB)\n",
-                 name, d, e.mean, e.p95, e.psnr, none.mean, none.psnr);
-      rows.push_back({{"fixation", name}, {"focus_m", d}, {"mean_abs_error", e.mean}, {"p95_abs_error", e.p95}, {"psnr_db", e.psnr},
+      fmt::print(
+          "  {:<6} focus {:6.2f} m: approximation vs reference mean {:.4f}, p95 {:.4f}, PSNR {:.1f} dB   (pinhole vs reference: mean "
+          "{:.4f}, PSNR {:.1f} dB)\n",
+          name, d, e.mean, e.p95, e.psnr, none.mean, none.psnr);
+      rows.push_back({{"fixation", name},
+                      {"focus_m", d},
+                      {"mean_abs_error", e.mean},
+                      {"p95_abs_error", e.p95},
+                      {"psnr_db", e.psnr},
                       {"pinhole", {{"mean_abs_error", none.mean}, {"p95_abs_error", none.p95}, {"psnr_db", none.psnr}}}});
       if (!o->images.empty()) {
         save_image(reference, (std::filesystem::path(o->images) / fmt::format("{}-reference.png", name)).string());
@@ -121,8 +128,12 @@ std::function<int()> add_bench_blur_command(CLI::App& bench) {
       }
     }
     if (!o->json.empty()) {
-      write_json_file(o->json, {{"scene", scene.source}, {"size", o->size}, {"pupil_mm", o->pupil}, {"lens_samples", o->samples},
-                                {"threads", threads.threads()}, {"rows", rows}});
+      write_json_file(o->json, {{"scene", scene.source},
+                                {"size", o->size},
+                                {"pupil_mm", o->pupil},
+                                {"lens_samples", o->samples},
+                                {"threads", threads.threads()},
+                                {"rows", rows}});
     }
     return 0;
   };
@@ -151,8 +162,8 @@ struct StageSeries {
     total.push_back(s.total_ms);
   }
   StageTimes medians() const {
-    return {median(trace), median(features), median(sharpness), median(blur), median(total),
-            ImpairTimes{median(media), median(retina), median(colour), median(impair)}};
+    return {median(trace), median(features), median(sharpness),
+            median(blur),  median(total),    ImpairTimes{median(media), median(retina), median(colour), median(impair)}};
   }
 };
 
@@ -165,7 +176,7 @@ struct Agreement {
   int first_corner_difference = 0;  // the first step whose corners differ (0: none did)
   size_t grey_px_differing = 0;     // … and at that step: grey pixels that differ, of grey_px
   size_t grey_px = 0;
-  size_t corners_differing = 0;     // corners of one device only (of corners_total on the GPU)
+  size_t corners_differing = 0;  // corners of one device only (of corners_total on the GPU)
   size_t corners_total = 0;
   double perceived_mean_abs_diff = 0;  // the largest per-step mean while the fixations are identical
 };
@@ -276,33 +287,41 @@ struct VisionRow {
   std::string scene, size;
   size_t triangles = 0, rays = 0;  // the primary rays of a step
   VisionCase vc;
-  double raw = 0, raw_cpu = 0;     // raw closest-hit rays per second on the device, and on Embree
+  double raw = 0, raw_cpu = 0;  // raw closest-hit rays per second on the device, and on Embree
   double rate(double ms) const { return ms > 0 ? rays / (ms * 1e-3) : 0.0; }
-  double ratio() const { const StageTimes& c = vc.times; return c.trace > 0 ? (c.features + c.sharpness + c.blur) / c.trace : 0; }
+  double ratio() const {
+    const StageTimes& c = vc.times;
+    return c.trace > 0 ? (c.features + c.sharpness + c.blur) / c.trace : 0;
+  }
   double trace_vs_raw() const { return raw > 0 ? rate(vc.times.trace) / raw : 0; }
   double cpu_trace_vs_raw() const { return raw_cpu > 0 ? rate(vc.cpu.trace) / raw_cpu : 0; }
   double speedup() const { return vc.times.total > 0 ? vc.cpu.total / vc.times.total : 0; }
 };
 
 std::string vision_table_header(bool cuda) {
-  return cuda ? std::string("| scene | size | device | trace ms | features ms | sharpness ms | blur ms | step ms | CPU step ms | CPU / GPU | GPU trace / raw | CPU trace / raw | same fixations | corners first differ at step | perceived mean abs diff |\n"
-                            "|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n")
-              : std::string("| scene | size | trace ms | features ms | sharpness ms | blur ms | impairments ms (media + retina + colour) | total ms | (features+sharpness+blur) / trace | "
-                            "impairments / trace | trace / raw Embree |\n"
-                            "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
+  return cuda ? std::string(
+                    "| scene | size | device | trace ms | features ms | sharpness ms | blur ms | step ms | CPU step ms | CPU / GPU | GPU "
+                    "trace / raw | CPU trace / raw | same fixations | corners first differ at step | perceived mean abs diff |\n"
+                    "|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n")
+              : std::string(
+                    "| scene | size | trace ms | features ms | sharpness ms | blur ms | impairments ms (media + retina + colour) | total "
+                    "ms | (features+sharpness+blur) / trace | "
+                    "impairments / trace | trace / raw Embree |\n"
+                    "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
 }
 
 // The row on stdout.
 void print_vision_row(const VisionRow& r, const Impairments& impair, bool cuda) {
   const StageTimes& c = r.vc.times;
   if (impair.any())
-    fmt::print("  {:<28} {:>9}  impairments {:6.2f} ms (media {:.2f}, retina {:.2f}, colour {:.2f}) = {:.2f} of the trace stage\n",
-               r.scene, r.size, c.impair.total_ms, c.impair.media_ms, c.impair.field_ms, c.impair.colour_ms,
+    fmt::print("  {:<28} {:>9}  impairments {:6.2f} ms (media {:.2f}, retina {:.2f}, colour {:.2f}) = {:.2f} of the trace stage\n", r.scene,
+               r.size, c.impair.total_ms, c.impair.media_ms, c.impair.field_ms, c.impair.colour_ms,
                c.trace > 0 ? c.impair.total_ms / c.trace : 0.0);
-  fmt::print("  {:<28} {:>9}  trace {:6.2f}  features {:6.2f}  sharpness {:6.2f}  blur {:6.2f}  total {:6.2f} ms  (rest/trace {:.2f})\n"
-             "  {:<28} {:>9}  trace {:.0f} Mrays/s = {:.2f} of raw {} closest-hit tracing of the same rays ({:.0f} Mrays/s)\n",
-             r.scene, r.size, c.trace, c.features, c.sharpness, c.blur, c.total, r.ratio(), "", "", r.rate(c.trace) / 1e6, r.trace_vs_raw(),
-             cuda ? "GPU" : "Embree", r.raw / 1e6);
+  fmt::print(
+      "  {:<28} {:>9}  trace {:6.2f}  features {:6.2f}  sharpness {:6.2f}  blur {:6.2f}  total {:6.2f} ms  (rest/trace {:.2f})\n"
+      "  {:<28} {:>9}  trace {:.0f} Mrays/s = {:.2f} of raw {} closest-hit tracing of the same rays ({:.0f} Mrays/s)\n",
+      r.scene, r.size, c.trace, c.features, c.sharpness, c.blur, c.total, r.ratio(), "", "", r.rate(c.trace) / 1e6, r.trace_vs_raw(),
+      cuda ? "GPU" : "Embree", r.raw / 1e6);
   if (!cuda) return;
   // The same case on the CPU, step for step in the same run: the ratio, and how far the devices agree
   const StageTimes& cpu = r.vc.cpu;
@@ -312,35 +331,42 @@ void print_vision_row(const VisionRow& r, const Impairments& impair, bool cuda) 
           ? std::string("the corners identical at every step")
           : fmt::format("the corners first differ at step {} ({} of {} corners; {} of {} grey pixels differ)", g.first_corner_difference,
                         g.corners_differing, g.corners_total, g.grey_px_differing, g.grey_px);
-  fmt::print("  {:<28} {:>9}  CPU: trace {:6.2f}  features {:6.2f}  sharpness {:6.2f}  blur {:6.2f}  total {:6.2f} ms  → GPU {:.1f}× faster\n"
-             "  {:<28} {:>9}  CPU: trace {:.0f} Mrays/s = {:.2f} of raw Embree closest-hit tracing of the same rays ({:.0f} Mrays/s)\n"
-             "  {:<28} {:>9}  same fixations for {}/{} steps, {}; perceived mean |diff| ≤ {:.2e} while the same\n",
-             "", "", cpu.trace, cpu.features, cpu.sharpness, cpu.blur, cpu.total, r.speedup(), "", "", r.rate(cpu.trace) / 1e6,
-             r.cpu_trace_vs_raw(), r.raw_cpu / 1e6, "", "", g.same_fixations, g.steps, parted, g.perceived_mean_abs_diff);
+  fmt::print(
+      "  {:<28} {:>9}  CPU: trace {:6.2f}  features {:6.2f}  sharpness {:6.2f}  blur {:6.2f}  total {:6.2f} ms  → GPU {:.1f}× faster\n"
+      "  {:<28} {:>9}  CPU: trace {:.0f} Mrays/s = {:.2f} of raw Embree closest-hit tracing of the same rays ({:.0f} Mrays/s)\n"
+      "  {:<28} {:>9}  same fixations for {}/{} steps, {}; perceived mean |diff| ≤ {:.2e} while the same\n",
+      "", "", cpu.trace, cpu.features, cpu.sharpness, cpu.blur, cpu.total, r.speedup(), "", "", r.rate(cpu.trace) / 1e6,
+      r.cpu_trace_vs_raw(), r.raw_cpu / 1e6, "", "", g.same_fixations, g.steps, parted, g.perceived_mean_abs_diff);
 }
 
 // The row in the JSON (--json's "rows").
 nlohmann::json vision_row_json(const VisionRow& r, const Impairments& impair, ComputeDevice device, int steps, int threads) {
   const StageTimes& c = r.vc.times;
-  nlohmann::json row = {{"scene", r.scene}, {"triangles", r.triangles}, {"size", r.size}, {"steps", steps - 1},
-                        {"device", to_string(device)},
-                        {"time_ms", {{"trace", c.trace}, {"features", c.features}, {"sharpness", c.sharpness}, {"blur", c.blur}, {"total", c.total}}},
-                        {"non_tracing_over_trace", r.ratio()},
-                        {"impairments", impair.describe()},
-                        {"impairments_ms", {{"media", c.impair.media_ms}, {"retina", c.impair.field_ms}, {"colour", c.impair.colour_ms},
-                                            {"total", c.impair.total_ms}}},
-                        {"impairments_over_trace", c.trace > 0 ? c.impair.total_ms / c.trace : 0.0},
-                        {"trace_rays_per_second", r.rate(c.trace)},
-                        {"raw_closest_hit_rays_per_second", r.raw},
-                        {"trace_over_raw", r.trace_vs_raw()}};
+  nlohmann::json row = {
+      {"scene", r.scene},
+      {"triangles", r.triangles},
+      {"size", r.size},
+      {"steps", steps - 1},
+      {"device", to_string(device)},
+      {"time_ms", {{"trace", c.trace}, {"features", c.features}, {"sharpness", c.sharpness}, {"blur", c.blur}, {"total", c.total}}},
+      {"non_tracing_over_trace", r.ratio()},
+      {"impairments", impair.describe()},
+      {"impairments_ms",
+       {{"media", c.impair.media_ms}, {"retina", c.impair.field_ms}, {"colour", c.impair.colour_ms}, {"total", c.impair.total_ms}}},
+      {"impairments_over_trace", c.trace > 0 ? c.impair.total_ms / c.trace : 0.0},
+      {"trace_rays_per_second", r.rate(c.trace)},
+      {"raw_closest_hit_rays_per_second", r.raw},
+      {"trace_over_raw", r.trace_vs_raw()}};
   if (device != ComputeDevice::cuda) return row;
   const StageTimes& cpu = r.vc.cpu;
   const Agreement& g = r.vc.agreement;
-  row["cpu"] = {{"time_ms", {{"trace", cpu.trace}, {"features", cpu.features}, {"sharpness", cpu.sharpness}, {"blur", cpu.blur}, {"total", cpu.total}}},
-                {"threads", threads},
-                {"trace_rays_per_second", r.rate(cpu.trace)},
-                {"raw_closest_hit_rays_per_second", r.raw_cpu},
-                {"trace_over_raw", r.cpu_trace_vs_raw()}};
+  row["cpu"] = {
+      {"time_ms",
+       {{"trace", cpu.trace}, {"features", cpu.features}, {"sharpness", cpu.sharpness}, {"blur", cpu.blur}, {"total", cpu.total}}},
+      {"threads", threads},
+      {"trace_rays_per_second", r.rate(cpu.trace)},
+      {"raw_closest_hit_rays_per_second", r.raw_cpu},
+      {"trace_over_raw", r.cpu_trace_vs_raw()}};
   row["cpu_over_gpu"] = r.speedup();
   row["agreement"] = {{"steps", g.steps},
                       {"same_fixations", g.same_fixations},
@@ -357,18 +383,18 @@ nlohmann::json vision_row_json(const VisionRow& r, const Impairments& impair, Co
 std::string vision_row_markdown(const VisionRow& r, bool cuda) {
   const StageTimes& c = r.vc.times;
   if (!cuda)
-    return fmt::format("| {} | {} | {:.1f} | {:.1f} | {:.1f} | {:.1f} | {:.1f} ({:.1f} + {:.1f} + {:.1f}) | {:.1f} | {:.2f} | {:.2f} | {:.2f} |\n",
-                       r.scene, r.size, c.trace, c.features, c.sharpness, c.blur, c.impair.total_ms, c.impair.media_ms,
-                       c.impair.field_ms, c.impair.colour_ms, c.total, r.ratio(), c.trace > 0 ? c.impair.total_ms / c.trace : 0.0,
-                       r.trace_vs_raw());
+    return fmt::format(
+        "| {} | {} | {:.1f} | {:.1f} | {:.1f} | {:.1f} | {:.1f} ({:.1f} + {:.1f} + {:.1f}) | {:.1f} | {:.2f} | {:.2f} | {:.2f} |\n",
+        r.scene, r.size, c.trace, c.features, c.sharpness, c.blur, c.impair.total_ms, c.impair.media_ms, c.impair.field_ms,
+        c.impair.colour_ms, c.total, r.ratio(), c.trace > 0 ? c.impair.total_ms / c.trace : 0.0, r.trace_vs_raw());
   const Agreement& g = r.vc.agreement;
-  const std::string first = g.first_corner_difference == 0
-                                ? std::string("–")
-                                : fmt::format("{} ({}/{} corners, {} grey px)", g.first_corner_difference, g.corners_differing,
-                                              g.corners_total, g.grey_px_differing);
-  return fmt::format("| {} | {} | {} | {:.2f} | {:.2f} | {:.2f} | {:.2f} | {:.2f} | {:.1f} | {:.1f} | {:.2f} | {:.2f} | {}/{} | {} | {:.1e} |\n",
-                     r.scene, r.size, availability().name, c.trace, c.features, c.sharpness, c.blur, c.total, r.vc.cpu.total, r.speedup(),
-                     r.trace_vs_raw(), r.cpu_trace_vs_raw(), g.same_fixations, g.steps, first, g.perceived_mean_abs_diff);
+  const std::string first = g.first_corner_difference == 0 ? std::string("–")
+                                                           : fmt::format("{} ({}/{} corners, {} grey px)", g.first_corner_difference,
+                                                                         g.corners_differing, g.corners_total, g.grey_px_differing);
+  return fmt::format(
+      "| {} | {} | {} | {:.2f} | {:.2f} | {:.2f} | {:.2f} | {:.2f} | {:.1f} | {:.1f} | {:.2f} | {:.2f} | {}/{} | {} | {:.1e} |\n", r.scene,
+      r.size, availability().name, c.trace, c.features, c.sharpness, c.blur, c.total, r.vc.cpu.total, r.speedup(), r.trace_vs_raw(),
+      r.cpu_trace_vs_raw(), g.same_fixations, g.steps, first, g.perceived_mean_abs_diff);
 }
 
 int run_bench_vision(const BenchVisionOptions& o) {
@@ -417,8 +443,11 @@ int run_bench_vision(const BenchVisionOptions& o) {
     }
   }
   if (!o.json.empty())
-    write_json_file(o.json, {{"threads", threads.threads()}, {"eye", o.eye}, {"optics", optics_json(eye_spec.eye)},
-                             {"device", describe_device(device)}, {"rows", rows}});
+    write_json_file(o.json, {{"threads", threads.threads()},
+                             {"eye", o.eye},
+                             {"optics", optics_json(eye_spec.eye)},
+                             {"device", describe_device(device)},
+                             {"rows", rows}});
   if (!o.markdown.empty()) write_text_file(o.markdown, md);
   return 0;
 }
@@ -429,10 +458,12 @@ std::function<int()> add_bench_vision_command(CLI::App& bench) {
   auto* cmd = bench.add_subcommand("vision", "the second paper's Table 1: milliseconds per stage of a simulation step");
 
   auto o = std::make_shared<BenchVisionOptions>();
-  cmd->add_option("--scene", o->scenes, "scenes (default: scenes/conference.json when ../shared/data has it, and builtin:box)")->delimiter(',');
+  cmd->add_option("--scene", o->scenes, "scenes (default: scenes/conference.json when ../shared/data has it, and builtin:box)")
+      ->delimiter(',');
   cmd->add_option("--size", o->sizes, "sizes WxH")->delimiter(',')->capture_default_str();
   cmd->add_option("--steps", o->steps, "steps per case (median reported; the first is left out as warm-up)")
-      ->capture_default_str()->check(CLI::Range(2, 10000));
+      ->capture_default_str()
+      ->check(CLI::Range(2, 10000));
   cmd->add_option("--eye", o->eye, "the eye's optics: presets or a profile .json, as for simulate")->capture_default_str();
   cmd->add_option("--pupil", o->pupil, "pupil diameter, mm (overrides a profile's pupil_mm; default: the profile's, else 3.5)");
   cmd->add_option("--impairments", o->impairments,

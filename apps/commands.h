@@ -37,7 +37,7 @@ struct ViewOptions {
   std::string eye, look, up = "0,1,0";
   std::string eye_option = "--eye";  // simulate calls the camera position --from (--eye is the eye model there)
   bool display_option = true;        // simulate has no display: the eye sits at the camera
-  std::optional<double> fov;  // unset: the camera's
+  std::optional<double> fov;         // unset: the camera's
   std::string size = "840x525";
   std::string display = "47.5,30,60,1680,1050";
   int threads = 0;
@@ -83,8 +83,8 @@ struct GazeOptions {
   double min_confidence = 0.6;
   std::string fixation = to_string(kRecommendedFixationMethod);
   double pursuit_velocity = 6, pursuit_window_ms = 40, min_pursuit_ms = 80;
-  double ivt_threshold = 30, velocity_window_ms = 20, gap_fill_ms = 75, merge_gap_ms = 75, merge_angle = 0.5,
-         min_fixation_ms = 60, idt_dispersion = 1.0, idt_duration_ms = 80;
+  double ivt_threshold = 30, velocity_window_ms = 20, gap_fill_ms = 75, merge_gap_ms = 75, merge_angle = 0.5, min_fixation_ms = 60,
+         idt_dispersion = 1.0, idt_duration_ms = 80;
   int median_window = 1;
 };
 // `fixation_help` replaces the --fixation description (simulate accepts other values).

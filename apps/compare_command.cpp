@@ -16,7 +16,8 @@
 namespace foveal::app {
 
 std::function<int()> add_compare_command(CLI::App& app) {
-  auto* cmd = app.add_subcommand("compare", "PSNR, SSIM and RMSE of an image against a reference, whole and per eccentricity band around the gaze");
+  auto* cmd =
+      app.add_subcommand("compare", "PSNR, SSIM and RMSE of an image against a reference, whole and per eccentricity band around the gaze");
   struct Options {
     std::string a, b, b2, gaze, display = "47.5,30,60,1680,1050", json, markdown, error_map, plot, ssim_border = "reflect";
     double ellipse = 1.538;
@@ -26,14 +27,18 @@ std::function<int()> add_compare_command(CLI::App& app) {
   auto o = std::make_shared<Options>();
   cmd->add_option("image", o->a, "the image to judge (PNG, EXR or PFM), e.g. a foveated render")->required();
   cmd->add_option("reference", o->b, "the reference of the same size, e.g. the full-frame render")->required();
-  cmd->add_option("--reference2", o->b2, "the reference rendered with another seed: each band's error is also given as a multiple of the reference's own noise");
+  cmd->add_option("--reference2", o->b2,
+                  "the reference rendered with another seed: each band's error is also given as a multiple of the reference's own noise");
   cmd->add_option("--gaze", o->gaze, "gaze point X,Y in image pixels (default: the image centre)");
-  cmd->add_option("--display", o->display, "display W_CM,H_CM,DIST_CM[,RES_X,RES_Y] the image filled (the bands' degrees); without a resolution the image size is used")
+  cmd->add_option(
+         "--display", o->display,
+         "display W_CM,H_CM,DIST_CM[,RES_X,RES_Y] the image filled (the bands' degrees); without a resolution the image size is used")
       ->capture_default_str();
   cmd->add_option("--ellipse", o->ellipse, "ROI ellipse ratio a of the q(E) = 1 region (as rendered)")->capture_default_str();
   cmd->add_option("--ssim-border", o->ssim_border,
                   "SSIM near the edges: reflect (the image mirrored, every pixel counts) or valid (only 11x11 windows wholly inside "
-                  "the image count, as Wang et al.'s code and scikit-image)")->capture_default_str();
+                  "the image count, as Wang et al.'s code and scikit-image)")
+      ->capture_default_str();
   cmd->add_option("--json", o->json, "write every figure as JSON");
   cmd->add_option("--markdown", o->markdown, "write the per-band table as Markdown");
   cmd->add_option("--error-map", o->error_map, "per-pixel |image − reference| as a heat map (PNG)");
@@ -76,7 +81,8 @@ std::function<int()> add_compare_command(CLI::App& app) {
     for (const BandResult& r : c.bands) {
       row(r.band.foveal_region ? "q(E)=1" : r.band.name + "°", r.error);
       if (r.noise && r.error.pixels > 0)
-        fmt::print("   noise RMSE {:.5f}  ×{:.2f} ± {:.2f}{}", r.noise->rmse, r.noise_ratio, r.ratio_se, r.within_noise ? "  within noise" : "");
+        fmt::print("   noise RMSE {:.5f}  ×{:.2f} ± {:.2f}{}", r.noise->rmse, r.noise_ratio, r.ratio_se,
+                   r.within_noise ? "  within noise" : "");
       fmt::print("\n");
     }
     fmt::print("  acuity-weighted RMSE {:.5f}", c.weighted_rmse);

@@ -19,33 +19,45 @@
 namespace foveal::app {
 
 void add_gaze_options(CLI::App& cmd, GazeOptions& o, const std::string& fixation_help) {
-  cmd.add_option("--format", o.format, "recording format: auto, asc (EyeLink), pupil (Pupil Player gaze_positions.csv), tobii (SDK or Pro Lab TSV), csv (t,x,y[,confidence])")
+  cmd.add_option("--format", o.format,
+                 "recording format: auto, asc (EyeLink), pupil (Pupil Player gaze_positions.csv), tobii (SDK or Pro Lab TSV), csv "
+                 "(t,x,y[,confidence])")
       ->capture_default_str();
-  cmd.add_option("--screen", o.screen, "screen WxH in pixels for normalised coordinates (Pupil, Tobii SDK, --coords norm) or to override the file's (default: the display's resolution)");
+  cmd.add_option("--screen", o.screen,
+                 "screen WxH in pixels for normalised coordinates (Pupil, Tobii SDK, --coords norm) or to override the file's (default: "
+                 "the display's resolution)");
   cmd.add_option("--gaze-eye", o.eye, "binocular recordings: average (of the valid eyes), left or right")->capture_default_str();
   cmd.add_option("--min-confidence", o.min_confidence, "samples with lower tracker confidence are invalid (Pupil's default)")
-      ->capture_default_str()->check(CLI::Range(0.0, 1.0));
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 1.0));
   cmd.add_option("--time-unit", o.time_unit, "csv: unit of the t column: s, ms or us")->capture_default_str();
-  cmd.add_option("--coords", o.coords, "csv: x, y in px (screen pixels), norm ([0,1] of the screen) or deg (degrees from the screen centre, y up, through --display; also columns x_deg, y_deg)")->capture_default_str();
+  cmd.add_option("--coords", o.coords,
+                 "csv: x, y in px (screen pixels), norm ([0,1] of the screen) or deg (degrees from the screen centre, y up, through "
+                 "--display; also columns x_deg, y_deg)")
+      ->capture_default_str();
   cmd.add_option("--origin", o.origin, "csv: top-left or bottom-left")->capture_default_str();
   cmd.add_option("--fixations", o.fixations_file, "Pupil: the tracker's fixations.csv (default: the one beside the recording)");
   cmd.add_option("--blinks", o.blinks_file, "Pupil: the tracker's blinks.csv (default: the one beside the recording)");
   cmd.add_option("--fixation", o.fixation,
-                 fixation_help.empty() ? "fixation filter: ivvt (velocity threshold, smooth pursuit followed), mean (the paper's per-frame mean), "
-                                         "ivt (velocity threshold) or idt (dispersion threshold)"
-                                       : fixation_help)
+                 fixation_help.empty()
+                     ? "fixation filter: ivvt (velocity threshold, smooth pursuit followed), mean (the paper's per-frame mean), "
+                       "ivt (velocity threshold) or idt (dispersion threshold)"
+                     : fixation_help)
       ->capture_default_str();
   cmd.add_option("--ivt-threshold", o.ivt_threshold, "I-VT, I-VVT: saccade velocity threshold, deg/s")->capture_default_str();
-  cmd.add_option("--pursuit-velocity", o.pursuit_velocity, "ivvt, --events nhp: samples slower than saccades but faster than this are pursuit candidates, deg/s")
+  cmd.add_option("--pursuit-velocity", o.pursuit_velocity,
+                 "ivvt, --events nhp: samples slower than saccades but faster than this are pursuit candidates, deg/s")
       ->capture_default_str();
-  cmd.add_option("--pursuit-window-ms", o.pursuit_window_ms, "ivvt, --events nhp: the pursuit velocity's least-squares window, ms")->capture_default_str();
+  cmd.add_option("--pursuit-window-ms", o.pursuit_window_ms, "ivvt, --events nhp: the pursuit velocity's least-squares window, ms")
+      ->capture_default_str();
   cmd.add_option("--min-pursuit-ms", o.min_pursuit_ms, "ivvt, --events nhp: shortest pursuit, ms")->capture_default_str();
   cmd.add_option("--velocity-window-ms", o.velocity_window_ms, "I-VT velocity window, ms")->capture_default_str();
   cmd.add_option("--gap-fill-ms", o.gap_fill_ms, "invalid gaps up to this long are interpolated, ms")->capture_default_str();
   cmd.add_option("--merge-gap-ms", o.merge_gap_ms, "I-VT: merge fixations less than this apart in time, ms …")->capture_default_str();
   cmd.add_option("--merge-angle", o.merge_angle, "… and this apart in angle, deg")->capture_default_str();
   cmd.add_option("--min-fixation-ms", o.min_fixation_ms, "I-VT: discard shorter fixations, ms")->capture_default_str();
-  cmd.add_option("--median-window", o.median_window, "noise reduction: moving median over this many samples before filtering (odd; 1 = off)")
+  cmd.add_option("--median-window", o.median_window,
+                 "noise reduction: moving median over this many samples before filtering (odd; 1 = off)")
       ->capture_default_str();
   cmd.add_option("--idt-dispersion", o.idt_dispersion, "I-DT dispersion limit (x range + y range), deg")->capture_default_str();
   cmd.add_option("--idt-duration-ms", o.idt_duration_ms, "I-DT minimum fixation duration, ms")->capture_default_str();
@@ -61,10 +73,14 @@ ReadOptions resolve_read_options(const GazeOptions& o, const Display& display) {
   }
   r.eye = parse_eye_selection(o.eye);
   r.min_confidence = static_cast<float>(o.min_confidence);
-  if (o.time_unit == "s") r.csv_time_scale = 1;
-  else if (o.time_unit == "ms") r.csv_time_scale = 1e-3;
-  else if (o.time_unit == "us") r.csv_time_scale = 1e-6;
-  else fail("--time-unit: unknown unit '{}' (expected s, ms or us)", o.time_unit);
+  if (o.time_unit == "s")
+    r.csv_time_scale = 1;
+  else if (o.time_unit == "ms")
+    r.csv_time_scale = 1e-3;
+  else if (o.time_unit == "us")
+    r.csv_time_scale = 1e-6;
+  else
+    fail("--time-unit: unknown unit '{}' (expected s, ms or us)", o.time_unit);
   if (o.coords != "px" && o.coords != "norm" && o.coords != "deg") fail("--coords: expected px, norm or deg, got '{}'", o.coords);
   r.csv_normalised = o.coords == "norm";
   r.csv_degrees = o.coords == "deg";
@@ -116,10 +132,9 @@ namespace {
 // The command's options as typed.
 struct GazeCommandOptions {
   std::string recording, json, samples, scanpath = "scanpath.png", display = "47.5,30,60", events, samples_out, events_out, evaluate,
-      coder2;
+                                        coder2;
   GazeOptions gaze;
-  double filter_window_ms = 6, detection_window_ms = 20, ek_lambda = 6,
-         blink_flank_ms = 100, max_blink_ms = 2000;
+  double filter_window_ms = 6, detection_window_ms = 20, ek_lambda = 6, blink_flank_ms = 100, max_blink_ms = 2000;
   bool no_scanpath = false, quiet = false;
 };
 
@@ -135,7 +150,8 @@ struct EventsRun {
 EventsRun detect_and_score(const GazeCommandOptions& o, const Recording& recording, const Display& display, const FixationParams& params) {
   EventsRun run;
   if (o.events.empty()) {
-    if (!o.samples_out.empty() || !o.evaluate.empty() || !o.events_out.empty()) fail("--samples-out, --events-out and --evaluate need --events");
+    if (!o.samples_out.empty() || !o.evaluate.empty() || !o.events_out.empty())
+      fail("--samples-out, --events-out and --evaluate need --events");
     if (!o.coder2.empty() && o.evaluate.empty()) fail("--coder2 needs --evaluate (the first coder's labels)");
     return run;
   }
@@ -182,8 +198,8 @@ void write_event_files(const GazeCommandOptions& o, const Recording& recording, 
   if (!o.samples_out.empty()) {
     std::string text = "t_s,x,y,label\n";
     for (size_t i = 0; i < labels.size(); ++i)
-      text += fmt::format("{:.17g},{:.17g},{:.17g},{}\n", recording.samples[i].t_s, recording.samples[i].px.x,
-                          recording.samples[i].px.y, to_string(labels[i]));
+      text += fmt::format("{:.17g},{:.17g},{:.17g},{}\n", recording.samples[i].t_s, recording.samples[i].px.x, recording.samples[i].px.y,
+                          to_string(labels[i]));
     write_text_file(o.samples_out, text);
   }
   if (!o.events_out.empty()) write_text_file(o.events_out, events_tsv(*run.detection, recording));
@@ -195,18 +211,27 @@ nlohmann::json events_json(const GazeCommandOptions& o, const EventsRun& run) {
   auto scores = [&](const Evaluation& e) {
     nlohmann::json classes = nlohmann::json::object();
     for (const ClassScore& c : e.classes)
-      classes[to_string(c.label)] = {{"kappa", number(c.kappa)}, {"f1", number(c.f1)}, {"hits", c.hits}, {"misses", c.misses},
-                                     {"false_alarms", c.false_alarms}, {"reference_events", c.reference_events},
-                                     {"test_events", c.test_events}, {"rto_ms", c.rto_ms}, {"rtd_ms", c.rtd_ms}};
+      classes[to_string(c.label)] = {{"kappa", number(c.kappa)},
+                                     {"f1", number(c.f1)},
+                                     {"hits", c.hits},
+                                     {"misses", c.misses},
+                                     {"false_alarms", c.false_alarms},
+                                     {"reference_events", c.reference_events},
+                                     {"test_events", c.test_events},
+                                     {"rto_ms", c.rto_ms},
+                                     {"rtd_ms", c.rtd_ms}};
     return nlohmann::json{{"samples", e.samples}, {"kappa", number(e.kappa)}, {"accuracy", e.accuracy}, {"classes", classes}};
   };
   const EventDetection& d = *run.detection;
   nlohmann::json counts = nlohmann::json::object();
   for (EventLabel c : kEventClasses) counts[to_string(c)] = 0;
   for (const DetectedEvent& e : d.events) counts[to_string(e.label)] = counts[to_string(e.label)].get<int>() + 1;
-  nlohmann::json ev = {{"detector", run.detector}, {"detect_ms", run.detect_ms}, {"sampling_hz", d.sampling_hz},
+  nlohmann::json ev = {{"detector", run.detector},
+                       {"detect_ms", run.detect_ms},
+                       {"sampling_hz", d.sampling_hz},
                        {"peak_threshold_deg_s", number(d.peak_threshold_deg_s)},
-                       {"onset_threshold_deg_s", number(d.onset_threshold_deg_s)}, {"counts", counts}};
+                       {"onset_threshold_deg_s", number(d.onset_threshold_deg_s)},
+                       {"counts", counts}};
   if (run.evaluation) {
     ev.update(scores(*run.evaluation));
     ev["labels"] = o.evaluate;
@@ -229,7 +254,8 @@ void print_gaze(const GazeCommandOptions& o, const Recording& recording, const G
                 const EventsRun& run) {
   fmt::print("{}", format_summary(recording, summary));
   if (method == FixationMethod::mean || method == FixationMethod::ivvt)
-    fmt::print("  ({} is a causal filter for the fovea: the scan path shows I-VT's fixations; --events nhp labels pursuit)\n", to_string(method));
+    fmt::print("  ({} is a causal filter for the fovea: the scan path shows I-VT's fixations; --events nhp labels pursuit)\n",
+               to_string(method));
   for (const std::string* written : {&o.json, &o.samples, &o.samples_out, &o.events_out})
     if (!written->empty()) fmt::print("  wrote     {}\n", *written);
   if (run.detection) {
@@ -240,8 +266,9 @@ void print_gaze(const GazeCommandOptions& o, const Recording& recording, const G
       counts += fmt::format("{}{} {}", counts.empty() ? "" : ", ", k, to_string(c));
     }
     fmt::print("  events    {} ({:.0f} Hz{}): {}\n", run.detector, d.sampling_hz,
-               std::isfinite(d.peak_threshold_deg_s) ? fmt::format(", thresholds {:.1f}/{:.1f} deg/s", d.peak_threshold_deg_s, d.onset_threshold_deg_s)
-                                                     : "",
+               std::isfinite(d.peak_threshold_deg_s)
+                   ? fmt::format(", thresholds {:.1f}/{:.1f} deg/s", d.peak_threshold_deg_s, d.onset_threshold_deg_s)
+                   : "",
                counts);
   }
   auto print_scores = [](const Evaluation& e, const std::string& what) {
@@ -280,8 +307,8 @@ int run_gaze(const GazeCommandOptions& o) {
   if (!o.no_scanpath) {
     const FixationResult& shown = method == FixationMethod::idt ? summary.filters[1].result : summary.filters[0].result;
     ScanpathStyle style;
-    style.title = fmt::format("{} - {} fixations ({})", std::filesystem::path(recording.source).filename().string(),
-                              shown.fixations.size(), method == FixationMethod::idt ? "I-DT" : "I-VT");
+    style.title = fmt::format("{} - {} fixations ({})", std::filesystem::path(recording.source).filename().string(), shown.fixations.size(),
+                              method == FixationMethod::idt ? "I-DT" : "I-VT");
     write_scanpath(recording, shown, o.scanpath, style);
   }
   if (!o.quiet) print_gaze(o, recording, summary, method, run);
@@ -291,12 +318,15 @@ int run_gaze(const GazeCommandOptions& o) {
 }  // namespace
 
 std::function<int()> add_gaze_command(CLI::App& app) {
-  auto* cmd = app.add_subcommand("gaze", "summarise an eye-tracker recording: samples, fixations (I-VT, I-DT), agreement with the tracker, scan path");
+  auto* cmd = app.add_subcommand(
+      "gaze", "summarise an eye-tracker recording: samples, fixations (I-VT, I-DT), agreement with the tracker, scan path");
 
   auto o = std::make_shared<GazeCommandOptions>();
   cmd->add_option("RECORDING", o->recording, "EyeLink .asc, Pupil gaze_positions.csv, Tobii .tsv or a t,x,y CSV")->required();
   add_gaze_options(*cmd, o->gaze);
-  cmd->add_option("--display", o->display, "the recording's screen W_CM,H_CM,DIST_CM[,RES_X,RES_Y] (angles for the filters); the resolution defaults to the recording's screen")
+  cmd->add_option("--display", o->display,
+                  "the recording's screen W_CM,H_CM,DIST_CM[,RES_X,RES_Y] (angles for the filters); the resolution defaults to the "
+                  "recording's screen")
       ->capture_default_str();
   cmd->add_option("--json", o->json, "write the summary as JSON");
   cmd->add_option("--events", o->events,
@@ -311,16 +341,20 @@ std::function<int()> add_gaze_command(CLI::App& app) {
   cmd->add_option("--evaluate", o->evaluate,
                   "--events: score the labels against an expert's (CSV with t/t_s and label columns, e.g. the IRF recordings): "
                   "sample-level Cohen's kappa per class and overall, event F1 (Hooge et al. 2018 matching), RTO/RTD");
-  cmd->add_option("--coder2", o->coder2, "--evaluate: a second coder's labels of the same samples: their agreement with the first is the ceiling");
+  cmd->add_option("--coder2", o->coder2,
+                  "--evaluate: a second coder's labels of the same samples: their agreement with the first is the ceiling");
   cmd->add_option("--filter-window-ms", o->filter_window_ms, "nh, nhp: Savitzky-Golay window of the velocity, ms")->capture_default_str();
-  cmd->add_option("--detection-window-ms", o->detection_window_ms,
-                  "nh, nhp: window of the smoother velocity whose peaks also start saccades (small ones in noise), ms (0: off, the paper's)")
+  cmd->add_option(
+         "--detection-window-ms", o->detection_window_ms,
+         "nh, nhp: window of the smoother velocity whose peaks also start saccades (small ones in noise), ms (0: off, the paper's)")
       ->capture_default_str();
   cmd->add_option("--ek-lambda", o->ek_lambda, "ek: threshold in median-based standard deviations of the velocity")->capture_default_str();
-  cmd->add_option("--blink-flank-ms", o->blink_flank_ms, "ek, nh, nhp: a blink takes in the lid's artefacts up to this long either side of the loss, ms")
+  cmd->add_option("--blink-flank-ms", o->blink_flank_ms,
+                  "ek, nh, nhp: a blink takes in the lid's artefacts up to this long either side of the loss, ms")
       ->capture_default_str();
   cmd->add_option("--max-blink-ms", o->max_blink_ms, "ek, nh, nhp: longer losses are undefined, not blinks, ms")->capture_default_str();
-  cmd->add_option("--samples", o->samples, "write the samples as read (t_s,x,y,confidence,valid: seconds, screen pixels, NaN where the eye was lost) as CSV");
+  cmd->add_option("--samples", o->samples,
+                  "write the samples as read (t_s,x,y,confidence,valid: seconds, screen pixels, NaN where the eye was lost) as CSV");
   cmd->add_option("--scanpath", o->scanpath, "scan-path picture (PNG) of the --fixation filter's fixations")->capture_default_str();
   cmd->add_flag("--no-scanpath", o->no_scanpath, "do not draw the scan path");
   cmd->add_flag("-q,--quiet", o->quiet, "print nothing on success");

@@ -48,9 +48,7 @@ bool is_video(const fs::path& p) {
   return ext == ".mp4" || ext == ".mkv" || ext == ".mov" || ext == ".webm" || ext == ".avi" || ext == ".m4v";
 }
 
-float srgb_to_linear(float v) {
-  return v <= 0.04045f ? v / 12.92f : std::pow((v + 0.055f) / 1.055f, 2.4f);
-}
+float srgb_to_linear(float v) { return v <= 0.04045f ? v / 12.92f : std::pow((v + 0.055f) / 1.055f, 2.4f); }
 
 // An input frame as linear RGB: 8/16-bit files are sRGB-decoded, EXR/PFM kept as stored
 Image load_linear(const std::string& path) {
@@ -188,7 +186,8 @@ PerceiveInput open_input(const PerceiveOptions& o) {
   in.lamps = o.input == "builtin:lamps";
   in.folder = !in.amsler && fs::is_directory(o.input);
   in.video = !in.amsler && !in.folder && is_video(o.input);
-  if (in.folder && fs::exists(o.output) && !fs::is_directory(o.output)) fail("-o {}: a folder of images needs a folder as output", o.output);
+  if (in.folder && fs::exists(o.output) && !fs::is_directory(o.output))
+    fail("-o {}: a folder of images needs a folder as output", o.output);
   if (in.video && !is_video(o.output)) fail("-o {}: a video needs a video file as output (.mp4, .mkv, .mov, .webm)", o.output);
   if (in.amsler) {
     if (!o.gaze.empty()) fail("--gaze: the Amsler grid is always fixated at its centre");
@@ -239,7 +238,8 @@ struct PerceiveGaze {
 
 PerceiveGaze open_gaze(const PerceiveOptions& o, const PerceiveInput& in) {
   PerceiveGaze g;
-  const bool recording_gaze = !o.gaze.empty() && !std::isdigit(static_cast<unsigned char>(o.gaze[0])) && o.gaze[0] != '-' && o.gaze[0] != '.';
+  const bool recording_gaze =
+      !o.gaze.empty() && !std::isdigit(static_cast<unsigned char>(o.gaze[0])) && o.gaze[0] != '-' && o.gaze[0] != '.';
   if (!recording_gaze) {
     if (!o.gaze.empty()) g.fixed = parse_vec2("--gaze", o.gaze);
     return g;
@@ -254,7 +254,8 @@ PerceiveGaze open_gaze(const PerceiveOptions& o, const PerceiveInput& in) {
   const Recording recording = read_recording_warned(o.gaze, read);
   if (recording.samples.empty()) fail("{}: no samples", recording.source);
   const GazeGeometry geometry(screen, recording.screen_px);
-  g.fixations = recording_steps(recording, geometry, parse_step_fixations(o.gaze_options.fixation), resolve_fixation_params(o.gaze_options));
+  g.fixations =
+      recording_steps(recording, geometry, parse_step_fixations(o.gaze_options.fixation), resolve_fixation_params(o.gaze_options));
   if (g.fixations.empty()) fail("{}: no fixations", recording.source);
   g.t0 = recording.samples.front().t_s + o.start;
   g.mapping = make_screen_mapping(recording.screen_px, {0, 0}, o.stimulus);
@@ -278,9 +279,12 @@ double see_frames(const PerceiveOptions& o, const Perceiver& p, const PerceiveIn
     const Image image = in.lamps ? lamps_card() : load_linear(in.frames[k].string());
     const Image seen = p.see(image, gaze.at(k, in.fps, image.width, image.height));
     std::string target;
-    if (in.folder) target = (out_dir / in.frames[k].filename()).string();
-    else if (in.video) target = (out_dir / fmt::format("out_{:06d}.png", k)).string();
-    else target = o.output;
+    if (in.folder)
+      target = (out_dir / in.frames[k].filename()).string();
+    else if (in.video)
+      target = (out_dir / fmt::format("out_{:06d}.png", k)).string();
+    else
+      target = o.output;
     save_image(seen, target, !is_float_format(target));
     frame_ms += t.ms();
     if (show && clock.ms() > 1000) fmt::print(stderr, "\r  frame {}/{} ", k + 1, in.frames.size());
@@ -300,9 +304,9 @@ void print_perceive(const PerceiveOptions& o, const Perceiver& p, const Perceive
   const FocusRange range = focus_range(p.eye.eye);
   auto point = [](double m) { return m < 1e9 ? fmt::format("{:.2f} m", m) : std::string("infinity"); };
   fmt::print("  optics   {}\n", p.optics ? fmt::format("focus {} … {}, pupil {} mm, viewing distance {} cm{}", point(range.near_point_m()),
-                                                         point(range.far_point_m()), p.eye.eye.pupil_diameter_mm,
-                                                         p.display.distance_cm, p.depth ? ", depth map" : "")
-                                             : std::string("off"));
+                                                       point(range.far_point_m()), p.eye.eye.pupil_diameter_mm, p.display.distance_cm,
+                                                       p.depth ? ", depth map" : "")
+                                         : std::string("off"));
   fmt::print("  impaired {}\n", p.eye.impair.describe());
   if (!in.amsler) fmt::print("  time     {:.1f} ms per frame\n", frame_ms / in.frames.size());
   fmt::print("  wrote    {}{}{}\n", o.output, o.amsler.empty() ? "" : ", " + o.amsler, o.field_map.empty() ? "" : ", " + o.field_map);
@@ -323,23 +327,29 @@ int run_perceive(const PerceiveOptions& o) {
 }  // namespace
 
 std::function<int()> add_perceive_command(CLI::App& app) {
-  auto* cmd = app.add_subcommand("perceive", "a person's eye applied to your own stimuli: an image, a folder of images or a video, "
-                                             "gaze-contingent (optics, media, visual field, colour vision)");
+  auto* cmd = app.add_subcommand("perceive",
+                                 "a person's eye applied to your own stimuli: an image, a folder of images or a video, "
+                                 "gaze-contingent (optics, media, visual field, colour vision)");
 
   auto o = std::make_shared<PerceiveOptions>();
-  cmd->add_option("input", o->input, "a PNG/JPEG/EXR/PFM image, a folder of images, a video (ffmpeg), builtin:amsler (an Amsler grid) or builtin:lamps "
-                                   "(a glare test card: bright lamps in a dark room, linear HDR)")
+  cmd->add_option("input", o->input,
+                  "a PNG/JPEG/EXR/PFM image, a folder of images, a video (ffmpeg), builtin:amsler (an Amsler grid) or builtin:lamps "
+                  "(a glare test card: bright lamps in a dark room, linear HDR)")
       ->required();
   cmd->add_option("-o,--output", o->output, "the same kind as the input: an image file, a folder, a video file")->required();
-  cmd->add_option("--eye", o->eye, "the eye: presets joined with '+' (as for simulate: cataract:0.5, cvd:deutan:0.6, field:arcuate:20, "
-                                   "field:24-2:FILE.csv, amd:5, myopia:-2, …) or a profile .json")
+  cmd->add_option("--eye", o->eye,
+                  "the eye: presets joined with '+' (as for simulate: cataract:0.5, cvd:deutan:0.6, field:arcuate:20, "
+                  "field:24-2:FILE.csv, amd:5, myopia:-2, …) or a profile .json")
       ->capture_default_str();
-  cmd->add_option("--gaze", o->gaze, "X,Y in image pixels (default: the centre), or a recording (EyeLink .asc, Pupil, Tobii, t,x,y CSV): "
-                                     "each frame fixates where the recording's fixation was at the frame's time");
-  cmd->add_option("--depth", o->depth, "per-pixel distance from the eye in metres (EXR/PFM, the input's size); without it the stimulus is "
-                                       "a plane at the viewing distance");
-  cmd->add_option("--display", o->display, "W_CM,H_CM,DIST_CM[,RES_X,RES_Y]: the screen the stimulus fills and the viewing distance "
-                                           "(without a resolution: the stimulus fills the width with square pixels)")
+  cmd->add_option("--gaze", o->gaze,
+                  "X,Y in image pixels (default: the centre), or a recording (EyeLink .asc, Pupil, Tobii, t,x,y CSV): "
+                  "each frame fixates where the recording's fixation was at the frame's time");
+  cmd->add_option("--depth", o->depth,
+                  "per-pixel distance from the eye in metres (EXR/PFM, the input's size); without it the stimulus is "
+                  "a plane at the viewing distance");
+  cmd->add_option("--display", o->display,
+                  "W_CM,H_CM,DIST_CM[,RES_X,RES_Y]: the screen the stimulus fills and the viewing distance "
+                  "(without a resolution: the stimulus fills the width with square pixels)")
       ->capture_default_str();
   cmd->add_option("--stimulus", o->stimulus, "X,Y,W,H: where the stimulus was shown on the recording's screen (default: the whole screen)");
   cmd->add_option("--fps", o->fps, "frame rate of a folder of frames (a video's own rate is used)")->capture_default_str();
@@ -352,9 +362,10 @@ std::function<int()> add_perceive_command(CLI::App& app) {
   cmd->add_option("--threads", o->threads, "worker threads (0 = all cores)")->capture_default_str()->check(CLI::Range(0, 4096));
   cmd->add_flag("-q,--quiet", o->quiet, "print nothing on success");
   o->gaze_options.fixation = "nhp";  // the field moves from fixation to fixation
-  add_gaze_options(*cmd, o->gaze_options,
-                   "where the fixations come from: nhp (the recommended event detector; pursuit a step every 100 ms), ivt (velocity threshold), "
-                   "idt (dispersion threshold) or tracker (the recording's own fixation events)");
+  add_gaze_options(
+      *cmd, o->gaze_options,
+      "where the fixations come from: nhp (the recommended event detector; pursuit a step every 100 ms), ivt (velocity threshold), "
+      "idt (dispersion threshold) or tracker (the recording's own fixation events)");
 
   return [o] { return run_perceive(*o); };
 }

@@ -47,7 +47,7 @@ void add_view_options(CLI::App& cmd, ViewOptions& o) {
   cmd.add_option("--size", o.size, "image size WxH in pixels")->capture_default_str();
   if (o.display_option)
     cmd.add_option("--display", o.display, "display W_CM,H_CM,DIST_CM[,RES_X,RES_Y]; without a resolution the render size is used")
-      ->capture_default_str();
+        ->capture_default_str();
   cmd.add_option("--threads", o.threads, "worker threads (0 = all cores)")->capture_default_str()->check(CLI::Range(0, 4096));
 }
 
@@ -59,34 +59,43 @@ void add_device_option(CLI::App& cmd, std::string& device) {
 void add_render_options(CLI::App& cmd, RenderOptions& o) {
   if (o.mode_option)
     cmd.add_option("--mode", o.mode, "foveated (budget follows the gaze) or full (n_max rays everywhere: the reference)")
-      ->capture_default_str();
-  cmd.add_option("--ao-distance", o.ao_distance, "AO ray length in scene units, or inf (default: scene's, else 0.2 × bounding-box diagonal)");
+        ->capture_default_str();
+  cmd.add_option("--ao-distance", o.ao_distance,
+                 "AO ray length in scene units, or inf (default: scene's, else 0.2 × bounding-box diagonal)");
   cmd.add_option("--max-rays", o.max_rays, "n_max: AO rays per pixel where q(E) = 1")->capture_default_str();
   cmd.add_option("--min-rays", o.min_rays, "n_min: AO rays per pixel far from the gaze")->capture_default_str();
   cmd.add_option("--gamma", o.gamma, "γ: exponent of q(E) in the ray budget n(E)")->capture_default_str();
   cmd.add_option("--beta", o.beta, "β: exponent of q(E) in the AO blend weight b(E)")->capture_default_str();
   cmd.add_option("--ellipse", o.ellipse, "horizontal:vertical ratio a of the elliptical ROI (1 = circle)")->capture_default_str();
-  cmd.add_option("--ambient-constant", o.ambient, "k_const, the Phong ambient factor away from the gaze: a number, or auto (mean AO visibility of the fovea)")
+  cmd.add_option("--ambient-constant", o.ambient,
+                 "k_const, the Phong ambient factor away from the gaze: a number, or auto (mean AO visibility of the fovea)")
       ->capture_default_str();
   cmd.add_option("--seed", o.seed, "seed of the AO ray directions")->capture_default_str();
   cmd.add_option("--trace-api", o.trace_api, "how occlusion rays go to Embree: stream, packet8 or single")->capture_default_str();
   cmd.add_flag("--shadows", o.shadows, "cast shadow rays for the lights (off, as in the papers)");
   // Quality per ray (docs/quality.md, "More quality per ray")
   const std::string group = "Quality per ray (all off: the paper's method)";
-  cmd.add_flag("--adaptive", o.adaptive, "cast each pixel's rays in doubling rounds and stop once its standard error is below τ(E) (n(E) becomes a maximum)")
+  cmd.add_flag("--adaptive", o.adaptive,
+               "cast each pixel's rays in doubling rounds and stop once its standard error is below τ(E) (n(E) becomes a maximum)")
       ->group(group);
   cmd.add_option("--adaptive-min-rays", o.adaptive_min_rays, "--adaptive: rays of the first round")->capture_default_str()->group(group);
-  cmd.add_flag("--denoise", o.denoise, "edge-stopping filter (depth, normal, albedo) of AO where a pixel is noisier than τ(E)")->group(group);
-  cmd.add_option("--denoise-radius", o.denoise_radius, "--denoise: the footprint is radius·(1/q(E) − 1) pixels, at most 8 (none where q = 1)")
-      ->capture_default_str()->group(group);
+  cmd.add_flag("--denoise", o.denoise, "edge-stopping filter (depth, normal, albedo) of AO where a pixel is noisier than τ(E)")
+      ->group(group);
+  cmd.add_option("--denoise-radius", o.denoise_radius,
+                 "--denoise: the footprint is radius·(1/q(E) − 1) pixels, at most 8 (none where q = 1)")
+      ->capture_default_str()
+      ->group(group);
   cmd.add_flag("--temporal", o.temporal, "accumulate AO rays across frames, reprojected with the camera, history rejected on disocclusion")
       ->group(group);
   cmd.add_option("--temporal-frames", o.temporal_frames, "--temporal: F, a pixel with n(E) rays of history casts n(E)/F a frame")
-      ->capture_default_str()->group(group);
+      ->capture_default_str()
+      ->group(group);
   cmd.add_option("--history-frames", o.history_frames, "--temporal: history length where q = 1, frames (max(F, H·q(E)) elsewhere)")
-      ->capture_default_str()->group(group);
+      ->capture_default_str()
+      ->group(group);
   cmd.add_option("--target-rays", o.target_rays, "the reference whose noise sets τ(E) = 0.5/√N / q(E), rays per pixel")
-      ->capture_default_str()->group(group);
+      ->capture_default_str()
+      ->group(group);
   cmd.add_option("--tolerance", o.tolerance, "scales τ(E) (above 1: fewer rays, more noise)")->capture_default_str()->group(group);
 }
 
@@ -99,8 +108,10 @@ RenderParams resolve_render_params(const ViewOptions& view, const RenderOptions&
   p.display = resolve_display(view.display, size);
   p.foveation = {o.ellipse, o.max_rays, o.min_rays, o.gamma, o.beta};
   if (!o.ao_distance.empty()) p.ao_distance = parse_length_or_inf("--ao-distance", o.ao_distance);
-  if (o.ambient == "auto") p.ambient_constant.reset();
-  else p.ambient_constant = static_cast<float>(parse_numbers("--ambient-constant", o.ambient, 1)[0]);
+  if (o.ambient == "auto")
+    p.ambient_constant.reset();
+  else
+    p.ambient_constant = static_cast<float>(parse_numbers("--ambient-constant", o.ambient, 1)[0]);
   p.seed = o.seed;
   p.shadows = o.shadows;
   p.reuse.adaptive = o.adaptive;
@@ -162,8 +173,10 @@ int run_render(const RenderCommandOptions& o) {
       const int percent = static_cast<int>(fraction * 100);
       if (!show_progress || percent == shown || clock.ms() < 1000) return;
       shown = percent;
-      if (o.frames > 1) fmt::print(stderr, "\r  frame {}/{}  AO {:3d}%  {:.1f} s", k + 1, o.frames, percent, clock.ms() / 1000);
-      else fmt::print(stderr, "\r  AO {:3d}%  {:.1f} s", percent, clock.ms() / 1000);
+      if (o.frames > 1)
+        fmt::print(stderr, "\r  frame {}/{}  AO {:3d}%  {:.1f} s", k + 1, o.frames, percent, clock.ms() / 1000);
+      else
+        fmt::print(stderr, "\r  AO {:3d}%  {:.1f} s", percent, clock.ms() / 1000);
     };
     frame = renderer->render(camera, p, options);
     ao_rays += frame.stats.ao_rays;
@@ -178,20 +191,19 @@ int run_render(const RenderCommandOptions& o) {
   save_image(frame.color, o.output);
   if (!o.aov.empty()) write_aovs(frame, o.aov);
   if (!o.mask.empty()) save_image(budget_mask(frame, p.foveation.max_rays), o.mask, false);
-  if (!o.stats.empty()) write_json_file(o.stats, frame_stats_json(frame, p, scene, triangles, build_ms, threads.threads(),
-                                                                 to_string(device), renderer->trace_api()));
+  if (!o.stats.empty())
+    write_json_file(o.stats,
+                    frame_stats_json(frame, p, scene, triangles, build_ms, threads.threads(), to_string(device), renderer->trace_api()));
   if (o.quiet) return 0;
   const FrameStats& s = frame.stats;
   fmt::print("foveal render: {} ({} triangles{}, BVH {:.0f} ms), camera '{}', {}x{}, {} mode, gaze ({:.0f}, {:.0f}), {} threads\n",
-             scene.source, triangles,
-             scene.skipped_triangles ? fmt::format(", {} degenerate skipped", scene.skipped_triangles) : "",
-             build_ms, camera.name, p.width, p.height, to_string(p.mode), frame.gaze_px.x, frame.gaze_px.y,
-             threads.threads());
+             scene.source, triangles, scene.skipped_triangles ? fmt::format(", {} degenerate skipped", scene.skipped_triangles) : "",
+             build_ms, camera.name, p.width, p.height, to_string(p.mode), frame.gaze_px.x, frame.gaze_px.y, threads.threads());
   fmt::print("  device   {}\n", renderer->describe());
-  fmt::print("  AO rays  {:.2f} M ({:.1f} per pixel, {}..{}), {:.1f} Mrays/s\n", s.ao_rays / 1e6, s.ao_rays_mean,
-             s.ao_rays_min, s.ao_rays_max, s.ao_ms > 0 ? s.ao_rays / (s.ao_ms * 1e3) : 0.0);
-  fmt::print("  time     primary {:.1f} ms, foveation {:.1f} ms, AO {:.1f} ms, shade {:.1f} ms, total {:.1f} ms\n",
-             s.primary_ms, s.foveation_ms, s.ao_ms, s.shade_ms, s.total_ms);
+  fmt::print("  AO rays  {:.2f} M ({:.1f} per pixel, {}..{}), {:.1f} Mrays/s\n", s.ao_rays / 1e6, s.ao_rays_mean, s.ao_rays_min,
+             s.ao_rays_max, s.ao_ms > 0 ? s.ao_rays / (s.ao_ms * 1e3) : 0.0);
+  fmt::print("  time     primary {:.1f} ms, foveation {:.1f} ms, AO {:.1f} ms, shade {:.1f} ms, total {:.1f} ms\n", s.primary_ms,
+             s.foveation_ms, s.ao_ms, s.shade_ms, s.total_ms);
   if (p.reuse.any())
     fmt::print("  reuse    {}{}{}, history kept at {} pixels, {} pixels filtered, {:.1f} ms\n", p.reuse.adaptive ? "adaptive " : "",
                p.reuse.denoise ? "denoise " : "", p.reuse.temporal ? "temporal" : "", s.history_pixels, s.denoised_pixels, s.reuse_ms);
@@ -214,12 +226,17 @@ std::function<int()> add_render_command(CLI::App& app) {
   add_render_options(*cmd, o->render);
   add_device_option(*cmd, o->device);
   cmd->add_option("-o,--output", o->output, "shaded image (.png; .pfm/.exr keep linear floats)")->capture_default_str();
-  cmd->add_option("--aov", o->aov, "float buffers NAME=FILE[,…] as .pfm/.exr; names: ao, depth, position, normal, albedo, budget, quality, blend, eccentricity, traced (AO rays traced this frame)");
+  cmd->add_option("--aov", o->aov,
+                  "float buffers NAME=FILE[,…] as .pfm/.exr; names: ao, depth, position, normal, albedo, budget, quality, blend, "
+                  "eccentricity, traced (AO rays traced this frame)");
   cmd->add_option("--mask", o->mask, "ROI/budget mask of the paper's Figure 5 (PNG): grey = n(E)/n_max, red cross at the gaze");
   cmd->add_option("--acuity-plot", o->plot, "plot of the acuity model (paper's Figure 4) for the display, .svg or .png");
   cmd->add_option("--stats", o->stats, "write timings and ray counts as JSON");
-  cmd->add_option("--frames", o->frames, "with --temporal: render this many frames of the still camera and gaze, each from the last one's history; the last is written")
-      ->capture_default_str()->check(CLI::Range(1, 100000));
+  cmd->add_option(
+         "--frames", o->frames,
+         "with --temporal: render this many frames of the still camera and gaze, each from the last one's history; the last is written")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 100000));
   cmd->add_flag("-q,--quiet", o->quiet, "print nothing on success");
 
   return [o] { return run_render(*o); };

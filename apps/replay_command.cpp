@@ -23,9 +23,7 @@ namespace foveal::app {
 
 namespace {
 
-std::string cell(const std::optional<glm::dvec2>& p, int axis) {
-  return p ? fmt::format("{:.2f}", (*p)[axis]) : std::string();
-}
+std::string cell(const std::optional<glm::dvec2>& p, int axis) { return p ? fmt::format("{:.2f}", (*p)[axis]) : std::string(); }
 
 // The command's options as typed.
 struct ReplayOptions {
@@ -113,26 +111,31 @@ nlohmann::json replay_stats_json(const ReplayOptions& o, const ReplaySummary& su
                                  const FrameRenderer& renderer, const Scene& scene, const std::optional<Recording>& recording, bool live,
                                  int threads, ComputeDevice device) {
   const std::string& source_name = o.source;
-  nlohmann::json j = {{"gaze_source", source_name},
-                    {"live", live},
-                    {"fixation", o.gaze.fixation},
-                    {"fps", o.fps},
-                    {"frames", summary.frames},
-                    {"reused_frames", summary.reused},
-                    {"width", params.width},
-                    {"height", params.height},
-                    {"mode", to_string(params.mode)},
-                    {"seed", params.seed},
-                    {"threads", threads},
-                    {"device", to_string(device)},
-                    {"scene", {{"source", scene.source}, {"triangles", renderer.triangles()}, {"build_ms", renderer.build_ms()}}},
-                    {"rays", {{"ao", summary.ao_rays}}},
-                    {"time_ms", {{"frames", summary.render_ms}, {"total", summary.wall_ms},
-                                 {"per_rendered_frame", summary.frames > summary.reused ? summary.render_ms / (summary.frames - summary.reused) : 0.0}}},
-                    {"stopped", summary.stopped},
-                    {"peak_rss_mib", peak_rss_mib()}};
-  if (recording) j["recording"] = {{"format", to_string(recording->format)}, {"screen_px", {recording->screen_px.x, recording->screen_px.y}},
-                                   {"samples", recording->samples.size()}};
+  nlohmann::json j = {
+      {"gaze_source", source_name},
+      {"live", live},
+      {"fixation", o.gaze.fixation},
+      {"fps", o.fps},
+      {"frames", summary.frames},
+      {"reused_frames", summary.reused},
+      {"width", params.width},
+      {"height", params.height},
+      {"mode", to_string(params.mode)},
+      {"seed", params.seed},
+      {"threads", threads},
+      {"device", to_string(device)},
+      {"scene", {{"source", scene.source}, {"triangles", renderer.triangles()}, {"build_ms", renderer.build_ms()}}},
+      {"rays", {{"ao", summary.ao_rays}}},
+      {"time_ms",
+       {{"frames", summary.render_ms},
+        {"total", summary.wall_ms},
+        {"per_rendered_frame", summary.frames > summary.reused ? summary.render_ms / (summary.frames - summary.reused) : 0.0}}},
+      {"stopped", summary.stopped},
+      {"peak_rss_mib", peak_rss_mib()}};
+  if (recording)
+    j["recording"] = {{"format", to_string(recording->format)},
+                      {"screen_px", {recording->screen_px.x, recording->screen_px.y}},
+                      {"samples", recording->samples.size()}};
   return j;
 }
 
@@ -197,7 +200,9 @@ std::function<int()> add_replay_command(CLI::App& app) {
   auto* cmd = app.add_subcommand("replay", "render a foveated-AO sequence that follows a gaze recording or a live tracker");
 
   auto o = std::make_shared<ReplayOptions>();
-  cmd->add_option("--gaze", o->source, "a recording (EyeLink .asc, Pupil gaze_positions.csv, Tobii .tsv, t,x,y CSV) or a live tracker: pupil://HOST:PORT[?surface=NAME]")
+  cmd->add_option(
+         "--gaze", o->source,
+         "a recording (EyeLink .asc, Pupil gaze_positions.csv, Tobii .tsv, t,x,y CSV) or a live tracker: pupil://HOST:PORT[?surface=NAME]")
       ->required();
   add_view_options(*cmd, o->view);
   add_render_options(*cmd, o->render);
@@ -208,8 +213,10 @@ std::function<int()> add_replay_command(CLI::App& app) {
   cmd->add_option("--frames", o->frames, "number of frames (0: to the end of the recording; live: 10 s)")->capture_default_str();
   cmd->add_option("--start", o->start, "recordings: start this many seconds after the first sample")->capture_default_str();
   cmd->add_option("--duration", o->duration, "seconds of gaze to render (0: all)")->capture_default_str();
-  cmd->add_option("--stimulus", o->stimulus, "where the render was shown on the recording's screen, X,Y,W,H in screen pixels (default: the whole screen)");
-  cmd->add_option("--live-timeout", o->live_timeout, "live: stop when the tracker sends nothing for this many seconds")->capture_default_str();
+  cmd->add_option("--stimulus", o->stimulus,
+                  "where the render was shown on the recording's screen, X,Y,W,H in screen pixels (default: the whole screen)");
+  cmd->add_option("--live-timeout", o->live_timeout, "live: stop when the tracker sends nothing for this many seconds")
+      ->capture_default_str();
   cmd->add_flag("--mark", o->mark, "draw a red cross at each frame's gaze point on the saved frames");
   cmd->add_flag("--no-reuse", o->no_reuse, "render every frame, even when the gaze has not moved since the previous one");
   cmd->add_option("--video", o->video, "also encode the frames into a video with ffmpeg (.mp4, .mkv, .webm, …)");

@@ -136,7 +136,8 @@ std::unique_ptr<GazeSteps> open_gaze(const SimulateOptions& o, const SimulatePar
            to_string(from));
     // Every fixation unless --steps asks for fewer
     if (!o.steps_given || step_count > int(g->recorded.size())) step_count = static_cast<int>(g->recorded.size());
-    const auto blinks = std::count_if(g->recorded.begin(), g->recorded.begin() + step_count, [](const GazeStep& s) { return s.blink_before; });
+    const auto blinks =
+        std::count_if(g->recorded.begin(), g->recorded.begin() + step_count, [](const GazeStep& s) { return s.blink_before; });
     g->summary = fmt::format("{} ({} fixations by {}, {} blinks{})", recording.source, g->recorded.size(), to_string(from),
                              o.no_gaze_blinks ? 0 : blinks, o.no_gaze_blinks ? " ignored" : "");
   }
@@ -169,8 +170,8 @@ struct SimulateRun {
 };
 
 // The steps, each saved as asked, with a progress line on a terminal.
-SimulateRun run_steps(const SimulateOptions& o, VisionSimulation& sim, const Camera& camera, const CameraPath* path,
-                      GazeSteps* gaze, int step_count, const SavedSteps& save, const std::filesystem::path& dir) {
+SimulateRun run_steps(const SimulateOptions& o, VisionSimulation& sim, const Camera& camera, const CameraPath* path, GazeSteps* gaze,
+                      int step_count, const SavedSteps& save, const std::filesystem::path& dir) {
   const bool show = !o.quiet && isatty(fileno(stderr));
   const Timer clock;
   SimulateRun run;
@@ -208,8 +209,7 @@ void write_pictures(const SimulateOptions& o, const VisionSimulation& sim, const
 
 // --stats: the run, the eye, the field, median stage times and every step.
 nlohmann::json simulate_stats_json(const SimulateOptions& o, const SimulateParams& p, const Scene& scene, const Tracer& tracer,
-                                   const VisionSimulation& sim, const SimulateRun& run, int threads, ComputeDevice device,
-                                   bool live) {
+                                   const VisionSimulation& sim, const SimulateRun& run, int threads, ComputeDevice device, bool live) {
   nlohmann::json j;
   j["width"] = p.width;
   j["height"] = p.height;
@@ -222,16 +222,11 @@ nlohmann::json simulate_stats_json(const SimulateOptions& o, const SimulateParam
   j["scene"] = {{"source", scene.source}, {"triangles", tracer.triangles()}, {"build_ms", tracer.build_ms()}};
   j["pixels_per_degree"] = sim.pixels_per_degree();
   j["field"] = {{"voxel", sim.field().voxel()}, {"cells", sim.field().cells()}, {"starvation", p.starvation}};
-  j["time_ms"] = {{"trace", run.median_ms(&StepStats::trace_ms)},
-                  {"features", run.median_ms(&StepStats::features_ms)},
-                  {"sharpness", run.median_ms(&StepStats::sharpness_ms)},
-                  {"blur", run.median_ms(&StepStats::blur_ms)},
-                  {"impairments", run.median_ms(&ImpairTimes::total_ms)},
-                  {"media", run.median_ms(&ImpairTimes::media_ms)},
-                  {"retina", run.median_ms(&ImpairTimes::field_ms)},
-                  {"colour", run.median_ms(&ImpairTimes::colour_ms)},
-                  {"total", run.median_ms(&StepStats::total_ms)},
-                  {"statistic", "median over steps"}};
+  j["time_ms"] = {{"trace", run.median_ms(&StepStats::trace_ms)},         {"features", run.median_ms(&StepStats::features_ms)},
+                  {"sharpness", run.median_ms(&StepStats::sharpness_ms)}, {"blur", run.median_ms(&StepStats::blur_ms)},
+                  {"impairments", run.median_ms(&ImpairTimes::total_ms)}, {"media", run.median_ms(&ImpairTimes::media_ms)},
+                  {"retina", run.median_ms(&ImpairTimes::field_ms)},      {"colour", run.median_ms(&ImpairTimes::colour_ms)},
+                  {"total", run.median_ms(&StepStats::total_ms)},         {"statistic", "median over steps"}};
   j["scan_path_px"] = run.path_px();
   const bool gaze = !o.gaze_source.empty();
   if (gaze) j["gaze"] = {{"source", o.gaze_source}, {"live", live}, {"fixation", o.gaze.fixation}, {"stopped", run.stopped}};
@@ -239,7 +234,9 @@ nlohmann::json simulate_stats_json(const SimulateOptions& o, const SimulateParam
     j["steps"].push_back(step_stats_json(s));
     if (gaze) {
       const GazeStep& g = run.gaze_steps[size_t(s.step - 1)];
-      j["steps"].back()["gaze"] = {{"t_s", g.start_s}, {"duration_s", g.duration_s}, {"screen_px", {g.screen_px.x, g.screen_px.y}},
+      j["steps"].back()["gaze"] = {{"t_s", g.start_s},
+                                   {"duration_s", g.duration_s},
+                                   {"screen_px", {g.screen_px.x, g.screen_px.y}},
                                    {"blink_before", g.blink_before}};
     }
   }
@@ -251,8 +248,8 @@ void print_summary(const SimulateOptions& o, const SimulateParams& p, const Scen
                    const CameraPath* path, const SimulateRun& run, int threads, ComputeDevice device, const GazeSteps* gaze,
                    const SavedSteps& save) {
   const FocusRange range = focus_range(p.eye);
-  fmt::print("foveal simulate: {} ({} triangles), camera '{}', {}x{}, eye {} (focus {:.2f} m … {}), {} steps, {} threads\n",
-             scene.source, tracer.triangles(), path ? "path " + path->name : camera.name, p.width, p.height, o.eye, range.near_point_m(),
+  fmt::print("foveal simulate: {} ({} triangles), camera '{}', {}x{}, eye {} (focus {:.2f} m … {}), {} steps, {} threads\n", scene.source,
+             tracer.triangles(), path ? "path " + path->name : camera.name, p.width, p.height, o.eye, range.near_point_m(),
              std::isfinite(range.far_point_m()) ? fmt::format("{:.2f} m", range.far_point_m()) : "infinity", run.steps.size(), threads);
   fmt::print("  device   {}\n", describe_device(device));
   if (p.impair.any())
@@ -301,7 +298,8 @@ int run_simulate(const SimulateOptions& o) {
 }  // namespace
 
 std::function<int()> add_simulate_command(CLI::App& app) {
-  auto* cmd = app.add_subcommand("simulate", "simulate human vision over time: fixations, accommodation, a sharpness field that remembers, variable blur");
+  auto* cmd = app.add_subcommand(
+      "simulate", "simulate human vision over time: fixations, accommodation, a sharpness field that remembers, variable blur");
 
   auto o = std::make_shared<SimulateOptions>();
   o->view.size = "1024x768";
@@ -309,8 +307,13 @@ std::function<int()> add_simulate_command(CLI::App& app) {
   o->view.display_option = false;
   add_view_options(*cmd, o->view);
   cmd->add_option("--path", o->path, "a camera path of the scene JSON (camera_paths): the camera moves between steps");
-  auto* steps_option = cmd->add_option("--steps", o->steps, "time steps (one fixation each); with a --gaze recording: at most this many (default: all its fixations)")->capture_default_str()->check(CLI::Range(1, 100000));
-  cmd->add_option("--eye", o->eye, "eye: healthy, glaucoma[:SEVERITY 0..1], myopia:-D, hyperopia:D, presbyopia:AGE, astigmatism:CYL[@AXIS], "
+  auto* steps_option =
+      cmd->add_option("--steps", o->steps,
+                      "time steps (one fixation each); with a --gaze recording: at most this many (default: all its fixations)")
+          ->capture_default_str()
+          ->check(CLI::Range(1, 100000));
+  cmd->add_option("--eye", o->eye,
+                  "eye: healthy, glaucoma[:SEVERITY 0..1], myopia:-D, hyperopia:D, presbyopia:AGE, astigmatism:CYL[@AXIS], "
                   "age:Y, cataract[:S], glare, cvd:TYPE[:S], achromatopsia, field:FILE.csv|GRID:FILE|DEFECT, field-view:OD|OS|both, "
                   "field-mode:contrast|blur|grey|fill, amd[:R[:A]], metamorphopsia:A[:R]; join with '+'; or a profile .json")
       ->capture_default_str();
@@ -325,19 +328,33 @@ std::function<int()> add_simulate_command(CLI::App& app) {
   cmd->add_option("--blur-taps", o->taps, "most taps of the variable blur per pixel (large CoCs)")->capture_default_str();
   cmd->add_option("--ambient", o->ambient, "constant Phong ambient factor of the ray-cast colour")->capture_default_str();
   cmd->add_option("--seed", o->seed, "seed of the saccades")->capture_default_str();
-  auto* gaze_option = cmd->add_option("--gaze", o->gaze_source,
-                  "real eye movements instead of simulated saccades: a recording (EyeLink .asc, Pupil gaze_positions.csv, Tobii .tsv, t,x,y CSV; "
-                  "one step per fixation, every fixation unless --steps) or a live tracker pupil://HOST:PORT[?surface=NAME] (a step per new fixation)");
+  auto* gaze_option = cmd->add_option(
+      "--gaze", o->gaze_source,
+      "real eye movements instead of simulated saccades: a recording (EyeLink .asc, Pupil gaze_positions.csv, Tobii .tsv, t,x,y CSV; "
+      "one step per fixation, every fixation unless --steps) or a live tracker pupil://HOST:PORT[?surface=NAME] (a step per new fixation)");
   o->gaze.fixation = "nhp";  // steps go from fixation to fixation
-  add_gaze_options(*cmd, o->gaze, "--gaze: where the steps' fixations come from: nhp (the recommended event detector; pursuit a step every 100 ms; live: I-VVT), "
-                   "ivt (velocity threshold), idt (dispersion threshold) or tracker (the recording's own fixation events)");
-  cmd->add_option("--display", o->gaze_display, "--gaze: the recording's screen W_CM,H_CM,DIST_CM (angles for the fixation filter)")->capture_default_str()->needs(gaze_option);
-  cmd->add_option("--stimulus", o->stimulus, "--gaze: where the render was shown on the recording's screen, X,Y,W,H in screen pixels (default: the whole screen)")->needs(gaze_option);
-  cmd->add_option("--start", o->start, "--gaze recordings: skip the fixations that begin earlier than this many seconds after the first sample")
-      ->capture_default_str()->needs(gaze_option);
-  cmd->add_option("--live-timeout", o->live_timeout, "--gaze live: stop when the tracker sends nothing for this many seconds")->capture_default_str()->needs(gaze_option);
-  cmd->add_flag("--no-gaze-blinks", o->no_gaze_blinks, "--gaze: ignore the recording's blinks (by default a blink between fixations resets the field)")->needs(gaze_option);
-  cmd->add_option("--save-steps", o->save_steps, "steps whose perceived image is saved (step_NNNN.png), e.g. 1,4,20,69; 'all' for every step")
+  add_gaze_options(
+      *cmd, o->gaze,
+      "--gaze: where the steps' fixations come from: nhp (the recommended event detector; pursuit a step every 100 ms; live: I-VVT), "
+      "ivt (velocity threshold), idt (dispersion threshold) or tracker (the recording's own fixation events)");
+  cmd->add_option("--display", o->gaze_display, "--gaze: the recording's screen W_CM,H_CM,DIST_CM (angles for the fixation filter)")
+      ->capture_default_str()
+      ->needs(gaze_option);
+  cmd->add_option("--stimulus", o->stimulus,
+                  "--gaze: where the render was shown on the recording's screen, X,Y,W,H in screen pixels (default: the whole screen)")
+      ->needs(gaze_option);
+  cmd->add_option("--start", o->start,
+                  "--gaze recordings: skip the fixations that begin earlier than this many seconds after the first sample")
+      ->capture_default_str()
+      ->needs(gaze_option);
+  cmd->add_option("--live-timeout", o->live_timeout, "--gaze live: stop when the tracker sends nothing for this many seconds")
+      ->capture_default_str()
+      ->needs(gaze_option);
+  cmd->add_flag("--no-gaze-blinks", o->no_gaze_blinks,
+                "--gaze: ignore the recording's blinks (by default a blink between fixations resets the field)")
+      ->needs(gaze_option);
+  cmd->add_option("--save-steps", o->save_steps,
+                  "steps whose perceived image is saved (step_NNNN.png), e.g. 1,4,20,69; 'all' for every step")
       ->capture_default_str();
   cmd->add_option("-o,--output", o->output, "output folder (created)")->required();
   cmd->add_option("--video", o->video, "also a video of every step's perceived image (ffmpeg)");

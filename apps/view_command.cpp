@@ -52,7 +52,8 @@ int run_view(const ViewCommandOptions& o) {
   w.window_screenshot = o.window_screenshot;
   w.panel = !o.no_panel;
   w.converge_timeout_s = o.timeout;
-  if (o.frames > 0 && o.screenshot.empty() && o.window_screenshot.empty()) fail("--frames: give --screenshot or --window-screenshot too (what the run is for)");
+  if (o.frames > 0 && o.screenshot.empty() && o.window_screenshot.empty())
+    fail("--frames: give --screenshot or --window-screenshot too (what the run is for)");
   if (o.frames == 0 && !o.window_screenshot.empty()) fail("--window-screenshot: needs --frames");
   if (!(o.speed > 0)) fail("--speed: must be positive, got {}", o.speed);
   if (!(o.timeout > 0)) fail("--timeout: must be positive seconds, got {}", o.timeout);
@@ -61,8 +62,10 @@ int run_view(const ViewCommandOptions& o) {
   GazeInput gaze;
   const glm::ivec2 render_px(s.render.width, s.render.height);
   gaze.display = s.render.display;
-  if (o.gaze.fixation == "none") gaze.filter.reset();
-  else gaze.filter = parse_fixation_method(o.gaze.fixation);
+  if (o.gaze.fixation == "none")
+    gaze.filter.reset();
+  else
+    gaze.filter = parse_fixation_method(o.gaze.fixation);
   gaze.fixation = resolve_fixation_params(o.gaze);
   std::string source_name = o.source;
   if (o.source == "mouse") {
@@ -93,8 +96,8 @@ int run_view(const ViewCommandOptions& o) {
   run_window(session, w);
   if (!o.screenshot.empty() && o.frames > 0) {
     const ViewStatus st = session.status();
-    fmt::print("foveal view: {} mode, {}x{}, gaze {}, {} → {} ({}, {:.0f} ms)\n", to_string(s.mode), s.render.width,
-               s.render.height, source_name, st.stage, o.screenshot, st.converged ? "converged" : "not converged", st.render_ms);
+    fmt::print("foveal view: {} mode, {}x{}, gaze {}, {} → {} ({}, {:.0f} ms)\n", to_string(s.mode), s.render.width, s.render.height,
+               source_name, st.stage, o.screenshot, st.converged ? "converged" : "not converged", st.render_ms);
     fmt::print("  device   {}\n", describe_device(device));
   }
   return 0;
@@ -103,36 +106,53 @@ int run_view(const ViewCommandOptions& o) {
 }  // namespace
 
 std::function<int()> add_view_command(CLI::App& app) {
-  auto* cmd = app.add_subcommand("view", "interactive viewer: foveated AO, the reference, both side by side, or the simulated eye, following the mouse, a recording or a live tracker");
+  auto* cmd = app.add_subcommand("view",
+                                 "interactive viewer: foveated AO, the reference, both side by side, or the simulated eye, following the "
+                                 "mouse, a recording or a live tracker");
 
   auto o = std::make_shared<ViewCommandOptions>();
   o->view.eye_option = "--from";
   o->render.mode_option = false;
   o->gaze.fixation = to_string(kRecommendedFixationMethod);
   add_view_options(*cmd, o->view);
-  cmd->add_option("--mode", o->mode, "foveated, reference (n_max rays everywhere), side-by-side (foveated | reference | difference) or vision (the simulated eye)")
+  cmd->add_option(
+         "--mode", o->mode,
+         "foveated, reference (n_max rays everywhere), side-by-side (foveated | reference | difference) or vision (the simulated eye)")
       ->capture_default_str();
-  cmd->add_option("--gaze", o->source,
-                  "mouse (the cursor over the image), X,Y (a fixed point, render pixels), a recording (EyeLink .asc, Pupil gaze_positions.csv, "
-                  "Tobii .tsv, t,x,y CSV; played in real time) or a live tracker pupil://HOST:PORT[?surface=NAME]")
+  cmd->add_option(
+         "--gaze", o->source,
+         "mouse (the cursor over the image), X,Y (a fixed point, render pixels), a recording (EyeLink .asc, Pupil gaze_positions.csv, "
+         "Tobii .tsv, t,x,y CSV; played in real time) or a live tracker pupil://HOST:PORT[?surface=NAME]")
       ->capture_default_str();
   add_render_options(*cmd, o->render);
-  add_gaze_options(*cmd, o->gaze, "how raw gaze becomes the fixation the render follows: ivvt (velocity threshold, smooth pursuit followed), ivt (velocity threshold), "
-                   "idt (dispersion threshold), mean, or none (every sample)");
-  cmd->add_option("--stimulus", o->stimulus, "recordings and trackers: where the render is on their screen, X,Y,W,H in screen pixels (default: the whole screen)");
+  add_gaze_options(
+      *cmd, o->gaze,
+      "how raw gaze becomes the fixation the render follows: ivvt (velocity threshold, smooth pursuit followed), ivt (velocity threshold), "
+      "idt (dispersion threshold), mean, or none (every sample)");
+  cmd->add_option("--stimulus", o->stimulus,
+                  "recordings and trackers: where the render is on their screen, X,Y,W,H in screen pixels (default: the whole screen)");
   cmd->add_option("--speed", o->speed, "recordings: playback speed (1 = real time)")->capture_default_str();
-  cmd->add_option("--eye", o->eye, "vision mode: healthy, glaucoma[:SEVERITY 0..1], myopia:-D, hyperopia:D, presbyopia:AGE, astigmatism:CYL[@AXIS]; join with '+'")
+  cmd->add_option(
+         "--eye", o->eye,
+         "vision mode: healthy, glaucoma[:SEVERITY 0..1], myopia:-D, hyperopia:D, presbyopia:AGE, astigmatism:CYL[@AXIS]; join with '+'")
       ->capture_default_str();
-  cmd->add_option("--pupil", o->pupil, "vision mode: pupil diameter, mm (overrides a profile's pupil_mm; default: the profile's, else 3.5)");
+  cmd->add_option("--pupil", o->pupil,
+                  "vision mode: pupil diameter, mm (overrides a profile's pupil_mm; default: the profile's, else 3.5)");
   cmd->add_option("--starvation", o->starvation, "vision mode: remembered CoCs grow by this fraction per step")->capture_default_str();
-  cmd->add_option("--blink-every", o->blink_every, "vision mode: a blink (the field forgets) every N steps; 0 = never")->capture_default_str();
-  cmd->add_option("--overlays", o->overlays, "drawn over the image: gaze, contours (q = 1, 0.5, 0.25), budget (AO heat map), scanpath, sharp (vision); comma-separated, all or none")
+  cmd->add_option("--blink-every", o->blink_every, "vision mode: a blink (the field forgets) every N steps; 0 = never")
       ->capture_default_str();
-  cmd->add_option("--diff-gain", o->diff_gain, "side-by-side: the difference pane shows |foveated − reference| × this")->capture_default_str();
+  cmd->add_option("--overlays", o->overlays,
+                  "drawn over the image: gaze, contours (q = 1, 0.5, 0.25), budget (AO heat map), scanpath, sharp (vision); "
+                  "comma-separated, all or none")
+      ->capture_default_str();
+  cmd->add_option("--diff-gain", o->diff_gain, "side-by-side: the difference pane shows |foveated − reference| × this")
+      ->capture_default_str();
   cmd->add_flag("--no-progressive", o->no_progressive, "no quarter-resolution preview before each full frame");
-  cmd->add_option("--frames", o->frames, "show this many frames, wait for the finished image, write --screenshot, and exit (scripts, tests)")
+  cmd->add_option("--frames", o->frames,
+                  "show this many frames, wait for the finished image, write --screenshot, and exit (scripts, tests)")
       ->check(CLI::Range(0, 1000000));
-  cmd->add_option("--screenshot", o->screenshot, "screenshot path (.png; its stats go beside it as .json); key P writes it (numbered when it exists)");
+  cmd->add_option("--screenshot", o->screenshot,
+                  "screenshot path (.png; its stats go beside it as .json); key P writes it (numbered when it exists)");
   cmd->add_option("--window-screenshot", o->window_screenshot, "with --frames: also a PNG of the whole window, panel included");
   cmd->add_option("--timeout", o->timeout, "--frames: longest wait for the finished image, seconds")->capture_default_str();
   cmd->add_flag("--no-panel", o->no_panel, "start with the parameter panel hidden (Tab toggles it)");

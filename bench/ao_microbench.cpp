@@ -41,8 +41,7 @@ void BM_RendererAoPass(benchmark::State& state) {
   s.tracer.set_occlusion_api(static_cast<TraceApi>(state.range(0)));
   std::vector<float> visibility;
   uint64_t rays = 0;
-  for (auto _ : state)
-    rays += trace_ao(s.tracer, s.gbuffer, s.maps, s.ao_distance, s.epsilon, 1, visibility);
+  for (auto _ : state) rays += trace_ao(s.tracer, s.gbuffer, s.maps, s.ao_distance, s.epsilon, 1, visibility);
   state.SetItemsProcessed(static_cast<int64_t>(rays));
   state.SetLabel(to_string(static_cast<TraceApi>(state.range(0))));
 }

@@ -10,7 +10,6 @@
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   try {
     foveal::parse_eye_profile(std::string(reinterpret_cast<const char*>(data), size), "fuzz.json", "/nonexistent-foveal-fuzz");
-  } catch (const foveal::Error&) {
-  }
+  } catch (const foveal::Error&) {}
   return 0;
 }

@@ -13,11 +13,9 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   const std::string grid = grids[data[0] % 4];
   const foveal::Eye eye = (data[0] & 4) ? foveal::Eye::os : foveal::Eye::od;
   try {
-    const auto fields =
-        foveal::parse_field_csv(std::string(reinterpret_cast<const char*>(data + 1), size - 1), "fuzz.csv", grid, eye, 60);
+    const auto fields = foveal::parse_field_csv(std::string(reinterpret_cast<const char*>(data + 1), size - 1), "fuzz.csv", grid, eye, 60);
     for (const auto& f : fields)
       for (double y : {-10.0, -0.5, 0.0, 0.5, 10.0}) (void)foveal::interpolate_loss_db(f, 3.0, y);
-  } catch (const foveal::Error&) {
-  }
+  } catch (const foveal::Error&) {}
   return 0;
 }

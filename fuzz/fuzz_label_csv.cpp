@@ -14,7 +14,6 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     std::vector<foveal::EventLabel> shifted(f.label.begin() + 1, f.label.end());
     shifted.push_back(foveal::EventLabel::undefined);
     (void)foveal::evaluate_labels(shifted, f.label, f.t_s);
-  } catch (const foveal::Error&) {
-  }
+  } catch (const foveal::Error&) {}
   return 0;
 }

@@ -9,7 +9,6 @@
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   try {
     foveal::parse_pfm(std::string(reinterpret_cast<const char*>(data), size), "fuzz.pfm");
-  } catch (const foveal::Error&) {
-  }
+  } catch (const foveal::Error&) {}
   return 0;
 }

@@ -7,11 +7,16 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   const std::string text(reinterpret_cast<const char*>(data + 1), size - 1);
   try {
     switch (data[0] % 3) {
-      case 0: fuzz_recording(data + 1, size - 1, foveal::GazeFormat::pupil, "gaze_positions.csv"); break;
-      case 1: foveal::parse_pupil_fixations(text, "fixations.csv", {640, 480}); break;
-      default: foveal::parse_pupil_blinks(text, "blinks.csv"); break;
+      case 0:
+        fuzz_recording(data + 1, size - 1, foveal::GazeFormat::pupil, "gaze_positions.csv");
+        break;
+      case 1:
+        foveal::parse_pupil_fixations(text, "fixations.csv", {640, 480});
+        break;
+      default:
+        foveal::parse_pupil_blinks(text, "blinks.csv");
+        break;
     }
-  } catch (const foveal::Error&) {
-  }
+  } catch (const foveal::Error&) {}
   return 0;
 }

@@ -31,12 +31,11 @@ inline void fuzz_recording(const uint8_t* data, size_t size, foveal::GazeFormat 
         if (const auto g = tracker.current(); g && !(std::isfinite(g->x) && std::isfinite(g->y))) __builtin_trap();
       }
     }
-    for (foveal::EventMethod m : {foveal::EventMethod::ivt, foveal::EventMethod::idt, foveal::EventMethod::ek, foveal::EventMethod::nh,
-                                  foveal::EventMethod::nhp}) {
+    for (foveal::EventMethod m :
+         {foveal::EventMethod::ivt, foveal::EventMethod::idt, foveal::EventMethod::ek, foveal::EventMethod::nh, foveal::EventMethod::nhp}) {
       const foveal::EventDetection d = foveal::detect_events(r, geometry, m, {}, {});
       if (d.labels.size() != r.samples.size()) __builtin_trap();
       (void)foveal::events_tsv(d, r);
     }
-  } catch (const foveal::Error&) {
-  }
+  } catch (const foveal::Error&) {}
 }

@@ -10,7 +10,6 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   try {
     // Mesh files are looked up in a folder that does not exist, so only shapes can load
     foveal::parse_scene_json(std::string(reinterpret_cast<const char*>(data), size), "fuzz.json", "/nonexistent-foveal-fuzz");
-  } catch (const foveal::Error&) {
-  }
+  } catch (const foveal::Error&) {}
   return 0;
 }

@@ -17,8 +17,9 @@ using namespace foveal_test;
 namespace fs = std::filesystem;
 
 TEST(Cli, RenderWritesImageMaskPlotAovsAndContractStats) {
-  const CliRun r = foveal("render --size 96x60 --max-rays 8 --gaze 10,10 -o img.png --mask mask.png --acuity-plot fig4.svg "
-                       "--aov ao=ao.pfm,depth=depth.exr,position=p.pfm,normal=n.exr --stats stats.json");
+  const CliRun r = foveal(
+      "render --size 96x60 --max-rays 8 --gaze 10,10 -o img.png --mask mask.png --acuity-plot fig4.svg "
+      "--aov ao=ao.pfm,depth=depth.exr,position=p.pfm,normal=n.exr --stats stats.json");
   ASSERT_EQ(r.status, 0) << r.err;
   EXPECT_NE(r.out.find("AO rays"), std::string::npos);
   for (const char* f : {"img.png", "mask.png", "ao.pfm", "depth.exr", "p.pfm", "n.exr"}) EXPECT_GT(fs::file_size(scratch(f)), 100u) << f;

@@ -29,7 +29,8 @@ std::string fmt_ratio(double v) {
 
 TEST(CompareCli, BandsJsonErrorMapAndPlot) {
   render_foveated_and_references("--size 200x125 --gaze 60,50 --max-rays 32");
-  const CliRun r = foveal("compare fov.png ref.png --reference2 ref2.png --gaze 60,50 --json cmp.json --error-map err.png --plot err_plot.png");
+  const CliRun r =
+      foveal("compare fov.png ref.png --reference2 ref2.png --gaze 60,50 --json cmp.json --error-map err.png --plot err_plot.png");
   ASSERT_EQ(r.status, 0) << r.err;
   EXPECT_NE(r.out.find("q(E)=1"), std::string::npos) << r.out;
   const auto j = nlohmann::json::parse(std::ifstream(scratch("cmp.json")));
@@ -55,12 +56,12 @@ TEST(CompareCli, BandsJsonErrorMapAndPlot) {
 TEST(CompareCli, BadInputIsOneClearLine) {
   ASSERT_EQ(foveal("render --scene builtin:plane --size 40x30 -q -o small.png").status, 0);
   ASSERT_EQ(foveal("render --scene builtin:plane --size 30x40 -q -o tall.png").status, 0);
-  for (const auto& [args, expected] : std::vector<std::pair<std::string, std::string>>{
-           {"compare small.png tall.png", "same size"},
-           {"compare small.png missing.png", "missing.png"},
-           {"compare small.png small.png --gaze 1", "--gaze"},
-           {"compare small.png small.png --ellipse 0", "--ellipse"},
-           {"compare small.png small.png --ssim-border mirror", "--ssim-border"}})
+  for (const auto& [args, expected] :
+       std::vector<std::pair<std::string, std::string>>{{"compare small.png tall.png", "same size"},
+                                                        {"compare small.png missing.png", "missing.png"},
+                                                        {"compare small.png small.png --gaze 1", "--gaze"},
+                                                        {"compare small.png small.png --ellipse 0", "--ellipse"},
+                                                        {"compare small.png small.png --ssim-border mirror", "--ssim-border"}})
     expect_one_line_error(args, expected);
 }
 
@@ -91,8 +92,9 @@ TEST(CompareCli, MarkdownTableAndAcuityWeightedError) {
 }
 
 TEST(BenchQualityCli, SweepTableJsonAndPlot) {
-  const CliRun r = foveal("bench quality --scene builtin:box --size 120x75 --reference-rays 16 --gamma 1,3 --max-rays 8,16 "
-                          "--beta 1 --gaze 30,40 --gaze 90,20 --json q.json --markdown q.md --plot q.png");
+  const CliRun r = foveal(
+      "bench quality --scene builtin:box --size 120x75 --reference-rays 16 --gamma 1,3 --max-rays 8,16 "
+      "--beta 1 --gaze 30,40 --gaze 90,20 --json q.json --markdown q.md --plot q.png");
   ASSERT_EQ(r.status, 0) << r.err;
   const auto j = nlohmann::json::parse(std::ifstream(scratch("q.json")));
   ASSERT_EQ(j["points"].size(), 8u);  // 2 γ × 2 n_max × 2 methods (paper, adaptive+denoise) × 1 β
@@ -115,14 +117,15 @@ TEST(BenchQualityCli, SweepTableJsonAndPlot) {
   EXPECT_EQ(std::count(table.begin(), table.end(), '\n'), 2 + 2 + 2 + 8);
   EXPECT_NE(table.find("| adaptive+denoise | 3 | 16 | 1 |"), std::string::npos) << table;
   const foveal::Image plot = foveal::load_image(scratch("q.png").string());
-  EXPECT_EQ(plot.width, 1300);  // two panels: still error and flicker
+  EXPECT_EQ(plot.width, 1300);                               // two panels: still error and flicker
   EXPECT_EQ(r.out.find("the defaults"), std::string::npos);  // not in the grid: no line about them
   EXPECT_NE(r.out.find("recommended"), std::string::npos) << r.out;
 }
 
 TEST(BenchQualityCli, SequenceRunsTheConfigurationsAskedForAndPlotsThem) {
-  const CliRun r = foveal("bench quality --sequence --scene builtin:box --size 60x40 --frames 3 --reference-rays 8 "
-                          "--configs denoise+temporal,paper --json s.json --markdown s.md --plot s.png");
+  const CliRun r = foveal(
+      "bench quality --sequence --scene builtin:box --size 60x40 --frames 3 --reference-rays 8 "
+      "--configs denoise+temporal,paper --json s.json --markdown s.md --plot s.png");
   ASSERT_EQ(r.status, 0) << r.err;
   const auto j = nlohmann::json::parse(std::ifstream(scratch("s.json")));
   ASSERT_EQ(j["configs"].size(), 2u);  // in the order given, named canonically
@@ -140,20 +143,20 @@ TEST(BenchQualityCli, SequenceRunsTheConfigurationsAskedForAndPlotsThem) {
 
 TEST(BenchQualityCli, BadOptionsAreOneClearLine) {
   const std::string base = "bench quality --scene builtin:plane --size 40x30 ";
-  for (const auto& [args, expected] : std::vector<std::pair<std::string, std::string>>{
-           {base + "--max-rays 0", "--max-rays"},
-           {base + "--max-rays 2.5", "--max-rays"},
-           {base + "--gamma 0", "--gamma"},
-           {base + "--beta -1", "--beta"},
-           {base + "--gamma x", "--gamma"},
-           {base + "--gazes nowhere", "nowhere"},
-           {base + "--gaze 3", "--gaze"},
-           {base + "--recording x.csv", "--sequence"},
-           {base + "--sequence --recording missing.csv", "missing.csv"},
-           {base + "--configs paper,temporal", "--sequence"},
-           {base + "--configs adaptive+sharpen", "sharpen"},
-           {base + "--sequence --configs paper,paper", "paper is listed twice"},
-           {base + "--sequence --device opencl", "--device: unknown device 'opencl'"}})
+  for (const auto& [args, expected] :
+       std::vector<std::pair<std::string, std::string>>{{base + "--max-rays 0", "--max-rays"},
+                                                        {base + "--max-rays 2.5", "--max-rays"},
+                                                        {base + "--gamma 0", "--gamma"},
+                                                        {base + "--beta -1", "--beta"},
+                                                        {base + "--gamma x", "--gamma"},
+                                                        {base + "--gazes nowhere", "nowhere"},
+                                                        {base + "--gaze 3", "--gaze"},
+                                                        {base + "--recording x.csv", "--sequence"},
+                                                        {base + "--sequence --recording missing.csv", "missing.csv"},
+                                                        {base + "--configs paper,temporal", "--sequence"},
+                                                        {base + "--configs adaptive+sharpen", "sharpen"},
+                                                        {base + "--sequence --configs paper,paper", "paper is listed twice"},
+                                                        {base + "--sequence --device opencl", "--device: unknown device 'opencl'"}})
     expect_one_line_error(args, expected);
   // The GPU measures sequences; without one, --device cuda says why
   if (foveal::availability().usable)

@@ -17,20 +17,19 @@ TEST(DeviceCli, CpuRunsAndTheChoiceIsPrinted) {
   // auto picks what is there and says so
   const CliRun a = foveal("render --scene builtin:box --size 80x50 --max-rays 8 -o dev_auto.png");
   ASSERT_EQ(a.status, 0) << a.err;
-  EXPECT_NE(a.out.find(foveal::availability().usable ? "device   cuda (" : "device   cpu (no GPU: "), std::string::npos)
-      << a.out;
+  EXPECT_NE(a.out.find(foveal::availability().usable ? "device   cuda (" : "device   cpu (no GPU: "), std::string::npos) << a.out;
 }
 
 TEST(DeviceCli, UnknownOrUnavailableDeviceIsOneLine) {
   expect_one_line_error("render --scene builtin:box --device opencl", "--device: unknown device 'opencl' (known: auto, cpu, cuda)");
   expect_one_line_error("bench ao --scene builtin:box --device tpu", "--device: unknown device 'tpu'");
   if (foveal::availability().usable) GTEST_SKIP() << "a GPU is usable here: --device cuda is not refused";
-  expect_one_line_error("render --scene builtin:box --device cuda",
-                        "--device cuda: unavailable: " + foveal::availability().reason);
+  expect_one_line_error("render --scene builtin:box --device cuda", "--device cuda: unavailable: " + foveal::availability().reason);
   expect_one_line_error("bench ao --scene builtin:box --device cuda", "--device cuda: unavailable");
   const std::string recording = write_three_fixations("device_three.csv");
-  expect_one_line_error("replay --gaze " + recording + " --screen 480x300 --scene builtin:box --size 48x30 --frames 2 -o dev_replay --device cuda",
-                        "--device cuda: unavailable");
+  expect_one_line_error(
+      "replay --gaze " + recording + " --screen 480x300 --scene builtin:box --size 48x30 --frames 2 -o dev_replay --device cuda",
+      "--device cuda: unavailable");
   expect_one_line_error("simulate --scene builtin:box --size 64x48 --steps 2 -o dev_sim --device cuda", "--device cuda: unavailable");
   expect_one_line_error("bench vision --scene builtin:box --size 64x48 --steps 2 --device cuda", "--device cuda: unavailable");
   expect_one_line_error("view --scene builtin:box --device cuda", "--device cuda: unavailable");
@@ -53,7 +52,8 @@ TEST(DeviceCli, QualityPerRayRunsOnTheChosenDevice) {
 // The vision simulation and its benchmark name their device; on a GPU the benchmark runs the CPU
 // beside it and reports the ratio and how far the two agree.
 TEST(DeviceCli, SimulateAndBenchVisionNameTheirDevice) {
-  const CliRun r = foveal("simulate --scene builtin:box --size 64x48 --steps 3 --save-steps '' -o dev_sim --stats dev_sim.json --device cpu");
+  const CliRun r =
+      foveal("simulate --scene builtin:box --size 64x48 --steps 3 --save-steps '' -o dev_sim --stats dev_sim.json --device cpu");
   ASSERT_EQ(r.status, 0) << r.err;
   EXPECT_NE(r.out.find("device   cpu"), std::string::npos) << r.out;
   EXPECT_EQ(nlohmann::json::parse(std::ifstream(scratch("dev_sim.json")))["device"], "cpu");
@@ -69,13 +69,15 @@ TEST(DeviceCli, SimulateAndBenchVisionNameTheirDevice) {
   }
   EXPECT_EQ(row["device"], "cuda");
   EXPECT_GT(row["cpu_over_gpu"].get<double>(), 0);
-  EXPECT_NEAR(row["cpu_over_gpu"].get<double>(), row["cpu"]["time_ms"]["total"].get<double>() / row["time_ms"]["total"].get<double>(), 1e-6);
+  EXPECT_NEAR(row["cpu_over_gpu"].get<double>(), row["cpu"]["time_ms"]["total"].get<double>() / row["time_ms"]["total"].get<double>(),
+              1e-6);
   EXPECT_LT(row["agreement"]["perceived_mean_abs_diff"].get<double>(), 0.01);
 }
 
 TEST(DeviceCli, ReplayNamesItsDevice) {
   const std::string recording = write_three_fixations("device_replay.csv");
-  const CliRun r = foveal("replay --gaze " + recording + " --screen 480x300 --scene builtin:box --size 48x30 --max-rays 4 --frames 3 "
+  const CliRun r = foveal("replay --gaze " + recording +
+                          " --screen 480x300 --scene builtin:box --size 48x30 --max-rays 4 --frames 3 "
                           "-o dev_replay --stats dev_replay.json --device cpu");
   ASSERT_EQ(r.status, 0) << r.err;
   EXPECT_NE(r.out.find("device   cpu"), std::string::npos) << r.out;

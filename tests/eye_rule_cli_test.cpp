@@ -36,13 +36,13 @@ bool have_xvfb() { return std::system("command -v xvfb-run > /dev/null 2>&1") ==
 // The rule itself: the spec gives the eye, a given override replaces it whatever its value.
 TEST(EyeRule, AnExplicitValueBeatsTheProfileWhichBeatsTheDefault) {
   const std::string profile = scratch(patient_profile()).string();
-  EXPECT_DOUBLE_EQ(foveal::resolve_eye("healthy").eye.pupil_diameter_mm, 3.5);  // the default
-  EXPECT_DOUBLE_EQ(foveal::resolve_eye(profile).eye.pupil_diameter_mm, 5.5);    // the profile's
+  EXPECT_DOUBLE_EQ(foveal::resolve_eye("healthy").eye.pupil_diameter_mm, 3.5);                     // the default
+  EXPECT_DOUBLE_EQ(foveal::resolve_eye(profile).eye.pupil_diameter_mm, 5.5);                       // the profile's
   EXPECT_DOUBLE_EQ(foveal::resolve_eye(profile, {3.5, std::nullopt}).eye.pupil_diameter_mm, 3.5);  // explicit, the default's value
   EXPECT_DOUBLE_EQ(foveal::resolve_eye("myopia:-2", {7.0, 20.0}).eye.pupil_diameter_mm, 7.0);
   EXPECT_DOUBLE_EQ(foveal::resolve_eye("myopia:-2", {7.0, 20.0}).eye.image_distance_mm, 20.0);
   EXPECT_DOUBLE_EQ(foveal::resolve_eye(profile, {3.5, std::nullopt}).eye.refraction_d, -1.0);  // the rest stays the profile's
-  EXPECT_THROW(foveal::resolve_eye(profile, {12.0, std::nullopt}), foveal::Error);  // validated after the override
+  EXPECT_THROW(foveal::resolve_eye(profile, {12.0, std::nullopt}), foveal::Error);             // validated after the override
   EXPECT_EQ(foveal::optics_json(foveal::resolve_eye(profile).eye)["pupil_mm"], 5.5);
 }
 
@@ -84,8 +84,8 @@ TEST(EyeRule, BenchVisionKeepsAProfilesPupilAndAnExplicitPupilOverridesIt) {
 TEST(EyeRule, ViewKeepsAProfilesPupilAndAnExplicitPupilOverridesIt) {
   if (!have_xvfb()) GTEST_SKIP() << "skipped: xvfb-run absent (Debian package xvfb)";
   const std::string profile = patient_profile();
-  const std::string view = "ASAN_OPTIONS=detect_leaks=0 xvfb-run -a -n " + std::to_string(100 + ::getpid() % 800 + 1) +
-                           " -s '-screen 0 1280x1024x24'";
+  const std::string view =
+      "ASAN_OPTIONS=detect_leaks=0 xvfb-run -a -n " + std::to_string(100 + ::getpid() % 800 + 1) + " -s '-screen 0 1280x1024x24'";
   const std::string common = "view --scene builtin:plane --size 64x40 --mode vision --frames 1 --eye " + profile;
   const CliRun kept = run_foveal(view, common + " --screenshot v1.png < /dev/null");
   ASSERT_EQ(kept.status, 0) << kept.err;

@@ -75,8 +75,9 @@ TEST(GazeCli, RealEyeLinkAgreementInJson) {
 
 TEST(GazeCli, ReplayFollowsTheRecording) {
   const std::string rec = write_three_fixations("replay.csv");
-  const CliRun r = foveal_test::foveal("replay --gaze " + rec + " --screen 480x300 --scene builtin:sphere-plane --size 48x30 --max-rays 4 "
-                          "--fps 10 -o seq --stats seq.json");
+  const CliRun r = foveal_test::foveal("replay --gaze " + rec +
+                                       " --screen 480x300 --scene builtin:sphere-plane --size 48x30 --max-rays 4 "
+                                       "--fps 10 -o seq --stats seq.json");
   ASSERT_EQ(r.status, 0) << r.err;
   const auto rows = read_csv(scratch("seq/frames.csv"));
   ASSERT_GE(rows.size(), 2u);
@@ -112,8 +113,9 @@ TEST(GazeCli, ReplayFoveaFollowsAPursuit) {
   }
   std::map<std::string, std::vector<std::vector<std::string>>> frames;
   for (const std::string filter : {"", "ivt"}) {
-    const CliRun r = foveal_test::foveal("replay --gaze " + path.string() + " --screen 480x300 --scene builtin:plane --size 48x30 --max-rays 1 " +
-                                         "--fps 10 -q -o pursuit" + filter + (filter.empty() ? "" : " --fixation " + filter));
+    const CliRun r =
+        foveal_test::foveal("replay --gaze " + path.string() + " --screen 480x300 --scene builtin:plane --size 48x30 --max-rays 1 " +
+                            "--fps 10 -q -o pursuit" + filter + (filter.empty() ? "" : " --fixation " + filter));
     ASSERT_EQ(r.status, 0) << r.err;
     frames[filter] = read_csv(scratch("pursuit" + filter + "/frames.csv"));
     ASSERT_EQ(frames[filter].size(), 1u + 12u);
@@ -121,8 +123,8 @@ TEST(GazeCli, ReplayFoveaFollowsAPursuit) {
   // Frames at 0.5, 0.6, 0.7, 0.8 s: the eye at x = 140 … 200 px = 14 … 20 render px
   for (int k = 5; k <= 8; ++k) {
     const double eye = (100 + 200 * (0.1 * k - 0.3)) / 10;
-    EXPECT_NEAR(std::stod(frames[""][k + 1][4]), eye, 0.3) << k;       // I-VVT: with the eye
-    EXPECT_LT(std::stod(frames["ivt"][k + 1][4]), eye - 2.0) << k;     // I-VT: behind it
+    EXPECT_NEAR(std::stod(frames[""][k + 1][4]), eye, 0.3) << k;    // I-VVT: with the eye
+    EXPECT_LT(std::stod(frames["ivt"][k + 1][4]), eye - 2.0) << k;  // I-VT: behind it
   }
   // At 1.1 s the eye rests at 220 px: I-VVT's fovea there, I-VT's still a mean of the whole movement
   EXPECT_NEAR(std::stod(frames[""][12][4]), 22.0, 0.2);
@@ -132,12 +134,14 @@ TEST(GazeCli, ReplayFoveaFollowsAPursuit) {
 TEST(BenchQualityCli, SequenceFollowsARecordingAsReplayDoes) {
   // The sequence's gaze at each frame is the one `replay` renders for the same recording and fps
   const std::string rec = write_three_fixations("sequence_gaze.csv");
-  const CliRun replay = foveal_test::foveal("replay --gaze " + rec + " --scene builtin:sphere-plane --size 48x30 --max-rays 1 --fps 10 -q -o seqgaze");
+  const CliRun replay =
+      foveal_test::foveal("replay --gaze " + rec + " --scene builtin:sphere-plane --size 48x30 --max-rays 1 --fps 10 -q -o seqgaze");
   ASSERT_EQ(replay.status, 0) << replay.err;
   const auto rows = read_csv(scratch("seqgaze/frames.csv"));
   ASSERT_EQ(rows.size(), 1u + 10u);
-  const CliRun r = foveal_test::foveal("bench quality --sequence --recording " + rec + " --fps 10 --frames 10 --orbit 0 --scene builtin:sphere-plane "
-                          "--size 48x30 --reference-rays 8 --json sequence.json");
+  const CliRun r = foveal_test::foveal("bench quality --sequence --recording " + rec +
+                                       " --fps 10 --frames 10 --orbit 0 --scene builtin:sphere-plane "
+                                       "--size 48x30 --reference-rays 8 --json sequence.json");
   ASSERT_EQ(r.status, 0) << r.err;
   EXPECT_NE(r.out.find("gaze of"), std::string::npos) << r.out;
   const auto j = nlohmann::json::parse(std::ifstream(scratch("sequence.json")));
@@ -157,8 +161,9 @@ TEST(BenchQualityCli, SequenceFollowsARecordingAsReplayDoes) {
 TEST(GazeCli, ReplayWritesAVideo) {
   if (std::system("ffmpeg -version > /dev/null 2>&1") != 0) GTEST_SKIP() << "skipped: ffmpeg absent";
   const std::string rec = write_three_fixations("video.csv");
-  const CliRun r = foveal_test::foveal("replay --gaze " + rec + " --screen 480x300 --scene builtin:plane --size 33x21 --max-rays 2 --fps 10 "
-                          "-o vid --video vid/out.mp4 -q");
+  const CliRun r = foveal_test::foveal("replay --gaze " + rec +
+                                       " --screen 480x300 --scene builtin:plane --size 33x21 --max-rays 2 --fps 10 "
+                                       "-o vid --video vid/out.mp4 -q");
   ASSERT_EQ(r.status, 0) << r.err;
   EXPECT_GT(fs::file_size(scratch("vid/out.mp4")), 500u);
 }
@@ -168,8 +173,9 @@ TEST(GazeCli, LiveReplayHoldsTheFixationAndStopsWhenTheTrackerHangsUp) {
   std::vector<std::pair<std::string, std::string>> messages;
   for (int i = 0; i < 150; ++i) messages.emplace_back("surfaces.screen", surface_gaze(0.25, 0.75, true, 10 + 0.004 * i));
   fake.serve(messages, true, nullptr);
-  const CliRun r = foveal_test::foveal("replay --gaze '" + fake.url("surface=screen") + "' --screen 400x200 --scene builtin:plane --size 40x20 "
-                          "--max-rays 2 --fps 20 --frames 400 --live-timeout 1 -o live");
+  const CliRun r = foveal_test::foveal("replay --gaze '" + fake.url("surface=screen") +
+                                       "' --screen 400x200 --scene builtin:plane --size 40x20 "
+                                       "--max-rays 2 --fps 20 --frames 400 --live-timeout 1 -o live");
   // The tracker hung up: a clear message and a non-zero exit after a bounded wait
   EXPECT_EQ(r.status, 1);
   EXPECT_NE(r.err.find("no gaze for"), std::string::npos) << r.err;
@@ -233,7 +239,8 @@ TEST(GazeCli, TruncatedRecordingIsSaidOnStderr) {
   const CliRun r = foveal_test::foveal("gaze cut.asc --no-scanpath");
   EXPECT_EQ(r.status, 0) << r.err;
   EXPECT_NE(r.err.find("foveal: warning: cut.asc: recording block 1 (from line 2) has no END: the file may be truncated"),
-            std::string::npos) << r.err;
+            std::string::npos)
+      << r.err;
   EXPECT_NE(r.out.find("200"), std::string::npos) << r.out;  // its samples were summarised
 }
 
@@ -250,7 +257,8 @@ TEST(GazeCli, EventsAreScoredAgainstExpertLabels) {
     while (std::getline(in, line))
       if (!line.empty()) out << line.substr(0, line.find(',')) << ",fixation\n";
   }
-  const CliRun r = foveal_test::foveal("gaze " + rec + " --events ivt --evaluate three_labels.csv --samples-out lab.csv --json ev.json --no-scanpath");
+  const CliRun r =
+      foveal_test::foveal("gaze " + rec + " --events ivt --evaluate three_labels.csv --samples-out lab.csv --json ev.json --no-scanpath");
   ASSERT_EQ(r.status, 0) << r.err;
   EXPECT_NE(r.out.find("scores    ivt against three_labels.csv"), std::string::npos) << r.out;
   const auto j = nlohmann::json::parse(std::ifstream(scratch("ev.json")));

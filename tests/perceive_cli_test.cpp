@@ -89,7 +89,8 @@ TEST(PerceiveCli, EightBitImagesAreDecodedFromSrgbAndEncodedBack) {
   const foveal::Image png_in = foveal::load_image(scratch("in.png").string()), out = foveal::load_image(scratch("ach.png").string());
   auto lin = [](float v) { return v <= 0.04045f ? v / 12.92f : std::pow((v + 0.055f) / 1.055f, 2.4f); };
   for (size_t p = 0; p < size_t(in.width) * in.height; p += 7) {
-    const double y = 0.2126729 * lin(png_in.pixels[p * 3]) + 0.7151522 * lin(png_in.pixels[p * 3 + 1]) + 0.0721750 * lin(png_in.pixels[p * 3 + 2]);
+    const double y =
+        0.2126729 * lin(png_in.pixels[p * 3]) + 0.7151522 * lin(png_in.pixels[p * 3 + 1]) + 0.0721750 * lin(png_in.pixels[p * 3 + 2]);
     EXPECT_NEAR(out.pixels[p * 3], foveal::linear_to_srgb(static_cast<float>(y)), 1.0 / 255 + 1e-6);
     EXPECT_EQ(out.pixels[p * 3], out.pixels[p * 3 + 1]);
   }
@@ -105,7 +106,8 @@ TEST(PerceiveCli, ARecordingsFixationsMoveTheFieldWithTheFramesTime) {
     csv << "t,x,y\n";
     for (int i = 0; i < 100; ++i) csv << i * 0.01 << "," << (i < 45 ? 100 : 300) << ",100\n";
   }
-  const CliRun r = run_cli("perceive frames -o seen --fps 4 --gaze gaze.csv --screen 400x200 --eye field:hemianopia:left:20 --no-optics -q");
+  const CliRun r =
+      run_cli("perceive frames -o seen --fps 4 --gaze gaze.csv --screen 400x200 --eye field:hemianopia:left:20 --no-optics -q");
   ASSERT_EQ(r.status, 0) << r.err;
   for (int k = 0; k < 4; ++k) {
     const foveal::Image out = foveal::load_image(scratch("seen/f" + std::to_string(k) + ".png").string());
@@ -118,7 +120,8 @@ TEST(PerceiveCli, ARecordingsFixationsMoveTheFieldWithTheFramesTime) {
 
 TEST(PerceiveCli, VideosGoThroughFfmpegFrameByFrame) {
   fs::create_directories(scratch("vin"));
-  for (int k = 0; k < 5; ++k) foveal::save_image(test_image(64, 48), scratch("vin/frame_" + std::to_string(10000 + k).substr(1) + ".png").string());
+  for (int k = 0; k < 5; ++k)
+    foveal::save_image(test_image(64, 48), scratch("vin/frame_" + std::to_string(10000 + k).substr(1) + ".png").string());
   try {
     foveal::encode_video(scratch("vin/frame_%04d.png").string(), 10, scratch("in.mp4").string());
   } catch (const std::exception& e) {

@@ -61,10 +61,10 @@ TEST(SimulateCli, RecordedFixationsDriveTheSteps) {
   ASSERT_EQ(foveal_test::foveal(common + "--steps 2 -o gz3 --stats gz3.json -q").status, 0);
   EXPECT_EQ(nlohmann::json::parse(std::ifstream(scratch("gz3.json")))["steps"].size(), 2u);
   // What cannot drive the steps says why, in one line
-  for (const auto& [args, expected] : std::vector<std::pair<std::string, std::string>>{
-           {"--fixation mean", "'mean' gives a gaze point per frame"},
-           {"--fixation tracker", "no fixation events of its tracker"},
-           {"--start 5", "no fixations after --start 5 s"}})
+  for (const auto& [args, expected] :
+       std::vector<std::pair<std::string, std::string>>{{"--fixation mean", "'mean' gives a gaze point per frame"},
+                                                        {"--fixation tracker", "no fixation events of its tracker"},
+                                                        {"--start 5", "no fixations after --start 5 s"}})
     expect_one_line_error(common + args + " -o gz4", expected);
 }
 
@@ -74,7 +74,8 @@ TEST(SimulateCli, LiveTrackerDrivesTheStepsAndItsHangUpIsOneLine) {
   for (int i = 0; i < 60; ++i) messages.emplace_back("surfaces.screen", surface_gaze(0.25, 0.75, true, 10 + 0.004 * i));
   for (int i = 0; i < 60; ++i) messages.emplace_back("surfaces.screen", surface_gaze(0.75, 0.25, true, 10.3 + 0.004 * i));
   fake.serve(messages, true, nullptr);
-  const CliRun r = foveal_test::foveal("simulate --gaze '" + fake.url("surface=screen") + "' --screen 400x200 --size 40x20 --steps 5 "
+  const CliRun r = foveal_test::foveal("simulate --gaze '" + fake.url("surface=screen") +
+                                       "' --screen 400x200 --size 40x20 --steps 5 "
                                        "--live-timeout 2 --save-steps '' -o live --stats live.json");
   EXPECT_EQ(r.status, 1);
   EXPECT_EQ(lines(r.err), 1u) << r.err;
@@ -99,8 +100,9 @@ TEST(SimulateCli, BenchVisionReportsEveryStage) {
 }
 
 TEST(SimulateCli, ImpairedEyesAreAppliedAndTimed) {
-  const CliRun r = foveal_test::foveal("simulate --size 160x100 --steps 3 --eye age:70+cataract:0.5+achromatopsia+field:arcuate:20 "
-                                       "-o sim-impaired --stats impaired.json");
+  const CliRun r = foveal_test::foveal(
+      "simulate --size 160x100 --steps 3 --eye age:70+cataract:0.5+achromatopsia+field:arcuate:20 "
+      "-o sim-impaired --stats impaired.json");
   ASSERT_EQ(r.status, 0) << r.err;
   EXPECT_NE(r.out.find("impaired glare (age 70, cataract 0.5)"), std::string::npos) << r.out;
   const auto j = nlohmann::json::parse(std::ifstream(scratch("impaired.json")));

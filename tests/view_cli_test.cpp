@@ -52,15 +52,17 @@ TEST(ViewCli, ScreenshotIsTheRenderCommandsImage) {
 
 TEST(ViewCli, SideBySideAndVisionScreenshotsWithOverlays) {
   if (!have_xvfb()) GTEST_SKIP() << "skipped: xvfb-run absent (Debian package xvfb)";
-  const CliRun s = run_view("--scene builtin:box --size 200x120 --gaze 60,50 --max-rays 32 --mode side-by-side --overlays all --frames 2 "
-                            "--screenshot sbs.png");
+  const CliRun s = run_view(
+      "--scene builtin:box --size 200x120 --gaze 60,50 --max-rays 32 --mode side-by-side --overlays all --frames 2 "
+      "--screenshot sbs.png");
   ASSERT_EQ(s.status, 0) << s.err;
   const foveal::Image sbs = foveal::load_image(scratch("sbs.png").string());
   EXPECT_EQ(sbs.width, 600);  // foveated | reference | difference
   EXPECT_EQ(sbs.height, 120);
   EXPECT_NEAR(sbs.at(60, 50, 0), 1.0f, 1e-6f);  // the gaze cross on every pane
   EXPECT_NEAR(sbs.at(260, 50, 0), 1.0f, 1e-6f);
-  const CliRun v = run_view("--scene builtin:box --size 200x120 --gaze 60,50 --mode vision --eye myopia:-3 --frames 2 --screenshot vision.png");
+  const CliRun v =
+      run_view("--scene builtin:box --size 200x120 --gaze 60,50 --mode vision --eye myopia:-3 --frames 2 --screenshot vision.png");
   ASSERT_EQ(v.status, 0) << v.err;
   const nlohmann::json j = read_json("vision.json");
   EXPECT_EQ(j["settings"]["eye"]["preset"], "myopia:-3");
@@ -91,7 +93,8 @@ TEST(ViewCli, LiveTrackerThatHangsUpDoesNotStopTheView) {
   fake.serve(messages, true, nullptr);
   // At most 60 frames a second: 240 frames leave the tracker (120 messages, then the hang-up) at
   // least 4 s, ample also on a loaded machine
-  const CliRun v = run_view("--gaze '" + fake.url("surface=screen") + "' --screen 400x200 --size 80x40 --max-rays 8 --frames 240 "
+  const CliRun v = run_view("--gaze '" + fake.url("surface=screen") +
+                            "' --screen 400x200 --size 80x40 --max-rays 8 --frames 240 "
                             "--screenshot live.png");
   ASSERT_EQ(v.status, 0) << v.err;
   const nlohmann::json j = read_json("live.json");
@@ -106,11 +109,11 @@ TEST(ViewCli, NoDisplayAndBadOptionsAreOneClearLine) {
   EXPECT_EQ(no_display.status, 1) << no_display.err;
   EXPECT_NE(no_display.err.find("needs a display"), std::string::npos) << no_display.err;
   EXPECT_EQ(lines(no_display.err), 1u) << no_display.err;
-  for (const auto& [args, expected] : std::vector<std::pair<std::string, std::string>>{
-           {"view --mode fullscreen", "unknown view mode 'fullscreen'"},
-           {"view --overlays gaze,heat", "unknown overlay 'heat'"},
-           {"view --frames 3", "--screenshot"},
-           {"view --gaze no_such_recording.asc", "no_such_recording.asc"}})
+  for (const auto& [args, expected] :
+       std::vector<std::pair<std::string, std::string>>{{"view --mode fullscreen", "unknown view mode 'fullscreen'"},
+                                                        {"view --overlays gaze,heat", "unknown overlay 'heat'"},
+                                                        {"view --frames 3", "--screenshot"},
+                                                        {"view --gaze no_such_recording.asc", "no_such_recording.asc"}})
     expect_one_line_error(args, expected);
 }
 

@@ -139,7 +139,8 @@ void bind_gaze(nb::module_& m) {
         d["samples"] = sample_columns(r.samples);
         // The tracker's 3-D gaze directions where it gives them (Pupil's gaze_point_3d): the filters use them
         std::vector<double> directions;
-        const bool any_direction = std::any_of(r.samples.begin(), r.samples.end(), [](const GazeSample& s) { return s.direction.has_value(); });
+        const bool any_direction =
+            std::any_of(r.samples.begin(), r.samples.end(), [](const GazeSample& s) { return s.direction.has_value(); });
         if (any_direction)
           for (const GazeSample& s : r.samples)
             for (int k = 0; k < 3; ++k) directions.push_back(s.direction ? (*s.direction)[k] : NAN);
@@ -171,26 +172,38 @@ void bind_gaze(nb::module_& m) {
         for (auto [key, value] : params) {
           const std::string k = nb::cast<std::string>(key);
           const double v = nb::cast<double>(value);
-          if (k == "velocity_threshold_deg_s") p.velocity_threshold_deg_s = v;
-          else if (k == "velocity_window_s") p.velocity_window_s = v;
-          else if (k == "gap_fill_s") p.gap_fill_s = v;
-          else if (k == "merge_gap_s") p.merge_gap_s = v;
-          else if (k == "merge_angle_deg") p.merge_angle_deg = v;
-          else if (k == "min_fixation_s") p.min_fixation_s = v;
-          else if (k == "median_window") p.median_window = static_cast<int>(v);
-          else if (k == "dispersion_deg") p.dispersion_deg = v;
-          else if (k == "min_duration_s") p.min_duration_s = v;
+          if (k == "velocity_threshold_deg_s")
+            p.velocity_threshold_deg_s = v;
+          else if (k == "velocity_window_s")
+            p.velocity_window_s = v;
+          else if (k == "gap_fill_s")
+            p.gap_fill_s = v;
+          else if (k == "merge_gap_s")
+            p.merge_gap_s = v;
+          else if (k == "merge_angle_deg")
+            p.merge_angle_deg = v;
+          else if (k == "min_fixation_s")
+            p.min_fixation_s = v;
+          else if (k == "median_window")
+            p.median_window = static_cast<int>(v);
+          else if (k == "dispersion_deg")
+            p.dispersion_deg = v;
+          else if (k == "min_duration_s")
+            p.min_duration_s = v;
           else
-            fail("fixations: unknown parameter '{}' (velocity_threshold_deg_s, velocity_window_s, gap_fill_s, merge_gap_s, "
-                 "merge_angle_deg, min_fixation_s, median_window, dispersion_deg, min_duration_s)", k);
+            fail(
+                "fixations: unknown parameter '{}' (velocity_threshold_deg_s, velocity_window_s, gap_fill_s, merge_gap_s, "
+                "merge_angle_deg, min_fixation_s, median_window, dispersion_deg, min_duration_s)",
+                k);
         }
         validate(p);
         validate(display);
         const FixationMethod fm = parse_fixation_method(method);
         if (fm == FixationMethod::mean) fail("fixations: 'mean' is a per-frame average, not a fixation filter: use ivt or idt");
         if (fm == FixationMethod::ivvt)
-          fail("fixations: 'ivvt' is the causal filter for the fovea (FixationTracker); for offline fixations use ivt or idt, "
-               "for pursuit the events (method nhp)");
+          fail(
+              "fixations: 'ivvt' is the causal filter for the fovea (FixationTracker); for offline fixations use ivt or idt, "
+              "for pursuit the events (method nhp)");
         Recording r = recording_from(t, x, y, confidence, valid, screen, directions);
         if (block_starts && !block_starts->empty()) {
           for (size_t b : *block_starts)
@@ -218,25 +231,28 @@ void bind_gaze(nb::module_& m) {
         d["label"] = column(std::move(label));
         return d;
       },
-      "t"_a, "x"_a, "y"_a, "confidence"_a, "valid"_a, "screen"_a, "display"_a, "method"_a, "params"_a, "block_starts"_a = nb::none(), "directions"_a = nb::none());
+      "t"_a, "x"_a, "y"_a, "confidence"_a, "valid"_a, "screen"_a, "display"_a, "method"_a, "params"_a, "block_starts"_a = nb::none(),
+      "directions"_a = nb::none());
 
   nb::class_<PyPupilSource>(m, "_PupilSource")
-      .def("__init__",
-           [](PyPupilSource* s, const std::string& url, std::array<int, 2> screen, double min_confidence) {
-             if (screen[0] <= 0 || screen[1] <= 0) fail("screen: must be positive pixels, got {}x{}", screen[0], screen[1]);
-             std::unique_ptr<PupilSource> source;
-             {
-               nb::gil_scoped_release release;
-               source = std::make_unique<PupilSource>(url, glm::ivec2(screen[0], screen[1]), static_cast<float>(min_confidence));
-             }
-             new (s) PyPupilSource{std::move(source)};
-           },
-           "url"_a, "screen"_a, "min_confidence"_a)
-      .def("poll", [](PyPupilSource& s) {
-        std::vector<GazeSample> samples;
-        s.open().poll(samples);
-        return sample_columns(samples);
-      })
+      .def(
+          "__init__",
+          [](PyPupilSource* s, const std::string& url, std::array<int, 2> screen, double min_confidence) {
+            if (screen[0] <= 0 || screen[1] <= 0) fail("screen: must be positive pixels, got {}x{}", screen[0], screen[1]);
+            std::unique_ptr<PupilSource> source;
+            {
+              nb::gil_scoped_release release;
+              source = std::make_unique<PupilSource>(url, glm::ivec2(screen[0], screen[1]), static_cast<float>(min_confidence));
+            }
+            new (s) PyPupilSource{std::move(source)};
+          },
+          "url"_a, "screen"_a, "min_confidence"_a)
+      .def("poll",
+           [](PyPupilSource& s) {
+             std::vector<GazeSample> samples;
+             s.open().poll(samples);
+             return sample_columns(samples);
+           })
       .def_prop_ro("state", [](const PyPupilSource& s) { return std::string(to_string(s.open().state())); })
       .def_prop_ro("silent_s", [](const PyPupilSource& s) { return s.open().silent_s(); })
       .def_prop_ro("received", [](const PyPupilSource& s) { return s.open().received(); })

@@ -31,9 +31,7 @@
 
 namespace foveal::python {
 
-nb::object to_python(const nlohmann::json& j) {
-  return nb::module_::import_("json").attr("loads")(j.dump());
-}
+nb::object to_python(const nlohmann::json& j) { return nb::module_::import_("json").attr("loads")(j.dump()); }
 
 nb::ndarray<nb::numpy, float> owned_array(std::vector<float>&& values, std::initializer_list<size_t> shape) {
   auto* data = new std::vector<float>(std::move(values));
@@ -92,11 +90,11 @@ struct PyRenderer {
     renderer = make_frame_renderer(*scene, device);
   }
 
-  std::unique_ptr<PyFrame> render(const std::array<int, 2>& size, const nb::object& camera_arg,
-                                  std::optional<std::array<double, 2>> gaze, const std::string& mode, int max_rays,
-                                  int min_rays, double gamma, double beta, uint64_t seed, std::optional<Display> display,
-                                  double ellipse, std::optional<double> ao_distance, std::optional<double> ambient_constant,
-                                  bool shadows, bool adaptive, bool denoise, bool temporal, int temporal_frames, double tolerance) {
+  std::unique_ptr<PyFrame> render(const std::array<int, 2>& size, const nb::object& camera_arg, std::optional<std::array<double, 2>> gaze,
+                                  const std::string& mode, int max_rays, int min_rays, double gamma, double beta, uint64_t seed,
+                                  std::optional<Display> display, double ellipse, std::optional<double> ao_distance,
+                                  std::optional<double> ambient_constant, bool shadows, bool adaptive, bool denoise, bool temporal,
+                                  int temporal_frames, double tolerance) {
     auto out = std::make_unique<PyFrame>();
     RenderParams& p = out->params;
     std::tie(p.width, p.height) = size_of(size, "size");
@@ -104,8 +102,10 @@ struct PyRenderer {
     p.display = display ? *display : Display{};
     p.foveation = {ellipse, max_rays, min_rays, gamma, beta};
     if (ao_distance) p.ao_distance = static_cast<float>(*ao_distance);
-    if (ambient_constant) p.ambient_constant = static_cast<float>(*ambient_constant);
-    else p.ambient_constant.reset();
+    if (ambient_constant)
+      p.ambient_constant = static_cast<float>(*ambient_constant);
+    else
+      p.ambient_constant.reset();
     p.seed = seed;
     p.shadows = shadows;
     if (gaze) p.gaze_px = glm::dvec2((*gaze)[0], (*gaze)[1]);
@@ -226,9 +226,11 @@ NB_MODULE(_core, m) {
     try {
       std::rethrow_exception(p);
     } catch (const Error& e) {
-      static constexpr ParameterName kKeywords[] = {
-          {"pupil_diameter_mm", "pupil_mm"}, {"ellipse_ratio", "ellipse"}, {"gaze_px", "gaze"}, {"gaze_eye", "eye"},
-          {"device cuda", "device='cuda'"}};
+      static constexpr ParameterName kKeywords[] = {{"pupil_diameter_mm", "pupil_mm"},
+                                                    {"ellipse_ratio", "ellipse"},
+                                                    {"gaze_px", "gaze"},
+                                                    {"gaze_eye", "eye"},
+                                                    {"device cuda", "device='cuda'"}};
       const std::string what = in_words(e.what(), kKeywords);
       // A file that is not there (the readers say "no such file", or "cannot open" a path that does not exist)
       const size_t cannot = what.find(": cannot open");
@@ -254,13 +256,17 @@ NB_MODULE(_core, m) {
       .def_rw("distance_cm", &Display::distance_cm)
       .def_rw("res_x", &Display::res_x)
       .def_rw("res_y", &Display::res_y)
-      .def_prop_ro("pixels_per_degree", [](const Display& d) { return pixels_per_degree(d); },
-                   "Display pixels per degree at the screen centre.")
-      .def_prop_ro("fov_deg", [](const Display& d) { return std::array<double, 2>{field_of_view_x_deg(d), field_of_view_y_deg(d)}; },
-                   "Horizontal and vertical field of view, degrees.")
+      .def_prop_ro(
+          "pixels_per_degree", [](const Display& d) { return pixels_per_degree(d); }, "Display pixels per degree at the screen centre.")
+      .def_prop_ro(
+          "fov_deg",
+          [](const Display& d) {
+            return std::array<double, 2>{field_of_view_x_deg(d), field_of_view_y_deg(d)};
+          },
+          "Horizontal and vertical field of view, degrees.")
       .def("__repr__", [](const Display& d) {
-        return fmt::format("Display(width_cm={}, height_cm={}, distance_cm={}, res_x={}, res_y={})", d.width_cm, d.height_cm,
-                           d.distance_cm, d.res_x, d.res_y);
+        return fmt::format("Display(width_cm={}, height_cm={}, distance_cm={}, res_x={}, res_y={})", d.width_cm, d.height_cm, d.distance_cm,
+                           d.res_x, d.res_y);
       });
 
   nb::class_<Camera>(m, "Camera", "A pinhole camera: position, point looked at, up vector, vertical field of view.")
@@ -280,8 +286,8 @@ NB_MODULE(_core, m) {
       .def_prop_ro("up", [](const Camera& c) { return tuple(c.up); })
       .def_prop_ro("fov", [](const Camera& c) { return c.fov_deg; })
       .def("__repr__", [](const Camera& c) {
-        return fmt::format("Camera(eye=({}, {}, {}), look=({}, {}, {}), fov={}, name='{}')", c.eye.x, c.eye.y, c.eye.z, c.look.x,
-                           c.look.y, c.look.z, c.fov_deg, c.name);
+        return fmt::format("Camera(eye=({}, {}, {}), look=({}, {}, {}), fov={}, name='{}')", c.eye.x, c.eye.y, c.eye.z, c.look.x, c.look.y,
+                           c.look.z, c.fov_deg, c.name);
       });
 
   nb::class_<PyScene>(m, "Scene", "A scene: a mesh file, a scene .json, or builtin:box|sphere-plane|plane.")
@@ -297,12 +303,17 @@ NB_MODULE(_core, m) {
           },
           "path_or_builtin"_a, "Load a mesh (OBJ, PLY, glTF, … through Assimp), a scene .json or a built-in scene.")
       .def_prop_ro("source", [](const PyScene& s) { return s.scene->source; })
-      .def_prop_ro("triangles", [](const PyScene& s) { return s.scene->triangles.size(); }, "Triangles loaded.")
-      .def_prop_ro("cameras", [](const PyScene& s) { return s.scene->cameras; }, "The scene's named cameras.")
-      .def("camera", [](const PyScene& s, const std::string& name) { return find_camera(*s.scene, name); }, "name"_a,
-           "The named camera (ValueError listing the names when there is none).")
-      .def("default_camera", [](const PyScene& s) { return default_camera(*s.scene); }, "A camera framing the whole scene.")
-      .def("__repr__", [](const PyScene& s) { return fmt::format("Scene('{}', {} triangles)", s.scene->source, s.scene->triangles.size()); });
+      .def_prop_ro(
+          "triangles", [](const PyScene& s) { return s.scene->triangles.size(); }, "Triangles loaded.")
+      .def_prop_ro(
+          "cameras", [](const PyScene& s) { return s.scene->cameras; }, "The scene's named cameras.")
+      .def(
+          "camera", [](const PyScene& s, const std::string& name) { return find_camera(*s.scene, name); }, "name"_a,
+          "The named camera (ValueError listing the names when there is none).")
+      .def(
+          "default_camera", [](const PyScene& s) { return default_camera(*s.scene); }, "A camera framing the whole scene.")
+      .def("__repr__",
+           [](const PyScene& s) { return fmt::format("Scene('{}', {} triangles)", s.scene->source, s.scene->triangles.size()); });
 
   nb::class_<PyFrame>(m, "Frame", "A rendered frame. Its arrays are views of the frame's own buffers.")
       .def_prop_ro(
@@ -330,14 +341,20 @@ NB_MODULE(_core, m) {
             return to_python(frame_stats_json(f.frame, f.params, *f.scene, f.triangles, f.build_ms, f.threads, f.device, f.trace_api));
           },
           "Timings and ray counts: the same fields as `foveal render --stats`.")
-      .def_prop_ro("gaze", [](const PyFrame& f) { return std::array<double, 2>{f.frame.gaze_px.x, f.frame.gaze_px.y}; },
-                   "The gaze point in render pixels.")
+      .def_prop_ro(
+          "gaze",
+          [](const PyFrame& f) {
+            return std::array<double, 2>{f.frame.gaze_px.x, f.frame.gaze_px.y};
+          },
+          "The gaze point in render pixels.")
       .def_prop_ro("width", [](const PyFrame& f) { return f.frame.color.width; })
       .def_prop_ro("height", [](const PyFrame& f) { return f.frame.color.height; })
-      .def_prop_ro("library_ms", [](const PyFrame& f) { return f.wall_ms; },
-                   "Wall time of the library's render call alone, ms (for measuring the binding's own overhead).")
-      .def("save", [](const PyFrame& f, const std::string& path) { save_image(f.frame.color, path); }, "path"_a,
-           "Write the image as the CLI does (.png sRGB; .pfm/.exr linear floats).");
+      .def_prop_ro(
+          "library_ms", [](const PyFrame& f) { return f.wall_ms; },
+          "Wall time of the library's render call alone, ms (for measuring the binding's own overhead).")
+      .def(
+          "save", [](const PyFrame& f, const std::string& path) { save_image(f.frame.color, path); }, "path"_a,
+          "Write the image as the CLI does (.png sRGB; .pfm/.exr linear floats).");
 
   nb::class_<PyRenderer>(m, "Renderer", "The foveated-AO renderer of one scene on one device.")
       .def(nb::init<const PyScene&, const std::string&, int>(), "scene"_a, "device"_a = "auto", "threads"_a = 0,
@@ -345,8 +362,8 @@ NB_MODULE(_core, m) {
            "`threads` = 0 uses all cores.")
       .def("render", &PyRenderer::render, "size"_a = std::array<int, 2>{840, 525}, "camera"_a = nb::none(), "gaze"_a = nb::none(),
            "mode"_a = "foveated", "max_rays"_a = 400, "min_rays"_a = 0, "gamma"_a = 2.0, "beta"_a = 0.0, "seed"_a = 1,
-           "display"_a = nb::none(), "ellipse"_a = 1.538, "ao_distance"_a = nb::none(), "ambient_constant"_a = 1.0,
-           "shadows"_a = false, "adaptive"_a = false, "denoise"_a = false, "temporal"_a = false, "temporal_frames"_a = 4,
+           "display"_a = nb::none(), "ellipse"_a = 1.538, "ao_distance"_a = nb::none(), "ambient_constant"_a = 1.0, "shadows"_a = false,
+           "adaptive"_a = false, "denoise"_a = false, "temporal"_a = false, "temporal_frames"_a = 4,
            "tolerance"_a = foveal::AoReuseParams{}.tolerance,
            "Render one frame. `gaze` (x, y) in render pixels, origin top-left (default: the centre); mode 'foveated' "
            "(the AO budget follows the gaze) or 'full' (max_rays everywhere: the reference); `camera` a Camera, a "
@@ -354,13 +371,14 @@ NB_MODULE(_core, m) {
            "More quality per ray (the CLI's --adaptive, --denoise, --temporal, --temporal-frames, --tolerance; on the CPU "
            "and the GPU): `temporal` builds on the AO rays of this Renderer's earlier temporal frames, reprojected to the "
            "new camera (reset_history() starts afresh). The GIL is released while rendering.")
-      .def("reset_history",
-           [](PyRenderer& r) {
-             nb::gil_scoped_release release;
-             const std::lock_guard<std::mutex> lock(r.render_mutex);
-             r.renderer->reset_history();
-           },
-           "Forget the AO rays kept for temporal=True: the next temporal frame is the paper's frame.")
+      .def(
+          "reset_history",
+          [](PyRenderer& r) {
+            nb::gil_scoped_release release;
+            const std::lock_guard<std::mutex> lock(r.render_mutex);
+            r.renderer->reset_history();
+          },
+          "Forget the AO rays kept for temporal=True: the next temporal frame is the paper's frame.")
       .def_prop_ro("device", [](const PyRenderer& r) { return std::string(to_string(r.device)); })
       .def_prop_ro("device_description", [](const PyRenderer& r) { return r.renderer->describe(); });
 
@@ -370,30 +388,34 @@ NB_MODULE(_core, m) {
       .def_ro("coc", &PyVisionStep::coc, "Per-pixel circle-of-confusion diameter used for the blur, pixels (H×W).")
       .def_ro("fixation", &PyVisionStep::fixation, "The fixation of this step, render pixels.")
       .def_ro("sharp_fraction", &PyVisionStep::sharp_fraction, "Share of pixels remembered sharp.")
-      .def_ro("stats", &PyVisionStep::stats, "The step's record, as in `simulate --stats`: focus_px, depth, accommodation, blink, corners, stage times (ms).");
+      .def_ro("stats", &PyVisionStep::stats,
+              "The step's record, as in `simulate --stats`: focus_px, depth, accommodation, blink, corners, stage times (ms).");
 
   nb::class_<PyVision>(m, "VisionSimulation", "The second paper's simulation of human vision over time.")
-      .def("__init__",
-           [](PyVision* v, const PyScene& s, const std::string& eye, const std::array<int, 2>& size, uint64_t seed,
-              const nb::object& camera, const std::string& device, int threads, int blink_every, std::optional<double> pupil_mm,
-              double starvation, bool features_every_step) {
-             new (v) PyVision(std::move(*make_vision(s, eye, size, seed, camera, device, threads, blink_every, pupil_mm, starvation,
-                                                     features_every_step)));
-           },
-           "scene"_a, "eye"_a = "healthy", "size"_a = std::array<int, 2>{1024, 768}, "seed"_a = 1, "camera"_a = nb::none(),
-           "device"_a = "auto", "threads"_a = 0, "blink_every"_a = 0, "pupil_mm"_a = nb::none(), "starvation"_a = 0.015,
-           "features_every_step"_a = false,
-           "A simulation of `eye` (the CLI's --eye: presets joined with '+', e.g. 'myopia:-2+cvd:deutan:0.6', or a profile "
-           ".json) looking at `scene` through `camera`. `pupil_mm` (the CLI's --pupil), when given, overrides the eye's pupil "
-           "(a profile's pupil_mm, else 3.5 mm).")
+      .def(
+          "__init__",
+          [](PyVision* v, const PyScene& s, const std::string& eye, const std::array<int, 2>& size, uint64_t seed, const nb::object& camera,
+             const std::string& device, int threads, int blink_every, std::optional<double> pupil_mm, double starvation,
+             bool features_every_step) {
+            new (v) PyVision(std::move(
+                *make_vision(s, eye, size, seed, camera, device, threads, blink_every, pupil_mm, starvation, features_every_step)));
+          },
+          "scene"_a, "eye"_a = "healthy", "size"_a = std::array<int, 2>{1024, 768}, "seed"_a = 1, "camera"_a = nb::none(),
+          "device"_a = "auto", "threads"_a = 0, "blink_every"_a = 0, "pupil_mm"_a = nb::none(), "starvation"_a = 0.015,
+          "features_every_step"_a = false,
+          "A simulation of `eye` (the CLI's --eye: presets joined with '+', e.g. 'myopia:-2+cvd:deutan:0.6', or a profile "
+          ".json) looking at `scene` through `camera`. `pupil_mm` (the CLI's --pupil), when given, overrides the eye's pupil "
+          "(a profile's pupil_mm, else 3.5 mm).")
       .def("step", &vision_step, "fixation"_a = nb::none(), "camera"_a = nb::none(),
            "One step: the next fixation (simulated saccade, or `fixation` (x, y) in render pixels from real gaze), "
            "accommodation, the sharpness field, the blur and the impairments. Returns a VisionStep.")
-      .def("blink", [](PyVision& v) { v.sim->blink_before_next_step(); }, "The eye blinks before the next step (the field forgets).")
+      .def(
+          "blink", [](PyVision& v) { v.sim->blink_before_next_step(); }, "The eye blinks before the next step (the field forgets).")
       .def_prop_ro("on_gpu", [](const PyVision& v) { return v.sim->on_gpu(); })
-      .def_prop_ro("optics", [](const PyVision& v) { return to_python(optics_json(v.params.eye)); },
-                   "The eye's optics as resolved (as `simulate --stats` writes them): preset, pupil_mm, image_distance_mm, "
-                   "refraction_d, cylinder_d, axis_deg, age_years, glaucoma.");
+      .def_prop_ro(
+          "optics", [](const PyVision& v) { return to_python(optics_json(v.params.eye)); },
+          "The eye's optics as resolved (as `simulate --stats` writes them): preset, pupil_mm, image_distance_mm, "
+          "refraction_d, cylinder_d, axis_deg, age_years, glaucoma.");
 
   m.def(
       "_compare",
@@ -419,19 +441,26 @@ NB_MODULE(_core, m) {
         }
         return to_python(j);
       },
-      "a"_a, "b"_a, "b2"_a = nb::none(), "gaze"_a = nb::none(), "display"_a = nb::none(), "ellipse"_a = 1.538,
-      "ssim_border"_a = "reflect");
+      "a"_a, "b"_a, "b2"_a = nb::none(), "gaze"_a = nb::none(), "display"_a = nb::none(), "ellipse"_a = 1.538, "ssim_border"_a = "reflect");
 
-  m.def("load_image", [](const std::string& path) {
-    Image img = load_image(path);
-    const size_t h = img.height, w = img.width, c = img.channels;
-    return owned_array(std::move(img.pixels), {h, w, c});
-  }, "path"_a, "Read an image as the CLI does: PNG/JPEG decoded from sRGB to linear, PFM/EXR as stored (float32 H×W×C).");
-  m.def("save_image", [](const nb::ndarray<const float, nb::ndim<3>, nb::c_contig, nb::device::cpu>& a, const std::string& path) {
-    save_image(image_from(a), path);
-  }, "image"_a, "path"_a, "Write a linear float32 H×W×3 image as the CLI does (.png sRGB; .pfm/.exr exact).");
-  m.def("device_available", [] { return availability().usable; }, "Whether a usable NVIDIA GPU answered.");
-  m.def("device_description", [] { return availability().describe(); }, "The GPU, or why there is none.");
+  m.def(
+      "load_image",
+      [](const std::string& path) {
+        Image img = load_image(path);
+        const size_t h = img.height, w = img.width, c = img.channels;
+        return owned_array(std::move(img.pixels), {h, w, c});
+      },
+      "path"_a, "Read an image as the CLI does: PNG/JPEG decoded from sRGB to linear, PFM/EXR as stored (float32 H×W×C).");
+  m.def(
+      "save_image",
+      [](const nb::ndarray<const float, nb::ndim<3>, nb::c_contig, nb::device::cpu>& a, const std::string& path) {
+        save_image(image_from(a), path);
+      },
+      "image"_a, "path"_a, "Write a linear float32 H×W×3 image as the CLI does (.png sRGB; .pfm/.exr exact).");
+  m.def(
+      "device_available", [] { return availability().usable; }, "Whether a usable NVIDIA GPU answered.");
+  m.def(
+      "device_description", [] { return availability().describe(); }, "The GPU, or why there is none.");
 
   bind_gaze(m);
 }

@@ -83,7 +83,6 @@ class Renderer {
   std::unique_ptr<Impl> impl_;
 };
 
-
 // The second paper's passes for one scene on the GPU: the ray-cast image, FAST corners, the
 // sharpness field (kept on the GPU), each pixel's CoC and the variable blur. VisionSimulation
 // (vision/simulate.h) drives it a step at a time; the saccade model chooses among the corners on

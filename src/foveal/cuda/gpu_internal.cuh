@@ -64,7 +64,7 @@ struct FrameCounters {
   unsigned long long fovea_open;    // unblocked AO rays of pixels with q = 1 (the `auto` ambient constant)
   unsigned long long fovea_pixels;  // pixels with q = 1, a hit and rays
   unsigned long long shadow_rays;
-  int min_rays, max_rays;           // over pixels that hit the scene
+  int min_rays, max_rays;  // over pixels that hit the scene
   // Quality per ray (zero without it)
   unsigned long long fovea_visibility;  // Σ V over the q = 1 pixels in units of 2⁻³² (exact, any order)
   unsigned long long history_pixels;    // pixels whose reprojected history was kept
@@ -83,9 +83,9 @@ __host__ __device__ inline float fovea_mean_visibility(const FrameCounters& f, i
 // The `auto` ambient constant of a frame with quality per ray, whose visibilities are not open / n_max:
 // the mean of the q = 1 pixels' V from their fixed-point sum.
 __host__ __device__ inline float fovea_mean_reused_visibility(const FrameCounters& f) {
-  return f.fovea_pixels > 0 ? static_cast<float>(static_cast<double>(f.fovea_visibility) / kFoveaVisibilityUnit /
-                                                  static_cast<double>(f.fovea_pixels))
-                            : 1.0f;
+  return f.fovea_pixels > 0
+             ? static_cast<float>(static_cast<double>(f.fovea_visibility) / kFoveaVisibilityUnit / static_cast<double>(f.fovea_pixels))
+             : 1.0f;
 }
 
 struct GBufferPtrs {
@@ -129,7 +129,7 @@ struct Renderer::Impl {
   AoSchedule schedule = AoSchedule::balanced;
   GpuPassTimes times;
   PassEvents events;  // timing the passes of each frame
-  int ao_grid = 0;  // blocks of the balanced AO kernel (a full GPU)
+  int ao_grid = 0;    // blocks of the balanced AO kernel (a full GPU)
 
   // Scene
   DeviceArray<BvhNode> nodes;

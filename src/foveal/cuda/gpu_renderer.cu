@@ -30,8 +30,8 @@ struct MapPtrs {
   unsigned long long* ray_count;  // rays the AO pass traces for the pixel (0 where nothing was hit)
 };
 
-__global__ void foveation_kernel(FoveationModel model, bool foveated, int max_rays, int width, int height,
-                                 const uint32_t* prim, MapPtrs m, FrameCounters* counters) {
+__global__ void foveation_kernel(FoveationModel model, bool foveated, int max_rays, int width, int height, const uint32_t* prim, MapPtrs m,
+                                 FrameCounters* counters) {
   const int x = blockIdx.x * blockDim.x + threadIdx.x, y = blockIdx.y * blockDim.y + threadIdx.y;
   if (x >= width || y >= height) return;
   const size_t i = static_cast<size_t>(y) * width + x;
@@ -91,8 +91,10 @@ __global__ void ao_balanced_kernel(AoArgs a) {
     size_t lo = 0, hi = a.pixels;  // answer in [lo, hi)
     while (hi - lo > 1) {
       const size_t mid = (lo + hi) / 2;
-      if (a.offset[mid] <= r) lo = mid;
-      else hi = mid;
+      if (a.offset[mid] <= r)
+        lo = mid;
+      else
+        hi = mid;
     }
     size_t pixel = lo;
     unsigned long long pixel_end = a.offset[pixel] + a.ray_count[pixel];
@@ -127,8 +129,8 @@ __global__ void ao_per_pixel_kernel(AoArgs a) {
 }
 
 // Per-pixel AO visibility V = open / n, and the fovea's sums for the `auto` ambient constant.
-__global__ void visibility_kernel(size_t pixels, const unsigned long long* ray_count, const float* quality,
-                                  const uint32_t* blocked, float* visibility, FrameCounters* counters) {
+__global__ void visibility_kernel(size_t pixels, const unsigned long long* ray_count, const float* quality, const uint32_t* blocked,
+                                  float* visibility, FrameCounters* counters) {
   const size_t i = blockIdx.x * static_cast<size_t>(blockDim.x) + threadIdx.x;
   if (i >= pixels) return;
   const auto n = static_cast<uint32_t>(ray_count[i]);
@@ -169,14 +171,13 @@ __global__ void shade_kernel(ShadeArgs a) {
   glm::vec3 c = background_colour();
   if (a.prim[i] != Hit::kNoHit) {
     const float k_const = !a.auto_constant ? a.ambient_constant
-                          : a.reused     ? fovea_mean_reused_visibility(*a.counters)
-                                         : fovea_mean_visibility(*a.counters, a.max_rays);
+                          : a.reused       ? fovea_mean_reused_visibility(*a.counters)
+                                           : fovea_mean_visibility(*a.counters, a.max_rays);
     const float b = a.blend[i];
     const float ka = b * a.visibility[i] + (1.0f - b) * k_const;
     uint32_t shadow_rays = 0;
-    c = shade_point(a.materials[a.material_ids[a.prim[i]]], a.g.albedo[i], a.g.position[i], a.g.normal[i],
-                    a.g.geo_normal[i], a.g.view[i], ka, a.ambient, a.lights, a.light_count, a.shadows, a.epsilon,
-                    [&](const Ray& ray) {
+    c = shade_point(a.materials[a.material_ids[a.prim[i]]], a.g.albedo[i], a.g.position[i], a.g.normal[i], a.g.geo_normal[i], a.g.view[i],
+                    ka, a.ambient, a.lights, a.light_count, a.shadows, a.epsilon, [&](const Ray& ray) {
                       ++shadow_rays;
                       return bvh_trace<true>(a.bvh, ray, nullptr);
                     });
@@ -262,8 +263,8 @@ const Availability& availability() {
 std::string Availability::describe() const {
   if (!usable) return reason;
   char text[256];
-  std::snprintf(text, sizeof text, "%s (compute %d.%d, %d SMs, %.1f GiB)", name.c_str(), compute_major, compute_minor,
-                multiprocessors, memory_gib);
+  std::snprintf(text, sizeof text, "%s (compute %d.%d, %d SMs, %.1f GiB)", name.c_str(), compute_major, compute_minor, multiprocessors,
+                memory_gib);
   return text;
 }
 
@@ -274,7 +275,6 @@ namespace foveal::gpu {
 // ---- Renderer --------------------------------------------------------------------------------
 
 const char* to_string(AoSchedule schedule) { return schedule == AoSchedule::balanced ? "balanced" : "per-pixel"; }
-
 
 Renderer::Renderer(const Scene& scene) {
   const Availability& a = availability();
@@ -357,8 +357,7 @@ Frame Renderer::render(const Camera& camera, const RenderParams& params, const F
   FOVEAL_CUDA_CHECK(cudaMemcpy(m.counters.get(), &zero, sizeof zero, cudaMemcpyHostToDevice));
   FOVEAL_CUDA_CHECK(cudaMemset(m.blocked.get(), 0, n * sizeof(uint32_t)));
   const dim3 block2d(16, 8), grid2d((w + 15) / 16, (h + 7) / 8);
-  const GBufferPtrs g{m.prim.get(), m.position.get(), m.geo_normal.get(), m.normal.get(), m.albedo.get(), m.view.get(),
-                      m.depth.get()};
+  const GBufferPtrs g{m.prim.get(), m.position.get(), m.geo_normal.get(), m.normal.get(), m.albedo.get(), m.view.get(), m.depth.get()};
   PassEvents& ev = m.events;
   ev.record(0);
   // Primary rays → G-buffer
@@ -367,8 +366,8 @@ Frame Renderer::render(const Camera& camera, const RenderParams& params, const F
   ev.record(1);
   // Foveation model → q, n, b and each pixel's ray count
   const MapPtrs maps{m.quality.get(), m.eccentricity.get(), m.rays.get(), m.blend.get(), m.ray_count.get()};
-  foveation_kernel<<<grid2d, block2d>>>(model, params.mode == RenderMode::foveated, params.foveation.max_rays, w, h,
-                                        m.prim.get(), maps, m.counters.get());
+  foveation_kernel<<<grid2d, block2d>>>(model, params.mode == RenderMode::foveated, params.foveation.max_rays, w, h, m.prim.get(), maps,
+                                        m.counters.get());
   FOVEAL_CUDA_LAUNCHED("foveation model");
   ev.record(2);
   const bool reuse = params.reuse.any();
@@ -382,16 +381,27 @@ Frame Renderer::render(const Camera& camera, const RenderParams& params, const F
     FOVEAL_CUDA_LAUNCHED("ray total");
     ev.record(3);
     // Foveated AO
-    AoArgs ao{m.bvh_view(), m.position.get(), m.geo_normal.get(), m.offset.get(), m.ray_count.get(), m.sobol.get(),
-              m.blocked.get(), m.counters.get(), n, w, ao_distance, m.epsilon, params.seed};
+    AoArgs ao{m.bvh_view(),
+              m.position.get(),
+              m.geo_normal.get(),
+              m.offset.get(),
+              m.ray_count.get(),
+              m.sobol.get(),
+              m.blocked.get(),
+              m.counters.get(),
+              n,
+              w,
+              ao_distance,
+              m.epsilon,
+              params.seed};
     if (m.schedule == AoSchedule::balanced)
       ao_balanced_kernel<<<m.ao_grid, 128>>>(ao);
     else
       ao_per_pixel_kernel<<<blocks_for(n, 128), 128>>>(ao);
     FOVEAL_CUDA_LAUNCHED("ambient occlusion");
     ev.record(4);
-    visibility_kernel<<<blocks_for(n, 256), 256>>>(n, m.ray_count.get(), m.quality.get(), m.blocked.get(),
-                                                    m.visibility.get(), m.counters.get());
+    visibility_kernel<<<blocks_for(n, 256), 256>>>(n, m.ray_count.get(), m.quality.get(), m.blocked.get(), m.visibility.get(),
+                                                   m.counters.get());
     FOVEAL_CUDA_LAUNCHED("visibility");
   } else {
     // Quality per ray: history, adaptive rounds, the filter (events 3, 4 and 5)
@@ -399,10 +409,26 @@ Frame Renderer::render(const Camera& camera, const RenderParams& params, const F
     last = 6;
   }
   // Phong shading with the blended ambient term
-  ShadeArgs sh{m.bvh_view(), m.prim.get(), m.material_ids.get(), m.materials.get(), g, m.blend.get(),
-               visibility, m.lights.get(), static_cast<int>(lights.size()), m.ambient,
-               !params.ambient_constant.has_value(), reuse, params.ambient_constant.value_or(1.0f), params.foveation.max_rays,
-               params.shadows, m.epsilon, w, h, m.color.get(), m.counters.get()};
+  ShadeArgs sh{m.bvh_view(),
+               m.prim.get(),
+               m.material_ids.get(),
+               m.materials.get(),
+               g,
+               m.blend.get(),
+               visibility,
+               m.lights.get(),
+               static_cast<int>(lights.size()),
+               m.ambient,
+               !params.ambient_constant.has_value(),
+               reuse,
+               params.ambient_constant.value_or(1.0f),
+               params.foveation.max_rays,
+               params.shadows,
+               m.epsilon,
+               w,
+               h,
+               m.color.get(),
+               m.counters.get()};
   shade_kernel<<<grid2d, block2d>>>(sh);
   FOVEAL_CUDA_LAUNCHED("shading");
   ev.record(last);
@@ -472,8 +498,8 @@ Frame Renderer::render(const Camera& camera, const RenderParams& params, const F
   s.ao_rays_min = counters.min_rays == std::numeric_limits<int>::max() ? 0 : counters.min_rays;
   s.ao_rays_max = counters.max_rays;
   s.ambient_constant = params.ambient_constant ? *params.ambient_constant
-                       : reuse                   ? fovea_mean_reused_visibility(counters)
-                                                 : fovea_mean_visibility(counters, params.foveation.max_rays);
+                       : reuse                 ? fovea_mean_reused_visibility(counters)
+                                               : fovea_mean_visibility(counters, params.foveation.max_rays);
   s.history_pixels = counters.history_pixels;
   s.denoised_pixels = counters.denoised_pixels;
   s.reuse_ms = m.times.reuse_ms;
@@ -496,8 +522,7 @@ void Renderer::occluded(std::span<const Ray> rays, std::span<uint8_t> occluded) 
   if (occluded.size() < rays.size()) throw Error("gpu::Renderer::occluded: fewer results than rays");
   m.raw_rays.upload(rays.data(), rays.size());
   m.raw_occluded.reserve(rays.size());
-  occluded_kernel<<<blocks_for(rays.size(), 128), 128>>>(m.bvh_view(), m.raw_rays.get(), m.raw_occluded.get(),
-                                                         rays.size());
+  occluded_kernel<<<blocks_for(rays.size(), 128), 128>>>(m.bvh_view(), m.raw_rays.get(), m.raw_occluded.get(), rays.size());
   FOVEAL_CUDA_LAUNCHED("occluded");
   m.raw_occluded.download(occluded.data(), rays.size());
 }

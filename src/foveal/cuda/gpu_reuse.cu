@@ -36,8 +36,8 @@ __global__ void ao_reuse_kernel(AoReuseArgs a, FrameCounters* counters) {
 }
 
 // V, and the q = 1 pixels' Σ V for the `auto` ambient constant in fixed point (exact in any order)
-__global__ void counts_visibility_kernel(SurfaceView g, const float* quality, const uint16_t* rays, const float* open,
-                                         const float* cast, float* visibility, FrameCounters* counters) {
+__global__ void counts_visibility_kernel(SurfaceView g, const float* quality, const uint16_t* rays, const float* open, const float* cast,
+                                         float* visibility, FrameCounters* counters) {
   const size_t i = blockIdx.x * static_cast<size_t>(blockDim.x) + threadIdx.x;
   if (i >= static_cast<size_t>(g.width) * g.height) return;
   if (counts_visibility_body(g, quality, rays, open, cast, visibility, i)) {
@@ -94,14 +94,14 @@ float* run_reuse_passes(Renderer::Impl& m, const ReuseFrame& frame) {
   m.events.record(3);
   // The AO pass in rounds, on the history
   const AoSampling sampling = ao_sampling(reuse, temporal ? history.frames : 0);
-  const AoReuseArgs ao{m.bvh_view(), g,        m.quality.get(),   m.rays.get(), m.sobol.get(), counts,
+  const AoReuseArgs ao{m.bvh_view(),   g,        m.quality.get(),   m.rays.get(), m.sobol.get(), counts,
                        m.traced.get(), sampling, frame.ao_distance, m.epsilon,    p.seed};
   ao_reuse_kernel<<<blocks, 128>>>(ao, m.counters.get());
   FOVEAL_CUDA_LAUNCHED("ambient occlusion (quality per ray)");
   m.events.record(4);
   // Visibility, the filter, and what the next frame keeps
-  counts_visibility_kernel<<<blocks_for(n, 256), 256>>>(g, m.quality.get(), m.rays.get(), counts.open, counts.cast,
-                                                       m.visibility.get(), m.counters.get());
+  counts_visibility_kernel<<<blocks_for(n, 256), 256>>>(g, m.quality.get(), m.rays.get(), counts.open, counts.cast, m.visibility.get(),
+                                                        m.counters.get());
   FOVEAL_CUDA_LAUNCHED("visibility");
   float* visibility = m.visibility.get();
   if (reuse.denoise) {

@@ -74,20 +74,46 @@ struct KernelsOnTheCpu {
       for (size_t i = 0; i < n; ++i) kept += gpu::reproject_body(view, g, quality, budget, p.reuse.temporal_frames, counts, i);
     }
     const Bounds bounds = scene.bounds();
-    const gpu::AoReuseArgs ao{bvh, g, quality, budget, sobol_table_2d(), counts, traced.data(), ao_sampling(p.reuse, frames),
-                              resolve_ao_distance(scene, bounds, p.ao_distance), surface_epsilon(bounds), p.seed};
+    const gpu::AoReuseArgs ao{bvh,
+                              g,
+                              quality,
+                              budget,
+                              sobol_table_2d(),
+                              counts,
+                              traced.data(),
+                              ao_sampling(p.reuse, frames),
+                              resolve_ao_distance(scene, bounds, p.ao_distance),
+                              surface_epsilon(bounds),
+                              p.seed};
     for (size_t i = 0; i < n; ++i) rays += gpu::ao_reuse_body(ao, i);
     for (size_t i = 0; i < n; ++i) gpu::counts_visibility_body(g, quality, budget, open.data(), cast.data(), visibility.data(), i);
-    const gpu::DenoiseArgs denoise{g, quality, open.data(), cast.data(), pixel_angle(camera.fov_deg, p.height),
-                                   p.reuse.tau_fovea(), p.reuse.denoise_radius, visibility.data(), filtered.data()};
+    const gpu::DenoiseArgs denoise{g,
+                                   quality,
+                                   open.data(),
+                                   cast.data(),
+                                   pixel_angle(camera.fov_deg, p.height),
+                                   p.reuse.tau_fovea(),
+                                   p.reuse.denoise_radius,
+                                   visibility.data(),
+                                   filtered.data()};
     for (int y = 0; y < p.height; ++y)
       for (int x = 0; x < p.width; ++x) changed += gpu::denoise_body(denoise, x, y);
     for (auto* v : {&h_position, &h_normal, &h_origin}) v->resize(n);
     h_hit.resize(n);
     h_open.resize(n);
     h_cast.resize(n);
-    const gpu::StoreArgs store{g, quality, budget, p.reuse.temporal_frames, p.reuse.history_frames, counts, h_position.data(),
-                               h_normal.data(), h_origin.data(), h_hit.data(), h_open.data(), h_cast.data()};
+    const gpu::StoreArgs store{g,
+                               quality,
+                               budget,
+                               p.reuse.temporal_frames,
+                               p.reuse.history_frames,
+                               counts,
+                               h_position.data(),
+                               h_normal.data(),
+                               h_origin.data(),
+                               h_hit.data(),
+                               h_open.data(),
+                               h_cast.data()};
     for (size_t i = 0; i < n; ++i) gpu::store_history_body(store, i);
     h_camera = camera;
     h_width = p.width;
@@ -129,8 +155,10 @@ void expect_kernels_match_the_cpu(const Scene& scene, const Camera& start, const
     EXPECT_TRUE(near(kernels.kept, cpu.stats.history_pixels, 0.01)) << kernels.kept << " vs " << cpu.stats.history_pixels;
     EXPECT_TRUE(near(kernels.changed, cpu.stats.denoised_pixels, 0.02)) << kernels.changed << " vs " << cpu.stats.denoised_pixels;
     EXPECT_GT(kernels.changed, hit / 10) << "frame " << k;  // the filter is exercised
-    if (k == 0) EXPECT_EQ(kernels.kept, 0u);
-    else EXPECT_GT(kernels.kept, hit * 9 / 10) << "frame " << k;  // a slow camera keeps nearly all history
+    if (k == 0)
+      EXPECT_EQ(kernels.kept, 0u);
+    else
+      EXPECT_GT(kernels.kept, hit * 9 / 10) << "frame " << k;  // a slow camera keeps nearly all history
   }
 }
 
@@ -172,8 +200,8 @@ TEST(GpuReuseKernels, EqualTheCpuRendererExactlyOnAnOpenPlane) {
   }
 }
 
-#define FOVEAL_NEED_GPU()                                                                      \
-  do {                                                                                         \
+#define FOVEAL_NEED_GPU()                                                             \
+  do {                                                                                \
     if (!availability().usable) GTEST_SKIP() << "skipped: " << availability().reason; \
   } while (0)
 
@@ -206,8 +234,7 @@ TEST(Gpu, QualityPerRayMatchesTheCpu) {
     EXPECT_GE(static_cast<double>(close) / hit, 0.95) << "frame " << k;
     EXPECT_LT(std::fabs(signed_sum / hit), 1e-3) << "frame " << k;
     EXPECT_NEAR(static_cast<double>(gpu.stats.ao_rays), static_cast<double>(cpu.stats.ao_rays), 0.02 * cpu.stats.ao_rays);
-    EXPECT_NEAR(static_cast<double>(gpu.stats.history_pixels), static_cast<double>(cpu.stats.history_pixels),
-                0.02 * hit);
+    EXPECT_NEAR(static_cast<double>(gpu.stats.history_pixels), static_cast<double>(cpu.stats.history_pixels), 0.02 * hit);
     EXPECT_EQ(gpu.ao_traced.size(), cpu.ao_traced.size());
   }
 }

@@ -40,9 +40,7 @@ double Renderer::measure_intersection_rate(std::span<const Ray>, int) { fail("no
 
 struct VisionPasses::Impl {};
 
-VisionPasses::VisionPasses(const Scene&, const SharpnessField&, const BlurParams&) {
-  fail("device cuda: {}", availability().reason);
-}
+VisionPasses::VisionPasses(const Scene&, const SharpnessField&, const BlurParams&) { fail("device cuda: {}", availability().reason); }
 VisionPasses::~VisionPasses() = default;
 void VisionPasses::trace(const Camera&, int, int, float) { fail("no CUDA backend"); }
 std::vector<Corner> VisionPasses::corners(int, bool) { fail("no CUDA backend"); }

@@ -18,8 +18,8 @@
 namespace foveal {
 namespace {
 
-#define FOVEAL_NEED_GPU()                                                                      \
-  do {                                                                                         \
+#define FOVEAL_NEED_GPU()                                                             \
+  do {                                                                                \
     if (!availability().usable) GTEST_SKIP() << "skipped: " << availability().reason; \
   } while (0)
 
@@ -216,9 +216,8 @@ TEST(Gpu, VisionCornersAreOpenCvs) {
     for (const cv::KeyPoint& k : expected) b.insert({k.pt.x, k.pt.y, k.response});
     EXPECT_EQ(a, b) << "threshold " << threshold;
     // and sorted by row, then column, as on the CPU
-    EXPECT_TRUE(std::is_sorted(got.begin(), got.end(), [](const Corner& l, const Corner& r) {
-      return l.px.y != r.px.y ? l.px.y < r.px.y : l.px.x < r.px.x;
-    }));
+    EXPECT_TRUE(std::is_sorted(got.begin(), got.end(),
+                               [](const Corner& l, const Corner& r) { return l.px.y != r.px.y ? l.px.y < r.px.y : l.px.x < r.px.x; }));
   }
 }
 

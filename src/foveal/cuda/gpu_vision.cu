@@ -30,16 +30,15 @@ namespace foveal::gpu {
 using namespace detail;
 namespace {
 
-__global__ void shade_constant_kernel(SceneView scene, const MaterialView* materials, GBufferPtrs g, const Light* lights,
-                                      int light_count, float ka, glm::vec3 ambient, float epsilon, int width, int height,
-                                      glm::vec3* color) {
+__global__ void shade_constant_kernel(SceneView scene, const MaterialView* materials, GBufferPtrs g, const Light* lights, int light_count,
+                                      float ka, glm::vec3 ambient, float epsilon, int width, int height, glm::vec3* color) {
   const int x = blockIdx.x * blockDim.x + threadIdx.x, y = blockIdx.y * blockDim.y + threadIdx.y;
   if (x >= width || y >= height) return;
   const size_t i = static_cast<size_t>(y) * width + x;
   glm::vec3 c = background_colour();
   if (g.prim[i] != Hit::kNoHit)
-    c = shade_point(materials[scene.material_ids[g.prim[i]]], g.albedo[i], g.position[i], g.normal[i], g.geo_normal[i],
-                    g.view[i], ka, ambient, lights, light_count, false, epsilon, [](const Ray&) { return false; });
+    c = shade_point(materials[scene.material_ids[g.prim[i]]], g.albedo[i], g.position[i], g.normal[i], g.geo_normal[i], g.view[i], ka,
+                    ambient, lights, light_count, false, epsilon, [](const Ray&) { return false; });
   color[i] = c;
 }
 
@@ -62,8 +61,7 @@ struct GpuCorner {
   int x, y, score;
 };
 
-__global__ void fast_keep_kernel(const uint8_t* scores, int width, int height, bool nonmax, GpuCorner* out,
-                                 unsigned* count) {
+__global__ void fast_keep_kernel(const uint8_t* scores, int width, int height, bool nonmax, GpuCorner* out, unsigned* count) {
   const int x = blockIdx.x * blockDim.x + threadIdx.x, y = blockIdx.y * blockDim.y + threadIdx.y;
   if (x >= width || y >= height) return;
   const int s = scores[static_cast<size_t>(y) * width + x];
@@ -83,7 +81,7 @@ struct CocArgs {
   size_t pixels;
   int64_t* cells;
   float* now_deg;
-  glm::vec2* scale;  // astigmatism, else null
+  glm::vec2* scale;                  // astigmatism, else null
   ConcurrentFieldUpdate concurrent;  // the cells' smallest CoC and first pixel of this step
   bool update;
 };
@@ -109,8 +107,8 @@ __global__ void field_update_kernel(CocArgs a, uint32_t step) {
 }
 
 // The blur's CoC in pixels: the field's memory where there is geometry, this step's elsewhere.
-__global__ void blur_coc_kernel(CocArgs a, uint32_t step, float ppd, float sharp_px, float max_diameter, float* coc_px,
-                                float* clamped, unsigned long long* sharp) {
+__global__ void blur_coc_kernel(CocArgs a, uint32_t step, float ppd, float sharp_px, float max_diameter, float* coc_px, float* clamped,
+                                unsigned long long* sharp) {
   const size_t i = blockIdx.x * static_cast<size_t>(blockDim.x) + threadIdx.x;
   if (i >= a.pixels) return;
   const int64_t c = a.cells[i];
@@ -139,9 +137,8 @@ __global__ void box_kernel(const glm::vec4* below, int bw, int bh, glm::vec4* ab
 __global__ void min_kernel(const float* below, int bw, int bh, float* out, int w, int h, bool halve) {
   const int x = blockIdx.x * blockDim.x + threadIdx.x, y = blockIdx.y * blockDim.y + threadIdx.y;
   if (x >= w || y >= h) return;
-  out[static_cast<size_t>(y) * w + x] =
-      halve ? blur::min_of_block(below, bw, 2 * x, 2 * y, min(2 * x + 1, bw - 1), min(2 * y + 1, bh - 1))
-            : blur::min_of_block(below, bw, x, y, min(x + 1, bw - 1), min(y + 1, bh - 1));
+  out[static_cast<size_t>(y) * w + x] = halve ? blur::min_of_block(below, bw, 2 * x, 2 * y, min(2 * x + 1, bw - 1), min(2 * y + 1, bh - 1))
+                                              : blur::min_of_block(below, bw, x, y, min(x + 1, bw - 1), min(y + 1, bh - 1));
 }
 
 // One thread per tile: the smallest CoC of its kTile × kTile pixels.
@@ -259,15 +256,13 @@ void VisionPasses::trace(const Camera& camera, int w, int h, float ambient) {
   m.height = h;
   const std::vector<Light> lights = frame_lights(r.scene_lights, camera);
   r.lights.upload(lights);
-  const GBufferPtrs g{r.prim.get(), r.position.get(), r.geo_normal.get(), r.normal.get(), r.albedo.get(), r.view.get(),
-                      r.depth.get()};
+  const GBufferPtrs g{r.prim.get(), r.position.get(), r.geo_normal.get(), r.normal.get(), r.albedo.get(), r.view.get(), r.depth.get()};
   const dim3 block(16, 8), grid = grid_for(w, h, block);
   m.events.record(0);
   primary_kernel<<<grid, block>>>(r.bvh_view(), r.scene_view(), CameraRays(camera, w, h), w, h, g);
   FOVEAL_CUDA_LAUNCHED("primary rays");
-  shade_constant_kernel<<<grid, block>>>(r.scene_view(), m.materials.get(), g, r.lights.get(),
-                                         static_cast<int>(lights.size()), ambient, r.ambient, r.epsilon, w, h,
-                                         r.color.get());
+  shade_constant_kernel<<<grid, block>>>(r.scene_view(), m.materials.get(), g, r.lights.get(), static_cast<int>(lights.size()), ambient,
+                                         r.ambient, r.epsilon, w, h, r.color.get());
   FOVEAL_CUDA_LAUNCHED("shading");
   m.events.record(1);
   FOVEAL_CUDA_CHECK(cudaEventSynchronize(m.events.e[1]));
@@ -333,9 +328,18 @@ size_t VisionPasses::sharpness(const CocModel& model, uint32_t step, bool update
   m.astigmatic = model.astigmatic;
   if (m.astigmatic) m.scale.reserve(n);
   if (update) ++m.serial;
-  const CocArgs a{model, m.field, r.prim.get(), r.position.get(), r.depth.get(), r.view.get(), n, m.cells.get(),
-                  m.now_deg.get(), m.astigmatic ? m.scale.get() : nullptr,
-                  ConcurrentFieldUpdate{m.cell_min.get(), m.cell_owner.get(), m.serial}, update};
+  const CocArgs a{model,
+                  m.field,
+                  r.prim.get(),
+                  r.position.get(),
+                  r.depth.get(),
+                  r.view.get(),
+                  n,
+                  m.cells.get(),
+                  m.now_deg.get(),
+                  m.astigmatic ? m.scale.get() : nullptr,
+                  ConcurrentFieldUpdate{m.cell_min.get(), m.cell_owner.get(), m.serial},
+                  update};
   m.events.record(0);
   FOVEAL_CUDA_CHECK(cudaMemset(m.sharp_count.get(), 0, sizeof(unsigned long long)));
   coc_kernel<<<blocks_for(n, 256), 256>>>(a);
@@ -344,8 +348,8 @@ size_t VisionPasses::sharpness(const CocModel& model, uint32_t step, bool update
     field_update_kernel<<<blocks_for(n, 256), 256>>>(a, step);
     FOVEAL_CUDA_LAUNCHED("sharpness field");
   }
-  blur_coc_kernel<<<blocks_for(n, 256), 256>>>(a, step, ppd, sharp_px, m.blur_params.max_diameter_px, m.coc_px.get(),
-                                                m.clamped.get(), m.sharp_count.get());
+  blur_coc_kernel<<<blocks_for(n, 256), 256>>>(a, step, ppd, sharp_px, m.blur_params.max_diameter_px, m.coc_px.get(), m.clamped.get(),
+                                               m.sharp_count.get());
   FOVEAL_CUDA_LAUNCHED("blur CoC");
   unsigned long long sharp = 0;
   m.sharp_count.download(&sharp, 1);
@@ -399,8 +403,8 @@ void VisionPasses::blur(float axis_deg) {
   g.tiles_y = (h + blur::kTile - 1) / blur::kTile;
   m.tile_min.reserve(static_cast<size_t>(g.tiles_x) * g.tiles_y);
   g.tile_min = m.tile_min.get();
-  tile_min_kernel<<<grid_for(g.tiles_x, g.tiles_y, dim3(16, 16)), dim3(16, 16)>>>(m.clamped.get(), w, h, g.tiles_x,
-                                                                                  g.tiles_y, m.tile_min.get());
+  tile_min_kernel<<<grid_for(g.tiles_x, g.tiles_y, dim3(16, 16)), dim3(16, 16)>>>(m.clamped.get(), w, h, g.tiles_x, g.tiles_y,
+                                                                                  m.tile_min.get());
   FOVEAL_CUDA_LAUNCHED("blur tiles");
   gather_kernel<<<grid_for(w, h, block), block>>>(g, reinterpret_cast<const float*>(m.r().color.get()),
                                                   reinterpret_cast<float*>(m.perceived.get()));

@@ -102,8 +102,8 @@ FOVEAL_HD inline void store_history_body(const StoreArgs& a, size_t i) {
   a.hit[i] = a.g.hit(i) ? 1 : 0;
   a.position[i] = a.g.position[i];
   a.normal[i] = a.g.geo_normal[i];
-  history_of_pixel(history_cap_rays(a.rays[i], a.quality[i], a.temporal_frames, a.history_frames), a.counts.open[i],
-                   a.counts.cast[i], a.counts.origin_sum, i, a.g.position[i], a.open[i], a.cast[i], a.origin[i]);
+  history_of_pixel(history_cap_rays(a.rays[i], a.quality[i], a.temporal_frames, a.history_frames), a.counts.open[i], a.counts.cast[i],
+                   a.counts.origin_sum, i, a.g.position[i], a.open[i], a.cast[i], a.origin[i]);
 }
 
 }  // namespace foveal::gpu

@@ -14,8 +14,7 @@
 #include "foveal/util/stats.h"
 
 namespace foveal {
-Frame timed_frame(const Tracer& tracer, const Scene& scene, const Camera& camera, const RenderParams& p, int repeats,
-                  double& median_ms) {
+Frame timed_frame(const Tracer& tracer, const Scene& scene, const Camera& camera, const RenderParams& p, int repeats, double& median_ms) {
   std::vector<double> times;
   Frame frame;
   for (int r = 0; r < std::max(1, repeats); ++r) {
@@ -58,8 +57,9 @@ glm::dvec2 object_gaze(const Scene& scene, const Frame& frame) {
 
 std::vector<std::pair<std::string, glm::dvec2>> benchmark_gazes(const Scene& scene, const Frame& reference) {
   const double w = reference.gbuffer.width, h = reference.gbuffer.height;
-  return {{"centre", {w * 0.5, h * 0.5}},   {"top-left", {0.5, 0.5}},          {"top-right", {w - 0.5, 0.5}},
-          {"bottom-left", {0.5, h - 0.5}}, {"bottom-right", {w - 0.5, h - 0.5}}, {"object", object_gaze(scene, reference)}};
+  return {{"centre", {w * 0.5, h * 0.5}},       {"top-left", {0.5, 0.5}},
+          {"top-right", {w - 0.5, 0.5}},        {"bottom-left", {0.5, h - 0.5}},
+          {"bottom-right", {w - 0.5, h - 0.5}}, {"object", object_gaze(scene, reference)}};
 }
 
 namespace {
@@ -154,9 +154,9 @@ class CpuTable final : public AoTableDevice {
     const FoveaCheck fovea = fovea_check(frame, reference);
     c.fovea_identical = fovea.identical;
     c.fovea_pixels = fovea.pixels;
-    say_(fmt::format("{} / {}: {:.0f} ms ({:.2f} fps), speed-up {:.2f}x, {:.1f} rays/px, fovea {} ({} px)", camera.name,
-                     t.label, c.foveated_ms, c.foveated_fps, c.speedup, c.ao_rays_per_pixel,
-                     c.fovea_identical ? "identical" : "DIFFERS", c.fovea_pixels));
+    say_(fmt::format("{} / {}: {:.0f} ms ({:.2f} fps), speed-up {:.2f}x, {:.1f} rays/px, fovea {} ({} px)", camera.name, t.label,
+                     c.foveated_ms, c.foveated_fps, c.speedup, c.ao_rays_per_pixel, c.fovea_identical ? "identical" : "DIFFERS",
+                     c.fovea_pixels));
     cam.cases.push_back(c);
   }
 
@@ -199,10 +199,11 @@ class CpuTable final : public AoTableDevice {
     const auto& raw_same_api = raw[static_cast<int>(tracer_.occlusion_api())];
     for (size_t r = 0; r < pass_ms.size(); ++r) ratios.push_back(pass_rays / (pass_ms[r] / 1000.0) / raw_same_api[r]);
     cam.renderer_vs_raw = median(ratios);
-    say_(fmt::format("{}: raw Embree occlusion on {} rays: single {:.1f}, packet8 {:.1f}, stream {:.1f} Mrays/s; "
-                     "renderer AO pass {:.1f} Mrays/s, renderer/raw {:.3f}",
-                     camera.name, sample.size(), cam.raw_rays_per_second[0] / 1e6, cam.raw_rays_per_second[1] / 1e6,
-                     cam.raw_rays_per_second[2] / 1e6, cam.ao_pass_rays_per_second / 1e6, cam.renderer_vs_raw));
+    say_(
+        fmt::format("{}: raw Embree occlusion on {} rays: single {:.1f}, packet8 {:.1f}, stream {:.1f} Mrays/s; "
+                    "renderer AO pass {:.1f} Mrays/s, renderer/raw {:.3f}",
+                    camera.name, sample.size(), cam.raw_rays_per_second[0] / 1e6, cam.raw_rays_per_second[1] / 1e6,
+                    cam.raw_rays_per_second[2] / 1e6, cam.ao_pass_rays_per_second / 1e6, cam.renderer_vs_raw));
   }
 
   const Scene& scene_;
@@ -210,8 +211,8 @@ class CpuTable final : public AoTableDevice {
   const AoBenchParams& params_;
   AoBenchResult& result_;
   const std::function<void(const std::string&)>& say_;
-  std::vector<double> tile_cost_;               // the reference's AO cost per tile, ms
-  std::vector<uint64_t> reference_tile_rays_;   // and its rays per tile
+  std::vector<double> tile_cost_;              // the reference's AO cost per tile, ms
+  std::vector<uint64_t> reference_tile_rays_;  // and its rays per tile
 };
 
 }  // namespace
@@ -242,10 +243,12 @@ nlohmann::json to_json(const AoBenchResult& r) {
   for (const auto& cam : r.cameras) {
     nlohmann::json c;
     c["camera"] = cam.name;
-    c["full"] = {{"ms", cam.full_ms}, {"fps", cam.full_fps}, {"ao_rays_per_pixel", cam.full_ao_rays_per_pixel},
+    c["full"] = {{"ms", cam.full_ms},
+                 {"fps", cam.full_fps},
+                 {"ao_rays_per_pixel", cam.full_ao_rays_per_pixel},
                  {"ao_rays_per_second", cam.full_ao_rays_per_second}};
-    c["raw_embree_rays_per_second"] = {{"single", cam.raw_rays_per_second[0]}, {"packet8", cam.raw_rays_per_second[1]},
-                                       {"stream", cam.raw_rays_per_second[2]}};
+    c["raw_embree_rays_per_second"] = {
+        {"single", cam.raw_rays_per_second[0]}, {"packet8", cam.raw_rays_per_second[1]}, {"stream", cam.raw_rays_per_second[2]}};
     c["renderer_ao_pass_rays_per_second"] = cam.ao_pass_rays_per_second;
     c["renderer_vs_raw"] = cam.renderer_vs_raw;
     for (const auto& k : cam.cases)
@@ -279,10 +282,11 @@ std::string to_markdown(const AoBenchResult& r) {
                      cam.full_ao_rays_per_pixel, cam.full_ao_rays_per_second / 1e6);
     for (const auto& k : cam.cases)
       s += fmt::format(
-          "| {} | {} ({:.0f}, {:.0f}) | | {:.3f} | {:.2f}x | {:.0f}% | {:.1f} | {:.2f} | {:.2f} | {:.2f} | {:.2f} | {:.2f} | {} ({} px) |\n",
+          "| {} | {} ({:.0f}, {:.0f}) | | {:.3f} | {:.2f}x | {:.0f}% | {:.1f} | {:.2f} | {:.2f} | {:.2f} | {:.2f} | {:.2f} | {} ({} px) "
+          "|\n",
           cam.name, k.gaze_label, k.gaze_px.x, k.gaze_px.y, k.foveated_fps, k.speedup, k.speedup_pct, k.ao_rays_per_pixel,
-          k.ao_rays_per_second / 1e6, k.ao_ray_ratio, k.efficiency, k.cost_ratio, k.cost_efficiency,
-          k.fovea_identical ? "yes" : "NO", k.fovea_pixels);
+          k.ao_rays_per_second / 1e6, k.ao_ray_ratio, k.efficiency, k.cost_ratio, k.cost_efficiency, k.fovea_identical ? "yes" : "NO",
+          k.fovea_pixels);
   }
   s += "\n| camera | raw Embree single Mrays/s | packet8 | stream | renderer AO pass Mrays/s | renderer / raw (same API) |\n";
   s += "|---|---:|---:|---:|---:|---:|\n";

@@ -14,10 +14,10 @@ namespace foveal {
 
 // What to measure.
 struct AoBenchParams {
-  RenderParams render;                  // size, display, n_max, γ, … (mode and gaze are set per case)
-  std::vector<std::string> cameras;     // empty → every camera of the scene (or the default one)
-  int repeats = 1;                      // frames per case; the median time is reported
-  size_t raw_stride = 32;               // every k-th pixel's AO rays form the raw-throughput sample
+  RenderParams render;               // size, display, n_max, γ, … (mode and gaze are set per case)
+  std::vector<std::string> cameras;  // empty → every camera of the scene (or the default one)
+  int repeats = 1;                   // frames per case; the median time is reported
+  size_t raw_stride = 32;            // every k-th pixel's AO rays form the raw-throughput sample
 };
 
 // One gaze point of one camera.
@@ -43,8 +43,8 @@ struct AoBenchCamera {
   std::string name;
   double full_ms = 0, full_fps = 0, full_ao_rays_per_pixel = 0, full_ao_rays_per_second = 0;
   double raw_rays_per_second[3] = {0, 0, 0};  // indexed by TraceApi: single, packet8, stream
-  double ao_pass_rays_per_second = 0;  // the renderer's AO pass on the reference frame (median)
-  double renderer_vs_raw = 0;   // renderer's AO pass rate / raw rate with the same API: median over interleaved rounds
+  double ao_pass_rays_per_second = 0;         // the renderer's AO pass on the reference frame (median)
+  double renderer_vs_raw = 0;                 // renderer's AO pass rate / raw rate with the same API: median over interleaved rounds
   std::vector<AoBenchCase> cases;
 };
 
@@ -59,8 +59,7 @@ struct AoBenchResult {
 };
 
 // The median frame time of `repeats` renders (the frame itself is the same every time), and the frame.
-Frame timed_frame(const Tracer& tracer, const Scene& scene, const Camera& camera, const RenderParams& p, int repeats,
-                  double& median_ms);
+Frame timed_frame(const Tracer& tracer, const Scene& scene, const Camera& camera, const RenderParams& p, int repeats, double& median_ms);
 
 // The table's gaze points for a reference frame (its G-buffer): the centre, the four corner
 // pixels, and the pixel nearest the centroid of the object (the material with most triangles).
@@ -71,9 +70,9 @@ glm::dvec2 object_gaze(const Scene& scene, const Frame& reference);
 // one): for each camera (`camera_names`, or every camera of the scene when empty) its full-frame
 // reference, then the gaze points of benchmark_gazes() foveated, each judged against it.
 struct AoTableCase {
-  std::string label;       // the gaze point's name
+  std::string label;  // the gaze point's name
   glm::dvec2 gaze_px{0.0};
-  RenderParams params;     // foveated at the gaze
+  RenderParams params;  // foveated at the gaze
 };
 class AoTableDevice {
  public:

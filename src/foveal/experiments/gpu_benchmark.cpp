@@ -89,15 +89,14 @@ class GpuTable final : public AoTableDevice {
     cam.cases.push_back(fc);
     // The GPU's raw occlusion rate on a sample of the reference's own AO rays
     std::vector<Ray> sample;
-    collect_ao_rays(reference.gbuffer, reference.maps, reference.stats.ao_distance, surface_epsilon(scene_.bounds()),
-                    params_.render.seed, params_.raw_stride, sample);
+    collect_ao_rays(reference.gbuffer, reference.maps, reference.stats.ao_distance, surface_epsilon(scene_.bounds()), params_.render.seed,
+                    params_.raw_stride, sample);
     cam.raw_sample = sample.size();
     cam.raw_rays_per_second = gpu_.measure_occlusion_rate(sample, std::max(3, params_.repeats));
     cam.renderer_ao_rays_per_second = fc.ao_rays_per_second;
     cam.renderer_vs_raw = cam.raw_rays_per_second > 0 ? cam.renderer_ao_rays_per_second / cam.raw_rays_per_second : 0;
-    say_(fmt::format("{}: raw GPU occlusion {:.0f} Mrays/s on {} rays, renderer AO pass {:.0f} Mrays/s, ratio {:.2f}",
-                     camera.name, cam.raw_rays_per_second / 1e6, sample.size(), cam.renderer_ao_rays_per_second / 1e6,
-                     cam.renderer_vs_raw));
+    say_(fmt::format("{}: raw GPU occlusion {:.0f} Mrays/s on {} rays, renderer AO pass {:.0f} Mrays/s, ratio {:.2f}", camera.name,
+                     cam.raw_rays_per_second / 1e6, sample.size(), cam.renderer_ao_rays_per_second / 1e6, cam.renderer_vs_raw));
     return reference;
   }
 
@@ -111,10 +110,11 @@ class GpuTable final : public AoTableDevice {
     c.speedup_vs_full = fc.gpu_ms / c.gpu_ms;
     c.ray_ratio = frame.stats.ao_rays > 0 ? static_cast<double>(reference.stats.ao_rays) / frame.stats.ao_rays : 0;
     c.fovea_identical = fovea_check(frame, reference).identical;
-    say_(fmt::format("{} / {}: GPU {:.2f} ms ({:.0f} fps), CPU {:.0f} ms, GPU/CPU {:.1f}x, vs full {:.2f}x (rays {:.2f}x), "
-                     "AO balanced {:.2f} ms vs per-pixel {:.2f} ms",
-                     camera.name, t.label, c.gpu_ms, c.gpu_fps, c.cpu_ms, c.gpu_speedup_over_cpu, c.speedup_vs_full,
-                     c.ray_ratio, c.passes.ao_ms, c.per_pixel_ao_ms));
+    say_(
+        fmt::format("{} / {}: GPU {:.2f} ms ({:.0f} fps), CPU {:.0f} ms, GPU/CPU {:.1f}x, vs full {:.2f}x (rays {:.2f}x), "
+                    "AO balanced {:.2f} ms vs per-pixel {:.2f} ms",
+                    camera.name, t.label, c.gpu_ms, c.gpu_fps, c.cpu_ms, c.gpu_speedup_over_cpu, c.speedup_vs_full, c.ray_ratio,
+                    c.passes.ao_ms, c.per_pixel_ao_ms));
     cam.cases.push_back(c);
   }
 
@@ -202,7 +202,10 @@ nlohmann::json to_json(const BenchResult& r) {
   j["cpu_threads"] = r.cpu_threads;
   j["size"] = {r.width, r.height};
   j["max_rays"] = r.max_rays;
-  j["bvh"] = {{"triangles", r.triangles}, {"nodes", r.bvh_nodes}, {"depth", r.bvh_depth}, {"build_ms", r.bvh_build_ms},
+  j["bvh"] = {{"triangles", r.triangles},
+              {"nodes", r.bvh_nodes},
+              {"depth", r.bvh_depth},
+              {"build_ms", r.bvh_build_ms},
               {"sah_cost", r.bvh_sah_cost}};
   for (const auto& cam : r.cameras) {
     nlohmann::json c;
@@ -248,23 +251,23 @@ std::string to_markdown(const BenchResult& r) {
   std::string s = fmt::format(
       "Scene `{}` ({} triangles; BVH {} nodes, depth {}, SAH cost {:.1f}, built in {:.0f} ms), {}x{}, n_max {}\n"
       "GPU: {}. CPU: {}, {} threads.\n\n",
-      r.scene, r.triangles, r.bvh_nodes, r.bvh_depth, r.bvh_sah_cost, r.bvh_build_ms, r.width, r.height, r.max_rays, r.device,
-      r.cpu, r.cpu_threads);
+      r.scene, r.triangles, r.bvh_nodes, r.bvh_depth, r.bvh_sah_cost, r.bvh_build_ms, r.width, r.height, r.max_rays, r.device, r.cpu,
+      r.cpu_threads);
   s += "| camera | gaze | GPU ms | GPU fps | CPU ms | GPU/CPU | vs full (GPU) | rays saved | AO rays/px | GPU AO Mrays/s | "
        "AO ms balanced | AO ms per-pixel | fovea = full | primary = CPU | V = CPU | V within 2 rays | mean ΔV | mean abs ΔV / MC σ |\n";
   s += "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|---:|---:|---:|---:|---:|\n";
   for (const auto& cam : r.cameras)
     for (const auto& k : cam.cases)
-      s += fmt::format("| {} | {} | {:.2f} | {:.0f} | {:.0f} | {:.1f}x | {:.2f}x | {:.2f}x | {:.1f} | {:.0f} | {:.2f} | {:.2f} | {} | "
-                       "{:.5f} | {:.3f} | {:.4f} | {:+.1e} | {:.3f} |\n",
-                       cam.name, k.label, k.gpu_ms, k.gpu_fps, k.cpu_ms, k.gpu_speedup_over_cpu, k.speedup_vs_full, k.ray_ratio,
-                       k.ao_rays_per_pixel, k.ao_rays_per_second / 1e6, k.passes.ao_ms, k.per_pixel_ao_ms,
-                       k.fovea_identical ? "yes" : "NO", k.vs_cpu.primary_identical, k.vs_cpu.visibility_identical,
-                       k.vs_cpu.visibility_within_2_rays, k.vs_cpu.visibility_mean_signed, k.vs_cpu.noise_ratio);
+      s += fmt::format(
+          "| {} | {} | {:.2f} | {:.0f} | {:.0f} | {:.1f}x | {:.2f}x | {:.2f}x | {:.1f} | {:.0f} | {:.2f} | {:.2f} | {} | "
+          "{:.5f} | {:.3f} | {:.4f} | {:+.1e} | {:.3f} |\n",
+          cam.name, k.label, k.gpu_ms, k.gpu_fps, k.cpu_ms, k.gpu_speedup_over_cpu, k.speedup_vs_full, k.ray_ratio, k.ao_rays_per_pixel,
+          k.ao_rays_per_second / 1e6, k.passes.ao_ms, k.per_pixel_ao_ms, k.fovea_identical ? "yes" : "NO", k.vs_cpu.primary_identical,
+          k.vs_cpu.visibility_identical, k.vs_cpu.visibility_within_2_rays, k.vs_cpu.visibility_mean_signed, k.vs_cpu.noise_ratio);
   s += "\n| camera | raw GPU occlusion Mrays/s | renderer AO pass Mrays/s | renderer / raw |\n|---|---:|---:|---:|\n";
   for (const auto& cam : r.cameras)
-    s += fmt::format("| {} | {:.0f} | {:.0f} | {:.2f} |\n", cam.name, cam.raw_rays_per_second / 1e6,
-                     cam.renderer_ao_rays_per_second / 1e6, cam.renderer_vs_raw);
+    s += fmt::format("| {} | {:.0f} | {:.0f} | {:.2f} |\n", cam.name, cam.raw_rays_per_second / 1e6, cam.renderer_ao_rays_per_second / 1e6,
+                     cam.renderer_vs_raw);
   return s;
 }
 

@@ -22,19 +22,19 @@ struct BenchParams {
   std::vector<std::string> cameras;  // empty → every camera of the scene
   int repeats = 5;                   // GPU frames per case (median); the CPU runs cpu_repeats
   int cpu_repeats = 1;
-  bool cpu = true;                   // also time the CPU
-  size_t raw_stride = 4;             // every k-th reference pixel's AO rays: the raw-rate sample
+  bool cpu = true;        // also time the CPU
+  size_t raw_stride = 4;  // every k-th reference pixel's AO rays: the raw-rate sample
 };
 
 // How the GPU frame differs from the CPU frame of the same parameters.
 struct Agreement {
-  double primary_identical = 0;      // fraction of pixels with the same primary triangle (or both missing)
-  double visibility_identical = 0;   // fraction of pixels with bit-identical AO visibility
-  double visibility_mean_abs = 0;    // mean |V_gpu − V_cpu| over pixels
-  double visibility_mean_signed = 0; // mean V_gpu − V_cpu (a bias, were there one)
+  double primary_identical = 0;         // fraction of pixels with the same primary triangle (or both missing)
+  double visibility_identical = 0;      // fraction of pixels with bit-identical AO visibility
+  double visibility_mean_abs = 0;       // mean |V_gpu − V_cpu| over pixels
+  double visibility_mean_signed = 0;    // mean V_gpu − V_cpu (a bias, were there one)
   double visibility_within_2_rays = 0;  // fraction of pixels whose open-ray counts differ by at most 2
-  double noise_ratio = 0;            // mean |ΔV| over the mean Monte-Carlo standard error √(V(1−V)/n) of pixels with rays
-  double colour_max_abs = 0;         // largest |colour difference| of any channel
+  double noise_ratio = 0;               // mean |ΔV| over the mean Monte-Carlo standard error √(V(1−V)/n) of pixels with rays
+  double colour_max_abs = 0;            // largest |colour difference| of any channel
 };
 Agreement compare_frames(const Frame& gpu, const Frame& cpu);
 
@@ -45,19 +45,19 @@ struct BenchCase {
   double speedup_vs_full = 0;  // GPU full time / GPU time of this case
   double ray_ratio = 0;        // full AO rays / this case's AO rays
   double ao_rays_per_pixel = 0, ao_rays_per_second = 0;
-  GpuPassTimes passes;         // of the median GPU frame
-  double per_pixel_ao_ms = 0;  // the AO pass with one thread per pixel (median)
-  bool fovea_identical = true; // q = 1 pixels bit-identical to the GPU's full frame
+  GpuPassTimes passes;          // of the median GPU frame
+  double per_pixel_ao_ms = 0;   // the AO pass with one thread per pixel (median)
+  bool fovea_identical = true;  // q = 1 pixels bit-identical to the GPU's full frame
   Agreement vs_cpu;
 };
 
 struct BenchCamera {
   std::string name;
-  double raw_rays_per_second = 0;       // GPU occlusion kernel on the sampled reference rays
+  double raw_rays_per_second = 0;  // GPU occlusion kernel on the sampled reference rays
   double renderer_ao_rays_per_second = 0;
   double renderer_vs_raw = 0;
   size_t raw_sample = 0;
-  std::vector<BenchCase> cases;         // [0] = full frame
+  std::vector<BenchCase> cases;  // [0] = full frame
 };
 
 struct BenchResult {
@@ -70,8 +70,7 @@ struct BenchResult {
   std::vector<BenchCamera> cameras;
 };
 
-BenchResult run_benchmark(const Scene& scene, const BenchParams& params,
-                          const std::function<void(const std::string&)>& progress = {});
+BenchResult run_benchmark(const Scene& scene, const BenchParams& params, const std::function<void(const std::string&)>& progress = {});
 nlohmann::json to_json(const BenchResult& result);
 std::string to_markdown(const BenchResult& result);
 

@@ -14,7 +14,8 @@ void validate(const ReplaySettings& s) {
   if (!(s.fps > 0 && s.fps <= 1000)) fail("fps: must be in (0, 1000], got {}", s.fps);
   if (s.frames < 0) fail("frames: must be zero (all) or positive, got {}", s.frames);
   if (!(s.start_s >= 0) || !std::isfinite(s.start_s)) fail("start_s: must be zero or positive seconds, got {}", s.start_s);
-  if (!(s.duration_s >= 0) || !std::isfinite(s.duration_s)) fail("duration_s: must be zero (all) or positive seconds, got {}", s.duration_s);
+  if (!(s.duration_s >= 0) || !std::isfinite(s.duration_s))
+    fail("duration_s: must be zero (all) or positive seconds, got {}", s.duration_s);
   if (!(s.live_timeout_s > 0)) fail("live_timeout_s: must be positive seconds, got {}", s.live_timeout_s);
   validate(s.fixation);
 }
@@ -57,8 +58,7 @@ class FrameMaker {
 // Walks a recording's frames: for each, the samples up to t_k through the causal fixation filter,
 // then `frame(info)` with the frame's record (gaze, fixation, state) filled in.
 template <typename OnFrame>
-void walk_recording(const Recording& r, const Display& display, const RenderParams& params, const ReplaySettings& s,
-                    OnFrame&& frame) {
+void walk_recording(const Recording& r, const Display& display, const RenderParams& params, const ReplaySettings& s, OnFrame&& frame) {
   validate(s);
   if (r.samples.empty()) fail("{}: no samples to replay", r.source);
   const GazeGeometry geometry(display, r.screen_px);
@@ -119,16 +119,14 @@ ReplaySummary replay_recording(const Recording& r, const Display& display, Frame
   return summary;
 }
 
-std::vector<ReplayFrame> replay_gazes(const Recording& r, const Display& display, const RenderParams& params,
-                                      const ReplaySettings& s) {
+std::vector<ReplayFrame> replay_gazes(const Recording& r, const Display& display, const RenderParams& params, const ReplaySettings& s) {
   std::vector<ReplayFrame> frames;
   walk_recording(r, display, params, s, [&](ReplayFrame& info, int, int) { frames.push_back(info); });
   return frames;
 }
 
 ReplaySummary replay_live(GazeSource& source, const Display& display, FrameRenderer& renderer, const Camera& camera,
-                          const RenderParams& params, const ReplaySettings& s, const ReplaySink& sink,
-                          const ReplayProgress& progress) {
+                          const RenderParams& params, const ReplaySettings& s, const ReplaySink& sink, const ReplayProgress& progress) {
   validate(s);
   const Timer wall;
   const glm::ivec2 screen = source.screen_px();

@@ -20,25 +20,25 @@ namespace foveal {
 
 struct ReplaySettings {
   double fps = 30;
-  int frames = 0;              // 0: to the end of the recording (live: 10 s)
-  double start_s = 0;          // recordings: seconds after the first sample
-  double duration_s = 0;       // 0: everything from the start
+  int frames = 0;         // 0: to the end of the recording (live: 10 s)
+  double start_s = 0;     // recordings: seconds after the first sample
+  double duration_s = 0;  // 0: everything from the start
   FixationMethod method = kRecommendedFixationMethod;
   FixationParams fixation;
-  std::string stimulus;        // where the render sits on the screen, "X,Y,W,H" (empty: the whole screen)
-  double live_timeout_s = 5;   // live: stop when the tracker stays silent this long
-  bool reuse = true;           // a frame whose gaze equals the previous one's reuses its (identical) image
+  std::string stimulus;       // where the render sits on the screen, "X,Y,W,H" (empty: the whole screen)
+  double live_timeout_s = 5;  // live: stop when the tracker stays silent this long
+  bool reuse = true;          // a frame whose gaze equals the previous one's reuses its (identical) image
 };
 void validate(const ReplaySettings& settings);
 
 struct ReplayFrame {
   int index = 0;
-  double t_s = 0;                         // recording: since its first sample; live: since the start
-  std::optional<glm::dvec2> gaze;         // latest raw sample at t_k, render pixels (unset: invalid)
-  std::optional<glm::dvec2> fixation;     // filter output at t_k, render pixels (unset: none yet)
-  glm::dvec2 render_gaze{0};              // the gaze the frame was rendered with
-  uint64_t ao_rays = 0;                   // AO rays of the image
-  double ms = 0;                          // time to produce the frame (render or reuse)
+  double t_s = 0;                      // recording: since its first sample; live: since the start
+  std::optional<glm::dvec2> gaze;      // latest raw sample at t_k, render pixels (unset: invalid)
+  std::optional<glm::dvec2> fixation;  // filter output at t_k, render pixels (unset: none yet)
+  glm::dvec2 render_gaze{0};           // the gaze the frame was rendered with
+  uint64_t ao_rays = 0;                // AO rays of the image
+  double ms = 0;                       // time to produce the frame (render or reuse)
   bool reused = false;
   SourceState state = SourceState::live;  // the source's state at t_k
 };
@@ -46,9 +46,9 @@ struct ReplayFrame {
 struct ReplaySummary {
   int frames = 0, reused = 0;
   uint64_t ao_rays = 0;
-  double render_ms = 0;       // sum of the frames' ms
+  double render_ms = 0;  // sum of the frames' ms
   double wall_ms = 0;
-  std::string stopped;        // why it stopped early ("" when it ran to the end)
+  std::string stopped;  // why it stopped early ("" when it ran to the end)
 };
 
 using ReplaySink = std::function<void(const ReplayFrame&, const Frame&)>;
@@ -60,9 +60,9 @@ int replay_frame_count(const Recording& recording, const ReplaySettings& setting
 // Replay a recording: each frame rendered by `renderer` (any device; with params.reuse.temporal it
 // builds on the renderer's history). The sink reads the frame's colour and stats only.
 // `display` gives the angles for the filter (its physical size; the recording's screen pixels).
-ReplaySummary replay_recording(const Recording& recording, const Display& display, FrameRenderer& renderer,
-                               const Camera& camera, const RenderParams& params, const ReplaySettings& settings,
-                               const ReplaySink& sink, const ReplayProgress& progress = {});
+ReplaySummary replay_recording(const Recording& recording, const Display& display, FrameRenderer& renderer, const Camera& camera,
+                               const RenderParams& params, const ReplaySettings& settings, const ReplaySink& sink,
+                               const ReplayProgress& progress = {});
 
 // The gaze replay_recording() renders each frame with (the fixation filter's output, the image
 // centre before the first fixation), without rendering: the frames' records, render_gaze set.

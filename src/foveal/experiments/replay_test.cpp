@@ -46,18 +46,19 @@ TEST(Replay, FramesAreTheRenderersFramesForTheFilteredGaze) {
   const Camera camera = box.cameras.front();
   AoHistory history;  // the same frames by hand: render_frame with a history of the test's own
   int frames = 0;
-  const ReplaySummary summary = replay_recording(recording, display, *renderer, camera, p, s, [&](const ReplayFrame& f, const Frame& frame) {
-    ASSERT_LT(f.index, static_cast<int>(gazes.size()));
-    EXPECT_EQ(f.render_gaze, gazes[f.index].render_gaze);
-    EXPECT_FALSE(f.reused);  // temporal: every frame adds rays
-    RenderParams q = p;
-    q.gaze_px = f.render_gaze;
-    const Frame expected = render_frame(tracer, box, camera, q, {}, &history);
-    EXPECT_EQ(std::memcmp(frame.color.pixels.data(), expected.color.pixels.data(), expected.color.pixels.size() * sizeof(float)), 0)
-        << "frame " << f.index;
-    EXPECT_EQ(f.ao_rays, expected.stats.ao_rays);
-    ++frames;
-  });
+  const ReplaySummary summary =
+      replay_recording(recording, display, *renderer, camera, p, s, [&](const ReplayFrame& f, const Frame& frame) {
+        ASSERT_LT(f.index, static_cast<int>(gazes.size()));
+        EXPECT_EQ(f.render_gaze, gazes[f.index].render_gaze);
+        EXPECT_FALSE(f.reused);  // temporal: every frame adds rays
+        RenderParams q = p;
+        q.gaze_px = f.render_gaze;
+        const Frame expected = render_frame(tracer, box, camera, q, {}, &history);
+        EXPECT_EQ(std::memcmp(frame.color.pixels.data(), expected.color.pixels.data(), expected.color.pixels.size() * sizeof(float)), 0)
+            << "frame " << f.index;
+        EXPECT_EQ(f.ao_rays, expected.stats.ao_rays);
+        ++frames;
+      });
   EXPECT_EQ(frames, static_cast<int>(gazes.size()));
   EXPECT_EQ(summary.frames, frames);
   EXPECT_EQ(renderer->history_frames(), static_cast<uint32_t>(frames));

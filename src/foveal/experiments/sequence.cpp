@@ -37,7 +37,10 @@ std::vector<ReuseConfig> parse_reuse_configs(const std::string& option, const st
     bool paper = false;
     for (const std::string_view raw : text::split(entry, '+')) {
       const std::string_view word = text::trim(raw);
-      bool* flag = word == "adaptive" ? &c.reuse.adaptive : word == "denoise" ? &c.reuse.denoise : word == "temporal" ? &c.reuse.temporal : nullptr;
+      bool* flag = word == "adaptive"   ? &c.reuse.adaptive
+                   : word == "denoise"  ? &c.reuse.denoise
+                   : word == "temporal" ? &c.reuse.temporal
+                                        : nullptr;
       if (word == "paper") {
         if (paper) fail("{}: '{}' names paper twice", option, entry);
         paper = true;
@@ -104,7 +107,8 @@ QualitySequenceResult run_quality_sequence(const Scene& scene, FrameRenderer& re
   };
   const int frames = static_cast<int>(params.cameras.size());
   if (frames < 2) fail("bench quality --sequence: needs at least 2 frames, got {}", frames);
-  if (params.gazes.size() != params.cameras.size()) fail("bench quality --sequence: {} gaze points for {} frames", params.gazes.size(), frames);
+  if (params.gazes.size() != params.cameras.size())
+    fail("bench quality --sequence: {} gaze points for {} frames", params.gazes.size(), frames);
   if (params.configs.empty()) fail("bench quality --sequence: no configuration");
   validate(params.render);
   for (const ReuseConfig& c : params.configs) {
@@ -204,9 +208,16 @@ QualitySequenceResult run_quality_sequence(const Scene& scene, FrameRenderer& re
 
 nlohmann::json to_json(const QualitySequenceResult& r) {
   auto number = [](double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); };
-  nlohmann::json j = {{"scene", r.scene},        {"width", r.width},     {"height", r.height},
-                      {"frames", r.frames},      {"threads", r.threads}, {"device", r.device}, {"reference_rays", r.reference_rays},
-                      {"reference_ms", r.reference_ms}, {"bands", r.band_names}, {"configs", nlohmann::json::array()},
+  nlohmann::json j = {{"scene", r.scene},
+                      {"width", r.width},
+                      {"height", r.height},
+                      {"frames", r.frames},
+                      {"threads", r.threads},
+                      {"device", r.device},
+                      {"reference_rays", r.reference_rays},
+                      {"reference_ms", r.reference_ms},
+                      {"bands", r.band_names},
+                      {"configs", nlohmann::json::array()},
                       {"gazes", nlohmann::json::array()}};
   for (const glm::dvec2& g : r.gazes) j["gazes"].push_back({g.x, g.y});
   for (const SequenceConfigResult& c : r.configs) {

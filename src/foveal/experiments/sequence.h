@@ -29,34 +29,34 @@ std::vector<ReuseConfig> default_sequence_configs();
 std::vector<ReuseConfig> parse_reuse_configs(const std::string& option, const std::string& list);
 
 struct QualitySequenceParams {
-  RenderParams render;              // size, display, model; gaze and reuse set per frame and configuration
-  std::vector<Camera> cameras;      // one per frame
-  std::vector<glm::dvec2> gazes;    // one per frame, render pixels
+  RenderParams render;            // size, display, model; gaze and reuse set per frame and configuration
+  std::vector<Camera> cameras;    // one per frame
+  std::vector<glm::dvec2> gazes;  // one per frame, render pixels
   std::vector<ReuseConfig> configs = default_sequence_configs();
   int reference_rays = 400;
-  uint64_t seed = 1;                // the configurations' seed; references seed + 1 and seed + 2
+  uint64_t seed = 1;  // the configurations' seed; references seed + 1 and seed + 2
 };
 
 struct SequenceConfigResult {
   std::string name;
   AoReuseParams reuse;
-  double ms = 0;                 // mean frame time
-  double speedup = 0;            // reference mean frame time / ms
-  double ray_ratio = 0;          // reference AO rays / this configuration's
-  double weighted_ratio = 0;     // mean over frames of the acuity-weighted error / the reference's noise
-  double flicker_ratio = 0;      // mean over frame pairs of the acuity-weighted change of the error / noise
-  double fovea_ratio = 0;        // mean over frames of the q(E) = 1 region's error / noise
-  double fovea_within = 0;       // fraction of frames whose q(E) = 1 region is within the reference's noise
-  std::vector<double> band_ratio;  // per band (default_bands), mean over frames
+  double ms = 0;                             // mean frame time
+  double speedup = 0;                        // reference mean frame time / ms
+  double ray_ratio = 0;                      // reference AO rays / this configuration's
+  double weighted_ratio = 0;                 // mean over frames of the acuity-weighted error / the reference's noise
+  double flicker_ratio = 0;                  // mean over frame pairs of the acuity-weighted change of the error / noise
+  double fovea_ratio = 0;                    // mean over frames of the q(E) = 1 region's error / noise
+  double fovea_within = 0;                   // fraction of frames whose q(E) = 1 region is within the reference's noise
+  std::vector<double> band_ratio;            // per band (default_bands), mean over frames
   std::vector<double> frame_weighted_ratio;  // per frame
 };
 
 struct QualitySequenceResult {
   std::string scene;
   int width = 0, height = 0, frames = 0, reference_rays = 0, threads = 0;
-  std::string device;            // "cpu", or the GPU's description
-  double reference_ms = 0;       // mean full-frame time
-  std::vector<glm::dvec2> gazes; // per frame, render pixels
+  std::string device;             // "cpu", or the GPU's description
+  double reference_ms = 0;        // mean full-frame time
+  std::vector<glm::dvec2> gazes;  // per frame, render pixels
   std::vector<std::string> band_names;
   std::vector<SequenceConfigResult> configs;
 };

@@ -26,8 +26,7 @@ int band_index(const std::vector<std::string>& names, const std::string& name) {
 
 }  // namespace
 
-QualitySweepResult run_quality_sweep(const Scene& scene, const Tracer& tracer, const Camera& camera,
-                                     const QualitySweepParams& params,
+QualitySweepResult run_quality_sweep(const Scene& scene, const Tracer& tracer, const Camera& camera, const QualitySweepParams& params,
                                      const std::function<void(const std::string&)>& progress) {
   auto say = [&](const std::string& line) {
     if (progress) progress(line);
@@ -88,8 +87,8 @@ QualitySweepResult run_quality_sweep(const Scene& scene, const Tracer& tracer, c
   full.seed = params.seed + 2;
   // The reference's own noise: per pixel, the same for every configuration and gaze
   const ReferenceNoise noise = reference_noise(render_frame(tracer, scene, camera, full).color, reference.color);
-  say(fmt::format("reference: full frame, {} rays per pixel, {:.0f} ms, {:.1f} M AO rays", params.reference_rays,
-                  result.reference_ms, reference.stats.ao_rays * 1e-6));
+  say(fmt::format("reference: full frame, {} rays per pixel, {:.0f} ms, {:.1f} M AO rays", params.reference_rays, result.reference_ms,
+                  reference.stats.ao_rays * 1e-6));
   for (const auto& [label, gaze] : params.gazes) {
     const FoveationMaps maps = foveation_maps(base, gaze);
     FoveaFloor f;
@@ -104,8 +103,8 @@ QualitySweepResult run_quality_sweep(const Scene& scene, const Tracer& tracer, c
       sum_variance += v * (1.0 - v);
     }
     f.min_rays = sum_variance > 0 ? params.reference_rays * sum_sigma * sum_sigma / sum_variance : 0.0;
-    f.ray_ratio_bound = f.min_rays > 0 ? static_cast<double>(result.reference_ao_rays) / f.min_rays
-                                       : std::numeric_limits<double>::infinity();
+    f.ray_ratio_bound =
+        f.min_rays > 0 ? static_cast<double>(result.reference_ao_rays) / f.min_rays : std::numeric_limits<double>::infinity();
     result.fovea_floors.push_back(f);
   }
 
@@ -145,8 +144,8 @@ QualitySweepResult run_quality_sweep(const Scene& scene, const Tracer& tracer, c
               image = frame.color;
               image_after = next.color;
             } else {
-              image = shade(tracer, scene, camera, frame.gbuffer, foveation_maps(p, gaze), frame.visibility,
-                            frame.stats.ambient_constant, p.shadows, epsilon);
+              image = shade(tracer, scene, camera, frame.gbuffer, foveation_maps(p, gaze), frame.visibility, frame.stats.ambient_constant,
+                            p.shadows, epsilon);
               image_after = shade(tracer, scene, camera, next.gbuffer, foveation_maps(after, *after.gaze_px), next.visibility,
                                   next.stats.ambient_constant, p.shadows, epsilon);
             }
@@ -198,8 +197,10 @@ QualitySweepResult run_quality_sweep(const Scene& scene, const Tracer& tracer, c
       }
     }
     for (size_t k = 0; k < bands; ++k)
-      if (band_gazes[k] > 0) q.band_ratio[k] /= band_gazes[k], q.band_rmse[k] /= band_gazes[k];
-      else q.band_ratio[k] = q.band_rmse[k] = std::nan("");
+      if (band_gazes[k] > 0)
+        q.band_ratio[k] /= band_gazes[k], q.band_rmse[k] /= band_gazes[k];
+      else
+        q.band_ratio[k] = q.band_rmse[k] = std::nan("");
     q.ms = ms / g;
     q.speedup = q.ms > 0 ? result.reference_ms / q.ms : 0.0;
     q.ray_ratio = rays > 0 ? static_cast<double>(result.reference_ao_rays) * g / rays : std::numeric_limits<double>::infinity();
@@ -278,17 +279,10 @@ nlohmann::json to_json(const QualitySweepResult& r) {
       p["band_rmse"].push_back(number(q.band_rmse[k]));
     }
     for (const QualityGazeResult& g : q.per_gaze) {
-      nlohmann::json gj = {{"label", g.gaze_label},
-                           {"gaze_px", {g.gaze_px.x, g.gaze_px.y}},
-                           {"ms", g.ms},
-                           {"ao_rays", g.ao_rays},
-                           {"weighted_rmse", g.weighted_rmse},
-                           {"weighted_ratio", g.weighted_ratio},
-                           {"flicker_rmse", g.flicker_rmse},
-                           {"flicker_ratio", g.flicker_ratio},
-                           {"psnr", number(g.whole.psnr)},
-                           {"ssim", g.whole.ssim},
-                           {"bands", nlohmann::json::array()}};
+      nlohmann::json gj = {{"label", g.gaze_label},          {"gaze_px", {g.gaze_px.x, g.gaze_px.y}}, {"ms", g.ms},
+                           {"ao_rays", g.ao_rays},           {"weighted_rmse", g.weighted_rmse},      {"weighted_ratio", g.weighted_ratio},
+                           {"flicker_rmse", g.flicker_rmse}, {"flicker_ratio", g.flicker_ratio},      {"psnr", number(g.whole.psnr)},
+                           {"ssim", g.whole.ssim},           {"bands", nlohmann::json::array()}};
       for (const BandResult& b : g.bands)
         gj["bands"].push_back({{"name", b.band.name},
                                {"pixels", b.error.pixels},
@@ -311,14 +305,15 @@ std::string to_markdown(const QualitySweepResult& r) {
       "points; the acuity-weighted error weights each pixel by q(E)²; flicker is the acuity-weighted change after a "
       "{:g}° saccade (the reference does not change), in the same unit. ● = on the Pareto front (speed-up, error, "
       "flicker); ✓ = the q(E) = 1 region within the reference's noise at every gaze point.\n\n",
-      r.scene, r.triangles, r.camera.empty() ? "(default)" : r.camera, r.width, r.height, r.reference_rays, r.reference_ms,
-      r.threads, r.saccade_deg);
+      r.scene, r.triangles, r.camera.empty() ? "(default)" : r.camera, r.width, r.height, r.reference_rays, r.reference_ms, r.threads,
+      r.saccade_deg);
   bool methods = false;
   for (const QualityPoint& q : r.points) methods |= q.method != "paper";
   if (!r.fovea_floors.empty()) {
-    out += "No method that leaves the fovea unfiltered and keeps it within the reference's noise casts fewer rays than the "
-           "q(E) = 1 region's N·(Σσ)²/Σσ² (σ² = V(1 − V) of the reference's pixels there, rays spread ∝ σ): its AO ray ratio is "
-           "at most ";
+    out +=
+        "No method that leaves the fovea unfiltered and keeps it within the reference's noise casts fewer rays than the "
+        "q(E) = 1 region's N·(Σσ)²/Σσ² (σ² = V(1 − V) of the reference's pixels there, rays spread ∝ σ): its AO ray ratio is "
+        "at most ";
     for (size_t k = 0; k < r.fovea_floors.size(); ++k) {
       const FoveaFloor& f = r.fovea_floors[k];
       out += fmt::format("{}{:.2f} at {} ({} of {} pixels partly occluded)", k ? ", " : "", f.ray_ratio_bound, f.gaze_label,
@@ -384,8 +379,10 @@ std::string point_label(const QualityPoint& q) {
   if (q.method == "paper") return label;
   label += ' ';
   for (size_t k = 0; k < q.method.size(); ++k)
-    if (k == 0 || q.method[k - 1] == '+') label += q.method[k];
-    else if (q.method[k] == '+') label += '+';
+    if (k == 0 || q.method[k - 1] == '+')
+      label += q.method[k];
+    else if (q.method[k] == '+')
+      label += '+';
   return label;
 }
 
@@ -468,12 +465,14 @@ void write_pareto_plot(const QualitySweepResult& r, const std::string& path, dou
     const float t = betas.size() > 1 ? static_cast<float>(k) / (betas.size() - 1) : 0.0f;
     return glm::mix(glm::vec3(0.1f, 0.35f, 0.85f), glm::vec3(0.85f, 0.2f, 0.1f), t);
   };
-  pareto_panel(plot, 0, r, [](const QualityPoint& q) { return q.weighted_ratio; },
-               "still image: acuity-weighted error / reference noise (log)", hg, hn, hb, beta_colour);
-  pareto_panel(plot, 560, r, [](const QualityPoint& q) { return q.flicker_ratio; },
-               r.saccade_deg > 0 ? fmt::format("flicker after a {:g} deg saccade / reference noise (log)", r.saccade_deg)
-                                 : std::string("flicker between consecutive frames / reference noise (log)"),
-               hg, hn, hb, beta_colour);
+  pareto_panel(
+      plot, 0, r, [](const QualityPoint& q) { return q.weighted_ratio; }, "still image: acuity-weighted error / reference noise (log)", hg,
+      hn, hb, beta_colour);
+  pareto_panel(
+      plot, 560, r, [](const QualityPoint& q) { return q.flicker_ratio; },
+      r.saccade_deg > 0 ? fmt::format("flicker after a {:g} deg saccade / reference noise (log)", r.saccade_deg)
+                        : std::string("flicker between consecutive frames / reference noise (log)"),
+      hg, hn, hb, beta_colour);
   // Legend
   const float x = 1130;
   float y = 60;

@@ -27,17 +27,17 @@ namespace foveal {
 class Tracer;
 
 struct QualitySweepParams {
-  RenderParams render;  // size, display, ellipse, AO distance, ambient constant; γ, n_max, β, mode and gaze set per frame
+  RenderParams render;      // size, display, ellipse, AO distance, ambient constant; γ, n_max, β, mode and gaze set per frame
   std::string camera_name;  // for the report only
   std::vector<std::pair<std::string, glm::dvec2>> gazes;
   std::vector<double> gammas{1, 1.5, 2, 3, 4};
   std::vector<int> max_rays{100, 200, 400};
   std::vector<double> betas{0.5, 1, 2};
   std::vector<ReuseConfig> methods{ReuseConfig{"paper", {}}};  // single-frame ones only (no temporal)
-  int reference_rays = 400;  // the full-frame reference's rays per pixel
-  uint64_t seed = 1;         // the foveated frames' seed; the references use seed + 1 and seed + 2
-  int repeats = 1;           // timed frames per (γ, n_max) and for the reference (median)
-  double saccade_deg = 5;    // flicker: the frame after a horizontal saccade of this many degrees
+  int reference_rays = 400;                                    // the full-frame reference's rays per pixel
+  uint64_t seed = 1;                                           // the foveated frames' seed; the references use seed + 1 and seed + 2
+  int repeats = 1;                                             // timed frames per (γ, n_max) and for the reference (median)
+  double saccade_deg = 5;                                      // flicker: the frame after a horizontal saccade of this many degrees
 };
 
 // One configuration at one gaze point.
@@ -52,7 +52,7 @@ struct QualityGazeResult {
   // rendered after a saccade of saccade_deg, where the full-frame reference does not change at all;
   // as a multiple of the reference's noise. Still-image errors miss it; the paper's blend exists to hide it.
   double flicker_rmse = 0, flicker_ratio = 0;
-  std::vector<BandResult> bands;                 // default_bands(), with the noise
+  std::vector<BandResult> bands;  // default_bands(), with the noise
   ErrorStats whole;
 };
 
@@ -60,17 +60,17 @@ struct QualityGazeResult {
 struct QualityPoint {
   double gamma = 2, beta = 1;
   int max_rays = 400;
-  std::string method = "paper";  // ReuseConfig::name
-  double ms = 0;            // mean frame time over the gaze points
-  double speedup = 0;       // reference time / ms
-  double ray_ratio = 0;     // reference AO rays / mean AO rays
-  double weighted_ratio = 0;   // mean over gazes of the acuity-weighted error / reference noise
-  double weighted_rmse = 0;    // mean over gazes
-  double flicker_ratio = 0;    // mean over gazes
-  std::vector<double> band_ratio;  // per band (default_bands order), mean error / noise over the gazes
-  std::vector<double> band_rmse;   // per band, mean RMSE
-  bool fovea_within_noise = false; // the q(E) = 1 region within the reference's noise at every gaze
-  bool pareto = false;  // no other point is at least as fast with at most its still error and flicker, and better in one
+  std::string method = "paper";     // ReuseConfig::name
+  double ms = 0;                    // mean frame time over the gaze points
+  double speedup = 0;               // reference time / ms
+  double ray_ratio = 0;             // reference AO rays / mean AO rays
+  double weighted_ratio = 0;        // mean over gazes of the acuity-weighted error / reference noise
+  double weighted_rmse = 0;         // mean over gazes
+  double flicker_ratio = 0;         // mean over gazes
+  std::vector<double> band_ratio;   // per band (default_bands order), mean error / noise over the gazes
+  std::vector<double> band_rmse;    // per band, mean RMSE
+  bool fovea_within_noise = false;  // the q(E) = 1 region within the reference's noise at every gaze
+  bool pareto = false;              // no other point is at least as fast with at most its still error and flicker, and better in one
   std::vector<QualityGazeResult> per_gaze;
 };
 
@@ -82,10 +82,10 @@ struct QualityPoint {
 // N·(Σσ_i)²/Σσ_i². σ_i is taken from the reference's visibility; shading weights are left out.
 struct FoveaFloor {
   std::string gaze_label;
-  uint64_t fovea_pixels = 0;      // q(E) = 1 pixels that hit the scene
-  uint64_t partly_occluded = 0;   // … of which 0 < V < 1 in the reference
-  double min_rays = 0;            // N·(Σσ)²/Σσ² over them
-  double ray_ratio_bound = 0;     // reference AO rays / min_rays: no such method's ray ratio exceeds it
+  uint64_t fovea_pixels = 0;     // q(E) = 1 pixels that hit the scene
+  uint64_t partly_occluded = 0;  // … of which 0 < V < 1 in the reference
+  double min_rays = 0;           // N·(Σσ)²/Σσ² over them
+  double ray_ratio_bound = 0;    // reference AO rays / min_rays: no such method's ray ratio exceeds it
 };
 
 struct QualitySweepResult {
@@ -93,17 +93,16 @@ struct QualitySweepResult {
   int width = 0, height = 0, reference_rays = 0, threads = 0;
   double saccade_deg = 0;
   size_t triangles = 0;
-  double reference_ms = 0;        // median full-frame time
+  double reference_ms = 0;  // median full-frame time
   uint64_t reference_ao_rays = 0;
   double reference_noise_weighted_rmse = 0;  // mean over gazes of the references' acuity-weighted seed-to-seed RMSE
   std::vector<std::string> band_names;
-  std::vector<QualityPoint> points;  // in grid order: γ, then n_max, then method, then β
+  std::vector<QualityPoint> points;      // in grid order: γ, then n_max, then method, then β
   std::vector<FoveaFloor> fovea_floors;  // per gaze point
 };
 
 // Run the sweep; `progress` receives a line per finished (γ, n_max).
-QualitySweepResult run_quality_sweep(const Scene& scene, const Tracer& tracer, const Camera& camera,
-                                     const QualitySweepParams& params,
+QualitySweepResult run_quality_sweep(const Scene& scene, const Tracer& tracer, const Camera& camera, const QualitySweepParams& params,
                                      const std::function<void(const std::string&)>& progress = {});
 
 // Mark each point's `pareto` flag: maximise speed-up, minimise the still error ratio and the flicker ratio.
@@ -120,8 +119,8 @@ std::string to_markdown(const QualitySweepResult& result);
 // Two panels, speed-up against the still error ratio and against the flicker ratio: every point
 // (β by colour, method by marker), each panel's two-way front joined, the paper's method at the
 // default configuration (`highlight`: γ, n_max, β) ringed; .png or .svg.
-void write_pareto_plot(const QualitySweepResult& result, const std::string& path, double highlight_gamma,
-                       int highlight_max_rays, double highlight_beta);
+void write_pareto_plot(const QualitySweepResult& result, const std::string& path, double highlight_gamma, int highlight_max_rays,
+                       double highlight_beta);
 // A sequence's configurations as points of the plot (γ, n_max, β those of `foveation`; flicker
 // the change between consecutive frames, saccade_deg 0; fovea within noise where it is in every frame).
 QualitySweepResult sequence_points(const QualitySequenceResult& sequence, const FoveationParams& foveation);

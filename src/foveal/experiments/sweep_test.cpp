@@ -101,8 +101,8 @@ TEST(QualitySweep, ReferenceLikeConfigurationIsWithinNoiseEverywhere) {
   for (const QualityPoint& a : r.points) {
     bool dominated = false;
     for (const QualityPoint& b : r.points)
-      dominated |= b.speedup >= a.speedup && b.weighted_ratio <= a.weighted_ratio &&
-                   (b.speedup > a.speedup || b.weighted_ratio < a.weighted_ratio);
+      dominated |=
+          b.speedup >= a.speedup && b.weighted_ratio <= a.weighted_ratio && (b.speedup > a.speedup || b.weighted_ratio < a.weighted_ratio);
     EXPECT_EQ(a.pareto, !dominated);
   }
 }

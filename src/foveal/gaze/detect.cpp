@@ -15,11 +15,16 @@ namespace foveal {
 
 const char* to_string(EventMethod m) {
   switch (m) {
-    case EventMethod::ivt: return "ivt";
-    case EventMethod::idt: return "idt";
-    case EventMethod::ek: return "ek";
-    case EventMethod::nh: return "nh";
-    case EventMethod::nhp: return "nhp";
+    case EventMethod::ivt:
+      return "ivt";
+    case EventMethod::idt:
+      return "idt";
+    case EventMethod::ek:
+      return "ek";
+    case EventMethod::nh:
+      return "nh";
+    case EventMethod::nhp:
+      return "nhp";
   }
   return "?";
 }
@@ -100,7 +105,7 @@ struct Signal {
   double dt = 0;
   std::vector<glm::dvec3> dir;
   std::vector<bool> valid;
-  std::vector<bool> noise;  // nh: physiologically impossible velocity or acceleration (never free)
+  std::vector<bool> noise;                 // nh: physiologically impossible velocity or acceleration (never free)
   std::vector<size_t> run_start, run_end;  // per sample: its run of contiguous valid samples [start, end)
 };
 
@@ -374,8 +379,7 @@ void line_velocity(const Signal& s, int h, std::vector<float>& velocity) {
       const size_t hi = std::min<size_t>({hh, i - start, end - 1 - i});
       if (hi == hh) continue;
       if (hi < 1) {  // a run's first or last sample: the one-sided difference
-        if (end - start >= 2)
-          velocity[i] = static_cast<float>(kDeg * glm::length(s.dir[i == start ? i + 1 : i - 1] - s.dir[i]) / s.dt);
+        if (end - start >= 2) velocity[i] = static_cast<float>(kDeg * glm::length(s.dir[i == start ? i + 1 : i - 1] - s.dir[i]) / s.dt);
         continue;
       }
       glm::dvec3 v(0);
@@ -511,7 +515,8 @@ EventDetection detect_events(const Recording& r, const GazeGeometry& g, EventMet
       out.peak_threshold_deg_s = peak;
       out.onset_threshold_deg_s = onset;
       // Noise next to a loss is the lid's (a blink); elsewhere it stays undefined
-      label_blinks(r, s, p, [&](size_t i) { return s.noise[i] || !(v[i] < onset) || (*pupil)(r.samples[i]); }, labels);
+      label_blinks(
+          r, s, p, [&](size_t i) { return s.noise[i] || !(v[i] < onset) || (*pupil)(r.samples[i]); }, labels);
       // The smoother velocity that finds small saccades in noise (its own thresholds; none when off)
       std::vector<float> coarse;
       double coarse_peak = INFINITY;
@@ -569,7 +574,8 @@ EventDetection detect_events(const Recording& r, const GazeGeometry& g, EventMet
         const glm::dvec2 q = vel[i] / eta;
         return glm::dot(q, q) > 1;  // NaN: false
       };
-      label_blinks(r, s, p, [&](size_t i) { return outside(i) || (*pupil)(r.samples[i]); }, labels);
+      label_blinks(
+          r, s, p, [&](size_t i) { return outside(i) || (*pupil)(r.samples[i]); }, labels);
       const size_t min_samples = std::max<size_t>(1, static_cast<size_t>(std::lround(p.ek_min_saccade_s / s.dt)));
       for (size_t i = 0; i < s.n;) {
         if (!(free_sample(labels, s, i) && outside(i))) {
@@ -596,9 +602,9 @@ std::string events_tsv(const EventDetection& d, const Recording& r) {
   auto cell = [](double x) { return std::isfinite(x) ? fmt::format("{:.4f}", x) : std::string("n/a"); };
   std::string out = "onset\tduration\ttrial_type\tamplitude_deg\tpeak_velocity_deg_s\tstart_x_deg\tstart_y_deg\tend_x_deg\tend_y_deg\n";
   for (const DetectedEvent& e : d.events)
-    out += fmt::format("{:.6f}\t{:.6f}\t{}\t{}\t{}\t{}\t{}\t{}\t{}\n", e.onset_s - t0, e.duration_s, to_string(e.label), cell(e.amplitude_deg),
-                       std::isfinite(e.peak_velocity_deg_s) ? fmt::format("{:.1f}", e.peak_velocity_deg_s) : "n/a", cell(e.start_deg.x),
-                       cell(e.start_deg.y), cell(e.end_deg.x), cell(e.end_deg.y));
+    out += fmt::format("{:.6f}\t{:.6f}\t{}\t{}\t{}\t{}\t{}\t{}\t{}\n", e.onset_s - t0, e.duration_s, to_string(e.label),
+                       cell(e.amplitude_deg), std::isfinite(e.peak_velocity_deg_s) ? fmt::format("{:.1f}", e.peak_velocity_deg_s) : "n/a",
+                       cell(e.start_deg.x), cell(e.start_deg.y), cell(e.end_deg.x), cell(e.end_deg.y));
   return out;
 }
 

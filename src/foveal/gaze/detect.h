@@ -56,24 +56,24 @@ EventMethod parse_event_method(const std::string& name);
 
 struct EventParams {
   // Blinks
-  double blink_flank_s = 0.100;       // the lid's artefacts either side of a loss: at most this long
-  double max_blink_s = 2.0;           // longer losses are undefined, not blinks
-  double pupil_deviation = 0.25;      // a pupil this far (relative) from the median is the lid's
-  double lid_saccade_s = 0.025;       // nh, nhp: a saccade or PSO this close to a blink is the lid's (part of the blink)
+  double blink_flank_s = 0.100;   // the lid's artefacts either side of a loss: at most this long
+  double max_blink_s = 2.0;       // longer losses are undefined, not blinks
+  double pupil_deviation = 0.25;  // a pupil this far (relative) from the median is the lid's
+  double lid_saccade_s = 0.025;   // nh, nhp: a saccade or PSO this close to a blink is the lid's (part of the blink)
   // Nyström & Holmqvist 2010
   double filter_window_s = 0.006;     // Savitzky–Golay window (the paper: 20 ms; see above)
   double detection_window_s = 0.020;  // a smoother velocity (least-squares line) whose own peaks also start saccades (0: off)
   double initial_peak_deg_s = 100;    // where the peak threshold's iteration starts
   double max_velocity_deg_s = 1000;   // faster samples are noise
   double max_acceleration_deg_s2 = 100000;
-  double min_saccade_s = 0.008;       // the paper: 10 ms (see above)
-  double min_fixation_s = 0.040;      // shorter intersaccadic runs are undefined
-  double pso_window_s = 0.040;        // a PSO begins within this time of a saccade's offset
-  double local_noise_s = 0.040;       // the window before an onset that sets the offset threshold
+  double min_saccade_s = 0.008;   // the paper: 10 ms (see above)
+  double min_fixation_s = 0.040;  // shorter intersaccadic runs are undefined
+  double pso_window_s = 0.040;    // a PSO begins within this time of a saccade's offset
+  double local_noise_s = 0.040;   // the window before an onset that sets the offset threshold
   // Engbert & Kliegl 2003
   double ek_lambda = 6;
   double ek_min_saccade_s = 0.006;
-  PursuitParams pursuit;              // nhp: smooth pursuit in the intersaccadic intervals
+  PursuitParams pursuit;  // nhp: smooth pursuit in the intersaccadic intervals
 };
 // Check parameters; throws Error naming the option.
 void validate(const EventParams& params);
@@ -81,26 +81,26 @@ void validate(const EventParams& params);
 // One event: a run of samples with one label.
 struct DetectedEvent {
   EventLabel label = EventLabel::undefined;
-  size_t first = 0, last = 0;     // sample indices, inclusive
-  double onset_s = 0, duration_s = 0;  // first sample's time; time to the sample after the last (one sample: one interval)
-  double amplitude_deg = 0;       // angle between the first and last valid direction (NaN for blinks)
-  double peak_velocity_deg_s = 0; // largest velocity inside (NaN where none)
+  size_t first = 0, last = 0;               // sample indices, inclusive
+  double onset_s = 0, duration_s = 0;       // first sample's time; time to the sample after the last (one sample: one interval)
+  double amplitude_deg = 0;                 // angle between the first and last valid direction (NaN for blinks)
+  double peak_velocity_deg_s = 0;           // largest velocity inside (NaN where none)
   glm::dvec2 start_deg{NAN}, end_deg{NAN};  // first/last valid position, degrees from the screen centre, x right, y up
 };
 
 struct EventDetection {
-  std::optional<EventMethod> method;   // none: labels from elsewhere (events_from_labels)
-  std::vector<EventLabel> labels;       // per sample
-  std::vector<DetectedEvent> events;    // the runs of labels, undefined runs left out
-  std::vector<float> velocity_deg_s;    // per sample (NaN where the eye was lost)
-  double sampling_hz = 0;               // the median interval's rate
-  double peak_threshold_deg_s = NAN;    // nh/nhp: the adaptive thresholds found; ek: the mean of ηx, ηy
+  std::optional<EventMethod> method;  // none: labels from elsewhere (events_from_labels)
+  std::vector<EventLabel> labels;     // per sample
+  std::vector<DetectedEvent> events;  // the runs of labels, undefined runs left out
+  std::vector<float> velocity_deg_s;  // per sample (NaN where the eye was lost)
+  double sampling_hz = 0;             // the median interval's rate
+  double peak_threshold_deg_s = NAN;  // nh/nhp: the adaptive thresholds found; ek: the mean of ηx, ηy
   double onset_threshold_deg_s = NAN;
 };
 
 // Detect events over a whole recording (offline). `fixation` parametrises ivt and idt.
-EventDetection detect_events(const Recording& recording, const GazeGeometry& geometry, EventMethod method,
-                             const EventParams& params, const FixationParams& fixation);
+EventDetection detect_events(const Recording& recording, const GazeGeometry& geometry, EventMethod method, const EventParams& params,
+                             const FixationParams& fixation);
 
 // Events, amplitudes and peak velocities for labels from elsewhere (another tool's, a coder's).
 EventDetection events_from_labels(const Recording& recording, const GazeGeometry& geometry, std::vector<EventLabel> labels);

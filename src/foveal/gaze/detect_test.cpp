@@ -289,9 +289,8 @@ TEST(Detect, SmallSaccadesInNoiseAreFoundByTheSmootherVelocity) {
     // ends, so its measured amplitude is its central part (waiting for the velocity's local
     // minima instead lowers the saccades' kappa on the IRF data from 0.887 to 0.862)
     const double t = e->onset_s - 100;
-    const auto truth = std::find_if(s.truth.begin(), s.truth.end(), [&](const TrueEvent& x) {
-      return t >= x.onset_s - 0.002 && t < x.onset_s + x.duration_s;
-    });
+    const auto truth = std::find_if(s.truth.begin(), s.truth.end(),
+                                    [&](const TrueEvent& x) { return t >= x.onset_s - 0.002 && t < x.onset_s + x.duration_s; });
     ASSERT_NE(truth, s.truth.end()) << "a saccade at " << t << " s where there is none";
     EXPECT_GT(e->amplitude_deg, 0.4 / 3) << t;
     EXPECT_LT(e->amplitude_deg, 0.4 + 0.1) << t;

@@ -11,19 +11,25 @@ namespace foveal {
 
 const char* to_string(EventLabel label) {
   switch (label) {
-    case EventLabel::fixation: return "fixation";
-    case EventLabel::saccade: return "saccade";
-    case EventLabel::pso: return "pso";
-    case EventLabel::pursuit: return "pursuit";
-    case EventLabel::blink: return "blink";
-    default: return "undefined";
+    case EventLabel::fixation:
+      return "fixation";
+    case EventLabel::saccade:
+      return "saccade";
+    case EventLabel::pso:
+      return "pso";
+    case EventLabel::pursuit:
+      return "pursuit";
+    case EventLabel::blink:
+      return "blink";
+    default:
+      return "undefined";
   }
 }
 
 std::optional<EventLabel> parse_event_label(std::string_view text) {
   text = text::trim(text);
-  for (EventLabel l : {EventLabel::undefined, EventLabel::fixation, EventLabel::saccade, EventLabel::pso, EventLabel::pursuit,
-                       EventLabel::blink})
+  for (EventLabel l :
+       {EventLabel::undefined, EventLabel::fixation, EventLabel::saccade, EventLabel::pso, EventLabel::pursuit, EventLabel::blink})
     if (text == to_string(l)) return l;
   if (const auto v = text::to_number(text); v && *v == std::floor(*v) && *v >= 0 && *v <= 5) return static_cast<EventLabel>(*v);
   return std::nullopt;

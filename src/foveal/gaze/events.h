@@ -25,8 +25,8 @@
 namespace foveal {
 
 enum class EventLabel : uint8_t { undefined = 0, fixation, saccade, pso, pursuit, blink };
-inline constexpr std::array<EventLabel, 5> kEventClasses{EventLabel::fixation, EventLabel::saccade, EventLabel::pso,
-                                                         EventLabel::pursuit, EventLabel::blink};
+inline constexpr std::array<EventLabel, 5> kEventClasses{EventLabel::fixation, EventLabel::saccade, EventLabel::pso, EventLabel::pursuit,
+                                                         EventLabel::blink};
 const char* to_string(EventLabel label);
 // A label's name (fixation, saccade, pso, pursuit, blink, undefined) or its number in the coding
 // of Zemblys et al. 2018 (1 fixation, 2 saccade, 3 PSO, 4 pursuit, 5 blink, 0 undefined).
@@ -62,19 +62,18 @@ struct ClassScore {
   size_t reference_samples = 0, test_samples = 0;
   double kappa = 0;  // sample level, this class against the rest (NaN when neither stream has it)
   size_t reference_events = 0, test_events = 0, hits = 0, misses = 0, false_alarms = 0;
-  double f1 = 0;       // event level (NaN when neither stream has an event of the class)
-  double rto_ms = 0;   // mean onset difference of the hits (test − reference)
-  double rtd_ms = 0;   // mean duration difference of the hits (test − reference)
+  double f1 = 0;      // event level (NaN when neither stream has an event of the class)
+  double rto_ms = 0;  // mean onset difference of the hits (test − reference)
+  double rtd_ms = 0;  // mean duration difference of the hits (test − reference)
 };
 struct Evaluation {
   size_t samples = 0;
-  double kappa = 0;     // sample level, all classes at once (Cohen's kappa of the two labellings)
-  double accuracy = 0;  // share of samples labelled alike
+  double kappa = 0;                 // sample level, all classes at once (Cohen's kappa of the two labellings)
+  double accuracy = 0;              // share of samples labelled alike
   std::vector<ClassScore> classes;  // kEventClasses order
   const ClassScore& of(EventLabel label) const;
 };
 // `test` against `reference` (same length, same sample times `t_s`).
-Evaluation evaluate_labels(const std::vector<EventLabel>& test, const std::vector<EventLabel>& reference,
-                           const std::vector<double>& t_s);
+Evaluation evaluate_labels(const std::vector<EventLabel>& test, const std::vector<EventLabel>& reference, const std::vector<double>& t_s);
 
 }  // namespace foveal

@@ -15,8 +15,11 @@ namespace {
 std::vector<EventLabel> labels(const std::string& code) {  // F fixation, S saccade, P pso, B blink, U undefined
   std::vector<EventLabel> out;
   for (char c : code)
-    out.push_back(c == 'F' ? EventLabel::fixation : c == 'S' ? EventLabel::saccade : c == 'P' ? EventLabel::pso
-                  : c == 'B' ? EventLabel::blink : EventLabel::undefined);
+    out.push_back(c == 'F'   ? EventLabel::fixation
+                  : c == 'S' ? EventLabel::saccade
+                  : c == 'P' ? EventLabel::pso
+                  : c == 'B' ? EventLabel::blink
+                             : EventLabel::undefined);
   return out;
 }
 
@@ -78,13 +81,13 @@ TEST(Events, LabelFilesAndTheirErrors) {
   EXPECT_EQ(f.label[0], EventLabel::fixation);
   EXPECT_EQ(f.label[1], EventLabel::saccade);
   EXPECT_EQ(f.label[2], EventLabel::pso);
-  for (const auto& [text, needle] : std::vector<std::pair<std::string, std::string>>{
-           {"t,label\n0,1\n0.001,jump\n", "f.csv:3: unknown label 'jump'"},
-           {"t,label\n0,9\n", "f.csv:2: unknown label '9'"},
-           {"t,kind\n0,1\n", "f.csv:1: the header needs"},
-           {"t,label\n0.1,1\n0.0,1\n", "f.csv:3: time goes back"},
-           {"t,label\n0,1,3\n", "f.csv:2: 3 fields, expected 2"},
-           {"t,label\n", "f.csv: no labelled samples"}}) {
+  for (const auto& [text, needle] :
+       std::vector<std::pair<std::string, std::string>>{{"t,label\n0,1\n0.001,jump\n", "f.csv:3: unknown label 'jump'"},
+                                                        {"t,label\n0,9\n", "f.csv:2: unknown label '9'"},
+                                                        {"t,kind\n0,1\n", "f.csv:1: the header needs"},
+                                                        {"t,label\n0.1,1\n0.0,1\n", "f.csv:3: time goes back"},
+                                                        {"t,label\n0,1,3\n", "f.csv:2: 3 fields, expected 2"},
+                                                        {"t,label\n", "f.csv: no labelled samples"}}) {
     try {
       parse_label_file(text, "f.csv");
       ADD_FAILURE() << "accepted: " << text;

@@ -49,7 +49,7 @@ Recording parse_eyelink_asc(const std::string& content, const std::string& name,
   std::string_view line;
   bool in_block = false, saw_left = false, saw_right = false, display_coords = false;
   size_t block_line = 0;  // where the open block started
-  glm::dvec2 origin{0};  // top-left of DISPLAY_COORDS
+  glm::dvec2 origin{0};   // top-left of DISPLAY_COORDS
   BlockLayout layout;
   std::vector<GazeEvent> fix[2], blink[2];  // per eye: 0 left, 1 right
   double previous = -INFINITY;
@@ -73,7 +73,8 @@ Recording parse_eyelink_asc(const std::string& content, const std::string& name,
              eyes == 2 ? ", x, y, pupil for each eye" : ", x, y, pupil");
       GazeSample s;
       s.t_s = num(f[0], "sample time") / 1000.0;  // EyeLink time stamps are milliseconds
-      if (s.t_s < previous) fail("{}: time {} ms is before the previous sample's {} ms (time must not go backwards)", where(), f[0], previous * 1000);
+      if (s.t_s < previous)
+        fail("{}: time {} ms is before the previous sample's {} ms (time must not go backwards)", where(), f[0], previous * 1000);
       previous = s.t_s;
       glm::dvec2 eye_px[2]{glm::dvec2(NAN), glm::dvec2(NAN)};
       float eye_pupil[2]{NAN, NAN};
@@ -89,15 +90,23 @@ Recording parse_eyelink_asc(const std::string& content, const std::string& name,
       }
       const bool ok[2] = {std::isfinite(eye_px[0].x), std::isfinite(eye_px[1].x)};
       switch (o.eye) {
-        case EyeSelection::left: s.px = layout.left ? eye_px[0] : eye_px[1]; break;
-        case EyeSelection::right: s.px = layout.right ? eye_px[1] : eye_px[0]; break;
+        case EyeSelection::left:
+          s.px = layout.left ? eye_px[0] : eye_px[1];
+          break;
+        case EyeSelection::right:
+          s.px = layout.right ? eye_px[1] : eye_px[0];
+          break;
         case EyeSelection::average:
           s.px = ok[0] && ok[1] ? 0.5 * (eye_px[0] + eye_px[1]) : ok[0] ? eye_px[0] : eye_px[1];
           break;
       }
       switch (o.eye) {  // the pupil of the eye the point came from (average: of both where both were seen)
-        case EyeSelection::left: s.pupil = layout.left ? eye_pupil[0] : eye_pupil[1]; break;
-        case EyeSelection::right: s.pupil = layout.right ? eye_pupil[1] : eye_pupil[0]; break;
+        case EyeSelection::left:
+          s.pupil = layout.left ? eye_pupil[0] : eye_pupil[1];
+          break;
+        case EyeSelection::right:
+          s.pupil = layout.right ? eye_pupil[1] : eye_pupil[0];
+          break;
         case EyeSelection::average:
           s.pupil = ok[0] && ok[1] ? 0.5f * (eye_pupil[0] + eye_pupil[1]) : ok[0] ? eye_pupil[0] : eye_pupil[1];
           break;
@@ -156,8 +165,7 @@ Recording parse_eyelink_asc(const std::string& content, const std::string& name,
       const double left = num(f[3], "screen left"), top = num(f[4], "screen top"), right = num(f[5], "screen right"),
                    bottom = num(f[6], "screen bottom");
       const glm::dvec2 size{right - left + 1, bottom - top + 1};
-      if (!(size.x >= 1 && size.y >= 1 && size.x <= 65536 && size.y <= 65536))
-        fail("{}: {} gives an empty or huge screen", where(), f[2]);
+      if (!(size.x >= 1 && size.y >= 1 && size.x <= 65536 && size.y <= 65536)) fail("{}: {} gives an empty or huge screen", where(), f[2]);
       r.screen_px = glm::ivec2(glm::round(size));
       origin = {left, top};
       r.screen_from_file = true;

@@ -23,9 +23,7 @@ bool inside(double dt, double limit) { return dt < limit - kTimeTolerance_s; }  
 // Geometry
 
 GazeGeometry::GazeGeometry(const Display& display, glm::ivec2 screen_px)
-    : screen_(screen_px),
-      cm_per_px_(display.width_cm / screen_px.x, display.height_cm / screen_px.y),
-      distance_cm_(display.distance_cm) {
+    : screen_(screen_px), cm_per_px_(display.width_cm / screen_px.x, display.height_cm / screen_px.y), distance_cm_(display.distance_cm) {
   if (screen_px.x < 1 || screen_px.y < 1) fail("gaze screen must be at least 1x1 pixels");
 }
 
@@ -36,9 +34,7 @@ glm::dvec3 GazeGeometry::direction(glm::dvec2 px) const {
 
 glm::dvec3 GazeGeometry::direction(const GazeSample& s) const { return s.direction ? *s.direction : direction(s.px); }
 
-glm::dvec2 GazeGeometry::angles_deg(glm::dvec3 d) {
-  return glm::degrees(glm::dvec2(std::atan2(d.x, d.z), std::atan2(d.y, d.z)));
-}
+glm::dvec2 GazeGeometry::angles_deg(glm::dvec3 d) { return glm::degrees(glm::dvec2(std::atan2(d.x, d.z), std::atan2(d.y, d.z))); }
 
 double GazeGeometry::pixels_per_degree() const {
   return screen_.x / glm::degrees(2 * std::atan(0.5 * screen_.x * cm_per_px_.x / distance_cm_));
@@ -51,10 +47,14 @@ double angle_between_deg(glm::dvec3 a, glm::dvec3 b) {
 
 const char* to_string(FixationMethod m) {
   switch (m) {
-    case FixationMethod::mean: return "mean";
-    case FixationMethod::ivt: return "ivt";
-    case FixationMethod::idt: return "idt";
-    case FixationMethod::ivvt: return "ivvt";
+    case FixationMethod::mean:
+      return "mean";
+    case FixationMethod::ivt:
+      return "ivt";
+    case FixationMethod::idt:
+      return "idt";
+    case FixationMethod::ivvt:
+      return "ivvt";
   }
   return "?";
 }
@@ -78,8 +78,8 @@ void validate(const FixationParams& p) {
   require_non_negative(p.min_duration_s, "min_duration_s");
   validate(p.pursuit);
   if (!(p.pursuit.velocity_deg_s < p.velocity_threshold_deg_s))
-    fail("pursuit_velocity_deg_s: must be below the saccade threshold velocity_threshold_deg_s ({} deg/s), got {}", p.velocity_threshold_deg_s,
-         p.pursuit.velocity_deg_s);
+    fail("pursuit_velocity_deg_s: must be below the saccade threshold velocity_threshold_deg_s ({} deg/s), got {}",
+         p.velocity_threshold_deg_s, p.pursuit.velocity_deg_s);
 }
 
 void validate(const PursuitParams& p) {
@@ -212,9 +212,12 @@ FixationResult detect_ivt(const Recording& r, const GazeGeometry& g, const Fixat
     while (hi + 1 < n && prep.run[hi + 1] == prep.run[i] && inside(s[hi + 1].t_s - s[i].t_s, half)) ++hi;
     size_t a = lo, b = hi;
     if (a == b) {  // the window holds this sample only: use its neighbours in the run
-      if (i + 1 < n && prep.run[i + 1] == prep.run[i]) b = i + 1;
-      else if (i > 0 && prep.run[i - 1] == prep.run[i]) a = i - 1;
-      else continue;
+      if (i + 1 < n && prep.run[i + 1] == prep.run[i])
+        b = i + 1;
+      else if (i > 0 && prep.run[i - 1] == prep.run[i])
+        a = i - 1;
+      else
+        continue;
     }
     const double dt = s[b].t_s - s[a].t_s;
     if (dt <= 0) continue;
@@ -382,9 +385,15 @@ void FixationTracker::push(const GazeSample& s) {
       ++frame_count_;
       in_fixation_ = true;
       break;
-    case FixationMethod::ivt: push_ivt(e); break;
-    case FixationMethod::idt: push_idt(e); break;
-    case FixationMethod::ivvt: push_ivvt(e); break;
+    case FixationMethod::ivt:
+      push_ivt(e);
+      break;
+    case FixationMethod::idt:
+      push_idt(e);
+      break;
+    case FixationMethod::ivvt:
+      push_ivvt(e);
+      break;
   }
 }
 

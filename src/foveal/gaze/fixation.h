@@ -101,8 +101,7 @@ struct Agreement {
   double reference_fraction = 0;  // fraction the reference calls fixation
 };
 // `is_fixation[i]` for each sample against "sample i lies inside one of `events`".
-Agreement agreement_with_events(const Recording& recording, const std::vector<bool>& is_fixation,
-                                const std::vector<GazeEvent>& events);
+Agreement agreement_with_events(const Recording& recording, const std::vector<bool>& is_fixation, const std::vector<GazeEvent>& events);
 std::vector<bool> fixation_mask(const FixationResult& result);
 
 // A causal filter: samples go in, in time order, as they would arrive from a tracker; the output
@@ -166,11 +165,11 @@ class FixationTracker {
   double candidate_start_ = 0;
   glm::dvec2 lo_{0}, hi_{0};  // idt: angular bounds of an established fixation
   // ivvt
-  std::deque<Entry> line_;    // the pursuit window's samples
+  std::deque<Entry> line_;  // the pursuit window's samples
   bool in_pursuit_ = false;
   double pursuit_start_t_ = NAN;  // the current run of pursuit-fast samples: its start …
   glm::dvec3 pursuit_start_dir_{0};
-  double pursuit_distance_ = 0;    // … and the sum of its speeds × intervals (the distance implied)
+  double pursuit_distance_ = 0;  // … and the sum of its speeds × intervals (the distance implied)
   double pursuit_last_t_ = NAN;
 };
 

@@ -110,7 +110,7 @@ TEST(Fixation, IvtGapFillMergeAndDiscard) {
 TEST(Fixation, MedianWindowRemovesASingleSampleSpike) {
   const GazeGeometry g(kDisplay, {1680, 1050});
   Recording r = synthetic({{800, 500}}, {0.400}, nullptr);
-  r.samples[100].px += glm::dvec2(120, 0);  // one 3° outlier in the middle of the fixation
+  r.samples[100].px += glm::dvec2(120, 0);               // one 3° outlier in the middle of the fixation
   EXPECT_EQ(detect_idt(r, g, {}).fixations.size(), 2u);  // the dispersion breaks at the spike
   FixationParams median;
   median.median_window = 3;
@@ -143,7 +143,7 @@ TEST(Fixation, AgreementAndKappaAtKnownValues) {
     r.samples.push_back(s);
   }
   r.samples.push_back(GazeSample{10, glm::dvec2(NAN), 0, false, {}});  // invalid: not compared
-  const std::vector<GazeEvent> reference{{0, 4.5, {}}};                  // samples 0..4
+  const std::vector<GazeEvent> reference{{0, 4.5, {}}};                // samples 0..4
   const std::vector<bool> filter{true, true, true, true, false, false, false, false, false, false, true};
   const Agreement a = agreement_with_events(r, filter, reference);
   EXPECT_EQ(a.samples, 10u);
@@ -331,10 +331,11 @@ TEST(Fixation, ShiftingTheClockChangesNoLabel) {
 // of a fixation's mean).
 TEST(Fixation, IvvtFindsNoPursuitInFixationTasks) {
   const std::string data = std::string(FOVEAL_DATA_DIR);
-  const std::vector<std::pair<std::string, Display>> cases = {{data + "/gaze/eyelink/monoRemote500.asc", {47.5, 30, 60, 0, 0}},
-                                                              {data + "/gaze/eyelink/bino1000.asc", {47.5, 30, 60, 0, 0}},
-                                                              {data + "/eye-movements/irf/lookAtPoint_EL_S2.csv", {53.3, 30.1, 56.5, 1920, 1080}},
-                                                              {data + "/eye-movements/irf/lookAtPoint_EL_S5.csv", {53.3, 30.1, 56.5, 1920, 1080}}};
+  const std::vector<std::pair<std::string, Display>> cases = {
+      {data + "/gaze/eyelink/monoRemote500.asc", {47.5, 30, 60, 0, 0}},
+      {data + "/gaze/eyelink/bino1000.asc", {47.5, 30, 60, 0, 0}},
+      {data + "/eye-movements/irf/lookAtPoint_EL_S2.csv", {53.3, 30.1, 56.5, 1920, 1080}},
+      {data + "/eye-movements/irf/lookAtPoint_EL_S5.csv", {53.3, 30.1, 56.5, 1920, 1080}}};
   bool any = false;
   for (const auto& [path, display] : cases) {
     if (!std::filesystem::exists(path)) continue;
@@ -356,8 +357,8 @@ TEST(Fixation, IvvtFindsNoPursuitInFixationTasks) {
       pursuit += ivvt.in_pursuit();
       same += ivvt.current() && ivt.current() && angle_between_deg(g.direction(*ivvt.current()), g.direction(*ivt.current())) < 0.1;
     }
-    std::printf("%s: %.2f %% of valid samples pursuit, %.2f %% with the fovea within 0.1 deg of I-VT's\n", path.c_str(), 100.0 * pursuit / valid,
-                100.0 * same / valid);
+    std::printf("%s: %.2f %% of valid samples pursuit, %.2f %% with the fovea within 0.1 deg of I-VT's\n", path.c_str(),
+                100.0 * pursuit / valid, 100.0 * same / valid);
     EXPECT_LT(pursuit, valid / 200) << path;
     EXPECT_GT(same, valid * 9 / 10) << path;
   }

@@ -13,11 +13,16 @@ namespace foveal {
 
 const char* to_string(GazeFormat format) {
   switch (format) {
-    case GazeFormat::automatic: return "auto";
-    case GazeFormat::asc: return "asc";
-    case GazeFormat::pupil: return "pupil";
-    case GazeFormat::tobii: return "tobii";
-    case GazeFormat::csv: return "csv";
+    case GazeFormat::automatic:
+      return "auto";
+    case GazeFormat::asc:
+      return "asc";
+    case GazeFormat::pupil:
+      return "pupil";
+    case GazeFormat::tobii:
+      return "tobii";
+    case GazeFormat::csv:
+      return "csv";
   }
   return "?";
 }
@@ -39,9 +44,7 @@ size_t Recording::valid_count() const {
   return static_cast<size_t>(std::count_if(samples.begin(), samples.end(), [](const GazeSample& s) { return s.valid; }));
 }
 
-double Recording::duration_s() const {
-  return samples.size() < 2 ? 0.0 : samples.back().t_s - samples.front().t_s;
-}
+double Recording::duration_s() const { return samples.size() < 2 ? 0.0 : samples.back().t_s - samples.front().t_s; }
 
 namespace {
 
@@ -108,8 +111,7 @@ GazeFormat detect_gaze_format(const std::string& text, const std::string& name) 
   if (has(first, "start_timestamp") && has(first, "filter_response"))
     fail("{}: this is Pupil's blinks.csv; give the gaze_positions.csv beside it", name);
   if (has(first, "LGazePos2dx") || has(first, "Recording timestamp") || has(first, "Gaze point X")) return GazeFormat::tobii;
-  if (head.rfind("**", 0) == 0 || has(head, "\nMSG\t") || has(head, "\nSTART\t") || head.rfind("MSG\t", 0) == 0)
-    return GazeFormat::asc;
+  if (head.rfind("**", 0) == 0 || has(head, "\nMSG\t") || has(head, "\nSTART\t") || head.rfind("MSG\t", 0) == 0) return GazeFormat::asc;
   const auto ext = std::filesystem::path(name).extension().string();
   if (ext == ".asc" || ext == ".ASC") return GazeFormat::asc;
   return GazeFormat::csv;
@@ -121,10 +123,18 @@ Recording parse_recording(const std::string& text, const std::string& name, cons
   const GazeFormat format = options.format == GazeFormat::automatic ? detect_gaze_format(text, name) : options.format;
   Recording r;
   switch (format) {
-    case GazeFormat::asc: r = parse_eyelink_asc(text, name, options); break;
-    case GazeFormat::pupil: r = parse_pupil_gaze(text, name, options); break;
-    case GazeFormat::tobii: r = parse_tobii(text, name, options); break;
-    default: r = parse_gaze_csv(text, name, options); break;
+    case GazeFormat::asc:
+      r = parse_eyelink_asc(text, name, options);
+      break;
+    case GazeFormat::pupil:
+      r = parse_pupil_gaze(text, name, options);
+      break;
+    case GazeFormat::tobii:
+      r = parse_tobii(text, name, options);
+      break;
+    default:
+      r = parse_gaze_csv(text, name, options);
+      break;
   }
   r.source = name;
   r.format = format;

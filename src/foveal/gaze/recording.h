@@ -26,12 +26,12 @@ GazeFormat parse_gaze_format(const std::string& name);  // throws Error for an u
 
 // One gaze sample.
 struct GazeSample {
-  double t_s = 0;          // tracker clock, seconds
-  glm::dvec2 px{NAN};      // screen pixels, origin top-left, y down; NaN when the tracker lost the eye
-  float confidence = 1;    // tracker's confidence in [0, 1] (1 where the format has none)
-  bool valid = false;      // finite point, confidence ≥ the minimum, not inside a blink
+  double t_s = 0;                       // tracker clock, seconds
+  glm::dvec2 px{NAN};                   // screen pixels, origin top-left, y down; NaN when the tracker lost the eye
+  float confidence = 1;                 // tracker's confidence in [0, 1] (1 where the format has none)
+  bool valid = false;                   // finite point, confidence ≥ the minimum, not inside a blink
   std::optional<glm::dvec3> direction;  // gaze direction where the tracker gives one (Pupil's gaze_point_3d)
-  float pupil = NAN;       // pupil size in the tracker's units (EyeLink area or diameter, a CSV's pupil column); NaN if none
+  float pupil = NAN;                    // pupil size in the tracker's units (EyeLink area or diameter, a CSV's pupil column); NaN if none
 };
 
 // An event of the tracker's own (EyeLink EFIX/EBLINK, Pupil fixations.csv/blinks.csv, Tobii Pro Lab).
@@ -52,11 +52,11 @@ struct ReadOptions {
   float min_confidence = 0.6f;       // Pupil's default: lower confidence → invalid sample
   EyeSelection eye = EyeSelection::average;
   // Plain CSV only
-  double csv_time_scale = 1;         // seconds per unit of the t column (s: 1, ms: 1e-3, us: 1e-6)
-  bool csv_normalised = false;       // x, y in [0, 1] of the screen instead of pixels
+  double csv_time_scale = 1;    // seconds per unit of the t column (s: 1, ms: 1e-3, us: 1e-6)
+  bool csv_normalised = false;  // x, y in [0, 1] of the screen instead of pixels
   bool csv_origin_bottom_left = false;
-  bool csv_degrees = false;          // x, y in degrees of visual angle from the screen centre (y up), mapped
-                                     // through the display below (also columns named x_deg, y_deg)
+  bool csv_degrees = false;  // x, y in degrees of visual angle from the screen centre (y up), mapped
+                             // through the display below (also columns named x_deg, y_deg)
   double display_width_cm = 47.5, display_height_cm = 30, display_distance_cm = 60;
   // Tracker events from side files (Pupil's fixations.csv / blinks.csv); empty → looked for beside the file
   std::string fixations_file, blinks_file;
@@ -65,21 +65,21 @@ struct ReadOptions {
 
 // A recording: samples in time order plus what the file says about itself.
 struct Recording {
-  std::string source;                 // path (or name given to parse_recording)
+  std::string source;  // path (or name given to parse_recording)
   GazeFormat format = GazeFormat::csv;
-  std::string tracker;                // "EyeLink", "Pupil Player export", …
-  std::vector<GazeSample> samples;    // time never decreases
-  std::vector<size_t> block_starts;   // index of each recording block's first sample (EyeLink START…END)
-  glm::ivec2 screen_px{0};            // screen the points are in
-  bool screen_from_file = false;      // the file stated the screen size
-  std::string eyes;                   // "left", "right", "binocular (average)", …
-  double nominal_rate_hz = 0;         // as the file states it (EyeLink RATE), else 0
-  std::vector<GazeEvent> fixations;   // the tracker's own fixations (empty if none)
-  std::vector<GazeEvent> blinks;      // the tracker's own blinks
-  bool has_tracker_fixations = false; // the format carries fixation events (even if there are none)
-  std::vector<std::string> notes;     // what the reader did beyond the obvious (side files read, …)
-  std::vector<std::string> warnings;  // what the user must hear (a block cut short: the file may be truncated);
-                                      // the commands print them on stderr, the data read stays usable
+  std::string tracker;                 // "EyeLink", "Pupil Player export", …
+  std::vector<GazeSample> samples;     // time never decreases
+  std::vector<size_t> block_starts;    // index of each recording block's first sample (EyeLink START…END)
+  glm::ivec2 screen_px{0};             // screen the points are in
+  bool screen_from_file = false;       // the file stated the screen size
+  std::string eyes;                    // "left", "right", "binocular (average)", …
+  double nominal_rate_hz = 0;          // as the file states it (EyeLink RATE), else 0
+  std::vector<GazeEvent> fixations;    // the tracker's own fixations (empty if none)
+  std::vector<GazeEvent> blinks;       // the tracker's own blinks
+  bool has_tracker_fixations = false;  // the format carries fixation events (even if there are none)
+  std::vector<std::string> notes;      // what the reader did beyond the obvious (side files read, …)
+  std::vector<std::string> warnings;   // what the user must hear (a block cut short: the file may be truncated);
+                                       // the commands print them on stderr, the data read stays usable
 
   size_t valid_count() const;
   // Time from the first to the last sample, seconds.

@@ -153,7 +153,8 @@ TEST(Recording, MalformedInputNamesFileLineAndReason) {
       {"MSG\t1 nothing\n", "nosamples.asc", "nosamples.asc: no samples inside START"},
       {"gaze_timestamp,confidence,norm_pos_x,norm_pos_y\n1,0.9,0.5\n", "p.csv", "p.csv:2: 3 fields, but the header has 4"},
       {"gaze_timestamp,confidence,norm_pos_x\n1,0.9,0.5\n", "p2.csv", "p2.csv:1: missing column 'norm_pos_y'"},
-      {"gaze_timestamp,confidence,norm_pos_x,norm_pos_y\n1,high,0.5,0.5\n", "p3.csv", "p3.csv:2: column 'confidence': 'high' is not a number"},
+      {"gaze_timestamp,confidence,norm_pos_x,norm_pos_y\n1,high,0.5,0.5\n", "p3.csv",
+       "p3.csv:2: column 'confidence': 'high' is not a number"},
       {"Time\tLGazePos2dx\tLGazePos2dy\tLValidity\tRGazePos2dx\tRGazePos2dy\tRValidity\n1\t0.5\t0.5\t0\t0.5\n", "t.tsv",
        "t.tsv:2: 5 fields, but the header has 7"},
       {"id,start_timestamp,duration,dispersion\n", "fixations.csv", "this is Pupil's fixations.csv"},
@@ -200,7 +201,7 @@ TEST(Recording, RealEyeLinkBinocular) {
   o.eye = EyeSelection::left;
   const Recording r = read_recording(path, o);
   EXPECT_EQ(r.samples.size(), 3467u);
-  EXPECT_EQ(r.valid_count(), 3467u);  // "no missing"
+  EXPECT_EQ(r.valid_count(), 3467u);   // "no missing"
   EXPECT_EQ(r.fixations.size(), 12u);  // 24 EFIX, for the two eyes
   EXPECT_EQ(r.screen_px, glm::ivec2(1024, 768));
   EXPECT_NEAR(r.rate_hz(), 1000, 1);
@@ -280,8 +281,9 @@ TEST(Recording, ByteOrderMarkAndCrlfInEveryReader) {
   };
   const std::vector<std::pair<std::string, std::string>> files = {
       {"gaze_positions.csv", "gaze_timestamp,world_index,confidence,norm_pos_x,norm_pos_y\n10.0,1,0.9,0.25,0.75\n10.004,1,0.95,0.5,0.5\n"},
-      {"tobii.tsv", "Time\tLGazePos2dx\tLGazePos2dy\tLValidity\tRGazePos2dx\tRGazePos2dy\tRValidity\n"
-                    "1000000\t0.4\t0.5\t0\t0.6\t0.5\t0\n1003333\t0.4\t0.5\t0\t0.6\t0.4\t0\n"},
+      {"tobii.tsv",
+       "Time\tLGazePos2dx\tLGazePos2dy\tLValidity\tRGazePos2dx\tRGazePos2dy\tRValidity\n"
+       "1000000\t0.4\t0.5\t0\t0.6\t0.5\t0\n1003333\t0.4\t0.5\t0\t0.6\t0.4\t0\n"},
       {"plain.csv", "t,x,y\n0.0,10,20\n0.1,11,21\n"},
       {"rec.asc", kAsc},
   };
@@ -293,7 +295,8 @@ TEST(Recording, ByteOrderMarkAndCrlfInEveryReader) {
     }
   }
   // Pupil's side files
-  const std::string fixations = "id,start_timestamp,duration,start_frame_index,end_frame_index,norm_pos_x,norm_pos_y\n1,10.0,200,1,5,0.5,0.5\n";
+  const std::string fixations =
+      "id,start_timestamp,duration,start_frame_index,end_frame_index,norm_pos_x,norm_pos_y\n1,10.0,200,1,5,0.5,0.5\n";
   const std::string blinks = "id,start_timestamp,duration,end_timestamp\n1,11.0,0.3,11.3\n";
   for (const std::string& v : variants(fixations)) EXPECT_EQ(parse_pupil_fixations(v, "fixations.csv", {1000, 500}).size(), 1u);
   for (const std::string& v : variants(blinks)) EXPECT_EQ(parse_pupil_blinks(v, "blinks.csv").size(), 1u);

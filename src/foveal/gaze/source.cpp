@@ -16,11 +16,16 @@ namespace foveal {
 
 const char* to_string(SourceState s) {
   switch (s) {
-    case SourceState::waiting: return "waiting";
-    case SourceState::live: return "live";
-    case SourceState::stale: return "stale";
-    case SourceState::disconnected: return "disconnected";
-    case SourceState::ended: return "ended";
+    case SourceState::waiting:
+      return "waiting";
+    case SourceState::live:
+      return "live";
+    case SourceState::stale:
+      return "stale";
+    case SourceState::disconnected:
+      return "disconnected";
+    case SourceState::ended:
+      return "ended";
   }
   return "?";
 }
@@ -99,11 +104,15 @@ const msgpack::object* field(const msgpack::object& map, std::string_view key) {
 std::optional<double> number(const msgpack::object* o) {
   if (!o) return std::nullopt;
   switch (o->type) {
-    case msgpack::type::POSITIVE_INTEGER: return static_cast<double>(o->via.u64);
-    case msgpack::type::NEGATIVE_INTEGER: return static_cast<double>(o->via.i64);
+    case msgpack::type::POSITIVE_INTEGER:
+      return static_cast<double>(o->via.u64);
+    case msgpack::type::NEGATIVE_INTEGER:
+      return static_cast<double>(o->via.i64);
     case msgpack::type::FLOAT32:
-    case msgpack::type::FLOAT64: return std::isfinite(o->via.f64) ? std::optional<double>(o->via.f64) : std::nullopt;
-    default: return std::nullopt;
+    case msgpack::type::FLOAT64:
+      return std::isfinite(o->via.f64) ? std::optional<double>(o->via.f64) : std::nullopt;
+    default:
+      return std::nullopt;
   }
 }
 
@@ -181,8 +190,8 @@ struct PupilSource::Impl {
     std::vector<zmq::message_t> parts;
     if (!zmq::recv_multipart(sub, std::back_inserter(parts), zmq::recv_flags::dontwait)) return false;
     decoded.clear();
-    const bool ok = parts.size() >= 2 &&
-                    decode_pupil_message(parts[0].to_string(), parts[1].data(), parts[1].size(), screen, min_confidence, decoded);
+    const bool ok =
+        parts.size() >= 2 && decode_pupil_message(parts[0].to_string(), parts[1].data(), parts[1].size(), screen, min_confidence, decoded);
     const std::lock_guard lock(mutex);
     ++received;
     if (!ok) {
@@ -197,8 +206,7 @@ struct PupilSource::Impl {
   }
   // Every message there is now (until stopped).
   void drain(glm::ivec2 screen, float min_confidence, std::vector<GazeSample>& decoded) {
-    while (!stop.load() && read_one(screen, min_confidence, decoded)) {
-    }
+    while (!stop.load() && read_one(screen, min_confidence, decoded)) {}
   }
 
   void run(glm::ivec2 screen, float min_confidence) {
@@ -219,8 +227,7 @@ struct PupilSource::Impl {
               // What the tracker sent before it hung up is still on its way to this socket: read it
               // all (until 50 ms pass without a message), so that a caller that sees
               // `disconnected` and then polls has every sample
-              while (!stop.load() && zmq::poll(sub_only, 1, std::chrono::milliseconds(50)) > 0)
-                drain(screen, min_confidence, decoded);
+              while (!stop.load() && zmq::poll(sub_only, 1, std::chrono::milliseconds(50)) > 0) drain(screen, min_confidence, decoded);
               const std::lock_guard lock(mutex);
               disconnected = true;
             } else if (id == ZMQ_EVENT_CONNECTED) {
@@ -255,8 +262,8 @@ PupilSource::PupilSource(const std::string& url, glm::ivec2 screen_px, float min
       fail("{}: cannot send to Pupil Remote at {} within {:g} s", url, remote, u.timeout_s);
     zmq::message_t reply;
     if (!req.recv(reply, zmq::recv_flags::none))
-      fail("{}: Pupil Remote at {} did not answer SUB_PORT within {:g} s (is Pupil Capture running with Pupil Remote on that port?)",
-           url, remote, u.timeout_s);
+      fail("{}: Pupil Remote at {} did not answer SUB_PORT within {:g} s (is Pupil Capture running with Pupil Remote on that port?)", url,
+           remote, u.timeout_s);
     sub_port = reply.to_string();
   } catch (const zmq::error_t& e) {
     fail("{}: cannot reach Pupil Remote at {}: {}", url, remote, e.what());

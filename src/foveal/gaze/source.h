@@ -47,7 +47,7 @@ class GazeSource {
 struct PupilUrl {
   std::string host = "127.0.0.1";
   int port = 50020;
-  std::string surface;         // empty: world-camera gaze
+  std::string surface;  // empty: world-camera gaze
   double timeout_s = 2.0;
   double stale_s = 0.5;
   std::string topic() const { return surface.empty() ? "gaze." : "surfaces." + surface; }
@@ -84,8 +84,8 @@ class PupilSource final : public GazeSource {
 };
 
 // Decode one Pupil message (topic + msgpack payload) into samples; false if it is malformed.
-bool decode_pupil_message(const std::string& topic, const void* payload, size_t size, glm::ivec2 screen_px,
-                          float min_confidence, std::vector<GazeSample>& out);
+bool decode_pupil_message(const std::string& topic, const void* payload, size_t size, glm::ivec2 screen_px, float min_confidence,
+                          std::vector<GazeSample>& out);
 
 // A recording played back in real time (optionally faster or slower): poll() returns the samples
 // whose time, counted from the first, has passed on the clock.

@@ -52,8 +52,8 @@ TEST(Source, PupilUrls) {
   EXPECT_DOUBLE_EQ(u.stale_s, 0.25);
   EXPECT_EQ(parse_pupil_url("pupil://localhost").port, 50020);
   EXPECT_EQ(parse_pupil_url("pupil://localhost").topic(), "gaze.");
-  for (const char* bad : {"http://x:1", "pupil://:50020", "pupil://h:99999", "pupil://h:12?colour=red", "pupil://h:1?timeout=-1",
-                          "pupil://h:1?surface="})
+  for (const char* bad :
+       {"http://x:1", "pupil://:50020", "pupil://h:99999", "pupil://h:12?colour=red", "pupil://h:1?timeout=-1", "pupil://h:1?surface="})
     EXPECT_THROW(parse_pupil_url(bad), Error) << bad;
 }
 
@@ -67,7 +67,7 @@ TEST(Source, DecodesPupilMessages) {
   EXPECT_TRUE(out[0].valid);
   const std::string off = surface_gaze(0.5, 0.5, false, 1);
   ASSERT_TRUE(decode_pupil_message("surfaces.screen", off.data(), off.size(), {1000, 500}, 0.6f, out));
-  EXPECT_FALSE(out.back().valid);  // off the surface: held, not followed
+  EXPECT_FALSE(out.back().valid);           // off the surface: held, not followed
   const std::string junk = "\x93\x01\x02";  // a msgpack array, not a dict
   EXPECT_FALSE(decode_pupil_message("gaze.", junk.data(), junk.size(), {1000, 500}, 0.6f, out));
   EXPECT_FALSE(decode_pupil_message("gaze.", "\xc1", 1, {1000, 500}, 0.6f, out));  // never-used byte
@@ -206,7 +206,7 @@ TEST(Source, AbsurdGazeIsInvalidAndCounted) {
   std::vector<std::pair<std::string, std::string>> messages;
   for (int i = 0; i < 60; ++i)
     messages.emplace_back("surfaces.screen", i == 30 ? surface_gaze(1e30, -5, true, 0.004 * i) : surface_gaze(0.5, 0.5, true, 0.004 * i));
-  messages.emplace_back("surfaces.screen", surface_gaze(-1.5, 0.5, true, 0.24));  // one screen and a half to the left
+  messages.emplace_back("surfaces.screen", surface_gaze(-1.5, 0.5, true, 0.24));   // one screen and a half to the left
   messages.emplace_back("surfaces.screen", surface_gaze(1.9, -0.9, true, 0.244));  // off the screen, within one screen: kept
   fake.serve(messages, false, nullptr);
   PupilSource source(fake.url("surface=screen&timeout=3"), {1000, 500});

@@ -22,20 +22,28 @@ StepFixations parse_step_fixations(const std::string& name) {
 
 const char* to_string(StepFixations source) {
   switch (source) {
-    case StepFixations::nhp: return "nhp";
-    case StepFixations::ivt: return "ivt";
-    case StepFixations::idt: return "idt";
-    case StepFixations::tracker: return "tracker";
+    case StepFixations::nhp:
+      return "nhp";
+    case StepFixations::ivt:
+      return "ivt";
+    case StepFixations::idt:
+      return "idt";
+    case StepFixations::tracker:
+      return "tracker";
   }
   return "?";
 }
 
 FixationMethod live_filter(StepFixations source) {
   switch (source) {
-    case StepFixations::nhp: return FixationMethod::ivvt;
-    case StepFixations::ivt: return FixationMethod::ivt;
-    case StepFixations::idt: return FixationMethod::idt;
-    case StepFixations::tracker: break;
+    case StepFixations::nhp:
+      return FixationMethod::ivvt;
+    case StepFixations::ivt:
+      return FixationMethod::ivt;
+    case StepFixations::idt:
+      return FixationMethod::idt;
+    case StepFixations::tracker:
+      break;
   }
   fail("fixation: a live tracker sends gaze, not fixation events: use nhp, ivt or idt");
 }
@@ -87,8 +95,7 @@ std::vector<GazeStep> recording_steps(const Recording& r, const GazeGeometry& ge
     }
     case StepFixations::ivt:
     case StepFixations::idt: {
-      const FixationResult result =
-          source == StepFixations::ivt ? detect_ivt(r, geometry, params) : detect_idt(r, geometry, params);
+      const FixationResult result = source == StepFixations::ivt ? detect_ivt(r, geometry, params) : detect_idt(r, geometry, params);
       for (const Fixation& f : result.fixations) fixations.push_back({f.start_s, f.end_s, f.px});
       break;
     }
@@ -99,7 +106,7 @@ std::vector<GazeStep> recording_steps(const Recording& r, const GazeGeometry& ge
       fixations = r.fixations;
       break;
   }
-  const std::vector<GazeEvent> blinks = !r.blinks.empty()             ? r.blinks
+  const std::vector<GazeEvent> blinks = !r.blinks.empty()              ? r.blinks
                                         : source == StepFixations::nhp ? detected_blinks
                                                                        : invalid_gap_blinks(r.samples);
   std::vector<GazeStep> steps;

@@ -27,10 +27,10 @@ const char* to_string(StepFixations source);
 FixationMethod live_filter(StepFixations source);
 
 struct GazeStep {
-  glm::dvec2 screen_px{0};     // fixation centre, the recording's screen pixels
-  double start_s = 0;          // tracker clock, seconds
-  double duration_s = 0;       // 0 for live fixations (not over yet when the step runs)
-  bool blink_before = false;   // the eye blinked since the previous fixation
+  glm::dvec2 screen_px{0};    // fixation centre, the recording's screen pixels
+  double start_s = 0;         // tracker clock, seconds
+  double duration_s = 0;      // 0 for live fixations (not over yet when the step runs)
+  bool blink_before = false;  // the eye blinked since the previous fixation
 };
 
 // A pursuit becomes a step every this long.

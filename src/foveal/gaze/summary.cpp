@@ -49,9 +49,8 @@ GazeSummary summarize_recording(const Recording& r, const Display& display, cons
     double total = 0;
     for (const Fixation& x : f.result.fixations) total += x.duration_s();
     f.mean_duration_ms = f.result.fixations.empty() ? 0 : 1000 * total / f.result.fixations.size();
-    nlohmann::json j = {{"count", f.result.fixations.size()},
-                        {"mean_duration_ms", f.mean_duration_ms},
-                        {"fixation_fraction", f.fixation_fraction}};
+    nlohmann::json j = {
+        {"count", f.result.fixations.size()}, {"mean_duration_ms", f.mean_duration_ms}, {"fixation_fraction", f.fixation_fraction}};
     if (r.has_tracker_fixations) {
       f.agreement = agreement_with_events(r, mask, r.fixations);
       f.causal_agreement = agreement_with_events(r, causal_fixation_mask(r, m, params, geometry), r.fixations);
@@ -64,13 +63,13 @@ GazeSummary summarize_recording(const Recording& r, const Display& display, cons
     out.filters.push_back(std::move(f));
   }
   const nlohmann::json parameters = {{"ivt_threshold_deg_s", params.velocity_threshold_deg_s},
-                             {"velocity_window_ms", params.velocity_window_s * 1000},
-                             {"gap_fill_ms", params.gap_fill_s * 1000},
-                             {"merge_gap_ms", params.merge_gap_s * 1000},
-                             {"merge_angle_deg", params.merge_angle_deg},
-                             {"min_fixation_ms", params.min_fixation_s * 1000},
-                             {"idt_dispersion_deg", params.dispersion_deg},
-                             {"idt_min_duration_ms", params.min_duration_s * 1000}};
+                                     {"velocity_window_ms", params.velocity_window_s * 1000},
+                                     {"gap_fill_ms", params.gap_fill_s * 1000},
+                                     {"merge_gap_ms", params.merge_gap_s * 1000},
+                                     {"merge_angle_deg", params.merge_angle_deg},
+                                     {"min_fixation_ms", params.min_fixation_s * 1000},
+                                     {"idt_dispersion_deg", params.dispersion_deg},
+                                     {"idt_min_duration_ms", params.min_duration_s * 1000}};
   const size_t valid = r.valid_count();
   out.json = {{"format", to_string(r.format)},
               {"source", r.source},
@@ -100,15 +99,14 @@ GazeSummary summarize_recording(const Recording& r, const Display& display, cons
 std::string format_summary(const Recording& r, const GazeSummary& s) {
   const auto& j = s.json;
   std::string out = fmt::format("foveal gaze: {} — {}, {}\n", r.source, r.tracker, r.eyes);
-  out += fmt::format("  samples   {} ({:.1f}% valid), {:.1f} Hz{}, {:.2f} s", r.samples.size(),
-                     100 * j["valid_fraction"].get<double>(), r.rate_hz(),
-                     r.nominal_rate_hz > 0 ? fmt::format(" (file: {:g} Hz)", r.nominal_rate_hz) : "", r.duration_s());
+  out += fmt::format("  samples   {} ({:.1f}% valid), {:.1f} Hz{}, {:.2f} s", r.samples.size(), 100 * j["valid_fraction"].get<double>(),
+                     r.rate_hz(), r.nominal_rate_hz > 0 ? fmt::format(" (file: {:g} Hz)", r.nominal_rate_hz) : "", r.duration_s());
   if (r.block_starts.size() > 1) out += fmt::format(" in {} blocks ({:.2f} s recorded)", r.block_starts.size(), r.recorded_s());
   out += "\n";
-  out += fmt::format("  screen    {}x{} px ({}), display {:g}x{:g} cm at {:g} cm: {:.1f} px/deg\n", r.screen_px.x, r.screen_px.y,
-                     r.screen_from_file ? "from the file" : "assumed: --screen / --display", j["display"]["width_cm"].get<double>(),
-                     j["display"]["height_cm"].get<double>(), j["display"]["distance_cm"].get<double>(),
-                     j["pixels_per_degree"].get<double>());
+  out +=
+      fmt::format("  screen    {}x{} px ({}), display {:g}x{:g} cm at {:g} cm: {:.1f} px/deg\n", r.screen_px.x, r.screen_px.y,
+                  r.screen_from_file ? "from the file" : "assumed: --screen / --display", j["display"]["width_cm"].get<double>(),
+                  j["display"]["height_cm"].get<double>(), j["display"]["distance_cm"].get<double>(), j["pixels_per_degree"].get<double>());
   if (r.has_tracker_fixations || !r.blinks.empty())
     out += fmt::format("  tracker   {} fixations, {} blinks\n", r.fixations.size(), r.blinks.size());
   out += fmt::format("  {:<8}  {:>9}  {:>9}  {:>6}", "filter", "fixations", "mean dur", "fix %");

@@ -59,9 +59,8 @@ Recording parse_tobii(const std::string& content, const std::string& name, const
     r.tracker = "Tobii (SDK TSV)";
     r.eyes = o.eye == EyeSelection::average ? "binocular (average of valid eyes)" : o.eye == EyeSelection::left ? "left" : "right";
     r.screen_px = o.screen_px;
-    const size_t c_t = require("Time"), c_lx = require("LGazePos2dx"), c_ly = require("LGazePos2dy"),
-                 c_lv = require("LValidity"), c_rx = require("RGazePos2dx"), c_ry = require("RGazePos2dy"),
-                 c_rv = require("RValidity");
+    const size_t c_t = require("Time"), c_lx = require("LGazePos2dx"), c_ly = require("LGazePos2dy"), c_lv = require("LValidity"),
+                 c_rx = require("RGazePos2dx"), c_ry = require("RGazePos2dy"), c_rv = require("RValidity");
     while (lines.next(line)) {
       if (text::trim(line).empty()) continue;
       const auto f = fields_of(line);
@@ -84,8 +83,12 @@ Recording parse_tobii(const std::string& content, const std::string& name, const
       }
       const glm::dvec2 screen(r.screen_px);
       switch (o.eye) {
-        case EyeSelection::left: s.px = ok[0] ? eye[0] * screen : glm::dvec2(NAN); break;
-        case EyeSelection::right: s.px = ok[1] ? eye[1] * screen : glm::dvec2(NAN); break;
+        case EyeSelection::left:
+          s.px = ok[0] ? eye[0] * screen : glm::dvec2(NAN);
+          break;
+        case EyeSelection::right:
+          s.px = ok[1] ? eye[1] * screen : glm::dvec2(NAN);
+          break;
         case EyeSelection::average:
           s.px = ok[0] && ok[1] ? 0.5 * (eye[0] + eye[1]) * screen : ok[0] ? eye[0] * screen : ok[1] ? eye[1] * screen : glm::dvec2(NAN);
           break;
@@ -104,9 +107,9 @@ Recording parse_tobii(const std::string& content, const std::string& name, const
   const std::string& t_name = cols.names[c_t];
   const double t_scale = t_name.find("μs") != std::string::npos || t_name.find("us]") != std::string::npos ? 1e-6 : 1e-3;
   const auto c_vl = cols.find("Validity left"), c_vr = cols.find("Validity right"), c_sensor = cols.find("Sensor"),
-             c_type = cols.find("Eye movement type"), c_index = cols.find("Eye movement type index"),
-             c_fx = cols.find("Fixation point X"), c_fy = cols.find("Fixation point Y"),
-             c_w = cols.find("Recording resolution width"), c_h = cols.find("Recording resolution height");
+             c_type = cols.find("Eye movement type"), c_index = cols.find("Eye movement type index"), c_fx = cols.find("Fixation point X"),
+             c_fy = cols.find("Fixation point Y"), c_w = cols.find("Recording resolution width"),
+             c_h = cols.find("Recording resolution height");
   if (!c_type) r.has_tracker_fixations = false;
   r.screen_px = o.screen_px;
   std::string open_fixation;  // index of the fixation being read

@@ -63,12 +63,12 @@ glm::dmat3 from_rows(const Row9& m) {
 }
 
 // Smith & Pokorny cone fundamentals for the sRGB primaries (linear RGB → LMS)
-const glm::dmat3 kLmsFromRgb = from_rows({0.17885956, 0.43997117, 0.03596577, 0.03380394, 0.27515242, 0.03620635,
-                                          0.00031087, 0.00191661, 0.01528089});
+const glm::dmat3 kLmsFromRgb =
+    from_rows({0.17885956, 0.43997117, 0.03596577, 0.03380394, 0.27515242, 0.03620635, 0.00031087, 0.00191661, 0.01528089});
 const glm::dmat3 kRgbFromLms = glm::inverse(kLmsFromRgb);
 // IEC 61966-2-1: linear sRGB → CIE XYZ (D65)
-const glm::dmat3 kXyzFromRgb = from_rows({0.4124564, 0.3575761, 0.1804375, 0.2126729, 0.7151522, 0.0721750,
-                                          0.0193339, 0.1191920, 0.9503041});
+const glm::dmat3 kXyzFromRgb =
+    from_rows({0.4124564, 0.3575761, 0.1804375, 0.2126729, 0.7151522, 0.0721750, 0.0193339, 0.1191920, 0.9503041});
 
 // LMS of a monochromatic light from its CIE 1931 chromaticity (Y = 1)
 glm::dvec3 spectral_lms(double x, double y) {
@@ -79,9 +79,9 @@ glm::dvec3 spectral_lms(double x, double y) {
 // Brettel et al. 1997: the two half-planes of one dichromacy, each the plane through the origin,
 // the neutral stimulus E and an anchor, as its normal.
 struct Dichromat {
-  int missing;               // 0 = L, 1 = M, 2 = S
-  int num, den;              // the ratio LMS[num]/LMS[den] that chooses the half-plane
-  glm::dvec3 normal_below;   // used where the ratio is below E's
+  int missing;              // 0 = L, 1 = M, 2 = S
+  int num, den;             // the ratio LMS[num]/LMS[den] that chooses the half-plane
+  glm::dvec3 normal_below;  // used where the ratio is below E's
   glm::dvec3 normal_above;
   double neutral_ratio;
 };
@@ -119,21 +119,29 @@ glm::dvec3 brettel(const Dichromat& d, glm::dvec3 lms) {
 
 const char* to_string(CvdType type) {
   switch (type) {
-    case CvdType::none: return "none";
-    case CvdType::protan: return "protan";
-    case CvdType::deutan: return "deutan";
-    case CvdType::tritan: return "tritan";
-    case CvdType::protanopia: return "protanopia";
-    case CvdType::deuteranopia: return "deuteranopia";
-    case CvdType::tritanopia: return "tritanopia";
-    case CvdType::achromatopsia: return "achromatopsia";
+    case CvdType::none:
+      return "none";
+    case CvdType::protan:
+      return "protan";
+    case CvdType::deutan:
+      return "deutan";
+    case CvdType::tritan:
+      return "tritan";
+    case CvdType::protanopia:
+      return "protanopia";
+    case CvdType::deuteranopia:
+      return "deuteranopia";
+    case CvdType::tritanopia:
+      return "tritanopia";
+    case CvdType::achromatopsia:
+      return "achromatopsia";
   }
   return "?";
 }
 
 CvdType parse_cvd_type(const std::string& name) {
-  for (CvdType t : {CvdType::protan, CvdType::deutan, CvdType::tritan, CvdType::protanopia, CvdType::deuteranopia,
-                    CvdType::tritanopia, CvdType::achromatopsia})
+  for (CvdType t : {CvdType::protan, CvdType::deutan, CvdType::tritan, CvdType::protanopia, CvdType::deuteranopia, CvdType::tritanopia,
+                    CvdType::achromatopsia})
     if (name == to_string(t)) return t;
   fail("unknown colour-vision deficiency '{}' (expected protan, deutan, tritan, protanopia, deuteranopia, tritanopia, achromatopsia)",
        name);
@@ -142,10 +150,14 @@ CvdType parse_cvd_type(const std::string& name) {
 glm::dmat3 machado_table(CvdType type, int step) {
   if (step < 0 || step > 10) fail("Machado table: severity step {} outside 0–10", step);
   switch (type) {
-    case CvdType::protan: return from_rows(kProtan[step]);
-    case CvdType::deutan: return from_rows(kDeutan[step]);
-    case CvdType::tritan: return from_rows(kTritan[step]);
-    default: fail("Machado et al. 2009 tabulate protan, deutan and tritan only, not {}", to_string(type));
+    case CvdType::protan:
+      return from_rows(kProtan[step]);
+    case CvdType::deutan:
+      return from_rows(kDeutan[step]);
+    case CvdType::tritan:
+      return from_rows(kTritan[step]);
+    default:
+      fail("Machado et al. 2009 tabulate protan, deutan and tritan only, not {}", to_string(type));
   }
 }
 
@@ -164,14 +176,18 @@ glm::dvec3 lms_to_rgb(glm::dvec3 lms) { return kRgbFromLms * lms; }
 
 glm::dvec3 simulate_cvd(const CvdParams& p, glm::dvec3 rgb) {
   switch (p.type) {
-    case CvdType::none: return rgb;
+    case CvdType::none:
+      return rgb;
     case CvdType::protan:
     case CvdType::deutan:
-    case CvdType::tritan: return machado_matrix(p.type, p.severity) * rgb;
+    case CvdType::tritan:
+      return machado_matrix(p.type, p.severity) * rgb;
     case CvdType::protanopia:
     case CvdType::deuteranopia:
-    case CvdType::tritanopia: return lms_to_rgb(brettel(dichromat(p.type), rgb_to_lms(rgb)));
-    case CvdType::achromatopsia: return glm::dvec3(glm::dot(glm::dvec3(0.2126729, 0.7151522, 0.0721750), rgb));
+    case CvdType::tritanopia:
+      return lms_to_rgb(brettel(dichromat(p.type), rgb_to_lms(rgb)));
+    case CvdType::achromatopsia:
+      return glm::dvec3(glm::dot(glm::dvec3(0.2126729, 0.7151522, 0.0721750), rgb));
   }
   return rgb;
 }
@@ -180,11 +196,11 @@ void apply_cvd(const CvdParams& p, Image& image) {
   if (p.type == CvdType::none) return;
   if (image.channels != 3) fail("colour-vision deficiency needs a 3-channel image, got {} channels", image.channels);
   const size_t n = size_t(image.width) * image.height;
-  const bool linear = p.type == CvdType::protan || p.type == CvdType::deutan || p.type == CvdType::tritan ||
-                      p.type == CvdType::achromatopsia;
-  const glm::dmat3 m = p.type == CvdType::achromatopsia
-                           ? glm::dmat3(glm::dvec3(0.2126729), glm::dvec3(0.7151522), glm::dvec3(0.0721750))
-                           : linear ? machado_matrix(p.type, p.severity) : glm::dmat3(1.0);
+  const bool linear =
+      p.type == CvdType::protan || p.type == CvdType::deutan || p.type == CvdType::tritan || p.type == CvdType::achromatopsia;
+  const glm::dmat3 m = p.type == CvdType::achromatopsia ? glm::dmat3(glm::dvec3(0.2126729), glm::dvec3(0.7151522), glm::dvec3(0.0721750))
+                       : linear                         ? machado_matrix(p.type, p.severity)
+                                                        : glm::dmat3(1.0);
   tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 8192), [&](const tbb::blocked_range<size_t>& r) {
     for (size_t i = r.begin(); i < r.end(); ++i) {
       float* px = &image.pixels[i * 3];

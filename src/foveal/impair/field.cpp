@@ -25,9 +25,12 @@ std::optional<Eye> parse_eye_side(std::string_view text) {
 
 const char* to_string(FieldValue kind) {
   switch (kind) {
-    case FieldValue::sensitivity_db: return "sensitivity_db";
-    case FieldValue::total_deviation_db: return "total_deviation_db";
-    case FieldValue::pattern_deviation_db: return "pattern_deviation_db";
+    case FieldValue::sensitivity_db:
+      return "sensitivity_db";
+    case FieldValue::total_deviation_db:
+      return "total_deviation_db";
+    case FieldValue::pattern_deviation_db:
+      return "pattern_deviation_db";
   }
   return "?";
 }
@@ -36,10 +39,14 @@ std::vector<glm::dvec2> standard_grid(const std::string& name, Eye eye) {
   // Test locations on a square lattice offset from both meridians: 6° spacing for 24-2 and 30-2,
   // 2° for 10-2, within each grid's radius; the 24-2 adds two nasal locations at 27° (x < 0 in OD).
   double spacing = 6, max_r2 = 0;
-  if (name == "24-2") max_r2 = 522;          // 9² + 21²
-  else if (name == "30-2") max_r2 = 810;     // 9² + 27²
-  else if (name == "10-2") spacing = 2, max_r2 = 82;  // 1² + 9²
-  else fail("unknown perimetry grid '{}' (expected 24-2, 30-2 or 10-2)", name);
+  if (name == "24-2")
+    max_r2 = 522;  // 9² + 21²
+  else if (name == "30-2")
+    max_r2 = 810;  // 9² + 27²
+  else if (name == "10-2")
+    spacing = 2, max_r2 = 82;  // 1² + 9²
+  else
+    fail("unknown perimetry grid '{}' (expected 24-2, 30-2 or 10-2)", name);
   std::vector<glm::dvec2> grid;
   const int half = static_cast<int>(std::sqrt(max_r2) / spacing) + 2;  // reaches the 24-2 nasal step at 27°
   for (int j = half - 1; j >= -half; --j)
@@ -88,16 +95,15 @@ void check_range(const std::string& where, FieldValue kind, double v) {
 
 }  // namespace
 
-std::vector<PerimetryField> parse_field_csv(const std::string& raw, const std::string& name, const std::string& grid,
-                                            Eye default_eye, double age, const NormalModel& normal) {
+std::vector<PerimetryField> parse_field_csv(const std::string& raw, const std::string& name, const std::string& grid, Eye default_eye,
+                                            double age, const NormalModel& normal) {
   const std::string_view text = text::strip_bom(raw);
   text::Lines lines(text);
   std::string_view line;
   Header h;
   int columns = 0;
   // The header: the first line that is not empty
-  while (lines.next(line) && text::trim(line).empty()) {
-  }
+  while (lines.next(line) && text::trim(line).empty()) {}
   if (text::trim(line).empty()) fail("{}: empty field file (expected a header such as x_deg,y_deg,total_deviation_db)", name);
   const int header_line = lines.number();
   {
@@ -110,25 +116,29 @@ std::vector<PerimetryField> parse_field_csv(const std::string& raw, const std::s
         if (column >= 0) fail("{}:{}: column '{}' appears twice", name, header_line, f);
         column = i;
       };
-      if (f == "x_deg") set(h.x);
-      else if (f == "y_deg") set(h.y);
-      else if (f == "eye") set(h.eye);
+      if (f == "x_deg")
+        set(h.x);
+      else if (f == "y_deg")
+        set(h.y);
+      else if (f == "eye")
+        set(h.eye);
       else if (f == "sensitivity_db" || f == "total_deviation_db" || f == "pattern_deviation_db") {
         set(h.value);
-        h.kind = f == "sensitivity_db" ? FieldValue::sensitivity_db
-                 : f == "total_deviation_db" ? FieldValue::total_deviation_db : FieldValue::pattern_deviation_db;
+        h.kind = f == "sensitivity_db"       ? FieldValue::sensitivity_db
+                 : f == "total_deviation_db" ? FieldValue::total_deviation_db
+                                             : FieldValue::pattern_deviation_db;
       } else {
-        fail("{}:{}: unknown column '{}' (expected x_deg, y_deg, eye and one of sensitivity_db, total_deviation_db, "
-             "pattern_deviation_db)", name, header_line, f);
+        fail(
+            "{}:{}: unknown column '{}' (expected x_deg, y_deg, eye and one of sensitivity_db, total_deviation_db, "
+            "pattern_deviation_db)",
+            name, header_line, f);
       }
     }
   }
-  if (h.value < 0)
-    fail("{}:{}: no value column (sensitivity_db, total_deviation_db or pattern_deviation_db)", name, header_line);
+  if (h.value < 0) fail("{}:{}: no value column (sensitivity_db, total_deviation_db or pattern_deviation_db)", name, header_line);
   const bool located = h.x >= 0 || h.y >= 0;
   if (located && (h.x < 0 || h.y < 0)) fail("{}:{}: x_deg and y_deg go together", name, header_line);
-  if (located && !grid.empty())
-    fail("{}: the file has x_deg,y_deg: do not also name a grid ('{}')", name, grid);
+  if (located && !grid.empty()) fail("{}: the file has x_deg,y_deg: do not also name a grid ('{}')", name, grid);
   if (!located && grid.empty())
     fail("{}:{}: no x_deg,y_deg columns: name the grid the values follow (e.g. field:24-2:{})", name, header_line, name);
 
@@ -138,8 +148,7 @@ std::vector<PerimetryField> parse_field_csv(const std::string& raw, const std::s
     if (text::trim(line).empty()) continue;
     const std::string where = fmt::format("{}:{}", name, lines.number());
     const auto fields = text::split(line, ',');
-    if (static_cast<int>(fields.size()) != columns)
-      fail("{}: {} fields, the header has {}", where, fields.size(), columns);
+    if (static_cast<int>(fields.size()) != columns) fail("{}: {} fields, the header has {}", where, fields.size(), columns);
     auto number = [&](int column, const char* what) {
       const auto v = text::to_number(text::trim(fields[column]));
       if (!v) fail("{}: {} '{}' is not a number", where, what, text::trim(fields[column]));
@@ -174,8 +183,7 @@ std::vector<PerimetryField> parse_field_csv(const std::string& raw, const std::s
     if (!located) {
       const std::vector<glm::dvec2> locations = standard_grid(grid, eye);
       if (f.points.size() != locations.size())
-        fail("{}: {} values for {}, the {} grid has {} locations", name, f.points.size(), to_string(eye), grid,
-             locations.size());
+        fail("{}: {} values for {}, the {} grid has {} locations", name, f.points.size(), to_string(eye), grid, locations.size());
       std::vector<FieldPoint> kept;
       for (size_t i = 0; i < locations.size(); ++i) {
         f.points[i].x_deg = locations[i].x;
@@ -193,8 +201,8 @@ std::vector<PerimetryField> parse_field_csv(const std::string& raw, const std::s
   return out;
 }
 
-std::vector<PerimetryField> read_field_file(const std::string& path, const std::string& grid, Eye default_eye,
-                                            double age, const NormalModel& normal) {
+std::vector<PerimetryField> read_field_file(const std::string& path, const std::string& grid, Eye default_eye, double age,
+                                            const NormalModel& normal) {
   return parse_field_csv(text::read_file(path), path, grid, default_eye, age, normal);
 }
 
@@ -226,10 +234,12 @@ double interpolate_loss_db(const PerimetryField& field, double x, double y) {
 PerimetryField integrated_field(const PerimetryField& od, const PerimetryField& os) {
   PerimetryField ivf = od;
   for (const FieldPoint& p : os.points) {
-    auto same = std::find_if(ivf.points.begin(), ivf.points.end(),
-                             [&](const FieldPoint& q) { return q.x_deg == p.x_deg && q.y_deg == p.y_deg; });
-    if (same == ivf.points.end()) ivf.points.push_back(p);
-    else if (p.loss_db < same->loss_db) *same = p;
+    auto same =
+        std::find_if(ivf.points.begin(), ivf.points.end(), [&](const FieldPoint& q) { return q.x_deg == p.x_deg && q.y_deg == p.y_deg; });
+    if (same == ivf.points.end())
+      ivf.points.push_back(p);
+    else if (p.loss_db < same->loss_db)
+      *same = p;
   }
   return ivf;
 }
@@ -329,8 +339,7 @@ std::function<double(double, double)> generated_defect(const std::string& spec, 
         const double a = std::atan2(std::abs(y), x * -nasal_sign) * kDeg;
         return depth * smooth_step(9, 11, r) * (1 - smooth_step(19, 21, r)) * smooth_step(10, 25, a);
       };
-    if (kind == "nasal-step")
-      return [=](double x, double y) { return y * up < 0 ? 0.0 : depth * smooth_step(12, 18, x * nasal_sign); };
+    if (kind == "nasal-step") return [=](double x, double y) { return y * up < 0 ? 0.0 : depth * smooth_step(12, 18, x * nasal_sign); };
     if (kind == "paracentral")
       return [=](double x, double y) {
         if (y * up < 0) return 0.0;
@@ -359,8 +368,10 @@ std::function<double(double, double)> generated_defect(const std::string& spec, 
     no_more(3);
     return [=](double x, double y) { return y * sy < 0 ? 0.0 : depth * smooth_step(-0.25, 0.25, x * sx); };
   }
-  fail("field: unknown defect '{}' (expected a .csv file, 24-2:FILE, arcuate, nasal-step, paracentral, constriction:R, "
-       "central:R, altitudinal, hemianopia:left|right, quadrantanopia:QUADRANT)", kind);
+  fail(
+      "field: unknown defect '{}' (expected a .csv file, 24-2:FILE, arcuate, nasal-step, paracentral, constriction:R, "
+      "central:R, altitudinal, hemianopia:left|right, quadrantanopia:QUADRANT)",
+      kind);
 }
 
 std::string VisualField::resolved_view() const {

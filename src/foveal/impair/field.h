@@ -48,8 +48,7 @@ struct NormalModel {
   double eccentricity_db_per_deg = -0.30;
   double mean_eccentricity_deg = 13.0;  // the mean eccentricity of the central 26° field
   double sensitivity_db(double age_years, double eccentricity_deg) const {
-    return intercept_db + age_db_per_year * age_years +
-           eccentricity_db_per_deg * (eccentricity_deg - mean_eccentricity_deg);
+    return intercept_db + age_db_per_year * age_years + eccentricity_db_per_deg * (eccentricity_deg - mean_eccentricity_deg);
   }
 };
 
@@ -63,12 +62,10 @@ bool is_blind_spot_location(const std::string& grid, Eye eye, glm::dvec2 locatio
 // (sensitivity_db, total_deviation_db or pattern_deviation_db), or — when `grid` names a standard
 // grid — the value column alone in the grid's reading order; an optional `eye` column (OD/OS) holds
 // both eyes in one file (without it the values are `default_eye`'s). Errors name file:line.
-std::vector<PerimetryField> read_field_file(const std::string& path, const std::string& grid = {},
-                                            Eye default_eye = Eye::od, double age_years = 50,
-                                            const NormalModel& normal = {});
-std::vector<PerimetryField> parse_field_csv(const std::string& text, const std::string& name,
-                                            const std::string& grid = {}, Eye default_eye = Eye::od,
+std::vector<PerimetryField> read_field_file(const std::string& path, const std::string& grid = {}, Eye default_eye = Eye::od,
                                             double age_years = 50, const NormalModel& normal = {});
+std::vector<PerimetryField> parse_field_csv(const std::string& text, const std::string& name, const std::string& grid = {},
+                                            Eye default_eye = Eye::od, double age_years = 50, const NormalModel& normal = {});
 
 // The physiological blind spot: centre 15.5° temporal, 1.5° below the horizontal meridian, 5.5° wide
 // and 7.5° high (Rohrschneider 2004, IOVS 45(9)); an absolute scotoma (kAbsoluteLossDb).
@@ -126,14 +123,14 @@ std::function<double(double, double)> generated_defect(const std::string& spec, 
 
 // An eye's or both eyes' fields as the renderer sees them.
 struct VisualField {
-  std::vector<PerimetryField> measured;          // from files
+  std::vector<PerimetryField> measured;  // from files
   struct Generated {
-    std::string spec;          // e.g. "arcuate:20"
-    std::optional<Eye> eye;    // nullopt: both eyes
+    std::string spec;        // e.g. "arcuate:20"
+    std::optional<Eye> eye;  // nullopt: both eyes
   };
   std::vector<Generated> generated;
-  std::string view = "auto";                     // "OD", "OS", "both"; auto = both when two eyes are measured, else the one
-  bool blind_spot = true;                        // monocular views show the eye's blind spot
+  std::string view = "auto";  // "OD", "OS", "both"; auto = both when two eyes are measured, else the one
+  bool blind_spot = true;     // monocular views show the eye's blind spot
   bool empty() const { return measured.empty() && generated.empty(); }
   // The loss map of the view (monocular: the eye's field and blind spot; both: the better eye).
   FieldMap map() const;

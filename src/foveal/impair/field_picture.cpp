@@ -31,8 +31,8 @@ void write_field_picture(const VisualField& field, const FieldMap& map, const st
     cv::circle(img, c, 6, cv::Scalar(40, 255 * (1 - t), 255 * t), cv::FILLED, cv::LINE_AA);
     cv::circle(img, c, 6, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
   }
-  cv::putText(img, "view " + field.resolved_view() + ", +-30 deg, white 0 dB .. black 30 dB loss", {8, kSize - 10}, cv::FONT_HERSHEY_SIMPLEX, 0.45,
-              cv::Scalar(40, 40, 220), 1, cv::LINE_AA);
+  cv::putText(img, "view " + field.resolved_view() + ", +-30 deg, white 0 dB .. black 30 dB loss", {8, kSize - 10},
+              cv::FONT_HERSHEY_SIMPLEX, 0.45, cv::Scalar(40, 40, 220), 1, cv::LINE_AA);
   bool ok = false;
   try {
     ok = cv::imwrite(path, img);

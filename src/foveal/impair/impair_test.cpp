@@ -194,8 +194,7 @@ TEST(Field, MalformedFilesNameFileLineAndReason) {
 
 TEST(Field, InterpolationNeverCrossesTheHorizontalMeridian) {
   PerimetryField f;
-  for (const glm::dvec2 p : standard_grid("24-2", Eye::od))
-    f.points.push_back({p.x, p.y, 0, p.y > 0 ? 20.0 : 0.0});
+  for (const glm::dvec2 p : standard_grid("24-2", Eye::od)) f.points.push_back({p.x, p.y, 0, p.y > 0 ? 20.0 : 0.0});
   for (double x : {-25.0, -3.0, 0.0, 8.0, 20.0}) {
     EXPECT_DOUBLE_EQ(interpolate_loss_db(f, x, 0.01), 20.0);
     EXPECT_DOUBLE_EQ(interpolate_loss_db(f, x, -0.01), 0.0);
@@ -222,9 +221,9 @@ TEST(Field, TheBlindSpotSitsWhereTheEyesGeometryPutsIt) {
   vf.view = "OD";
   const FieldMap od = vf.map();
   EXPECT_NEAR(od.loss_db(15.5, -1.5), kAbsoluteLossDb, 1e-3);
-  EXPECT_NEAR(od.loss_db(15.5, 1.0), kAbsoluteLossDb, 1e-3);   // 7.5° high: up to 2.25° above the meridian
+  EXPECT_NEAR(od.loss_db(15.5, 1.0), kAbsoluteLossDb, 1e-3);  // 7.5° high: up to 2.25° above the meridian
   EXPECT_NEAR(od.loss_db(15.5, 3.5), 0.0, 1e-3);
-  EXPECT_NEAR(od.loss_db(-15.5, -1.5), 0.0, 1e-3);            // the nasal field has none
+  EXPECT_NEAR(od.loss_db(-15.5, -1.5), 0.0, 1e-3);  // the nasal field has none
   vf.view = "OS";
   EXPECT_NEAR(vf.map().loss_db(-15.5, -1.5), kAbsoluteLossDb, 1e-3);
   vf.view = "both";  // each eye sees the other's blind spot
@@ -254,9 +253,9 @@ TEST(Field, TheBinocularFieldIsTheBetterEyeAtEachLocation) {
 
 TEST(Field, GeneratedDefectsRespectTheirAnatomy) {
   const auto arcuate = generated_defect("arcuate:20", Eye::od);
-  EXPECT_NEAR(arcuate(-10, 12), 20, 1e-9);   // superior nasal, 15.6° out
-  EXPECT_EQ(arcuate(-10, -12), 0);           // the inferior field is spared
-  EXPECT_EQ(arcuate(0, 3), 0);               // central field spared
+  EXPECT_NEAR(arcuate(-10, 12), 20, 1e-9);  // superior nasal, 15.6° out
+  EXPECT_EQ(arcuate(-10, -12), 0);          // the inferior field is spared
+  EXPECT_EQ(arcuate(0, 3), 0);              // central field spared
   const auto step = generated_defect("nasal-step:15", Eye::od);
   EXPECT_NEAR(step(-25, 2), 15, 1e-9);
   EXPECT_EQ(step(-25, -2), 0);
@@ -304,8 +303,7 @@ double rms_contrast(const Image& im, int y0, int y1) {
 Retinotopy linear_retinotopy(int w, int h, glm::dvec2 gaze, double ppd) {
   Retinotopy r{w, h, std::vector<glm::vec2>(size_t(w) * h), ppd};
   for (int y = 0; y < h; ++y)
-    for (int x = 0; x < w; ++x)
-      r.field_deg[size_t(y) * w + x] = glm::vec2((x + 0.5 - gaze.x) / ppd, (gaze.y - y - 0.5) / ppd);
+    for (int x = 0; x < w; ++x) r.field_deg[size_t(y) * w + x] = glm::vec2((x + 0.5 - gaze.x) / ppd, (gaze.y - y - 0.5) / ppd);
   return r;
 }
 
@@ -472,7 +470,7 @@ TEST(Metamorphopsia, TheAmslerGridShowsTheScotomaAndTheDistortion) {
       const double r = std::hypot(x - c, y - c) / 10.0;
       if (r > 3.5 && r < 8) moved += std::abs(seen.at(x, y, 0) - plain.at(x, y, 0));
     }
-  EXPECT_GT(moved, 50.0);  // lines bent between the scotoma and 9°
+  EXPECT_GT(moved, 50.0);                                                      // lines bent between the scotoma and 9°
   EXPECT_NEAR(seen.at(c + 100, c + 1, 0), plain.at(c + 100, c + 1, 0), 0.05);  // 10° out: unchanged
 }
 
@@ -488,8 +486,8 @@ TEST(EyeSpec, PresetsJoinOpticsAndImpairments) {
   EXPECT_EQ(s.impair.field_mode, FieldMode::fill);
   EXPECT_EQ(parse_eye_spec("hyperopia:+2+achromatopsia").impair.cvd.type, CvdType::achromatopsia);
   EXPECT_EQ(parse_eye_spec("glaucoma").eye.glaucoma, 0.5);
-  for (const char* bad : {"cataract:2", "cvd:purple", "cvd:protanopia:0.5", "field:", "field:spiral", "age:-3", "amd:50",
-                          "field:24-2", "field-view:OU", "sparkles"})
+  for (const char* bad : {"cataract:2", "cvd:purple", "cvd:protanopia:0.5", "field:", "field:spiral", "age:-3", "amd:50", "field:24-2",
+                          "field-view:OU", "sparkles"})
     EXPECT_THROW(parse_eye_spec(bad), Error) << bad;
 }
 
@@ -518,8 +516,9 @@ TEST(EyeSpec, ProfilesAreValidatedStrictlyWithJsonPaths) {
     }
     return std::string("accepted");
   };
-  EXPECT_EQ(error_of(R"({"eyes": {"OD": {"refraction": -1.5, "colour": 1}}})"),
-            "p.json: /eyes/OD/colour: unknown key (expected refraction, cylinder, axis, pupil_mm, glaucoma, cataract, field, metamorphopsia)");
+  EXPECT_EQ(
+      error_of(R"({"eyes": {"OD": {"refraction": -1.5, "colour": 1}}})"),
+      "p.json: /eyes/OD/colour: unknown key (expected refraction, cylinder, axis, pupil_mm, glaucoma, cataract, field, metamorphopsia)");
   EXPECT_EQ(error_of(R"({"eyes": {"OD": {"refraction": "-1.5"}}})"), "p.json: /eyes/OD/refraction: must be a number");
   EXPECT_EQ(error_of(R"({"eyes": {"OD": {"cataract": 3}}})"), "p.json: /eyes/OD/cataract: must be in [0, 1], got 3");
   EXPECT_EQ(error_of(R"({"eyes": {"OU": {}}})"), "p.json: /eyes/OU: unknown key (expected OD, OS)");

@@ -19,9 +19,7 @@ namespace {
 
 constexpr double kSrPerDeg2 = (std::numbers::pi / 180.0) * (std::numbers::pi / 180.0);
 
-cv::Mat as_mat(Image& image) {
-  return cv::Mat(image.height, image.width, image.channels == 3 ? CV_32FC3 : CV_32FC1, image.pixels.data());
-}
+cv::Mat as_mat(Image& image) { return cv::Mat(image.height, image.width, image.channels == 3 ? CV_32FC3 : CV_32FC1, image.pixels.data()); }
 
 double age_factor(double age) { return 1.0 + std::pow(age / 62.5, 4.0); }
 
@@ -44,17 +42,14 @@ double cie_glare_fraction(double t1, double t2, double age, double p, double str
   if (!(t2 > t1)) return 0.0;
   const double g = straylight * age_factor(age);
   return 2.0 * std::numbers::pi * kSrPerDeg2 *
-         (10.0 * (1.0 / t1 - 1.0 / t2) + 5.0 * g * std::log(t2 / t1) + 0.1 * p * g * (t2 - t1) +
-          0.0025 * p * (t2 * t2 - t1 * t1) / 2.0);
+         (10.0 * (1.0 / t1 - 1.0 / t2) + 5.0 * g * std::log(t2 / t1) + 0.1 * p * g * (t2 - t1) + 0.0025 * p * (t2 * t2 - t1 * t1) / 2.0);
 }
 
 double cataract_straylight_factor(double severity) { return std::pow(10.0, std::clamp(severity, 0.0, 1.0)); }
 
 glm::dvec3 lens_transmittance(const MediaParams& m) {
   // Pokorny, Smith & Lutze 1987: the multiplier of the age-dependent density D1
-  auto multiplier = [](double age) {
-    return age <= 60 ? 1.0 + 0.02 * (std::max(age, 20.0) - 32.0) : 1.56 + 0.0667 * (age - 60.0);
-  };
+  auto multiplier = [](double age) { return age <= 60 ? 1.0 + 0.02 * (std::max(age, 20.0) - 32.0) : 1.56 + 0.0667 * (age - 60.0); };
   const glm::dvec3 d1(0.02, 0.05, 0.25);
   const double extra = multiplier(m.age_years) - multiplier(25.0) + 0.0667 * 20.0 * std::clamp(m.cataract, 0.0, 1.0);
   return glm::dvec3(std::pow(10.0, -d1.x * extra), std::pow(10.0, -d1.y * extra), std::pow(10.0, -d1.z * extra));
@@ -105,8 +100,7 @@ void apply_glare(Image& image, double ppd, const MediaParams& m, std::shared_ptr
   const cv::Mat full = as_mat(image);
   cv::Mat small;
   if (factor > 1)
-    cv::resize(full, small, cv::Size((image.width + factor - 1) / factor, (image.height + factor - 1) / factor), 0, 0,
-               cv::INTER_AREA);
+    cv::resize(full, small, cv::Size((image.width + factor - 1) / factor, (image.height + factor - 1) / factor), 0, 0, cv::INTER_AREA);
   else
     small = full.clone();
   const double small_ppd = ppd * small.cols / image.width;
@@ -149,8 +143,10 @@ void apply_glare(Image& image, double ppd, const MediaParams& m, std::shared_ptr
   cv::merge(channels, scattered);
   thread_local cv::Mat up_buffer;  // full size, kept per thread
   cv::Mat& up = up_buffer;
-  if (factor > 1) cv::resize(scattered, up, full.size(), 0, 0, cv::INTER_LINEAR);
-  else scattered.copyTo(up);
+  if (factor > 1)
+    cv::resize(scattered, up, full.size(), 0, 0, cv::INTER_LINEAR);
+  else
+    scattered.copyTo(up);
   const float keep = static_cast<float>(1.0 - g->eta);
   const size_t n = image.pixels.size();
   tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 1 << 16), [&](const tbb::blocked_range<size_t>& r) {
@@ -169,10 +165,14 @@ FieldMode parse_field_mode(const std::string& name) {
 
 const char* to_string(FieldMode mode) {
   switch (mode) {
-    case FieldMode::contrast: return "contrast";
-    case FieldMode::blur: return "blur";
-    case FieldMode::grey: return "grey";
-    case FieldMode::fill: return "fill";
+    case FieldMode::contrast:
+      return "contrast";
+    case FieldMode::blur:
+      return "blur";
+    case FieldMode::grey:
+      return "grey";
+    case FieldMode::fill:
+      return "fill";
   }
   return "?";
 }
@@ -204,8 +204,8 @@ int pyramid_levels(cv::Size size) {
 }  // namespace
 
 void apply_field_loss(Image& image, const std::vector<float>& loss_db, FieldMode mode) {
-  if (loss_db.size() != size_t(image.width) * image.height) fail("field loss: {} values for a {}x{} image", loss_db.size(),
-                                                                  image.width, image.height);
+  if (loss_db.size() != size_t(image.width) * image.height)
+    fail("field loss: {} values for a {}x{} image", loss_db.size(), image.width, image.height);
   cv::Mat img = as_mat(image);
   const cv::Mat loss(image.height, image.width, CV_32F, const_cast<float*>(loss_db.data()));
   if (image.channels != 3) fail("field loss needs a 3-channel image, got {} channels", image.channels);
@@ -272,8 +272,10 @@ void apply_field_loss(Image& image, const std::vector<float>& loss_db, FieldMode
     cv::pyrUp(g[k + 1], up_g, gk.size());
     cv::pyrUp(out, up_o, gk.size());
     cv::Mat lk;
-    if (k == 0) lk = loss;
-    else cv::resize(loss, lk, gk.size(), 0, 0, cv::INTER_LINEAR);
+    if (k == 0)
+      lk = loss;
+    else
+      cv::resize(loss, lk, gk.size(), 0, 0, cv::INTER_LINEAR);
     cv::Mat& dst = k == 0 ? img : up_o;  // the finest level writes the image itself
     tbb::parallel_for(tbb::blocked_range<int>(0, gk.rows, 8), [&](const tbb::blocked_range<int>& rows) {
       for (int y = rows.begin(); y < rows.end(); ++y) {
@@ -322,15 +324,13 @@ std::string Impairments::describe() const {
   return s.empty() ? "none" : s;
 }
 
-ImpairmentPasses::ImpairmentPasses(const Impairments& impairments)
-    : impairments_(impairments), map_(impairments.field.map()) {}
+ImpairmentPasses::ImpairmentPasses(const Impairments& impairments) : impairments_(impairments), map_(impairments.field.map()) {}
 
 std::vector<float> ImpairmentPasses::loss_db(const Retinotopy& r) const {
   std::vector<float> loss(r.field_deg.size(), 0.0f);
   if (map_.empty()) return loss;
   tbb::parallel_for(tbb::blocked_range<size_t>(0, loss.size(), 4096), [&](const tbb::blocked_range<size_t>& range) {
-    for (size_t i = range.begin(); i < range.end(); ++i)
-      loss[i] = static_cast<float>(map_.loss_db(r.field_deg[i].x, r.field_deg[i].y));
+    for (size_t i = range.begin(); i < range.end(); ++i) loss[i] = static_cast<float>(map_.loss_db(r.field_deg[i].x, r.field_deg[i].y));
   });
   return loss;
 }
@@ -421,8 +421,7 @@ Retinotopy display_retinotopy(const Display& display, int width, int height, glm
   FoveationParams round;
   round.ellipse_ratio = 1.0;
   const FoveationModel model(display, width, height, gaze_px, round);
-  Retinotopy r{width, height, std::vector<glm::vec2>(size_t(width) * height),
-               pixels_per_degree(display) * width / display.res_x};
+  Retinotopy r{width, height, std::vector<glm::vec2>(size_t(width) * height), pixels_per_degree(display) * width / display.res_x};
   tbb::parallel_for(0, height, [&](int y) {
     for (int x = 0; x < width; ++x) {
       const FoveaSample s = model.evaluate(x, y);
@@ -449,8 +448,7 @@ Image amsler_grid(const ImpairmentPasses& passes, double ppd) {
     }
   Retinotopy r{size, size, std::vector<glm::vec2>(size_t(size) * size), ppd};
   for (int y = 0; y < size; ++y)
-    for (int x = 0; x < size; ++x)
-      r.field_deg[size_t(y) * size + x] = glm::vec2((x + 0.5 - c) / ppd, (c - y - 0.5) / ppd);
+    for (int x = 0; x < size; ++x) r.field_deg[size_t(y) * size + x] = glm::vec2((x + 0.5 - c) / ppd, (c - y - 0.5) / ppd);
   passes.apply(grid, r);
   return grid;
 }

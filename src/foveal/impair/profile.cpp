@@ -29,8 +29,8 @@ double number_in(const std::string& part, const std::string& value, double lo, d
 bool is_grid(const std::string& s) { return s == "24-2" || s == "30-2" || s == "10-2"; }
 
 // The field part's text after "field:": a file, GRID:FILE, or a generated defect
-void add_field(VisualField& field, const std::string& spec, const std::string& base_dir, const double& age,
-               std::optional<Eye> eye, std::vector<std::function<void()>>& reads) {
+void add_field(VisualField& field, const std::string& spec, const std::string& base_dir, const double& age, std::optional<Eye> eye,
+               std::vector<std::function<void()>>& reads) {
   const auto colon = spec.find(':');
   const std::string head = spec.substr(0, colon);
   auto path_of = [&](const std::string& p) {
@@ -59,7 +59,8 @@ EyeSpec parse_eye_spec(const std::string& text) {
   if (text.ends_with(".json")) return read_eye_profile(text);
   EyeSpec spec;
   spec.source = text;
-  if (text.empty()) fail("eye: empty (expected presets such as healthy, glaucoma:0.5, cataract:0.5, cvd:deutan:0.6, field:arcuate:20, or a profile .json)");
+  if (text.empty())
+    fail("eye: empty (expected presets such as healthy, glaucoma:0.5, cataract:0.5, cvd:deutan:0.6, field:arcuate:20, or a profile .json)");
   std::string joined = text;  // a sign right after ':' ("hyperopia:+2") belongs to the number
   for (size_t at = joined.find(":+"); at != std::string::npos; at = joined.find(":+")) joined.erase(at + 1, 1);
   std::string optics;
@@ -81,8 +82,7 @@ EyeSpec parse_eye_spec(const std::string& text) {
       im.media.glare = im.media.yellowing = true;
     } else if (name == "glare" && value.empty()) {
       im.media.glare = true;
-    } else if (name == "cvd" || name == "achromatopsia" || name == "protanopia" || name == "deuteranopia" ||
-               name == "tritanopia") {
+    } else if (name == "cvd" || name == "achromatopsia" || name == "protanopia" || name == "deuteranopia" || name == "tritanopia") {
       const std::string rest = name == "cvd" ? value : part;
       const auto c = rest.find(':');
       im.cvd.type = parse_cvd_type(rest.substr(0, c));
@@ -115,9 +115,11 @@ EyeSpec parse_eye_spec(const std::string& text) {
       im.metamorphopsia.amplitude_deg = number_in(part, a, 0, 5, "distortion");
       if (!r.empty()) im.metamorphopsia.radius_deg = number_in(part, r, 1, 30, "radius");
     } else {
-      fail("eye: unknown preset '{}' in '{}' (expected healthy, glaucoma[:S], myopia:-D, hyperopia:D, presbyopia:AGE, "
-           "astigmatism:CYL[@AXIS], age:Y, cataract[:S], glare, cvd:TYPE[:S], achromatopsia, field:…, field-view:…, "
-           "field-mode:…, amd[:R[:A]], metamorphopsia:A[:R], or a profile .json)", name, text);
+      fail(
+          "eye: unknown preset '{}' in '{}' (expected healthy, glaucoma[:S], myopia:-D, hyperopia:D, presbyopia:AGE, "
+          "astigmatism:CYL[@AXIS], age:Y, cataract[:S], glare, cvd:TYPE[:S], achromatopsia, field:…, field-view:…, "
+          "field-mode:…, amd[:R[:A]], metamorphopsia:A[:R], or a profile .json)",
+          name, text);
     }
   }
   spec.eye = optics.empty() ? EyeParams{} : parse_eye_preset(optics);
@@ -248,8 +250,7 @@ EyeSpec parse_eye_profile(const std::string& text, const std::string& name, cons
         } else {
           const std::string grid = f.string("grid", "");
           if (!grid.empty() && !is_grid(grid)) fail("unknown grid '{}' (expected 24-2, 30-2 or 10-2)", grid);
-          add_field(im.field, grid.empty() ? f.string("file", "") : grid + ":" + f.string("file", ""), base_dir, age, side,
-                    reads);
+          add_field(im.field, grid.empty() ? f.string("file", "") : grid + ":" + f.string("file", ""), base_dir, age, side, reads);
         }
         for (auto& read : reads) read();  // the age is known: read the file here, so that its errors carry the path
         reads.clear();
@@ -278,9 +279,9 @@ EyeSpec parse_eye_profile(const std::string& text, const std::string& name, cons
 
 EyeSpec read_eye_profile(const std::string& path) {
   const std::string text = text::read_file(path);
-  return parse_eye_profile(text, path, std::filesystem::path(path).parent_path().string().empty()
-                                           ? std::string(".")
-                                           : std::filesystem::path(path).parent_path().string());
+  return parse_eye_profile(
+      text, path,
+      std::filesystem::path(path).parent_path().string().empty() ? std::string(".") : std::filesystem::path(path).parent_path().string());
 }
 
 EyeSpec resolve_eye(const std::string& spec, const EyeOverrides& overrides) {
@@ -292,9 +293,14 @@ EyeSpec resolve_eye(const std::string& spec, const EyeOverrides& overrides) {
 }
 
 json optics_json(const EyeParams& e) {
-  return {{"preset", e.preset},           {"pupil_mm", e.pupil_diameter_mm}, {"image_distance_mm", e.image_distance_mm},
-          {"refraction_d", e.refraction_d}, {"cylinder_d", e.cylinder_d},     {"axis_deg", e.cylinder_axis_deg},
-          {"age_years", e.age_years},     {"glaucoma", e.glaucoma}};
+  return {{"preset", e.preset},
+          {"pupil_mm", e.pupil_diameter_mm},
+          {"image_distance_mm", e.image_distance_mm},
+          {"refraction_d", e.refraction_d},
+          {"cylinder_d", e.cylinder_d},
+          {"axis_deg", e.cylinder_axis_deg},
+          {"age_years", e.age_years},
+          {"glaucoma", e.glaucoma}};
 }
 
 }  // namespace foveal

@@ -13,9 +13,9 @@
 namespace foveal {
 
 struct EyeSpec {
-  EyeParams eye;          // the optics (refraction, accommodation, pupil, glaucoma's saccades)
-  Impairments impair;     // media, field, metamorphopsia, colour
-  std::string source;     // the preset string or profile path
+  EyeParams eye;       // the optics (refraction, accommodation, pupil, glaucoma's saccades)
+  Impairments impair;  // media, field, metamorphopsia, colour
+  std::string source;  // the preset string or profile path
 };
 
 // A profile file (ending in .json) or presets joined with '+':
@@ -40,7 +40,7 @@ EyeSpec parse_eye_profile(const std::string& json_text, const std::string& name,
 // What a user states explicitly about an eye besides its presets or profile; unset = not given.
 struct EyeOverrides {
   std::optional<double> pupil_diameter_mm;  // A, mm (a profile's "pupil_mm")
-  std::optional<double> image_distance_mm; // I, lens to retina, mm
+  std::optional<double> image_distance_mm;  // I, lens to retina, mm
 };
 
 // The one rule for an eye, the same in simulate, view, perceive, bench vision and Python: `spec`

@@ -81,8 +81,7 @@ const std::array<uint8_t, 4097>& srgb_bucket_start() {
   static const std::array<uint8_t, 4097> start = [] {
     const auto& steps = srgb_steps();
     std::array<uint8_t, 4097> t{};
-    for (int b = 0; b <= 4096; ++b)
-      t[b] = static_cast<uint8_t>(std::upper_bound(steps.begin(), steps.end(), b / 4096.0f) - steps.begin());
+    for (int b = 0; b <= 4096; ++b) t[b] = static_cast<uint8_t>(std::upper_bound(steps.begin(), steps.end(), b / 4096.0f) - steps.begin());
     return t;
   }();
   return start;
@@ -167,7 +166,8 @@ void save_pfm(const Image& image, const std::string& path) {
   std::ofstream out(path, std::ios::binary);
   if (!out) fail("{}: cannot open for writing", path);
   // Header; a negative scale means little-endian. Rows are stored bottom to top.
-  out << (image.channels == 3 ? "PF" : "Pf") << "\n" << image.width << " " << image.height << "\n"
+  out << (image.channels == 3 ? "PF" : "Pf") << "\n"
+      << image.width << " " << image.height << "\n"
       << (std::endian::native == std::endian::little ? "-1.0" : "1.0") << "\n";
   for (int y = image.height - 1; y >= 0; --y)
     out.write(reinterpret_cast<const char*>(&image.pixels[static_cast<size_t>(y) * image.width * image.channels]),
@@ -227,8 +227,7 @@ void save_exr(const Image& image, const std::string& path) {
     Imf::FrameBuffer fb;
     const size_t xs = sizeof(float) * n, ys = xs * image.width;
     for (int c = 0; c < n; ++c)
-      fb.insert(n == 1 ? "Y" : names[c],
-                Imf::Slice(Imf::FLOAT, (char*)(image.pixels.data() + c), xs, ys));  // NOLINT: OpenEXR takes char*
+      fb.insert(n == 1 ? "Y" : names[c], Imf::Slice(Imf::FLOAT, (char*)(image.pixels.data() + c), xs, ys));  // NOLINT: OpenEXR takes char*
     file.setFrameBuffer(fb);
     file.writePixels(image.height);
   } catch (const std::exception& e) {

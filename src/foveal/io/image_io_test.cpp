@@ -55,9 +55,9 @@ TEST(ImageIO, MalformedFilesGiveErrors) {
   EXPECT_THROW(parse_pfm("", "a.pfm"), Error);
   EXPECT_THROW(parse_pfm("P6\n1 1\n255\n", "a.pfm"), Error);
   EXPECT_THROW(parse_pfm("PF\n-3 2\n-1.0\n", "a.pfm"), Error);
-  EXPECT_THROW(parse_pfm("Pf\n2 2\n-1.0\n\x01\x02", "a.pfm"), Error);  // truncated
+  EXPECT_THROW(parse_pfm("Pf\n2 2\n-1.0\n\x01\x02", "a.pfm"), Error);       // truncated
   EXPECT_THROW(parse_pfm("Pf\n1 1\n0\n\x01\x02\x03\x04", "a.pfm"), Error);  // zero scale
-  EXPECT_THROW(parse_pfm("Pf\n1 1\n98888888888", "a.pfm"), Error);  // ends in the header (found by fuzzing)
+  EXPECT_THROW(parse_pfm("Pf\n1 1\n98888888888", "a.pfm"), Error);          // ends in the header (found by fuzzing)
   EXPECT_THROW(load_image(temp("missing.exr")), Error);
   const std::string bad = temp("bad.exr");
   std::ofstream(bad) << "not an exr";
@@ -119,4 +119,3 @@ TEST(ImageIO, DisplayBytesAreTheSavedPngBytes) {
     ASSERT_EQ(srgb_byte(values[i]), expected) << "v = " << values[i];
   }
 }
-

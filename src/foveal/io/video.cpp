@@ -59,12 +59,14 @@ void run_program(std::vector<std::string> args, const std::string& what, const s
 void encode_video(const std::string& pattern, double fps, const std::string& output) {
   namespace fs = std::filesystem;
   const std::string ext = fs::path(output).extension().string();
-  std::vector<std::string> args{"ffmpeg", "-y", "-nostdin", "-loglevel", "error", "-framerate", fmt::format("{}", fps),
-                                "-start_number", "0", "-i", pattern,
+  std::vector<std::string> args{"ffmpeg", "-y", "-nostdin", "-loglevel", "error", "-framerate", fmt::format("{}", fps), "-start_number",
+                                "0", "-i", pattern,
                                 // even sizes for 4:2:0 chroma
                                 "-vf", "pad=ceil(iw/2)*2:ceil(ih/2)*2"};
-  if (ext == ".mp4" || ext == ".mkv" || ext == ".mov") args.insert(args.end(), {"-c:v", "libx264", "-pix_fmt", "yuv420p", "-crf", "18"});
-  else if (ext == ".webm") args.insert(args.end(), {"-c:v", "libvpx-vp9", "-pix_fmt", "yuv420p", "-b:v", "0", "-crf", "30"});
+  if (ext == ".mp4" || ext == ".mkv" || ext == ".mov")
+    args.insert(args.end(), {"-c:v", "libx264", "-pix_fmt", "yuv420p", "-crf", "18"});
+  else if (ext == ".webm")
+    args.insert(args.end(), {"-c:v", "libvpx-vp9", "-pix_fmt", "yuv420p", "-b:v", "0", "-crf", "30"});
   args.push_back(output);
   run_program(args, output + " (the frames are kept)");
 }
@@ -83,9 +85,7 @@ double decode_video(const std::string& input, const std::string& frame_pattern) 
   double num = 0, den = 1;
   if (std::sscanf(rate.c_str(), "%lf/%lf", &num, &den) < 1 || !(num > 0) || !(den > 0))
     fail("{}: no video stream with a frame rate (ffprobe said '{}')", input, rate);
-  run_program({"ffmpeg", "-y", "-nostdin", "-loglevel", "error", "-i", input, "-vsync", "0", "-start_number", "0",
-               frame_pattern},
-              input);
+  run_program({"ffmpeg", "-y", "-nostdin", "-loglevel", "error", "-i", input, "-vsync", "0", "-start_number", "0", frame_pattern}, input);
   return num / den;
 }
 

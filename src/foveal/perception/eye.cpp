@@ -13,16 +13,15 @@ namespace foveal {
 
 namespace {
 
-double number(const std::string& preset, const std::string& text) {
-  return parse_numbers(fmt::format("eye '{}'", preset), text, 1)[0];
-}
+double number(const std::string& preset, const std::string& text) { return parse_numbers(fmt::format("eye '{}'", preset), text, 1)[0]; }
 
 }  // namespace
 
 EyeParams parse_eye_preset(const std::string& text) {
   EyeParams eye;
   eye.preset = text;
-  if (text.empty()) fail("eye: empty preset (expected healthy, glaucoma[:S], myopia:-D, hyperopia:+D, presbyopia:AGE, astigmatism:CYL[@AXIS])");
+  if (text.empty())
+    fail("eye: empty preset (expected healthy, glaucoma[:S], myopia:-D, hyperopia:+D, presbyopia:AGE, astigmatism:CYL[@AXIS])");
   // '+' joins presets; a sign right after ':' ("hyperopia:+2") belongs to the number
   std::string joined = text;
   for (size_t at = joined.find(":+"); at != std::string::npos; at = joined.find(":+")) joined.erase(at + 1, 1);
@@ -47,8 +46,10 @@ EyeParams parse_eye_preset(const std::string& text) {
       eye.cylinder_d = std::abs(number(text, value.substr(0, at)));
       if (at != std::string::npos) eye.cylinder_axis_deg = number(text, value.substr(at + 1));
     } else {
-      fail("eye: unknown preset '{}' in '{}' (expected healthy, glaucoma[:S], myopia:-D, hyperopia:D, presbyopia:AGE, astigmatism:CYL[@AXIS])",
-           name, text);
+      fail(
+          "eye: unknown preset '{}' in '{}' (expected healthy, glaucoma[:S], myopia:-D, hyperopia:D, presbyopia:AGE, "
+          "astigmatism:CYL[@AXIS])",
+          name, text);
     }
   }
   validate(eye);
@@ -56,8 +57,10 @@ EyeParams parse_eye_preset(const std::string& text) {
 }
 
 void validate(const EyeParams& e) {
-  if (!(e.pupil_diameter_mm > 0 && e.pupil_diameter_mm <= 10)) fail("pupil_diameter_mm: must be in (0, 10] mm, got {}", e.pupil_diameter_mm);
-  if (!(e.image_distance_mm > 0 && e.image_distance_mm <= 50)) fail("image_distance_mm: must be in (0, 50] mm, got {}", e.image_distance_mm);
+  if (!(e.pupil_diameter_mm > 0 && e.pupil_diameter_mm <= 10))
+    fail("pupil_diameter_mm: must be in (0, 10] mm, got {}", e.pupil_diameter_mm);
+  if (!(e.image_distance_mm > 0 && e.image_distance_mm <= 50))
+    fail("image_distance_mm: must be in (0, 50] mm, got {}", e.image_distance_mm);
   if (!(std::abs(e.refraction_d) <= 30)) fail("eye: refraction must be within ±30 D, got {}", e.refraction_d);
   if (!(e.age_years >= 0 && e.age_years <= 120)) fail("eye: age must be in [0, 120] years, got {}", e.age_years);
   if (!(e.cylinder_d >= 0 && e.cylinder_d <= 10)) fail("eye: cylinder must be in [0, 10] D, got {}", e.cylinder_d);
@@ -67,13 +70,9 @@ void validate(const EyeParams& e) {
 
 double accommodation_amplitude_d(double age) { return std::max(0.0, 18.5 - 0.3 * age); }
 
-double FocusRange::far_point_m() const {
-  return far_vergence > 0 ? 1.0 / far_vergence : std::numeric_limits<double>::infinity();
-}
+double FocusRange::far_point_m() const { return far_vergence > 0 ? 1.0 / far_vergence : std::numeric_limits<double>::infinity(); }
 
-double FocusRange::near_point_m() const {
-  return near_vergence > 0 ? 1.0 / near_vergence : std::numeric_limits<double>::infinity();
-}
+double FocusRange::near_point_m() const { return near_vergence > 0 ? 1.0 / near_vergence : std::numeric_limits<double>::infinity(); }
 
 FocusRange focus_range(const EyeParams& e) {
   // A myope (refraction −M) is focused at vergence M when relaxed; a hyperope (+H) at −H.

@@ -37,8 +37,8 @@ double accommodation_amplitude_d(double age_years);
 
 // The object vergences (1/m) the eye can focus on: [far, near].
 struct FocusRange {
-  double far_vergence = 0;   // 1/far point; may be negative (hyperopia beyond the amplitude)
-  double near_vergence = 0;  // 1/near point
+  double far_vergence = 0;      // 1/far point; may be negative (hyperopia beyond the amplitude)
+  double near_vergence = 0;     // 1/near point
   double far_point_m() const;   // infinity when far_vergence ≤ 0
   double near_point_m() const;  // infinity when near_vergence ≤ 0
 };

@@ -12,7 +12,7 @@ TEST(Eye, CocFollowsTheThinLensAtKnownDistances) {
   EyeParams eye;  // A = 3.5 mm
   // Focused at 2 m, a point at 1 m: A·|1/1 − 1/2| = 3.5e-3 × 0.5 rad
   EXPECT_NEAR(coc_angle_rad(eye, 1.0, 1.0 / 2.0), 1.75e-3, 1e-12);
-  EXPECT_NEAR(coc_angle_rad(eye, 2.0, 0.5), 0.0, 1e-15);  // in focus
+  EXPECT_NEAR(coc_angle_rad(eye, 2.0, 0.5), 0.0, 1e-15);           // in focus
   EXPECT_NEAR(coc_angle_rad(eye, INFINITY, 0.5), 1.75e-3, 1e-12);  // infinity: vergence 0
   EXPECT_NEAR(coc_retina_mm(eye, 1.0, 0.5), 1.75e-3 * 25.0, 1e-12);
   // Demers' form |A·F·(P − D) / (D·(P − F))| with 1/F = 1/P + 1/I, as in the paper: the same

@@ -25,15 +25,14 @@ Display parse_display(const std::string& text, Display defaults) {
     }
   }
   if (values.size() != 3 && values.size() != 5)
-    fail("display: expected 3 or 5 comma-separated values W_CM,H_CM,DIST_CM[,RES_X,RES_Y], got {}",
-         values.size());
+    fail("display: expected 3 or 5 comma-separated values W_CM,H_CM,DIST_CM[,RES_X,RES_Y], got {}", values.size());
   Display d = defaults;
   d.width_cm = values[0];
   d.height_cm = values[1];
   d.distance_cm = values[2];
   if (values.size() == 5) {
-    if (values[3] != std::floor(values[3]) || values[4] != std::floor(values[4]) || values[3] > 1e6 ||
-        values[4] > 1e6 || values[3] < 1 || values[4] < 1)
+    if (values[3] != std::floor(values[3]) || values[4] != std::floor(values[4]) || values[3] > 1e6 || values[4] > 1e6 || values[3] < 1 ||
+        values[4] < 1)
       fail("display: resolution {}x{} must be whole pixels between 1 and 1000000", values[3], values[4]);
     d.res_x = static_cast<int>(values[3]);
     d.res_y = static_cast<int>(values[4]);
@@ -45,8 +44,7 @@ Display parse_display(const std::string& text, Display defaults) {
 void validate(const Display& d) {
   if (!(d.width_cm > 0) || !std::isfinite(d.width_cm)) fail("display width must be > 0 cm, got {}", d.width_cm);
   if (!(d.height_cm > 0) || !std::isfinite(d.height_cm)) fail("display height must be > 0 cm, got {}", d.height_cm);
-  if (!(d.distance_cm > 0) || !std::isfinite(d.distance_cm))
-    fail("viewing distance must be > 0 cm, got {}", d.distance_cm);
+  if (!(d.distance_cm > 0) || !std::isfinite(d.distance_cm)) fail("viewing distance must be > 0 cm, got {}", d.distance_cm);
   if (d.res_x < 1 || d.res_y < 1) fail("display resolution must be at least 1x1, got {}x{}", d.res_x, d.res_y);
 }
 

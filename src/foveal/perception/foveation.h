@@ -79,26 +79,24 @@ FOVEAL_HD inline double blend_weight(double q, int rays, const FoveationParams& 
 
 // Per-pixel result of the foveation model.
 struct FoveaSample {
-  double ex_deg = 0;  // horizontal angular offset from the gaze, degrees
-  double ey_deg = 0;  // vertical angular offset from the gaze, degrees
-  double angle_deg = 0;  // exact angle between pixel and gaze eye rays, degrees
+  double ex_deg = 0;         // horizontal angular offset from the gaze, degrees
+  double ey_deg = 0;         // vertical angular offset from the gaze, degrees
+  double angle_deg = 0;      // exact angle between pixel and gaze eye rays, degrees
   double effective_deg = 0;  // elliptical eccentricity sqrt((Ex/a)² + Ey²), degrees
-  double quality = 1;  // q(E) in [0, 1]
-  int rays = 0;        // AO rays n(E)
-  double blend = 1;    // b(E) in [0, 1]
+  double quality = 1;        // q(E) in [0, 1]
+  int rays = 0;              // AO rays n(E)
+  double blend = 1;          // b(E) in [0, 1]
 };
 
 // The model for one frame: display, render size and gaze; evaluate() is a pure per-pixel function,
 // the same on the CPU and the GPU (the object is trivially copyable into a kernel's arguments).
 class FoveationModel {
  public:
-  FoveationModel(const Display& display, int render_width, int render_height, glm::dvec2 gaze_px,
-                 const FoveationParams& params);
+  FoveationModel(const Display& display, int render_width, int render_height, glm::dvec2 gaze_px, const FoveationParams& params);
 
   // Eye ray (cm, eye at origin, +z towards the screen, +y down) through a render position.
   FOVEAL_HD glm::dvec3 eye_ray(double x_px, double y_px) const {
-    return {(x_px / width_ - 0.5) * display_.width_cm, (y_px / height_ - 0.5) * display_.height_cm,
-            display_.distance_cm};
+    return {(x_px / width_ - 0.5) * display_.width_cm, (y_px / height_ - 0.5) * display_.height_cm, display_.distance_cm};
   }
   // The model at the centre of pixel (x, y).
   FOVEAL_HD FoveaSample evaluate(int x, int y) const { return evaluate_at(x + 0.5, y + 0.5); }

@@ -44,7 +44,7 @@ TEST(Acuity, Equation4AtKnownPoints) {
 }
 
 TEST(Budget, RaysAndBlendFollowTheFormulas) {
-  FoveationParams p;  // n_max 400, n_min 0, γ 2, β 0
+  FoveationParams p;                                // n_max 400, n_min 0, γ 2, β 0
   EXPECT_DOUBLE_EQ(blend_weight(0.3, 10, p), 1.0);  // the default: AO wherever rays are cast
   p.beta = 1;
   EXPECT_EQ(ao_ray_budget(1.0, p), 400);

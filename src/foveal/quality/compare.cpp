@@ -16,7 +16,7 @@ namespace foveal {
 
 std::vector<Band> default_bands() {
   const double inf = std::numeric_limits<double>::infinity();
-  return {{"0-2.5", 0, 2.5, false},  {"2.5-5", 2.5, 5, false}, {"5-10", 5, 10, false},
+  return {{"0-2.5", 0, 2.5, false}, {"2.5-5", 2.5, 5, false}, {"5-10", 5, 10, false},
           {"10-20", 10, 20, false}, {"20+", 20, inf, false},  {"q=1", 0, 0, true}};
 }
 
@@ -131,7 +131,8 @@ ReferenceNoise reference_noise(const Image& b2, const Image& b, SsimBorder ssim_
 
 double acuity_weighted_rmse(const Image& a, const Image& b, const std::vector<float>& quality) {
   check_same(a, b, "the image");
-  if (quality.size() != static_cast<size_t>(a.width) * a.height) fail("acuity_weighted_rmse: {} q values for {}x{} pixels", quality.size(), a.width, a.height);
+  if (quality.size() != static_cast<size_t>(a.width) * a.height)
+    fail("acuity_weighted_rmse: {} q values for {}x{} pixels", quality.size(), a.width, a.height);
   std::vector<double> se;
   pixel_errors(a, b, se, nullptr);
   double w_sum = 0, w_se = 0;
@@ -256,8 +257,8 @@ Comparison compare_images(const Image& a, const Image& b, const Image* b2, const
   return compare(a, b, &noise, display, gaze_px, params, bands, ssim_border);
 }
 
-Comparison compare_images(const Image& a, const Image& b, const ReferenceNoise& noise, const Display& display,
-                          glm::dvec2 gaze_px, const FoveationParams& params, const std::vector<Band>& bands, SsimBorder ssim_border) {
+Comparison compare_images(const Image& a, const Image& b, const ReferenceNoise& noise, const Display& display, glm::dvec2 gaze_px,
+                          const FoveationParams& params, const std::vector<Band>& bands, SsimBorder ssim_border) {
   return compare(a, b, &noise, display, gaze_px, params, bands, ssim_border);
 }
 
@@ -314,9 +315,10 @@ void write_error_plot(const Comparison& c, const std::string& path) {
   plot.strokes.push_back(err);
   if (b2) plot.strokes.push_back(floor);
   plot.labels.push_back({glm::vec2((left + right) / 2, bottom + 48), "eccentricity from the gaze (degrees)", 15, true});
-  plot.labels.push_back({glm::vec2(left, 24), b2 ? "RMSE per 1-degree bin: image vs reference (orange), reference noise (grey)"
-                                                 : "RMSE per 1-degree bin: image vs reference",
-                         13, false});
+  plot.labels.push_back(
+      {glm::vec2(left, 24),
+       b2 ? "RMSE per 1-degree bin: image vs reference (orange), reference noise (grey)" : "RMSE per 1-degree bin: image vs reference", 13,
+       false});
   save_plot(plot, path);
 }
 
@@ -327,15 +329,25 @@ namespace foveal {
 namespace {
 nlohmann::json json_number(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(v > 0 ? "inf" : "-inf"); }
 nlohmann::json stats_json(const ErrorStats& s) {
-  return {{"pixels", s.pixels}, {"rmse", s.rmse}, {"mse", s.mse}, {"psnr_db", json_number(s.psnr)},
-          {"ssim", std::isfinite(s.ssim) ? nlohmann::json(s.ssim) : nlohmann::json(nullptr)}, {"ssim_pixels", s.ssim_pixels}};
+  return {{"pixels", s.pixels},
+          {"rmse", s.rmse},
+          {"mse", s.mse},
+          {"psnr_db", json_number(s.psnr)},
+          {"ssim", std::isfinite(s.ssim) ? nlohmann::json(s.ssim) : nlohmann::json(nullptr)},
+          {"ssim_pixels", s.ssim_pixels}};
 }
 }  // namespace
 
 nlohmann::json comparison_json(const Comparison& c, const Display& display) {
-  nlohmann::json j = {{"width", c.width}, {"height", c.height}, {"gaze_px", {c.gaze_px.x, c.gaze_px.y}},
-                      {"display", {{"width_cm", display.width_cm}, {"height_cm", display.height_cm}, {"distance_cm", display.distance_cm},
-                                   {"res_x", display.res_x}, {"res_y", display.res_y}}},
+  nlohmann::json j = {{"width", c.width},
+                      {"height", c.height},
+                      {"gaze_px", {c.gaze_px.x, c.gaze_px.y}},
+                      {"display",
+                       {{"width_cm", display.width_cm},
+                        {"height_cm", display.height_cm},
+                        {"distance_cm", display.distance_cm},
+                        {"res_x", display.res_x},
+                        {"res_y", display.res_y}}},
                       {"whole", stats_json(c.whole)}};
   j["acuity_weighted_rmse"] = c.weighted_rmse;
   if (c.whole_noise) {

@@ -29,11 +29,11 @@ namespace foveal {
 struct ErrorStats {
   size_t pixels = 0;
   size_t ssim_pixels = 0;  // pixels with an SSIM (fewer than `pixels` near the border with SsimBorder::valid)
-  double mse = 0;   // mean over pixels and channels of (a − b)²
+  double mse = 0;          // mean over pixels and channels of (a − b)²
   double rmse = 0;
   double psnr = std::numeric_limits<double>::infinity();  // 10·log10(1/mse) dB; inf when identical
-  double ssim = 1;  // mean of the SSIM map over the pixels that have one (NaN when none has)
-  double rmse_rel_se = 0;  // standard error of the RMSE over these pixels, relative to it
+  double ssim = 1;                                        // mean of the SSIM map over the pixels that have one (NaN when none has)
+  double rmse_rel_se = 0;                                 // standard error of the RMSE over these pixels, relative to it
 };
 
 // A region of the image: an eccentricity range [lo, hi) in degrees, or the q(E) = 1 region.
@@ -47,11 +47,11 @@ std::vector<Band> default_bands();
 
 struct BandResult {
   Band band;
-  ErrorStats error;                    // a against b
-  std::optional<ErrorStats> noise;     // the reference against the second reference
-  double noise_ratio = 0;              // error.rmse / noise.rmse (0 without a second reference)
-  double ratio_se = 0;                 // its standard error
-  bool within_noise = false;           // noise_ratio ≤ 1 + 2·ratio_se: indistinguishable from the reference's own noise
+  ErrorStats error;                 // a against b
+  std::optional<ErrorStats> noise;  // the reference against the second reference
+  double noise_ratio = 0;           // error.rmse / noise.rmse (0 without a second reference)
+  double ratio_se = 0;              // its standard error
+  bool within_noise = false;        // noise_ratio ≤ 1 + 2·ratio_se: indistinguishable from the reference's own noise
 };
 
 struct Comparison {
@@ -60,18 +60,18 @@ struct Comparison {
   ErrorStats whole;
   std::optional<ErrorStats> whole_noise;
   std::vector<BandResult> bands;
-  std::vector<float> ssim_map;          // per pixel, mean over channels
-  std::vector<float> abs_error;         // per pixel |a − b|, mean over channels
-  std::vector<double> squared_error;    // per pixel (a − b)², mean over channels
+  std::vector<float> ssim_map;              // per pixel, mean over channels
+  std::vector<float> abs_error;             // per pixel |a − b|, mean over channels
+  std::vector<double> squared_error;        // per pixel (a − b)², mean over channels
   std::vector<double> noise_squared_error;  // per pixel (b2 − b)² (empty without a second reference)
-  std::vector<float> eccentricity_deg;  // per pixel, the renderer's exact angle from the gaze
-  std::vector<uint8_t> foveal;          // per pixel: q(E) = 1
-  std::vector<float> quality;           // per pixel q(E), the renderer's normalised acuity
+  std::vector<float> eccentricity_deg;      // per pixel, the renderer's exact angle from the gaze
+  std::vector<uint8_t> foveal;              // per pixel: q(E) = 1
+  std::vector<float> quality;               // per pixel q(E), the renderer's normalised acuity
   // Acuity-weighted RMSE: sqrt(Σ q² · e² / Σ q²). An error counts in proportion to the resolvable
   // cells per unit area where it lies (∝ f_c², the reasoning behind γ = 2): one number for the
   // error a viewer fixating the gaze point can see. The same for the second reference when given.
   double weighted_rmse = 0;
-  double weighted_noise_rmse = 0;   // 0 without a second reference
+  double weighted_noise_rmse = 0;  // 0 without a second reference
   double weighted_ratio() const { return weighted_noise_rmse > 0 ? weighted_rmse / weighted_noise_rmse : 0.0; }
 };
 
@@ -98,8 +98,8 @@ struct ReferenceNoise {
 ReferenceNoise reference_noise(const Image& b2, const Image& b, SsimBorder ssim_border = SsimBorder::reflect);
 // The same comparison with the reference's noise already computed.
 // (`ssim_border` must be the one the noise was computed with.)
-Comparison compare_images(const Image& a, const Image& b, const ReferenceNoise& noise, const Display& display,
-                          glm::dvec2 gaze_px, const FoveationParams& params, const std::vector<Band>& bands = default_bands(),
+Comparison compare_images(const Image& a, const Image& b, const ReferenceNoise& noise, const Display& display, glm::dvec2 gaze_px,
+                          const FoveationParams& params, const std::vector<Band>& bands = default_bands(),
                           SsimBorder ssim_border = SsimBorder::reflect);
 
 // sqrt(Σ q²·e² / Σ q²) of a against b with the given per-pixel q (a Comparison's `quality`):

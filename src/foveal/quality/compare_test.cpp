@@ -218,8 +218,8 @@ TEST(Compare, SsimValidBorderIsTheReferenceConvention) {
       for (int x = 5; x < img.width - 5; ++x, ++count)
         for (int c = 0; c < img.channels; ++c) sum += ssim_at(a[c], b[c], x, y) / img.channels;
     const double reference = sum / count;
-    const Comparison valid = compare_images(other, img, nullptr, display, {img.width / 2.0, img.height / 2.0}, {}, default_bands(),
-                                            SsimBorder::valid);
+    const Comparison valid =
+        compare_images(other, img, nullptr, display, {img.width / 2.0, img.height / 2.0}, {}, default_bands(), SsimBorder::valid);
     EXPECT_EQ(valid.whole.ssim_pixels, count) << name;
     EXPECT_NEAR(valid.whole.ssim, reference, 1e-6) << name;
     EXPECT_TRUE(std::isnan(valid.ssim_map[0])) << name;

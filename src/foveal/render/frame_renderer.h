@@ -50,9 +50,9 @@ class FrameRenderer {
   virtual ComputeDevice device() const = 0;
   // One line for the user: "cpu", or "cuda (NVIDIA H100 …)".
   std::string describe() const { return describe_device(device()); }
-  virtual size_t triangles() const = 0;          // triangles traced
-  virtual double build_ms() const = 0;           // the acceleration structure's build time
-  virtual std::string trace_api() const = 0;     // how rays are traced: "stream", "packet8", "single" (Embree) or "bvh2" (the GPU)
+  virtual size_t triangles() const = 0;       // triangles traced
+  virtual double build_ms() const = 0;        // the acceleration structure's build time
+  virtual std::string trace_api() const = 0;  // how rays are traced: "stream", "packet8", "single" (Embree) or "bvh2" (the GPU)
 };
 
 // A renderer for the scene on `device`; throws Error with the reason when the CUDA backend is

@@ -41,13 +41,20 @@ Image aov_image(const Frame& f, const std::string& name) {
         continue;
       }
       float v = 0;
-      if (name == "ao") v = hit ? f.visibility[i] : 1.0f;
-      else if (name == "depth") v = hit ? g.depth[i] : kNaN;
-      else if (name == "budget") v = f.maps.rays[i];
-      else if (name == "quality") v = f.maps.quality[i];
-      else if (name == "blend") v = f.maps.blend[i];
-      else if (name == "eccentricity") v = f.maps.eccentricity[i];
-      else if (name == "traced") v = f.ao_traced.empty() ? (hit ? f.maps.rays[i] : 0) : f.ao_traced[i];  // rays traced this frame
+      if (name == "ao")
+        v = hit ? f.visibility[i] : 1.0f;
+      else if (name == "depth")
+        v = hit ? g.depth[i] : kNaN;
+      else if (name == "budget")
+        v = f.maps.rays[i];
+      else if (name == "quality")
+        v = f.maps.quality[i];
+      else if (name == "blend")
+        v = f.maps.blend[i];
+      else if (name == "eccentricity")
+        v = f.maps.eccentricity[i];
+      else if (name == "traced")
+        v = f.ao_traced.empty() ? (hit ? f.maps.rays[i] : 0) : f.ao_traced[i];  // rays traced this frame
       else {
         std::string known;
         for (const auto& n : aov_names()) known += (known.empty() ? "" : ", ") + n;
@@ -63,8 +70,7 @@ void write_aovs(const Frame& frame, const std::string& spec) {
   std::string item;
   while (std::getline(stream, item, ',')) {
     const auto eq = item.find('=');
-    if (eq == std::string::npos || eq == 0 || eq + 1 == item.size())
-      fail("aov: expected NAME=FILE[,NAME=FILE…], got '{}'", item);
+    if (eq == std::string::npos || eq == 0 || eq + 1 == item.size()) fail("aov: expected NAME=FILE[,NAME=FILE…], got '{}'", item);
     const std::string name = item.substr(0, eq), path = item.substr(eq + 1);
     const std::string ext = std::filesystem::path(path).extension().string();
     if (ext != ".pfm" && ext != ".exr") fail("aov: {}: float buffers are written as .pfm or .exr", path);
@@ -89,9 +95,7 @@ void write_acuity_plot(const Display& display, const FoveationParams& params, co
   plot.width = 740;
   const float left = 70, right = 650, top = 40, bottom = 380;
   const double e_max = 60.0, cpd_max = 45.0;
-  auto px = [&](double e, double cpd) {
-    return glm::vec2(left + (right - left) * e / e_max, bottom - (bottom - top) * cpd / cpd_max);
-  };
+  auto px = [&](double e, double cpd) { return glm::vec2(left + (right - left) * e / e_max, bottom - (bottom - top) * cpd / cpd_max); };
   const double max_cpd = max_display_cpd(display);
   // Axes and ticks
   plot.strokes.push_back({{px(0, cpd_max), px(0, 0), px(e_max, 0)}, glm::vec3(0), 1.5f});
@@ -140,17 +144,16 @@ void write_acuity_plot(const Display& display, const FoveationParams& params, co
     ly += 20;
   }
   plot.labels.push_back({{left + 10, bottom + 64},
-                         fmt::format("display {:g}x{:g} cm at {:g} cm, {}x{} px: {:.1f} x {:.1f} deg, {:.1f} px/deg",
-                                     display.width_cm, display.height_cm, display.distance_cm, display.res_x, display.res_y,
-                                     field_of_view_x_deg(display), field_of_view_y_deg(display), pixels_per_degree(display)),
+                         fmt::format("display {:g}x{:g} cm at {:g} cm, {}x{} px: {:.1f} x {:.1f} deg, {:.1f} px/deg", display.width_cm,
+                                     display.height_cm, display.distance_cm, display.res_x, display.res_y, field_of_view_x_deg(display),
+                                     field_of_view_y_deg(display), pixels_per_degree(display)),
                          12});
   plot.height = 460;
   save_plot(plot, path);
 }
 
-nlohmann::json frame_stats_json(const Frame& f, const RenderParams& p, const Scene& scene, size_t bvh_triangles,
-                                double build_ms, int threads, const std::string& device,
-                                const std::string& trace_api) {
+nlohmann::json frame_stats_json(const Frame& f, const RenderParams& p, const Scene& scene, size_t bvh_triangles, double build_ms,
+                                int threads, const std::string& device, const std::string& trace_api) {
   const FrameStats& s = f.stats;
   nlohmann::json j;
   j["mode"] = to_string(p.mode);
@@ -160,15 +163,12 @@ nlohmann::json frame_stats_json(const Frame& f, const RenderParams& p, const Sce
   j["seed"] = p.seed;
   j["threads"] = threads;
   j["device"] = device;
-  j["scene"] = {{"source", scene.source},
-                {"triangles", bvh_triangles},
-                {"skipped_triangles", scene.skipped_triangles},
-                {"build_ms", build_ms}};
-  j["rays"] = {{"primary", s.primary_rays}, {"ao", s.ao_rays}, {"shadow", s.shadow_rays},
-               {"total", s.primary_rays + s.ao_rays + s.shadow_rays}};
+  j["scene"] = {
+      {"source", scene.source}, {"triangles", bvh_triangles}, {"skipped_triangles", scene.skipped_triangles}, {"build_ms", build_ms}};
+  j["rays"] = {
+      {"primary", s.primary_rays}, {"ao", s.ao_rays}, {"shadow", s.shadow_rays}, {"total", s.primary_rays + s.ao_rays + s.shadow_rays}};
   j["ao_rays_per_pixel"] = {{"mean", s.ao_rays_mean}, {"min", s.ao_rays_min}, {"max", s.ao_rays_max}};
-  j["time_ms"] = {{"primary", s.primary_ms}, {"foveation", s.foveation_ms}, {"ao", s.ao_ms}, {"shade", s.shade_ms},
-                  {"total", s.total_ms}};
+  j["time_ms"] = {{"primary", s.primary_ms}, {"foveation", s.foveation_ms}, {"ao", s.ao_ms}, {"shade", s.shade_ms}, {"total", s.total_ms}};
   j["ao_rays_per_second"] = s.ao_ms > 0 ? s.ao_rays / (s.ao_ms / 1000.0) : 0.0;
   j["model"] = {{"display_cm", {p.display.width_cm, p.display.height_cm}},
                 {"distance_cm", p.display.distance_cm},

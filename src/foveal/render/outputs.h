@@ -32,8 +32,8 @@ void mark_gaze(Image& image, glm::dvec2 gaze_px);
 void write_acuity_plot(const Display& display, const FoveationParams& params, const std::string& path);
 
 // The `--stats` JSON of the CLI contract for one frame.
-nlohmann::json frame_stats_json(const Frame& frame, const RenderParams& params, const Scene& scene,
-                                size_t bvh_triangles, double build_ms, int threads, const std::string& device,
+nlohmann::json frame_stats_json(const Frame& frame, const RenderParams& params, const Scene& scene, size_t bvh_triangles, double build_ms,
+                                int threads, const std::string& device,
                                 const std::string& trace_api);  // device "cpu"/"cuda", trace API "stream", … or "bvh2"
 
 // Peak resident memory of this process so far, MiB.

@@ -68,8 +68,8 @@ struct AoPixelRays {
   SobolScramble scramble;
   float distance;
 
-  FOVEAL_HD AoPixelRays(glm::vec3 position, glm::vec3 normal, float epsilon, float ao_distance, uint64_t seed,
-                        uint32_t x, uint32_t y, const uint32_t* sobol_table)
+  FOVEAL_HD AoPixelRays(glm::vec3 position, glm::vec3 normal, float epsilon, float ao_distance, uint64_t seed, uint32_t x, uint32_t y,
+                        const uint32_t* sobol_table)
       : frame(make_frame(normal)),
         origin(position + ray_offset(position, epsilon) * normal),
         scramble(sobol_scramble(pixel_seed(seed, x, y), sobol_table)),
@@ -148,9 +148,9 @@ FOVEAL_HD inline glm::vec3 background_colour() { return {0.06f, 0.06f, 0.08f}; }
 // Phong shading of eq. 2 at a surface point seen along `view_dir`, with the ambient factor k_a
 // already blended. `occluded(ray)` answers shadow rays (called only when `shadows`).
 template <class Occluded>
-FOVEAL_HD glm::vec3 shade_point(const MaterialView& m, glm::vec3 albedo, glm::vec3 p, glm::vec3 n, glm::vec3 ng,
-                                glm::vec3 view_dir, float ka, glm::vec3 ambient, const Light* lights, int light_count,
-                                bool shadows, float epsilon, Occluded&& occluded) {
+FOVEAL_HD glm::vec3 shade_point(const MaterialView& m, glm::vec3 albedo, glm::vec3 p, glm::vec3 n, glm::vec3 ng, glm::vec3 view_dir,
+                                float ka, glm::vec3 ambient, const Light* lights, int light_count, bool shadows, float epsilon,
+                                Occluded&& occluded) {
   const glm::vec3 v = -view_dir;
   glm::vec3 c = ka * ambient * albedo;
   for (int k = 0; k < light_count; ++k) {

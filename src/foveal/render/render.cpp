@@ -20,9 +20,9 @@
 namespace foveal {
 namespace {
 
-constexpr int kTile = kTileSize;     // pixels per tile side
-constexpr size_t kAoBatch = 1024;    // occlusion rays handed to the tracer at once
-constexpr int kMaxRaysLimit = 65535; // n is stored in 16 bits
+constexpr int kTile = kTileSize;      // pixels per tile side
+constexpr size_t kAoBatch = 1024;     // occlusion rays handed to the tracer at once
+constexpr int kMaxRaysLimit = 65535;  // n is stored in 16 bits
 
 // Run body(x0, x1, y0, y1, tile) over fixed 16×16 tiles in parallel; the result never depends on the order.
 template <class Body>
@@ -36,7 +36,6 @@ void for_each_tile(int width, int height, Body&& body) {
       body(x0, std::min(x0 + kTile, width), y0, std::min(y0 + kTile, height));
   });
 }
-
 
 }  // namespace
 
@@ -61,8 +60,7 @@ void validate(const RenderParams& p) {
   if (p.ao_distance && !(*p.ao_distance > 0)) fail("ao_distance: must be > 0 or inf, got {}", *p.ao_distance);
   if (p.ambient_constant && !(*p.ambient_constant >= 0 && std::isfinite(*p.ambient_constant)))
     fail("ambient_constant: must be a number >= 0 or 'auto', got {}", *p.ambient_constant);
-  if (p.gaze_px && !(std::isfinite(p.gaze_px->x) && std::isfinite(p.gaze_px->y)))
-    fail("gaze_px: must be finite render pixels");
+  if (p.gaze_px && !(std::isfinite(p.gaze_px->x) && std::isfinite(p.gaze_px->y))) fail("gaze_px: must be finite render pixels");
   const AoReuseParams& r = p.reuse;
   if (r.adaptive_min_rays < 1 || r.adaptive_min_rays > kMaxRaysLimit)
     fail("adaptive_min_rays: must be in [1, {}], got {}", kMaxRaysLimit, r.adaptive_min_rays);
@@ -82,7 +80,6 @@ CameraRays::CameraRays(const Camera& camera, int width, int height)
   right_ = right * tan_half * aspect;
   up_ = glm::cross(right, forward_) * tan_half;
 }
-
 
 std::vector<MaterialView> material_views(const Scene& scene) {
   std::vector<MaterialView> views;
@@ -119,7 +116,6 @@ float resolve_ao_distance(const Scene& scene, const Bounds& bounds, std::optiona
 }
 
 float surface_epsilon(const Bounds& bounds) { return std::max(1e-9f, 1e-6f * bounds.diagonal()); }
-
 
 namespace {
 
@@ -177,7 +173,8 @@ constexpr auto kNothingAfter = [](int, int, int, int) {};
 GBuffer trace_primary(const Tracer& tracer, const Scene& scene, const Camera& camera, int width, int height) {
   GBuffer g;
   const CameraRays camera_ray(camera, width, height);
-  trace_into_gbuffer(tracer, scene, width, height, [&](int x, int y) { return camera_ray(x + 0.5, y + 0.5); }, g, kNothingAfter);
+  trace_into_gbuffer(
+      tracer, scene, width, height, [&](int x, int y) { return camera_ray(x + 0.5, y + 0.5); }, g, kNothingAfter);
   return g;
 }
 
@@ -213,8 +210,8 @@ FoveationMaps foveation_maps(const RenderParams& params, glm::dvec2 gaze_px) {
   return m;
 }
 
-float estimate_visibility(const Tracer& tracer, glm::vec3 position, glm::vec3 normal, int rays, float ao_distance,
-                          float epsilon, uint64_t seed, uint32_t x, uint32_t y) {
+float estimate_visibility(const Tracer& tracer, glm::vec3 position, glm::vec3 normal, int rays, float ao_distance, float epsilon,
+                          uint64_t seed, uint32_t x, uint32_t y) {
   if (rays <= 0) return 1.0f;
   const AoPixelRays pixel(position, normal, epsilon, ao_distance, seed, x, y, sobol_table_2d());
   std::vector<Ray> batch(static_cast<size_t>(rays));
@@ -241,8 +238,8 @@ AoSampling ao_sampling(const AoReuseParams& reuse, uint32_t frame_index) {
   return s;
 }
 
-uint64_t trace_ao_counts(const Tracer& tracer, const GBuffer& g, const FoveationMaps& maps, float ao_distance, float epsilon,
-                         uint64_t seed, const AoSampling& sampling, AoCounts& counts, const AoPassHooks& hooks) {
+uint64_t trace_ao_counts(const Tracer& tracer, const GBuffer& g, const FoveationMaps& maps, float ao_distance, float epsilon, uint64_t seed,
+                         const AoSampling& sampling, AoCounts& counts, const AoPassHooks& hooks) {
   const size_t pixels = static_cast<size_t>(g.width) * g.height;
   const bool prior = counts.open.size() == pixels && counts.cast.size() == pixels;
   if (!prior) {
@@ -333,8 +330,10 @@ uint64_t trace_ao_counts(const Tracer& tracer, const GBuffer& g, const Foveation
     if (hooks.progress) {
       const int done = ++tiles_done;
       std::unique_lock lock(progress_mutex, std::defer_lock);
-      if (done == tiles) lock.lock();  // the last tile always reports
-      else if (!lock.try_lock()) return;
+      if (done == tiles)
+        lock.lock();  // the last tile always reports
+      else if (!lock.try_lock())
+        return;
       if (done > tiles_reported) {  // never backwards
         tiles_reported = done;
         hooks.progress(static_cast<double>(done) / tiles);
@@ -356,20 +355,20 @@ void visibility_from_counts(const AoCounts& c, std::vector<float>& visibility) {
 
 }  // namespace
 
-uint64_t trace_ao(const Tracer& tracer, const GBuffer& g, const FoveationMaps& maps, float ao_distance, float epsilon,
-                  uint64_t seed, std::vector<float>& visibility, const AoPassHooks& hooks) {
+uint64_t trace_ao(const Tracer& tracer, const GBuffer& g, const FoveationMaps& maps, float ao_distance, float epsilon, uint64_t seed,
+                  std::vector<float>& visibility, const AoPassHooks& hooks) {
   AoCounts counts;
   const uint64_t rays = trace_ao_counts(tracer, g, maps, ao_distance, epsilon, seed, AoSampling{}, counts, hooks);
   visibility_from_counts(counts, visibility);
   return rays;
 }
 
-void collect_ao_rays(const GBuffer& g, const FoveationMaps& maps, float ao_distance, float epsilon, uint64_t seed,
-                     size_t stride, std::vector<Ray>& rays) {
+void collect_ao_rays(const GBuffer& g, const FoveationMaps& maps, float ao_distance, float epsilon, uint64_t seed, size_t stride,
+                     std::vector<Ray>& rays) {
   for (size_t i = 0; i < g.prim.size(); i += std::max<size_t>(1, stride)) {
     if (!g.hit(i) || maps.rays[i] == 0) continue;
-    const AoPixelRays pixel(g.position[i], g.geo_normal[i], epsilon, ao_distance, seed,
-                            static_cast<uint32_t>(i % g.width), static_cast<uint32_t>(i / g.width), sobol_table_2d());
+    const AoPixelRays pixel(g.position[i], g.geo_normal[i], epsilon, ao_distance, seed, static_cast<uint32_t>(i % g.width),
+                            static_cast<uint32_t>(i / g.width), sobol_table_2d());
     for (uint32_t k = 0; k < maps.rays[i]; ++k) rays.push_back(pixel(k));
   }
 }
@@ -392,8 +391,8 @@ namespace {
 // i's k_a, `occluded(ray)` answers shadow rays (asked only with `shadows`).
 template <class AmbientFactor, class Occluded>
 void shade_tile(const Scene& scene, const GBuffer& g, const std::vector<MaterialView>& materials, const std::vector<Light>& lights,
-                bool shadows, float epsilon, const AmbientFactor& ambient_factor, const Occluded& occluded, int x0, int x1, int y0,
-                int y1, Image& image) {
+                bool shadows, float epsilon, const AmbientFactor& ambient_factor, const Occluded& occluded, int x0, int x1, int y0, int y1,
+                Image& image) {
   for (int y = y0; y < y1; ++y)
     for (int x = x0; x < x1; ++x) {
       const size_t i = static_cast<size_t>(y) * g.width + x;
@@ -411,13 +410,18 @@ void shade_tile(const Scene& scene, const GBuffer& g, const std::vector<Material
 // colour), a tile at a time into `image`.
 class ConstantAmbientShading {
  public:
-  ConstantAmbientShading(const Scene& scene, const Camera& camera, const GBuffer& g, float ambient_constant, float epsilon,
-                         Image& image)
-      : scene_(scene), g_(g), lights_(frame_lights(scene.lights, camera)), materials_(material_views(scene)),
-        ambient_constant_(ambient_constant), epsilon_(epsilon), image_(image) {}
+  ConstantAmbientShading(const Scene& scene, const Camera& camera, const GBuffer& g, float ambient_constant, float epsilon, Image& image)
+      : scene_(scene),
+        g_(g),
+        lights_(frame_lights(scene.lights, camera)),
+        materials_(material_views(scene)),
+        ambient_constant_(ambient_constant),
+        epsilon_(epsilon),
+        image_(image) {}
   void operator()(int x0, int x1, int y0, int y1) const {
-    shade_tile(scene_, g_, materials_, lights_, false, epsilon_, [this](size_t) { return ambient_constant_; },
-               [](const Ray&) { return false; }, x0, x1, y0, y1, image_);
+    shade_tile(
+        scene_, g_, materials_, lights_, false, epsilon_, [this](size_t) { return ambient_constant_; }, [](const Ray&) { return false; },
+        x0, x1, y0, y1, image_);
   }
 
  private:
@@ -432,8 +436,7 @@ class ConstantAmbientShading {
 }  // namespace
 
 Image shade(const Tracer& tracer, const Scene& scene, const Camera& camera, const GBuffer& g, const FoveationMaps& maps,
-            const std::vector<float>& visibility, float ambient_constant, bool shadows, float epsilon,
-            uint64_t* shadow_rays) {
+            const std::vector<float>& visibility, float ambient_constant, bool shadows, float epsilon, uint64_t* shadow_rays) {
   Image image(g.width, g.height, 3);
   const std::vector<Light> lights = frame_lights(scene.lights, camera);
   const std::vector<MaterialView> materials = material_views(scene);
@@ -467,8 +470,9 @@ void trace_primary_shaded(const Tracer& tracer, const Scene& scene, const Camera
                           float epsilon, GBuffer& gbuffer, Image& color) {
   if (color.width != width || color.height != height || color.channels != 3) color = Image(width, height, 3);  // else its memory is kept
   const CameraRays camera_ray(camera, width, height);
-  trace_into_gbuffer(tracer, scene, width, height, [&](int x, int y) { return camera_ray(x + 0.5, y + 0.5); }, gbuffer,
-                     ConstantAmbientShading(scene, camera, gbuffer, ambient_constant, epsilon, color));
+  trace_into_gbuffer(
+      tracer, scene, width, height, [&](int x, int y) { return camera_ray(x + 0.5, y + 0.5); }, gbuffer,
+      ConstantAmbientShading(scene, camera, gbuffer, ambient_constant, epsilon, color));
 }
 
 Frame render_frame(const Tracer& tracer, const Scene& scene, const Camera& camera, const RenderParams& params,
@@ -506,18 +510,15 @@ Frame render_frame(const Tracer& tracer, const Scene& scene, const Camera& camer
     f.stats.ao_ms = t.ms();
     t.reset();
     visibility_from_counts(counts, f.visibility);
-    if (reuse.denoise)
-      f.stats.denoised_pixels = denoise_visibility(f.gbuffer, f.maps, counts, reuse, camera.fov_deg, f.visibility);
+    if (reuse.denoise) f.stats.denoised_pixels = denoise_visibility(f.gbuffer, f.maps, counts, reuse, camera.fov_deg, f.visibility);
     if (temporal) history->store(f.gbuffer, camera, f.maps, reuse, counts);
     f.ao_traced = std::move(counts.traced);
     f.stats.reuse_ms += t.ms();
   }
   // Phong shading with the blended ambient term
   t.reset();
-  const float k_const = params.ambient_constant ? *params.ambient_constant
-                                                : foveal_mean_visibility(f.gbuffer, f.maps, f.visibility);
-  f.color = shade(tracer, scene, camera, f.gbuffer, f.maps, f.visibility, k_const, params.shadows, epsilon,
-                  &f.stats.shadow_rays);
+  const float k_const = params.ambient_constant ? *params.ambient_constant : foveal_mean_visibility(f.gbuffer, f.maps, f.visibility);
+  f.color = shade(tracer, scene, camera, f.gbuffer, f.maps, f.visibility, k_const, params.shadows, epsilon, &f.stats.shadow_rays);
   f.stats.shade_ms = t.ms();
   f.stats.total_ms = total.ms();
   // Counts

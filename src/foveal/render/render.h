@@ -52,17 +52,17 @@ struct AoReuseParams {
 };
 // Everything that decides one frame besides the scene and camera.
 struct RenderParams {
-  int width = 840;                      // render pixels
-  int height = 525;                     // render pixels
+  int width = 840;   // render pixels
+  int height = 525;  // render pixels
   RenderMode mode = RenderMode::foveated;
-  std::optional<glm::dvec2> gaze_px;    // render pixels, origin top-left; unset → image centre
-  Display display;                      // the screen the render fills
-  FoveationParams foveation;            // n_max, n_min, γ, β, ellipse ratio
-  std::optional<float> ao_distance;     // scene units, may be infinite; unset → scene's or 0.2 × diagonal
+  std::optional<glm::dvec2> gaze_px;             // render pixels, origin top-left; unset → image centre
+  Display display;                               // the screen the render fills
+  FoveationParams foveation;                     // n_max, n_min, γ, β, ellipse ratio
+  std::optional<float> ao_distance;              // scene units, may be infinite; unset → scene's or 0.2 × diagonal
   std::optional<float> ambient_constant = 1.0f;  // k_const; unset → mean visibility of the fovea
-  uint64_t seed = 1;                    // scrambles every pixel's AO directions
-  bool shadows = false;                 // shadow rays for the lights (off, as in the papers)
-  AoReuseParams reuse;                  // adaptive rays, denoising, temporal reuse (all off: the paper)
+  uint64_t seed = 1;                             // scrambles every pixel's AO directions
+  bool shadows = false;                          // shadow rays for the lights (off, as in the papers)
+  AoReuseParams reuse;                           // adaptive rays, denoising, temporal reuse (all off: the paper)
 };
 
 // Check sizes and model parameters; throws Error naming the option.
@@ -71,23 +71,23 @@ void validate(const RenderParams& params);
 // Per-pixel surface data from the primary rays. Pixels that hit nothing have prim == Hit::kNoHit.
 struct GBuffer {
   int width = 0, height = 0;
-  std::vector<uint32_t> prim;          // triangle index or Hit::kNoHit
-  std::vector<glm::vec3> position;     // world position, scene units
-  std::vector<glm::vec3> normal;       // shading normal, unit, facing the camera
-  std::vector<glm::vec3> geo_normal;   // geometric normal, unit, facing the camera (AO hemisphere)
-  std::vector<glm::vec3> albedo;       // diffuse reflectance k_d, linear RGB (texture applied)
-  std::vector<float> depth;            // distance along the primary ray, scene units
-  std::vector<glm::vec3> view;         // unit direction of the primary ray
+  std::vector<uint32_t> prim;         // triangle index or Hit::kNoHit
+  std::vector<glm::vec3> position;    // world position, scene units
+  std::vector<glm::vec3> normal;      // shading normal, unit, facing the camera
+  std::vector<glm::vec3> geo_normal;  // geometric normal, unit, facing the camera (AO hemisphere)
+  std::vector<glm::vec3> albedo;      // diffuse reflectance k_d, linear RGB (texture applied)
+  std::vector<float> depth;           // distance along the primary ray, scene units
+  std::vector<glm::vec3> view;        // unit direction of the primary ray
   bool hit(size_t i) const { return prim[i] != Hit::kNoHit; }
 };
 
 // Per-pixel foveation model output.
 struct FoveationMaps {
   int width = 0, height = 0;
-  std::vector<float> quality;     // q(E) in [0, 1]
-  std::vector<float> eccentricity;// elliptical eccentricity E, degrees
-  std::vector<uint16_t> rays;     // n(E), AO rays for the pixel
-  std::vector<float> blend;       // b(E) in [0, 1]
+  std::vector<float> quality;       // q(E) in [0, 1]
+  std::vector<float> eccentricity;  // elliptical eccentricity E, degrees
+  std::vector<uint16_t> rays;       // n(E), AO rays for the pixel
+  std::vector<float> blend;         // b(E) in [0, 1]
 };
 
 // Counts and times of one frame (the `--stats` JSON).
@@ -95,12 +95,12 @@ struct FrameStats {
   uint64_t primary_rays = 0;
   uint64_t ao_rays = 0;
   uint64_t shadow_rays = 0;
-  double ao_rays_mean = 0;   // AO rays traced / pixels
-  int ao_rays_min = 0;       // smallest budget among pixels that hit the scene
-  int ao_rays_max = 0;       // largest budget among pixels that hit the scene
+  double ao_rays_mean = 0;  // AO rays traced / pixels
+  int ao_rays_min = 0;      // smallest budget among pixels that hit the scene
+  int ao_rays_max = 0;      // largest budget among pixels that hit the scene
   double primary_ms = 0, foveation_ms = 0, ao_ms = 0, shade_ms = 0, total_ms = 0;
-  float ambient_constant = 1; // k_const used
-  float ao_distance = 0;      // scene units (may be infinite)
+  float ambient_constant = 1;  // k_const used
+  float ao_distance = 0;       // scene units (may be infinite)
   // Quality per ray (zero when its option is off)
   uint64_t history_pixels = 0;   // pixels whose reprojected history was kept (--temporal)
   uint64_t denoised_pixels = 0;  // pixels the filter changed (--denoise)
@@ -109,11 +109,11 @@ struct FrameStats {
 
 // A rendered frame with every intermediate buffer.
 struct Frame {
-  Image color;                    // linear RGB
+  Image color;  // linear RGB
   GBuffer gbuffer;
   FoveationMaps maps;
-  std::vector<float> visibility;  // AO visibility V per pixel (1 where nothing was hit or no ray cast)
-  std::vector<uint16_t> ao_traced; // AO rays traced this frame per pixel (filled with --adaptive/--temporal)
+  std::vector<float> visibility;    // AO visibility V per pixel (1 where nothing was hit or no ray cast)
+  std::vector<uint16_t> ao_traced;  // AO rays traced this frame per pixel (filled with --adaptive/--temporal)
   glm::dvec2 gaze_px{0.0};
   FrameStats stats;
 };
@@ -134,8 +134,8 @@ GBuffer trace_gbuffer(const Tracer& tracer, const Scene& scene, int width, int h
 FoveationMaps foveation_maps(const RenderParams& params, glm::dvec2 gaze_px);
 // Optional observers of the AO pass.
 struct AoPassHooks {
-  std::function<void(double)> progress;  // finished fraction in (0, 1], called from one thread at a time
-  std::vector<double>* tile_ms = nullptr; // if set: each tile's time on its thread, ms, in tile order
+  std::function<void(double)> progress;    // finished fraction in (0, 1], called from one thread at a time
+  std::vector<double>* tile_ms = nullptr;  // if set: each tile's time on its thread, ms, in tile order
 };
 // Every pass runs over square tiles of this many pixels a side, row by row: tile t covers
 // pixels from ((t % tiles_x)·kTileSize, (t / tiles_x)·kTileSize).
@@ -143,8 +143,8 @@ inline constexpr int kTileSize = 16;
 int ao_tiles_x(int width);
 int ao_tile_count(int width, int height);
 // AO visibility per pixel with maps.rays[i] rays; returns the number of rays traced.
-uint64_t trace_ao(const Tracer& tracer, const GBuffer& gbuffer, const FoveationMaps& maps, float ao_distance,
-                  float epsilon, uint64_t seed, std::vector<float>& visibility, const AoPassHooks& hooks = {});
+uint64_t trace_ao(const Tracer& tracer, const GBuffer& gbuffer, const FoveationMaps& maps, float ao_distance, float epsilon, uint64_t seed,
+                  std::vector<float>& visibility, const AoPassHooks& hooks = {});
 // AoSampling (how the AO pass spends each pixel's budget): reuse_pixel.h.
 AoSampling ao_sampling(const AoReuseParams& reuse, uint32_t frame_index);
 // AO ray counts per pixel: rays found open and rays cast, history included (floats: history is
@@ -160,31 +160,27 @@ struct AoCounts {
 inline SurfaceView surface_view(const GBuffer& g) {
   return {g.prim.data(), g.position.data(), g.normal.data(), g.geo_normal.data(), g.albedo.data(), g.depth.data(), g.width, g.height};
 }
-inline CountsView counts_view(AoCounts& c) {
-  return {c.open.data(), c.cast.data(), c.origin_sum.empty() ? nullptr : c.origin_sum.data()};
-}
+inline CountsView counts_view(AoCounts& c) { return {c.open.data(), c.cast.data(), c.origin_sum.empty() ? nullptr : c.origin_sum.data()}; }
 // The AO pass with a prior (`counts` on entry: history, or empty for none; on return, prior + this
 // frame). The rays are each pixel's sequence from sample_offset, cast in rounds; the result does
 // not depend on the thread count. Returns the number of rays traced.
-uint64_t trace_ao_counts(const Tracer& tracer, const GBuffer& gbuffer, const FoveationMaps& maps, float ao_distance,
-                         float epsilon, uint64_t seed, const AoSampling& sampling, AoCounts& counts,
-                         const AoPassHooks& hooks = {});
+uint64_t trace_ao_counts(const Tracer& tracer, const GBuffer& gbuffer, const FoveationMaps& maps, float ao_distance, float epsilon,
+                         uint64_t seed, const AoSampling& sampling, AoCounts& counts, const AoPassHooks& hooks = {});
 // visibility_standard_error(), history_contradicted(): reuse_pixel.h.
 
 // Visibility at one point from `rays` cosine-weighted directions of pixel (x, y)'s sequence:
 // the per-pixel function the AO pass runs, exposed for analytic tests.
-float estimate_visibility(const Tracer& tracer, glm::vec3 position, glm::vec3 normal, int rays, float ao_distance,
-                          float epsilon, uint64_t seed, uint32_t x, uint32_t y);
+float estimate_visibility(const Tracer& tracer, glm::vec3 position, glm::vec3 normal, int rays, float ao_distance, float epsilon,
+                          uint64_t seed, uint32_t x, uint32_t y);
 // The AO rays the pass would trace for every `stride`-th pixel (in pixel order), appended to
 // `rays`: the same distribution the renderer traces, for raw-throughput baselines.
-void collect_ao_rays(const GBuffer& gbuffer, const FoveationMaps& maps, float ao_distance, float epsilon, uint64_t seed,
-                     size_t stride, std::vector<Ray>& rays);
+void collect_ao_rays(const GBuffer& gbuffer, const FoveationMaps& maps, float ao_distance, float epsilon, uint64_t seed, size_t stride,
+                     std::vector<Ray>& rays);
 // Mean visibility of the pixels with q = 1 (the `auto` ambient constant); 1 when there are none.
 float foveal_mean_visibility(const GBuffer& gbuffer, const FoveationMaps& maps, const std::vector<float>& visibility);
 // Phong shading of eq. 2 with the blended ambient factor; returns linear RGB.
-Image shade(const Tracer& tracer, const Scene& scene, const Camera& camera, const GBuffer& gbuffer,
-            const FoveationMaps& maps, const std::vector<float>& visibility, float ambient_constant, bool shadows,
-            float epsilon, uint64_t* shadow_rays = nullptr);
+Image shade(const Tracer& tracer, const Scene& scene, const Camera& camera, const GBuffer& gbuffer, const FoveationMaps& maps,
+            const std::vector<float>& visibility, float ambient_constant, bool shadows, float epsilon, uint64_t* shadow_rays = nullptr);
 
 // Phong shading with the constant ambient factor everywhere (no AO): the vision simulation's colour.
 Image shade_constant_ambient(const Scene& scene, const Camera& camera, const GBuffer& gbuffer, float ambient_constant, float epsilon);

@@ -43,8 +43,7 @@ TEST(AmbientOcclusion, SphereOverPlaneMatchesOneMinusRSquaredOverHSquared) {
   const float eps = surface_epsilon(sphere_plane().bounds());
   const int rays = 400, pixels = 64;
   double sum = 0;
-  for (int i = 0; i < pixels; ++i)
-    sum += estimate_visibility(tracer, {0, 0, 0}, {0, 1, 0}, rays, INFINITY, eps, 7, i, 3);
+  for (int i = 0; i < pixels; ++i) sum += estimate_visibility(tracer, {0, 0, 0}, {0, 1, 0}, rays, INFINITY, eps, 7, i, 3);
   const double mean = sum / pixels, expected = 0.75;
   // Monte-Carlo error of plain sampling for this count (the Sobol sequence does better)
   const double sigma = std::sqrt(expected * (1 - expected) / (rays * pixels));
@@ -60,8 +59,7 @@ TEST(AmbientOcclusion, ConvergesAsRaysGrow) {
   double previous_error = 1;
   for (int rays : {7, 97, 4001}) {
     double err = 0;
-    for (int i = 0; i < 16; ++i)
-      err += std::abs(estimate_visibility(tracer, {0, 0, 0}, {0, 1, 0}, rays, INFINITY, eps, 3, i, 0) - 0.75);
+    for (int i = 0; i < 16; ++i) err += std::abs(estimate_visibility(tracer, {0, 0, 0}, {0, 1, 0}, rays, INFINITY, eps, 3, i, 0) - 0.75);
     err /= 16;
     EXPECT_LT(err, previous_error);
     previous_error = err;
@@ -248,7 +246,6 @@ TEST(Render, ShadowRaysDarkenOnlyWhatTheLightCannotSee) {
   p.shadows = true;
   const Frame low_shadowed = render_frame(tracer, scene, scene.cameras.front(), p);
   for (size_t i = 0; i < low_lit.visibility.size(); ++i)
-    if (low_lit.gbuffer.hit(i) && std::abs(low_lit.gbuffer.position[i].y) < 1e-3f &&
-        glm::length(low_lit.gbuffer.position[i]) < 0.5f)
+    if (low_lit.gbuffer.hit(i) && std::abs(low_lit.gbuffer.position[i].y) < 1e-3f && glm::length(low_lit.gbuffer.position[i]) < 0.5f)
       EXPECT_EQ(low_shadowed.color.pixels[3 * i], low_lit.color.pixels[3 * i]);
 }

@@ -10,8 +10,7 @@
 #include <cmath>
 
 namespace foveal {
-uint64_t AoHistory::reproject(const GBuffer& g, const FoveationMaps& maps, const AoReuseParams& reuse,
-                              AoCounts& counts) const {
+uint64_t AoHistory::reproject(const GBuffer& g, const FoveationMaps& maps, const AoReuseParams& reuse, AoCounts& counts) const {
   const size_t pixels = static_cast<size_t>(g.width) * g.height;
   counts.open.assign(pixels, 0.0f);
   counts.cast.assign(pixels, 0.0f);
@@ -64,8 +63,8 @@ void AoHistory::store(const GBuffer& g, const Camera& camera, const FoveationMap
   ++frames_;
 }
 
-uint64_t denoise_visibility(const GBuffer& g, const FoveationMaps& maps, const AoCounts& c, const AoReuseParams& reuse,
-                            float fov_deg, std::vector<float>& visibility) {
+uint64_t denoise_visibility(const GBuffer& g, const FoveationMaps& maps, const AoCounts& c, const AoReuseParams& reuse, float fov_deg,
+                            std::vector<float>& visibility) {
   const float angle = pixel_angle(fov_deg, g.height);
   const float tau_fovea = reuse.tau_fovea();
   const SurfaceView surfaces = surface_view(g);

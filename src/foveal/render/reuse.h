@@ -45,12 +45,10 @@ class AoHistory {
   // AoCounts::origin_sum, drifts as the camera moves); where that mean is farther than
   // history_reach_px(q(E)) the history is weighed down so that, with this frame's n(E)/F rays, it
   // comes back within reach. Returns the number of pixels that kept history.
-  uint64_t reproject(const GBuffer& gbuffer, const FoveationMaps& maps, const AoReuseParams& reuse,
-                     AoCounts& counts) const;
+  uint64_t reproject(const GBuffer& gbuffer, const FoveationMaps& maps, const AoReuseParams& reuse, AoCounts& counts) const;
   // Keep a frame's counts for the next, each pixel's capped at H(E) frames of its refresh rays
   // (scaled down, V unchanged).
-  void store(const GBuffer& gbuffer, const Camera& camera, const FoveationMaps& maps, const AoReuseParams& reuse,
-             const AoCounts& counts);
+  void store(const GBuffer& gbuffer, const Camera& camera, const FoveationMaps& maps, const AoReuseParams& reuse, const AoCounts& counts);
 
  private:
   int width_ = 0, height_ = 0;
@@ -75,7 +73,7 @@ inline int denoise_max_radius(float quality, const AoReuseParams& reuse) { retur
 
 // Filter `visibility` (V = open / cast on entry) where a pixel's standard error exceeds τ(E);
 // `fov_deg` is the camera's vertical field of view (pixel footprints). Returns the pixels changed.
-uint64_t denoise_visibility(const GBuffer& gbuffer, const FoveationMaps& maps, const AoCounts& counts,
-                            const AoReuseParams& reuse, float fov_deg, std::vector<float>& visibility);
+uint64_t denoise_visibility(const GBuffer& gbuffer, const FoveationMaps& maps, const AoCounts& counts, const AoReuseParams& reuse,
+                            float fov_deg, std::vector<float>& visibility);
 
 }  // namespace foveal

@@ -136,8 +136,7 @@ struct AoPixelRounds {
   FOVEAL_HD bool next_round(const CountsView& c, size_t i, float quality, const AoSampling& s) {
     // History this frame's rays contradict (an occluder that moved, another surface) is dropped,
     // with them: the pixel starts again without history, n(E) rays from its sequence's start
-    if (s.temporal_frames > 0 &&
-        history_contradicted(c.open[i], c.cast[i], static_cast<float>(cast - blocked), static_cast<float>(cast))) {
+    if (s.temporal_frames > 0 && history_contradicted(c.open[i], c.cast[i], static_cast<float>(cast - blocked), static_cast<float>(cast))) {
       c.open[i] = c.cast[i] = 0.0f;
       if (c.origin_sum) c.origin_sum[i] = glm::vec3(0.0f);
       dropped += cast;
@@ -221,8 +220,8 @@ inline HistoryView history_view(const Camera& camera, int width, int height) {
 
 // The history of surface pixel i of `g` (a hit) into `out` (zero on entry); true when kept.
 // `rays` and `quality`: the pixel's n(E) and q(E).
-FOVEAL_HD inline bool reproject_pixel(const HistoryView& h, const SurfaceView& g, size_t i, float quality, int rays,
-                                      int temporal_frames, const CountsView& out) {
+FOVEAL_HD inline bool reproject_pixel(const HistoryView& h, const SurfaceView& g, size_t i, float quality, int rays, int temporal_frames,
+                                      const CountsView& out) {
   double px = 0, py = 0;
   float distance = 0;
   if (!h.camera.project(g.position[i], px, py, distance)) return false;
@@ -277,8 +276,8 @@ FOVEAL_HD inline bool reproject_pixel(const HistoryView& h, const SurfaceView& g
 
 // What pixel i keeps for the next frame: its counts capped at `cap` rays (scaled down, V
 // unchanged), and the Σ of their origins (`origin_sum` may be null: all cast at `position`).
-FOVEAL_HD inline void history_of_pixel(float cap, float open, float cast, const glm::vec3* origin_sum, size_t i,
-                                       glm::vec3 position, float& kept_open, float& kept_cast, glm::vec3& kept_origin) {
+FOVEAL_HD inline void history_of_pixel(float cap, float open, float cast, const glm::vec3* origin_sum, size_t i, glm::vec3 position,
+                                       float& kept_open, float& kept_cast, glm::vec3& kept_origin) {
   const float scale = cast > cap ? cap / cast : 1.0f;
   kept_open = open * scale;
   kept_cast = cast * scale;
@@ -300,9 +299,8 @@ FOVEAL_HD inline int denoise_max_radius(float quality, double denoise_radius) {
 // The filter at pixel (x, y) of `g` with counts `open`/`cast` and q(E) `quality`: true, with the
 // pooled visibility in `v`, where the pixel's standard error exceeds τ(E) = tau_fovea / q and the
 // eye's cells are wider than a pixel; false where it is left alone. `angle`: pixel_angle.
-FOVEAL_HD inline bool denoise_pixel(const SurfaceView& g, const float* quality, const float* open_count,
-                                    const float* cast_count, int x, int y, float angle, float tau_fovea,
-                                    double denoise_radius, float& v) {
+FOVEAL_HD inline bool denoise_pixel(const SurfaceView& g, const float* quality, const float* open_count, const float* cast_count, int x,
+                                    int y, float angle, float tau_fovea, double denoise_radius, float& v) {
   constexpr float kSameNormal = 0.9f;  // cos 25.8°: the filter pools only pixels whose normals are this close
   constexpr float kAlbedoSigma = 0.15f;
   // Range weight: neighbours whose estimate differs from the pixel's by more than k(E) of their
@@ -343,8 +341,7 @@ FOVEAL_HD inline bool denoise_pixel(const SurfaceView& g, const float* quality, 
       // Range: estimates further apart than their noise explains are another AO (a crevice)
       const float vj = open_count[j] / cast_count[j], sej = visibility_standard_error(open_count[j], cast_count[j]);
       const float dv = vj - vi, var = range2 * (se * se + sej * sej);
-      const float w =
-          std::exp(-0.5f * d2 / sigma2 - 0.5f * glm::dot(da, da) / (kAlbedoSigma * kAlbedoSigma) - 0.5f * dv * dv / var);
+      const float w = std::exp(-0.5f * d2 / sigma2 - 0.5f * glm::dot(da, da) / (kAlbedoSigma * kAlbedoSigma) - 0.5f * dv * dv / var);
       open_sum += w * open_count[j];
       cast_sum += w * cast_count[j];
     }

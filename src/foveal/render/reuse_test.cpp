@@ -213,8 +213,8 @@ TEST(Reuse, AdaptiveStopsAtTheMinimumOnAnOpenPlane) {
     if (!f.gbuffer.hit(i) || f.maps.rays[i] == 0) continue;
     const int n = f.maps.rays[i];
     int expected = std::min(n, p.reuse.adaptive_min_rays);
-    while (expected < n && visibility_standard_error(static_cast<float>(expected), static_cast<float>(expected)) * f.maps.quality[i] >
-                               sampling.tau_fovea)
+    while (expected < n &&
+           visibility_standard_error(static_cast<float>(expected), static_cast<float>(expected)) * f.maps.quality[i] > sampling.tau_fovea)
       expected = std::min(n, 2 * expected);
     ASSERT_EQ(f.ao_traced[i], expected) << "pixel " << i;
     ASSERT_EQ(f.visibility[i], 1.0f);
@@ -283,9 +283,7 @@ TEST(Reuse, FilterNeverMixesAcrossADepthStepACreaseOrAnotherAo) {
         counts.open[i] = open(x, y);
       }
   };
-  auto halves = [&](float left_open, float right_open) {
-    return [=](int x, int) { return x < w / 2 ? left_open : right_open; };
-  };
+  auto halves = [&](float left_open, float right_open) { return [=](int x, int) { return x < w / 2 ? left_open : right_open; }; };
   auto filtered = [&] {
     std::vector<float> v(n);
     for (size_t i = 0; i < n; ++i) v[i] = counts.open[i] / counts.cast[i];

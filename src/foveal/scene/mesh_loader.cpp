@@ -42,8 +42,7 @@ glm::vec3 colour(const aiMaterial* m, const char* key, unsigned type, unsigned i
 
 }  // namespace
 
-void append_mesh_file(Scene& scene, const std::string& path, const glm::mat4& transform,
-                      std::optional<glm::vec3> diffuse_override) {
+void append_mesh_file(Scene& scene, const std::string& path, const glm::mat4& transform, std::optional<glm::vec3> diffuse_override) {
   namespace fs = std::filesystem;
   std::error_code ec;
   if (!fs::exists(path, ec)) fail("{}: no such file", path);
@@ -56,8 +55,8 @@ void append_mesh_file(Scene& scene, const std::string& path, const glm::mat4& tr
   std::string ext = fs::path(path).extension().string();
   std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
   const unsigned join = ext == ".ply" ? 0u : unsigned(aiProcess_JoinIdenticalVertices);
-  const unsigned flags = aiProcess_Triangulate | aiProcess_PreTransformVertices | aiProcess_SortByPType | join |
-                         aiProcess_ValidateDataStructure;
+  const unsigned flags =
+      aiProcess_Triangulate | aiProcess_PreTransformVertices | aiProcess_SortByPType | join | aiProcess_ValidateDataStructure;
   const aiScene* ai = importer.ReadFile(path, flags);
   if (ai == nullptr) fail("{}: cannot read mesh: {}", path, importer.GetErrorString());
   if (!ai->HasMeshes()) fail("{}: contains no meshes", path);

@@ -34,9 +34,7 @@ bool finite(glm::vec3 v) { return std::isfinite(v.x) && std::isfinite(v.y) && st
 
 }  // namespace
 
-glm::vec3 Texture::sample(glm::vec2 uv) const {
-  return sample_texture({rgb.data(), width, height}, srgb_to_linear_lut(), uv);
-}
+glm::vec3 Texture::sample(glm::vec2 uv) const { return sample_texture({rgb.data(), width, height}, srgb_to_linear_lut(), uv); }
 
 const float* srgb_to_linear_lut() { return srgb_to_linear_table().data(); }
 
@@ -101,8 +99,7 @@ void append_sphere(Scene& scene, glm::vec3 centre, float radius, int segments, c
     const float theta = std::numbers::pi_v<float> * i / rings;
     for (int j = 0; j <= slices; ++j) {
       const float phi = 2.0f * std::numbers::pi_v<float> * j / slices;
-      p.push_back(centre + radius * glm::vec3(std::sin(theta) * std::cos(phi), std::cos(theta),
-                                              std::sin(theta) * std::sin(phi)));
+      p.push_back(centre + radius * glm::vec3(std::sin(theta) * std::cos(phi), std::cos(theta), std::sin(theta) * std::sin(phi)));
     }
   }
   for (int i = 0; i < rings; ++i)
@@ -114,8 +111,7 @@ void append_sphere(Scene& scene, glm::vec3 centre, float radius, int segments, c
   const size_t first = scene.positions.size();
   append_triangles(scene, p, t, material);
   // Exact sphere normals instead of the averaged ones
-  for (size_t v = first; v < scene.positions.size(); ++v)
-    scene.normals[v] = glm::normalize(scene.positions[v] - centre);
+  for (size_t v = first; v < scene.positions.size(); ++v) scene.normals[v] = glm::normalize(scene.positions[v] - centre);
 }
 
 void append_plane(Scene& scene, glm::vec3 c, float h, const Material& material) {

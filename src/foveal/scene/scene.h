@@ -19,9 +19,9 @@ namespace foveal {
 
 // An 8-bit sRGB texture, rows top to bottom (kept 8-bit: Sponza's 39 textures stay small).
 struct Texture {
-  std::string path;            // file it was read from
-  int width = 0, height = 0;   // texels
-  std::vector<uint8_t> rgb;    // width*height*3, sRGB-encoded
+  std::string path;           // file it was read from
+  int width = 0, height = 0;  // texels
+  std::vector<uint8_t> rgb;   // width*height*3, sRGB-encoded
 
   // Bilinear, wrapping lookup in linear RGB; uv origin at the bottom-left as in OBJ.
   glm::vec3 sample(glm::vec2 uv) const;
@@ -50,17 +50,16 @@ FOVEAL_HD inline glm::vec3 sample_texture(const TextureView& tex, const float* l
     const uint8_t* p = &tex.rgb[(static_cast<size_t>(y) * tex.width + x) * 3];
     return glm::vec3(lut[p[0]], lut[p[1]], lut[p[2]]);
   };
-  return glm::mix(glm::mix(texel(x0, y0), texel(x0 + 1, y0), tx), glm::mix(texel(x0, y0 + 1), texel(x0 + 1, y0 + 1), tx),
-                  ty);
+  return glm::mix(glm::mix(texel(x0, y0), texel(x0 + 1, y0), tx), glm::mix(texel(x0, y0 + 1), texel(x0 + 1, y0 + 1), tx), ty);
 }
 
 // Phong material of eq. 2 (reflectances in linear RGB).
 struct Material {
   std::string name;
-  glm::vec3 diffuse{0.8f};      // k_d, also the albedo lit by the ambient term
-  glm::vec3 specular{0.0f};     // k_s
-  float shininess = 32.0f;      // Phong exponent α
-  int diffuse_texture = -1;     // index into Scene::textures, or -1
+  glm::vec3 diffuse{0.8f};   // k_d, also the albedo lit by the ambient term
+  glm::vec3 specular{0.0f};  // k_s
+  float shininess = 32.0f;   // Phong exponent α
+  int diffuse_texture = -1;  // index into Scene::textures, or -1
 };
 
 // A pinhole camera in scene units; fov is vertical, degrees.
@@ -84,15 +83,18 @@ struct CameraPath {
 // Point light (position) or directional light (direction the light travels).
 struct Light {
   enum class Type { point, directional } type = Type::point;
-  glm::vec3 vector{0.0f};          // position (point) or direction (directional), scene units
-  glm::vec3 diffuse{0.5f};         // i_d
-  glm::vec3 specular{0.3f};        // i_s
+  glm::vec3 vector{0.0f};    // position (point) or direction (directional), scene units
+  glm::vec3 diffuse{0.5f};   // i_d
+  glm::vec3 specular{0.3f};  // i_s
 };
 
 // Axis-aligned bounding box.
 struct Bounds {
   glm::vec3 lo{1e30f}, hi{-1e30f};
-  void extend(glm::vec3 p) { lo = glm::min(lo, p); hi = glm::max(hi, p); }
+  void extend(glm::vec3 p) {
+    lo = glm::min(lo, p);
+    hi = glm::max(hi, p);
+  }
   glm::vec3 centre() const { return (lo + hi) * 0.5f; }
   float diagonal() const { return glm::length(hi - lo); }
   bool valid() const { return lo.x <= hi.x; }
@@ -100,12 +102,12 @@ struct Bounds {
 
 // A whole scene in world space.
 struct Scene {
-  std::string source;                    // what it was loaded from
-  std::vector<glm::vec3> positions;      // per vertex, scene units
-  std::vector<glm::vec3> normals;        // per vertex, unit length
-  std::vector<glm::vec2> uvs;            // per vertex (zero where the mesh has none)
-  std::vector<glm::uvec3> triangles;     // vertex indices
-  std::vector<uint32_t> material_ids;    // per triangle
+  std::string source;                  // what it was loaded from
+  std::vector<glm::vec3> positions;    // per vertex, scene units
+  std::vector<glm::vec3> normals;      // per vertex, unit length
+  std::vector<glm::vec2> uvs;          // per vertex (zero where the mesh has none)
+  std::vector<glm::uvec3> triangles;   // vertex indices
+  std::vector<uint32_t> material_ids;  // per triangle
   std::vector<Material> materials;
   std::vector<Texture> textures;
   std::vector<Camera> cameras;           // named viewpoints (may be empty)
@@ -134,8 +136,8 @@ void append_mesh_file(Scene& scene, const std::string& path, const glm::mat4& tr
 // One mesh's vertex data before it joins a scene (normals and uvs may be empty).
 struct MeshData {
   std::vector<glm::vec3> positions;
-  std::vector<glm::vec3> normals;   // per vertex, or empty: computed from the faces
-  std::vector<glm::vec2> uvs;       // per vertex, or empty
+  std::vector<glm::vec3> normals;  // per vertex, or empty: computed from the faces
+  std::vector<glm::vec2> uvs;      // per vertex, or empty
   std::vector<glm::uvec3> triangles;
 };
 
@@ -148,9 +150,8 @@ void append_mesh(Scene& scene, const MeshData& mesh, uint32_t material_id, const
 void reserve_mesh_space(Scene& scene, size_t vertices, size_t triangles);
 
 // Append raw triangles with one material; drops degenerate triangles; computes missing normals.
-void append_triangles(Scene& scene, const std::vector<glm::vec3>& positions,
-                      const std::vector<glm::uvec3>& triangles, const Material& material,
-                      const glm::mat4& transform = glm::mat4(1.0f));
+void append_triangles(Scene& scene, const std::vector<glm::vec3>& positions, const std::vector<glm::uvec3>& triangles,
+                      const Material& material, const glm::mat4& transform = glm::mat4(1.0f));
 
 // Shapes for built-ins and scene JSON: a sphere (UV-tessellated), a square plane (y up) and an
 // open box of five walls (no wall at +z, the side facing the default camera).

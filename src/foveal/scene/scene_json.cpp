@@ -123,12 +123,12 @@ void mesh(Scene& scene, const Ctx& ctx, const json& m, const std::string& base_d
       if (s < 3 || s > 4096 || s != std::floor(s)) ctx.at("segments").error("must be a whole number in [3, 4096]");
       segments = static_cast<int>(s);
     }
-    append_sphere(scene, vec3(ctx.at("centre"), m.value("centre", json())),
-                  positive(ctx.at("radius"), m.value("radius", json())), segments, material(ctx, m));
+    append_sphere(scene, vec3(ctx.at("centre"), m.value("centre", json())), positive(ctx.at("radius"), m.value("radius", json())), segments,
+                  material(ctx, m));
   } else if (shape == "plane") {
     check_keys(ctx, m, {"shape", "centre", "half_size", "diffuse", "specular", "shininess"});
-    append_plane(scene, vec3(ctx.at("centre"), m.value("centre", json())),
-                 positive(ctx.at("half_size"), m.value("half_size", json())), material(ctx, m));
+    append_plane(scene, vec3(ctx.at("centre"), m.value("centre", json())), positive(ctx.at("half_size"), m.value("half_size", json())),
+                 material(ctx, m));
   } else {
     ctx.at("shape").error(fmt::format("unknown shape '{}' (known: box, sphere, plane)", shape));
   }
@@ -153,8 +153,10 @@ Scene parse_scene_json(const std::string& text, const std::string& path, const s
   if (root.contains("meters_per_unit")) scene.meters_per_unit = positive(ctx.at("meters_per_unit"), root["meters_per_unit"]);
   if (root.contains("ao_distance")) {
     const json& d = root["ao_distance"];
-    if (d.is_string() && d.get<std::string>() == "inf") scene.ao_distance = INFINITY;
-    else scene.ao_distance = positive(ctx.at("ao_distance"), d);
+    if (d.is_string() && d.get<std::string>() == "inf")
+      scene.ao_distance = INFINITY;
+    else
+      scene.ao_distance = positive(ctx.at("ao_distance"), d);
   }
   if (root.contains("ambient")) scene.ambient = vec3(ctx.at("ambient"), root["ambient"]);
   if (!root.contains("meshes") || !root["meshes"].is_array() || root["meshes"].empty())

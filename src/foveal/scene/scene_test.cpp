@@ -15,8 +15,9 @@ namespace {
 // A file in a fresh temporary folder, removed with the test.
 struct TempDir {
   fs::path dir;
-  TempDir() : dir(fs::temp_directory_path() / fs::path("foveal_test_" + std::to_string(::testing::UnitTest::GetInstance()->random_seed()) +
-                                                      "_" + ::testing::UnitTest::GetInstance()->current_test_info()->name())) {
+  TempDir()
+      : dir(fs::temp_directory_path() / fs::path("foveal_test_" + std::to_string(::testing::UnitTest::GetInstance()->random_seed()) + "_" +
+                                                 ::testing::UnitTest::GetInstance()->current_test_info()->name())) {
     fs::create_directories(dir);
   }
   ~TempDir() { fs::remove_all(dir); }
@@ -57,8 +58,9 @@ TEST(Scene, SkipsDegenerateTriangles) {
 
 TEST(Scene, LoadsPlyWithCrlfAndObjMaterials) {
   TempDir t;
-  const std::string ply = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
-                          "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
+  const std::string ply =
+      "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+      "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
   EXPECT_EQ(load_scene(t.write("tri.ply", ply)).triangles.size(), 1u);
   t.write("m.mtl", "newmtl red\nKd 0.9 0.1 0.1\n");
   const Scene s = load_scene(t.write("crlf.obj", "mtllib m.mtl\r\nusemtl red\r\nv 0 0 0\r\nv 1 0 0\r\nv 0 1 0\r\nf 1 2 3 \r\n"));
@@ -88,7 +90,8 @@ TEST(Scene, ObjTexturesAreSampledInLinearColour) {
   const std::string ppm = std::string("P6\n2 2\n255\n") + std::string("\xff\x80\x00\xff\x80\x00\xff\x80\x00\xff\x80\x00", 12);
   t.write("tex.ppm", ppm);
   t.write("m.mtl", "newmtl t\nKd 1 1 1\nmap_Kd tex.ppm\n");
-  const Scene s = load_scene(t.write("tex.obj", "mtllib m.mtl\nusemtl t\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\nf 1/1 2/2 3/3\n"));
+  const Scene s =
+      load_scene(t.write("tex.obj", "mtllib m.mtl\nusemtl t\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\nf 1/1 2/2 3/3\n"));
   ASSERT_EQ(s.textures.size(), 1u);
   const Material& m = s.materials[s.material_ids[0]];
   ASSERT_GE(m.diffuse_texture, 0);
@@ -174,17 +177,21 @@ TEST(Scene, CameraPathsInterpolateThroughNamedCameras) {
   const Scene s = parse_scene_json(text, "path.json", ".");
   const CameraPath& p = find_camera_path(s, "walk");
   ASSERT_EQ(p.keys.size(), 3u);
-  EXPECT_EQ(p.at(1).eye, glm::vec3(0, 0, 10));    // first key at step 1
-  EXPECT_EQ(p.at(2).eye, glm::vec3(5, 0, 10));    // halfway to b
+  EXPECT_EQ(p.at(1).eye, glm::vec3(0, 0, 10));  // first key at step 1
+  EXPECT_EQ(p.at(2).eye, glm::vec3(5, 0, 10));  // halfway to b
   EXPECT_FLOAT_EQ(p.at(2).fov_deg, 50.0f);
-  EXPECT_EQ(p.at(3).eye, glm::vec3(10, 0, 10));   // b at the middle step
-  EXPECT_EQ(p.at(5).eye, glm::vec3(10, 10, 10));  // last key at the last step
-  EXPECT_EQ(p.at(99).eye, glm::vec3(10, 10, 10)); // held afterwards
+  EXPECT_EQ(p.at(3).eye, glm::vec3(10, 0, 10));    // b at the middle step
+  EXPECT_EQ(p.at(5).eye, glm::vec3(10, 10, 10));   // last key at the last step
+  EXPECT_EQ(p.at(99).eye, glm::vec3(10, 10, 10));  // held afterwards
   EXPECT_THROW(find_camera_path(s, "run"), Error);
-  for (const char* bad : {R"("camera_paths": [{"cameras": ["a", "x"]}])", R"("camera_paths": [{"cameras": ["a"]}])",
-                          R"("camera_paths": [{"cameras": ["a", "b"], "steps": 1.5}])", R"("camera_paths": [{"cameras": ["a", "b"], "speed": 2}])"}) {
-    const std::string doc = std::string(R"({"meshes": [{"shape": "sphere", "radius": 1, "centre": [0, 0, 0]}], "cameras": [{"name": "a", "eye": [0, 0, 10], "look": [0, 0, 0]},
-      {"name": "b", "eye": [1, 0, 10], "look": [0, 0, 0]}], )") + bad + "}";
+  for (const char* bad :
+       {R"("camera_paths": [{"cameras": ["a", "x"]}])", R"("camera_paths": [{"cameras": ["a"]}])",
+        R"("camera_paths": [{"cameras": ["a", "b"], "steps": 1.5}])", R"("camera_paths": [{"cameras": ["a", "b"], "speed": 2}])"}) {
+    const std::string doc =
+        std::string(
+            R"({"meshes": [{"shape": "sphere", "radius": 1, "centre": [0, 0, 0]}], "cameras": [{"name": "a", "eye": [0, 0, 10], "look": [0, 0, 0]},
+      {"name": "b", "eye": [1, 0, 10], "look": [0, 0, 0]}], )") +
+        bad + "}";
     try {
       parse_scene_json(doc, "bad.json", ".");
       ADD_FAILURE() << "accepted " << bad;
@@ -196,8 +203,9 @@ TEST(Scene, CameraPathsInterpolateThroughNamedCameras) {
 
 // A scene JSON saved with a UTF-8 byte-order mark and CRLF line ends reads as the plain one.
 TEST(Scene, JsonWithByteOrderMarkAndCrlf) {
-  const std::string text = "{\"meshes\": [{\"shape\": \"sphere\", \"radius\": 1, \"centre\": [0, 0, 0]}],\r\n"
-                           " \"cameras\": [{\"name\": \"a\", \"eye\": [0, 0, 10], \"look\": [0, 0, 0], \"fov\": 40}]}\r\n";
+  const std::string text =
+      "{\"meshes\": [{\"shape\": \"sphere\", \"radius\": 1, \"centre\": [0, 0, 0]}],\r\n"
+      " \"cameras\": [{\"name\": \"a\", \"eye\": [0, 0, 10], \"look\": [0, 0, 0], \"fov\": 40}]}\r\n";
   const Scene plain = parse_scene_json(text, "s.json", ".");
   const Scene bom = parse_scene_json("\xEF\xBB\xBF" + text, "s.json", ".");
   EXPECT_EQ(bom.triangles.size(), plain.triangles.size());

@@ -68,8 +68,7 @@ struct Flattener {
   double cost = 0;  // Σ area(inner)·1 + Σ area(leaf)·count, before dividing by the root's
 
   // A child slot: inner → its index; leaf → its triangles appended
-  void link(const BuildNode* child, const RTCBounds& b, glm::vec3& lo, glm::vec3& hi, int32_t& link, int32_t& count,
-            int depth) {
+  void link(const BuildNode* child, const RTCBounds& b, glm::vec3& lo, glm::vec3& hi, int32_t& link, int32_t& count, int depth) {
     if (child == nullptr) {  // empty slot: an inverted box and no triangles
       lo = glm::vec3(std::numeric_limits<float>::max());
       hi = glm::vec3(-std::numeric_limits<float>::max());

@@ -50,7 +50,7 @@ struct Bvh {
   std::vector<BvhTriangle> triangles;  // leaf order
   int depth = 0;                       // longest root-to-leaf path, nodes
   double build_ms = 0;
-  double sah_cost = 0;                 // SAH cost relative to the root box (traversal 1, triangle 1)
+  double sah_cost = 0;  // SAH cost relative to the root box (traversal 1, triangle 1)
 };
 
 // Build the BVH over every triangle of the scene; throws Error if Embree fails.
@@ -86,8 +86,7 @@ FOVEAL_HD inline T load(const T* p) {
 
 // Entry and exit distances of a box, or false; the exit is widened by 2 ulps so that flat
 // boxes (axis-aligned triangles) and grazing rays are never lost to rounding.
-FOVEAL_HD inline bool slab(glm::vec3 lo, glm::vec3 hi, glm::vec3 org, glm::vec3 inv, float tnear, float tfar,
-                           float& entry) {
+FOVEAL_HD inline bool slab(glm::vec3 lo, glm::vec3 hi, glm::vec3 org, glm::vec3 inv, float tnear, float tfar, float& entry) {
   const glm::vec3 t0 = (lo - org) * inv, t1 = (hi - org) * inv;
   const float tmin = fmaxf(fmaxf(fminf(t0.x, t1.x), fminf(t0.y, t1.y)), fmaxf(fminf(t0.z, t1.z), tnear));
   const float tmax = fminf(fminf(fmaxf(t0.x, t1.x), fmaxf(t0.y, t1.y)), fminf(fmaxf(t0.z, t1.z), tfar)) * 1.00000024f;
@@ -96,8 +95,8 @@ FOVEAL_HD inline bool slab(glm::vec3 lo, glm::vec3 hi, glm::vec3 org, glm::vec3 
 }
 
 // Möller–Trumbore; u, v are the barycentrics of vertices 1 and 2 as in Embree's hits.
-FOVEAL_HD inline bool triangle(const BvhTriangle& tri, glm::vec3 org, glm::vec3 dir, float tnear, float tfar, float& t,
-                               float& u, float& v) {
+FOVEAL_HD inline bool triangle(const BvhTriangle& tri, glm::vec3 org, glm::vec3 dir, float tnear, float tfar, float& t, float& u,
+                               float& v) {
   const glm::vec3 p = glm::cross(dir, tri.e2);
   const float det = glm::dot(tri.e1, p);
   if (det == 0.0f) return false;

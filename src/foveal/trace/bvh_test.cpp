@@ -105,14 +105,12 @@ void expect_same_hits_as_embree(const Scene& scene, const Camera& camera, int w,
 
 TEST(Bvh, BuiltinBoxTracesLikeEmbree) {
   const Scene scene = make_builtin_scene("box");
-  expect_same_hits_as_embree(scene, first_camera(scene), 160, 100, 0.999,
-                             0.999);
+  expect_same_hits_as_embree(scene, first_camera(scene), 160, 100, 0.999, 0.999);
 }
 
 TEST(Bvh, SpherePlaneTracesLikeEmbree) {
   const Scene scene = make_builtin_scene("sphere-plane");
-  expect_same_hits_as_embree(scene, first_camera(scene), 160, 100, 0.999,
-                             0.999);
+  expect_same_hits_as_embree(scene, first_camera(scene), 160, 100, 0.999, 0.999);
 }
 
 TEST(Bvh, DragonTracesLikeEmbree) {

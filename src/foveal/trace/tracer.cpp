@@ -124,9 +124,12 @@ struct Tracer::Impl {
 
 const char* to_string(TraceApi api) {
   switch (api) {
-    case TraceApi::single: return "single";
-    case TraceApi::packet8: return "packet8";
-    case TraceApi::stream: return "stream";
+    case TraceApi::single:
+      return "single";
+    case TraceApi::packet8:
+      return "packet8";
+    case TraceApi::stream:
+      return "stream";
   }
   return "?";
 }
@@ -150,8 +153,8 @@ Tracer::Tracer(const Scene& s, TraceApi api) : impl_(std::make_unique<Impl>()) {
   rtcSetSceneBuildQuality(impl_->scene, RTC_BUILD_QUALITY_HIGH);
   RTCGeometry geom = rtcNewGeometry(impl_->device, RTC_GEOMETRY_TYPE_TRIANGLE);
   rtcSetGeometryBuildQuality(geom, RTC_BUILD_QUALITY_HIGH);
-  auto* vertices = static_cast<float*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
-                                                               3 * sizeof(float), std::max<size_t>(1, s.positions.size())));
+  auto* vertices = static_cast<float*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float),
+                                                               std::max<size_t>(1, s.positions.size())));
   // The triangles' indices are read in place from the scene (no copy: 12 bytes per triangle saved);
   // vertices are copied, since Embree reads 16 bytes at the last one
   static_assert(sizeof(glm::uvec3) == 3 * sizeof(uint32_t));

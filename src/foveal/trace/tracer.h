@@ -22,20 +22,20 @@ struct alignas(16) Ray {
   glm::vec3 org{0.0f};
   float tnear = 0.0f;
   glm::vec3 dir{0.0f, 0.0f, 1.0f};
-  float time = 0.0f;           // unused (no motion blur)
-  float tfar = 1e30f;          // set below 0 by occluded() where the ray is blocked
-  uint32_t mask = 0xffffffffU; // unused
-  uint32_t id = 0;             // unused
-  uint32_t flags = 0;          // unused
+  float time = 0.0f;            // unused (no motion blur)
+  float tfar = 1e30f;           // set below 0 by occluded() where the ray is blocked
+  uint32_t mask = 0xffffffffU;  // unused
+  uint32_t id = 0;              // unused
+  uint32_t flags = 0;           // unused
 };
 
 // The closest hit along a ray; prim == kNoHit when it missed.
 struct Hit {
   static constexpr uint32_t kNoHit = 0xffffffffU;
-  float t = 0.0f;           // distance along the ray in units of |dir|
-  uint32_t prim = kNoHit;   // triangle index in Scene::triangles
-  float u = 0.0f, v = 0.0f; // barycentrics of vertices 1 and 2
-  glm::vec3 ng{0.0f};       // unnormalised geometric normal
+  float t = 0.0f;            // distance along the ray in units of |dir|
+  uint32_t prim = kNoHit;    // triangle index in Scene::triangles
+  float u = 0.0f, v = 0.0f;  // barycentrics of vertices 1 and 2
+  glm::vec3 ng{0.0f};        // unnormalised geometric normal
   bool valid() const { return prim != kNoHit; }
 };
 
@@ -69,8 +69,8 @@ class Tracer {
 
   TraceApi occlusion_api() const;
   void set_occlusion_api(TraceApi api);
-  double build_ms() const;    // time to build the BVH, milliseconds
-  size_t triangles() const;   // triangles in the BVH
+  double build_ms() const;   // time to build the BVH, milliseconds
+  size_t triangles() const;  // triangles in the BVH
 
   struct Impl;
 

@@ -38,8 +38,8 @@ TEST(Tracer, OcclusionApisAgree) {
   for (uint32_t i = 0; i < 3000; ++i) {
     const glm::vec2 u = scrambled_sobol_2d(i, 17), v = scrambled_sobol_2d(i, 99);
     const glm::vec3 dir = make_frame(glm::normalize(glm::vec3(v.x - 0.5f, v.y - 0.5f, 0.3f))).to_world(cosine_hemisphere(u));
-    rays.push_back({.org = {(v.x - 0.5f) * 3.5f, 0.05f + 2.4f * u.y, (u.x - 0.5f) * 3.5f}, .dir = dir,
-                    .tfar = (i % 3 == 0) ? 0.3f : 1e30f});
+    rays.push_back(
+        {.org = {(v.x - 0.5f) * 3.5f, 0.05f + 2.4f * u.y, (u.x - 0.5f) * 3.5f}, .dir = dir, .tfar = (i % 3 == 0) ? 0.3f : 1e30f});
   }
   // occluded() traces in place, so each API gets a fresh copy of the rays
   std::vector<uint8_t> reference(rays.size());

@@ -19,7 +19,7 @@ TEST(Navigator, OrbitCirclesTheLookPointAndNeverCrossesThePole) {
   nav.rotate_view(c, static_cast<float>(3.14159265 / 0.006), 0);  // half a turn about the up axis
   EXPECT_EQ(c.look, start().look);
   EXPECT_NEAR(glm::length(c.eye - c.look), 5, 1e-4);
-  EXPECT_NEAR(c.eye.z, -5, 1e-3);  // now behind the look point
+  EXPECT_NEAR(c.eye.z, -5, 1e-3);                           // now behind the look point
   for (int i = 0; i < 100; ++i) nav.rotate_view(c, 0, 50);  // drag far upwards
   EXPECT_NEAR(glm::length(c.eye - c.look), 5, 1e-3);
   EXPECT_GT(glm::length(glm::cross(glm::normalize(c.eye - c.look), c.up)), 0.04f);  // stopped short of straight above

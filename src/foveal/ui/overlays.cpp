@@ -31,20 +31,26 @@ Overlays parse_overlays(const std::string& text) {
   std::stringstream in(text);
   std::string name;
   while (std::getline(in, name, ',')) {
-    if (name == "gaze") o.gaze = true;
-    else if (name == "contours") o.contours = true;
-    else if (name == "budget") o.budget = true;
-    else if (name == "scanpath") o.scanpath = true;
-    else if (name == "sharp") o.sharp = true;
-    else fail("overlays: unknown overlay '{}' (gaze, contours, budget, scanpath, sharp, all or none)", name);
+    if (name == "gaze")
+      o.gaze = true;
+    else if (name == "contours")
+      o.contours = true;
+    else if (name == "budget")
+      o.budget = true;
+    else if (name == "scanpath")
+      o.scanpath = true;
+    else if (name == "sharp")
+      o.sharp = true;
+    else
+      fail("overlays: unknown overlay '{}' (gaze, contours, budget, scanpath, sharp, all or none)", name);
   }
   return o;
 }
 
 std::string to_string(const Overlays& o) {
   std::string s;
-  for (auto [on, name] : {std::pair{o.gaze, "gaze"}, {o.contours, "contours"}, {o.budget, "budget"}, {o.scanpath, "scanpath"},
-                          {o.sharp, "sharp"}})
+  for (auto [on, name] :
+       {std::pair{o.gaze, "gaze"}, {o.contours, "contours"}, {o.budget, "budget"}, {o.scanpath, "scanpath"}, {o.sharp, "sharp"}})
     if (on) s += (s.empty() ? "" : ",") + std::string(name);
   return s.empty() ? "none" : s;
 }
@@ -151,7 +157,8 @@ void draw_overlays(Rgba8& image, int x0, int y0, int width, int height, const Ov
         table[i] = heat_colour(fp.max_rays > 0 ? static_cast<float>(ao_ray_budget(i / 1024.0, fp)) / fp.max_rays : 0.0f);
       tbb::parallel_for(0, height, [&](int y) {
         for (int x = 0; x < width; ++x)
-          canvas.blend(x, y, table[static_cast<size_t>(std::lround(std::clamp(q[static_cast<size_t>(y) * width + x], 0.0f, 1.0f) * 1024))], 128);
+          canvas.blend(x, y, table[static_cast<size_t>(std::lround(std::clamp(q[static_cast<size_t>(y) * width + x], 0.0f, 1.0f) * 1024))],
+                       128);
       });
     }
     if (which.contours) {

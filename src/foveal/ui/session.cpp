@@ -26,10 +26,14 @@ namespace foveal {
 
 const char* to_string(ViewMode mode) {
   switch (mode) {
-    case ViewMode::foveated: return "foveated";
-    case ViewMode::reference: return "reference";
-    case ViewMode::side_by_side: return "side-by-side";
-    case ViewMode::vision: return "vision";
+    case ViewMode::foveated:
+      return "foveated";
+    case ViewMode::reference:
+      return "reference";
+    case ViewMode::side_by_side:
+      return "side-by-side";
+    case ViewMode::vision:
+      return "vision";
   }
   return "?";
 }
@@ -61,24 +65,40 @@ nlohmann::json settings_json(const ViewSettings& s) {
   return {{"mode", to_string(s.mode)},
           {"width", r.width},
           {"height", r.height},
-          {"display", {{"width_cm", r.display.width_cm}, {"height_cm", r.display.height_cm}, {"distance_cm", r.display.distance_cm},
-                       {"res_x", r.display.res_x}, {"res_y", r.display.res_y}}},
-          {"foveation", {{"max_rays", r.foveation.max_rays}, {"min_rays", r.foveation.min_rays}, {"gamma", r.foveation.gamma},
-                         {"beta", r.foveation.beta}, {"ellipse_ratio", r.foveation.ellipse_ratio}}},
+          {"display",
+           {{"width_cm", r.display.width_cm},
+            {"height_cm", r.display.height_cm},
+            {"distance_cm", r.display.distance_cm},
+            {"res_x", r.display.res_x},
+            {"res_y", r.display.res_y}}},
+          {"foveation",
+           {{"max_rays", r.foveation.max_rays},
+            {"min_rays", r.foveation.min_rays},
+            {"gamma", r.foveation.gamma},
+            {"beta", r.foveation.beta},
+            {"ellipse_ratio", r.foveation.ellipse_ratio}}},
           {"seed", r.seed},
-          {"ao_distance", r.ao_distance ? nlohmann::json(std::isfinite(*r.ao_distance) ? nlohmann::json(*r.ao_distance) : "inf")
-                                        : nlohmann::json("auto")},
+          {"ao_distance",
+           r.ao_distance ? nlohmann::json(std::isfinite(*r.ao_distance) ? nlohmann::json(*r.ao_distance) : "inf") : nlohmann::json("auto")},
           {"ambient_constant", r.ambient_constant ? nlohmann::json(*r.ambient_constant) : nlohmann::json("auto")},
-          {"eye", {{"preset", s.eye}, {"pupil_mm", e.pupil_diameter_mm}, {"image_distance_mm", e.image_distance_mm},
-                   {"starvation", s.vision.starvation}, {"blink_every", s.vision.blink_every}, {"voxel", s.vision.voxel},
-                   {"sharp_px", s.vision.sharp_px}, {"seed", s.vision.seed}}},
+          {"eye",
+           {{"preset", s.eye},
+            {"pupil_mm", e.pupil_diameter_mm},
+            {"image_distance_mm", e.image_distance_mm},
+            {"starvation", s.vision.starvation},
+            {"blink_every", s.vision.blink_every},
+            {"voxel", s.vision.voxel},
+            {"sharp_px", s.vision.sharp_px},
+            {"seed", s.vision.seed}}},
           {"diff_gain", s.diff_gain},
           {"progressive", s.progressive},
           {"device", s.cuda ? "cuda" : "cpu"}};
 }
 
 nlohmann::json camera_json(const Camera& c) {
-  return {{"eye", {c.eye.x, c.eye.y, c.eye.z}}, {"look", {c.look.x, c.look.y, c.look.z}}, {"up", {c.up.x, c.up.y, c.up.z}},
+  return {{"eye", {c.eye.x, c.eye.y, c.eye.z}},
+          {"look", {c.look.x, c.look.y, c.look.z}},
+          {"up", {c.up.x, c.up.y, c.up.z}},
           {"fov_deg", c.fov_deg}};
 }
 
@@ -114,18 +134,18 @@ struct Request {
   Camera camera;
   glm::dvec2 gaze{0};
   bool restart_vision = false;
-  bool blink = false;             // vision: the eye blinked since the last step
+  bool blink = false;  // vision: the eye blinked since the last step
 };
 
 struct Result {
   uint64_t generation = 0;
-  bool last = false;             // the request's final stage
+  bool last = false;  // the request's final stage
   std::string stage;
-  Image fov, ref;                // AO modes: the foveated and reference panes (empty: not yet)
-  Image perceived;               // vision mode
-  std::vector<float> coc;        // vision mode: per-pixel remembered CoC
+  Image fov, ref;          // AO modes: the foveated and reference panes (empty: not yet)
+  Image perceived;         // vision mode
+  std::vector<float> coc;  // vision mode: per-pixel remembered CoC
   std::optional<StepStats> step;
-  FrameStats stats;              // the stage's frame (side by side: the reference once it has one)
+  FrameStats stats;  // the stage's frame (side by side: the reference once it has one)
   glm::dvec2 gaze{0};
   std::string error;
 };
@@ -135,9 +155,9 @@ struct ViewSession::Worker {
   const Tracer& tracer;
   std::mutex mutex;
   std::condition_variable wake;
-  std::optional<Request> pending;     // guarded by mutex
-  std::optional<Result> finished;     // guarded by mutex
-  bool stop = false;                  // guarded by mutex
+  std::optional<Request> pending;  // guarded by mutex
+  std::optional<Result> finished;  // guarded by mutex
+  bool stop = false;               // guarded by mutex
   std::atomic<uint64_t> wanted{0};
   std::atomic<double> progress{0};
   std::unique_ptr<VisionSimulation> sim;  // the worker's own
@@ -257,7 +277,11 @@ struct ViewSession::Worker {
       return publish(std::move(out));
     }
     // The stages: (mode, scale, rays) in order; the last is the frame `render` makes
-    struct Stage { RenderMode mode; int scale, rays; std::string name; };
+    struct Stage {
+      RenderMode mode;
+      int scale, rays;
+      std::string name;
+    };
     std::vector<Stage> stages;
     auto add = [&](RenderMode mode, bool reference) {
       const std::string what = reference ? "reference" : "foveated";
@@ -291,7 +315,11 @@ struct ViewSession::Shown {
 };
 
 ViewSession::ViewSession(const Scene& scene, const Tracer& tracer, const Camera& camera, ViewSettings settings, GazeInput gaze)
-    : scene_(scene), tracer_(tracer), camera_(camera), settings_(std::move(settings)), gaze_(std::move(gaze)),
+    : scene_(scene),
+      tracer_(tracer),
+      camera_(camera),
+      settings_(std::move(settings)),
+      gaze_(std::move(gaze)),
       shown_state_(std::make_unique<Shown>()) {
   resolve(settings_);
   if (gaze_.source) {
@@ -323,7 +351,8 @@ void ViewSession::request_if_changed() {
   }
   // What the image depends on: the settings, the camera, and (but for the reference) the gaze
   const std::string settings_key = settings_json(settings_).dump();
-  const std::string view_key = camera_json(camera_).dump() + (settings_.mode != ViewMode::reference ? fmt::format("|{},{}", gaze.x, gaze.y) : "");
+  const std::string view_key =
+      camera_json(camera_).dump() + (settings_.mode != ViewMode::reference ? fmt::format("|{},{}", gaze.x, gaze.y) : "");
   if (settings_key == settings_key_ && view_key == view_key_) return;
   // The vision simulation starts afresh when anything but the camera and the fixation changed
   const bool restart = settings_key != settings_key_;
@@ -482,19 +511,24 @@ nlohmann::json ViewSession::stats_json() const {
                       {"render_gaze_px", {st.render_gaze.x, st.render_gaze.y}},
                       {"image_px", {shown_.width, shown_.height}}};
   if (settings_.mode != ViewMode::vision)
-    j["frame"] = {{"ao_rays", f.ao_rays},
-                  {"ao_rays_per_pixel", f.ao_rays_mean},
-                  {"ao_rays_per_second", st.rays_per_s},
-                  {"time_ms", {{"primary", f.primary_ms}, {"foveation", f.foveation_ms}, {"ao", f.ao_ms}, {"shade", f.shade_ms},
-                               {"total", f.total_ms}}}};
+    j["frame"] = {
+        {"ao_rays", f.ao_rays},
+        {"ao_rays_per_pixel", f.ao_rays_mean},
+        {"ao_rays_per_second", st.rays_per_s},
+        {"time_ms",
+         {{"primary", f.primary_ms}, {"foveation", f.foveation_ms}, {"ao", f.ao_ms}, {"shade", f.shade_ms}, {"total", f.total_ms}}}};
   if (st.step)
     j["vision_step"] = {{"step", st.step->step},
                         {"focus_px", {st.step->focus_px.x, st.step->focus_px.y}},
                         {"focus_depth_m", std::isfinite(st.step->focus_depth_m) ? nlohmann::json(st.step->focus_depth_m) : "inf"},
                         {"sharp_fraction", st.step->sharp_fraction},
                         {"blink", st.step->blink},
-                        {"time_ms", {{"trace", st.step->trace_ms}, {"features", st.step->features_ms},
-                                     {"sharpness", st.step->sharpness_ms}, {"blur", st.step->blur_ms}, {"total", st.step->total_ms}}}};
+                        {"time_ms",
+                         {{"trace", st.step->trace_ms},
+                          {"features", st.step->features_ms},
+                          {"sharpness", st.step->sharpness_ms},
+                          {"blur", st.step->blur_ms},
+                          {"total", st.step->total_ms}}}};
   return j;
 }
 

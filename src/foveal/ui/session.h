@@ -33,13 +33,13 @@ ViewMode parse_view_mode(const std::string& name);  // throws Error for an unkno
 // Every parameter the panel edits.
 struct ViewSettings {
   ViewMode mode = ViewMode::foveated;
-  RenderParams render;        // size, display, n_max, n_min, γ, β, ellipse ratio, seed, AO distance, k_const
-  SimulateParams vision;      // starvation, blink interval, … (its size is the render's; its eye and impairments resolve() sets)
+  RenderParams render;          // size, display, n_max, n_min, γ, β, ellipse ratio, seed, AO distance, k_const
+  SimulateParams vision;        // starvation, blink interval, … (its size is the render's; its eye and impairments resolve() sets)
   std::string eye = "healthy";  // the eye: presets joined with '+', or a profile .json
   EyeOverrides eye_overrides;   // the pupil and image distance the user set (they override the eye's)
-  float diff_gain = 8;        // side by side: |foveated − reference| × this gain
-  bool progressive = true;    // a cheap quarter-resolution frame before the full one
-  bool cuda = false;          // frames and vision steps on the GPU (gpu::Renderer, gpu::VisionPasses)
+  float diff_gain = 8;          // side by side: |foveated − reference| × this gain
+  bool progressive = true;      // a cheap quarter-resolution frame before the full one
+  bool cuda = false;            // frames and vision steps on the GPU (gpu::Renderer, gpu::VisionPasses)
 };
 // Resolve `eye` with `eye_overrides` into vision.eye and vision.impair (resolve_eye, the one rule for
 // an eye) and check everything; throws Error.
@@ -47,26 +47,26 @@ void resolve(ViewSettings& settings);
 
 // Where the gaze comes from.
 struct GazeInput {
-  std::unique_ptr<GazeSource> source;   // mouse, recording playback or live tracker; null: fixed gaze
-  std::optional<glm::dvec2> fixed_px;   // no source: this render position (unset: the image centre)
-  ScreenMapping mapping;                // source screen → render pixels
-  Display display;                      // the source screen's physical size (angles for the filter)
+  std::unique_ptr<GazeSource> source;                                 // mouse, recording playback or live tracker; null: fixed gaze
+  std::optional<glm::dvec2> fixed_px;                                 // no source: this render position (unset: the image centre)
+  ScreenMapping mapping;                                              // source screen → render pixels
+  Display display;                                                    // the source screen's physical size (angles for the filter)
   std::optional<FixationMethod> filter = kRecommendedFixationMethod;  // unset: every raw sample is the gaze
   FixationParams fixation;
 };
 
 // What the panel shows.
 struct ViewStatus {
-  std::string stage;                    // "preview", "full", "reference 64 rays", "vision step 12", …
-  bool converged = false;               // the last stage for the current inputs is shown
-  double progress = 0;                  // of the stage being rendered, 0..1
-  double render_ms = 0;                 // the shown stage's time
-  double rays_per_s = 0;                // AO rays / AO pass time of the shown stage
+  std::string stage;       // "preview", "full", "reference 64 rays", "vision step 12", …
+  bool converged = false;  // the last stage for the current inputs is shown
+  double progress = 0;     // of the stage being rendered, 0..1
+  double render_ms = 0;    // the shown stage's time
+  double rays_per_s = 0;   // AO rays / AO pass time of the shown stage
   uint64_t ao_rays = 0;
   std::optional<glm::dvec2> gaze, fixation;  // render pixels
-  glm::dvec2 render_gaze{0};            // the gaze of the shown image
-  std::string source;                   // gaze source name and state
-  std::optional<StepStats> step;        // vision mode: the last step
+  glm::dvec2 render_gaze{0};                 // the gaze of the shown image
+  std::string source;                        // gaze source name and state
+  std::optional<StepStats> step;             // vision mode: the last step
 };
 
 class ViewSession {
@@ -113,11 +113,11 @@ class ViewSession {
   std::optional<FixationTracker> tracker_;
   std::optional<glm::dvec2> raw_gaze_, fixation_;
   std::optional<glm::dvec2> step_fixation_;  // vision: the fixation of the last step
-  std::optional<double> last_valid_s_;  // time of the last valid sample
+  std::optional<double> last_valid_s_;       // time of the last valid sample
   bool in_gap_ = false, blink_pending_ = false;
   std::vector<glm::dvec2> scanpath_;
   std::string settings_key_, view_key_;  // what the last request was for
-  std::string region_key_, mark_key_;     // what the overlay layers show
+  std::string region_key_, mark_key_;    // what the overlay layers show
   uint64_t generation_ = 0;
   std::unique_ptr<Worker> worker_;
   std::unique_ptr<Shown> shown_state_;

@@ -38,15 +38,15 @@ std::string free_path(const std::string& path) {
   }
 }
 
-const char* const kEyePresets[] = {"healthy", "glaucoma:0.5", "glaucoma:0.8", "myopia:-3", "hyperopia:2", "presbyopia:60", "astigmatism:2@45"};
+const char* const kEyePresets[] = {"healthy",     "glaucoma:0.5",  "glaucoma:0.8",    "myopia:-3",
+                                   "hyperopia:2", "presbyopia:60", "astigmatism:2@45"};
 
 // The window: GLFW and OpenGL, Dear ImGui's panel, the session's image as a texture. One frame
 // per frame() call, at most about 60 a second.
 class ViewerWindow {
  public:
   ViewerWindow(ViewSession& session, WindowOptions options)
-      : session_(session), options_(std::move(options)), overlays_(options_.overlays), home_(session.camera()),
-        edit_(session.settings()) {
+      : session_(session), options_(std::move(options)), overlays_(options_.overlays), home_(session.camera()), edit_(session.settings()) {
     nav_.speed = std::max(1e-3f, glm::length(home_.look - home_.eye) * 0.5f);
     std::snprintf(eye_text_, sizeof eye_text_, "%s", edit_.eye.c_str());
   }
@@ -179,7 +179,8 @@ class ViewerWindow {
     const int rw = session_.settings().render.width;
     if (MouseSource* mouse = session_.mouse()) {
       const float ix = (io.MousePos.x - at.p0.x) / at.scale, iy = (io.MousePos.y - at.p0.y) / at.scale;
-      const bool inside = !io.WantCaptureMouse && ix >= 0 && iy >= 0 && ix < at.iw && iy < at.ih && glfwGetWindowAttrib(window_, GLFW_HOVERED);
+      const bool inside =
+          !io.WantCaptureMouse && ix >= 0 && iy >= 0 && ix < at.iw && iy < at.ih && glfwGetWindowAttrib(window_, GLFW_HOVERED);
       const float pane_x = std::fmod(ix, static_cast<float>(rw));
       mouse->move(glm::dvec2(pane_x, iy), glfwGetTime(), inside);
     }
@@ -234,10 +235,13 @@ class ViewerWindow {
     ImGui::Text("%s%s", st.stage.c_str(), st.converged ? " (done)" : " ...");
     if (!st.converged) ImGui::ProgressBar(static_cast<float>(st.progress), ImVec2(-1, 0));
     ImGui::Text("render %.0f ms, %.2f M AO rays, %.1f Mrays/s", st.render_ms, st.ao_rays / 1e6, st.rays_per_s / 1e6);
-    if (st.fixation) ImGui::Text("fixation %.0f, %.0f px   %s", st.fixation->x, st.fixation->y, st.source.c_str());
-    else ImGui::Text("no fixation yet   %s", st.source.c_str());
-    if (st.step) ImGui::Text("step %d: sharp %.1f %%, focus %.2f m%s", st.step->step, st.step->sharp_fraction * 100, st.step->focus_depth_m,
-                             st.step->blink ? ", blink" : "");
+    if (st.fixation)
+      ImGui::Text("fixation %.0f, %.0f px   %s", st.fixation->x, st.fixation->y, st.source.c_str());
+    else
+      ImGui::Text("no fixation yet   %s", st.source.c_str());
+    if (st.step)
+      ImGui::Text("step %d: sharp %.1f %%, focus %.2f m%s", st.step->step, st.step->sharp_fraction * 100, st.step->focus_depth_m,
+                  st.step->blink ? ", blink" : "");
     ImGui::Separator();
   }
 
@@ -352,7 +356,8 @@ class ViewerWindow {
     // Frame times since the start: median and 95th percentile
     std::vector<double> all = all_ms_;
     std::sort(all.begin(), all.end());
-    const double p50 = all.empty() ? 0.0 : all[all.size() / 2], p95 = all.empty() ? 0.0 : all[std::min(all.size() - 1, all.size() * 95 / 100)];
+    const double p50 = all.empty() ? 0.0 : all[all.size() / 2],
+                 p95 = all.empty() ? 0.0 : all[std::min(all.size() - 1, all.size() * 95 / 100)];
     session_.save_screenshot(path, {{"ui_frame_ms", median_frame_ms_},
                                     {"ui_frame_ms_all", {{"median", p50}, {"p95", p95}, {"frames", all.size()}}},
                                     {"overlays", to_string(overlays_)}});

@@ -6,8 +6,8 @@
 using namespace foveal;
 
 TEST(ErrorWords, TheLeadingParameterAndOtherParametersAreRenamedNothingElse) {
-  static constexpr ParameterName kCli[] = {{"max_rays", "--max-rays"}, {"min_rays", "--min-rays"}, {"size", "--size"},
-                                           {"device", "--device"}, {"device cuda", "--device cuda"}};
+  static constexpr ParameterName kCli[] = {
+      {"max_rays", "--max-rays"}, {"min_rays", "--min-rays"}, {"size", "--size"}, {"device", "--device"}, {"device cuda", "--device cuda"}};
   EXPECT_EQ(in_words("max_rays: must be in [0, 65535], got -1", kCli), "--max-rays: must be in [0, 65535], got -1");
   // a snake_case parameter mentioned later is renamed too; a plain word ("size") only where it leads
   EXPECT_EQ(in_words("min_rays: must be in [0, max_rays = 400], got 500", kCli), "--min-rays: must be in [0, --max-rays = 400], got 500");

@@ -15,16 +15,11 @@ struct Image {
   std::vector<float> pixels;  // size width*height*channels
 
   Image() = default;
-  Image(int w, int h, int c, float fill = 0.0f)
-      : width(w), height(h), channels(c), pixels(static_cast<size_t>(w) * h * c, fill) {}
+  Image(int w, int h, int c, float fill = 0.0f) : width(w), height(h), channels(c), pixels(static_cast<size_t>(w) * h * c, fill) {}
 
   // Pixel (x, y), channel c.
-  float& at(int x, int y, int c = 0) {
-    return pixels[(static_cast<size_t>(y) * width + x) * channels + c];
-  }
-  float at(int x, int y, int c = 0) const {
-    return pixels[(static_cast<size_t>(y) * width + x) * channels + c];
-  }
+  float& at(int x, int y, int c = 0) { return pixels[(static_cast<size_t>(y) * width + x) * channels + c]; }
+  float at(int x, int y, int c = 0) const { return pixels[(static_cast<size_t>(y) * width + x) * channels + c]; }
   bool empty() const { return pixels.empty(); }
 };
 

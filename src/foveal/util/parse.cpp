@@ -24,8 +24,7 @@ std::vector<double> parse_numbers(const std::string& option, const std::string& 
     if (used == 0 || used != item.size() || !std::isfinite(v)) fail("{}: '{}' is not a finite number", option, item);
     values.push_back(v);
   }
-  if (count != 0 && values.size() != count)
-    fail("{}: expected {} comma-separated numbers, got '{}'", option, count, text);
+  if (count != 0 && values.size() != count) fail("{}: expected {} comma-separated numbers, got '{}'", option, count, text);
   return values;
 }
 

@@ -55,9 +55,7 @@ FOVEAL_HD constexpr uint32_t sobol_dim1(uint32_t index) {
 }
 
 // Fixed point [0, 2^32) to float in [0, 1).
-FOVEAL_HD inline float to_unit_float(uint32_t bits) {
-  return static_cast<float>(bits >> 8) * 0x1p-24f;
-}
+FOVEAL_HD inline float to_unit_float(uint32_t bits) { return static_cast<float>(bits >> 8) * 0x1p-24f; }
 
 // The first 2^16 points of the 2-D Sobol sequence, computed once (512 KiB).
 const uint32_t* sobol_table_2d();

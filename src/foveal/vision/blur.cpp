@@ -107,10 +107,18 @@ __attribute__((target_clones("arch=x86-64-v3", "default")))
 #endif
 void gather_rows(const blur::GatherView<v4>& g, const float* image, float* out, int channels, int y0, int y1) {
   switch (channels) {
-    case 1: gather_rows_of<1>(g, image, out, y0, y1); break;
-    case 2: gather_rows_of<2>(g, image, out, y0, y1); break;
-    case 3: gather_rows_of<3>(g, image, out, y0, y1); break;
-    default: gather_rows_of<4>(g, image, out, y0, y1); break;
+    case 1:
+      gather_rows_of<1>(g, image, out, y0, y1);
+      break;
+    case 2:
+      gather_rows_of<2>(g, image, out, y0, y1);
+      break;
+    case 3:
+      gather_rows_of<3>(g, image, out, y0, y1);
+      break;
+    default:
+      gather_rows_of<4>(g, image, out, y0, y1);
+      break;
   }
 }
 
@@ -144,7 +152,8 @@ Image variable_blur(const Image& img, const std::vector<float>& coc, const BlurP
       above.resize(size_t(lw) * lh);
       for (int y = 0; y < lh; ++y)
         for (int x = 0; x < lw; ++x)
-          above[size_t(y) * lw + x] = blur::min_of_block(below.data(), bw, 2 * x, 2 * y, std::min(2 * x + 1, bw - 1), std::min(2 * y + 1, bh - 1));
+          above[size_t(y) * lw + x] =
+              blur::min_of_block(below.data(), bw, 2 * x, 2 * y, std::min(2 * x + 1, bw - 1), std::min(2 * y + 1, bh - 1));
       std::swap(below, above);
     }
     std::vector<float>& quad = min_quad[l];

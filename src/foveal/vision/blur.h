@@ -20,9 +20,9 @@
 namespace foveal {
 
 struct BlurParams {
-  int taps = 64;                 // most points of a disc pattern (plus the centre), for large CoCs
-  float max_diameter_px = 96;    // CoCs are clamped to this diameter (unseen cells, far defocus)
-  bool scatter_aware = true;     // a tap counts only if its own CoC reaches the pixel (no sharp-edge bleeding)
+  int taps = 64;               // most points of a disc pattern (plus the centre), for large CoCs
+  float max_diameter_px = 96;  // CoCs are clamped to this diameter (unseen cells, far defocus)
+  bool scatter_aware = true;   // a tap counts only if its own CoC reaches the pixel (no sharp-edge bleeding)
 };
 
 // taps_for_diameter(d, max_taps), the taps of a CoC of d pixels, is in blur_kernel.h with the

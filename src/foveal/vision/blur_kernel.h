@@ -57,9 +57,9 @@ struct LevelView {
 template <class Texel>
 struct GatherView {
   int width = 0, height = 0;
-  const float* coc = nullptr;             // per pixel, clamped to [0, max diameter] (NaN, ∞ → the max)
-  const glm::vec2* shape = nullptr;       // per pixel (along, across) ≤ 1, or null for round CoCs
-  glm::vec2 along{1, 0}, across{0, 1};    // the ellipse's axes in image coordinates
+  const float* coc = nullptr;           // per pixel, clamped to [0, max diameter] (NaN, ∞ → the max)
+  const glm::vec2* shape = nullptr;     // per pixel (along, across) ≤ 1, or null for round CoCs
+  glm::vec2 along{1, 0}, across{0, 1};  // the ellipse's axes in image coordinates
   LevelView<Texel> levels[kMaxLevels];
   int level_count = 0;
   // The tap patterns of first_count … max_taps taps, end to end: pattern n (n + 1 points, the
@@ -168,8 +168,10 @@ FOVEAL_HD FOVEAL_FORCE_INLINE void gather_pixel(const GatherView<Texel>& g, cons
   };
   // Each combination of the three is its own instantiation of the loop
   auto when = [](bool b, auto next) FOVEAL_INLINE {
-    if (b) next(std::true_type{});
-    else next(std::false_type{});
+    if (b)
+      next(std::true_type{});
+    else
+      next(std::false_type{});
   };
   when(check, [&](auto checked) FOVEAL_INLINE {
     when(!interior, [&](auto clamped) FOVEAL_INLINE {
@@ -203,8 +205,7 @@ FOVEAL_HD inline Texel box_average(const Texel* below, int bw, int bh, int x, in
 }
 // The smallest of a 2×2 block whose corner is (x0, y0) (x1, y1: the other corner, clamped).
 FOVEAL_HD inline float min_of_block(const float* v, int w, int x0, int y0, int x1, int y1) {
-  return std::min(std::min(v[size_t(y0) * w + x0], v[size_t(y0) * w + x1]),
-                  std::min(v[size_t(y1) * w + x0], v[size_t(y1) * w + x1]));
+  return std::min(std::min(v[size_t(y0) * w + x0], v[size_t(y0) * w + x1]), std::min(v[size_t(y1) * w + x0], v[size_t(y1) * w + x1]));
 }
 // The smallest (clamped) CoC of tile (tx, ty): its kTile × kTile pixels, cut at the image's edge.
 FOVEAL_HD inline float tile_minimum(const float* coc, int w, int h, int tx, int ty) {
@@ -215,9 +216,7 @@ FOVEAL_HD inline float tile_minimum(const float* coc, int w, int h, int tx, int 
   return m;
 }
 // A CoC as the gather reads it: at most `max_diameter`, NaN and infinity → the max.
-FOVEAL_HD inline float clamp_coc(float coc, float max_diameter) {
-  return std::isfinite(coc) ? std::min(coc, max_diameter) : max_diameter;
-}
+FOVEAL_HD inline float clamp_coc(float coc, float max_diameter) { return std::isfinite(coc) ? std::min(coc, max_diameter) : max_diameter; }
 
 }  // namespace blur
 }  // namespace foveal

@@ -26,10 +26,10 @@ struct CocModel {
   glm::vec3 axis{0, 0, -1};      // the camera's viewing direction, unit
   glm::vec3 gaze_dir{0, 0, -1};  // the camera ray through the fixation, unit
   float metres_per_unit = 1;
-  float focus_vergence = 0;      // dioptres
-  float pupil_deg = 0;           // pupil diameter in radians, in degrees (A)
-  float penalty_per_deg = 0;     // degrees of CoC per degree of eccentricity
-  float cylinder = 0;            // dioptres; 0 = round CoCs
+  float focus_vergence = 0;   // dioptres
+  float pupil_deg = 0;        // pupil diameter in radians, in degrees (A)
+  float penalty_per_deg = 0;  // degrees of CoC per degree of eccentricity
+  float cylinder = 0;         // dioptres; 0 = round CoCs
   bool astigmatic = false;
 
   // `depth` is the hit distance along the unit ray `view` (ignored without a hit).

@@ -85,8 +85,6 @@ FOVEAL_HD inline int srgb8_index(float v) {
 
 // BT.601 luma (0.299, 0.587, 0.114) of an 8-bit sRGB triple in 15-bit fixed point, rounded, as
 // cv::cvtColor(COLOR_RGB2GRAY) computes it for bytes (the test checks all 2^24 triples).
-FOVEAL_HD inline uint8_t grey_of(int r, int g, int b) {
-  return static_cast<uint8_t>((r * 9798 + g * 19235 + b * 3735 + (1 << 14)) >> 15);
-}
+FOVEAL_HD inline uint8_t grey_of(int r, int g, int b) { return static_cast<uint8_t>((r * 9798 + g * 19235 + b * 3735 + (1 << 14)) >> 15); }
 
 }  // namespace foveal::fast

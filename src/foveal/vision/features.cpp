@@ -51,9 +51,8 @@ std::vector<Corner> detect_corners(const Image& img, int threshold, bool nonmax)
   corners.reserve(points.size());
   for (const cv::KeyPoint& k : points) corners.push_back({{k.pt.x + 0.5f, k.pt.y + 0.5f}, k.response});
   // A fixed order (OpenCV's is by row, but do not depend on it): by row, then column
-  std::sort(corners.begin(), corners.end(), [](const Corner& a, const Corner& b) {
-    return a.px.y != b.px.y ? a.px.y < b.px.y : a.px.x < b.px.x;
-  });
+  std::sort(corners.begin(), corners.end(),
+            [](const Corner& a, const Corner& b) { return a.px.y != b.px.y ? a.px.y < b.px.y : a.px.x < b.px.x; });
   return corners;
 }
 
@@ -67,8 +66,7 @@ std::vector<Corner> fast_corners(const std::vector<uint8_t>& grey, int w, int h,
   for (int y = 0; y < h; ++y)
     for (int x = 0; x < w; ++x) {
       const uint8_t s = scores[size_t(y) * w + x];
-      if (s > 0 && (!nonmax || fast::is_local_maximum(scores.data(), w, h, x, y)))
-        corners.push_back({{x + 0.5f, y + 0.5f}, float(s)});
+      if (s > 0 && (!nonmax || fast::is_local_maximum(scores.data(), w, h, x, y))) corners.push_back({{x + 0.5f, y + 0.5f}, float(s)});
     }
   return corners;
 }

@@ -35,11 +35,11 @@ std::vector<Corner> fast_corners(const std::vector<uint8_t>& grey, int width, in
 // Gaussian around the image centre; each next one ∝ score among corners within the maximum
 // amplitude of the current fixation and at least the minimum distance from the recent ones.
 struct SaccadeParams {
-  double centre_sigma = 0.25;       // first fixation: Gaussian σ as a fraction of the image size
-  double max_amplitude_deg = 15;    // furthest next fixation, degrees of visual angle
-  double min_distance_deg = 2;      // nearest allowed to the recent fixations, degrees
-  int recent = 8;                   // how many recent fixations keep their distance
-  double skip_probability = 0;      // chance to keep the last fixation (glaucoma)
+  double centre_sigma = 0.25;     // first fixation: Gaussian σ as a fraction of the image size
+  double max_amplitude_deg = 15;  // furthest next fixation, degrees of visual angle
+  double min_distance_deg = 2;    // nearest allowed to the recent fixations, degrees
+  int recent = 8;                 // how many recent fixations keep their distance
+  double skip_probability = 0;    // chance to keep the last fixation (glaucoma)
 };
 
 class SaccadeModel {

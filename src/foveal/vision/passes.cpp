@@ -67,8 +67,7 @@ class CpuPasses final : public VisionStepPasses {
     // The blur's CoC: the field's memory where there is geometry, this step's CoC for the background
     coc_.resize(n);
     tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 4096), [&](const tbb::blocked_range<size_t>& r) {
-      for (size_t i = r.begin(); i < r.end(); ++i)
-        coc_[i] = (cells_[i] >= 0 ? field_.effective(cells_[i], step) : now_deg_[i]) * ppd;
+      for (size_t i = r.begin(); i < r.end(); ++i) coc_[i] = (cells_[i] >= 0 ? field_.effective(cells_[i], step) : now_deg_[i]) * ppd;
     });
     const size_t sharp = std::count_if(coc_.begin(), coc_.end(), [&](float c) { return c < sharp_px; });
     times_.sharpness_ms = t.ms();

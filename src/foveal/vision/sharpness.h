@@ -31,11 +31,11 @@ struct SharpnessFieldView {
   glm::ivec3 dims{0};
   float* coc = nullptr;
   uint32_t* stamp = nullptr;
-  uint32_t* written = nullptr;     // epoch of the last write
-  const float* growth = nullptr;   // (1 + s)^age for ages below growth_size
+  uint32_t* written = nullptr;    // epoch of the last write
+  const float* growth = nullptr;  // (1 + s)^age for ages below growth_size
   uint32_t growth_size = 0;
   uint32_t epoch = 1;
-  double log_growth = 0;           // log(1 + s)
+  double log_growth = 0;  // log(1 + s)
 
   // Cell index of a point, or −1 outside the grid (and for NaN).
   FOVEAL_HD int64_t cell(glm::vec3 p) const {
@@ -84,8 +84,7 @@ struct ConcurrentFieldUpdate {
 #else
     std::atomic_ref<unsigned long long> a(*p);
     unsigned long long now = a.load(std::memory_order_relaxed);
-    while (v < now && !a.compare_exchange_weak(now, v, std::memory_order_relaxed)) {
-    }
+    while (v < now && !a.compare_exchange_weak(now, v, std::memory_order_relaxed)) {}
 #endif
   }
 

@@ -38,9 +38,7 @@ SaccadeParams saccade_params_for(const EyeParams& eye, SaccadeParams base) {
 
 namespace {
 
-bool same_camera(const Camera& a, const Camera& b) {
-  return a.eye == b.eye && a.look == b.look && a.up == b.up && a.fov_deg == b.fov_deg;
-}
+bool same_camera(const Camera& a, const Camera& b) { return a.eye == b.eye && a.look == b.look && a.up == b.up && a.fov_deg == b.fov_deg; }
 
 }  // namespace
 
@@ -73,8 +71,13 @@ nlohmann::json step_stats_json(const StepStats& s) {
           {"skipped", s.skipped},
           {"camera_moved", s.camera_moved},
           {"corners", s.corners},
-          {"time_ms", {{"trace", s.trace_ms}, {"features", s.features_ms}, {"sharpness", s.sharpness_ms}, {"blur", s.blur_ms},
-                       {"impairments", s.impair.total_ms}, {"total", s.total_ms}}}};
+          {"time_ms",
+           {{"trace", s.trace_ms},
+            {"features", s.features_ms},
+            {"sharpness", s.sharpness_ms},
+            {"blur", s.blur_ms},
+            {"impairments", s.impair.total_ms},
+            {"total", s.total_ms}}}};
 }
 
 Retinotopy camera_retinotopy(const Camera& camera, int width, int height, glm::vec2 fixation_px) {
@@ -179,8 +182,8 @@ StepStats VisionSimulation::step(const Camera& camera, std::optional<glm::vec2> 
   // sits at the camera: eccentricity is the angle between the camera rays through the pixel and
   // through the fixation.
   const glm::vec3 gaze_dir(CameraRays(camera, w, h)(s.focus_px.x, s.focus_px.y).dir);
-  const size_t sharp = passes.sharpness(coc_model(camera, gaze_dir, s.focus_vergence), step_, !s.skipped,
-                                        static_cast<float>(ppd_), params_.sharp_px);
+  const size_t sharp =
+      passes.sharpness(coc_model(camera, gaze_dir, s.focus_vergence), step_, !s.skipped, static_cast<float>(ppd_), params_.sharp_px);
   s.sharp_fraction = double(sharp) / (double(w) * h);
 
   // 5. Variable blur
@@ -190,8 +193,8 @@ StepStats VisionSimulation::step(const Camera& camera, std::optional<glm::vec2> 
   if (impair_) {
     const Timer timer;
     impaired_ = passes.perceived();
-    s.impair = impair_->apply(impaired_, impair_->needs_retinotopy() ? camera_retinotopy(camera, w, h, s.focus_px)
-                                                                     : Retinotopy{w, h, {}, ppd_});
+    s.impair =
+        impair_->apply(impaired_, impair_->needs_retinotopy() ? camera_retinotopy(camera, w, h, s.focus_px) : Retinotopy{w, h, {}, ppd_});
     s.impair.total_ms = timer.ms();  // with the retinotopy
   }
 

@@ -23,17 +23,17 @@ class VisionStepPasses;
 struct SimulateParams {
   int width = 1024, height = 768;
   EyeParams eye;
-  SaccadeParams saccades;         // glaucoma shortens and skips (see saccade_params_for)
-  int fast_threshold = 20;        // cv::FAST threshold
-  bool features_every_step = false; // recompute the corners every step (the paper's timing), not only when the camera moves
-  double starvation = 0.015;      // s: effective CoC grows by this fraction per step
-  float voxel = 0;                // cell edge, scene units; 0 = scene diagonal / 256
-  int blink_every = 0;            // a blink (field reset) every this many steps; 0 = never
-  float sharp_px = 1.0f;          // a pixel counts as sharp when its CoC is below this many pixels
-  float ambient = 0.3f;           // constant Phong ambient factor of the colour image
+  SaccadeParams saccades;            // glaucoma shortens and skips (see saccade_params_for)
+  int fast_threshold = 20;           // cv::FAST threshold
+  bool features_every_step = false;  // recompute the corners every step (the paper's timing), not only when the camera moves
+  double starvation = 0.015;         // s: effective CoC grows by this fraction per step
+  float voxel = 0;                   // cell edge, scene units; 0 = scene diagonal / 256
+  int blink_every = 0;               // a blink (field reset) every this many steps; 0 = never
+  float sharp_px = 1.0f;             // a pixel counts as sharp when its CoC is below this many pixels
+  float ambient = 0.3f;              // constant Phong ambient factor of the colour image
   BlurParams blur;
   uint64_t seed = 1;
-  bool cuda = false;              // run the passes on the GPU (make_cuda_vision_passes); the saccades stay on the CPU
+  bool cuda = false;  // run the passes on the GPU (make_cuda_vision_passes); the saccades stay on the CPU
   // After the optics: ocular media, the retina (metamorphopsia, field loss centred on the fixation),
   // colour vision (impair/impairments.h); on the CPU, also after the GPU's passes
   Impairments impair;
@@ -45,17 +45,17 @@ void validate(const SimulateParams& params);
 SaccadeParams saccade_params_for(const EyeParams& eye, SaccadeParams base = {});
 
 struct StepStats {
-  int step = 0;                   // 1-based
-  glm::vec2 focus_px{0};          // fixation, render pixels
-  double focus_depth_m = 0;       // distance of the fixated point (inf for the background)
-  double focus_vergence = 0;      // what the eye accommodated to, dioptres
-  bool skipped = false;           // glaucoma kept the last fixation (the field was not updated)
-  bool blink = false;             // the field was reset before this step
-  bool camera_moved = false;      // the corners were recomputed
+  int step = 0;               // 1-based
+  glm::vec2 focus_px{0};      // fixation, render pixels
+  double focus_depth_m = 0;   // distance of the fixated point (inf for the background)
+  double focus_vergence = 0;  // what the eye accommodated to, dioptres
+  bool skipped = false;       // glaucoma kept the last fixation (the field was not updated)
+  bool blink = false;         // the field was reset before this step
+  bool camera_moved = false;  // the corners were recomputed
   size_t corners = 0;
-  double sharp_fraction = 0;      // pixels whose remembered CoC is below sharp_px
+  double sharp_fraction = 0;  // pixels whose remembered CoC is below sharp_px
   double trace_ms = 0, features_ms = 0, sharpness_ms = 0, blur_ms = 0, total_ms = 0;
-  ImpairTimes impair;             // the impairment passes (0 without any)
+  ImpairTimes impair;  // the impairment passes (0 without any)
 };
 
 // One step's record as JSON (`simulate --stats`' "steps" entries, the Python step's stats): the
@@ -103,7 +103,7 @@ class VisionSimulation {
   std::unique_ptr<VisionStepPasses> passes_;  // one step's passes on one device (vision/passes.h)
   std::unique_ptr<ImpairmentPasses> impair_;  // with params.impair.any()
   Image impaired_;                            // this step's perceived image through the impairments
-  bool blink_due(int step);  // a blink every blink_every steps, or one asked for (consumed)
+  bool blink_due(int step);                   // a blink every blink_every steps, or one asked for (consumed)
   uint32_t step_ = 0;
   bool blink_requested_ = false;
 };

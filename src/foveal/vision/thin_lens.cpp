@@ -29,7 +29,7 @@ Image thin_lens_reference(const Tracer& tracer, const Scene& scene, const Camera
   const glm::vec3 forward = glm::normalize(camera.look - camera.eye);
   const glm::vec3 right = glm::normalize(glm::cross(forward, camera.up)), up = glm::cross(right, forward);
   const double radius = 0.5 * p.pupil_diameter_mm * 1e-3 / scene.meters_per_unit;  // scene units
-  const double v = p.focus_vergence * scene.meters_per_unit;                          // per scene unit
+  const double v = p.focus_vergence * scene.meters_per_unit;                       // per scene unit
   const float epsilon = surface_epsilon(scene.bounds());
   Image sum(p.width, p.height, 3, 0.0f);
   for (int s = 0; s < p.samples; ++s) {

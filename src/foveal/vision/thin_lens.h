@@ -10,10 +10,10 @@ namespace foveal {
 
 struct ThinLensParams {
   int width = 512, height = 384;
-  int samples = 256;              // lens samples per pixel (Sobol points on the pupil disc)
-  double focus_vergence = 0;      // dioptres (1/m): what the eye accommodates to; ≤ 0 allowed
+  int samples = 256;          // lens samples per pixel (Sobol points on the pupil disc)
+  double focus_vergence = 0;  // dioptres (1/m): what the eye accommodates to; ≤ 0 allowed
   double pupil_diameter_mm = 3.5;
-  float ambient = 0.3f;           // constant Phong ambient factor, as in the simulation
+  float ambient = 0.3f;  // constant Phong ambient factor, as in the simulation
 };
 
 // The camera's pixels per degree at the image centre (vertical field of view over the height).

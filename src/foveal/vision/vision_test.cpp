@@ -239,8 +239,7 @@ TEST(Vision, ConcurrentFieldUpdateIsThePixelOrderUpdate) {
     });
     std::atomic<size_t> applied{0};
     tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 64), [&](const tbb::blocked_range<size_t>& r) {
-      for (size_t k = r.begin(); k < r.end(); ++k)
-        applied += update.apply(concurrent.view(), cell[order[k]], order[k], step) ? 1 : 0;
+      for (size_t k = r.begin(); k < r.end(); ++k) applied += update.apply(concurrent.view(), cell[order[k]], order[k], step) ? 1 : 0;
     });
     applied_total += applied;
     for (size_t c = 0; c < cells; ++c) {
@@ -382,7 +381,7 @@ TEST(Vision, BlurApproximatesTheThinLensReference) {
     return e / a.pixels.size();
   };
   EXPECT_LT(mean_error(sharp, thin_lens_approximation(tracer, scene, camera, pinhole)), 1e-4);  // no CoC: the pinhole image
-  for (double focus_m : {4.3, 8.2}) {  // near wall, far wall
+  for (double focus_m : {4.3, 8.2}) {                                                           // near wall, far wall
     p.focus_vergence = 1.0 / focus_m;
     const Image reference = thin_lens_reference(tracer, scene, camera, p);
     const double blurred = mean_error(thin_lens_approximation(tracer, scene, camera, p), reference);
@@ -400,8 +399,8 @@ TEST(Vision, AstigmatismBlursAlongItsAxis) {
   const glm::dvec2 at_fixation = coc_axes_rad(eye, 0.5, v);
   EXPECT_NEAR(at_fixation.x, at_fixation.y, 1e-12);  // round
   const glm::dvec2 at_1m = coc_axes_rad(eye, 1.0, v);
-  EXPECT_NEAR(at_1m.x, 0.0, 1e-12);                   // sharp along the axis …
-  EXPECT_NEAR(at_1m.y, 3.5e-3 * 2, 1e-12);            // … blurred across it
+  EXPECT_NEAR(at_1m.x, 0.0, 1e-12);         // sharp along the axis …
+  EXPECT_NEAR(at_1m.y, 3.5e-3 * 2, 1e-12);  // … blurred across it
   // The blur: an impulse spreads along the ellipse's long axis only
   const int size = 41;
   Image impulse(size, size, 1, 0.0f);
