@@ -1,9 +1,7 @@
 // apps/bench_command.cpp — `foveal bench ao`: the first paper's Table 1 on this machine.
 #include "commands.h"
-#include "foveal/cuda/gpu.h"
-#include "foveal/experiments/gpu_benchmark.h"
+#include "foveal/experiments/bench_ao.h"
 #include "foveal/render/outputs.h"
-#include "foveal/experiments/ao_benchmark.h"
 #include "foveal/util/error.h"
 #include "foveal/util/parallel.h"
 #include "foveal/util/parse.h"
@@ -50,7 +48,7 @@ struct BenchAoOptions {
 };
 
 // The first paper's Table 1 on the chosen device (on the GPU with the CPU measured in the same run).
-int run_bench_ao(const BenchAoOptions& o) {
+int run_bench_ao_command(const BenchAoOptions& o) {
   const ThreadScope threads(o.threads);
   std::string spec = o.scene;
   const Scene scene = load_paper_scene(spec, "bench ao");
@@ -66,37 +64,20 @@ int run_bench_ao(const BenchAoOptions& o) {
   p.render.seed = o.seed;
   p.cameras = o.cameras;
   p.repeats = o.full ? std::max(o.repeats, 5) : o.repeats;
-  validate(p.render);
-  if (device == ComputeDevice::cuda) {
-    // The GPU table, with the CPU measured in the same run
-    gpu::BenchParams g;
-    g.render = p.render;
-    g.cameras = p.cameras;
-    g.repeats = o.full ? 20 : 5;
-    g.cpu_repeats = p.repeats;
-    fmt::print("foveal bench ao: {}, {}x{}, n_max {}, gamma {:g}; GPU {} frames per case (median), CPU {} ({} threads)\n", spec, size.x,
-               size.y, o.max_rays, o.gamma, g.repeats, g.cpu_repeats, threads.threads());
-    const gpu::BenchResult result =
-        gpu::run_benchmark(scene, g, [](const std::string& line) { fmt::print("  {}\n", line), std::fflush(stdout); });
-    const std::string table = gpu::to_markdown(result);
-    fmt::print("\n{}", table);
-    if (!o.json.empty()) write_json_file(o.json, gpu::to_json(result));
-    if (!o.markdown.empty()) write_text_file(o.markdown, table);
-    return 0;
-  }
-  const Tracer tracer(scene, parse_trace_api(o.trace_api));
-  fmt::print("foveal bench ao: {} ({} triangles), {}x{}, n_max {}, gamma {:g}, {} threads, {} frame(s) per case\n", spec,
-             tracer.triangles(), size.x, size.y, o.max_rays, o.gamma, threads.threads(), p.repeats);
-  const AoBenchResult result =
-      run_ao_benchmark(scene, tracer, p, [](const std::string& line) { fmt::print("  {}\n", line), std::fflush(stdout); });
-  const std::string table = to_markdown(result);
-  fmt::print("\n{}", table);
-  if (!o.json.empty()) {
-    auto j = to_json(result);
-    j["repeats"] = p.repeats;
-    write_json_file(o.json, j);
-  }
-  if (!o.markdown.empty()) write_text_file(o.markdown, table);
+  // The table on the chosen device (on the GPU, the CPU measured in the same run)
+  AoTableRun run;
+  run.params = p;
+  run.trace_api = parse_trace_api(o.trace_api);
+  run.gpu_repeats = o.full ? 20 : 5;
+  run.scene_name = spec;
+  run.threads = threads.threads();
+  const AoTableReport report = run_bench_ao(scene, device, run, [](const std::string& line) {
+    fmt::print("{}\n", line);
+    std::fflush(stdout);
+  });
+  fmt::print("\n{}", report.markdown);
+  if (!o.json.empty()) write_json_file(o.json, report.json);
+  if (!o.markdown.empty()) write_text_file(o.markdown, report.markdown);
   return 0;
 }
 
@@ -129,7 +110,7 @@ std::function<int()> add_bench_command(CLI::App& app) {
   auto quality = add_bench_quality_command(*bench);
   auto* blur_cmd = bench->get_subcommand("blur");
   auto* quality_cmd = bench->get_subcommand("quality");
-  auto run_ao = [o] { return run_bench_ao(*o); };
+  auto run_ao = [o] { return run_bench_ao_command(*o); };
   return [run_ao, vision, blur, quality, ao, blur_cmd, quality_cmd] {
     return ao->parsed() ? run_ao() : blur_cmd->parsed() ? blur() : quality_cmd->parsed() ? quality() : vision();
   };
