@@ -172,9 +172,22 @@ Perceiver make_perceiver(const PerceiveOptions& o) {
 }
 
 // The frames: one image, a folder, a video's frames, or a built-in card.
+// A temporary folder, removed with everything in it when the run ends, failed or not.
+struct TemporaryFolder {
+  std::string path;
+  explicit TemporaryFolder(std::string p) : path(std::move(p)) { fs::create_directories(path); }
+  ~TemporaryFolder() {
+    std::error_code ec;
+    fs::remove_all(path, ec);
+  }
+  TemporaryFolder(const TemporaryFolder&) = delete;
+  TemporaryFolder& operator=(const TemporaryFolder&) = delete;
+};
+
 struct PerceiveInput {
   std::vector<fs::path> frames;
-  std::string frame_dir;  // a video's decoded frames (removed at the end)
+  std::shared_ptr<TemporaryFolder> decoded;  // a video's decoded frames and the frames seen
+  std::string frame_dir;                     // its path
   double fps = 30;
   bool amsler = false, lamps = false, folder = false, video = false;
 };
@@ -197,8 +210,8 @@ PerceiveInput open_input(const PerceiveOptions& o) {
     std::sort(in.frames.begin(), in.frames.end());
     if (in.frames.empty()) fail("{}: no images (PNG, JPEG, BMP, TIFF, EXR, PFM) in the folder", o.input);
   } else if (in.video) {
-    in.frame_dir = (fs::temp_directory_path() / fmt::format("foveal-perceive-{}", getpid())).string();
-    fs::create_directories(in.frame_dir);
+    in.decoded = std::make_shared<TemporaryFolder>((fs::temp_directory_path() / fmt::format("foveal-perceive-{}", getpid())).string());
+    in.frame_dir = in.decoded->path;
     in.fps = decode_video(o.input, in.frame_dir + "/in_%06d.png");
     for (const auto& e : fs::directory_iterator(in.frame_dir)) in.frames.push_back(e.path());
     std::sort(in.frames.begin(), in.frames.end());
@@ -292,7 +305,6 @@ double see_frames(const PerceiveOptions& o, const Perceiver& p, const PerceiveIn
   if (show && clock.ms() > 1000) fmt::print(stderr, "\r{:40}\r", "");
   if (in.video) {
     encode_video((fs::path(in.frame_dir) / "out_%06d.png").string(), in.fps, o.output);
-    fs::remove_all(in.frame_dir);
   }
   return frame_ms;
 }

@@ -182,3 +182,29 @@ TEST(PerceiveCli, BadInputGivesOneClearLine) {
   expect_one_line_error("perceive small.png -o o.png --gaze pupil://127.0.0.1:1", "perceive takes a point or a recording");
   expect_one_line_error("perceive small.png -o o.png --eye field:24-2", "name the file of values");
 }
+
+// Hostile input: a failed video run leaves no decoded frames behind (they went to a temporary
+// folder that stayed), and --pupil 0 is refused instead of meaning the default 3.5 mm.
+TEST(PerceiveCli, AFailedVideoRunLeavesNoTemporaryFilesAndPupilZeroIsRefused) {
+  fs::create_directories(scratch("hvin"));
+  for (int k = 0; k < 3; ++k)
+    foveal::save_image(test_image(32, 24), scratch("hvin/frame_" + std::to_string(10000 + k).substr(1) + ".png").string());
+  try {
+    foveal::encode_video(scratch("hvin/frame_%04d.png").string(), 10, scratch("hin.mp4").string());
+  } catch (const std::exception& e) {
+    GTEST_SKIP() << "skipped: no ffmpeg (" << e.what() << ")";
+  }
+  foveal::save_image(test_image(8, 8), scratch("small-depth.pfm").string());  // not the video's size
+  fs::create_directories(scratch("private-tmp"));
+  const CliRun r = run_cli("perceive hin.mp4 -o hout.mp4 --depth small-depth.pfm");  // fails after decoding
+  EXPECT_EQ(r.status, 1) << r.err;
+  const CliRun t =
+      foveal_test::run_foveal("TMPDIR='" + scratch("private-tmp").string() + "'", "perceive hin.mp4 -o hout.mp4 --depth small-depth.pfm");
+  EXPECT_EQ(t.status, 1) << t.err;
+  EXPECT_NE(t.err.find("--depth"), std::string::npos) << t.err;
+  EXPECT_EQ(std::distance(fs::directory_iterator(scratch("private-tmp")), fs::directory_iterator{}), 0)
+      << "decoded frames left behind in the temporary folder";
+  EXPECT_FALSE(fs::exists(scratch("hout.mp4")));
+  foveal::save_image(test_image(32, 24), scratch("hstim.png").string());
+  expect_one_line_error("perceive hstim.png -o hseen.png --pupil 0", "--pupil: must be in (0, 10] mm, got 0");
+}
