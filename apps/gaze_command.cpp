@@ -149,12 +149,7 @@ struct EventsRun {
 
 EventsRun detect_and_score(const GazeCommandOptions& o, const Recording& recording, const Display& display, const FixationParams& params) {
   EventsRun run;
-  if (o.events.empty()) {
-    if (!o.samples_out.empty() || !o.evaluate.empty() || !o.events_out.empty())
-      fail("--samples-out, --events-out and --evaluate need --events");
-    if (!o.coder2.empty() && o.evaluate.empty()) fail("--coder2 needs --evaluate (the first coder's labels)");
-    return run;
-  }
+  if (o.events.empty()) return run;
   require_positive(o.filter_window_ms, "--filter-window-ms");
   require_non_negative(o.detection_window_ms, "--detection-window-ms");
   require_non_negative(o.blink_flank_ms, "--blink-flank-ms");
@@ -187,7 +182,6 @@ EventsRun detect_and_score(const GazeCommandOptions& o, const Recording& recordi
     run.evaluation = evaluate_labels(run.detection->labels, expert.label, t);
     if (!o.coder2.empty()) run.ceiling = evaluate_labels(read_labels(o.coder2).label, expert.label, t);
   }
-  if (!o.coder2.empty() && o.evaluate.empty()) fail("--coder2 needs --evaluate (the first coder's labels)");
   return run;
 }
 
@@ -285,6 +279,10 @@ void print_gaze(const GazeCommandOptions& o, const Recording& recording, const G
 }
 
 int run_gaze(const GazeCommandOptions& o) {
+  // The options that go together, checked before the recording is read
+  if (o.events.empty() && (!o.samples_out.empty() || !o.evaluate.empty() || !o.events_out.empty()))
+    fail("--samples-out, --events-out and --evaluate need --events");
+  if (!o.coder2.empty() && o.evaluate.empty()) fail("--coder2 needs --evaluate (the first coder's labels)");
   Display display = parse_display(o.display, Display{});
   const bool display_has_resolution = parse_numbers("--display", o.display).size() == 5;
   const ReadOptions read = resolve_read_options(o.gaze, display);

@@ -186,7 +186,7 @@ struct TemporaryFolder {
 
 struct PerceiveInput {
   std::vector<fs::path> frames;
-  std::shared_ptr<TemporaryFolder> decoded;  // a video's decoded frames and the frames seen
+  std::unique_ptr<TemporaryFolder> decoded;  // a video's decoded frames and the frames seen
   std::string frame_dir;                     // its path
   double fps = 30;
   bool amsler = false, lamps = false, folder = false, video = false;
@@ -210,7 +210,7 @@ PerceiveInput open_input(const PerceiveOptions& o) {
     std::sort(in.frames.begin(), in.frames.end());
     if (in.frames.empty()) fail("{}: no images (PNG, JPEG, BMP, TIFF, EXR, PFM) in the folder", o.input);
   } else if (in.video) {
-    in.decoded = std::make_shared<TemporaryFolder>((fs::temp_directory_path() / fmt::format("foveal-perceive-{}", getpid())).string());
+    in.decoded = std::make_unique<TemporaryFolder>((fs::temp_directory_path() / fmt::format("foveal-perceive-{}", getpid())).string());
     in.frame_dir = in.decoded->path;
     in.fps = decode_video(o.input, in.frame_dir + "/in_%06d.png");
     for (const auto& e : fs::directory_iterator(in.frame_dir)) in.frames.push_back(e.path());

@@ -11,6 +11,7 @@
 #include <filesystem>
 #include <fstream>
 #include <numbers>
+#include <optional>
 
 using namespace foveal_test;
 namespace fs = std::filesystem;
@@ -53,6 +54,21 @@ double contrast_near(const foveal::Image& im, int x0, int x1, int y) {
     hi = std::max(hi, im.at(x, y, 1));
   }
   return hi - lo;
+}
+
+// A `frames`-frame video of test_image(w, h) at 10 fps in the scratch folder; the error text when
+// ffmpeg cannot make it (the test skips).
+std::optional<std::string> write_test_video(const std::string& name, int frames, int w, int h) {
+  const std::string dir = name + "-frames";
+  fs::create_directories(scratch(dir));
+  for (int k = 0; k < frames; ++k)
+    foveal::save_image(test_image(w, h), scratch(dir + "/frame_" + std::to_string(10000 + k).substr(1) + ".png").string());
+  try {
+    foveal::encode_video(scratch(dir + "/frame_%04d.png").string(), 10, scratch(name).string());
+  } catch (const std::exception& e) {
+    return std::string(e.what());
+  }
+  return std::nullopt;
 }
 
 }  // namespace
@@ -119,14 +135,7 @@ TEST(PerceiveCli, ARecordingsFixationsMoveTheFieldWithTheFramesTime) {
 }
 
 TEST(PerceiveCli, VideosGoThroughFfmpegFrameByFrame) {
-  fs::create_directories(scratch("vin"));
-  for (int k = 0; k < 5; ++k)
-    foveal::save_image(test_image(64, 48), scratch("vin/frame_" + std::to_string(10000 + k).substr(1) + ".png").string());
-  try {
-    foveal::encode_video(scratch("vin/frame_%04d.png").string(), 10, scratch("in.mp4").string());
-  } catch (const std::exception& e) {
-    GTEST_SKIP() << "skipped: no ffmpeg (" << e.what() << ")";
-  }
+  if (const auto no_video = write_test_video("in.mp4", 5, 64, 48)) GTEST_SKIP() << "skipped: no ffmpeg (" << *no_video << ")";
   const CliRun r = run_cli("perceive in.mp4 -o out.mp4 --eye cvd:protanopia --gaze 20,20");
   ASSERT_EQ(r.status, 0) << r.err;
   EXPECT_NE(r.out.find("5 frames at 10 fps"), std::string::npos) << r.out;
@@ -186,14 +195,7 @@ TEST(PerceiveCli, BadInputGivesOneClearLine) {
 // Hostile input: a failed video run leaves no decoded frames behind (they went to a temporary
 // folder that stayed), and --pupil 0 is refused instead of meaning the default 3.5 mm.
 TEST(PerceiveCli, AFailedVideoRunLeavesNoTemporaryFilesAndPupilZeroIsRefused) {
-  fs::create_directories(scratch("hvin"));
-  for (int k = 0; k < 3; ++k)
-    foveal::save_image(test_image(32, 24), scratch("hvin/frame_" + std::to_string(10000 + k).substr(1) + ".png").string());
-  try {
-    foveal::encode_video(scratch("hvin/frame_%04d.png").string(), 10, scratch("hin.mp4").string());
-  } catch (const std::exception& e) {
-    GTEST_SKIP() << "skipped: no ffmpeg (" << e.what() << ")";
-  }
+  if (const auto no_video = write_test_video("hin.mp4", 3, 32, 24)) GTEST_SKIP() << "skipped: no ffmpeg (" << *no_video << ")";
   foveal::save_image(test_image(8, 8), scratch("small-depth.pfm").string());  // not the video's size
   fs::create_directories(scratch("private-tmp"));
   const CliRun r = run_cli("perceive hin.mp4 -o hout.mp4 --depth small-depth.pfm");  // fails after decoding
