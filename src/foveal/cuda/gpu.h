@@ -68,6 +68,10 @@ class Renderer {
   AoSchedule ao_schedule() const;
   const Bvh& bvh() const;
 
+  // AO rays continuing pixels' sequences (FrameRenderer::trace_ao_batch): one thread per task over
+  // the G-buffer's surfaces, uploaded when batch.gbuffer_version changes. The batch runs whole.
+  uint64_t trace_ao_tasks(const AoRayBatch& batch);
+
   // Raw tracing of given rays on the GPU (tests, and the GPU's own throughput baseline).
   void intersect(std::span<const Ray> rays, std::span<Hit> hits);
   void occluded(std::span<const Ray> rays, std::span<uint8_t> occluded);

@@ -174,6 +174,16 @@ struct Renderer::Impl {
     uint32_t frames = 0;  // stored since the last reset
   } history;
 
+  // AO tasks (the real-time loop): the surfaces of the last G-buffer version, the tasks, results
+  struct Tasks {
+    DeviceArray<uint32_t> prim;
+    DeviceArray<glm::vec3> position, geo_normal;
+    uint64_t version = 0;
+    bool uploaded = false;
+    DeviceArray<AoRayTask> list;
+    DeviceArray<uint32_t> blocked;
+  } tasks;
+
   // Raw tracing
   DeviceArray<Ray> raw_rays;
   DeviceArray<Hit> raw_hits;

@@ -128,6 +128,35 @@ __global__ void ao_per_pixel_kernel(AoArgs a) {
   a.blocked[i] = blocked;
 }
 
+// AO tasks: one thread per task casts rays [first, first + count) of its pixel's sequence.
+struct AoTaskArgs {
+  BvhView bvh;
+  const uint32_t* prim;
+  const glm::vec3* position;
+  const glm::vec3* geo_normal;
+  const AoRayTask* tasks;
+  uint32_t* blocked;
+  const uint32_t* sobol;
+  size_t count, pixels;
+  int width;
+  float ao_distance, epsilon;
+  uint64_t seed;
+};
+
+__global__ void ao_tasks_kernel(AoTaskArgs a) {
+  const size_t t = blockIdx.x * static_cast<size_t>(blockDim.x) + threadIdx.x;
+  if (t >= a.count) return;
+  const AoRayTask task = a.tasks[t];
+  uint32_t blocked = 0;
+  if (task.pixel < a.pixels && a.prim[task.pixel] != Hit::kNoHit) {
+    const size_t i = task.pixel;
+    const AoPixelRays rays(a.position[i], a.geo_normal[i], a.epsilon, a.ao_distance, a.seed, static_cast<uint32_t>(i % a.width),
+                           static_cast<uint32_t>(i / a.width), a.sobol);
+    for (uint32_t k = 0; k < task.count; ++k) blocked += bvh_trace<true>(a.bvh, rays(task.first + k), nullptr) ? 1U : 0U;
+  }
+  a.blocked[t] = blocked;
+}
+
 // Per-pixel AO visibility V = open / n, and the fovea's sums for the `auto` ambient constant.
 __global__ void visibility_kernel(size_t pixels, const unsigned long long* ray_count, const float* quality, const uint32_t* blocked,
                                   float* visibility, FrameCounters* counters) {
@@ -515,6 +544,46 @@ void Renderer::intersect(std::span<const Ray> rays, std::span<Hit> hits) {
   intersect_kernel<<<blocks_for(rays.size(), 128), 128>>>(m.bvh_view(), m.raw_rays.get(), m.raw_hits.get(), rays.size());
   FOVEAL_CUDA_LAUNCHED("intersect");
   m.raw_hits.download(hits.data(), rays.size());
+}
+
+uint64_t Renderer::trace_ao_tasks(const AoRayBatch& batch) {
+  Impl& m = *impl_;
+  const GBuffer& g = *batch.gbuffer;
+  const size_t count = batch.tasks.size();
+  if (batch.blocked.size() < count || batch.done.size() < count)
+    throw Error("gpu::Renderer::trace_ao_tasks: output spans shorter than the tasks");
+  if (!m.tasks.uploaded || m.tasks.version != batch.gbuffer_version) {
+    m.tasks.prim.upload(g.prim);
+    m.tasks.position.upload(g.position);
+    m.tasks.geo_normal.upload(g.geo_normal);
+    m.tasks.version = batch.gbuffer_version;
+    m.tasks.uploaded = true;
+  }
+  uint64_t rays = 0;
+  for (const AoRayTask& t : batch.tasks)
+    if (t.pixel < g.prim.size() && g.hit(t.pixel)) rays += t.count;
+  if (count > 0) {
+    m.tasks.list.upload(batch.tasks.data(), count);
+    m.tasks.blocked.reserve(count);
+    AoTaskArgs a{m.bvh_view(),
+                 m.tasks.prim.get(),
+                 m.tasks.position.get(),
+                 m.tasks.geo_normal.get(),
+                 m.tasks.list.get(),
+                 m.tasks.blocked.get(),
+                 m.sobol.get(),
+                 count,
+                 g.prim.size(),
+                 g.width,
+                 batch.ao_distance,
+                 batch.epsilon,
+                 batch.seed};
+    ao_tasks_kernel<<<blocks_for(count, 128), 128>>>(a);
+    FOVEAL_CUDA_LAUNCHED("ao tasks");
+    m.tasks.blocked.download(batch.blocked.data(), count);
+  }
+  std::fill(batch.done.begin(), batch.done.begin() + static_cast<std::ptrdiff_t>(count), uint8_t{1});
+  return rays;
 }
 
 void Renderer::occluded(std::span<const Ray> rays, std::span<uint8_t> occluded) {

@@ -18,6 +18,7 @@ class CpuFrameRenderer final : public FrameRenderer {
   }
   void reset_history() override { history_.clear(); }
   uint32_t history_frames() const override { return history_.frames(); }
+  uint64_t trace_ao_batch(const AoRayBatch& batch) override { return trace_ao_tasks(tracer_, batch); }
   ComputeDevice device() const override { return ComputeDevice::cpu; }
   size_t triangles() const override { return tracer_.triangles(); }
   double build_ms() const override { return tracer_.build_ms(); }

@@ -13,6 +13,7 @@
 
 #include <functional>
 #include <memory>
+#include <span>
 #include <string>
 
 namespace foveal {
@@ -37,6 +38,27 @@ struct FrameOptions {
   bool use_history = true;
 };
 
+// AO rays that continue pixels' sequences: the real-time loop's unit of work (render/realtime.h).
+// Pixel i's rays are those the AO pass would cast ([first, first + count) of its scrambled Sobol
+// sequence), so rays added frame after frame are the paper's pixel's first rays in order.
+struct AoRayTask {
+  uint32_t pixel = 0;  // y·width + x
+  uint32_t first = 0;  // index of the first ray in the pixel's sequence
+  uint32_t count = 0;  // rays to cast
+};
+struct AoRayBatch {
+  const GBuffer* gbuffer = nullptr;  // the surfaces the rays leave from
+  uint64_t gbuffer_version = 0;      // changes whenever *gbuffer does (a backend may keep a copy until then)
+  float ao_distance = 0, epsilon = 0;
+  uint64_t seed = 1;
+  std::span<const AoRayTask> tasks;  // in priority order: a deadline leaves the tail undone
+  std::span<uint32_t> blocked;       // out, per task: rays found blocked
+  std::span<uint8_t> done;           // out, per task: 1 once its rays were traced
+  // Asked before each chunk of tasks (the CPU's): true stops the batch there. A GPU batch runs whole.
+  std::function<bool()> expired;
+  double slowdown = 1;  // tests only: each chunk takes this many times as long (a slower tracer)
+};
+
 class FrameRenderer {
  public:
   virtual ~FrameRenderer() = default;
@@ -46,6 +68,8 @@ class FrameRenderer {
   virtual void reset_history() = 0;
   // Temporal frames stored since the last reset.
   virtual uint32_t history_frames() const = 0;
+  // Trace a batch of AO rays; returns the rays traced (those of the tasks marked done).
+  virtual uint64_t trace_ao_batch(const AoRayBatch& batch) = 0;
 
   virtual ComputeDevice device() const = 0;
   // One line for the user: "cpu", or "cuda (NVIDIA H100 …)".

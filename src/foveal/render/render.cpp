@@ -1,6 +1,7 @@
 // foveal/render/render.cpp — primary rays, foveation maps, foveated AO and Phong shading.
 #include "foveal/render/render.h"
 
+#include "foveal/render/frame_renderer.h"
 #include "foveal/render/reuse.h"
 
 #include "foveal/util/error.h"
@@ -9,6 +10,7 @@
 
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
 
 #include <algorithm>
 #include <atomic>
@@ -361,6 +363,69 @@ uint64_t trace_ao(const Tracer& tracer, const GBuffer& g, const FoveationMaps& m
   const uint64_t rays = trace_ao_counts(tracer, g, maps, ao_distance, epsilon, seed, AoSampling{}, counts, hooks);
   visibility_from_counts(counts, visibility);
   return rays;
+}
+
+uint64_t trace_ao_tasks(const Tracer& tracer, const AoRayBatch& batch) {
+  const GBuffer& g = *batch.gbuffer;
+  const auto tasks = batch.tasks;
+  if (batch.blocked.size() < tasks.size() || batch.done.size() < tasks.size()) fail("trace_ao_tasks: output spans shorter than the tasks");
+  std::fill(batch.done.begin(), batch.done.begin() + static_cast<std::ptrdiff_t>(tasks.size()), uint8_t{0});
+  // Chunks of whole tasks, about kAoBatch / 2 rays each (a fraction of a millisecond: the deadline's
+  // resolution), in task order
+  std::vector<size_t> chunk_start{0};
+  for (size_t t = 0, rays = 0; t < tasks.size(); ++t) {
+    rays += tasks[t].count;
+    if (rays >= kAoBatch / 2) {
+      chunk_start.push_back(t + 1);
+      rays = 0;
+    }
+  }
+  if (chunk_start.back() != tasks.size()) chunk_start.push_back(tasks.size());
+  const size_t chunks = chunk_start.size() - 1;
+  std::atomic<size_t> next{0};
+  std::atomic<bool> stopped{false};
+  std::atomic<uint64_t> traced{0};
+  const int threads = std::max(1, tbb::this_task_arena::max_concurrency());
+  tbb::parallel_for(0, threads, [&](int) {
+    std::vector<Ray> rays;
+    std::vector<uint8_t> occluded;
+    while (!stopped.load(std::memory_order_relaxed)) {
+      const size_t c = next.fetch_add(1);
+      if (c >= chunks) break;
+      if (batch.expired && batch.expired()) {
+        stopped = true;
+        break;
+      }
+      const Timer chunk_timer;
+      rays.clear();
+      for (size_t t = chunk_start[c]; t < chunk_start[c + 1]; ++t) {
+        const AoRayTask& task = tasks[t];
+        const size_t i = task.pixel;
+        if (i >= g.prim.size() || !g.hit(i)) continue;
+        const AoPixelRays pixel(g.position[i], g.geo_normal[i], batch.epsilon, batch.ao_distance, batch.seed,
+                                static_cast<uint32_t>(i % static_cast<size_t>(g.width)),
+                                static_cast<uint32_t>(i / static_cast<size_t>(g.width)), sobol_table_2d());
+        for (uint32_t k = 0; k < task.count; ++k) rays.push_back(pixel(task.first + k));
+      }
+      occluded.resize(rays.size());
+      tracer.occluded(rays, occluded);
+      size_t r = 0;
+      for (size_t t = chunk_start[c]; t < chunk_start[c + 1]; ++t) {
+        const AoRayTask& task = tasks[t];
+        uint32_t blocked = 0;
+        if (task.pixel < g.prim.size() && g.hit(task.pixel))
+          for (uint32_t k = 0; k < task.count; ++k) blocked += occluded[r++];
+        batch.blocked[t] = blocked;
+        batch.done[t] = 1;
+      }
+      traced += rays.size();
+      if (batch.slowdown > 1) {  // tests: a slower tracer, by waiting as long again
+        const double target = chunk_timer.ms() * batch.slowdown;
+        while (chunk_timer.ms() < target) {}
+      }
+    }
+  });
+  return traced.load();
 }
 
 void collect_ao_rays(const GBuffer& g, const FoveationMaps& maps, float ao_distance, float epsilon, uint64_t seed, size_t stride,

@@ -168,6 +168,12 @@ uint64_t trace_ao_counts(const Tracer& tracer, const GBuffer& gbuffer, const Fov
                          uint64_t seed, const AoSampling& sampling, AoCounts& counts, const AoPassHooks& hooks = {});
 // visibility_standard_error(), history_contradicted(): reuse_pixel.h.
 
+// The CPU's FrameRenderer::trace_ao_batch: the tasks in chunks of about a thousand rays, taken in
+// order by every thread, batch.expired() asked before each; a task's result does not depend on
+// the thread count. Returns the rays traced.
+struct AoRayBatch;
+uint64_t trace_ao_tasks(const Tracer& tracer, const AoRayBatch& batch);
+
 // Visibility at one point from `rays` cosine-weighted directions of pixel (x, y)'s sequence:
 // the per-pixel function the AO pass runs, exposed for analytic tests.
 float estimate_visibility(const Tracer& tracer, glm::vec3 position, glm::vec3 normal, int rays, float ao_distance, float epsilon,

@@ -1,0 +1,207 @@
+// foveal/gaze/landing.cpp — causal saccade landing prediction (the mirrored velocity profile).
+#include "foveal/gaze/landing.h"
+
+#include "foveal/util/error.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace foveal {
+
+namespace {
+
+// Velocities are taken over at least this long a baseline (one sample where samples are further
+// apart): at 1000 Hz a single interval turns 0.05° of noise into 70°/s, over 4 ms into 18°/s.
+constexpr double kVelocityBaselineS = 0.004;
+
+}  // namespace
+
+void validate(const LandingParams& p) {
+  auto positive = [](double v, const char* name) {
+    if (!(v > 0) || !std::isfinite(v)) fail("{}: must be > 0, got {}", name, v);
+  };
+  positive(p.onset_deg_s, "onset_deg_s");
+  positive(p.offset_deg_s, "offset_deg_s");
+  positive(p.max_velocity_deg_s, "max_velocity_deg_s");
+  positive(p.duration_slack, "duration_slack");
+  positive(p.main_sequence_ms_per_deg, "main_sequence_ms_per_deg");
+  positive(p.main_sequence_vmax_deg_s, "main_sequence_vmax_deg_s");
+  positive(p.main_sequence_c_deg, "main_sequence_c_deg");
+  if (!(p.min_amplitude_deg >= 0)) fail("min_amplitude_deg: must be >= 0, got {}", p.min_amplitude_deg);
+  if (!(p.skew >= 0.25 && p.skew <= 4)) fail("skew: must be in [0.25, 4], got {}", p.skew);
+  if (!(p.skew_per_deg >= 0 && p.skew_per_deg <= 1)) fail("skew_per_deg: must be in [0, 1], got {}", p.skew_per_deg);
+  if (!(p.max_skew >= p.skew && p.max_skew <= 8)) fail("max_skew: must be in [skew, 8], got {}", p.max_skew);
+  if (!(p.peak_drop > 0 && p.peak_drop < 1)) fail("peak_drop: must be in (0, 1), got {}", p.peak_drop);
+  if (!(p.main_sequence_ms >= 0)) fail("main_sequence_ms: must be >= 0, got {}", p.main_sequence_ms);
+  if (p.offset_deg_s > p.onset_deg_s) fail("offset_deg_s: must be <= onset_deg_s = {}, got {}", p.onset_deg_s, p.offset_deg_s);
+}
+
+LandingPredictor::LandingPredictor(const LandingParams& params) : params_(params) { validate(params); }
+
+void LandingPredictor::reset() { *this = LandingPredictor(params_); }
+
+void LandingPredictor::abandon() {
+  state_.in_flight = false;
+  state_.past_peak = false;
+  rise_.clear();
+  predictions_.clear();
+  prediction_t_.clear();
+}
+
+void LandingPredictor::start(double t_s, glm::dvec2 from, double velocity) {
+  state_ = LandingState{};
+  state_.in_flight = true;
+  state_.onset_s = t_s;
+  state_.onset_deg = from;
+  state_.landing_deg = from;
+  current_ = PredictedSaccade{};
+  current_.onset_s = t_s;
+  rise_.assign(1, Profile{});  // the rise starts at rest where the flight starts
+  predictions_.clear();
+  prediction_t_.clear();
+  slow_since_ = NAN;
+  (void)velocity;
+}
+
+void LandingPredictor::predict(double t_s, glm::dvec2 deg, double velocity) {
+  LandingState& s = state_;
+  const glm::dvec2 travelled = deg - s.onset_deg;
+  const double distance = glm::length(travelled);
+  if (!s.past_peak) {
+    if (velocity >= s.peak_velocity_deg_s) {
+      s.peak_velocity_deg_s = velocity;
+      rise_.push_back({t_s - s.onset_s, distance, velocity});
+      slow_since_ = NAN;
+    } else if (velocity < params_.peak_drop * s.peak_velocity_deg_s) {
+      // Passed once the velocity has stayed below the drop for a velocity baseline (noise at the
+      // start of a flight makes single dips)
+      if (std::isnan(slow_since_)) slow_since_ = t_s;
+      if (t_s - slow_since_ + sample_period_ >= kVelocityBaselineS - 1e-9) s.past_peak = true;
+    } else {
+      slow_since_ = NAN;
+    }
+  }
+  // The rest of the flight mirrors the rise from the current velocity, stretched by the skew; while
+  // the velocity still rises, as if it were the peak
+  double rise_distance = distance, rise_time = t_s - s.onset_s;
+  if (velocity < s.peak_velocity_deg_s) {
+    const auto it = std::lower_bound(rise_.begin(), rise_.end(), velocity, [](const Profile& p, double v) { return p.velocity < v; });
+    if (it == rise_.begin()) {
+      rise_distance = rise_.empty() ? 0 : rise_.front().distance;
+      rise_time = rise_.empty() ? 0 : rise_.front().t;
+    } else if (it == rise_.end()) {
+      rise_distance = rise_.back().distance;
+      rise_time = rise_.back().t;
+    } else {
+      const Profile& a = *(it - 1);
+      const Profile& b = *it;
+      const double f = b.velocity > a.velocity ? (velocity - a.velocity) / (b.velocity - a.velocity) : 0;
+      rise_distance = a.distance + f * (b.distance - a.distance);
+      rise_time = a.t + f * (b.t - a.t);
+    }
+  }
+  const double skew = std::min(params_.max_skew, params_.skew + params_.skew_per_deg * (distance + rise_distance));
+  const double amplitude = distance + skew * rise_distance;
+  const double landing_s = t_s + skew * rise_time;
+  const glm::dvec2 dir = distance > 0 ? travelled / distance : glm::dvec2(0);
+  s.amplitude_deg = amplitude;
+  s.landing_deg = s.onset_deg + amplitude * dir;
+  s.landing_s = landing_s;
+  if (s.past_peak && std::isnan(current_.first_landing_deg.x)) {
+    current_.first_prediction_s = t_s;
+    current_.first_landing_deg = s.landing_deg;
+    current_.first_landing_time_s = s.landing_s;
+  }
+  predictions_.push_back(s.landing_deg);
+  prediction_t_.push_back(t_s);
+}
+
+void LandingPredictor::land(double t_s, glm::dvec2 deg) {
+  LandingState& s = state_;
+  const double amplitude = glm::length(deg - s.onset_deg);
+  s.in_flight = false;
+  s.landing_deg = deg;
+  s.landing_s = t_s;
+  s.amplitude_deg = amplitude;
+  if (amplitude >= params_.min_amplitude_deg && s.past_peak) {
+    current_.landing_s = t_s;
+    current_.landing_deg = deg;
+    current_.amplitude_deg = amplitude;
+    // settled: the earliest prediction from which every later one was within 1° of the landing
+    double settled = NAN;
+    for (size_t k = predictions_.size(); k-- > 0;) {
+      if (glm::length(predictions_[k] - deg) > 1.0) break;
+      settled = prediction_t_[k];
+    }
+    current_.settled_s = settled;
+    current_.prediction_s = prediction_t_;
+    current_.prediction_deg = predictions_;
+    done_.push_back(current_);
+  }
+  s.past_peak = false;
+  rise_.clear();
+  predictions_.clear();
+  prediction_t_.clear();
+}
+
+void LandingPredictor::push(double t_s, glm::dvec2 deg, bool valid) {
+  valid = valid && std::isfinite(deg.x) && std::isfinite(deg.y) && std::isfinite(t_s);
+  if (!valid) {
+    if (state_.in_flight) abandon();
+    history_.clear();
+    fast_run_ = 0;
+    return;
+  }
+  if (!history_.empty() && t_s <= history_.back().t) return;  // out of order or repeated: ignored
+  history_.push_back({t_s, deg});
+  // The velocity over the last ≥ 4 ms (or one interval)
+  while (history_.size() > 2 && t_s - history_[1].t >= kVelocityBaselineS) history_.erase(history_.begin());
+  if (history_.size() < 2) return;
+  const Sample& from = history_.front();
+  const double dt = t_s - from.t;
+  sample_period_ = t_s - history_[history_.size() - 2].t;
+  const double velocity = glm::length(deg - from.deg) / dt;
+  if (!(velocity <= params_.max_velocity_deg_s)) return;
+  if (!state_.in_flight) {
+    fast_run_ = velocity > params_.onset_deg_s ? fast_run_ + 1 : 0;
+    if (fast_run_ == 1) {
+      onset_candidate_ = from;
+    } else if (fast_run_ >= 2) {
+      start(onset_candidate_.t, onset_candidate_.deg, velocity);
+      current_.detected_s = t_s;
+      fast_run_ = 0;
+      predict(t_s, 0.5 * (deg + from.deg), velocity);
+    }
+    return;
+  }
+  const double flight_ms = (t_s - state_.onset_s) * 1000;
+  const double vmax = params_.main_sequence_vmax_deg_s;
+  const double peak_amplitude = -params_.main_sequence_c_deg * std::log(1 - std::min(state_.peak_velocity_deg_s, 0.95 * vmax) / vmax);
+  const double limit_ms = params_.duration_slack * (params_.main_sequence_ms + params_.main_sequence_ms_per_deg * peak_amplitude);
+  if (flight_ms > limit_ms) {
+    abandon();  // no deceleration where a saccade would have one: a pursuit or drift
+    return;
+  }
+  if (state_.past_peak && velocity < params_.offset_deg_s) {
+    land(t_s, deg);
+    return;
+  }
+  // The velocity stands for the baseline's middle: so does the position the profile is mirrored from
+  predict(t_s, 0.5 * (deg + from.deg), velocity);
+}
+
+glm::dvec2 PredictedSaccade::prediction_at(double t_s) const {
+  const auto it = std::upper_bound(prediction_s.begin(), prediction_s.end(), t_s);
+  if (it == prediction_s.begin()) return glm::dvec2(NAN);
+  return prediction_deg[static_cast<size_t>(it - prediction_s.begin()) - 1];
+}
+
+std::vector<PredictedSaccade> predict_landings(const std::vector<double>& t_s, const std::vector<glm::dvec2>& deg,
+                                               const LandingParams& params) {
+  if (t_s.size() != deg.size()) fail("predict_landings: {} times for {} positions", t_s.size(), deg.size());
+  LandingPredictor predictor(params);
+  for (size_t i = 0; i < t_s.size(); ++i) predictor.push(t_s[i], deg[i]);
+  return predictor.saccades();
+}
+
+}  // namespace foveal

@@ -1,0 +1,294 @@
+// foveal/render/realtime.cpp — the deadline loop: base shading once per view, AO rays by perceived
+// error within each frame's budget, the fovea at a saccade's predicted landing.
+#include "foveal/render/realtime.h"
+
+#include "foveal/util/error.h"
+#include "foveal/util/timer.h"
+#include "foveal/util/units.h"
+
+#include <fmt/format.h>
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+
+namespace foveal {
+
+namespace {
+
+constexpr uint32_t kFirstRound = 16;  // a pixel's first round of rays (adaptive sampling's)
+constexpr int kBuckets = 64;          // priority buckets of the periphery (half powers of two)
+
+bool same_camera(const Camera& a, const Camera& b) { return a.eye == b.eye && a.look == b.look && a.up == b.up && a.fov_deg == b.fov_deg; }
+
+}  // namespace
+
+const char* to_string(LoopClock clock) { return clock == LoopClock::model ? "model" : "wall"; }
+
+LoopClock parse_loop_clock(const std::string& name) {
+  if (name == "wall") return LoopClock::wall;
+  if (name == "model") return LoopClock::model;
+  fail("clock: unknown clock '{}' (known: wall, model)", name);
+}
+
+void validate(const LoopSettings& s) {
+  if (!(s.budget_ms > 0) || !std::isfinite(s.budget_ms) || s.budget_ms > 10000)
+    fail("frame_budget_ms: must be in (0, 10000] ms, got {}", s.budget_ms);
+  if (s.clock == LoopClock::model) {
+    if (!(s.model_rays_per_ms > 0) || !std::isfinite(s.model_rays_per_ms))
+      fail("model_rays_per_ms: the model clock needs a ray rate > 0, got {}", s.model_rays_per_ms);
+    if (!(s.model_fixed_ms >= 0) || !std::isfinite(s.model_fixed_ms)) fail("model_fixed_ms: must be >= 0, got {}", s.model_fixed_ms);
+  }
+  if (!(s.margin_ms >= 0) || s.margin_ms >= s.budget_ms) fail("margin_ms: must be in [0, budget), got {}", s.margin_ms);
+  if (!(s.min_scale > 0 && s.min_scale <= 1)) fail("min_scale: must be in (0, 1], got {}", s.min_scale);
+  if (!(s.slowdown >= 1) || !std::isfinite(s.slowdown)) fail("slowdown: must be >= 1, got {}", s.slowdown);
+  validate(s.landing);
+}
+
+RealtimeLoop::RealtimeLoop(FrameRenderer& renderer, const Scene& scene, const RenderParams& params, const LoopSettings& settings)
+    : renderer_(renderer), scene_(scene), requested_(params), params_(params), settings_(settings), predictor_(settings.landing) {
+  validate(params);
+  validate(settings);
+  if (params.shadows) fail("shadows: the real-time loop shades without shadow rays (as the papers' frames)");
+  const Bounds bounds = scene.bounds();
+  ao_distance_ = resolve_ao_distance(scene, bounds, params.ao_distance);
+  epsilon_ = surface_epsilon(bounds);
+  // τ where q = 1: the reference's worst-case noise at n_max rays, times the tolerance
+  tau_fovea_ = static_cast<float>(params.reuse.tolerance * 0.5 / std::sqrt(std::max(1, params.foveation.max_rays)));
+}
+
+glm::dvec2 RealtimeLoop::px_to_deg(glm::dvec2 px) const {
+  const Display& d = requested_.display;
+  return {std::atan((px.x / requested_.width - 0.5) * d.width_cm / d.distance_cm) * kDeg,
+          std::atan((px.y / requested_.height - 0.5) * d.height_cm / d.distance_cm) * kDeg};
+}
+
+glm::dvec2 RealtimeLoop::deg_to_px(glm::dvec2 deg) const {
+  const Display& d = requested_.display;
+  return {(std::tan(deg.x / kDeg) * d.distance_cm / d.width_cm + 0.5) * requested_.width,
+          (std::tan(deg.y / kDeg) * d.distance_cm / d.height_cm + 0.5) * requested_.height};
+}
+
+void RealtimeLoop::push_gaze(double t_s, std::optional<glm::dvec2> gaze_px) {
+  const bool valid = gaze_px && std::isfinite(gaze_px->x) && std::isfinite(gaze_px->y);
+  if (valid) measured_px_ = *gaze_px;
+  predictor_.push(t_s, valid ? px_to_deg(*gaze_px) : glm::dvec2(NAN), valid);
+}
+
+void RealtimeLoop::reset() {
+  have_view_ = false;
+  maps_gaze_.reset();
+}
+
+void RealtimeLoop::new_view(const Camera& camera) {
+  RenderParams p = params_;
+  p.foveation.max_rays = p.foveation.min_rays = 0;
+  p.reuse = {};
+  p.gaze_px.reset();
+  FrameOptions options;
+  options.outputs = {false, false, true};
+  options.use_history = false;
+  gbuffer_ = renderer_.render(camera, p, options).gbuffer;
+  ++gbuffer_version_;
+  camera_ = camera;
+  have_view_ = true;
+  // S and A of the colour S + k_a·A: eq. 2 with k_a = 0, and the ambient light times the albedo
+  const size_t n = gbuffer_.prim.size();
+  lit_.assign(n, background_colour());
+  ambient_.assign(n, glm::vec3(0.0f));
+  const std::vector<Light> lights = frame_lights(scene_.lights, camera);
+  const std::vector<MaterialView> materials = material_views(scene_);
+  tbb::parallel_for(size_t{0}, n, size_t{4096}, [&](size_t i) {
+    if (!gbuffer_.hit(i)) return;
+    const GBuffer& g = gbuffer_;
+    const MaterialView& m = materials[scene_.material_ids[g.prim[i]]];
+    lit_[i] = shade_point(m, g.albedo[i], g.position[i], g.normal[i], g.geo_normal[i], g.view[i], 0.0f, scene_.ambient, lights.data(),
+                          static_cast<int>(lights.size()), false, epsilon_, [](const Ray&) { return false; });
+    ambient_[i] = scene_.ambient * g.albedo[i];
+  });
+  cast_.assign(n, 0);
+  open_.assign(n, 0);
+}
+
+void RealtimeLoop::update_maps(glm::dvec2 gaze_px) {
+  if (maps_gaze_ && glm::length(*maps_gaze_ - gaze_px) < 0.5 && maps_.width == params_.width && maps_.height == params_.height) return;
+  maps_ = foveation_maps(params_, gaze_px);
+  maps_gaze_ = gaze_px;
+}
+
+bool RealtimeLoop::converged(size_t i) const {
+  const uint32_t n = maps_.rays[i];
+  if (!gbuffer_.hit(i) || n == 0) return true;
+  const uint32_t c = cast_[i];
+  if (c >= n) return true;
+  const float q = maps_.quality[i];
+  return c >= kFirstRound && q > 0 &&
+         visibility_standard_error(static_cast<float>(open_[i]), static_cast<float>(c)) <= tau_fovea_ / q;
+}
+
+size_t RealtimeLoop::plan_round(uint64_t ray_limit) {
+  tasks_.clear();
+  const size_t n = cast_.size();
+  // Bucket 0: the fovea's unconverged pixels; then the periphery by q²·σ̂²·k/(c + k), in half
+  // powers of two from the highest
+  std::array<uint32_t, kBuckets + 2> count{};
+  order_.resize(n);
+  auto rays_for = [&](size_t i) { return std::min<uint32_t>(maps_.rays[i] - cast_[i], std::max(kFirstRound, cast_[i])); };
+  auto bucket_of = [&](size_t i) -> int {
+    if (converged(i)) return -1;
+    const float q = maps_.quality[i];
+    if (q >= 1.0f) return 0;
+    const float c = static_cast<float>(cast_[i]), k = static_cast<float>(rays_for(i));
+    const float p = (static_cast<float>(open_[i]) + 0.5f) / (c + 1.0f);
+    const float gain = q * q * p * (1 - p) * k / (c + k);
+    if (!(gain > 0)) return kBuckets;
+    return 1 + std::clamp(static_cast<int>(-2.0f * std::log2(gain)), 0, kBuckets - 1);
+  };
+  std::vector<int8_t>& key = key_;
+  key.resize(n);
+  for (size_t i = 0; i < n; ++i) {
+    const int b = bucket_of(i);
+    key[i] = static_cast<int8_t>(b);
+    if (b >= 0) ++count[static_cast<size_t>(b) + 1];
+  }
+  for (size_t b = 1; b < count.size(); ++b) count[b] += count[b - 1];
+  const size_t active = count.back();
+  for (size_t i = 0; i < n; ++i)
+    if (key[i] >= 0) order_[count[static_cast<size_t>(key[i])]++] = static_cast<uint32_t>(i);
+  // While the fovea has unconverged pixels a round is theirs alone: no peripheral pixel gets a ray
+  // before the fovea is at full quality
+  const size_t take = count[0] > 0 ? count[0] : active;
+  uint64_t rays = 0;
+  for (size_t k = 0; k < take && rays < ray_limit; ++k) {
+    const uint32_t i = order_[k];
+    uint32_t r = rays_for(i);
+    r = static_cast<uint32_t>(std::min<uint64_t>(r, ray_limit - rays));
+    tasks_.push_back({i, cast_[i], r});
+    rays += r;
+  }
+  return tasks_.size();
+}
+
+void RealtimeLoop::compose(Image& color) const {
+  color = Image(params_.width, params_.height, 3);
+  const float k_const = params_.ambient_constant.value_or(1.0f);
+  const size_t n = cast_.size();
+  tbb::parallel_for(size_t{0}, n, size_t{4096}, [&](size_t i) {
+    const float v = cast_[i] > 0 ? static_cast<float>(open_[i]) / static_cast<float>(cast_[i]) : 1.0f;
+    const float b = maps_.blend[i];
+    const float ka = b * v + (1 - b) * k_const;
+    const glm::vec3 c = lit_[i] + ka * ambient_[i];
+    for (int k = 0; k < 3; ++k) color.pixels[i * 3 + static_cast<size_t>(k)] = c[k];
+  });
+}
+
+void RealtimeLoop::rescale(double fixed_ms) {
+  const double target = scale_ * std::sqrt(0.5 * settings_.budget_ms / fixed_ms);
+  const double scale = std::clamp(target, settings_.min_scale, 1.0);
+  if (scale > 0.95 * scale_) return;
+  scale_ = scale;
+  params_.width = std::max(1, static_cast<int>(std::lround(requested_.width * scale)));
+  params_.height = std::max(1, static_cast<int>(std::lround(requested_.height * scale)));
+  note_ = fmt::format("the base shading took {:.1f} ms of the {:.1f} ms frame budget at {}x{}: rendering at {}x{} ({:.0f} %) instead",
+                      fixed_ms, settings_.budget_ms, requested_.width, requested_.height, params_.width, params_.height, 100 * scale);
+  have_view_ = false;
+  maps_gaze_.reset();
+}
+
+LoopFrame RealtimeLoop::frame(const Camera& camera) {
+  const Timer timer;
+  LoopFrame out;
+  out.index = index_++;
+  double view_ms = 0;
+  if (!have_view_ || !same_camera(camera, camera_)) {
+    const Timer view_timer;
+    new_view(camera);
+    view_ms = view_timer.ms();
+    out.new_view = true;
+  }
+  // Where the fovea goes: the predicted landing while a saccade flies, else the measured gaze
+  const glm::dvec2 centre(requested_.width * 0.5, requested_.height * 0.5);
+  glm::dvec2 gaze = measured_px_.value_or(centre);
+  out.measured_px = gaze * scale_;
+  const LandingState& flight = predictor_.state();
+  out.in_flight = flight.in_flight;
+  if (settings_.predict && flight.in_flight) {
+    gaze = glm::clamp(deg_to_px(flight.landing_deg), glm::dvec2(0.0), glm::dvec2(requested_.width, requested_.height));
+    out.predicted = true;
+  }
+  out.gaze_px = gaze * scale_;
+  update_maps(out.gaze_px);
+  // AO rays, in rounds, within what the frame may spend on them
+  double trace_ms = 0;
+  const bool wall = settings_.clock == LoopClock::wall;
+  const double deadline = settings_.budget_ms - settings_.margin_ms - compose_ms_;
+  const double model_fixed = settings_.model_fixed_ms * scale_ * scale_;  // the model's fixed cost scales with the pixels
+  uint64_t allowance = wall ? 0 : static_cast<uint64_t>(std::max(0.0, (settings_.budget_ms - model_fixed) * settings_.model_rays_per_ms));
+  for (;;) {
+    uint64_t limit = allowance;
+    if (wall) {
+      const double left = deadline - timer.ms();
+      if (left <= 0) break;
+      limit = rays_per_ms_ > 0 ? static_cast<uint64_t>(rays_per_ms_ * left * 1.5) + 1024 : 65536;
+    } else if (allowance == 0) {
+      break;
+    }
+    if (plan_round(limit) == 0) break;
+    blocked_.resize(tasks_.size());
+    done_.resize(tasks_.size());
+    AoRayBatch batch;
+    batch.gbuffer = &gbuffer_;
+    batch.gbuffer_version = gbuffer_version_;
+    batch.ao_distance = ao_distance_;
+    batch.epsilon = epsilon_;
+    batch.seed = params_.seed;
+    batch.tasks = tasks_;
+    batch.blocked = blocked_;
+    batch.done = done_;
+    batch.slowdown = settings_.slowdown;
+    if (wall) batch.expired = [&] { return timer.ms() >= deadline; };
+    const Timer trace_timer;
+    const uint64_t traced = renderer_.trace_ao_batch(batch);
+    const double ms = trace_timer.ms();
+    trace_ms += ms;
+    out.rays += traced;
+    for (size_t t = 0; t < tasks_.size(); ++t)
+      if (done_[t]) {
+        cast_[tasks_[t].pixel] += tasks_[t].count;
+        open_[tasks_[t].pixel] += tasks_[t].count - blocked_[t];
+      }
+    if (wall && traced > 0 && ms > 0.2) {
+      const double rate = static_cast<double>(traced) / ms;
+      rays_per_ms_ = rays_per_ms_ > 0 ? 0.7 * rays_per_ms_ + 0.3 * rate : rate;
+    }
+    if (!wall) allowance -= std::min(allowance, traced);
+    if (traced == 0) break;
+  }
+  // The image, and the fovea's state
+  const Timer compose_timer;
+  compose(out.color);
+  compose_ms_ = 0.8 * compose_ms_ + 0.2 * compose_timer.ms();
+  size_t fovea = 0, done = 0;
+  for (size_t i = 0; i < cast_.size(); ++i)
+    if (maps_.quality[i] >= 1.0f && gbuffer_.hit(i)) {
+      ++fovea;
+      done += converged(i) ? 1 : 0;
+    }
+  out.fovea_converged = fovea > 0 ? static_cast<double>(done) / static_cast<double>(fovea) : 1.0;
+  out.fovea_done = done == fovea;
+  out.ms = timer.ms();
+  out.cost_ms = wall ? out.ms : model_fixed + static_cast<double>(out.rays) / settings_.model_rays_per_ms;
+  out.late = out.cost_ms > settings_.budget_ms;
+  // Where the frame's fixed part alone (surfaces, maps, composing) takes most of the budget, the
+  // next frames render smaller
+  // (a new view counts when views follow one another: a moving camera; a still one pays it once)
+  const bool moving = out.new_view && last_new_view_;
+  last_new_view_ = out.new_view;
+  const double fixed = wall ? out.ms - trace_ms - (moving ? 0.0 : view_ms) : model_fixed;
+  if (fixed > 0.6 * settings_.budget_ms) rescale(fixed);
+  return out;
+}
+
+}  // namespace foveal

@@ -1,0 +1,140 @@
+// foveal/render/realtime.h — gaze-contingent rendering against a deadline: a frame every refresh.
+//
+// A RealtimeLoop turns the renderer's whole-frame passes into a loop that a display can follow.
+// Every call to frame() returns within the frame budget (1/refresh rate) an image of the whole
+// view: the base shading, complete every frame, with the ambient occlusion accumulated so far.
+//
+// - The view's surfaces (the G-buffer) and the shading that does not depend on AO are computed once
+//   per camera: with a still camera a frame only adds AO rays and recomposes. Eq. 2's ambient term
+//   is linear in k_a, so the colour is S + k_a·A per pixel, S and A kept.
+// - Each pixel keeps its AO rays across frames (open and cast counts) and continues its own Sobol
+//   sequence, so n rays over many frames are exactly the paper's pixel's first n rays.
+// - Inside the budget, rays go where they lower the perceived error most: first the pixels of the
+//   fovea (q(E) = 1) not yet converged, then the rest in order of the q(E)²-weighted variance
+//   their next rays remove (σ̂²·k/(c + k) from each pixel's own running estimate). A pixel is
+//   converged once its standard error is within τ(E) (issue 21's threshold, AoReuseParams) or it
+//   has its n(E) rays. Rays come in rounds that double a pixel's count, so a pixel whose rays all
+//   agree stops early (adaptive sampling); the periphery fills in over frames.
+// - With prediction on, while a saccade is in flight the fovea is placed at its predicted landing
+//   (gaze/landing.h): the eye sees little during the flight (saccadic suppression), and the rays
+//   are ready where it lands. Once the eye has landed the measured gaze is used again, so a wrong
+//   prediction costs only the rays of the flight.
+// - The clock: `wall` casts rays until the deadline (the frame's remaining time minus what
+//   composing takes) and checks it between chunks of about a thousand rays; `model` casts as many
+//   rays as a fixed cost model allows, so that a run is the same whatever the machine's load (the
+//   simulated clock of `bench latency` and the tests).
+// - Where even the base shading does not fit the budget, the loop renders at a lower resolution
+//   (scale() < 1, note() says so); the caller shows the image scaled up.
+#pragma once
+
+#include "foveal/gaze/landing.h"
+#include "foveal/render/frame_renderer.h"
+#include "foveal/render/render.h"
+
+#include <glm/glm.hpp>
+
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace foveal {
+
+enum class LoopClock { wall, model };
+const char* to_string(LoopClock clock);
+LoopClock parse_loop_clock(const std::string& name);  // throws Error naming --clock
+
+struct LoopSettings {
+  double budget_ms = 1000.0 / 60;  // a frame every refresh
+  bool predict = false;            // place the fovea at a saccade's predicted landing while it flies
+  LandingParams landing;
+  LoopClock clock = LoopClock::wall;
+  double model_rays_per_ms = 0;  // model clock: AO rays per millisecond
+  double model_fixed_ms = 0;     // model clock: a frame's cost besides its AO rays
+  double margin_ms = 0.5;        // wall clock: kept free at the end of each frame
+  double min_scale = 0.25;       // the smallest resolution scale the loop may choose
+  double slowdown = 1;           // tests only: the tracer this many times slower
+};
+// Check the settings; throws Error naming the option.
+void validate(const LoopSettings& settings);
+
+struct LoopFrame {
+  int index = 0;
+  Image color;                // linear RGB at the loop's render size (params().width × height)
+  glm::dvec2 gaze_px{0};      // where the fovea was placed, render pixels
+  glm::dvec2 measured_px{0};  // the latest measured gaze (render pixels; the image centre before any)
+  bool predicted = false;     // gaze_px is a predicted landing
+  bool in_flight = false;     // a saccade was under way at the latest sample
+  uint64_t rays = 0;          // AO rays traced this frame
+  double ms = 0;              // wall time of frame()
+  double cost_ms = 0;         // the frame's cost on the loop's clock (wall: ms; model: the model's)
+  bool late = false;          // cost_ms > the budget
+  bool new_view = false;      // the camera changed: surfaces traced and AO started afresh
+  double fovea_converged = 0; // fraction of the fovea's (q = 1, hit) pixels whose AO is converged
+  bool fovea_done = false;    // all of them: the fovea is at full quality
+};
+
+class RealtimeLoop {
+ public:
+  // `renderer` and `scene` must outlive the loop. params: size, display, foveation, seed, AO
+  // distance, ambient constant (unset: 1), reuse.tolerance (τ); the mode must be foveated.
+  RealtimeLoop(FrameRenderer& renderer, const Scene& scene, const RenderParams& params, const LoopSettings& settings);
+
+  // A tracker sample: its time (seconds, the tracker's clock) and point in render pixels (unset or
+  // NaN: lost). Samples must come in time order.
+  void push_gaze(double t_s, std::optional<glm::dvec2> gaze_px);
+  // The next frame for `camera`, within the budget.
+  LoopFrame frame(const Camera& camera);
+  // Forget the accumulated AO (the next frame starts afresh).
+  void reset();
+
+  const RenderParams& params() const { return params_; }  // at the render size in use
+  const LoopSettings& settings() const { return settings_; }
+  double scale() const { return scale_; }                  // render size / requested size
+  const std::string& note() const { return note_; }        // why the resolution was lowered ("" if not)
+  const LandingPredictor& predictor() const { return predictor_; }
+  // Per pixel: AO rays cast so far and found open (the loop's state, for tests and pictures).
+  const std::vector<uint32_t>& cast() const { return cast_; }
+  const std::vector<uint32_t>& open() const { return open_; }
+  const FoveationMaps& maps() const { return maps_; }
+  const GBuffer& gbuffer() const { return gbuffer_; }
+  // Whether pixel i's AO is converged (τ(E) or n(E) reached).
+  bool converged(size_t i) const;
+
+ private:
+  void new_view(const Camera& camera);
+  void update_maps(glm::dvec2 gaze_px);
+  size_t plan_round(uint64_t ray_limit);
+  void compose(Image& color) const;
+  void rescale(double fixed_ms);
+  glm::dvec2 px_to_deg(glm::dvec2 px) const;
+  glm::dvec2 deg_to_px(glm::dvec2 deg) const;
+
+  FrameRenderer& renderer_;
+  const Scene& scene_;
+  RenderParams requested_, params_;
+  LoopSettings settings_;
+  double scale_ = 1;
+  std::string note_;
+  LandingPredictor predictor_;
+  std::optional<glm::dvec2> measured_px_;
+  bool have_view_ = false;
+  Camera camera_;
+  GBuffer gbuffer_;
+  uint64_t gbuffer_version_ = 0;
+  std::vector<glm::vec3> lit_, ambient_;  // S and A of the colour S + k_a·A
+  FoveationMaps maps_;
+  std::optional<glm::dvec2> maps_gaze_;
+  std::vector<uint32_t> cast_, open_;
+  std::vector<AoRayTask> tasks_;
+  std::vector<uint32_t> blocked_;
+  std::vector<uint8_t> done_;
+  std::vector<uint32_t> order_;  // scratch: pixels by priority bucket
+  std::vector<int8_t> key_;      // scratch: each pixel's bucket (−1: converged)
+  bool last_new_view_ = false;   // the previous frame traced a new view
+  float ao_distance_ = 0, epsilon_ = 0, tau_fovea_ = 0;
+  double rays_per_ms_ = 0;   // wall clock: measured, smoothed
+  double compose_ms_ = 1;    // wall clock: measured, smoothed
+  int index_ = 0;
+};
+
+}  // namespace foveal

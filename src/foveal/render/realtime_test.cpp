@@ -1,0 +1,266 @@
+// The deadline loop: frames within budget under a slowed tracer, the fovea first after a gaze jump
+// (to its analytic AO on the sphere over the plane), the same frames for the same inputs under the
+// model clock whatever the thread count, a lower resolution where the base shading cannot fit, and
+// prediction that never leaves the landed fovea worse.
+#include "foveal/render/realtime.h"
+
+#include "foveal/util/error.h"
+#include "foveal/util/parallel.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+
+namespace foveal {
+namespace {
+
+const Scene& sphere_plane() {
+  static const Scene scene = make_builtin_scene("sphere-plane");
+  return scene;
+}
+const Scene& box() {
+  static const Scene scene = make_builtin_scene("box");
+  return scene;
+}
+
+RenderParams loop_params(int width, int height, int max_rays) {
+  RenderParams p;
+  p.width = width;
+  p.height = height;
+  p.foveation.max_rays = max_rays;
+  return p;
+}
+
+LoopSettings model_clock(double rays_per_ms) {
+  LoopSettings s;
+  s.clock = LoopClock::model;
+  s.model_rays_per_ms = rays_per_ms;
+  s.model_fixed_ms = 2;
+  return s;
+}
+
+// V at a point of the plane under the sphere (R = 1 at H = 2, the whole sphere above the horizon):
+// the cosine-weighted solid angle of a sphere of angular radius α at θ from the normal is
+// sin²α·cos θ, so V = 1 − R²H/D³ with D the distance to the centre.
+double plane_visibility(glm::vec3 p) {
+  const double d = glm::length(glm::dvec3(p) - glm::dvec3(0, 2, 0));
+  return 1.0 - 2.0 / (d * d * d);
+}
+
+bool on_plane(const GBuffer& g, size_t i) { return g.hit(i) && std::abs(g.position[i].y) < 1e-3f; }
+
+TEST(RealtimeLoop, EveryFrameIsDeliveredWithinBudgetUnderASlowedTracer) {
+  const std::unique_ptr<FrameRenderer> renderer = make_frame_renderer(box(), ComputeDevice::cpu);
+  LoopSettings settings;
+  settings.budget_ms = 1000.0 / 60;
+  settings.slowdown = 4;  // the tracer four times slower
+  RealtimeLoop loop(*renderer, box(), loop_params(320, 200, 400), settings);
+  loop.frame(box().cameras.front());  // the view's surfaces: traced once, before the trial starts
+  double worst = 0;
+  uint64_t rays = 0;
+  for (int k = 0; k < 40; ++k) {
+    loop.push_gaze(k / 60.0, glm::dvec2(60 + 5 * k, 100));
+    const LoopFrame f = loop.frame(box().cameras.front());
+    worst = std::max(worst, f.ms);
+    rays += f.rays;
+    EXPECT_EQ(f.color.width, loop.params().width);
+  }
+  EXPECT_LE(worst, settings.budget_ms + 1.0);
+  EXPECT_GT(rays, 0u);
+}
+
+TEST(RealtimeLoop, AfterAGazeJumpTheFoveaReachesItsAnalyticAoBeforeThePeripheryGetsARay) {
+  const std::unique_ptr<FrameRenderer> renderer = make_frame_renderer(sphere_plane(), ComputeDevice::cpu);
+  RenderParams params = loop_params(200, 125, 400);
+  RealtimeLoop loop(*renderer, sphere_plane(), params, model_clock(3000));
+  const Camera& camera = sphere_plane().cameras.front();
+  // Settle on the left, then jump to the plane below the sphere
+  loop.push_gaze(0, glm::dvec2(30, 100));
+  for (int k = 0; k < 10; ++k) loop.frame(camera);
+  loop.push_gaze(0.2, glm::dvec2(100, 112));
+  LoopFrame f = loop.frame(camera);
+  const std::vector<uint32_t> periphery_at_jump = loop.cast();
+  const FoveationMaps maps = loop.maps();
+  const GBuffer& g = loop.gbuffer();
+  bool periphery_touched = false;
+  int frames = 1;
+  while (!f.fovea_done && frames < 200) {
+    f = loop.frame(camera);
+    ++frames;
+    for (size_t i = 0; i < maps.quality.size(); ++i)
+      if (maps.quality[i] < 1.0f && loop.cast()[i] != periphery_at_jump[i]) periphery_touched = true;
+    if (!f.fovea_done) EXPECT_FALSE(periphery_touched) << "frame " << frames;
+  }
+  ASSERT_TRUE(f.fovea_done) << frames << " frames";
+  // The fovea's plane pixels: each within its own error of V = 1 − R²H/D³, and their mean too
+  size_t n = 0;
+  double error_sum = 0, variance_sum = 0;
+  for (size_t i = 0; i < maps.quality.size(); ++i) {
+    if (maps.quality[i] < 1.0f || !on_plane(g, i)) continue;
+    const double c = loop.cast()[i], v = loop.open()[i] / c, expected = plane_visibility(g.position[i]);
+    const double se = std::sqrt(expected * (1 - expected) / c) + 0.5 / c;
+    EXPECT_NEAR(v, expected, 5 * se) << "pixel " << i;
+    error_sum += v - expected;
+    variance_sum += se * se;
+    ++n;
+  }
+  ASSERT_GT(n, 50u);
+  EXPECT_LT(std::abs(error_sum / n), 4 * std::sqrt(variance_sum) / n);
+  // Then the periphery fills in
+  for (int k = 0; k < 5; ++k) loop.frame(camera);
+  uint64_t added = 0;
+  for (size_t i = 0; i < maps.quality.size(); ++i)
+    if (maps.quality[i] < 1.0f) added += loop.cast()[i] - periphery_at_jump[i];
+  EXPECT_GT(added, 0u);
+}
+
+std::vector<std::vector<float>> run_frames(int threads, bool predict) {
+  const ThreadScope scope(threads);
+  const std::unique_ptr<FrameRenderer> renderer = make_frame_renderer(box(), ComputeDevice::cpu);
+  LoopSettings settings = model_clock(1500);
+  settings.predict = predict;
+  RealtimeLoop loop(*renderer, box(), loop_params(160, 100, 64), settings);
+  std::vector<std::vector<float>> images;
+  double t = 0;
+  for (int k = 0; k < 12; ++k) {
+    for (int s = 0; s < 16; ++s, t += 0.001) loop.push_gaze(t, glm::dvec2(40 + (k > 5 ? 60 : 0) + 0.01 * s, 50));
+    images.push_back(loop.frame(box().cameras.front()).color.pixels);
+  }
+  return images;
+}
+
+TEST(RealtimeLoop, TheModelClockGivesTheSameFramesWhateverTheThreadCount) {
+  const auto a = run_frames(0, true), b = run_frames(0, true), c = run_frames(1, true);
+  ASSERT_EQ(a.size(), b.size());
+  for (size_t k = 0; k < a.size(); ++k) {
+    EXPECT_EQ(0, std::memcmp(a[k].data(), b[k].data(), a[k].size() * sizeof(float))) << "frame " << k;
+    EXPECT_EQ(0, std::memcmp(a[k].data(), c[k].data(), a[k].size() * sizeof(float))) << "frame " << k << " on one thread";
+  }
+  EXPECT_NE(a[0], a[11]);  // the frames do change: rays arrive
+}
+
+TEST(RealtimeLoop, WhereTheBaseShadingCannotFitTheResolutionScalesDownAndSaysSo) {
+  const std::unique_ptr<FrameRenderer> renderer = make_frame_renderer(box(), ComputeDevice::cpu);
+  LoopSettings settings = model_clock(1000);
+  settings.model_fixed_ms = 40;  // the base shading alone: 40 ms of a 16.7 ms budget
+  RealtimeLoop loop(*renderer, box(), loop_params(320, 200, 64), settings);
+  const LoopFrame first = loop.frame(box().cameras.front());
+  EXPECT_TRUE(first.late);
+  EXPECT_EQ(first.color.width, 320);
+  EXPECT_LT(loop.scale(), 1.0);
+  EXPECT_NE(loop.note().find("frame budget"), std::string::npos) << loop.note();
+  const LoopFrame next = loop.frame(box().cameras.front());
+  EXPECT_EQ(next.color.width, loop.params().width);
+  EXPECT_LT(next.color.width, 320);
+  EXPECT_FALSE(next.late);
+}
+
+// A saccade from `from` to `to` (render pixels) at 1000 Hz, its velocity a symmetric bell over the
+// main sequence's duration, then the fixation; pushed up to each frame's time (60 Hz) less 3 ms.
+struct SaccadeRun {
+  std::vector<double> fovea_error;  // per frame after landing: RMS of V − analytic over the landed fovea's plane pixels
+  std::vector<double> converged;    // per frame after landing: the fovea's converged fraction
+  int flight_frames = 0;            // frames shown while the saccade flew
+  bool measured_after_landing = true;  // every frame after landing placed the fovea at the measured gaze
+};
+
+SaccadeRun run_saccade(bool predict, const LandingParams& landing) {
+  const std::unique_ptr<FrameRenderer> renderer = make_frame_renderer(sphere_plane(), ComputeDevice::cpu);
+  LoopSettings settings = model_clock(2500);
+  settings.predict = predict;
+  settings.landing = landing;
+  RealtimeLoop loop(*renderer, sphere_plane(), loop_params(200, 125, 400), settings);
+  const Camera& camera = sphere_plane().cameras.front();
+  const glm::dvec2 from(20, 110), to(100, 112);
+  const double onset = 0.1, duration = 0.021 + 0.0022 * 20;  // about 20° across this display
+  auto position = [&](double t) {
+    const double tau = std::clamp((t - onset) / duration, 0.0, 1.0);
+    return from + (to - from) * (tau - std::sin(2 * M_PI * tau) / (2 * M_PI));  // a smooth bell of velocity
+  };
+  SaccadeRun run;
+  double t_sample = 0;
+  for (int k = 0; k < 40; ++k) {
+    const double t_frame = k / 60.0;
+    for (; t_sample <= t_frame - 0.003; t_sample += 0.001) loop.push_gaze(t_sample, position(t_sample));
+    const LoopFrame f = loop.frame(camera);
+    if (std::getenv("LOOP_DEBUG"))
+      std::printf("%d predict %d frame %d t %.3f gaze %.1f,%.1f measured %.1f,%.1f predicted %d flight %d rays %llu fovea %.3f\n", predict ? 1 : 0, landing.skew > 2 ? 1 : 0, k, t_frame,
+                  f.gaze_px.x, f.gaze_px.y, f.measured_px.x, f.measured_px.y, f.predicted ? 1 : 0, f.in_flight ? 1 : 0, static_cast<unsigned long long>(f.rays), f.fovea_converged);
+    if (t_frame - 0.003 < onset + duration) {
+      run.flight_frames += t_frame - 0.003 >= onset ? 1 : 0;
+      continue;
+    }
+    run.measured_after_landing = run.measured_after_landing && !f.predicted && glm::length(f.gaze_px - to) < 0.5;
+    // The landed fovea: q = 1 around the true landing
+    RenderParams p = loop.params();
+    const FoveationMaps landed = foveation_maps(p, to);
+    double sum = 0;
+    size_t n = 0, done = 0, fovea = 0;
+    for (size_t i = 0; i < landed.quality.size(); ++i) {
+      if (landed.quality[i] < 1.0f || !loop.gbuffer().hit(i)) continue;
+      ++fovea;
+      done += loop.cast()[i] >= 400 || loop.converged(i) ? 1 : 0;
+      if (!on_plane(loop.gbuffer(), i)) continue;
+      const double v = loop.cast()[i] > 0 ? static_cast<double>(loop.open()[i]) / loop.cast()[i] : 1.0;
+      const double e = v - plane_visibility(loop.gbuffer().position[i]);
+      sum += e * e;
+      ++n;
+    }
+    run.fovea_error.push_back(std::sqrt(sum / std::max<size_t>(n, 1)));
+    run.converged.push_back(static_cast<double>(done) / std::max<size_t>(fovea, 1));
+    (void)f;
+  }
+  return run;
+}
+
+// A right prediction leaves the landed fovea better at every frame; a wrong one is abandoned at
+// landing (the fovea goes to the measured gaze) and costs at most the flight's rays: its fovea is
+// where the one without prediction was at most the flight's frames earlier.
+TEST(RealtimeLoop, ARightPredictionHelpsAndAWrongOneIsAbandonedAtLanding) {
+  const SaccadeRun without = run_saccade(false, {});
+  const SaccadeRun right = run_saccade(true, {});
+  LandingParams wild;  // a predictor that overshoots far: its predictions are wrong
+  wild.skew = 4;
+  wild.max_skew = 4;
+  const SaccadeRun wrong = run_saccade(true, wild);
+  ASSERT_EQ(without.converged.size(), right.converged.size());
+  ASSERT_GT(without.converged.size(), 5u);
+  for (size_t k = 0; k < without.converged.size(); ++k) {
+    SCOPED_TRACE(::testing::Message() << "frame " << k << " after landing");
+    EXPECT_GE(right.converged[k] + 1e-9, without.converged[k]);
+    const size_t behind = k >= static_cast<size_t>(wrong.flight_frames) ? k - static_cast<size_t>(wrong.flight_frames) : 0;
+    EXPECT_GE(wrong.converged[k] + 1e-9, k >= static_cast<size_t>(wrong.flight_frames) ? without.converged[behind] : 0.0);
+  }
+  EXPECT_TRUE(right.measured_after_landing);
+  EXPECT_TRUE(wrong.measured_after_landing);
+  EXPECT_GT(wrong.flight_frames, 0);
+  EXPECT_EQ(without.converged.back(), 1.0);
+  EXPECT_EQ(wrong.converged.back(), 1.0);
+  EXPECT_GT(right.converged[0], without.converged[0]);  // the right one had the fovea's rays ready
+  EXPECT_LT(right.fovea_error[0], without.fovea_error[0]);
+}
+
+TEST(RealtimeLoop, SettingsAreChecked) {
+  const std::unique_ptr<FrameRenderer> renderer = make_frame_renderer(box(), ComputeDevice::cpu);
+  LoopSettings s;
+  s.budget_ms = 0;
+  EXPECT_THROW(RealtimeLoop(*renderer, box(), loop_params(32, 20, 8), s), Error);
+  s = {};
+  s.clock = LoopClock::model;  // without a rate
+  try {
+    RealtimeLoop(*renderer, box(), loop_params(32, 20, 8), s);
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("model_rays_per_ms"), std::string::npos);
+  }
+  RenderParams shadows = loop_params(32, 20, 8);
+  shadows.shadows = true;
+  EXPECT_THROW(RealtimeLoop(*renderer, box(), shadows, {}), Error);
+  EXPECT_THROW(parse_loop_clock("sundial"), Error);
+}
+
+}  // namespace
+}  // namespace foveal
