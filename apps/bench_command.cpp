@@ -108,10 +108,13 @@ std::function<int()> add_bench_command(CLI::App& app) {
   auto vision = add_bench_vision_command(*bench);
   auto blur = add_bench_blur_command(*bench);
   auto quality = add_bench_quality_command(*bench);
+  auto latency = add_bench_latency_command(*bench);
   auto* blur_cmd = bench->get_subcommand("blur");
   auto* quality_cmd = bench->get_subcommand("quality");
+  auto* latency_cmd = bench->get_subcommand("latency");
   auto run_ao = [o] { return run_bench_ao_command(*o); };
-  return [run_ao, vision, blur, quality, ao, blur_cmd, quality_cmd] {
+  return [run_ao, vision, blur, quality, latency, ao, blur_cmd, quality_cmd, latency_cmd] {
+    if (latency_cmd->parsed()) return latency();
     return ao->parsed() ? run_ao() : blur_cmd->parsed() ? blur() : quality_cmd->parsed() ? quality() : vision();
   };
 }

@@ -28,8 +28,8 @@
 namespace foveal {
 
 struct LandingParams {
-  double onset_deg_s = 40;     // a velocity above this (two samples in a row) starts a saccade
-  double offset_deg_s = 30;    // the saccade ends when the velocity falls below this
+  double onset_deg_s = 40;         // a velocity above this (two samples in a row) starts a saccade
+  double offset_deg_s = 30;        // the saccade ends when the velocity falls below this
   double min_amplitude_deg = 0.5;  // smaller predicted flights are not reported as saccades
   // The profile's skew (deceleration / acceleration; 1 = symmetric) grows with the amplitude (Van
   // Opstal & Van Gisbergen 1987): skew + skew_per_deg · A, A the symmetric mirror's amplitude, at
@@ -39,7 +39,7 @@ struct LandingParams {
   double skew = 1.0;
   double skew_per_deg = 0.03;
   double max_skew = 4;
-  double peak_drop = 0.8;      // the peak is taken as passed once the velocity is below this fraction of it
+  double peak_drop = 0.8;            // the peak is taken as passed once the velocity is below this fraction of it
   double max_velocity_deg_s = 1000;  // faster sample-to-sample velocities are noise (ignored)
   double main_sequence_ms = 21, main_sequence_ms_per_deg = 2.2;  // D = a + b·A (Carpenter 1988)
   // The peak velocity's main sequence V = V_max·(1 − exp(−A/C)) (Baloh et al. 1975): a flight longer
@@ -52,27 +52,27 @@ void validate(const LandingParams& params);
 
 // What the predictor knows at the latest sample.
 struct LandingState {
-  bool in_flight = false;         // a saccade is under way
-  bool past_peak = false;         // its peak velocity has been seen
-  double onset_s = 0;             // the saccade's start (the last sample before the threshold crossing)
-  glm::dvec2 onset_deg{0};        // where it started
-  glm::dvec2 landing_deg{0};      // predicted landing position (in flight) or the measured one
-  double landing_s = 0;           // predicted landing time (in flight) or the measured one
-  double amplitude_deg = 0;       // predicted amplitude
-  double peak_velocity_deg_s = 0; // so far
+  bool in_flight = false;          // a saccade is under way
+  bool past_peak = false;          // its peak velocity has been seen
+  double onset_s = 0;              // the saccade's start (the last sample before the threshold crossing)
+  glm::dvec2 onset_deg{0};         // where it started
+  glm::dvec2 landing_deg{0};       // predicted landing position (in flight) or the measured one
+  double landing_s = 0;            // predicted landing time (in flight) or the measured one
+  double amplitude_deg = 0;        // predicted amplitude
+  double peak_velocity_deg_s = 0;  // so far
 };
 
 // One saccade as the predictor saw it, for evaluation (gaze --events, bench latency).
 struct PredictedSaccade {
-  double onset_s = 0;             // detected start
-  double detected_s = 0;          // the sample at which the onset was detected
-  double first_prediction_s = 0;  // the first sample past the peak (the first mirrored prediction)
+  double onset_s = 0;                 // detected start
+  double detected_s = 0;              // the sample at which the onset was detected
+  double first_prediction_s = 0;      // the first sample past the peak (the first mirrored prediction)
   glm::dvec2 first_landing_deg{NAN};  // the prediction made then
   double first_landing_time_s = NAN;
-  double settled_s = NAN;         // from here on every prediction was within 1° of the landing (NaN: never)
-  double landing_s = 0;           // measured landing (the first sample below the offset threshold)
-  glm::dvec2 landing_deg{0};      // measured landing position
-  double amplitude_deg = 0;       // measured
+  double settled_s = NAN;     // from here on every prediction was within 1° of the landing (NaN: never)
+  double landing_s = 0;       // measured landing (the first sample below the offset threshold)
+  glm::dvec2 landing_deg{0};  // measured landing position
+  double amplitude_deg = 0;   // measured
   // Every prediction of the flight, in time order (the sample's time and the predicted landing)
   std::vector<double> prediction_s;
   std::vector<glm::dvec2> prediction_deg;

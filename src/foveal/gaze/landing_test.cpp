@@ -90,7 +90,10 @@ TEST(Landing, SyntheticMainSequenceSaccadesLandWithinOneDegree) {
         const double onset = trial.landing_s - SyntheticSaccade(amplitude).duration_s;
         const double error = glm::length(s.prediction_at(onset + (trial.landing_s - onset) * 2 / 3) - trial.landing);
         if (error <= 1.0) ++within;
-        if (std::getenv("LANDING_DEBUG")) std::printf("%g Hz A %.1f err %.2f pred %.2f measA %.2f settled %.1f ms\n", hz, amplitude, error, glm::length(s.prediction_at(onset + (trial.landing_s - onset) * 2 / 3) - trial.deg[0]), s.amplitude_deg, 1000*(trial.landing_s - s.settled_s));
+        if (std::getenv("LANDING_DEBUG"))
+          std::printf("%g Hz A %.1f err %.2f pred %.2f measA %.2f settled %.1f ms\n", hz, amplitude, error,
+                      glm::length(s.prediction_at(onset + (trial.landing_s - onset) * 2 / 3) - trial.deg[0]), s.amplitude_deg,
+                      1000 * (trial.landing_s - s.settled_s));
         if (!std::isnan(s.settled_s)) gained_sum += trial.landing_s - s.settled_s;
       }
     }
@@ -219,8 +222,9 @@ void score_landings(const Labelled& r, const LandingParams& params, double min_a
           ++out.found;
           out.error_deg.push_back(glm::length(p.first_landing_deg - end));
           if (std::getenv("LANDING_DEBUG"))
-            std::printf("A %.2f pred %.2f (final %.2f) onset %.3f/%.3f first %.3f landing %.3f/%.3f\n", amplitude, glm::length(p.first_landing_deg - start),
-                        p.amplitude_deg, r.t[i], p.onset_s, p.first_prediction_s, r.t[j], p.landing_s);
+            std::printf("A %.2f pred %.2f (final %.2f) onset %.3f/%.3f first %.3f landing %.3f/%.3f\n", amplitude,
+                        glm::length(p.first_landing_deg - start), p.amplitude_deg, r.t[i], p.onset_s, p.first_prediction_s, r.t[j],
+                        p.landing_s);
           const double third = r.t[i] + (r.t[j] - r.t[i]) * 2 / 3;
           out.third_error_deg.push_back(glm::length(p.prediction_at(third) - end));
           // Without prediction the fovea is where the eye is then
@@ -256,9 +260,11 @@ TEST(Landing, ExpertLabelledSaccadesOfTheIrfRecordings) {
     score_landings(read_labelled(path, false), {}, 5, e);
   }
   const double median = quantile(e.error_deg, 0.5), p90 = quantile(e.error_deg, 0.9);
-  std::printf("IRF: %d labelled saccades >= 5 deg, %d predicted; first prediction's error median %.2f deg, p90 %.2f deg; "
-              "two thirds in: median %.2f, p90 %.2f; within 1 deg for good %.1f ms before the landing (median; saccades last %.1f ms)\n",
-              e.labelled, e.found, median, p90, quantile(e.third_error_deg, 0.5), quantile(e.third_error_deg, 0.9), quantile(e.gained_ms, 0.5), quantile(e.duration_ms, 0.5));
+  std::printf(
+      "IRF: %d labelled saccades >= 5 deg, %d predicted; first prediction's error median %.2f deg, p90 %.2f deg; "
+      "two thirds in: median %.2f, p90 %.2f; within 1 deg for good %.1f ms before the landing (median; saccades last %.1f ms)\n",
+      e.labelled, e.found, median, p90, quantile(e.third_error_deg, 0.5), quantile(e.third_error_deg, 0.9), quantile(e.gained_ms, 0.5),
+      quantile(e.duration_ms, 0.5));
   std::printf("IRF: the gaze itself two thirds in: median %.2f deg, p90 %.2f deg from the landing\n", quantile(e.gaze_error_deg, 0.5),
               quantile(e.gaze_error_deg, 0.9));
   EXPECT_GE(e.found, 0.95 * e.labelled);
@@ -284,8 +290,9 @@ TEST(Landing, DISABLED_TuneSkewOnLundTraining) {
       p.max_skew = 4;
       LandingErrors e;
       for (const Labelled& r : recordings) score_landings(r, p, 5, e);
-      std::printf("skew %.2f + %.3f/deg: %d/%d, median %.3f, p90 %.3f; 2/3: %.3f %.3f; gained %.1f ms\n", skew, per_deg, e.found, e.labelled, quantile(e.error_deg, 0.5),
-                  quantile(e.error_deg, 0.9), quantile(e.third_error_deg, 0.5), quantile(e.third_error_deg, 0.9), quantile(e.gained_ms, 0.5));
+      std::printf("skew %.2f + %.3f/deg: %d/%d, median %.3f, p90 %.3f; 2/3: %.3f %.3f; gained %.1f ms\n", skew, per_deg, e.found,
+                  e.labelled, quantile(e.error_deg, 0.5), quantile(e.error_deg, 0.9), quantile(e.third_error_deg, 0.5),
+                  quantile(e.third_error_deg, 0.9), quantile(e.gained_ms, 0.5));
     }
 }
 

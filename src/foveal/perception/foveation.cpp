@@ -63,6 +63,9 @@ FoveationModel::FoveationModel(const Display& display, int w, int h, glm::dvec2 
   gaze_dir_ = glm::normalize(eye_ray(gaze_px.x, gaze_px.y));
   horiz_ = glm::normalize(glm::cross(glm::dvec3(0, 1, 0), gaze_dir_));
   vert_ = glm::cross(gaze_dir_, horiz_);
+  gaze_dir_f_ = glm::vec3(gaze_dir_);
+  horiz_f_ = glm::vec3(horiz_);
+  vert_f_ = glm::vec3(vert_);
 }
 
 }  // namespace foveal

@@ -131,3 +131,26 @@ TEST(Foveation, FoveaRadiusMatchesTheDisplayLimit) {
   EXPECT_LT(m.evaluate_at(840, below(limit + 0.01)).quality, 1.0);
   EXPECT_NEAR(m.evaluate_at(840, below(limit + 1.0)).effective_deg, limit + 1.0, 1e-9);
 }
+
+TEST(Foveation, TheSinglePrecisionModelAgreesWithTheDoubleOne) {
+  // Abramowitz & Stegun 4.4.47 (|error| ≤ 1e-5 rad) against atan2, on both sides of 45°
+  for (int k = 0; k <= 1000; ++k) {
+    const float angle = 1.5707f * static_cast<float>(k) / 1000;
+    EXPECT_NEAR(fast_atan2_positive(std::sin(angle), std::cos(angle)), angle, 1.2e-5f) << angle;
+  }
+  // The model over a 1680×1050 display with the gaze off-centre: E within 2e-3°, q within 1e-4
+  const Display d;
+  const FoveationModel m(d, 840, 525, {600, 150}, FoveationParams{});
+  size_t budgets_equal = 0, pixels = 0;
+  for (int y = 0; y < 525; y += 3)
+    for (int x = 0; x < 840; x += 3) {
+      const glm::dvec3 p = glm::normalize(m.eye_ray(x + 0.5, y + 0.5));
+      const FoveaSample exact = m.evaluate_direction(p), fast = m.evaluate_direction_fast(glm::vec3(p));
+      EXPECT_NEAR(fast.effective_deg, exact.effective_deg, 2e-3);
+      EXPECT_NEAR(fast.quality, exact.quality, 1e-4);
+      EXPECT_LE(std::abs(fast.rays - exact.rays), 1);
+      budgets_equal += fast.rays == exact.rays ? 1 : 0;
+      ++pixels;
+    }
+  EXPECT_GT(budgets_equal, pixels * 99 / 100);
+}

@@ -8,6 +8,7 @@
 
 #include <fmt/format.h>
 
+#include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
@@ -20,6 +21,14 @@ namespace {
 
 constexpr uint32_t kFirstRound = 16;  // a pixel's first round of rays (adaptive sampling's)
 constexpr int kBuckets = 64;          // priority buckets of the periphery (half powers of two)
+
+// body(i) for every pixel, in parallel blocks of 4096
+template <class Body>
+void for_each_pixel(size_t n, const Body& body) {
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 4096), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t i = r.begin(); i != r.end(); ++i) body(i);
+  });
+}
 
 bool same_camera(const Camera& a, const Camera& b) { return a.eye == b.eye && a.look == b.look && a.up == b.up && a.fov_deg == b.fov_deg; }
 
@@ -100,7 +109,7 @@ void RealtimeLoop::new_view(const Camera& camera) {
   ambient_.assign(n, glm::vec3(0.0f));
   const std::vector<Light> lights = frame_lights(scene_.lights, camera);
   const std::vector<MaterialView> materials = material_views(scene_);
-  tbb::parallel_for(size_t{0}, n, size_t{4096}, [&](size_t i) {
+  for_each_pixel(n, [&](size_t i) {
     if (!gbuffer_.hit(i)) return;
     const GBuffer& g = gbuffer_;
     const MaterialView& m = materials[scene_.material_ids[g.prim[i]]];
@@ -110,12 +119,51 @@ void RealtimeLoop::new_view(const Camera& camera) {
   });
   cast_.assign(n, 0);
   open_.assign(n, 0);
+  // What composing this view takes, before the first frame's deadline relies on it
+  maps_gaze_.reset();
+  update_maps(glm::dvec2(params_.width * 0.5, params_.height * 0.5));
+  Image scratch;
+  const Timer compose_timer;
+  compose(scratch);
+  finish_ms_ = compose_timer.ms();
 }
 
 void RealtimeLoop::update_maps(glm::dvec2 gaze_px) {
-  if (maps_gaze_ && glm::length(*maps_gaze_ - gaze_px) < 0.5 && maps_.width == params_.width && maps_.height == params_.height) return;
-  maps_ = foveation_maps(params_, gaze_px);
+  // The maps follow the gaze once it has moved a tenth of a degree (a fixation's tremor and the
+  // tracker's noise move it less; recomputing the model at every pixel costs milliseconds)
+  const double ppd = pixels_per_degree(params_.display) * params_.width / params_.display.res_x;
+  const double threshold_px = std::max(0.5, 0.1 * ppd);
+  if (maps_gaze_ && glm::length(*maps_gaze_ - gaze_px) < threshold_px && maps_.width == params_.width && maps_.height == params_.height)
+    return;
+  // foveation_maps()'s model in single precision, from the pixels' unit eye rays kept per size
+  const size_t n = static_cast<size_t>(params_.width) * static_cast<size_t>(params_.height);
+  const FoveationModel model(params_.display, params_.width, params_.height, gaze_px, params_.foveation);
+  if (rays_.size() != n) {
+    rays_.resize(n);
+    for_each_pixel(n, [&](size_t i) {
+      rays_[i] = glm::vec3(glm::normalize(model.eye_ray(static_cast<double>(i % static_cast<size_t>(params_.width)) + 0.5,
+                                                        static_cast<double>(i / static_cast<size_t>(params_.width)) + 0.5)));
+    });
+  }
+  maps_.width = params_.width;
+  maps_.height = params_.height;
+  maps_.quality.resize(n);
+  maps_.eccentricity.resize(n);
+  maps_.rays.resize(n);
+  maps_.blend.resize(n);
+  const bool foveated = params_.mode == RenderMode::foveated;
+  const FoveationParams& f = params_.foveation;
+  for_each_pixel(n, [&](size_t i) {
+    const FoveaSample s = model.evaluate_direction_fast(rays_[i]);
+    maps_.eccentricity[i] = static_cast<float>(s.effective_deg);
+    maps_.quality[i] = foveated ? static_cast<float>(s.quality) : 1.0f;
+    maps_.rays[i] = static_cast<uint16_t>(foveated ? s.rays : f.max_rays);
+    maps_.blend[i] = foveated ? static_cast<float>(s.blend) : (f.max_rays > 0 ? 1.0f : 0.0f);
+  });
   maps_gaze_ = gaze_px;
+  fovea_.clear();
+  for (size_t i = 0; i < n; ++i)
+    if (maps_.quality[i] >= 1.0f && gbuffer_.hit(i) && maps_.rays[i] > 0) fovea_.push_back(static_cast<uint32_t>(i));
 }
 
 bool RealtimeLoop::converged(size_t i) const {
@@ -123,51 +171,52 @@ bool RealtimeLoop::converged(size_t i) const {
   if (!gbuffer_.hit(i) || n == 0) return true;
   const uint32_t c = cast_[i];
   if (c >= n) return true;
+  // The fovea takes its n_max rays: stopped early at τ it measured 1.02× the reference's noise on
+  // the dragon (bench latency; two standard errors above it over 20,000 pixels)
   const float q = maps_.quality[i];
-  return c >= kFirstRound && q > 0 &&
+  return q < 1.0f && c >= kFirstRound && q > 0 &&
          visibility_standard_error(static_cast<float>(open_[i]), static_cast<float>(c)) <= tau_fovea_ / q;
 }
 
-size_t RealtimeLoop::plan_round(uint64_t ray_limit) {
+size_t RealtimeLoop::plan_round(uint64_t ray_limit, bool periphery) {
   tasks_.clear();
+  auto rays_for = [&](size_t i) { return std::min<uint32_t>(maps_.rays[i] - cast_[i], std::max(kFirstRound, cast_[i])); };
+  uint64_t rays = 0;
+  auto add = [&](uint32_t i) {
+    const uint32_t r = static_cast<uint32_t>(std::min<uint64_t>(rays_for(i), ray_limit - rays));
+    tasks_.push_back({i, cast_[i], r});
+    rays += r;
+  };
+  // While the fovea has unconverged pixels a round is theirs alone (in pixel order): no peripheral
+  // pixel gets a ray before the fovea is at full quality
+  for (const uint32_t i : fovea_) {
+    if (rays >= ray_limit) break;
+    if (!converged(i)) add(i);
+  }
+  if (!tasks_.empty() || !periphery) return tasks_.size();
+  // Then the periphery by q²·σ̂²·k/(c + k), in buckets of half powers of two from the highest
   const size_t n = cast_.size();
-  // Bucket 0: the fovea's unconverged pixels; then the periphery by q²·σ̂²·k/(c + k), in half
-  // powers of two from the highest
   std::array<uint32_t, kBuckets + 2> count{};
   order_.resize(n);
-  auto rays_for = [&](size_t i) { return std::min<uint32_t>(maps_.rays[i] - cast_[i], std::max(kFirstRound, cast_[i])); };
-  auto bucket_of = [&](size_t i) -> int {
-    if (converged(i)) return -1;
-    const float q = maps_.quality[i];
-    if (q >= 1.0f) return 0;
-    const float c = static_cast<float>(cast_[i]), k = static_cast<float>(rays_for(i));
-    const float p = (static_cast<float>(open_[i]) + 0.5f) / (c + 1.0f);
-    const float gain = q * q * p * (1 - p) * k / (c + k);
-    if (!(gain > 0)) return kBuckets;
-    return 1 + std::clamp(static_cast<int>(-2.0f * std::log2(gain)), 0, kBuckets - 1);
-  };
-  std::vector<int8_t>& key = key_;
-  key.resize(n);
-  for (size_t i = 0; i < n; ++i) {
-    const int b = bucket_of(i);
-    key[i] = static_cast<int8_t>(b);
-    if (b >= 0) ++count[static_cast<size_t>(b) + 1];
-  }
+  key_.resize(n);
+  for_each_pixel(n, [&](size_t i) {
+    int b = -1;
+    if (!converged(i)) {
+      const float q = maps_.quality[i];
+      const float c = static_cast<float>(cast_[i]), k = static_cast<float>(rays_for(i));
+      const float p = (static_cast<float>(open_[i]) + 0.5f) / (c + 1.0f);
+      const float gain = q * q * p * (1 - p) * k / (c + k);
+      b = gain > 0 ? std::clamp(static_cast<int>(-2.0f * std::log2(gain)), 0, kBuckets - 1) : kBuckets;
+    }
+    key_[i] = static_cast<int8_t>(b);
+  });
+  for (size_t i = 0; i < n; ++i)
+    if (key_[i] >= 0) ++count[static_cast<size_t>(key_[i]) + 1];
   for (size_t b = 1; b < count.size(); ++b) count[b] += count[b - 1];
   const size_t active = count.back();
   for (size_t i = 0; i < n; ++i)
-    if (key[i] >= 0) order_[count[static_cast<size_t>(key[i])]++] = static_cast<uint32_t>(i);
-  // While the fovea has unconverged pixels a round is theirs alone: no peripheral pixel gets a ray
-  // before the fovea is at full quality
-  const size_t take = count[0] > 0 ? count[0] : active;
-  uint64_t rays = 0;
-  for (size_t k = 0; k < take && rays < ray_limit; ++k) {
-    const uint32_t i = order_[k];
-    uint32_t r = rays_for(i);
-    r = static_cast<uint32_t>(std::min<uint64_t>(r, ray_limit - rays));
-    tasks_.push_back({i, cast_[i], r});
-    rays += r;
-  }
+    if (key_[i] >= 0) order_[count[static_cast<size_t>(key_[i])]++] = static_cast<uint32_t>(i);
+  for (size_t k = 0; k < active && rays < ray_limit; ++k) add(order_[k]);
   return tasks_.size();
 }
 
@@ -175,7 +224,7 @@ void RealtimeLoop::compose(Image& color) const {
   color = Image(params_.width, params_.height, 3);
   const float k_const = params_.ambient_constant.value_or(1.0f);
   const size_t n = cast_.size();
-  tbb::parallel_for(size_t{0}, n, size_t{4096}, [&](size_t i) {
+  for_each_pixel(n, [&](size_t i) {
     const float v = cast_[i] > 0 ? static_cast<float>(open_[i]) / static_cast<float>(cast_[i]) : 1.0f;
     const float b = maps_.blend[i];
     const float ka = b * v + (1 - b) * k_const;
@@ -195,6 +244,7 @@ void RealtimeLoop::rescale(double fixed_ms) {
                       fixed_ms, settings_.budget_ms, requested_.width, requested_.height, params_.width, params_.height, 100 * scale);
   have_view_ = false;
   maps_gaze_.reset();
+  rays_.clear();
 }
 
 LoopFrame RealtimeLoop::frame(const Camera& camera) {
@@ -219,23 +269,35 @@ LoopFrame RealtimeLoop::frame(const Camera& camera) {
     out.predicted = true;
   }
   out.gaze_px = gaze * scale_;
+  const Timer maps_timer;
   update_maps(out.gaze_px);
+  out.maps_ms = maps_timer.ms();
   // AO rays, in rounds, within what the frame may spend on them
   double trace_ms = 0;
   const bool wall = settings_.clock == LoopClock::wall;
-  const double deadline = settings_.budget_ms - settings_.margin_ms - compose_ms_;
+  const double deadline = settings_.budget_ms - settings_.margin_ms - finish_ms_;
   const double model_fixed = settings_.model_fixed_ms * scale_ * scale_;  // the model's fixed cost scales with the pixels
   uint64_t allowance = wall ? 0 : static_cast<uint64_t>(std::max(0.0, (settings_.budget_ms - model_fixed) * settings_.model_rays_per_ms));
   for (;;) {
     uint64_t limit = allowance;
     if (wall) {
-      const double left = deadline - timer.ms();
+      const double left = deadline - timer.ms() - plan_ms_;
       if (left <= 0) break;
       limit = rays_per_ms_ > 0 ? static_cast<uint64_t>(rays_per_ms_ * left * 1.5) + 1024 : 65536;
     } else if (allowance == 0) {
       break;
     }
-    if (plan_round(limit) == 0) break;
+    // A periphery round plans over every pixel: only when its planning fits
+    const bool periphery = !wall || deadline - timer.ms() > periphery_plan_ms_ + plan_ms_;
+    const Timer plan_timer;
+    const size_t planned = plan_round(limit, periphery);
+    const double plan_ms = plan_timer.ms();
+    out.plan_ms += plan_ms;
+    if (plan_ms > 4 * plan_ms_ + 0.2)  // a pass over every pixel
+      periphery_plan_ms_ = std::max(0.7 * periphery_plan_ms_ + 0.3 * plan_ms, plan_ms);
+    else
+      plan_ms_ = 0.7 * plan_ms_ + 0.3 * plan_ms;
+    if (planned == 0) break;
     blocked_.resize(tasks_.size());
     done_.resize(tasks_.size());
     AoRayBatch batch;
@@ -267,18 +329,16 @@ LoopFrame RealtimeLoop::frame(const Camera& camera) {
     if (traced == 0) break;
   }
   // The image, and the fovea's state
-  const Timer compose_timer;
+  const Timer finish_timer;
   compose(out.color);
-  compose_ms_ = 0.8 * compose_ms_ + 0.2 * compose_timer.ms();
-  size_t fovea = 0, done = 0;
-  for (size_t i = 0; i < cast_.size(); ++i)
-    if (maps_.quality[i] >= 1.0f && gbuffer_.hit(i)) {
-      ++fovea;
-      done += converged(i) ? 1 : 0;
-    }
-  out.fovea_converged = fovea > 0 ? static_cast<double>(done) / static_cast<double>(fovea) : 1.0;
-  out.fovea_done = done == fovea;
+  out.compose_ms = finish_timer.ms();
+  size_t done = 0;
+  for (const uint32_t i : fovea_) done += converged(i) ? 1 : 0;
+  out.fovea_converged = fovea_.empty() ? 1.0 : static_cast<double>(done) / static_cast<double>(fovea_.size());
+  out.fovea_done = done == fovea_.size();
+  finish_ms_ = std::max(0.8 * finish_ms_ + 0.2 * finish_timer.ms(), finish_timer.ms());  // what the frame's end takes, at least the last
   out.ms = timer.ms();
+  out.trace_ms = trace_ms;
   out.cost_ms = wall ? out.ms : model_fixed + static_cast<double>(out.rays) / settings_.model_rays_per_ms;
   out.late = out.cost_ms > settings_.budget_ms;
   // Where the frame's fixed part alone (surfaces, maps, composing) takes most of the budget, the
@@ -287,7 +347,12 @@ LoopFrame RealtimeLoop::frame(const Camera& camera) {
   const bool moving = out.new_view && last_new_view_;
   last_new_view_ = out.new_view;
   const double fixed = wall ? out.ms - trace_ms - (moving ? 0.0 : view_ms) : model_fixed;
-  if (fixed > 0.6 * settings_.budget_ms) rescale(fixed);
+  // (on the wall clock, smoothed over frames: a first frame's page faults are no reason)
+  fixed_ms_ = frames_measured_++ == 0 ? fixed : 0.7 * fixed_ms_ + 0.3 * fixed;
+  if ((!wall || frames_measured_ >= 4) && fixed_ms_ > 0.6 * settings_.budget_ms) {
+    rescale(fixed_ms_);
+    frames_measured_ = 0;
+  }
   return out;
 }
 

@@ -11,10 +11,11 @@
 //   sequence, so n rays over many frames are exactly the paper's pixel's first n rays.
 // - Inside the budget, rays go where they lower the perceived error most: first the pixels of the
 //   fovea (q(E) = 1) not yet converged, then the rest in order of the q(E)²-weighted variance
-//   their next rays remove (σ̂²·k/(c + k) from each pixel's own running estimate). A pixel is
-//   converged once its standard error is within τ(E) (issue 21's threshold, AoReuseParams) or it
-//   has its n(E) rays. Rays come in rounds that double a pixel's count, so a pixel whose rays all
-//   agree stops early (adaptive sampling); the periphery fills in over frames.
+//   their next rays remove (σ̂²·k/(c + k) from each pixel's own running estimate). A fovea pixel
+//   is converged with its n_max rays (the reference's); a peripheral one once its standard error
+//   is within τ(E) (issue 21's threshold, AoReuseParams::tolerance) or it has its n(E) rays. Rays
+//   come in rounds that double a pixel's count, so a peripheral pixel whose rays all agree stops
+//   early (adaptive sampling); the periphery fills in over frames.
 // - With prediction on, while a saccade is in flight the fovea is placed at its predicted landing
 //   (gaze/landing.h): the eye sees little during the flight (saccadic suppression), and the rays
 //   are ready where it lands. Once the eye has landed the measured gaze is used again, so a wrong
@@ -50,7 +51,7 @@ struct LoopSettings {
   LoopClock clock = LoopClock::wall;
   double model_rays_per_ms = 0;  // model clock: AO rays per millisecond
   double model_fixed_ms = 0;     // model clock: a frame's cost besides its AO rays
-  double margin_ms = 0.5;        // wall clock: kept free at the end of each frame
+  double margin_ms = 1.0;        // wall clock: kept free at the end of each frame
   double min_scale = 0.25;       // the smallest resolution scale the loop may choose
   double slowdown = 1;           // tests only: the tracer this many times slower
 };
@@ -59,18 +60,20 @@ void validate(const LoopSettings& settings);
 
 struct LoopFrame {
   int index = 0;
-  Image color;                // linear RGB at the loop's render size (params().width × height)
-  glm::dvec2 gaze_px{0};      // where the fovea was placed, render pixels
-  glm::dvec2 measured_px{0};  // the latest measured gaze (render pixels; the image centre before any)
-  bool predicted = false;     // gaze_px is a predicted landing
-  bool in_flight = false;     // a saccade was under way at the latest sample
-  uint64_t rays = 0;          // AO rays traced this frame
-  double ms = 0;              // wall time of frame()
-  double cost_ms = 0;         // the frame's cost on the loop's clock (wall: ms; model: the model's)
-  bool late = false;          // cost_ms > the budget
-  bool new_view = false;      // the camera changed: surfaces traced and AO started afresh
-  double fovea_converged = 0; // fraction of the fovea's (q = 1, hit) pixels whose AO is converged
-  bool fovea_done = false;    // all of them: the fovea is at full quality
+  Image color;                                      // linear RGB at the loop's render size (params().width × height)
+  glm::dvec2 gaze_px{0};                            // where the fovea was placed, render pixels
+  glm::dvec2 measured_px{0};                        // the latest measured gaze (render pixels; the image centre before any)
+  bool predicted = false;                           // gaze_px is a predicted landing
+  bool in_flight = false;                           // a saccade was under way at the latest sample
+  uint64_t rays = 0;                                // AO rays traced this frame
+  double ms = 0;                                    // wall time of frame()
+  double trace_ms = 0;                              // of which tracing AO rays
+  double maps_ms = 0, plan_ms = 0, compose_ms = 0;  // … the foveation maps, choosing rays, composing the image
+  double cost_ms = 0;                               // the frame's cost on the loop's clock (wall: ms; model: the model's)
+  bool late = false;                                // cost_ms > the budget
+  bool new_view = false;                            // the camera changed: surfaces traced and AO started afresh
+  double fovea_converged = 0;                       // fraction of the fovea's (q = 1, hit) pixels whose AO is converged
+  bool fovea_done = false;                          // all of them: the fovea is at full quality
 };
 
 class RealtimeLoop {
@@ -89,8 +92,8 @@ class RealtimeLoop {
 
   const RenderParams& params() const { return params_; }  // at the render size in use
   const LoopSettings& settings() const { return settings_; }
-  double scale() const { return scale_; }                  // render size / requested size
-  const std::string& note() const { return note_; }        // why the resolution was lowered ("" if not)
+  double scale() const { return scale_; }            // render size / requested size
+  const std::string& note() const { return note_; }  // why the resolution was lowered ("" if not)
   const LandingPredictor& predictor() const { return predictor_; }
   // Per pixel: AO rays cast so far and found open (the loop's state, for tests and pictures).
   const std::vector<uint32_t>& cast() const { return cast_; }
@@ -103,7 +106,7 @@ class RealtimeLoop {
  private:
   void new_view(const Camera& camera);
   void update_maps(glm::dvec2 gaze_px);
-  size_t plan_round(uint64_t ray_limit);
+  size_t plan_round(uint64_t ray_limit, bool periphery);
   void compose(Image& color) const;
   void rescale(double fixed_ms);
   glm::dvec2 px_to_deg(glm::dvec2 px) const;
@@ -123,17 +126,23 @@ class RealtimeLoop {
   uint64_t gbuffer_version_ = 0;
   std::vector<glm::vec3> lit_, ambient_;  // S and A of the colour S + k_a·A
   FoveationMaps maps_;
+  std::vector<glm::vec3> rays_;  // each pixel's unit eye ray (the maps' input that the gaze leaves alone)
   std::optional<glm::dvec2> maps_gaze_;
   std::vector<uint32_t> cast_, open_;
   std::vector<AoRayTask> tasks_;
   std::vector<uint32_t> blocked_;
   std::vector<uint8_t> done_;
   std::vector<uint32_t> order_;  // scratch: pixels by priority bucket
+  std::vector<uint32_t> fovea_;  // the fovea's pixels (q = 1, hit, rays) for the current maps
   std::vector<int8_t> key_;      // scratch: each pixel's bucket (−1: converged)
   bool last_new_view_ = false;   // the previous frame traced a new view
   float ao_distance_ = 0, epsilon_ = 0, tau_fovea_ = 0;
-  double rays_per_ms_ = 0;   // wall clock: measured, smoothed
-  double compose_ms_ = 1;    // wall clock: measured, smoothed
+  double rays_per_ms_ = 0;        // wall clock: measured, smoothed
+  double finish_ms_ = 1;          // wall clock: composing and the fovea's state at a frame's end, measured
+  double plan_ms_ = 0.5;          // wall clock: a round's planning, measured, smoothed
+  double periphery_plan_ms_ = 1;  // wall clock: a periphery round's planning (a pass over every pixel)
+  double fixed_ms_ = 0;           // a frame's cost besides its rays, smoothed
+  int frames_measured_ = 0;       // frames in fixed_ms_ since the last rescale
   int index_ = 0;
 };
 

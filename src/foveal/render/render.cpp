@@ -19,6 +19,8 @@
 #include <mutex>
 #include <type_traits>
 
+#include <time.h>
+
 namespace foveal {
 namespace {
 
@@ -365,17 +367,28 @@ uint64_t trace_ao(const Tracer& tracer, const GBuffer& g, const FoveationMaps& m
   return rays;
 }
 
+namespace {
+
+// CPU time of the calling thread, ms.
+double thread_cpu_ms() {
+  timespec ts{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return static_cast<double>(ts.tv_sec) * 1e3 + static_cast<double>(ts.tv_nsec) * 1e-6;
+}
+
+}  // namespace
+
 uint64_t trace_ao_tasks(const Tracer& tracer, const AoRayBatch& batch) {
   const GBuffer& g = *batch.gbuffer;
   const auto tasks = batch.tasks;
   if (batch.blocked.size() < tasks.size() || batch.done.size() < tasks.size()) fail("trace_ao_tasks: output spans shorter than the tasks");
   std::fill(batch.done.begin(), batch.done.begin() + static_cast<std::ptrdiff_t>(tasks.size()), uint8_t{0});
-  // Chunks of whole tasks, about kAoBatch / 2 rays each (a fraction of a millisecond: the deadline's
+  // Chunks of whole tasks, about 128 rays each (a few hundredths of a millisecond: the deadline's
   // resolution), in task order
   std::vector<size_t> chunk_start{0};
   for (size_t t = 0, rays = 0; t < tasks.size(); ++t) {
     rays += tasks[t].count;
-    if (rays >= kAoBatch / 2) {
+    if (rays >= kAoBatch / 8) {
       chunk_start.push_back(t + 1);
       rays = 0;
     }
@@ -387,8 +400,9 @@ uint64_t trace_ao_tasks(const Tracer& tracer, const AoRayBatch& batch) {
   std::atomic<uint64_t> traced{0};
   const int threads = std::max(1, tbb::this_task_arena::max_concurrency());
   tbb::parallel_for(0, threads, [&](int) {
-    std::vector<Ray> rays;
-    std::vector<uint8_t> occluded;
+    // Each thread's buffers outlive the call: a frame's rounds allocate nothing
+    thread_local std::vector<Ray> rays;
+    thread_local std::vector<uint8_t> occluded;
     while (!stopped.load(std::memory_order_relaxed)) {
       const size_t c = next.fetch_add(1);
       if (c >= chunks) break;
@@ -397,6 +411,7 @@ uint64_t trace_ao_tasks(const Tracer& tracer, const AoRayBatch& batch) {
         break;
       }
       const Timer chunk_timer;
+      const double cpu_start = thread_cpu_ms();
       rays.clear();
       for (size_t t = chunk_start[c]; t < chunk_start[c + 1]; ++t) {
         const AoRayTask& task = tasks[t];

@@ -1,0 +1,495 @@
+// foveal/experiments/latency.cpp — three display loops on recorded gaze under a simulated clock.
+#include "foveal/experiments/latency.h"
+
+#include "foveal/gaze/detect.h"
+#include "foveal/gaze/fixation.h"
+#include "foveal/io/plot.h"
+#include "foveal/util/error.h"
+#include "foveal/util/stats.h"
+#include "foveal/util/timer.h"
+#include "foveal/util/units.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+
+namespace foveal {
+
+namespace {
+
+// The q = 1 pixels (that hit the scene) around a landing, and the reference's noise over them.
+struct FoveaMask {
+  std::vector<uint32_t> pixels;
+  double noise_mse = 0, noise_rel_se = 0;
+};
+
+double pixel_squared_error(const Image& a, const Image& b, size_t i) {
+  double sq = 0;
+  for (int c = 0; c < 3; ++c) {
+    const double d = static_cast<double>(a.pixels[i * 3 + static_cast<size_t>(c)]) - b.pixels[i * 3 + static_cast<size_t>(c)];
+    sq += d * d;
+  }
+  return sq / 3;
+}
+
+// Mean and ½·sd/(mean·√n), the RMSE's relative standard error (as quality/compare.cpp).
+std::pair<double, double> mse_and_rel_se(const std::vector<double>& e) {
+  if (e.empty()) return {0, 0};
+  double sum = 0, sq = 0;
+  for (double v : e) sum += v, sq += v * v;
+  const double n = static_cast<double>(e.size()), mse = sum / n;
+  const double var = std::max(0.0, sq / n - mse * mse);
+  return {mse, mse > 0 ? 0.5 * std::sqrt(var / n) / mse : 0.0};
+}
+
+FoveaMask fovea_mask(const RenderParams& params, const GBuffer& g, glm::dvec2 landing, const Image& ref, const Image& ref2) {
+  FoveaMask m;
+  const FoveationMaps maps = foveation_maps(params, landing);
+  std::vector<double> noise;
+  for (size_t i = 0; i < maps.quality.size(); ++i)
+    if (maps.quality[i] >= 1.0f && g.hit(i)) {
+      m.pixels.push_back(static_cast<uint32_t>(i));
+      noise.push_back(pixel_squared_error(ref2, ref, i));
+    }
+  std::tie(m.noise_mse, m.noise_rel_se) = mse_and_rel_se(noise);
+  return m;
+}
+
+// The fovea's RMSE against the reference as a multiple of the reference's noise, and whether it
+// is within it (ratio ≤ 1 + 2 standard errors).
+std::pair<double, bool> fovea_error(const FoveaMask& m, const Image& image, const Image& ref) {
+  if (m.pixels.empty() || !(m.noise_mse > 0) || image.width != ref.width || image.height != ref.height) return {NAN, false};
+  std::vector<double> e;
+  e.reserve(m.pixels.size());
+  for (uint32_t i : m.pixels) e.push_back(pixel_squared_error(image, ref, i));
+  const auto [mse, rel_se] = mse_and_rel_se(e);
+  const double ratio = std::sqrt(mse / m.noise_mse);
+  const double se = ratio * std::hypot(rel_se, m.noise_rel_se);
+  return {ratio, ratio <= 1.0 + 2.0 * se};
+}
+
+double quantile(std::vector<double> v, double q) {
+  if (v.empty()) return NAN;
+  std::sort(v.begin(), v.end());
+  const double x = q * static_cast<double>(v.size() - 1);
+  const size_t lo = static_cast<size_t>(x);
+  const size_t hi = std::min(lo + 1, v.size() - 1);
+  return v[lo] + (x - static_cast<double>(lo)) * (v[hi] - v[lo]);
+}
+
+// Angle between two render positions as seen on the display, degrees.
+double render_angle_deg(const RenderParams& p, glm::dvec2 a, glm::dvec2 b) {
+  auto dir = [&](glm::dvec2 px) {
+    return glm::normalize(glm::dvec3((px.x / p.width - 0.5) * p.display.width_cm, (px.y / p.height - 0.5) * p.display.height_cm,
+                                     p.display.distance_cm));
+  };
+  return angle_between_deg(dir(a), dir(b));
+}
+
+// What the three loops share: the segment's samples, the saccades, the references and masks.
+struct Segment {
+  std::vector<double> t;                  // seconds from the recording's first sample
+  std::vector<std::optional<glm::dvec2>> px;  // render pixels
+  double begin = 0, end = 0, latency_s = 0;
+  std::vector<LatencySaccade> saccades;
+  std::vector<FoveaMask> masks;
+  Image ref, ref2;
+};
+
+// Which saccade's fovea a frame shown at `t` is judged against: the latest landed one (or, before
+// any, the first).
+size_t followed_saccade(const Segment& s, double t) {
+  size_t k = 0;
+  for (size_t j = 0; j < s.saccades.size(); ++j)
+    if (s.saccades[j].landing_s <= t) k = j;
+  return k;
+}
+
+// Judge a shown frame: each landed, not yet converged saccade's fovea; the timeline's error.
+void judge_frame(const Segment& s, const Image& image, double shown_s, LatencyLoop& loop, LatencyFrame& frame) {
+  for (size_t j = 0; j < s.saccades.size(); ++j) {
+    LatencySaccade& sac = loop.saccades[j];
+    if (sac.converged_ms || sac.landing_s > shown_s) continue;
+    if (fovea_error(s.masks[j], image, s.ref).second) sac.converged_ms = (shown_s - sac.landing_s) * 1000;
+  }
+  if (!s.saccades.empty()) frame.fovea_error = fovea_error(s.masks[followed_saccade(s, shown_s)], image, s.ref).first;
+}
+
+// The clock: a frame of `cost_ms` started at `start` is shown at the first refresh after it is done.
+double shown_at(double start, double cost_ms, double period_s, int& missed) {
+  const int refreshes = std::max(1, static_cast<int>(std::ceil(cost_ms / 1000 / period_s - 1e-9)));
+  missed += refreshes - 1;
+  return start + refreshes * period_s;
+}
+
+void finish_loop(LatencyLoop& loop, const std::vector<double>& frame_ms) {
+  loop.frames = static_cast<int>(frame_ms.size());
+  loop.frame_ms_p50 = quantile(frame_ms, 0.5);
+  loop.frame_ms_p99 = quantile(frame_ms, 0.99);
+}
+
+LatencyLoop run_whole_frame(const LatencyRun& run, const Segment& s, const LatencyParams& p, double budget_ms, double model_rate,
+                            double model_fixed) {
+  LatencyLoop loop;
+  loop.name = "whole-frame";
+  loop.budget_ms = budget_ms;
+  loop.saccades = s.saccades;
+  const double period = 1.0 / p.refresh_hz;
+  std::vector<double> frame_ms;
+  size_t next = 0;
+  std::optional<glm::dvec2> gaze;
+  for (double t = s.begin; t < s.end;) {
+    for (; next < s.t.size() && s.t[next] + s.latency_s <= t; ++next)
+      if (s.px[next]) gaze = s.px[next];
+    RenderParams params = p.render;
+    params.gaze_px = gaze;
+    FrameOptions options;
+    options.outputs = FrameOutputs::colour_only();
+    options.use_history = false;
+    const Timer timer;
+    const Frame f = run.renderer->render(run.camera, params, options);
+    const double ms = timer.ms();
+    const double cost =
+        p.clock == LoopClock::model ? model_fixed + static_cast<double>(f.stats.ao_rays) / model_rate : ms;
+    frame_ms.push_back(cost);
+    loop.frames_late += cost > budget_ms ? 1 : 0;
+    LatencyFrame lf;
+    lf.start_s = t;
+    lf.shown_s = shown_at(t, cost, period, loop.refreshes_missed);
+    lf.gaze_px = f.gaze_px;
+    judge_frame(s, f.color, lf.shown_s, loop, lf);
+    loop.timeline.push_back(lf);
+    t = lf.shown_s;
+  }
+  finish_loop(loop, frame_ms);
+  return loop;
+}
+
+LatencyLoop run_deadline(const LatencyRun& run, const Segment& s, const LatencyParams& p, double budget_ms, bool predict,
+                         double model_rate, double model_fixed) {
+  LatencyLoop loop;
+  loop.name = predict ? "deadline+prediction" : "deadline";
+  loop.budget_ms = budget_ms;
+  loop.saccades = s.saccades;
+  LoopSettings settings;
+  settings.budget_ms = budget_ms;
+  settings.predict = predict;
+  settings.clock = p.clock;
+  settings.model_rays_per_ms = model_rate;
+  settings.model_fixed_ms = model_fixed;
+  RealtimeLoop rt(*run.renderer, *run.scene, p.render, settings);
+  // Samples from a second before the segment: the predictor and the fovea start where the eye is
+  size_t next = 0;
+  while (next < s.t.size() && s.t[next] + s.latency_s <= s.begin - 1.0) ++next;
+  for (; next < s.t.size() && s.t[next] + s.latency_s <= s.begin; ++next) rt.push_gaze(s.t[next], s.px[next]);
+  rt.frame(run.camera);  // the view's surfaces, before the segment starts (as before a trial)
+  const double period = 1.0 / p.refresh_hz;
+  std::vector<double> frame_ms;
+  std::vector<std::pair<double, glm::dvec2>> predictions;  // frame start, predicted landing
+  for (double t = s.begin; t < s.end;) {
+    for (; next < s.t.size() && s.t[next] + s.latency_s <= t; ++next) rt.push_gaze(s.t[next], s.px[next]);
+    const LoopFrame f = rt.frame(run.camera);
+    frame_ms.push_back(f.cost_ms);
+    loop.frames_late += f.late ? 1 : 0;
+    LatencyFrame lf;
+    lf.start_s = t;
+    lf.shown_s = shown_at(t, f.cost_ms, period, loop.refreshes_missed);
+    lf.gaze_px = f.gaze_px / rt.scale();
+    lf.predicted = f.predicted;
+    if (f.predicted) predictions.emplace_back(t, lf.gaze_px);
+    if (rt.scale() == 1.0) judge_frame(s, f.color, lf.shown_s, loop, lf);
+    loop.timeline.push_back(lf);
+    t = lf.shown_s;
+  }
+  loop.scale = rt.scale();
+  for (LatencySaccade& sac : loop.saccades)  // the last prediction made before the landing
+    for (const auto& [start, at] : predictions)
+      if (start < sac.landing_s && start > sac.landing_s - sac.duration_ms / 1000 - 0.05)
+        sac.predicted_error_deg = render_angle_deg(p.render, at, sac.landing_px);
+  finish_loop(loop, frame_ms);
+  return loop;
+}
+
+// The segment's samples in render pixels, and its saccades (nhp) landing inside it.
+Segment make_segment(const Recording& rec, const LatencyParams& p) {
+  Segment s;
+  if (rec.samples.empty()) fail("recording {}: no samples", rec.source);
+  const double t0 = rec.samples.front().t_s;
+  s.begin = p.start_s;
+  s.end = p.start_s + p.duration_s;
+  if (s.begin >= rec.duration_s()) fail("start: {} s is past the end of {} ({:.1f} s)", p.start_s, rec.source, rec.duration_s());
+  const double rate = rec.rate_hz();
+  s.latency_s = p.tracker_latency_ms ? *p.tracker_latency_ms / 1000 : (rate > 0 ? 1.0 / rate : 0.0) + 0.002;
+  const glm::dvec2 scale(static_cast<double>(p.render.width) / rec.screen_px.x, static_cast<double>(p.render.height) / rec.screen_px.y);
+  for (const GazeSample& g : rec.samples) {
+    s.t.push_back(g.t_s - t0);
+    s.px.push_back(g.valid ? std::optional<glm::dvec2>(g.px * scale) : std::nullopt);
+  }
+  const GazeGeometry geometry(p.render.display, rec.screen_px);
+  const EventDetection events = detect_events(rec, geometry, kRecommendedEventMethod, EventParams{}, FixationParams{});
+  for (const DetectedEvent& e : events.events) {
+    if (e.label != EventLabel::saccade || !(e.amplitude_deg >= p.min_amplitude_deg)) continue;
+    const GazeSample& last = rec.samples[e.last];
+    const double landing = last.t_s - t0;
+    if (landing < s.begin || landing >= s.end || !last.valid) continue;
+    // Where the eye came to rest: the median of the samples of the 150 ms after the saccade (up to
+    // the next event that moves it), past its post-saccadic oscillation
+    std::vector<double> xs, ys;
+    for (size_t i = e.last + 1; i < rec.samples.size() && rec.samples[i].t_s <= last.t_s + 0.150; ++i) {
+      const EventLabel l = events.labels[i];
+      if (l == EventLabel::saccade || l == EventLabel::blink) break;
+      if (l == EventLabel::pso || !rec.samples[i].valid) continue;
+      xs.push_back(rec.samples[i].px.x);
+      ys.push_back(rec.samples[i].px.y);
+    }
+    const glm::dvec2 rest = xs.empty() ? last.px : glm::dvec2(quantile(xs, 0.5), quantile(ys, 0.5));
+    const glm::dvec2 px = rest * scale;
+    if (px.x < 0 || px.y < 0 || px.x >= p.render.width || px.y >= p.render.height) continue;
+    LatencySaccade sac;
+    sac.amplitude_deg = e.amplitude_deg;
+    sac.duration_ms = e.duration_s * 1000;
+    sac.landing_s = landing;
+    sac.landing_px = px;
+    s.saccades.push_back(sac);
+  }
+  return s;
+}
+
+std::string ms_or_dash(std::optional<double> v) { return v ? fmt::format("{:.0f}", *v) : "—"; }
+
+nlohmann::json loop_json(const LatencyLoop& l) {
+  nlohmann::json j;
+  j["budget_ms"] = l.budget_ms;
+  j["frames"] = l.frames;
+  j["frames_late"] = l.frames_late;
+  j["refreshes_missed"] = l.refreshes_missed;
+  j["frame_ms_p50"] = l.frame_ms_p50;
+  j["frame_ms_p99"] = l.frame_ms_p99;
+  j["resolution_scale"] = l.scale;
+  j["saccades"] = nlohmann::json::array();
+  for (const LatencySaccade& s : l.saccades) {
+    nlohmann::json js;
+    js["amplitude_deg"] = s.amplitude_deg;
+    js["duration_ms"] = s.duration_ms;
+    js["landing_s"] = s.landing_s;
+    js["landing_to_converged_ms"] = s.converged_ms ? nlohmann::json(*s.converged_ms) : nlohmann::json(nullptr);
+    js["ray_bound_ms"] = s.ray_bound_ms;
+    if (s.predicted_error_deg) js["predicted_error_deg"] = *s.predicted_error_deg;
+    j["saccades"].push_back(js);
+  }
+  j["timeline"] = nlohmann::json::array();
+  for (const LatencyFrame& f : l.timeline)
+    j["timeline"].push_back({{"start_s", f.start_s}, {"shown_s", f.shown_s}, {"fovea_px", {f.gaze_px.x, f.gaze_px.y}}, {"predicted", f.predicted},
+                             {"fovea_error", std::isfinite(f.fovea_error) ? nlohmann::json(f.fovea_error) : nlohmann::json(nullptr)}});
+  const auto median = l.median_converged_ms();
+  j["median_landing_to_converged_ms"] = median ? nlohmann::json(*median) : nlohmann::json(nullptr);
+  return j;
+}
+
+}  // namespace
+
+std::optional<double> LatencyLoop::median_converged_ms() const {
+  // Saccades never converged within the segment count as the longest (they took at least that)
+  std::vector<double> v;
+  bool any = false;
+  for (const LatencySaccade& s : saccades) {
+    v.push_back(s.converged_ms.value_or(INFINITY));
+    any = any || s.converged_ms.has_value();
+  }
+  if (!any) return std::nullopt;
+  const double m = quantile(v, 0.5);
+  return std::isfinite(m) ? std::optional<double>(m) : std::nullopt;
+}
+
+void validate(const LatencyParams& p) {
+  validate(p.render);
+  if (p.render.mode != RenderMode::foveated) fail("mode: bench latency renders foveated frames");
+  if (!(p.refresh_hz >= 1 && p.refresh_hz <= 1000)) fail("refresh_hz: must be in [1, 1000] Hz, got {}", p.refresh_hz);
+  if (p.budget_ms && !(*p.budget_ms > 0 && *p.budget_ms <= 10000)) fail("frame_budget_ms: must be in (0, 10000] ms, got {}", *p.budget_ms);
+  if (p.tracker_latency_ms && !(*p.tracker_latency_ms >= 0 && *p.tracker_latency_ms < 1000))
+    fail("tracker_latency_ms: must be in [0, 1000) ms, got {}", *p.tracker_latency_ms);
+  if (!(p.start_s >= 0) || !std::isfinite(p.start_s)) fail("start: must be >= 0 s, got {}", p.start_s);
+  if (!(p.duration_s > 0) || p.duration_s > 3600) fail("duration: must be in (0, 3600] s, got {}", p.duration_s);
+  if (!(p.min_amplitude_deg >= 0)) fail("min_amplitude_deg: must be >= 0, got {}", p.min_amplitude_deg);
+  for (const std::string& l : p.loops)
+    if (l != "whole-frame" && l != "deadline" && l != "deadline+prediction")
+      fail("loops: unknown loop '{}' (known: whole-frame, deadline, deadline+prediction)", l);
+}
+
+LatencyReport run_latency_bench(const LatencyRun& run, const std::vector<Recording>& recordings, const LatencyParams& p) {
+  validate(p);
+  if (!run.renderer || !run.scene) fail("run_latency_bench: no renderer or scene");
+  const auto say = [&](const std::string& line) {
+    if (run.say) run.say(line);
+  };
+  const double budget = p.budget_ms.value_or(1000.0 / p.refresh_hz);
+  LatencyReport report;
+  // The view: references (n_max everywhere, two seeds other than the loops'), surfaces, the raw rate
+  RenderParams full = p.render;
+  full.mode = RenderMode::full;
+  full.gaze_px.reset();
+  FrameOptions apart;
+  apart.outputs = {false, false, true};
+  apart.use_history = false;
+  say(fmt::format("references: two full frames of {} rays per pixel at {}x{}", p.render.foveation.max_rays, p.render.width, p.render.height));
+  full.seed = p.render.seed + 1000;
+  const Frame reference = run.renderer->render(run.camera, full, apart);
+  full.seed = p.render.seed + 2000;
+  apart.outputs = FrameOutputs::colour_only();
+  const Image ref2 = run.renderer->render(run.camera, full, apart).color;
+  const GBuffer& g = reference.gbuffer;
+  const Bounds bounds = run.scene->bounds();
+  FoveationMaps all = foveation_maps(full, glm::dvec2(p.render.width * 0.5, p.render.height * 0.5));
+  std::vector<Ray> sample;
+  collect_ao_rays(g, all, resolve_ao_distance(*run.scene, bounds, p.render.ao_distance), surface_epsilon(bounds), p.render.seed, 13, sample);
+  const double raw = run.raw_rays_per_ms ? run.raw_rays_per_ms(sample) : 0.0;
+  say(fmt::format("raw tracing rate: {:.0f} rays/ms on {} AO rays of the view", raw, sample.size()));
+  // The model clock: the deadline loop's own rate and fixed cost, measured on this view first
+  double model_rate = 0, model_fixed = 0;
+  if (p.clock == LoopClock::model) {
+    LoopSettings calib;
+    calib.budget_ms = budget;
+    RealtimeLoop rt(*run.renderer, *run.scene, p.render, calib);
+    rt.frame(run.camera);
+    double rays = 0, trace = 0;
+    std::vector<double> fixed;
+    for (int k = 0; k < 20; ++k) {
+      rt.push_gaze(k * 0.05, glm::dvec2((0.2 + 0.03 * k) * p.render.width, 0.5 * p.render.height));
+      const LoopFrame f = rt.frame(run.camera);
+      rays += static_cast<double>(f.rays);
+      trace += f.trace_ms;
+      fixed.push_back(f.ms - f.trace_ms);
+    }
+    model_rate = trace > 0 ? rays / trace : 1;
+    model_fixed = quantile(fixed, 0.5);
+    say(fmt::format("model clock: {:.0f} AO rays/ms and {:.2f} ms a frame besides, measured on 20 frames", model_rate, model_fixed));
+  }
+  for (const Recording& rec : recordings) {
+    Segment s = make_segment(rec, p);
+    s.ref = reference.color;
+    s.ref2 = ref2;
+    for (LatencySaccade& sac : s.saccades) {
+      s.masks.push_back(fovea_mask(p.render, g, sac.landing_px, s.ref, s.ref2));
+      sac.ray_bound_ms = raw > 0 ? static_cast<double>(s.masks.back().pixels.size()) * p.render.foveation.max_rays / raw : NAN;
+    }
+    LatencyRecording out;
+    out.recording = rec.source;
+    out.sampling_hz = rec.rate_hz();
+    out.tracker_latency_ms = s.latency_s * 1000;
+    out.raw_rays_per_ms = raw;
+    out.model_rays_per_ms = model_rate;
+    out.model_fixed_ms = model_fixed;
+    for (size_t i = 0; i < s.t.size(); ++i)
+      if (s.t[i] >= s.begin - 0.1 && s.t[i] < s.end && s.px[i]) {
+        out.gaze_t.push_back(s.t[i]);
+        out.gaze_px.push_back(*s.px[i]);
+      }
+    say(fmt::format("{}: {:.0f} Hz, tracker latency {:.1f} ms, {:.1f}–{:.1f} s: {} saccades of at least {}°", rec.source, out.sampling_hz,
+                    out.tracker_latency_ms, s.begin, s.end, s.saccades.size(), p.min_amplitude_deg));
+    for (const std::string& name : p.loops) {
+      const Timer timer;
+      LatencyLoop loop = name == "whole-frame" ? run_whole_frame(run, s, p, budget, model_rate, model_fixed)
+                                               : run_deadline(run, s, p, budget, name == "deadline+prediction", model_rate, model_fixed);
+      say(fmt::format("  {}: {} frames ({} late), median landing → converged fovea {} ms ({:.1f} s)", name, loop.frames, loop.frames_late,
+                      ms_or_dash(loop.median_converged_ms()), timer.ms() / 1000));
+      out.loops.push_back(std::move(loop));
+    }
+    report.recordings.push_back(std::move(out));
+  }
+  // Markdown and JSON
+  std::string md = fmt::format("Scene {}, {}x{}, n_max {}, device {}, {:.0f} Hz display (budget {:.1f} ms), {} clock.\n\n", run.scene_name,
+                               p.render.width, p.render.height, p.render.foveation.max_rays, run.device, p.refresh_hz, budget,
+                               to_string(p.clock));
+  nlohmann::json j;
+  j["scene"] = run.scene_name;
+  j["device"] = run.device;
+  j["size"] = {p.render.width, p.render.height};
+  j["max_rays"] = p.render.foveation.max_rays;
+  j["refresh_hz"] = p.refresh_hz;
+  j["clock"] = to_string(p.clock);
+  j["recordings"] = nlohmann::json::array();
+  for (const LatencyRecording& r : report.recordings) {
+    std::vector<double> bounds_ms, durations;
+    for (const LatencySaccade& sac : r.loops.empty() ? std::vector<LatencySaccade>{} : r.loops.front().saccades) {
+      bounds_ms.push_back(sac.ray_bound_ms);
+      durations.push_back(sac.duration_ms);
+    }
+    const double bound = quantile(bounds_ms, 0.5);
+    md += fmt::format("**{}** ({:.0f} Hz, tracker latency {:.1f} ms; {} saccades ≥ {}°, median duration {:.0f} ms; raw rate {:.0f} rays/ms, "
+                      "median ray bound {:.0f} ms)\n\n",
+                      r.recording, r.sampling_hz, r.tracker_latency_ms, bounds_ms.size(), p.min_amplitude_deg, quantile(durations, 0.5),
+                      r.raw_rays_per_ms, bound);
+    md += "| loop | frames | late | refreshes missed | frame ms p50 | p99 | landing → converged fovea, median ms | × ray bound |\n";
+    md += "|---|---:|---:|---:|---:|---:|---:|---:|\n";
+    nlohmann::json jr;
+    jr["recording"] = r.recording;
+    jr["sampling_hz"] = r.sampling_hz;
+    jr["tracker_latency_ms"] = r.tracker_latency_ms;
+    jr["raw_rays_per_ms"] = r.raw_rays_per_ms;
+    if (p.clock == LoopClock::model) jr["model"] = {{"rays_per_ms", r.model_rays_per_ms}, {"fixed_ms", r.model_fixed_ms}};
+    for (const LatencyLoop& l : r.loops) {
+      const auto median = l.median_converged_ms();
+      md += fmt::format("| {} | {} | {} | {} | {:.1f} | {:.1f} | {} | {} |\n", l.name, l.frames, l.frames_late, l.refreshes_missed,
+                        l.frame_ms_p50, l.frame_ms_p99, ms_or_dash(median),
+                        median && bound > 0 ? fmt::format("{:.2f}", *median / bound) : "—");
+      jr[l.name] = loop_json(l);
+    }
+    md += "\n";
+    j["recordings"].push_back(jr);
+  }
+  report.markdown = md;
+  report.json = j;
+  return report;
+}
+
+void write_latency_timeline(const LatencyRecording& r, size_t saccade, const std::string& path) {
+  if (r.loops.empty() || saccade >= r.loops.front().saccades.size()) fail("timeline: no saccade {} in {}", saccade, r.recording);
+  const LatencySaccade& sac = r.loops.front().saccades[saccade];
+  const double t0 = sac.landing_s - sac.duration_ms / 1000 - 0.1, t1 = sac.landing_s + 0.35;
+  Plot plot;
+  plot.width = 900;
+  plot.height = 560;
+  const float left = 70, right = 880, top = 40, mid = 300, bottom = 520;
+  const auto x_of = [&](double t) { return left + static_cast<float>((t - t0) / (t1 - t0)) * (right - left); };
+  // Top: the gaze's horizontal position and each loop's fovea placement (render pixels)
+  double lo = 1e30, hi = -1e30;
+  for (size_t i = 0; i < r.gaze_t.size(); ++i)
+    if (r.gaze_t[i] >= t0 && r.gaze_t[i] <= t1) lo = std::min(lo, r.gaze_px[i].x), hi = std::max(hi, r.gaze_px[i].x);
+  if (!(hi > lo)) lo = 0, hi = 1;
+  const double pad = 0.1 * (hi - lo);
+  lo -= pad, hi += pad;
+  const auto y_top = [&](double x) { return mid - 20 - static_cast<float>((x - lo) / (hi - lo)) * (mid - 20 - top); };
+  Stroke gaze{{}, {0.1f, 0.1f, 0.1f}, 2};
+  for (size_t i = 0; i < r.gaze_t.size(); ++i)
+    if (r.gaze_t[i] >= t0 && r.gaze_t[i] <= t1) gaze.points.emplace_back(x_of(r.gaze_t[i]), y_top(r.gaze_px[i].x));
+  plot.strokes.push_back(gaze);
+  const glm::vec3 colours[3] = {{0.55f, 0.55f, 0.55f}, {0.15f, 0.45f, 0.85f}, {0.85f, 0.35f, 0.1f}};
+  // Bottom: the fovea's error per shown frame (× the reference's noise; 1 = within it), log scale 0.5–64
+  const auto y_bottom = [&](double e) {
+    const double l = std::clamp(std::log2(std::max(e, 0.5)), -1.0, 6.0);
+    return bottom - static_cast<float>((l + 1) / 7) * (bottom - mid - 20);
+  };
+  for (size_t k = 0; k < r.loops.size() && k < 3; ++k) {
+    Stroke place{{}, colours[k], 1.5f, true}, err{{}, colours[k], 2};
+    for (const LatencyFrame& f : r.loops[k].timeline) {
+      if (f.shown_s < t0 || f.start_s > t1) continue;
+      place.points.emplace_back(x_of(f.start_s), y_top(f.gaze_px.x));
+      place.points.emplace_back(x_of(f.shown_s), y_top(f.gaze_px.x));
+      if (std::isfinite(f.fovea_error)) err.points.emplace_back(x_of(f.shown_s), y_bottom(f.fovea_error));
+    }
+    plot.strokes.push_back(place);
+    plot.strokes.push_back(err);
+    plot.labels.push_back({{right - 330, top + 16.0f * static_cast<float>(k)}, r.loops[k].name + ": fovea placed (dashed), its error"});
+  }
+  plot.strokes.push_back({{{x_of(sac.landing_s), top}, {x_of(sac.landing_s), bottom}}, {0.2f, 0.6f, 0.2f}, 1, true});
+  plot.strokes.push_back({{{left, y_bottom(1)}, {right, y_bottom(1)}}, {0.2f, 0.6f, 0.2f}, 1, true});
+  plot.labels.push_back({{x_of(sac.landing_s) + 4, bottom - 4}, "landing"});
+  plot.labels.push_back({{left, top - 14}, fmt::format("{} - a {:.1f} deg saccade: gaze x (black, render px) and where each loop put the fovea",
+                                                      r.recording, sac.amplitude_deg)});
+  plot.labels.push_back({{left, mid + 14}, "the landed fovea's error per shown frame, x the reference's noise (log 0.5-64; dashed green: 1)"});
+  plot.labels.push_back({{left, bottom + 22}, fmt::format("time, {:.2f} - {:.2f} s", t0, t1)});
+  save_plot(plot, path);
+}
+
+}  // namespace foveal

@@ -1,0 +1,109 @@
+// foveal/experiments/latency.h — `bench latency`: gaze-to-photon latency of three display loops on
+// recorded gaze, under a simulated clock.
+//
+// A recording is replayed as a tracker would deliver it: sample s reaches the renderer at
+// t_s + latency (default: the sample period + 2 ms). The display refreshes every 1/refresh_hz; a
+// frame started at a refresh is shown at the first refresh after it is done, and the next frame
+// starts then. The clock advances by each frame's cost: with the wall clock its measured time,
+// with the model clock a fixed cost model calibrated at the start of the run (reproducible). Three
+// loops run on the same samples:
+//   whole-frame          today's: render a whole foveated frame for the latest gaze, then show it;
+//   deadline             RealtimeLoop (render/realtime.h) without prediction;
+//   deadline+prediction  RealtimeLoop placing the fovea at each saccade's predicted landing.
+// For every saccade (detected in the recording, nhp) landing in the segment: the time from its
+// landing to the first shown frame whose fovea — the q = 1 region around the true landing — is
+// within the full-frame reference's own noise (RMSE against a reference of n_max rays per pixel,
+// as a multiple of a second reference's RMSE against it: ratio ≤ 1 + 2 standard errors, as
+// `bench quality` judges), and the ray-bound limit: that fovea's pixels × n_max over the raw
+// tracing rate measured in the same run.
+#pragma once
+
+#include "foveal/gaze/recording.h"
+#include "foveal/render/frame_renderer.h"
+#include "foveal/render/realtime.h"
+
+#include <nlohmann/json.hpp>
+
+#include <functional>
+#include <optional>
+#include <span>
+#include <string>
+#include <vector>
+
+namespace foveal {
+
+struct LatencyParams {
+  RenderParams render;                       // size, display, n_max, seed (the loops'); mode foveated
+  double refresh_hz = 60;                    // the display's rate
+  std::optional<double> budget_ms;           // unset: one refresh
+  std::optional<double> tracker_latency_ms;  // unset: the recording's sample period + 2 ms
+  LoopClock clock = LoopClock::wall;
+  double start_s = 0, duration_s = 3;        // the segment replayed (seconds from the recording's first sample)
+  double min_amplitude_deg = 2;              // smaller saccades are not judged
+  std::vector<std::string> loops = {"whole-frame", "deadline", "deadline+prediction"};
+};
+// Check the parameters; throws Error naming the option.
+void validate(const LatencyParams& params);
+
+struct LatencySaccade {
+  double amplitude_deg = 0;
+  double duration_ms = 0;
+  double landing_s = 0;                    // seconds from the recording's first sample
+  glm::dvec2 landing_px{0};                // render pixels
+  std::optional<double> converged_ms;      // landing → a shown frame with the fovea within noise (unset: not in the segment)
+  double ray_bound_ms = 0;                 // the fovea's pixels × n_max / the raw rate
+  std::optional<double> predicted_error_deg;  // deadline+prediction: the last prediction shown before the landing, from it
+};
+
+struct LatencyFrame {  // one shown frame, for the timeline picture
+  double start_s = 0, shown_s = 0;
+  glm::dvec2 gaze_px{0};  // where the fovea was placed
+  bool predicted = false;
+  double fovea_error = NAN;  // RMSE in the fovea of the saccade being followed, over the reference noise (NaN: none)
+};
+
+struct LatencyLoop {
+  std::string name;
+  double budget_ms = 0;
+  int frames = 0, frames_late = 0, refreshes_missed = 0;
+  double frame_ms_p50 = 0, frame_ms_p99 = 0;
+  double scale = 1;  // the deadline loops' resolution scale
+  std::vector<LatencySaccade> saccades;
+  std::vector<LatencyFrame> timeline;
+  std::optional<double> median_converged_ms() const;
+};
+
+struct LatencyRecording {
+  std::string recording;
+  double sampling_hz = 0, tracker_latency_ms = 0;
+  double raw_rays_per_ms = 0;   // the raw tracing rate of the run (the ray bound's denominator)
+  double model_rays_per_ms = 0, model_fixed_ms = 0;  // the model clock's calibration (0 with the wall clock)
+  std::vector<LatencyLoop> loops;
+  std::vector<double> gaze_t;  // the segment's samples (timeline picture): time, render pixels
+  std::vector<glm::dvec2> gaze_px;
+};
+
+struct LatencyReport {
+  std::vector<LatencyRecording> recordings;
+  std::string markdown;
+  nlohmann::json json;
+};
+
+// What the bench needs besides the recordings: the renderer on its device, the scene and camera,
+// and the raw tracing rate (rays per ms) on a sample of the view's AO rays.
+struct LatencyRun {
+  FrameRenderer* renderer = nullptr;
+  const Scene* scene = nullptr;
+  Camera camera;
+  std::string scene_name, device;
+  std::function<double(std::span<const Ray>)> raw_rays_per_ms;
+  std::function<void(const std::string&)> say;  // progress lines
+};
+
+LatencyReport run_latency_bench(const LatencyRun& run, const std::vector<Recording>& recordings, const LatencyParams& params);
+
+// A saccade's timeline as a picture: gaze x and y, the fovea's placement per frame of each loop,
+// and the fovea's error per shown frame; written by extension (.png or .svg).
+void write_latency_timeline(const LatencyRecording& recording, size_t saccade, const std::string& path);
+
+}  // namespace foveal
