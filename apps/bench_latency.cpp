@@ -77,7 +77,9 @@ int run_bench_latency(const BenchLatencyOptions& o) {
   run.scene_name = spec;
   run.device = fmt::format("{} ({} threads)", renderer->describe(), threads.threads());
   // The raw rate: Embree's on the CPU (the GPU reports its own rays through the same loop)
-  run.raw_rays_per_ms = [&](std::span<const Ray> rays) { return measure_raw_occlusion(tracer, rays, TraceApi::stream).rays_per_second / 1000; };
+  run.raw_rays_per_ms = [&](std::span<const Ray> rays) {
+    return measure_raw_occlusion(tracer, rays, TraceApi::stream).rays_per_second / 1000;
+  };
   run.say = [](const std::string& line) {
     fmt::print("{}\n", line);
     std::fflush(stdout);
@@ -124,8 +126,9 @@ std::function<int()> add_bench_latency_command(CLI::App& bench) {
   cmd->add_option("--seed", o->seed, "seed of the loops (the references use seed+1000 and seed+2000)")->capture_default_str();
   cmd->add_option("--refresh-hz", o->refresh_hz, "display refresh rate, Hz")->capture_default_str()->check(CLI::Range(1.0, 1000.0));
   cmd->add_option("--frame-budget-ms", o->budget_ms, "each frame's budget, ms (default: one refresh)");
-  cmd->add_option("--latency-ms", o->latency_ms, "tracker latency: a sample reaches the renderer this long after it was taken (default: "
-                                                 "the sample period + 2 ms)");
+  cmd->add_option("--latency-ms", o->latency_ms,
+                  "tracker latency: a sample reaches the renderer this long after it was taken (default: "
+                  "the sample period + 2 ms)");
   cmd->add_option("--clock", o->clock,
                   "wall: each frame costs its measured time; model: a cost model calibrated at the start (reproducible runs)")
       ->capture_default_str();

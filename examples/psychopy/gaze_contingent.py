@@ -1,10 +1,13 @@
 #!/usr/bin/env python3
-"""A gaze-contingent PsychoPy window: foveated frames rendered by foveal follow ioHub's eye tracker.
+"""A gaze-contingent PsychoPy window: foveal's real-time loop follows ioHub's eye tracker.
 
-Each frame: the tracker's latest gaze sample → foveal renders the foveated frame around it (the
-GIL is released meanwhile) → the frame is drawn and flipped. Per frame it logs the gaze sample's
-time, the render time and the flip time, all on PsychoPy's own clock (ioHub's time base is
-``psychopy.core.getTime``), so the gaze-to-photon latency is flip time − sample time.
+Every refresh: the tracker's new samples go to ``foveal.Loop`` (its saccade predictor sees each of
+them) → ``loop.frame()`` returns within the frame budget an image whose fovea — around the gaze, or
+around a saccade's predicted landing while the eye is in flight — is refined first (the GIL is
+released while it renders on the worker threads) → the image is drawn and flipped. Per flip it
+logs the latest gaze sample's time, the flip time (both on PsychoPy's clock: ioHub's time base is
+``psychopy.core.getTime``), and the fovea's state (refining or converged), so the gaze-to-photon
+latency is flip time − sample time and the fovea's refinement is read from the same log.
 
     python examples/psychopy/gaze_contingent.py                      # MouseGaze: the mouse is the eye
     python examples/psychopy/gaze_contingent.py --tracker eyelink.yaml   # any ioHub eye tracker
@@ -35,9 +38,11 @@ def parse_args(argv=None):
     p.add_argument("--camera", default=None, help="named camera of the scene (default: its first)")
     p.add_argument("--size", default="840x525", help="window and render size WxH in pixels (default 840x525)")
     p.add_argument("--display", default="47.5,30,60", help="the screen W_CM,H_CM,DIST_CM (default: the papers' 22-inch at 60 cm)")
-    p.add_argument("--max-rays", type=int, default=100, help="n_max, AO rays per pixel at the gaze (default 100)")
+    p.add_argument("--max-rays", type=int, default=400, help="n_max, AO rays per pixel of the fovea (default 400, the papers')")
     p.add_argument("--gamma", type=float, default=2.0, help="γ of the ray budget (default 2)")
     p.add_argument("--device", default="auto", help="auto, cpu or cuda")
+    p.add_argument("--refresh-hz", type=float, default=None, help="the display's refresh rate (default: measured by PsychoPy, else 60)")
+    p.add_argument("--no-predict", action="store_true", help="no saccade landing prediction: the fovea stays at the measured gaze")
     p.add_argument("--frames", type=int, default=0, help="stop after this many frames (0: until Escape)")
     p.add_argument("--tracker", default=None, help="ioHub eye-tracker configuration (YAML); default MouseGaze")
     p.add_argument("--move-mouse", action="store_true", help="move the pointer along a path (XTest), for runs without a person")
@@ -47,11 +52,16 @@ def parse_args(argv=None):
     return p.parse_args(argv)
 
 
+# Linear [0, 1] → sRGB → PsychoPy's float range [−1, 1], tabulated at 4096 steps (finer than the
+# display's 256): a lookup instead of a power per channel keeps the conversion to milliseconds
+_LEVELS = np.linspace(0.0, 1.0, 4096)
+_SRGB = (np.where(_LEVELS <= 0.0031308, 12.92 * _LEVELS, 1.055 * np.power(_LEVELS, 1 / 2.4) - 0.055) * 2.0 - 1.0).astype(np.float32)
+
+
 def linear_to_psychopy(image: np.ndarray) -> np.ndarray:
     """Linear RGB [0, 1] → sRGB → PsychoPy's float image range [−1, 1], rows bottom-up."""
-    c = np.clip(image, 0.0, 1.0)
-    srgb = np.where(c <= 0.0031308, 12.92 * c, 1.055 * np.power(c, 1 / 2.4) - 0.055)
-    return np.flipud(srgb * 2.0 - 1.0).astype(np.float32)
+    index = np.clip(image * 4095.0 + 0.5, 0, 4095).astype(np.uint16)
+    return _SRGB[index[::-1]]
 
 
 def tracker_config(path):
@@ -94,9 +104,13 @@ def main(argv=None) -> int:
     wcm, hcm, dcm = (float(v) for v in args.display.split(","))
     display = foveal.Display(wcm, hcm, dcm, w, h)
     scene = foveal.Scene(args.scene)
-    renderer = foveal.Renderer(scene, device=args.device)
 
     win = visual.Window((w, h), units="pix", fullscr=args.fullscreen, allowGUI=False, color=(-1, -1, -1), pos=(0, 0))
+    refresh_hz = args.refresh_hz or win.getActualFrameRate(nIdentical=10, nMaxFrames=60) or 60.0
+    loop = foveal.Loop(scene, size=(w, h), camera=args.camera, display=display, max_rays=args.max_rays, gamma=args.gamma,
+                       refresh_hz=refresh_hz, predict=not args.no_predict, device=args.device)
+    if loop.note:
+        print(f"gaze_contingent: {loop.note}")
     io = launchHubServer(window=win, **tracker_config(args.tracker))
     tracker = io.devices.tracker
     tracker.setRecordingState(True)
@@ -108,32 +122,53 @@ def main(argv=None) -> int:
         mover = threading.Thread(target=move_pointer, args=(stop,), daemon=True)
         mover.start()
 
+    def to_render(x, y):
+        # ioHub 'pix' units: origin at the window centre, y up → render pixels, origin top-left, y down
+        return (x + w / 2.0, h / 2.0 - y)
+
     rows = []
-    frame_index = 0
+    own_ms = 0.0
+    flip_index = 0
     gaze_px = (w / 2.0, h / 2.0)
     sample_time = core.getTime()
     try:
-        while args.frames == 0 or frame_index < args.frames:
+        while args.frames == 0 or flip_index < args.frames:
             if "escape" in event.getKeys():
                 break
-            samples = [e for e in tracker.getEvents() if hasattr(e, "time")]
-            position = tracker.getLastGazePosition()
-            if position is not None and samples:
-                # ioHub 'pix' units: origin at the window centre, y up → render pixels, origin top-left, y down
-                gaze_px = (position[0] + w / 2.0, h / 2.0 - position[1])
-                sample_time = samples[-1].time  # ioHub's time base is PsychoPy's core.getTime()
+            # Every sample since the last flip goes to the loop (the saccade predictor needs them all)
+            for e in tracker.getEvents():
+                if not hasattr(e, "time"):
+                    continue
+                x, y = getattr(e, "gaze_x", None), getattr(e, "gaze_y", None)
+                if x is None or y is None or not (math.isfinite(x) and math.isfinite(y)):
+                    loop.push(e.time, None)
+                    continue
+                gaze_px = to_render(x, y)
+                sample_time = e.time
+                loop.push(e.time, gaze_px)
+            if not rows or sample_time <= rows[-1]["sample_time_s"]:
+                position = tracker.getLastGazePosition()  # trackers whose events carry no gaze
+                if position is not None:
+                    gaze_px = to_render(*position)
+                    sample_time = core.getTime()
+                    loop.push(sample_time, gaze_px)
             start = core.getTime()
-            frame = renderer.render(size=(w, h), camera=args.camera, gaze=gaze_px, max_rays=args.max_rays,
-                                    gamma=args.gamma, display=display)
+            frame = loop.frame()
             rendered = core.getTime()
             stim.image = linear_to_psychopy(frame.image)
             stim.draw()
             flip = win.flip()
-            rows.append({"frame": frame_index, "gaze_x": gaze_px[0], "gaze_y": gaze_px[1], "sample_time_s": sample_time,
-                         "render_start_s": start, "render_ms": 1000 * (rendered - start),
-                         "library_ms": frame.library_ms, "flip_time_s": flip,
-                         "gaze_to_flip_ms": 1000 * (flip - sample_time)})
-            frame_index += 1
+            # The loop gets what this script's own work (conversion, drawing, the flip) leaves of the refresh
+            overhead = flip - rendered
+            own_ms = overhead * 1000 if not rows else 0.8 * own_ms + 0.2 * overhead * 1000
+            loop.budget_ms = max(4.0, 1000.0 / refresh_hz - own_ms - 1.0)
+            rows.append({"flip": flip_index, "gaze_x": gaze_px[0], "gaze_y": gaze_px[1], "sample_time_s": sample_time,
+                         "fovea_x": frame.gaze[0] / loop.scale, "fovea_y": frame.gaze[1] / loop.scale,
+                         "predicted": int(frame.predicted), "fovea": frame.fovea,
+                         "fovea_converged": round(frame.fovea_converged, 4), "rays": frame.rays,
+                         "render_start_s": start, "render_ms": 1000 * (rendered - start), "library_ms": frame.ms,
+                         "late": int(frame.late), "flip_time_s": flip, "gaze_to_flip_ms": 1000 * (flip - sample_time)})
+            flip_index += 1
     finally:
         stop.set()
         tracker.setRecordingState(False)
@@ -141,18 +176,23 @@ def main(argv=None) -> int:
         win.close()
 
     with open(args.log, "w", newline="") as f:
-        writer = csv.DictWriter(f, fieldnames=list(rows[0]) if rows else ["frame"])
+        writer = csv.DictWriter(f, fieldnames=list(rows[0]) if rows else ["flip"])
         writer.writeheader()
         writer.writerows(rows)
-    latencies = np.array([r["gaze_to_flip_ms"] for r in rows[1:]])  # the first frame waits for the tracker
-    summary = {"frames": len(rows), "size": [w, h], "scene": args.scene, "device": renderer.device,
+    latencies = np.array([r["gaze_to_flip_ms"] for r in rows[1:]])  # the first flip waits for the tracker
+    summary = {"flips": len(rows), "size": [w, h], "render_size": list(loop.size), "scene": args.scene, "device": loop.device,
+               "refresh_hz": refresh_hz, "budget_ms": loop.budget_ms, "predict": not args.no_predict,
                "gaze_positions": len({(round(r["gaze_x"]), round(r["gaze_y"])) for r in rows}),
+               "frames_late": sum(r["late"] for r in rows),
+               "flips_converged": sum(r["fovea"] == "converged" for r in rows),
                "gaze_to_flip_ms_median": float(np.median(latencies)) if len(latencies) else None,
                "gaze_to_flip_ms_p95": float(np.percentile(latencies, 95)) if len(latencies) else None,
+               "gaze_to_flip_refreshes_median": float(np.median(latencies)) * refresh_hz / 1000 if len(latencies) else None,
                "render_ms_median": float(np.median([r["render_ms"] for r in rows])) if rows else None}
-    print(f"gaze_contingent: {summary['frames']} frames at {w}x{h} on {summary['device']}, "
-          f"{summary['gaze_positions']} gaze positions, gaze-to-flip median {summary['gaze_to_flip_ms_median']:.1f} ms, "
-          f"95th percentile {summary['gaze_to_flip_ms_p95']:.1f} ms; log {args.log}")
+    print(f"gaze_contingent: {summary['flips']} flips at {w}x{h} on {summary['device']} ({refresh_hz:.0f} Hz, budget "
+          f"{loop.budget_ms:.1f} ms), {summary['gaze_positions']} gaze positions, gaze-to-flip median "
+          f"{summary['gaze_to_flip_ms_median']:.1f} ms ({summary['gaze_to_flip_refreshes_median']:.2f} refreshes), 95th percentile "
+          f"{summary['gaze_to_flip_ms_p95']:.1f} ms; {summary['frames_late']} late frames; log {args.log}")
     if args.summary:
         with open(args.summary, "w") as f:
             json.dump(summary, f, indent=2)

@@ -24,6 +24,8 @@ from ._core import (  # noqa: F401  (re-exported)
     Camera,
     Display,
     Frame,
+    Loop,
+    LoopFrame,
     Renderer,
     Scene,
     VisionSimulation,
@@ -36,7 +38,7 @@ from ._core import (  # noqa: F401  (re-exported)
 from . import gaze  # noqa: F401
 
 __all__ = [
-    "Camera", "Display", "Frame", "Renderer", "Scene", "VisionSimulation", "VisionStep",
+    "Camera", "Display", "Frame", "Loop", "LoopFrame", "Renderer", "Scene", "VisionSimulation", "VisionStep",
     "compare", "gaze", "load_image", "save_image", "device_available", "device_description",
 ]
 __version__ = "0.1.0"

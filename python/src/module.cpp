@@ -12,6 +12,7 @@
 #include "foveal/quality/compare.h"
 #include "foveal/render/render.h"
 #include "foveal/render/frame_renderer.h"
+#include "foveal/render/realtime.h"
 #include "foveal/util/error.h"
 #include "foveal/util/parallel.h"
 #include "foveal/util/timer.h"
@@ -132,6 +133,69 @@ struct PyRenderer {
       out->trace_api = renderer->trace_api();
       out->wall_ms = clock.ms();
     }
+    return out;
+  }
+};
+
+// The real-time loop of one scene, camera and size on one device (render/realtime.h).
+struct PyLoopFrame {
+  LoopFrame frame;
+  double budget_ms = 0;
+};
+
+struct PyLoop {
+  std::shared_ptr<const Scene> scene;
+  std::unique_ptr<FrameRenderer> renderer;
+  std::unique_ptr<RealtimeLoop> loop;
+  Camera camera;
+  int threads = 0;
+  std::mutex mutex;  // one frame at a time (the GIL is released while it renders)
+  std::optional<double> last_t;
+
+  PyLoop(const PyScene& s, const std::array<int, 2>& size, const nb::object& camera_arg, std::optional<Display> display, int max_rays,
+         double gamma, double refresh_hz, std::optional<double> frame_budget_ms, bool predict, const std::string& device_name, int threads_,
+         uint64_t seed, const std::string& clock, double tolerance, double ellipse)
+      : scene(s.scene), threads(threads_) {
+    if (threads < 0) fail("threads: must be 0 (all cores) or more, got {}", threads);
+    if (!(refresh_hz >= 1 && refresh_hz <= 1000)) fail("refresh_hz: must be in [1, 1000] Hz, got {}", refresh_hz);
+    RenderParams p;
+    std::tie(p.width, p.height) = size_of(size, "size");
+    p.display = display ? *display : Display{};
+    p.foveation.max_rays = max_rays;
+    p.foveation.gamma = gamma;
+    p.foveation.ellipse_ratio = ellipse;
+    p.seed = seed;
+    p.reuse.tolerance = tolerance;
+    LoopSettings settings;
+    settings.budget_ms = frame_budget_ms.value_or(1000.0 / refresh_hz);
+    settings.predict = predict;
+    settings.clock = parse_loop_clock(clock);
+    if (settings.clock == LoopClock::model) fail("clock: the model clock is bench latency's; a Loop in Python runs on the wall clock");
+    camera = resolve_camera(*scene, camera_arg);
+    const ComputeDevice device = choose_device(device_name);
+    nb::gil_scoped_release release;
+    const ThreadScope scope(threads);
+    renderer = make_frame_renderer(*scene, device);
+    loop = std::make_unique<RealtimeLoop>(*renderer, *scene, p, settings);
+    loop->frame(camera);  // the view's surfaces, before the first frame is asked for
+  }
+
+  void push(double t, std::optional<std::array<double, 2>> gaze) {
+    if (!std::isfinite(t)) fail("t: must be a finite time in seconds, got {}", t);
+    const std::lock_guard<std::mutex> lock(mutex);
+    if (last_t && t <= *last_t) return;  // a repeated or older sample (a tracker's duplicate) is ignored
+    last_t = t;
+    loop->push_gaze(t, gaze ? std::optional<glm::dvec2>(glm::dvec2((*gaze)[0], (*gaze)[1])) : std::nullopt);
+  }
+
+  std::unique_ptr<PyLoopFrame> frame(std::optional<std::array<double, 2>> gaze, std::optional<double> t) {
+    if (gaze || t) push(t.value_or(last_t.value_or(0.0) + 1e-6), gaze);
+    auto out = std::make_unique<PyLoopFrame>();
+    out->budget_ms = loop->settings().budget_ms;
+    nb::gil_scoped_release release;
+    const ThreadScope scope(threads);
+    const std::lock_guard<std::mutex> lock(mutex);
+    out->frame = loop->frame(camera);
     return out;
   }
 };
@@ -381,6 +445,88 @@ NB_MODULE(_core, m) {
           "Forget the AO rays kept for temporal=True: the next temporal frame is the paper's frame.")
       .def_prop_ro("device", [](const PyRenderer& r) { return std::string(to_string(r.device)); })
       .def_prop_ro("device_description", [](const PyRenderer& r) { return r.renderer->describe(); });
+
+  nb::class_<PyLoopFrame>(m, "LoopFrame", "One frame of a Loop: the image and the state of the fovea when it was made.")
+      .def_prop_ro(
+          "image",
+          [](PyLoopFrame& f) {
+            const Image& c = f.frame.color;
+            return nb::ndarray<nb::numpy, float>(const_cast<float*>(c.pixels.data()),
+                                                 {size_t(c.height), size_t(c.width), size_t(c.channels)}, nb::find(&f));
+          },
+          "The image: float32 H×W×3, linear RGB, at the loop's render size (smaller than asked where the base shading did not fit "
+          "the budget: see Loop.scale), a view valid while the frame lives.")
+      .def_prop_ro(
+          "fovea", [](const PyLoopFrame& f) { return std::string(f.frame.fovea_done ? "converged" : "refining"); },
+          "'converged' once every pixel of the fovea (q = 1 around where it was placed) has its n_max rays, else 'refining'.")
+      .def_prop_ro(
+          "fovea_converged", [](const PyLoopFrame& f) { return f.frame.fovea_converged; }, "The fovea's converged fraction, 0–1.")
+      .def_prop_ro(
+          "gaze",
+          [](const PyLoopFrame& f) {
+            return std::array<double, 2>{f.frame.gaze_px.x, f.frame.gaze_px.y};
+          },
+          "Where the fovea was placed, render pixels: the latest gaze, or a saccade's predicted landing.")
+      .def_prop_ro(
+          "measured_gaze",
+          [](const PyLoopFrame& f) {
+            return std::array<double, 2>{f.frame.measured_px.x, f.frame.measured_px.y};
+          },
+          "The latest measured gaze, render pixels.")
+      .def_prop_ro(
+          "predicted", [](const PyLoopFrame& f) { return f.frame.predicted; }, "The fovea was placed at a predicted landing.")
+      .def_prop_ro(
+          "in_flight", [](const PyLoopFrame& f) { return f.frame.in_flight; }, "A saccade was under way at the latest sample.")
+      .def_prop_ro(
+          "rays", [](const PyLoopFrame& f) { return f.frame.rays; }, "AO rays traced for this frame.")
+      .def_prop_ro(
+          "ms", [](const PyLoopFrame& f) { return f.frame.ms; }, "Wall time of the frame, ms.")
+      .def_prop_ro(
+          "late", [](const PyLoopFrame& f) { return f.frame.late; }, "The frame took longer than its budget.")
+      .def_prop_ro(
+          "budget_ms", [](const PyLoopFrame& f) { return f.budget_ms; }, "The frame budget, ms.")
+      .def_prop_ro("index", [](const PyLoopFrame& f) { return f.frame.index; });
+
+  nb::class_<PyLoop>(m, "Loop",
+                     "Gaze-contingent rendering in real time: frame() returns within the frame budget an image whose fovea "
+                     "is refined first (docs/realtime.md).")
+      .def(nb::init<const PyScene&, const std::array<int, 2>&, const nb::object&, std::optional<Display>, int, double, double,
+                    std::optional<double>, bool, const std::string&, int, uint64_t, const std::string&, double, double>(),
+           "scene"_a, "size"_a = std::array<int, 2>{840, 525}, "camera"_a = nb::none(), "display"_a = nb::none(), "max_rays"_a = 400,
+           "gamma"_a = 2.0, "refresh_hz"_a = 60.0, "frame_budget_ms"_a = nb::none(), "predict"_a = true, "device"_a = "auto",
+           "threads"_a = 0, "seed"_a = 1, "clock"_a = "wall", "tolerance"_a = foveal::AoReuseParams{}.tolerance, "ellipse"_a = 1.538,
+           "A loop for one view (traced here, once). `frame_budget_ms` (default: one refresh at `refresh_hz`) is what each "
+           "frame() may take; `predict` places the fovea at a saccade's predicted landing while it flies; `display` the "
+           "screen the image fills (default: the papers' 47.5×30 cm, 1680×1050 at 60 cm); `tolerance` the periphery's τ(E) "
+           "scale (as render --tolerance).")
+      .def("push", &PyLoop::push, "t"_a, "gaze"_a,
+           "A tracker sample: its time in seconds (any clock, increasing) and the gaze (x, y) in render pixels, or None "
+           "when the tracker lost the eye. Push every sample a fast tracker delivers between frames: the saccade predictor "
+           "needs them.")
+      .def("frame", &PyLoop::frame, "gaze"_a = nb::none(), "t"_a = nb::none(),
+           "The next frame, within the budget: `gaze` (x, y) and `t` (seconds), when given, are pushed first. The GIL is "
+           "released while it renders on the worker threads.")
+      .def_prop_ro(
+          "scale", [](const PyLoop& l) { return l.loop->scale(); },
+          "Render size / the size asked for (1 unless the base shading did not fit).")
+      .def_prop_ro(
+          "note", [](const PyLoop& l) { return l.loop->note(); }, "Why the resolution was lowered ('' if it was not).")
+      .def_prop_ro(
+          "size",
+          [](const PyLoop& l) {
+            return std::array<int, 2>{l.loop->params().width, l.loop->params().height};
+          },
+          "The render size in use.")
+      .def_prop_rw(
+          "budget_ms", [](const PyLoop& l) { return l.loop->settings().budget_ms; },
+          [](PyLoop& l, double ms) {
+            const std::lock_guard<std::mutex> lock(l.mutex);
+            l.loop->set_budget_ms(ms);
+          },
+          "Each frame's budget, ms; settable, so that an experiment leaves the loop what its own per-frame work (drawing, "
+          "flipping) does not take of the refresh.")
+      .def_prop_ro(
+          "device", [](const PyLoop& l) { return l.renderer->describe(); }, "Where the loop renders.");
 
   nb::class_<PyVisionStep>(m, "VisionStep", "One step of the vision simulation (arrays are the step's own copies).")
       .def_ro("perceived", &PyVisionStep::perceived, "What the eye perceives: float32 H×W×3, linear RGB.")

@@ -13,6 +13,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 
 namespace foveal {
 
@@ -81,15 +83,15 @@ double quantile(std::vector<double> v, double q) {
 // Angle between two render positions as seen on the display, degrees.
 double render_angle_deg(const RenderParams& p, glm::dvec2 a, glm::dvec2 b) {
   auto dir = [&](glm::dvec2 px) {
-    return glm::normalize(glm::dvec3((px.x / p.width - 0.5) * p.display.width_cm, (px.y / p.height - 0.5) * p.display.height_cm,
-                                     p.display.distance_cm));
+    return glm::normalize(
+        glm::dvec3((px.x / p.width - 0.5) * p.display.width_cm, (px.y / p.height - 0.5) * p.display.height_cm, p.display.distance_cm));
   };
   return angle_between_deg(dir(a), dir(b));
 }
 
 // What the three loops share: the segment's samples, the saccades, the references and masks.
 struct Segment {
-  std::vector<double> t;                  // seconds from the recording's first sample
+  std::vector<double> t;                      // seconds from the recording's first sample
   std::vector<std::optional<glm::dvec2>> px;  // render pixels
   double begin = 0, end = 0, latency_s = 0;
   std::vector<LatencySaccade> saccades;
@@ -150,12 +152,12 @@ LatencyLoop run_whole_frame(const LatencyRun& run, const Segment& s, const Laten
     const Timer timer;
     const Frame f = run.renderer->render(run.camera, params, options);
     const double ms = timer.ms();
-    const double cost =
-        p.clock == LoopClock::model ? model_fixed + static_cast<double>(f.stats.ao_rays) / model_rate : ms;
+    const double cost = p.clock == LoopClock::model ? model_fixed + static_cast<double>(f.stats.ao_rays) / model_rate : ms;
     frame_ms.push_back(cost);
     loop.frames_late += cost > budget_ms ? 1 : 0;
     LatencyFrame lf;
     lf.start_s = t;
+    lf.cost_ms = cost;
     lf.shown_s = shown_at(t, cost, period, loop.refreshes_missed);
     lf.gaze_px = f.gaze_px;
     judge_frame(s, f.color, lf.shown_s, loop, lf);
@@ -166,8 +168,8 @@ LatencyLoop run_whole_frame(const LatencyRun& run, const Segment& s, const Laten
   return loop;
 }
 
-LatencyLoop run_deadline(const LatencyRun& run, const Segment& s, const LatencyParams& p, double budget_ms, bool predict,
-                         double model_rate, double model_fixed) {
+LatencyLoop run_deadline(const LatencyRun& run, const Segment& s, const LatencyParams& p, double budget_ms, bool predict, double model_rate,
+                         double model_fixed) {
   LatencyLoop loop;
   loop.name = predict ? "deadline+prediction" : "deadline";
   loop.budget_ms = budget_ms;
@@ -194,7 +196,11 @@ LatencyLoop run_deadline(const LatencyRun& run, const Segment& s, const LatencyP
     loop.frames_late += f.late ? 1 : 0;
     LatencyFrame lf;
     lf.start_s = t;
+    lf.cost_ms = f.cost_ms;
     lf.shown_s = shown_at(t, f.cost_ms, period, loop.refreshes_missed);
+    if (std::getenv("LOOP_DEBUG") && f.late)
+      std::fprintf(stderr, "late %d: %.2f ms: maps %.2f plan %.2f trace %.2f compose %.2f rays %llu predicted %d\n", f.index, f.ms,
+                   f.maps_ms, f.plan_ms, f.trace_ms, f.compose_ms, static_cast<unsigned long long>(f.rays), f.predicted ? 1 : 0);
     lf.gaze_px = f.gaze_px / rt.scale();
     lf.predicted = f.predicted;
     if (f.predicted) predictions.emplace_back(t, lf.gaze_px);
@@ -280,7 +286,11 @@ nlohmann::json loop_json(const LatencyLoop& l) {
   }
   j["timeline"] = nlohmann::json::array();
   for (const LatencyFrame& f : l.timeline)
-    j["timeline"].push_back({{"start_s", f.start_s}, {"shown_s", f.shown_s}, {"fovea_px", {f.gaze_px.x, f.gaze_px.y}}, {"predicted", f.predicted},
+    j["timeline"].push_back({{"start_s", f.start_s},
+                             {"shown_s", f.shown_s},
+                             {"cost_ms", f.cost_ms},
+                             {"fovea_px", {f.gaze_px.x, f.gaze_px.y}},
+                             {"predicted", f.predicted},
                              {"fovea_error", std::isfinite(f.fovea_error) ? nlohmann::json(f.fovea_error) : nlohmann::json(nullptr)}});
   const auto median = l.median_converged_ms();
   j["median_landing_to_converged_ms"] = median ? nlohmann::json(*median) : nlohmann::json(nullptr);
@@ -332,7 +342,8 @@ LatencyReport run_latency_bench(const LatencyRun& run, const std::vector<Recordi
   FrameOptions apart;
   apart.outputs = {false, false, true};
   apart.use_history = false;
-  say(fmt::format("references: two full frames of {} rays per pixel at {}x{}", p.render.foveation.max_rays, p.render.width, p.render.height));
+  say(fmt::format("references: two full frames of {} rays per pixel at {}x{}", p.render.foveation.max_rays, p.render.width,
+                  p.render.height));
   full.seed = p.render.seed + 1000;
   const Frame reference = run.renderer->render(run.camera, full, apart);
   full.seed = p.render.seed + 2000;
@@ -342,7 +353,8 @@ LatencyReport run_latency_bench(const LatencyRun& run, const std::vector<Recordi
   const Bounds bounds = run.scene->bounds();
   FoveationMaps all = foveation_maps(full, glm::dvec2(p.render.width * 0.5, p.render.height * 0.5));
   std::vector<Ray> sample;
-  collect_ao_rays(g, all, resolve_ao_distance(*run.scene, bounds, p.render.ao_distance), surface_epsilon(bounds), p.render.seed, 13, sample);
+  collect_ao_rays(g, all, resolve_ao_distance(*run.scene, bounds, p.render.ao_distance), surface_epsilon(bounds), p.render.seed, 13,
+                  sample);
   const double raw = run.raw_rays_per_ms ? run.raw_rays_per_ms(sample) : 0.0;
   say(fmt::format("raw tracing rate: {:.0f} rays/ms on {} AO rays of the view", raw, sample.size()));
   // The model clock: the deadline loop's own rate and fixed cost, measured on this view first
@@ -398,9 +410,9 @@ LatencyReport run_latency_bench(const LatencyRun& run, const std::vector<Recordi
     report.recordings.push_back(std::move(out));
   }
   // Markdown and JSON
-  std::string md = fmt::format("Scene {}, {}x{}, n_max {}, device {}, {:.0f} Hz display (budget {:.1f} ms), {} clock.\n\n", run.scene_name,
-                               p.render.width, p.render.height, p.render.foveation.max_rays, run.device, p.refresh_hz, budget,
-                               to_string(p.clock));
+  std::string md =
+      fmt::format("Scene {}, {}x{}, n_max {}, device {}, {:.0f} Hz display (budget {:.1f} ms), {} clock.\n\n", run.scene_name,
+                  p.render.width, p.render.height, p.render.foveation.max_rays, run.device, p.refresh_hz, budget, to_string(p.clock));
   nlohmann::json j;
   j["scene"] = run.scene_name;
   j["device"] = run.device;
@@ -416,10 +428,11 @@ LatencyReport run_latency_bench(const LatencyRun& run, const std::vector<Recordi
       durations.push_back(sac.duration_ms);
     }
     const double bound = quantile(bounds_ms, 0.5);
-    md += fmt::format("**{}** ({:.0f} Hz, tracker latency {:.1f} ms; {} saccades ≥ {}°, median duration {:.0f} ms; raw rate {:.0f} rays/ms, "
-                      "median ray bound {:.0f} ms)\n\n",
-                      r.recording, r.sampling_hz, r.tracker_latency_ms, bounds_ms.size(), p.min_amplitude_deg, quantile(durations, 0.5),
-                      r.raw_rays_per_ms, bound);
+    md += fmt::format(
+        "**{}** ({:.0f} Hz, tracker latency {:.1f} ms; {} saccades ≥ {}°, median duration {:.0f} ms; raw rate {:.0f} rays/ms, "
+        "median ray bound {:.0f} ms)\n\n",
+        r.recording, r.sampling_hz, r.tracker_latency_ms, bounds_ms.size(), p.min_amplitude_deg, quantile(durations, 0.5),
+        r.raw_rays_per_ms, bound);
     md += "| loop | frames | late | refreshes missed | frame ms p50 | p99 | landing → converged fovea, median ms | × ray bound |\n";
     md += "|---|---:|---:|---:|---:|---:|---:|---:|\n";
     nlohmann::json jr;
@@ -485,9 +498,11 @@ void write_latency_timeline(const LatencyRecording& r, size_t saccade, const std
   plot.strokes.push_back({{{x_of(sac.landing_s), top}, {x_of(sac.landing_s), bottom}}, {0.2f, 0.6f, 0.2f}, 1, true});
   plot.strokes.push_back({{{left, y_bottom(1)}, {right, y_bottom(1)}}, {0.2f, 0.6f, 0.2f}, 1, true});
   plot.labels.push_back({{x_of(sac.landing_s) + 4, bottom - 4}, "landing"});
-  plot.labels.push_back({{left, top - 14}, fmt::format("{} - a {:.1f} deg saccade: gaze x (black, render px) and where each loop put the fovea",
-                                                      r.recording, sac.amplitude_deg)});
-  plot.labels.push_back({{left, mid + 14}, "the landed fovea's error per shown frame, x the reference's noise (log 0.5-64; dashed green: 1)"});
+  plot.labels.push_back({{left, top - 14},
+                         fmt::format("{} - a {:.1f} deg saccade: gaze x (black, render px) and where each loop put the fovea", r.recording,
+                                     sac.amplitude_deg)});
+  plot.labels.push_back(
+      {{left, mid + 14}, "the landed fovea's error per shown frame, x the reference's noise (log 0.5-64; dashed green: 1)"});
   plot.labels.push_back({{left, bottom + 22}, fmt::format("time, {:.2f} - {:.2f} s", t0, t1)});
   save_plot(plot, path);
 }

@@ -38,8 +38,8 @@ struct LatencyParams {
   std::optional<double> budget_ms;           // unset: one refresh
   std::optional<double> tracker_latency_ms;  // unset: the recording's sample period + 2 ms
   LoopClock clock = LoopClock::wall;
-  double start_s = 0, duration_s = 3;        // the segment replayed (seconds from the recording's first sample)
-  double min_amplitude_deg = 2;              // smaller saccades are not judged
+  double start_s = 0, duration_s = 3;  // the segment replayed (seconds from the recording's first sample)
+  double min_amplitude_deg = 2;        // smaller saccades are not judged
   std::vector<std::string> loops = {"whole-frame", "deadline", "deadline+prediction"};
 };
 // Check the parameters; throws Error naming the option.
@@ -48,15 +48,16 @@ void validate(const LatencyParams& params);
 struct LatencySaccade {
   double amplitude_deg = 0;
   double duration_ms = 0;
-  double landing_s = 0;                    // seconds from the recording's first sample
-  glm::dvec2 landing_px{0};                // render pixels
-  std::optional<double> converged_ms;      // landing → a shown frame with the fovea within noise (unset: not in the segment)
-  double ray_bound_ms = 0;                 // the fovea's pixels × n_max / the raw rate
+  double landing_s = 0;                       // seconds from the recording's first sample
+  glm::dvec2 landing_px{0};                   // render pixels
+  std::optional<double> converged_ms;         // landing → a shown frame with the fovea within noise (unset: not in the segment)
+  double ray_bound_ms = 0;                    // the fovea's pixels × n_max / the raw rate
   std::optional<double> predicted_error_deg;  // deadline+prediction: the last prediction shown before the landing, from it
 };
 
 struct LatencyFrame {  // one shown frame, for the timeline picture
   double start_s = 0, shown_s = 0;
+  double cost_ms = 0;     // what the frame cost on the clock
   glm::dvec2 gaze_px{0};  // where the fovea was placed
   bool predicted = false;
   double fovea_error = NAN;  // RMSE in the fovea of the saccade being followed, over the reference noise (NaN: none)
@@ -76,7 +77,7 @@ struct LatencyLoop {
 struct LatencyRecording {
   std::string recording;
   double sampling_hz = 0, tracker_latency_ms = 0;
-  double raw_rays_per_ms = 0;   // the raw tracing rate of the run (the ray bound's denominator)
+  double raw_rays_per_ms = 0;                        // the raw tracing rate of the run (the ray bound's denominator)
   double model_rays_per_ms = 0, model_fixed_ms = 0;  // the model clock's calibration (0 with the wall clock)
   std::vector<LatencyLoop> loops;
   std::vector<double> gaze_t;  // the segment's samples (timeline picture): time, render pixels

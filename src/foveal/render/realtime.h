@@ -51,7 +51,7 @@ struct LoopSettings {
   LoopClock clock = LoopClock::wall;
   double model_rays_per_ms = 0;  // model clock: AO rays per millisecond
   double model_fixed_ms = 0;     // model clock: a frame's cost besides its AO rays
-  double margin_ms = 1.0;        // wall clock: kept free at the end of each frame
+  double margin_ms = 2.0;        // wall clock: kept free at the end of each frame (the machine's pauses)
   double min_scale = 0.25;       // the smallest resolution scale the loop may choose
   double slowdown = 1;           // tests only: the tracer this many times slower
 };
@@ -89,6 +89,9 @@ class RealtimeLoop {
   LoopFrame frame(const Camera& camera);
   // Forget the accumulated AO (the next frame starts afresh).
   void reset();
+  // A new frame budget (an application that measures its own per-frame work leaves the loop the
+  // rest of the refresh); throws Error naming frame_budget_ms.
+  void set_budget_ms(double budget_ms);
 
   const RenderParams& params() const { return params_; }  // at the render size in use
   const LoopSettings& settings() const { return settings_; }

@@ -1,0 +1,86 @@
+"""foveal.Loop: frames within the budget, the fovea refined and converged, the saccade predictor fed
+sample by sample, the GIL released while rendering, and clear errors."""
+import threading
+import time
+
+import numpy as np
+import pytest
+
+import foveal
+
+
+@pytest.fixture(scope="module")
+def box():
+    return foveal.Scene("builtin:box")
+
+
+def test_a_still_gaze_converges_the_fovea_within_budget(box):
+    loop = foveal.Loop(box, size=(320, 200), max_rays=400, refresh_hz=60, device="cpu", predict=False)
+    assert loop.size == [320, 200] and loop.scale == 1.0 and loop.note == ""
+    assert loop.budget_ms == pytest.approx(1000 / 60)
+    frames = [loop.frame(gaze=(160, 100), t=k / 60) for k in range(60)]
+    first, last = frames[0], frames[-1]
+    assert first.image.shape == (200, 320, 3) and first.image.dtype == np.float32
+    assert first.fovea == "refining" and first.fovea_converged < 1
+    assert last.fovea == "converged" and last.fovea_converged == 1.0
+    assert all(f.fovea in ("refining", "converged") for f in frames)
+    assert tuple(last.gaze) == pytest.approx((160, 100)) and not last.predicted
+    # The loop renders within its budget (the machine may be busy: most frames, not every one)
+    assert sum(f.ms <= f.budget_ms + 1 for f in frames) >= 0.8 * len(frames)
+    # The image changes as rays arrive
+    assert not np.array_equal(first.image, last.image)
+
+
+def test_a_saccade_pushed_sample_by_sample_is_predicted(box):
+    loop = foveal.Loop(box, size=(200, 125), max_rays=32, device="cpu", predict=True)
+    # 1000 Hz samples: a fixation, a saccade across the screen (a smooth bell of velocity), a fixation
+    start, end, onset, duration = np.array([20.0, 60.0]), np.array([180.0, 70.0]), 0.2, 0.065
+    predicted = []
+    for k in range(600):
+        t = k / 1000
+        tau = np.clip((t - onset) / duration, 0, 1)
+        loop.push(t, tuple(start + (end - start) * (tau - np.sin(2 * np.pi * tau) / (2 * np.pi))))
+        if k % 8 == 0:
+            f = loop.frame()
+            if f.predicted:
+                predicted.append((t, f.gaze))
+    assert predicted, "no frame placed the fovea at a predicted landing"
+    assert all(onset <= t <= onset + duration + 0.01 for t, _ in predicted)
+    assert predicted[-1][1][0] > 120  # towards the landing, ahead of the eye
+    f = loop.frame()
+    assert not f.predicted and tuple(f.gaze) == pytest.approx(tuple(end))  # landed: the measured gaze again
+
+
+def test_frames_release_the_gil(box):
+    loop = foveal.Loop(box, size=(320, 200), max_rays=400, device="cpu", frame_budget_ms=40)
+    ticks = []
+    stop = threading.Event()
+
+    def tick():
+        while not stop.is_set():
+            ticks.append(time.perf_counter())
+            time.sleep(0.001)
+
+    thread = threading.Thread(target=tick)
+    thread.start()
+    for k in range(5):
+        loop.frame(gaze=(100 + 20 * k, 100), t=k)
+    stop.set()
+    thread.join()
+    assert len(ticks) > 50  # ~200 ms of frames: the other thread ran meanwhile
+
+
+def test_bad_arguments_are_clear_errors(box):
+    with pytest.raises(ValueError, match="refresh_hz"):
+        foveal.Loop(box, refresh_hz=0)
+    with pytest.raises(ValueError, match="frame_budget_ms"):
+        foveal.Loop(box, frame_budget_ms=-1)
+    with pytest.raises(ValueError, match="clock"):
+        foveal.Loop(box, clock="model")
+    with pytest.raises(ValueError, match="size"):
+        foveal.Loop(box, size=(0, 10))
+    loop = foveal.Loop(box, size=(64, 40), max_rays=8, device="cpu")
+    with pytest.raises(ValueError, match="t: must be a finite"):
+        loop.push(float("nan"), (1, 2))
+    loop.push(1.0, None)  # a lost sample is fine
+    assert loop.frame().image.shape == (40, 64, 3)
