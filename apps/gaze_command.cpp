@@ -3,6 +3,7 @@
 #include "commands.h"
 #include "foveal/gaze/detect.h"
 #include "foveal/gaze/events.h"
+#include "foveal/gaze/landing.h"
 #include "foveal/gaze/summary.h"
 #include "foveal/render/outputs.h"
 #include "foveal/io/scanpath.h"
@@ -132,7 +133,7 @@ namespace {
 // The command's options as typed.
 struct GazeCommandOptions {
   std::string recording, json, samples, scanpath = "scanpath.png", display = "47.5,30,60", events, samples_out, events_out, evaluate,
-                                        coder2;
+                                        coder2, landings_out;
   GazeOptions gaze;
   double filter_window_ms = 6, detection_window_ms = 20, ek_lambda = 6, blink_flank_ms = 100, max_blink_ms = 2000;
   bool no_scanpath = false, quiet = false;
@@ -145,7 +146,16 @@ struct EventsRun {
   std::string detector;  // the method's name (auto resolved), or file:PATH
   double detect_ms = 0;
   std::optional<Evaluation> evaluation, ceiling;
+  std::vector<LandingReport> landings;  // each saccade's landing as the live predictor saw it
 };
+
+// Median and 90th percentile of the finite values.
+std::pair<double, double> median_p90(std::vector<double> v) {
+  v.erase(std::remove_if(v.begin(), v.end(), [](double x) { return !std::isfinite(x); }), v.end());
+  if (v.empty()) return {NAN, NAN};
+  std::sort(v.begin(), v.end());
+  return {v[(v.size() - 1) / 2], v[static_cast<size_t>(0.9 * static_cast<double>(v.size() - 1))]};
+}
 
 EventsRun detect_and_score(const GazeCommandOptions& o, const Recording& recording, const Display& display, const FixationParams& params) {
   EventsRun run;
@@ -175,6 +185,7 @@ EventsRun detect_and_score(const GazeCommandOptions& o, const Recording& recordi
     run.detection = detect_events(recording, geometry, parse_event_method(o.events), ep, params);
   run.detect_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - started).count();
   run.detector = run.detection->method ? to_string(*run.detection->method) : o.events;
+  run.landings = evaluate_landings(recording, geometry, *run.detection);
   if (!o.evaluate.empty()) {
     std::vector<double> t(recording.samples.size());
     for (size_t i = 0; i < t.size(); ++i) t[i] = recording.samples[i].t_s;
@@ -197,6 +208,41 @@ void write_event_files(const GazeCommandOptions& o, const Recording& recording, 
     write_text_file(o.samples_out, text);
   }
   if (!o.events_out.empty()) write_text_file(o.events_out, events_tsv(*run.detection, recording));
+  if (!o.landings_out.empty()) write_text_file(o.landings_out, landings_tsv(run.landings));
+}
+
+// The "landings" entry of --json: per saccade and summarised.
+nlohmann::json landings_json(const std::vector<LandingReport>& reports) {
+  auto number = [](double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); };
+  nlohmann::json list = nlohmann::json::array();
+  std::vector<double> first, third, gained;
+  for (const LandingReport& r : reports) {
+    list.push_back({{"onset_s", r.onset_s},
+                    {"landing_s", r.landing_s},
+                    {"amplitude_deg", number(r.amplitude_deg)},
+                    {"end_deg", {number(r.landing_deg.x), number(r.landing_deg.y)}},
+                    {"predicted", r.predicted},
+                    {"predicted_deg", {number(r.first_deg.x), number(r.first_deg.y)}},
+                    {"error_deg", number(r.first_error_deg)},
+                    {"two_thirds_error_deg", number(r.two_thirds_error_deg)},
+                    {"gained_ms", number(r.gained_ms)}});
+    first.push_back(r.first_error_deg);
+    third.push_back(r.two_thirds_error_deg);
+    gained.push_back(r.gained_ms);
+  }
+  const auto [fm, f90] = median_p90(first);
+  const auto [tm, t90] = median_p90(third);
+  const auto [gm, g90] = median_p90(gained);
+  (void)g90;
+  return {{"model", "mirrored velocity profile (gaze/landing.h)"},
+          {"saccades", reports.size()},
+          {"predicted", std::count_if(reports.begin(), reports.end(), [](const LandingReport& r) { return r.predicted; })},
+          {"error_deg_median", number(fm)},
+          {"error_deg_p90", number(f90)},
+          {"two_thirds_error_deg_median", number(tm)},
+          {"two_thirds_error_deg_p90", number(t90)},
+          {"gained_ms_median", number(gm)},
+          {"list", list}};
 }
 
 // The "events" entry of --json: detector, thresholds, counts per class, and the scores.
@@ -232,6 +278,7 @@ nlohmann::json events_json(const GazeCommandOptions& o, const EventsRun& run) {
     ev["matching"] = "Hooge et al. 2018: earliest overlapping event of the same class";
   }
   if (run.ceiling) ev["ceiling"] = scores(*run.ceiling), ev["ceiling"]["labels"] = o.coder2;
+  ev["landings"] = landings_json(run.landings);
   return ev;
 }
 
@@ -250,7 +297,7 @@ void print_gaze(const GazeCommandOptions& o, const Recording& recording, const G
   if (method == FixationMethod::mean || method == FixationMethod::ivvt)
     fmt::print("  ({} is a causal filter for the fovea: the scan path shows I-VT's fixations; --events nhp labels pursuit)\n",
                to_string(method));
-  for (const std::string* written : {&o.json, &o.samples, &o.samples_out, &o.events_out})
+  for (const std::string* written : {&o.json, &o.samples, &o.samples_out, &o.events_out, &o.landings_out})
     if (!written->empty()) fmt::print("  wrote     {}\n", *written);
   if (run.detection) {
     const EventDetection& d = *run.detection;
@@ -273,6 +320,23 @@ void print_gaze(const GazeCommandOptions& o, const Recording& recording, const G
                  to_string(c.label), c.kappa, c.f1, c.hits, c.misses, c.false_alarms, c.rto_ms, c.rtd_ms);
     }
   };
+  if (run.detection) {
+    std::vector<double> first, third, gained;
+    size_t predicted = 0;
+    for (const LandingReport& r : run.landings) {
+      predicted += r.predicted ? 1 : 0;
+      first.push_back(r.first_error_deg);
+      third.push_back(r.two_thirds_error_deg);
+      gained.push_back(r.gained_ms);
+    }
+    const auto [fm, f90] = median_p90(first);
+    const auto [tm, t90] = median_p90(third);
+    const double gm = median_p90(gained).first;
+    if (!run.landings.empty())
+      fmt::print("  landings  {} of {} saccades predicted live: error at the first prediction median {:.2f} deg (p90 {:.2f}), two "
+                 "thirds in {:.2f} deg (p90 {:.2f}); within 1 deg for good {:.0f} ms before landing (median)\n",
+                 predicted, run.landings.size(), fm, f90, tm, t90, gm);
+  }
   if (run.evaluation) print_scores(*run.evaluation, fmt::format("scores    {} against {}", run.detector, o.evaluate));
   if (run.ceiling) print_scores(*run.ceiling, fmt::format("ceiling   {} against {}", o.coder2, o.evaluate));
   if (!o.no_scanpath) fmt::print("  wrote     {}\n", o.scanpath);
@@ -280,8 +344,8 @@ void print_gaze(const GazeCommandOptions& o, const Recording& recording, const G
 
 int run_gaze(const GazeCommandOptions& o) {
   // The options that go together, checked before the recording is read
-  if (o.events.empty() && (!o.samples_out.empty() || !o.evaluate.empty() || !o.events_out.empty()))
-    fail("--samples-out, --events-out and --evaluate need --events");
+  if (o.events.empty() && (!o.samples_out.empty() || !o.evaluate.empty() || !o.events_out.empty() || !o.landings_out.empty()))
+    fail("--samples-out, --events-out, --landings-out and --evaluate need --events");
   if (!o.coder2.empty() && o.evaluate.empty()) fail("--coder2 needs --evaluate (the first coder's labels)");
   Display display = parse_display(o.display, Display{});
   const bool display_has_resolution = parse_numbers("--display", o.display).size() == 5;
@@ -333,6 +397,9 @@ std::function<int()> add_gaze_command(CLI::App& app) {
                   "ivt or idt (fixation filters: other valid samples saccades, lost ones blinks), "
                   "or file:LABELS.csv (another tool's labels of these samples, listed and scored the same way)");
   cmd->add_option("--samples-out", o->samples_out, "--events: write t_s,x,y,label per sample (CSV)");
+  cmd->add_option("--landings-out", o->landings_out,
+                  "--events: write each saccade's landing as the live predictor saw it (TSV: the true and predicted landing, the "
+                  "error in degrees at the first prediction and two thirds in, the time gained; docs/realtime.md)");
   cmd->add_option("--events-out", o->events_out,
                   "--events: write the events as a BIDS-style events.tsv (onset, duration, trial_type, amplitude, peak velocity, "
                   "start and end positions in degrees)");

@@ -340,3 +340,40 @@ TEST(GazeCli, RecommendedDetectorAgainstTheIrfExpert) {
   EXPECT_DOUBLE_EQ(self["kappa"].get<double>(), 1.0);
   EXPECT_DOUBLE_EQ(self["classes"]["saccade"]["f1"].get<double>(), 1.0);
 }
+
+namespace foveal_test {
+
+// gaze --events reports each saccade's landing as the live predictor saw it: one row per detected
+// saccade, and for nine in ten of the large ones the prediction two thirds in is within half the
+// saccade's amplitude of where it landed.
+TEST(GazeCli, EventsReportEachSaccadesPredictedLanding) {
+  const std::string path = std::string(FOVEAL_DATA_DIR) + "/eye-movements/irf/lookAtPoint_EL_S2.csv";
+  if (!std::filesystem::exists(path)) GTEST_SKIP() << "skipped: " << path << " is absent";
+  const CliRun r = foveal("gaze " + path + " --display 53.3,30.1,56.5,1920,1080 --events nhp --no-scanpath --json land.json --landings-out land.tsv");
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_NE(r.out.find("landings "), std::string::npos) << r.out;
+  const auto j = nlohmann::json::parse(std::ifstream(scratch("land.json")))["events"];
+  const auto& landings = j["landings"];
+  EXPECT_EQ(landings["saccades"].get<int>(), j["counts"]["saccade"].get<int>());
+  EXPECT_GT(landings["predicted"].get<int>(), landings["saccades"].get<int>() / 2);
+  int rows = 0, large = 0, close = 0;
+  for (const auto& s : landings["list"]) {
+    ++rows;
+    if (s["predicted"].get<bool>() && s["amplitude_deg"].get<double>() >= 5) {
+      ++large;
+      close += s["two_thirds_error_deg"].get<double>() < 0.5 * s["amplitude_deg"].get<double>() ? 1 : 0;
+    }
+  }
+  EXPECT_GT(large, 10);
+  EXPECT_GE(close, 0.9 * large);
+  std::ifstream tsv(scratch("land.tsv"));
+  std::string line;
+  std::getline(tsv, line);
+  EXPECT_EQ(line.rfind("onset\tlanding\tamplitude_deg\tend_x_deg\tend_y_deg\tpredicted_x_deg", 0), 0u) << line;
+  int tsv_rows = 0;
+  while (std::getline(tsv, line)) ++tsv_rows;
+  EXPECT_EQ(tsv_rows, rows);
+  expect_one_line_error("gaze " + path + " --landings-out x.tsv", "--landings-out");
+}
+
+}  // namespace foveal_test

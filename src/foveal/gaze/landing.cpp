@@ -1,7 +1,11 @@
 // foveal/gaze/landing.cpp — causal saccade landing prediction (the mirrored velocity profile).
 #include "foveal/gaze/landing.h"
 
+#include "foveal/gaze/detect.h"
+#include "foveal/gaze/fixation.h"
 #include "foveal/util/error.h"
+
+#include <fmt/format.h>
 
 #include <algorithm>
 #include <cmath>
@@ -194,6 +198,55 @@ glm::dvec2 PredictedSaccade::prediction_at(double t_s) const {
   const auto it = std::upper_bound(prediction_s.begin(), prediction_s.end(), t_s);
   if (it == prediction_s.begin()) return glm::dvec2(NAN);
   return prediction_deg[static_cast<size_t>(it - prediction_s.begin()) - 1];
+}
+
+std::vector<LandingReport> evaluate_landings(const Recording& recording, const GazeGeometry& geometry, const EventDetection& detection,
+                                             const LandingParams& params) {
+  std::vector<LandingReport> out;
+  if (recording.samples.empty()) return out;
+  const double t0 = recording.samples.front().t_s;
+  std::vector<double> t;
+  std::vector<glm::dvec2> deg;
+  for (const GazeSample& s : recording.samples) {
+    t.push_back(s.t_s - t0);
+    const glm::dvec2 a = GazeGeometry::angles_deg(geometry.direction(s));
+    deg.push_back(s.valid ? glm::dvec2(a.x, -a.y) : glm::dvec2(NAN));  // y up, as the detection's positions
+  }
+  const std::vector<PredictedSaccade> flights = predict_landings(t, deg, params);
+  for (size_t k = 0; k < detection.events.size(); ++k) {
+    const DetectedEvent& e = detection.events[k];
+    if (e.label != EventLabel::saccade) continue;
+    LandingReport r;
+    r.event = k;
+    r.onset_s = t[e.first];
+    r.landing_s = t[e.last];
+    r.amplitude_deg = e.amplitude_deg;
+    r.landing_deg = e.end_deg;
+    for (const PredictedSaccade& f : flights) {
+      if (f.onset_s < r.onset_s - 0.020 || f.onset_s > r.landing_s) continue;
+      r.predicted = true;
+      r.first_deg = f.first_landing_deg;
+      r.first_error_deg = glm::length(f.first_landing_deg - r.landing_deg);
+      r.two_thirds_deg = f.prediction_at(r.onset_s + (r.landing_s - r.onset_s) * 2 / 3);
+      r.two_thirds_error_deg = glm::length(r.two_thirds_deg - r.landing_deg);
+      r.gained_ms = std::isnan(f.settled_s) ? NAN : 1000 * (r.landing_s - f.settled_s);
+      break;
+    }
+    out.push_back(r);
+  }
+  return out;
+}
+
+std::string landings_tsv(const std::vector<LandingReport>& reports) {
+  auto num = [](double v) { return std::isfinite(v) ? fmt::format("{:.4f}", v) : std::string("n/a"); };
+  std::string text =
+      "onset\tlanding\tamplitude_deg\tend_x_deg\tend_y_deg\tpredicted_x_deg\tpredicted_y_deg\terror_deg\ttwo_thirds_x_deg\t"
+      "two_thirds_y_deg\ttwo_thirds_error_deg\tgained_ms\n";
+  for (const LandingReport& r : reports)
+    text += fmt::format("{}\t{}\t{}\t{}\t{}\t{}\t{}\t{}\t{}\t{}\t{}\t{}\n", num(r.onset_s), num(r.landing_s), num(r.amplitude_deg),
+                        num(r.landing_deg.x), num(r.landing_deg.y), num(r.first_deg.x), num(r.first_deg.y), num(r.first_error_deg),
+                        num(r.two_thirds_deg.x), num(r.two_thirds_deg.y), num(r.two_thirds_error_deg), num(r.gained_ms));
+  return text;
 }
 
 std::vector<PredictedSaccade> predict_landings(const std::vector<double>& t_s, const std::vector<glm::dvec2>& deg,

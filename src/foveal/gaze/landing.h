@@ -23,6 +23,7 @@
 #include <glm/glm.hpp>
 
 #include <cmath>
+#include <string>
 #include <vector>
 
 namespace foveal {
@@ -117,6 +118,29 @@ class LandingPredictor {
   std::vector<double> prediction_t_;
   std::vector<PredictedSaccade> done_;
 };
+
+// Each detected saccade's landing as the predictor would have predicted it live (gaze --events):
+// the predictor runs causally over the recording, and the flight whose onset lies within a
+// detected saccade (from 20 ms before it) is its prediction.
+struct LandingReport {
+  size_t event = 0;                       // index into the detection's events
+  double onset_s = 0, landing_s = 0;      // the detected saccade's, seconds from the recording's first sample
+  double amplitude_deg = 0;               // the detected saccade's
+  glm::dvec2 landing_deg{NAN};            // where it ended (the detection's end position)
+  bool predicted = false;                 // the predictor saw the flight
+  glm::dvec2 first_deg{NAN};              // its first prediction past the peak
+  double first_error_deg = NAN;
+  glm::dvec2 two_thirds_deg{NAN};         // the prediction in force two thirds into the saccade
+  double two_thirds_error_deg = NAN;
+  double gained_ms = NAN;                 // landing − the time from which every prediction was within 1°
+};
+struct EventDetection;
+class GazeGeometry;
+struct Recording;
+std::vector<LandingReport> evaluate_landings(const Recording& recording, const GazeGeometry& geometry, const EventDetection& detection,
+                                             const LandingParams& params = {});
+// The reports as a tab-separated table (one row per detected saccade; n/a where not predicted).
+std::string landings_tsv(const std::vector<LandingReport>& reports);
 
 // Run the predictor over a whole sample stream (positions in degrees; NaN = lost) and return the
 // saccades it saw.
