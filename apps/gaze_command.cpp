@@ -333,9 +333,10 @@ void print_gaze(const GazeCommandOptions& o, const Recording& recording, const G
     const auto [tm, t90] = median_p90(third);
     const double gm = median_p90(gained).first;
     if (!run.landings.empty())
-      fmt::print("  landings  {} of {} saccades predicted live: error at the first prediction median {:.2f} deg (p90 {:.2f}), two "
-                 "thirds in {:.2f} deg (p90 {:.2f}); within 1 deg for good {:.0f} ms before landing (median)\n",
-                 predicted, run.landings.size(), fm, f90, tm, t90, gm);
+      fmt::print(
+          "  landings  {} of {} saccades predicted live: error at the first prediction median {:.2f} deg (p90 {:.2f}), two "
+          "thirds in {:.2f} deg (p90 {:.2f}); within 1 deg for good {:.0f} ms before landing (median)\n",
+          predicted, run.landings.size(), fm, f90, tm, t90, gm);
   }
   if (run.evaluation) print_scores(*run.evaluation, fmt::format("scores    {} against {}", run.detector, o.evaluate));
   if (run.ceiling) print_scores(*run.ceiling, fmt::format("ceiling   {} against {}", o.coder2, o.evaluate));

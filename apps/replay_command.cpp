@@ -33,7 +33,7 @@ struct ReplayOptions {
   std::string source, output, video, stats, stimulus;
   double fps = 30, start = 0, duration = 0, live_timeout = 5;
   int frames = 0;
-  bool no_reuse = false, mark = false, quiet = false;
+  bool no_reuse = false, mark = false, quiet = false, realtime = false, no_predict = false;
   std::string device = "auto";
 };
 
@@ -49,6 +49,9 @@ ReplaySettings replay_settings(const ReplayOptions& o) {
   settings.stimulus = o.stimulus;
   settings.live_timeout_s = o.live_timeout;
   settings.reuse = !o.no_reuse;
+  settings.realtime = o.realtime;
+  settings.predict = !o.no_predict;
+  if (o.no_predict && !o.realtime) fail("--no-predict needs --realtime");
   validate(settings);
   return settings;
 }
@@ -180,9 +183,12 @@ int run_replay(const ReplayOptions& o) {
     const ReplayProgress bar = [&](int done, int total) { progress(done, total); };
     if (live) {
       PupilSource source(o.source, read.screen_px, read.min_confidence);
-      summary = replay_live(source, gaze_display, *renderer, camera, params, settings, sink, bar);
+      summary = settings.realtime ? replay_live_realtime(source, gaze_display, *renderer, scene, camera, params, settings, sink, bar)
+                                  : replay_live(source, gaze_display, *renderer, camera, params, settings, sink, bar);
     } else {
-      summary = replay_recording(*recording, gaze_display, *renderer, camera, params, settings, sink, bar);
+      summary = settings.realtime
+                    ? replay_recording_realtime(*recording, gaze_display, *renderer, scene, camera, params, settings, sink, bar)
+                    : replay_recording(*recording, gaze_display, *renderer, camera, params, settings, sink, bar);
     }
   }
   writer.close();
@@ -218,6 +224,10 @@ std::function<int()> add_replay_command(CLI::App& app) {
   cmd->add_option("--live-timeout", o->live_timeout, "live: stop when the tracker sends nothing for this many seconds")
       ->capture_default_str();
   cmd->add_flag("--mark", o->mark, "draw a red cross at each frame's gaze point on the saved frames");
+  cmd->add_flag("--realtime", o->realtime,
+                "each frame is what the real-time loop shows on a display of --fps Hz: made within 1/fps of compute from the raw "
+                "samples up to its time, the fovea refined first (docs/realtime.md); frames.csv's ms is each frame's time");
+  cmd->add_flag("--no-predict", o->no_predict, "--realtime: keep the fovea at the measured gaze during saccades (no landing prediction)");
   cmd->add_flag("--no-reuse", o->no_reuse, "render every frame, even when the gaze has not moved since the previous one");
   cmd->add_option("--video", o->video, "also encode the frames into a video with ffmpeg (.mp4, .mkv, .webm, …)");
   cmd->add_option("--stats", o->stats, "write a summary of the sequence as JSON");

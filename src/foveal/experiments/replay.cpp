@@ -55,10 +55,44 @@ class FrameMaker {
   Frame frame_;
 };
 
-// Walks a recording's frames: for each, the samples up to t_k through the causal fixation filter,
-// then `frame(info)` with the frame's record (gaze, fixation, state) filled in.
-template <typename OnFrame>
-void walk_recording(const Recording& r, const Display& display, const RenderParams& params, const ReplaySettings& s, OnFrame&& frame) {
+// Makes frames with the real-time loop: the raw samples go in as they come, a frame per call.
+class LoopMaker {
+ public:
+  LoopMaker(FrameRenderer& renderer, const Scene& scene, const Camera& camera, const RenderParams& params, const ReplaySettings& s)
+      : camera_(camera), loop_(renderer, scene, params, loop_settings(s)) {
+    loop_.frame(camera_);  // the view's surfaces, before the first frame is due
+  }
+  void push(const GazeSample& g, std::optional<glm::dvec2> render_px) { loop_.push_gaze(g.t_s, g.valid ? render_px : std::nullopt); }
+  const Frame& make(ReplayFrame& info) {
+    LoopFrame f = loop_.frame(camera_);
+    info.render_gaze = f.gaze_px / loop_.scale();
+    info.ao_rays = f.rays;
+    info.ms = f.ms;
+    frame_.color = std::move(f.color);
+    frame_.gaze_px = info.render_gaze;
+    frame_.stats.ao_rays = f.rays;
+    frame_.stats.total_ms = f.ms;
+    return frame_;
+  }
+
+ private:
+  static LoopSettings loop_settings(const ReplaySettings& s) {
+    LoopSettings l;
+    l.budget_ms = 1000.0 / s.fps;
+    l.predict = s.predict;
+    return l;
+  }
+  const Camera& camera_;
+  RealtimeLoop loop_;
+  Frame frame_;
+};
+
+// Walks a recording's frames: for each, the samples up to t_k through the causal fixation filter
+// (and to `sample(g, render_px)`), then `frame(info)` with the frame's record (gaze, fixation,
+// state) filled in.
+template <typename OnFrame, typename OnSample>
+void walk_recording(const Recording& r, const Display& display, const RenderParams& params, const ReplaySettings& s, OnFrame&& frame,
+                    OnSample&& sample) {
   validate(s);
   if (r.samples.empty()) fail("{}: no samples to replay", r.source);
   const GazeGeometry geometry(display, r.screen_px);
@@ -73,6 +107,7 @@ void walk_recording(const Recording& r, const Display& display, const RenderPara
     const GazeSample* latest = nullptr;
     while (next < r.samples.size() && r.samples[next].t_s <= t) {
       tracker.push(r.samples[next]);
+      sample(r.samples[next], mapping.to_render(r.samples[next].px));
       latest = &r.samples[next++];
     }
     ReplayFrame info;
@@ -84,6 +119,11 @@ void walk_recording(const Recording& r, const Display& display, const RenderPara
     info.render_gaze = info.fixation.value_or(centre);
     frame(info, k, count);
   }
+}
+
+template <typename OnFrame>
+void walk_recording(const Recording& r, const Display& display, const RenderParams& params, const ReplaySettings& s, OnFrame&& frame) {
+  walk_recording(r, display, params, s, frame, [](const GazeSample&, glm::dvec2) {});
 }
 
 void account(ReplaySummary& summary, const ReplayFrame& f) {
@@ -119,39 +159,55 @@ ReplaySummary replay_recording(const Recording& r, const Display& display, Frame
   return summary;
 }
 
+ReplaySummary replay_recording_realtime(const Recording& r, const Display& display, FrameRenderer& renderer, const Scene& scene,
+                                        const Camera& camera, const RenderParams& params, const ReplaySettings& s, const ReplaySink& sink,
+                                        const ReplayProgress& progress) {
+  validate(s);
+  const Timer wall;
+  LoopMaker maker(renderer, scene, camera, params, s);
+  ReplaySummary summary;
+  walk_recording(
+      r, display, params, s,
+      [&](ReplayFrame& info, int k, int count) {
+        const Frame& frame = maker.make(info);
+        account(summary, info);
+        sink(info, frame);
+        if (progress) progress(k + 1, count);
+      },
+      [&](const GazeSample& g, glm::dvec2 px) { maker.push(g, px); });
+  summary.wall_ms = wall.ms();
+  return summary;
+}
+
 std::vector<ReplayFrame> replay_gazes(const Recording& r, const Display& display, const RenderParams& params, const ReplaySettings& s) {
   std::vector<ReplayFrame> frames;
   walk_recording(r, display, params, s, [&](ReplayFrame& info, int, int) { frames.push_back(info); });
   return frames;
 }
 
-ReplaySummary replay_live(GazeSource& source, const Display& display, FrameRenderer& renderer, const Camera& camera,
-                          const RenderParams& params, const ReplaySettings& s, const ReplaySink& sink, const ReplayProgress& progress) {
-  validate(s);
+namespace {
+
+// Follows a live source in real time: frame k due k/fps after the start (late frames are not
+// skipped, just late); `samples(polled)` takes each poll's samples, `make(info)` the frame.
+template <typename OnSamples, typename MakeFrame>
+ReplaySummary follow_live(GazeSource& source, const ScreenMapping& mapping, const ReplaySettings& s, const ReplaySink& sink,
+                          const ReplayProgress& progress, OnSamples&& on_samples, MakeFrame&& make) {
   const Timer wall;
-  const glm::ivec2 screen = source.screen_px();
-  const GazeGeometry geometry(display, screen);
-  const ScreenMapping mapping = make_screen_mapping(screen, {params.width, params.height}, s.stimulus);
-  FixationTracker tracker(s.method, s.fixation, geometry);
-  FrameMaker maker(renderer, camera, params, s.reuse);
   const int count = s.frames > 0 ? s.frames : static_cast<int>(std::ceil((s.duration_s > 0 ? s.duration_s : 10.0) * s.fps));
-  const glm::dvec2 centre(0.5 * params.width, 0.5 * params.height);
   ReplaySummary summary;
   std::vector<GazeSample> samples;
   for (int k = 0; k < count; ++k) {
-    // Pace: frame k is due k/fps after the start (late frames are not skipped, just late)
     const double due_ms = 1000.0 * k / s.fps, now_ms = wall.ms();
     if (due_ms > now_ms) std::this_thread::sleep_for(std::chrono::duration<double, std::milli>(due_ms - now_ms));
     samples.clear();
     source.poll(samples);
-    for (const GazeSample& g : samples) tracker.push(g);
+    on_samples(samples);
     ReplayFrame info;
     info.index = k;
     info.t_s = wall.ms() / 1000.0;
     info.state = source.state();
     if (!samples.empty() && samples.back().valid) info.gaze = mapping.to_render(samples.back().px);
-    if (const auto f = tracker.frame_gaze()) info.fixation = mapping.to_render(*f);
-    const Frame& frame = maker.make(info.fixation.value_or(centre), info);
+    const Frame& frame = make(info);
     account(summary, info);
     sink(info, frame);
     if (progress) progress(k + 1, count);
@@ -164,6 +220,43 @@ ReplaySummary replay_live(GazeSource& source, const Display& display, FrameRende
   }
   summary.wall_ms = wall.ms();
   return summary;
+}
+
+}  // namespace
+
+ReplaySummary replay_live(GazeSource& source, const Display& display, FrameRenderer& renderer, const Camera& camera,
+                          const RenderParams& params, const ReplaySettings& s, const ReplaySink& sink, const ReplayProgress& progress) {
+  validate(s);
+  const glm::ivec2 screen = source.screen_px();
+  const GazeGeometry geometry(display, screen);
+  const ScreenMapping mapping = make_screen_mapping(screen, {params.width, params.height}, s.stimulus);
+  FixationTracker tracker(s.method, s.fixation, geometry);
+  FrameMaker maker(renderer, camera, params, s.reuse);
+  const glm::dvec2 centre(0.5 * params.width, 0.5 * params.height);
+  return follow_live(
+      source, mapping, s, sink, progress,
+      [&](const std::vector<GazeSample>& samples) {
+        for (const GazeSample& g : samples) tracker.push(g);
+      },
+      [&](ReplayFrame& info) -> const Frame& {
+        if (const auto f = tracker.frame_gaze()) info.fixation = mapping.to_render(*f);
+        return maker.make(info.fixation.value_or(centre), info);
+      });
+}
+
+ReplaySummary replay_live_realtime(GazeSource& source, const Display& display, FrameRenderer& renderer, const Scene& scene,
+                                   const Camera& camera, const RenderParams& params, const ReplaySettings& s, const ReplaySink& sink,
+                                   const ReplayProgress& progress) {
+  validate(s);
+  (void)display;  // the loop's saccade predictor measures angles on the render's display
+  const ScreenMapping mapping = make_screen_mapping(source.screen_px(), {params.width, params.height}, s.stimulus);
+  LoopMaker maker(renderer, scene, camera, params, s);
+  return follow_live(
+      source, mapping, s, sink, progress,
+      [&](const std::vector<GazeSample>& samples) {
+        for (const GazeSample& g : samples) maker.push(g, mapping.to_render(g.px));
+      },
+      [&](ReplayFrame& info) -> const Frame& { return maker.make(info); });
 }
 
 }  // namespace foveal

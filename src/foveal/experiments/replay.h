@@ -10,6 +10,7 @@
 #include "foveal/gaze/fixation.h"
 #include "foveal/gaze/source.h"
 #include "foveal/render/frame_renderer.h"
+#include "foveal/render/realtime.h"
 #include "foveal/render/render.h"
 
 #include <functional>
@@ -28,6 +29,11 @@ struct ReplaySettings {
   std::string stimulus;       // where the render sits on the screen, "X,Y,W,H" (empty: the whole screen)
   double live_timeout_s = 5;  // live: stop when the tracker stays silent this long
   bool reuse = true;          // a frame whose gaze equals the previous one's reuses its (identical) image
+  // --realtime: each frame is what the real-time loop (render/realtime.h) shows at a display of
+  // `fps` Hz: made within 1/fps of compute from the raw samples up to its time (the loop's own
+  // saccade predictor, not the fixation filter, places the fovea)
+  bool realtime = false;
+  bool predict = true;  // realtime: place the fovea at a saccade's predicted landing while it flies
 };
 void validate(const ReplaySettings& settings);
 
@@ -63,6 +69,16 @@ int replay_frame_count(const Recording& recording, const ReplaySettings& setting
 ReplaySummary replay_recording(const Recording& recording, const Display& display, FrameRenderer& renderer, const Camera& camera,
                                const RenderParams& params, const ReplaySettings& settings, const ReplaySink& sink,
                                const ReplayProgress& progress = {});
+
+// The same with the real-time loop (settings.realtime): frame k is the loop's frame at t_k, made
+// within 1/fps; ReplayFrame::render_gaze is where the loop placed the fovea. The sink's Frame holds
+// the colour only.
+ReplaySummary replay_recording_realtime(const Recording& recording, const Display& display, FrameRenderer& renderer, const Scene& scene,
+                                        const Camera& camera, const RenderParams& params, const ReplaySettings& settings,
+                                        const ReplaySink& sink, const ReplayProgress& progress = {});
+ReplaySummary replay_live_realtime(GazeSource& source, const Display& display, FrameRenderer& renderer, const Scene& scene,
+                                   const Camera& camera, const RenderParams& params, const ReplaySettings& settings, const ReplaySink& sink,
+                                   const ReplayProgress& progress = {});
 
 // The gaze replay_recording() renders each frame with (the fixation filter's output, the image
 // centre before the first fixation), without rendering: the frames' records, render_gaze set.

@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include <cstring>
+#include <memory>
 #include <string>
 
 using namespace foveal;
@@ -62,4 +63,33 @@ TEST(Replay, FramesAreTheRenderersFramesForTheFilteredGaze) {
   EXPECT_EQ(frames, static_cast<int>(gazes.size()));
   EXPECT_EQ(summary.frames, frames);
   EXPECT_EQ(renderer->history_frames(), static_cast<uint32_t>(frames));
+}
+
+// replay --realtime: a frame per refresh from the real-time loop, the fovea at the raw gaze (no
+// fixation filter's delay), every frame at the render size with the loop's rays.
+TEST(Replay, RealtimeFramesFollowTheRawGazeThroughTheLoop) {
+  const Scene box = make_builtin_scene("box");
+  const Recording recording = two_fixations();
+  RenderParams p;
+  p.width = 168, p.height = 105, p.foveation.max_rays = 64;
+  ReplaySettings s;
+  s.fps = 60;
+  s.realtime = true;
+  const Display display;
+  const std::unique_ptr<FrameRenderer> renderer = make_frame_renderer(box, ComputeDevice::cpu);
+  std::vector<ReplayFrame> frames;
+  const ReplaySummary summary = replay_recording_realtime(recording, display, *renderer, box, box.cameras.front(), p, s,
+                                                          [&](const ReplayFrame& f, const Frame& frame) {
+                                                            EXPECT_EQ(frame.color.width, 168);
+                                                            frames.push_back(f);
+                                                          });
+  ASSERT_EQ(summary.frames, replay_frame_count(recording, s));
+  ASSERT_EQ(static_cast<int>(frames.size()), summary.frames);
+  EXPECT_GT(summary.ao_rays, 0u);
+  // Before the saccade the fovea is on the left fixation, a frame after it on the right one
+  // (500 and 1200 of 1680 screen px → 50 and 120 render px)
+  for (const ReplayFrame& f : frames) {
+    if (f.t_s < 0.55) EXPECT_NEAR(f.render_gaze.x, 50, 1.5) << f.t_s;
+    if (f.t_s > 0.62) EXPECT_NEAR(f.render_gaze.x, 120, 1.5) << f.t_s;
+  }
 }

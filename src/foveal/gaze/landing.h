@@ -123,16 +123,16 @@ class LandingPredictor {
 // the predictor runs causally over the recording, and the flight whose onset lies within a
 // detected saccade (from 20 ms before it) is its prediction.
 struct LandingReport {
-  size_t event = 0;                       // index into the detection's events
-  double onset_s = 0, landing_s = 0;      // the detected saccade's, seconds from the recording's first sample
-  double amplitude_deg = 0;               // the detected saccade's
-  glm::dvec2 landing_deg{NAN};            // where it ended (the detection's end position)
-  bool predicted = false;                 // the predictor saw the flight
-  glm::dvec2 first_deg{NAN};              // its first prediction past the peak
+  size_t event = 0;                   // index into the detection's events
+  double onset_s = 0, landing_s = 0;  // the detected saccade's, seconds from the recording's first sample
+  double amplitude_deg = 0;           // the detected saccade's
+  glm::dvec2 landing_deg{NAN};        // where it ended (the detection's end position)
+  bool predicted = false;             // the predictor saw the flight
+  glm::dvec2 first_deg{NAN};          // its first prediction past the peak
   double first_error_deg = NAN;
-  glm::dvec2 two_thirds_deg{NAN};         // the prediction in force two thirds into the saccade
+  glm::dvec2 two_thirds_deg{NAN};  // the prediction in force two thirds into the saccade
   double two_thirds_error_deg = NAN;
-  double gained_ms = NAN;                 // landing − the time from which every prediction was within 1°
+  double gained_ms = NAN;  // landing − the time from which every prediction was within 1°
 };
 struct EventDetection;
 class GazeGeometry;
