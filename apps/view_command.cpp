@@ -26,7 +26,8 @@ struct ViewCommandOptions {
   std::optional<double> pupil;  // not given: the eye's (a profile's pupil_mm, else 3.5)
   float diff_gain = 8;
   int frames = 0, blink_every = 0;
-  bool no_panel = false, no_progressive = false;
+  bool no_panel = false, no_progressive = false, realtime = false, no_predict = false;
+  double frame_budget_ms = 10;
   std::string device = "auto";
 };
 
@@ -44,6 +45,12 @@ int run_view(const ViewCommandOptions& o) {
   s.vision.blink_every = o.blink_every;
   s.diff_gain = o.diff_gain;
   s.progressive = !o.no_progressive;
+  s.realtime = o.realtime;
+  s.frame_budget_ms = o.frame_budget_ms;
+  s.predict = !o.no_predict;
+  if (o.realtime && s.mode != ViewMode::foveated) fail("--realtime: the real-time loop shows the foveated mode (--mode foveated)");
+  if (o.realtime && !(o.frame_budget_ms > 0 && o.frame_budget_ms <= 1000))
+    fail("--frame-budget-ms: must be in (0, 1000] ms, got {}", o.frame_budget_ms);
   resolve(s);
   WindowOptions w;
   w.overlays = parse_overlays(o.overlays);
@@ -148,6 +155,12 @@ std::function<int()> add_view_command(CLI::App& app) {
   cmd->add_option("--diff-gain", o->diff_gain, "side-by-side: the difference pane shows |foveated − reference| × this")
       ->capture_default_str();
   cmd->add_flag("--no-progressive", o->no_progressive, "no quarter-resolution preview before each full frame");
+  cmd->add_flag("--realtime", o->realtime,
+                "foveated mode: a frame every displayed frame from the real-time loop (the fovea refined first, at a saccade's "
+                "predicted landing while it flies; docs/realtime.md) instead of whole frames for the filtered fixation");
+  cmd->add_option("--frame-budget-ms", o->frame_budget_ms, "--realtime: what each frame may take of the window's refresh, ms")
+      ->capture_default_str();
+  cmd->add_flag("--no-predict", o->no_predict, "--realtime: keep the fovea at the measured gaze during saccades");
   cmd->add_option("--frames", o->frames,
                   "show this many frames, wait for the finished image, write --screenshot, and exit (scripts, tests)")
       ->check(CLI::Range(0, 1000000));

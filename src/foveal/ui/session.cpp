@@ -63,6 +63,7 @@ nlohmann::json settings_json(const ViewSettings& s) {
   const RenderParams& r = s.render;
   const EyeParams& e = s.vision.eye;
   return {{"mode", to_string(s.mode)},
+          {"realtime", s.realtime ? nlohmann::json{{"frame_budget_ms", s.frame_budget_ms}, {"predict", s.predict}} : nlohmann::json(false)},
           {"width", r.width},
           {"height", r.height},
           {"display",
@@ -379,6 +380,7 @@ void ViewSession::update(const Overlays& overlays) {
     gaze_.source->poll(samples);
     for (const GazeSample& s : samples) {
       if (tracker_) tracker_->push(s);
+      if (loop_ && realtime()) loop_->push_gaze(s.t_s, s.valid ? std::optional<glm::dvec2>(gaze_.mapping.to_render(s.px)) : std::nullopt);
       if (s.valid) {
         raw_gaze_ = gaze_.mapping.to_render(s.px);
         // A tracker's lost samples for a blink's duration (not the cursor leaving the image): the field forgets
@@ -400,6 +402,11 @@ void ViewSession::update(const Overlays& overlays) {
     scanpath_.push_back(*fixation_);
     if (scanpath_.size() > 40) scanpath_.erase(scanpath_.begin());
   }
+  if (realtime()) {
+    realtime_frame();
+    tbb::this_task_arena::isolate([&] { compose(overlays); });
+    return;
+  }
   request_if_changed();
   // The newest finished stage of the newest request
   if (std::optional<Result> r = worker_->take()) {
@@ -412,6 +419,48 @@ void ViewSession::update(const Overlays& overlays) {
   }
   // Isolated: this thread's parallel loops must not pick up the renderer's tiles while they wait
   tbb::this_task_arena::isolate([&] { compose(overlays); });
+}
+
+// --realtime: the loop's frame for this update, made within the budget on this thread.
+void ViewSession::realtime_frame() {
+  const std::string key = settings_json(settings_).dump();
+  if (!loop_ || key != loop_key_) {
+    loop_.reset();
+    loop_renderer_ = make_frame_renderer(scene_, settings_.cuda ? ComputeDevice::cuda : ComputeDevice::cpu, tracer_);
+    LoopSettings ls;
+    ls.budget_ms = settings_.frame_budget_ms;
+    ls.predict = settings_.predict;
+    loop_ = std::make_unique<RealtimeLoop>(*loop_renderer_, scene_, settings_.render, ls);
+    loop_key_ = key;
+    if (raw_gaze_) loop_->push_gaze(loop_t_ += 1e-3, raw_gaze_);
+  }
+  if (!gaze_.source && raw_gaze_) loop_->push_gaze(loop_t_ += 1e-3, raw_gaze_);  // a fixed gaze
+  LoopFrame f = loop_->frame(camera_);
+  Shown& sh = *shown_state_;
+  Result& r = sh.result;
+  r = Result{};
+  r.generation = generation_;
+  r.last = f.fovea_done;
+  r.stage = fmt::format("realtime: fovea {} ({:.0f} %){}{}", f.fovea_done ? "converged" : "refining", 100 * f.fovea_converged,
+                        f.predicted ? ", at the predicted landing" : "", loop_->scale() < 1 ? ", " + loop_->note() : "");
+  r.gaze = f.gaze_px / loop_->scale();
+  r.stats.ao_rays = f.rays;
+  r.stats.ao_ms = f.trace_ms;
+  r.stats.total_ms = f.ms;
+  const int w = settings_.render.width, h = settings_.render.height;
+  if (f.color.width == w && f.color.height == h) {
+    r.fov = std::move(f.color);
+  } else {  // the loop lowered its resolution: shown scaled up (nearest)
+    r.fov = Image(w, h, 3);
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x)
+        for (int c = 0; c < 3; ++c)
+          r.fov.at(x, y, c) =
+              f.color.at(std::min(f.color.width - 1, x * f.color.width / w), std::min(f.color.height - 1, y * f.color.height / h), c);
+  }
+  sh.any = true;
+  sh.converged = f.fovea_done;
+  base_dirty_ = true;
 }
 
 void ViewSession::compose(const Overlays& overlays) {

@@ -12,6 +12,8 @@
 #include "foveal/gaze/fixation.h"
 #include "foveal/gaze/source.h"
 #include "foveal/impair/profile.h"
+#include "foveal/render/frame_renderer.h"
+#include "foveal/render/realtime.h"
 #include "foveal/render/render.h"
 #include "foveal/ui/overlays.h"
 #include "foveal/vision/simulate.h"
@@ -40,6 +42,12 @@ struct ViewSettings {
   float diff_gain = 8;          // side by side: |foveated − reference| × this gain
   bool progressive = true;      // a cheap quarter-resolution frame before the full one
   bool cuda = false;            // frames and vision steps on the GPU (gpu::Renderer, gpu::VisionPasses)
+  // Foveated mode: the real-time loop (render/realtime.h) makes a frame at every update() within
+  // `frame_budget_ms`, the fovea refined first and placed at a saccade's predicted landing while
+  // it flies, from the raw samples (instead of stages of whole frames for the filtered fixation)
+  bool realtime = false;
+  double frame_budget_ms = 10;
+  bool predict = true;
 };
 // Resolve `eye` with `eye_overrides` into vision.eye and vision.impair (resolve_eye, the one rule for
 // an eye) and check everything; throws Error.
@@ -102,6 +110,8 @@ class ViewSession {
   struct Shown;
   void request_if_changed();
   void compose(const Overlays& overlays);
+  bool realtime() const { return settings_.realtime && settings_.mode == ViewMode::foveated; }
+  void realtime_frame();
 
   const Scene& scene_;
   const Tracer& tracer_;
@@ -120,6 +130,11 @@ class ViewSession {
   std::string region_key_, mark_key_;    // what the overlay layers show
   uint64_t generation_ = 0;
   std::unique_ptr<Worker> worker_;
+  // --realtime: the loop, its renderer, and what it was made for
+  std::unique_ptr<FrameRenderer> loop_renderer_;
+  std::unique_ptr<RealtimeLoop> loop_;
+  std::string loop_key_;
+  double loop_t_ = 0;  // fixed gaze: the time pushed with it
   std::unique_ptr<Shown> shown_state_;
   Rgba8 base_, layered_, shown_;  // the renders; with the region overlays; with the marks too
   bool base_dirty_ = true;

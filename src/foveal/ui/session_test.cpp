@@ -80,6 +80,33 @@ TEST(ViewSession, FinishedFrameIsTheRenderersFrame) {
   EXPECT_EQ(differing(session.image(), 0, to_rgba8(second.color)), 0u);
 }
 
+// --realtime: every update() is one frame of the real-time loop; the fovea converges at the fixed
+// gaze, and the finished fovea's pixels are the renderer's (the same rays of the same sequences).
+TEST(ViewSession, RealtimeUpdatesAreFramesOfTheLoop) {
+  const Camera camera = default_camera(box());
+  ViewSettings s = small_settings(ViewMode::foveated);
+  s.realtime = true;
+  s.frame_budget_ms = 5;
+  ViewSession session(box(), box_tracer(), camera, s, fixed({50, 40}));
+  ASSERT_TRUE(session.wait_until_converged(60, kNone));
+  EXPECT_NE(session.status().stage.find("realtime: fovea converged"), std::string::npos) << session.status().stage;
+  EXPECT_EQ(session.status().render_gaze, glm::dvec2(50, 40));
+  RenderParams p = s.render;
+  p.gaze_px = glm::dvec2(50, 40);
+  const Frame frame = render_frame(box_tracer(), box(), camera, p);
+  const Rgba8 expected = to_rgba8(frame.color);
+  ASSERT_EQ(session.image().width, expected.width);
+  size_t fovea = 0, same = 0;
+  for (size_t i = 0; i < frame.maps.quality.size(); ++i)
+    if (frame.maps.quality[i] >= 1.0f && frame.gbuffer.hit(i)) {
+      const int x = static_cast<int>(i % 160), y = static_cast<int>(i / 160);
+      ++fovea;
+      same += session.image().at(x, y)[0] == expected.at(x, y)[0] && session.image().at(x, y)[1] == expected.at(x, y)[1];
+    }
+  ASSERT_GT(fovea, 100u);
+  EXPECT_EQ(same, fovea);
+}
+
 TEST(ViewSession, SideBySideShowsFoveatedReferenceAndTheirDifference) {
   const Camera camera = default_camera(box());
   const ViewSettings s = small_settings(ViewMode::side_by_side);
