@@ -15,6 +15,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
 
 namespace foveal {
 
@@ -462,48 +463,50 @@ void write_latency_timeline(const LatencyRecording& r, size_t saccade, const std
   const double t0 = sac.landing_s - sac.duration_ms / 1000 - 0.1, t1 = sac.landing_s + 0.35;
   Plot plot;
   plot.width = 900;
-  plot.height = 560;
-  const float left = 70, right = 880, top = 40, mid = 300, bottom = 520;
+  plot.height = 600;
+  const float left = 70, right = 880, top = 50, mid = 300, bottom = 500;
   const auto x_of = [&](double t) { return left + static_cast<float>((t - t0) / (t1 - t0)) * (right - left); };
-  // Top: the gaze's horizontal position and each loop's fovea placement (render pixels)
+  // Top: the gaze's horizontal position and where each loop placed the fovea (render pixels)
   double lo = 1e30, hi = -1e30;
   for (size_t i = 0; i < r.gaze_t.size(); ++i)
     if (r.gaze_t[i] >= t0 && r.gaze_t[i] <= t1) lo = std::min(lo, r.gaze_px[i].x), hi = std::max(hi, r.gaze_px[i].x);
   if (!(hi > lo)) lo = 0, hi = 1;
-  const double pad = 0.1 * (hi - lo);
+  const double pad = 0.15 * (hi - lo);
   lo -= pad, hi += pad;
-  const auto y_top = [&](double x) { return mid - 20 - static_cast<float>((x - lo) / (hi - lo)) * (mid - 20 - top); };
-  Stroke gaze{{}, {0.1f, 0.1f, 0.1f}, 2};
+  const auto y_top = [&](double x) { return mid - 20 - static_cast<float>((std::clamp(x, lo, hi) - lo) / (hi - lo)) * (mid - 20 - top); };
+  Stroke gaze{{}, {0.1f, 0.1f, 0.1f}, 2.5f};
   for (size_t i = 0; i < r.gaze_t.size(); ++i)
     if (r.gaze_t[i] >= t0 && r.gaze_t[i] <= t1) gaze.points.emplace_back(x_of(r.gaze_t[i]), y_top(r.gaze_px[i].x));
   plot.strokes.push_back(gaze);
-  const glm::vec3 colours[3] = {{0.55f, 0.55f, 0.55f}, {0.15f, 0.45f, 0.85f}, {0.85f, 0.35f, 0.1f}};
-  // Bottom: the fovea's error per shown frame (× the reference's noise; 1 = within it), log scale 0.5–64
+  const glm::vec3 colours[3] = {{0.6f, 0.6f, 0.6f}, {0.15f, 0.45f, 0.85f}, {0.85f, 0.35f, 0.1f}};
+  // Bottom: the landed fovea's error per shown frame (× the reference's noise, log scale 0.5–64)
   const auto y_bottom = [&](double e) {
     const double l = std::clamp(std::log2(std::max(e, 0.5)), -1.0, 6.0);
-    return bottom - static_cast<float>((l + 1) / 7) * (bottom - mid - 20);
+    return bottom - static_cast<float>((l + 1) / 7) * (bottom - mid - 30);
   };
   for (size_t k = 0; k < r.loops.size() && k < 3; ++k) {
-    Stroke place{{}, colours[k], 1.5f, true}, err{{}, colours[k], 2};
+    Stroke place{{}, colours[k], 1.5f, false}, err{{}, colours[k], 2};
     for (const LatencyFrame& f : r.loops[k].timeline) {
       if (f.shown_s < t0 || f.start_s > t1) continue;
-      place.points.emplace_back(x_of(f.start_s), y_top(f.gaze_px.x));
-      place.points.emplace_back(x_of(f.shown_s), y_top(f.gaze_px.x));
-      if (std::isfinite(f.fovea_error)) err.points.emplace_back(x_of(f.shown_s), y_bottom(f.fovea_error));
+      const double a = std::max(f.start_s, t0), b = std::min(f.shown_s, t1);
+      place.points.emplace_back(x_of(a), y_top(f.gaze_px.x));
+      place.points.emplace_back(x_of(b), y_top(f.gaze_px.x));
+      if (std::isfinite(f.fovea_error) && f.shown_s <= t1) err.points.emplace_back(x_of(f.shown_s), y_bottom(f.fovea_error));
     }
     plot.strokes.push_back(place);
     plot.strokes.push_back(err);
-    plot.labels.push_back({{right - 330, top + 16.0f * static_cast<float>(k)}, r.loops[k].name + ": fovea placed (dashed), its error"});
+    const float ly = bottom + 48 + 18.0f * static_cast<float>(k);
+    plot.strokes.push_back({{{left, ly - 5}, {left + 30, ly - 5}}, colours[k], 3});
+    plot.labels.push_back({{left + 40, ly}, r.loops[k].name});
   }
   plot.strokes.push_back({{{x_of(sac.landing_s), top}, {x_of(sac.landing_s), bottom}}, {0.2f, 0.6f, 0.2f}, 1, true});
   plot.strokes.push_back({{{left, y_bottom(1)}, {right, y_bottom(1)}}, {0.2f, 0.6f, 0.2f}, 1, true});
-  plot.labels.push_back({{x_of(sac.landing_s) + 4, bottom - 4}, "landing"});
-  plot.labels.push_back({{left, top - 14},
-                         fmt::format("{} - a {:.1f} deg saccade: gaze x (black, render px) and where each loop put the fovea", r.recording,
-                                     sac.amplitude_deg)});
-  plot.labels.push_back(
-      {{left, mid + 14}, "the landed fovea's error per shown frame, x the reference's noise (log 0.5-64; dashed green: 1)"});
-  plot.labels.push_back({{left, bottom + 22}, fmt::format("time, {:.2f} - {:.2f} s", t0, t1)});
+  plot.labels.push_back({{x_of(sac.landing_s) + 4, top + 12}, "landing"});
+  const std::string name = std::filesystem::path(r.recording).filename().string();
+  plot.labels.push_back({{left, top - 28}, fmt::format("{}: a {:.1f} deg saccade. Gaze x (black, render px) and where each loop put the fovea", name,
+                                                      sac.amplitude_deg)});
+  plot.labels.push_back({{left, mid + 4}, "The landed fovea's error per shown frame, x the reference's noise (log, 0.5 to 64; green: 1)"});
+  plot.labels.push_back({{left, bottom + 22}, fmt::format("time {:.2f} to {:.2f} s; each loop's frames as shown", t0, t1)});
   save_plot(plot, path);
 }
 
