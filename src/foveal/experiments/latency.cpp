@@ -503,8 +503,9 @@ void write_latency_timeline(const LatencyRecording& r, size_t saccade, const std
   plot.strokes.push_back({{{left, y_bottom(1)}, {right, y_bottom(1)}}, {0.2f, 0.6f, 0.2f}, 1, true});
   plot.labels.push_back({{x_of(sac.landing_s) + 4, top + 12}, "landing"});
   const std::string name = std::filesystem::path(r.recording).filename().string();
-  plot.labels.push_back({{left, top - 28}, fmt::format("{}: a {:.1f} deg saccade. Gaze x (black, render px) and where each loop put the fovea", name,
-                                                      sac.amplitude_deg)});
+  plot.labels.push_back(
+      {{left, top - 28},
+       fmt::format("{}: a {:.1f} deg saccade. Gaze x (black, render px) and where each loop put the fovea", name, sac.amplitude_deg)});
   plot.labels.push_back({{left, mid + 4}, "The landed fovea's error per shown frame, x the reference's noise (log, 0.5 to 64; green: 1)"});
   plot.labels.push_back({{left, bottom + 22}, fmt::format("time {:.2f} to {:.2f} s; each loop's frames as shown", t0, t1)});
   save_plot(plot, path);
