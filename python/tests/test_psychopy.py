@@ -39,8 +39,9 @@ def test_gaze_contingent_follows_the_mouse_gaze_and_logs_latency(tmp_path):
         assert float(r["flip_time_s"]) > float(r["render_start_s"]) >= float(r["sample_time_s"])
         assert r["fovea"] in ("refining", "converged")
         assert 0 <= float(r["fovea_converged"]) <= 1
-    # The loop answers within its budget, so the image shown is at most two refreshes behind the gaze
-    assert summary["budget_ms"] == pytest.approx(1000 / 60)
+    # The loop answers within what the script's own work leaves of the 60 Hz refresh, so the image
+    # shown is at most two refreshes behind the gaze
+    assert summary["refresh_hz"] == 60 and 0 < summary["budget_ms"] <= 1000 / 60
     assert 0 < summary["gaze_to_flip_ms_median"] <= summary["gaze_to_flip_ms_p95"]
     assert summary["gaze_to_flip_refreshes_median"] <= 2.0
 
