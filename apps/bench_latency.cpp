@@ -23,7 +23,7 @@ struct BenchLatencyOptions {
   std::string json, markdown, timeline, loops = "whole-frame,deadline,deadline+prediction";
   std::vector<std::string> recordings;
   double start = 0, duration = 3, refresh_hz = 60, min_amplitude = 2;
-  std::optional<double> budget_ms, latency_ms;
+  std::optional<double> budget_ms, latency_ms, model_rays_per_ms, model_fixed_ms;
   int max_rays = 400, threads = 0, timeline_saccade = 0;
   double tolerance = AoReuseParams{}.tolerance;
   uint64_t seed = 1;
@@ -48,6 +48,8 @@ int run_bench_latency(const BenchLatencyOptions& o) {
   p.budget_ms = o.budget_ms;
   p.tracker_latency_ms = o.latency_ms;
   p.clock = parse_loop_clock(o.clock);
+  p.model_rays_per_ms = o.model_rays_per_ms;
+  p.model_fixed_ms = o.model_fixed_ms;
   p.start_s = o.start;
   p.duration_s = o.duration;
   p.min_amplitude_deg = o.min_amplitude;
@@ -132,6 +134,9 @@ std::function<int()> add_bench_latency_command(CLI::App& bench) {
   cmd->add_option("--clock", o->clock,
                   "wall: each frame costs its measured time; model: a cost model calibrated at the start (reproducible runs)")
       ->capture_default_str();
+  cmd->add_option("--model-rays-per-ms", o->model_rays_per_ms,
+                  "--clock model: the cost model's AO rays per ms (with --model-fixed-ms; default: measured on the view first)");
+  cmd->add_option("--model-fixed-ms", o->model_fixed_ms, "--clock model: each frame's cost besides its AO rays, ms");
   cmd->add_option("--loops", o->loops, "loops to run, comma-separated: whole-frame, deadline, deadline+prediction")->capture_default_str();
   cmd->add_option("--min-amplitude", o->min_amplitude, "saccades smaller than this are not judged, degrees")->capture_default_str();
   cmd->add_option("--threads", o->threads, "worker threads (0 = all cores)")->capture_default_str()->check(CLI::Range(0, 4096));

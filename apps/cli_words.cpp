@@ -38,6 +38,15 @@ constexpr std::array kOptions = std::to_array<ParameterName>({
     {"duration_s", "--duration"},
     {"live_timeout_s", "--live-timeout"},
     {"device", "--device"},
+    // the real-time loop and bench latency
+    {"frame_budget_ms", "--frame-budget-ms"},
+    {"refresh_hz", "--refresh-hz"},
+    {"tracker_latency_ms", "--latency-ms"},
+    {"min_amplitude_deg", "--min-amplitude"},
+    {"clock", "--clock"},
+    {"loops", "--loops"},
+    {"model_rays_per_ms", "--model-rays-per-ms"},
+    {"model_fixed_ms", "--model-fixed-ms"},
     {"device cuda", "--device cuda"},
     // the eye, the vision simulation, the viewer, compare
     {"eye", "--eye"},

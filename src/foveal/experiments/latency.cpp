@@ -225,7 +225,7 @@ Segment make_segment(const Recording& rec, const LatencyParams& p) {
   const double t0 = rec.samples.front().t_s;
   s.begin = p.start_s;
   s.end = p.start_s + p.duration_s;
-  if (s.begin >= rec.duration_s()) fail("start: {} s is past the end of {} ({:.1f} s)", p.start_s, rec.source, rec.duration_s());
+  if (s.begin >= rec.duration_s()) fail("start_s: {} s is past the end of {} ({:.1f} s)", p.start_s, rec.source, rec.duration_s());
   const double rate = rec.rate_hz();
   s.latency_s = p.tracker_latency_ms ? *p.tracker_latency_ms / 1000 : (rate > 0 ? 1.0 / rate : 0.0) + 0.002;
   const glm::dvec2 scale(static_cast<double>(p.render.width) / rec.screen_px.x, static_cast<double>(p.render.height) / rec.screen_px.y);
@@ -320,9 +320,16 @@ void validate(const LatencyParams& p) {
   if (p.budget_ms && !(*p.budget_ms > 0 && *p.budget_ms <= 10000)) fail("frame_budget_ms: must be in (0, 10000] ms, got {}", *p.budget_ms);
   if (p.tracker_latency_ms && !(*p.tracker_latency_ms >= 0 && *p.tracker_latency_ms < 1000))
     fail("tracker_latency_ms: must be in [0, 1000) ms, got {}", *p.tracker_latency_ms);
-  if (!(p.start_s >= 0) || !std::isfinite(p.start_s)) fail("start: must be >= 0 s, got {}", p.start_s);
-  if (!(p.duration_s > 0) || p.duration_s > 3600) fail("duration: must be in (0, 3600] s, got {}", p.duration_s);
+  if (!(p.start_s >= 0) || !std::isfinite(p.start_s)) fail("start_s: must be >= 0 s, got {}", p.start_s);
+  if (!(p.duration_s > 0) || p.duration_s > 3600) fail("duration_s: must be in (0, 3600] s, got {}", p.duration_s);
   if (!(p.min_amplitude_deg >= 0)) fail("min_amplitude_deg: must be >= 0, got {}", p.min_amplitude_deg);
+  if (p.model_rays_per_ms && !(*p.model_rays_per_ms > 0 && std::isfinite(*p.model_rays_per_ms)))
+    fail("model_rays_per_ms: must be > 0, got {}", *p.model_rays_per_ms);
+  if (p.model_fixed_ms && !(*p.model_fixed_ms >= 0 && std::isfinite(*p.model_fixed_ms)))
+    fail("model_fixed_ms: must be >= 0, got {}", *p.model_fixed_ms);
+  if ((p.model_rays_per_ms || p.model_fixed_ms) && p.clock != LoopClock::model) fail("model_rays_per_ms: needs the model clock");
+  if (p.model_rays_per_ms.has_value() != p.model_fixed_ms.has_value())
+    fail("model_fixed_ms: give both parts of the cost model, or neither");
   for (const std::string& l : p.loops)
     if (l != "whole-frame" && l != "deadline" && l != "deadline+prediction")
       fail("loops: unknown loop '{}' (known: whole-frame, deadline, deadline+prediction)", l);
@@ -360,7 +367,11 @@ LatencyReport run_latency_bench(const LatencyRun& run, const std::vector<Recordi
   say(fmt::format("raw tracing rate: {:.0f} rays/ms on {} AO rays of the view", raw, sample.size()));
   // The model clock: the deadline loop's own rate and fixed cost, measured on this view first
   double model_rate = 0, model_fixed = 0;
-  if (p.clock == LoopClock::model) {
+  if (p.clock == LoopClock::model && p.model_rays_per_ms && p.model_fixed_ms) {
+    model_rate = *p.model_rays_per_ms;
+    model_fixed = *p.model_fixed_ms;
+    say(fmt::format("model clock: {:.0f} AO rays/ms and {:.2f} ms a frame besides, as given", model_rate, model_fixed));
+  } else if (p.clock == LoopClock::model) {
     LoopSettings calib;
     calib.budget_ms = budget;
     RealtimeLoop rt(*run.renderer, *run.scene, p.render, calib);

@@ -38,6 +38,9 @@ struct LatencyParams {
   std::optional<double> budget_ms;           // unset: one refresh
   std::optional<double> tracker_latency_ms;  // unset: the recording's sample period + 2 ms
   LoopClock clock = LoopClock::wall;
+  // The model clock's cost model: unset, measured on the view at the start; set, the run is the
+  // same on any machine
+  std::optional<double> model_rays_per_ms, model_fixed_ms;
   double start_s = 0, duration_s = 3;  // the segment replayed (seconds from the recording's first sample)
   double min_amplitude_deg = 2;        // smaller saccades are not judged
   std::vector<std::string> loops = {"whole-frame", "deadline", "deadline+prediction"};

@@ -434,8 +434,8 @@ uint64_t trace_ao_tasks(const Tracer& tracer, const AoRayBatch& batch) {
         batch.done[t] = 1;
       }
       traced += rays.size();
-      if (batch.slowdown > 1) {  // tests: a slower tracer, by waiting as long again
-        const double target = chunk_timer.ms() * batch.slowdown;
+      if (batch.slowdown > 1) {  // tests: a slower tracer: the chunk's CPU time stretched (not the OS's pauses)
+        const double target = (thread_cpu_ms() - cpu_start) * batch.slowdown;
         while (chunk_timer.ms() < target) {}
       }
     }

@@ -1,0 +1,89 @@
+// foveal bench latency: the three loops on a small recording under the model clock (the same
+// figures twice), the JSON fields the docs name, errors in the command line's words.
+#include "cli_helpers.h"
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <cmath>
+#include <fstream>
+#include <string>
+
+using namespace foveal_test;
+
+namespace {
+
+// 1.6 s at 500 Hz on a 1680×1050 screen: a fixation, a 20° saccade (a smooth bell of velocity over
+// 65 ms), a fixation, a saccade back, a fixation.
+std::string write_saccades(const std::string& name) {
+  const fs::path path = scratch(name);
+  fs::create_directories(path.parent_path());
+  std::ofstream out(path);
+  out << "t,x,y\n";
+  auto x_at = [](double t) {
+    auto bell = [](double tau) { return tau <= 0 ? 0.0 : tau >= 1 ? 1.0 : tau - std::sin(2 * M_PI * tau) / (2 * M_PI); };
+    return 400 + 800 * bell((t - 0.4) / 0.065) - 800 * bell((t - 1.0) / 0.065);
+  };
+  for (int i = 0; i < 800; ++i) {
+    const double t = i / 500.0;
+    out << t << "," << x_at(t) + 0.3 * (i % 3) << "," << 520 + 0.2 * (i % 2) << "\n";
+  }
+  return path.string();
+}
+
+}  // namespace
+
+TEST(BenchLatencyCli, ThreeLoopsUnderTheModelClockWriteTheDocumentedJson) {
+  const std::string rec = write_saccades("saccades.csv");
+  const std::string args = "bench latency --scene builtin:box --size 168x105 --max-rays 64 --recording " + rec +
+                           " --duration 1.5 --clock model --model-rays-per-ms 2000 --model-fixed-ms 3 --min-amplitude 5";
+  const CliRun a = foveal(args + " --json a.json --timeline a.png");
+  ASSERT_EQ(a.status, 0) << a.err << a.out;
+  EXPECT_NE(a.out.find("| deadline+prediction |"), std::string::npos) << a.out;
+  const auto j = nlohmann::json::parse(std::ifstream(scratch("a.json")));
+  ASSERT_EQ(j["recordings"].size(), 1u);
+  const auto& r = j["recordings"][0];
+  for (const char* loop : {"whole-frame", "deadline", "deadline+prediction"}) {
+    SCOPED_TRACE(loop);
+    const auto& l = r[loop];
+    for (const char* key : {"budget_ms", "frames", "frames_late", "frame_ms_p50", "frame_ms_p99", "saccades"}) EXPECT_TRUE(l.contains(key)) << key;
+    EXPECT_NEAR(l["budget_ms"].get<double>(), 1000.0 / 60, 1e-9);
+    ASSERT_EQ(l["saccades"].size(), 2u);  // the two 20° saccades
+    for (const auto& s : l["saccades"]) {
+      EXPECT_NEAR(s["amplitude_deg"].get<double>(), 20, 4);
+      for (const char* key : {"landing_s", "landing_to_converged_ms", "ray_bound_ms"}) EXPECT_TRUE(s.contains(key)) << key;
+      EXPECT_GT(s["ray_bound_ms"].get<double>(), 0);
+    }
+  }
+  // The deadline loops make a frame every refresh and never miss one under the model clock
+  EXPECT_EQ(r["deadline"]["frames_late"], 0);
+  EXPECT_GE(r["deadline"]["frames"].get<int>(), 89);
+  EXPECT_LE(r["deadline"]["frame_ms_p99"].get<double>(), 1000.0 / 60);
+  EXPECT_TRUE(fs::exists(scratch("a.png")));
+  // A given cost model: the deadline loops' figures are the same on a second run (but the ray
+  // bound, whose raw rate is measured, and the whole-frame loop, whose frames' cost is)
+  const CliRun b = foveal(args + " --json b.json --loops deadline,deadline+prediction");
+  ASSERT_EQ(b.status, 0) << b.err;
+  const auto k = nlohmann::json::parse(std::ifstream(scratch("b.json")));
+  EXPECT_FALSE(k["recordings"][0].contains("whole-frame"));
+  auto without_bound = [](nlohmann::json saccades) {
+    for (auto& s : saccades) s.erase("ray_bound_ms");
+    return saccades;
+  };
+  for (const char* loop : {"deadline", "deadline+prediction"}) {
+    EXPECT_EQ(without_bound(k["recordings"][0][loop]["saccades"]), without_bound(r[loop]["saccades"])) << loop;
+    EXPECT_EQ(k["recordings"][0][loop]["timeline"], r[loop]["timeline"]) << loop;
+  }
+}
+
+TEST(BenchLatencyCli, BadOptionsAreOneClearLine) {
+  const std::string rec = write_saccades("saccades2.csv");
+  const std::string base = "bench latency --scene builtin:box --size 64x40 --recording " + rec;
+  expect_one_line_error(base + " --loops bogus", "--loops");
+  expect_one_line_error(base + " --start 99", "--start");
+  expect_one_line_error(base + " --clock sundial", "--clock");
+  expect_one_line_error(base + " --frame-budget-ms -3", "--frame-budget-ms");
+  expect_one_line_error(base + " --latency-ms -1", "--latency-ms");
+  expect_one_line_error(base + " --model-rays-per-ms 100 --model-fixed-ms 1", "--model-rays-per-ms");
+  expect_one_line_error("bench latency --scene builtin:box --recording /no/such/recording.asc", "/no/such/recording.asc");
+}
