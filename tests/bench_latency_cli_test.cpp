@@ -46,7 +46,8 @@ TEST(BenchLatencyCli, ThreeLoopsUnderTheModelClockWriteTheDocumentedJson) {
   for (const char* loop : {"whole-frame", "deadline", "deadline+prediction"}) {
     SCOPED_TRACE(loop);
     const auto& l = r[loop];
-    for (const char* key : {"budget_ms", "frames", "frames_late", "frame_ms_p50", "frame_ms_p99", "saccades"}) EXPECT_TRUE(l.contains(key)) << key;
+    for (const char* key : {"budget_ms", "frames", "frames_late", "frame_ms_p50", "frame_ms_p99", "saccades"})
+      EXPECT_TRUE(l.contains(key)) << key;
     EXPECT_NEAR(l["budget_ms"].get<double>(), 1000.0 / 60, 1e-9);
     ASSERT_EQ(l["saccades"].size(), 2u);  // the two 20° saccades
     for (const auto& s : l["saccades"]) {
