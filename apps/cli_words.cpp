@@ -24,6 +24,7 @@ constexpr std::array kOptions = std::to_array<ParameterName>({
     {"ao_distance", "--ao-distance"},
     {"ambient_constant", "--ambient-constant"},
     {"gaze_px", "--gaze"},
+    {"fixation_px", "the fixation"},
     {"adaptive_min_rays", "--adaptive-min-rays"},
     {"denoise_radius", "--denoise-radius"},
     {"temporal_frames", "--temporal-frames"},

@@ -188,3 +188,14 @@ TEST(Cli, LibraryErrorsNameTheOptionsTheUserTyped) {
       EXPECT_EQ(r.err.find(library), std::string::npos) << args << "\n" << r.err;
   }
 }
+
+namespace foveal_test {
+
+// Issue 36, finding 6: a gaze far from the image is one clear line naming --gaze (it overflowed
+// the foveation model into the full budget everywhere).
+TEST(Cli, AGazeFarFromTheImageIsRefused) {
+  expect_one_line_error("render --scene builtin:box --size 64x40 --gaze 1e155,1e155 -o far.png", "--gaze");
+  EXPECT_FALSE(fs::exists(scratch("far.png")));
+}
+
+}  // namespace foveal_test

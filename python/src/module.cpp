@@ -290,11 +290,9 @@ NB_MODULE(_core, m) {
     try {
       std::rethrow_exception(p);
     } catch (const Error& e) {
-      static constexpr ParameterName kKeywords[] = {{"pupil_diameter_mm", "pupil_mm"},
-                                                    {"ellipse_ratio", "ellipse"},
-                                                    {"gaze_px", "gaze"},
-                                                    {"gaze_eye", "eye"},
-                                                    {"device cuda", "device='cuda'"}};
+      static constexpr ParameterName kKeywords[] = {
+          {"pupil_diameter_mm", "pupil_mm"}, {"ellipse_ratio", "ellipse"}, {"gaze_px", "gaze"},
+          {"fixation_px", "fixation"},       {"gaze_eye", "eye"},          {"device cuda", "device='cuda'"}};
       const std::string what = in_words(e.what(), kKeywords);
       // A file that is not there (the readers say "no such file", or "cannot open" a path that does not exist)
       const size_t cannot = what.find(": cannot open");

@@ -84,3 +84,17 @@ def test_bad_arguments_are_clear_errors(box):
         loop.push(float("nan"), (1, 2))
     loop.push(1.0, None)  # a lost sample is fine
     assert loop.frame().image.shape == (40, 64, 3)
+
+
+def test_a_gaze_or_fixation_far_from_the_image_is_refused(box):
+    """Issue 36, findings 6 and 7: one rule for every gaze point (finite, near the image)."""
+    with pytest.raises(ValueError, match="gaze"):
+        foveal.Renderer(box, device="cpu").render(size=(64, 40), gaze=(1e155, 1e155), max_rays=4)
+    loop = foveal.Loop(box, size=(64, 40), max_rays=8, device="cpu")
+    with pytest.raises(ValueError, match="gaze"):
+        loop.push(1.0, (1e155, 1e155))
+    sim = foveal.VisionSimulation(box, size=(64, 48), device="cpu")
+    for fixation in [(float("nan"), float("nan")), (1e200, 1e200)]:
+        with pytest.raises(ValueError, match="fixation"):
+            sim.step(fixation=fixation)
+    assert sim.step(fixation=(30, 20)).fixation == pytest.approx((30, 20))

@@ -3,6 +3,7 @@
 #include "foveal/render/realtime.h"
 
 #include "foveal/util/error.h"
+#include "foveal/util/gaze_point.h"
 #include "foveal/util/timer.h"
 #include "foveal/util/units.h"
 
@@ -81,6 +82,8 @@ glm::dvec2 RealtimeLoop::deg_to_px(glm::dvec2 deg) const {
 }
 
 void RealtimeLoop::push_gaze(double t_s, std::optional<glm::dvec2> gaze_px) {
+  if (gaze_px && std::isfinite(gaze_px->x) && std::isfinite(gaze_px->y))  // NaN: a lost sample; a finite point must be near the image
+    check_gaze_point("gaze_px", gaze_px->x, gaze_px->y, requested_.width, requested_.height);
   const bool valid = gaze_px && std::isfinite(gaze_px->x) && std::isfinite(gaze_px->y);
   if (valid) measured_px_ = *gaze_px;
   predictor_.push(t_s, valid ? px_to_deg(*gaze_px) : glm::dvec2(NAN), valid);

@@ -5,6 +5,7 @@
 #include "foveal/render/reuse.h"
 
 #include "foveal/util/error.h"
+#include "foveal/util/gaze_point.h"
 #include "foveal/util/sampling.h"
 #include "foveal/util/timer.h"
 
@@ -64,7 +65,7 @@ void validate(const RenderParams& p) {
   if (p.ao_distance && !(*p.ao_distance > 0)) fail("ao_distance: must be > 0 or inf, got {}", *p.ao_distance);
   if (p.ambient_constant && !(*p.ambient_constant >= 0 && std::isfinite(*p.ambient_constant)))
     fail("ambient_constant: must be a number >= 0 or 'auto', got {}", *p.ambient_constant);
-  if (p.gaze_px && !(std::isfinite(p.gaze_px->x) && std::isfinite(p.gaze_px->y))) fail("gaze_px: must be finite render pixels");
+  if (p.gaze_px) check_gaze_point("gaze_px", p.gaze_px->x, p.gaze_px->y, p.width, p.height);
   const AoReuseParams& r = p.reuse;
   if (r.adaptive_min_rays < 1 || r.adaptive_min_rays > kMaxRaysLimit)
     fail("adaptive_min_rays: must be in [1, {}], got {}", kMaxRaysLimit, r.adaptive_min_rays);

@@ -249,3 +249,23 @@ TEST(Render, ShadowRaysDarkenOnlyWhatTheLightCannotSee) {
     if (low_lit.gbuffer.hit(i) && std::abs(low_lit.gbuffer.position[i].y) < 1e-3f && glm::length(low_lit.gbuffer.position[i]) < 0.5f)
       EXPECT_EQ(low_shadowed.color.pixels[3 * i], low_lit.color.pixels[3 * i]);
 }
+
+// Issue 36, finding 6: a gaze point must be finite and near the image (one rule, util/gaze_point.h);
+// from about 1e155 the foveation model's squares overflowed and the full budget went everywhere.
+TEST(Render, AGazeFarFromTheImageIsRefusedWithItsName) {
+  RenderParams p = small_params(RenderMode::foveated);
+  for (const glm::dvec2 g : {glm::dvec2(1e155, 1e155), glm::dvec2(-1e9, 10), glm::dvec2(10, 1e6), glm::dvec2(NAN, 3)}) {
+    p.gaze_px = g;
+    try {
+      validate(p);
+      FAIL() << g.x << "," << g.y;
+    } catch (const Error& e) {
+      EXPECT_EQ(std::string(e.what()).rfind("gaze_px: ", 0), 0u) << e.what();
+    }
+  }
+  // Off the image but where an eye can look (beside the display): accepted
+  for (const glm::dvec2 g : {glm::dvec2(-50, 20), glm::dvec2(200, -100), glm::dvec2(1500, 900)}) {
+    p.gaze_px = g;
+    EXPECT_NO_THROW(validate(p)) << g.x << "," << g.y;
+  }
+}

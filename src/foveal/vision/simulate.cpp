@@ -1,6 +1,8 @@
 // foveal/vision/simulate.cpp — one time step of the vision simulation.
 #include "foveal/vision/simulate.h"
 
+#include "foveal/util/gaze_point.h"
+
 #include "foveal/vision/thin_lens.h"
 
 #include "foveal/vision/passes.h"
@@ -140,6 +142,7 @@ CocModel VisionSimulation::coc_model(const Camera& camera, glm::vec3 gaze_dir, d
 }
 
 StepStats VisionSimulation::step(const Camera& camera, std::optional<glm::vec2> fixation) {
+  if (fixation) check_gaze_point("fixation_px", fixation->x, fixation->y, params_.width, params_.height);
   const Timer total;
   StepStats s;
   s.step = static_cast<int>(++step_);
