@@ -16,8 +16,7 @@ inline constexpr double kGazeReachImages = 10;  // how many image sizes beyond i
 // width × height image.
 inline void check_gaze_point(const char* name, double x, double y, int width, int height) {
   const double w = width, h = height, k = kGazeReachImages;
-  if (!(std::isfinite(x) && std::isfinite(y)))
-    fail("{}: must be finite render pixels, got ({}, {})", name, x, y);
+  if (!(std::isfinite(x) && std::isfinite(y))) fail("{}: must be finite render pixels, got ({}, {})", name, x, y);
   if (!(x >= -k * w && x <= (k + 1) * w && y >= -k * h && y <= (k + 1) * h))
     fail("{}: ({}, {}) is not near the {}x{} image (render pixels; at most {:g} image widths and heights beyond its edges)", name, x, y,
          width, height, k);
