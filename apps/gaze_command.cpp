@@ -4,6 +4,7 @@
 #include "foveal/gaze/detect.h"
 #include "foveal/gaze/events.h"
 #include "foveal/gaze/landing.h"
+#include "foveal/util/stats.h"
 #include "foveal/gaze/summary.h"
 #include "foveal/render/outputs.h"
 #include "foveal/io/scanpath.h"
@@ -149,13 +150,8 @@ struct EventsRun {
   std::vector<LandingReport> landings;  // each saccade's landing as the live predictor saw it
 };
 
-// Median and 90th percentile of the finite values.
-std::pair<double, double> median_p90(std::vector<double> v) {
-  v.erase(std::remove_if(v.begin(), v.end(), [](double x) { return !std::isfinite(x); }), v.end());
-  if (v.empty()) return {NAN, NAN};
-  std::sort(v.begin(), v.end());
-  return {v[(v.size() - 1) / 2], v[static_cast<size_t>(0.9 * static_cast<double>(v.size() - 1))]};
-}
+// Median and 90th percentile (NaN: not predicted, left out).
+std::pair<double, double> median_p90(const std::vector<double>& v) { return {quantile(v, 0.5), quantile(v, 0.9)}; }
 
 EventsRun detect_and_score(const GazeCommandOptions& o, const Recording& recording, const Display& display, const FixationParams& params) {
   EventsRun run;

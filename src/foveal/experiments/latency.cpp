@@ -13,8 +13,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
-#include <cstdlib>
 #include <filesystem>
 
 namespace foveal {
@@ -70,15 +68,6 @@ std::pair<double, bool> fovea_error(const FoveaMask& m, const Image& image, cons
   const double ratio = std::sqrt(mse / m.noise_mse);
   const double se = ratio * std::hypot(rel_se, m.noise_rel_se);
   return {ratio, ratio <= 1.0 + 2.0 * se};
-}
-
-double quantile(std::vector<double> v, double q) {
-  if (v.empty()) return NAN;
-  std::sort(v.begin(), v.end());
-  const double x = q * static_cast<double>(v.size() - 1);
-  const size_t lo = static_cast<size_t>(x);
-  const size_t hi = std::min(lo + 1, v.size() - 1);
-  return v[lo] + (x - static_cast<double>(lo)) * (v[hi] - v[lo]);
 }
 
 // Angle between two render positions as seen on the display, degrees.
@@ -199,9 +188,6 @@ LatencyLoop run_deadline(const LatencyRun& run, const Segment& s, const LatencyP
     lf.start_s = t;
     lf.cost_ms = f.cost_ms;
     lf.shown_s = shown_at(t, f.cost_ms, period, loop.refreshes_missed);
-    if (std::getenv("LOOP_DEBUG") && f.late)
-      std::fprintf(stderr, "late %d: %.2f ms: maps %.2f plan %.2f trace %.2f compose %.2f rays %llu predicted %d\n", f.index, f.ms,
-                   f.maps_ms, f.plan_ms, f.trace_ms, f.compose_ms, static_cast<unsigned long long>(f.rays), f.predicted ? 1 : 0);
     lf.gaze_px = f.gaze_px / rt.scale();
     lf.predicted = f.predicted;
     if (f.predicted) predictions.emplace_back(t, lf.gaze_px);

@@ -52,7 +52,7 @@ void LandingPredictor::abandon() {
   prediction_t_.clear();
 }
 
-void LandingPredictor::start(double t_s, glm::dvec2 from, double velocity) {
+void LandingPredictor::start(double t_s, glm::dvec2 from) {
   state_ = LandingState{};
   state_.in_flight = true;
   state_.onset_s = t_s;
@@ -64,7 +64,6 @@ void LandingPredictor::start(double t_s, glm::dvec2 from, double velocity) {
   predictions_.clear();
   prediction_t_.clear();
   slow_since_ = NAN;
-  (void)velocity;
 }
 
 void LandingPredictor::predict(double t_s, glm::dvec2 deg, double velocity) {
@@ -171,7 +170,7 @@ void LandingPredictor::push(double t_s, glm::dvec2 deg, bool valid) {
     if (fast_run_ == 1) {
       onset_candidate_ = from;
     } else if (fast_run_ >= 2) {
-      start(onset_candidate_.t, onset_candidate_.deg, velocity);
+      start(onset_candidate_.t, onset_candidate_.deg);
       current_.detected_s = t_s;
       fast_run_ = 0;
       predict(t_s, 0.5 * (deg + from.deg), velocity);

@@ -96,7 +96,7 @@ class LandingPredictor {
   struct Profile {
     double t = 0, distance = 0, velocity = 0;
   };
-  void start(double t_s, glm::dvec2 from, double velocity);
+  void start(double t_s, glm::dvec2 from);
   void predict(double t_s, glm::dvec2 deg, double velocity);
   void land(double t_s, glm::dvec2 deg);
   void abandon();

@@ -4,6 +4,7 @@
 #include "foveal/gaze/landing.h"
 
 #include "foveal/util/error.h"
+#include "foveal/util/stats.h"
 #include "foveal/util/units.h"
 
 #include <gtest/gtest.h>
@@ -90,10 +91,6 @@ TEST(Landing, SyntheticMainSequenceSaccadesLandWithinOneDegree) {
         const double onset = trial.landing_s - SyntheticSaccade(amplitude).duration_s;
         const double error = glm::length(s.prediction_at(onset + (trial.landing_s - onset) * 2 / 3) - trial.landing);
         if (error <= 1.0) ++within;
-        if (std::getenv("LANDING_DEBUG"))
-          std::printf("%g Hz A %.1f err %.2f pred %.2f measA %.2f settled %.1f ms\n", hz, amplitude, error,
-                      glm::length(s.prediction_at(onset + (trial.landing_s - onset) * 2 / 3) - trial.deg[0]), s.amplitude_deg,
-                      1000 * (trial.landing_s - s.settled_s));
         if (!std::isnan(s.settled_s)) gained_sum += trial.landing_s - s.settled_s;
       }
     }
@@ -221,10 +218,6 @@ void score_landings(const Labelled& r, const LandingParams& params, double min_a
         if (p.onset_s >= r.t[i] - 0.02 && p.onset_s <= r.t[j] && !std::isnan(p.first_landing_deg.x)) {
           ++out.found;
           out.error_deg.push_back(glm::length(p.first_landing_deg - end));
-          if (std::getenv("LANDING_DEBUG"))
-            std::printf("A %.2f pred %.2f (final %.2f) onset %.3f/%.3f first %.3f landing %.3f/%.3f\n", amplitude,
-                        glm::length(p.first_landing_deg - start), p.amplitude_deg, r.t[i], p.onset_s, p.first_prediction_s, r.t[j],
-                        p.landing_s);
           const double third = r.t[i] + (r.t[j] - r.t[i]) * 2 / 3;
           out.third_error_deg.push_back(glm::length(p.prediction_at(third) - end));
           // Without prediction the fovea is where the eye is then
@@ -237,12 +230,6 @@ void score_landings(const Labelled& r, const LandingParams& params, double min_a
     }
     i = j + 1;
   }
-}
-
-double quantile(std::vector<double> v, double q) {
-  if (v.empty()) return NAN;
-  std::sort(v.begin(), v.end());
-  return v[static_cast<size_t>(q * (v.size() - 1))];
 }
 
 std::string data_dir() {

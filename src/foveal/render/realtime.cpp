@@ -31,8 +31,6 @@ void for_each_pixel(size_t n, const Body& body) {
   });
 }
 
-bool same_camera(const Camera& a, const Camera& b) { return a.eye == b.eye && a.look == b.look && a.up == b.up && a.fov_deg == b.fov_deg; }
-
 }  // namespace
 
 const char* to_string(LoopClock clock) { return clock == LoopClock::model ? "model" : "wall"; }

@@ -197,10 +197,6 @@ SaccadeRun run_saccade(bool predict, const LandingParams& landing) {
     const double t_frame = k / 60.0;
     for (; t_sample <= t_frame - 0.003; t_sample += 0.001) loop.push_gaze(t_sample, position(t_sample));
     const LoopFrame f = loop.frame(camera);
-    if (std::getenv("LOOP_DEBUG"))
-      std::printf("%d predict %d frame %d t %.3f gaze %.1f,%.1f measured %.1f,%.1f predicted %d flight %d rays %llu fovea %.3f\n",
-                  predict ? 1 : 0, landing.skew > 2 ? 1 : 0, k, t_frame, f.gaze_px.x, f.gaze_px.y, f.measured_px.x, f.measured_px.y,
-                  f.predicted ? 1 : 0, f.in_flight ? 1 : 0, static_cast<unsigned long long>(f.rays), f.fovea_converged);
     if (t_frame - 0.003 < onset + duration) {
       run.flight_frames += t_frame - 0.003 >= onset ? 1 : 0;
       continue;

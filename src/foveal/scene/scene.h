@@ -71,6 +71,11 @@ struct Camera {
   float fov_deg = 45.0f;
 };
 
+// The same view: position, target, up and field of view all equal.
+inline bool same_camera(const Camera& a, const Camera& b) {
+  return a.eye == b.eye && a.look == b.look && a.up == b.up && a.fov_deg == b.fov_deg;
+}
+
 // A camera that moves: linear interpolation through key cameras (eye, look, up, fov), from the
 // first key at step 1 to the last at step `steps`, held there afterwards.
 struct CameraPath {

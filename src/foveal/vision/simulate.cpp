@@ -38,11 +38,7 @@ SaccadeParams saccade_params_for(const EyeParams& eye, SaccadeParams base) {
   return base;
 }
 
-namespace {
-
-bool same_camera(const Camera& a, const Camera& b) { return a.eye == b.eye && a.look == b.look && a.up == b.up && a.fov_deg == b.fov_deg; }
-
-}  // namespace
+namespace {}  // namespace
 
 VisionSimulation::VisionSimulation(const Tracer& tracer, const Scene& scene, const SimulateParams& params)
     : tracer_(tracer),
