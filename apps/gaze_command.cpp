@@ -136,7 +136,8 @@ struct GazeCommandOptions {
   std::string recording, json, samples, scanpath = "scanpath.png", display = "47.5,30,60", events, samples_out, events_out, evaluate,
                                         coder2, landings_out;
   GazeOptions gaze;
-  double filter_window_ms = 6, detection_window_ms = 20, ek_lambda = 6, blink_flank_ms = 100, max_blink_ms = 2000;
+  std::optional<double> filter_window_ms;  // default: the detector's (6 ms nh/nhp, 10 ms nhr)
+  double detection_window_ms = 20, ek_lambda = 6, blink_flank_ms = 100, max_blink_ms = 2000;
   bool no_scanpath = false, quiet = false;
 };
 
@@ -156,23 +157,20 @@ std::pair<double, double> median_p90(const std::vector<double>& v) { return {qua
 EventsRun detect_and_score(const GazeCommandOptions& o, const Recording& recording, const Display& display, const FixationParams& params) {
   EventsRun run;
   if (o.events.empty()) return run;
-  require_positive(o.filter_window_ms, "--filter-window-ms");
+  if (o.filter_window_ms) require_positive(*o.filter_window_ms, "--filter-window-ms");
   require_non_negative(o.detection_window_ms, "--detection-window-ms");
   require_non_negative(o.blink_flank_ms, "--blink-flank-ms");
   require_positive(o.max_blink_ms, "--max-blink-ms");
   EventParams ep;
   ep.pursuit = params.pursuit;  // the options --fixation ivvt reads too
-  ep.filter_window_s = o.filter_window_ms / 1000;
+  if (o.filter_window_ms) ep.filter_window_s = ep.robust_filter_window_s = *o.filter_window_ms / 1000;
   ep.detection_window_s = o.detection_window_ms / 1000;
   ep.ek_lambda = o.ek_lambda;
   ep.blink_flank_s = o.blink_flank_ms / 1000;
   ep.max_blink_s = o.max_blink_ms / 1000;
-  auto read_labels = [&](const std::string& path) {  // labels of exactly this recording's samples
-    LabelFile file = read_label_file(path);
-    if (file.label.size() != recording.samples.size())
-      fail("{}: {} labelled samples, but the recording has {} samples", path, file.label.size(), recording.samples.size());
-    return file;
-  };
+  std::vector<double> t(recording.samples.size());
+  for (size_t i = 0; i < t.size(); ++i) t[i] = recording.samples[i].t_s;
+  auto read_labels = [&](const std::string& path) { return align_labels(read_label_file(path), t); };  // matched to the samples by time
   const auto started = std::chrono::steady_clock::now();
   const GazeGeometry geometry(display, recording.screen_px);
   if (o.events.rfind("file:", 0) == 0)  // another tool's labels of these samples: listed and scored like a detector's
@@ -183,11 +181,16 @@ EventsRun detect_and_score(const GazeCommandOptions& o, const Recording& recordi
   run.detector = run.detection->method ? to_string(*run.detection->method) : o.events;
   run.landings = evaluate_landings(recording, geometry, *run.detection);
   if (!o.evaluate.empty()) {
-    std::vector<double> t(recording.samples.size());
-    for (size_t i = 0; i < t.size(); ++i) t[i] = recording.samples[i].t_s;
-    const LabelFile expert = read_labels(o.evaluate);
-    run.evaluation = evaluate_labels(run.detection->labels, expert.label, t);
-    if (!o.coder2.empty()) run.ceiling = evaluate_labels(read_labels(o.coder2).label, expert.label, t);
+    // Scored over the samples every coder labelled (a coder may leave a recording's lost tail out)
+    const AlignedLabels expert = read_labels(o.evaluate);
+    std::vector<bool> scored = expert.covered;
+    std::optional<AlignedLabels> second;
+    if (!o.coder2.empty()) {
+      second = read_labels(o.coder2);
+      for (size_t i = 0; i < scored.size(); ++i) scored[i] = scored[i] && second->covered[i];
+    }
+    run.evaluation = evaluate_labels(run.detection->labels, expert.label, t, scored);
+    if (second) run.ceiling = evaluate_labels(second->label, expert.label, t, scored);
   }
   return run;
 }
@@ -308,8 +311,11 @@ void print_gaze(const GazeCommandOptions& o, const Recording& recording, const G
                    : "",
                counts);
   }
-  auto print_scores = [](const Evaluation& e, const std::string& what) {
-    fmt::print("  {}: sample kappa {:.3f} (accuracy {:.3f})\n", what, e.kappa, e.accuracy);
+  auto print_scores = [&](const Evaluation& e, const std::string& what) {
+    fmt::print("  {}: sample kappa {:.3f} (accuracy {:.3f}){}\n", what, e.kappa, e.accuracy,
+               e.samples < recording.samples.size()
+                   ? fmt::format(", over the {} of {} samples every coder labelled", e.samples, recording.samples.size())
+                   : "");
     for (const ClassScore& c : e.classes) {
       if (c.reference_samples == 0 && c.test_samples == 0) continue;
       fmt::print("    {:<9} kappa {:6.3f}  events F1 {:5.3f} ({} hits, {} misses, {} false alarms)  RTO {:+.1f} ms  RTD {:+.1f} ms\n",
@@ -389,9 +395,11 @@ std::function<int()> add_gaze_command(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--json", o->json, "write the summary as JSON");
   cmd->add_option("--events", o->events,
-                  "label every sample and list the events: nhp (adaptive saccades + PSO + pursuit + blinks; the recommended, = auto), "
+                  "label every sample and list the events: nhr (saccades on local robust thresholds + PSO + pursuit in context + "
+                  "blinks; the recommended, = auto), nhp (nh + pursuit, tuned on fixation tasks), "
                   "nh (Nystrom & Holmqvist 2010: saccades, PSO, fixations, blinks), ek (Engbert & Kliegl 2003 saccades), "
-                  "ivt or idt (fixation filters: other valid samples saccades, lost ones blinks), "
+                  "ivt or idt (fixation filters: other valid samples saccades, lost ones blinks), ivvt (the causal filter replay and "
+                  "view follow the eye with: its fixations, pursuits and saccades), "
                   "or file:LABELS.csv (another tool's labels of these samples, listed and scored the same way)");
   cmd->add_option("--samples-out", o->samples_out, "--events: write t_s,x,y,label per sample (CSV)");
   cmd->add_option("--landings-out", o->landings_out,
@@ -405,16 +413,18 @@ std::function<int()> add_gaze_command(CLI::App& app) {
                   "sample-level Cohen's kappa per class and overall, event F1 (Hooge et al. 2018 matching), RTO/RTD");
   cmd->add_option("--coder2", o->coder2,
                   "--evaluate: a second coder's labels of the same samples: their agreement with the first is the ceiling");
-  cmd->add_option("--filter-window-ms", o->filter_window_ms, "nh, nhp: Savitzky-Golay window of the velocity, ms")->capture_default_str();
+  cmd->add_option("--filter-window-ms", o->filter_window_ms,
+                  "nh, nhp, nhr: Savitzky-Golay window of the velocity, ms (default 6 nh, nhp; 10 nhr)");
   cmd->add_option(
          "--detection-window-ms", o->detection_window_ms,
-         "nh, nhp: window of the smoother velocity whose peaks also start saccades (small ones in noise), ms (0: off, the paper's)")
+         "nh, nhp, nhr: window of the smoother velocity whose peaks also start saccades (small ones in noise), ms (0: off, the paper's)")
       ->capture_default_str();
   cmd->add_option("--ek-lambda", o->ek_lambda, "ek: threshold in median-based standard deviations of the velocity")->capture_default_str();
   cmd->add_option("--blink-flank-ms", o->blink_flank_ms,
-                  "ek, nh, nhp: a blink takes in the lid's artefacts up to this long either side of the loss, ms")
+                  "ek, nh, nhp, nhr: a blink takes in the lid's artefacts up to this long either side of the loss, ms")
       ->capture_default_str();
-  cmd->add_option("--max-blink-ms", o->max_blink_ms, "ek, nh, nhp: longer losses are undefined, not blinks, ms")->capture_default_str();
+  cmd->add_option("--max-blink-ms", o->max_blink_ms, "ek, nh, nhp, nhr: longer losses are undefined, not blinks, ms")
+      ->capture_default_str();
   cmd->add_option("--samples", o->samples,
                   "write the samples as read (t_s,x,y,confidence,valid: seconds, screen pixels, NaN where the eye was lost) as CSV");
   cmd->add_option("--scanpath", o->scanpath, "scan-path picture (PNG) of the --fixation filter's fixations")->capture_default_str();

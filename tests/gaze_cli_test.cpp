@@ -307,19 +307,19 @@ TEST(GazeCli, RecommendedDetectorAgainstTheIrfExpert) {
   if (!std::filesystem::exists(path)) GTEST_SKIP() << "skipped: " << path << " is absent";
   const std::string common = "gaze " + path + " --display 53.3,30.1,56.5,1920,1080 --evaluate " + path + " --no-scanpath -q";
   ASSERT_EQ(foveal_test::foveal(common + " --events ivt --json ivt.json").status, 0);
-  const CliRun r = foveal_test::foveal(common + " --events auto --json nhp.json --events-out s2.tsv --coder2 " + path);
+  const CliRun r = foveal_test::foveal(common + " --events auto --json auto.json --events-out s2.tsv --coder2 " + path);
   ASSERT_EQ(r.status, 0) << r.err;
   const auto ivt = nlohmann::json::parse(std::ifstream(scratch("ivt.json")))["events"];
-  const auto nhp = nlohmann::json::parse(std::ifstream(scratch("nhp.json")))["events"];
-  EXPECT_EQ(nhp["detector"], "nhp");
+  const auto best = nlohmann::json::parse(std::ifstream(scratch("auto.json")))["events"];
+  EXPECT_EQ(best["detector"], "nhr");
   for (const char* c : {"fixation", "saccade"}) {
-    EXPECT_GT(nhp["classes"][c]["kappa"].get<double>(), ivt["classes"][c]["kappa"].get<double>() + 0.04) << c;
-    EXPECT_GE(nhp["classes"][c]["f1"].get<double>(), ivt["classes"][c]["f1"].get<double>()) << c;
+    EXPECT_GT(best["classes"][c]["kappa"].get<double>(), ivt["classes"][c]["kappa"].get<double>() + 0.04) << c;
+    EXPECT_GE(best["classes"][c]["f1"].get<double>(), ivt["classes"][c]["f1"].get<double>()) << c;
   }
-  EXPECT_GT(nhp["classes"]["pso"]["kappa"].get<double>(), 0.5);
-  EXPECT_GT(nhp["classes"]["pso"]["f1"].get<double>(), 0.8);
-  EXPECT_EQ(nhp["counts"]["pursuit"], 0);  // a looking-at-points task
-  EXPECT_DOUBLE_EQ(nhp["ceiling"]["kappa"].get<double>(), 1.0);
+  EXPECT_GT(best["classes"]["pso"]["kappa"].get<double>(), 0.5);
+  EXPECT_GT(best["classes"]["pso"]["f1"].get<double>(), 0.8);
+  EXPECT_EQ(best["counts"]["pursuit"], 0);  // a looking-at-points task
+  EXPECT_DOUBLE_EQ(best["ceiling"]["kappa"].get<double>(), 1.0);
   // The table: a header and one row per event, saccade amplitudes in degrees
   std::ifstream tsv(scratch("s2.tsv"));
   std::string line;
@@ -331,9 +331,9 @@ TEST(GazeCli, RecommendedDetectorAgainstTheIrfExpert) {
     if (line.find("\tsaccade\t") != std::string::npos) ++saccades;
   }
   int events = 0;
-  for (const auto& [name, count] : nhp["counts"].items()) events += count.get<int>();
+  for (const auto& [name, count] : best["counts"].items()) events += count.get<int>();
   EXPECT_EQ(rows, events);
-  EXPECT_EQ(saccades, nhp["counts"]["saccade"].get<int>());
+  EXPECT_EQ(saccades, best["counts"]["saccade"].get<int>());
   // The expert's labels as another tool's
   ASSERT_EQ(foveal_test::foveal(common + " --events file:" + path + " --json self.json").status, 0);
   const auto self = nlohmann::json::parse(std::ifstream(scratch("self.json")))["events"];

@@ -8,8 +8,12 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <array>
+#include <cstdlib>
 #include <cmath>
+#include <memory>
 #include <optional>
+#include <tuple>
 
 namespace foveal {
 
@@ -25,15 +29,20 @@ const char* to_string(EventMethod m) {
       return "nh";
     case EventMethod::nhp:
       return "nhp";
+    case EventMethod::nhr:
+      return "nhr";
+    case EventMethod::ivvt:
+      return "ivvt";
   }
   return "?";
 }
 
 EventMethod parse_event_method(const std::string& name) {
   if (name == "auto") return kRecommendedEventMethod;
-  for (EventMethod m : {EventMethod::ivt, EventMethod::idt, EventMethod::ek, EventMethod::nh, EventMethod::nhp})
+  for (EventMethod m :
+       {EventMethod::ivt, EventMethod::idt, EventMethod::ivvt, EventMethod::ek, EventMethod::nh, EventMethod::nhp, EventMethod::nhr})
     if (name == to_string(m)) return m;
-  fail("events: unknown detector '{}' (ivt, idt, ek, nh, nhp or auto)", name);
+  fail("events: unknown detector '{}' (ivt, idt, ivvt, ek, nh, nhp, nhr or auto)", name);
 }
 
 // Errors name the parameter by its field (the command line names its own options: apps/).
@@ -54,6 +63,20 @@ void validate(const EventParams& p) {
   require_positive(p.ek_lambda, "ek_lambda");
   require_non_negative(p.ek_min_saccade_s, "ek_min_saccade_s");
   validate(p.pursuit);
+  require_positive(p.robust_filter_window_s, "robust_filter_window_s");
+  require_positive(p.threshold_window_s, "threshold_window_s");
+  require_positive(p.robust_peak_k, "robust_peak_k");
+  require_positive(p.robust_onset_k, "robust_onset_k");
+  if (p.robust_onset_k > p.robust_peak_k) fail("robust_onset_k: {} is above robust_peak_k ({})", p.robust_onset_k, p.robust_peak_k);
+  require_positive(p.min_peak_deg_s, "min_peak_deg_s");
+  validate(p.slow_pursuit);
+  require_positive(p.pursuit_keep, "pursuit_keep");
+  if (p.pursuit_keep > 1) fail("pursuit_keep: {} is above 1", p.pursuit_keep);
+  require_non_negative(p.settle_s, "settle_s");
+  require_non_negative(p.context_s, "context_s");
+  require_non_negative(p.context_relax, "context_relax");
+  require_non_negative(p.context_min_fraction, "context_min_fraction");
+  if (!(p.context_cos >= -1 && p.context_cos <= 1)) fail("context_cos: {} is not in [-1, 1]", p.context_cos);
 }
 
 std::pair<double, double> adaptive_velocity_thresholds(const std::vector<float>& v, double initial) {
@@ -104,8 +127,8 @@ struct Signal {
   size_t n = 0;
   double dt = 0;
   std::vector<glm::dvec3> dir;
-  std::vector<bool> valid;
-  std::vector<bool> noise;                 // nh: physiologically impossible velocity or acceleration (never free)
+  std::vector<uint8_t> valid;              // bytes, not std::vector<bool>: read at every sample by every pass
+  std::vector<uint8_t> noise;              // nh: physiologically impossible velocity or acceleration (never free)
   std::vector<size_t> run_start, run_end;  // per sample: its run of contiguous valid samples [start, end)
 };
 
@@ -113,8 +136,8 @@ Signal prepare(const Recording& r, const GazeGeometry& g) {
   Signal s;
   s.n = r.samples.size();
   s.dir.assign(s.n, glm::dvec3(0, 0, 1));
-  s.valid.assign(s.n, false);
-  s.noise.assign(s.n, false);
+  s.valid.assign(s.n, 0);
+  s.noise.assign(s.n, 0);
   std::vector<double> intervals;
   for (size_t i = 0; i < s.n; ++i) {
     if (r.samples[i].valid) {
@@ -264,8 +287,87 @@ bool free_sample(const std::vector<EventLabel>& labels, const Signal& s, size_t 
 }
 
 // Nyström & Holmqvist 2010: saccades and PSOs into `labels` (blinks already there).
-void label_saccades_nh(const Signal& s, const EventParams& p, const std::vector<float>& v, double peak, double onset,
-                       const std::vector<float>& coarse, double coarse_peak, std::vector<EventLabel>& labels) {
+// The median and the scaled median absolute deviation (1.4826·MAD: the standard deviation of
+// normal data) of the finite values in a window of `window` samples around each block of
+// window/8 samples (the window kept whole near the ends), from a sliding histogram of 0.25 °/s
+// bins: O(1) per sample plus one search per block. Windows with fewer than 16 finite values take
+// the whole recording's.
+struct LocalStatistics {
+  size_t block = 1;
+  std::vector<double> median, mad;  // per block: sample i has block i / block
+};
+
+double median_of(std::vector<double> x) {
+  x.erase(std::remove_if(x.begin(), x.end(), [](double d) { return !std::isfinite(d); }), x.end());
+  if (x.empty()) return NAN;
+  auto mid = x.begin() + x.size() / 2;
+  std::nth_element(x.begin(), mid, x.end());
+  return *mid;
+}
+
+class VelocityHistogram {
+ public:
+  static constexpr double kBin = 0.25;
+  static constexpr size_t kBins = 4096;  // 0 … 1024 °/s; faster in the last bin
+  void add(float v, int sign) {
+    if (!std::isfinite(v)) return;
+    counts_[bin(v)] += sign;
+    total_ += sign;
+  }
+  size_t total() const { return static_cast<size_t>(total_); }
+  // {median, 1.4826·MAD}, in °/s (bin centres)
+  std::pair<double, double> median_mad() const {
+    const long half = (total_ + 1) / 2;
+    long seen = 0;
+    size_t m = 0;
+    while (m + 1 < kBins && seen + counts_[m] < half) seen += counts_[m++];
+    long inside = counts_[m];
+    size_t d = 0;
+    while (inside < half && d < kBins) {
+      ++d;
+      if (m >= d) inside += counts_[m - d];
+      if (m + d < kBins) inside += counts_[m + d];
+    }
+    return {(m + 0.5) * kBin, 1.4826 * d * kBin};
+  }
+
+ private:
+  static size_t bin(float v) { return std::min(kBins - 1, static_cast<size_t>(std::max(0.0f, v) / kBin)); }
+  std::array<long, kBins> counts_{};
+  long total_ = 0;
+};
+
+LocalStatistics local_statistics(const std::vector<float>& v, size_t window) {
+  const size_t n = v.size();
+  LocalStatistics out;
+  if (n == 0) return out;
+  VelocityHistogram all;
+  for (float x : v) all.add(x, +1);
+  const auto [all_median, all_mad] = all.total() ? all.median_mad() : std::pair<double, double>{NAN, NAN};
+  window = std::min(window, n);
+  out.block = std::max<size_t>(1, window / 8);
+  auto hist = std::make_unique<VelocityHistogram>();
+  size_t lo = 0, hi = 0;  // the histogram holds v[lo, hi)
+  for (size_t b0 = 0; b0 < n; b0 += out.block) {
+    const size_t b1 = std::min(n, b0 + out.block), centre = (b0 + b1) / 2;
+    const size_t start = std::min(n - window, centre > window / 2 ? centre - window / 2 : 0), end = start + window;
+    while (hi < end) hist->add(v[hi++], +1);
+    while (lo < start) hist->add(v[lo++], -1);
+    double median = all_median, mad = all_mad;
+    if (hist->total() >= 16) std::tie(median, mad) = hist->median_mad();
+    out.median.push_back(median);
+    out.mad.push_back(mad);
+  }
+  return out;
+}
+
+// Thresholds per sample (°/s): constant for nh/nhp, local for nhr.
+struct SampleThresholds {
+  std::vector<float> peak, onset, coarse_peak;  // coarse_peak: the smoother velocity's peak threshold (empty: no smoother velocity)
+};
+
+void label_saccades_nh(const Signal& s, const EventParams& p, const std::vector<float>& v, const SampleThresholds& th,
+                       const std::vector<float>& coarse, std::vector<EventLabel>& labels) {
   const size_t n = s.n;
   const size_t pso_window = static_cast<size_t>(std::lround(p.pso_window_s / s.dt));
   const size_t noise_window = static_cast<size_t>(std::max(1L, std::lround(p.local_noise_s / s.dt)));
@@ -274,30 +376,31 @@ void label_saccades_nh(const Signal& s, const EventParams& p, const std::vector<
   for (size_t i = 0; i < n; ++i) {
     if (!usable(i)) continue;
     size_t p1 = i;
-    if (v[i] > peak) {
+    if (v[i] > th.peak[i]) {
       // A peak: samples above the peak threshold from i
-      while (p1 + 1 < n && usable(p1 + 1) && v[p1 + 1] > peak) ++p1;
-    } else if (!coarse.empty() && coarse[i] > coarse_peak) {
+      while (p1 + 1 < n && usable(p1 + 1) && v[p1 + 1] > th.peak[p1 + 1]) ++p1;
+    } else if (!coarse.empty() && coarse[i] > th.coarse_peak[i]) {
       // A peak of the smoother velocity only (a small saccade in noise): the saccade is around the
       // fine velocity's largest sample under it, if that is above the onset threshold
       size_t c1 = i, m = i;
-      while (c1 + 1 < n && usable(c1 + 1) && coarse[c1 + 1] > coarse_peak) {
+      while (c1 + 1 < n && usable(c1 + 1) && coarse[c1 + 1] > th.coarse_peak[c1 + 1]) {
         ++c1;
         if (v[c1] > v[m]) m = c1;
       }
-      if (!(v[m] >= onset)) {
+      if (!(v[m] >= th.onset[m])) {
         i = c1;
         continue;
       }
       i = p1 = m;
-      while (p1 + 1 < n && usable(p1 + 1) && v[p1 + 1] > peak) ++p1;
+      while (p1 + 1 < n && usable(p1 + 1) && v[p1 + 1] > th.peak[p1 + 1]) ++p1;
     } else {
       continue;
     }
     // Onset: back to the first sample below the onset threshold (the threshold crossing; waiting
     // for the local minimum as well starts saccades 2 ms early on the IRF data)
     size_t a = i;
-    while (a > 0 && usable(a - 1) && v[a] >= onset) --a;
+    while (a > 0 && usable(a - 1) && v[a] >= th.onset[a]) --a;
+    const double onset = th.onset[a], peak = th.peak[a];
     // Offset threshold from the local noise before the onset
     double sum = 0, sum2 = 0;
     size_t count = 0;
@@ -339,74 +442,178 @@ void label_saccades_nh(const Signal& s, const EventParams& p, const std::vector<
 // The velocity of a least-squares line over half-width h (= the Savitzky–Golay first derivative)
 // by running sums: O(1) per sample whatever the window, recomputed exactly every 512 samples so
 // that rounding cannot build up; near a run's edges, narrower windows as in savitzky_golay.
-void line_velocity(const Signal& s, int h, std::vector<float>& velocity) {
-  velocity.assign(s.n, NAN);
+// One run [start, end) of samples.
+void line_velocity_run(const Signal& s, int h, const SavitzkyGolay& sg, size_t start, size_t end, std::vector<float>& velocity) {
   double s2 = 0;
   for (int k = -h; k <= h; ++k) s2 += double(k) * k;
   const double scale = kDeg / (s2 * s.dt);
   const size_t hh = static_cast<size_t>(h);
+  if (end - start > 2 * hh) {
+    // Centres i in [start + h, end − h): full windows
+    glm::dvec3 a(0), b(0);
+    size_t since = 512;
+    for (size_t i = start + hh; i + hh < end; ++i) {
+      if (since >= 512) {
+        a = b = glm::dvec3(0);
+        for (int k = -h; k <= h; ++k) {
+          a += s.dir[i + k];
+          b += double(k) * s.dir[i + k];
+        }
+        since = 0;
+      }
+      velocity[i] = static_cast<float>(scale * glm::length(b));
+      if (i + hh + 1 < end) {  // slide to i + 1
+        b += -a + double(h + 1) * s.dir[i - hh] + double(h) * s.dir[i + hh + 1];
+        a += s.dir[i + hh + 1] - s.dir[i - hh];
+        ++since;
+      }
+    }
+  }
+  // The edges: the largest centred window that fits, from sums over the edge's stretch (O(1) per
+  // sample: Σ_k k·d[i+k] over |k| ≤ w is Σ m·d[m] − i·Σ d[m] over m in [i − w, i + w])
+  (void)sg;
+  auto edge = [&](size_t from, size_t to) {  // centres in [from, to); their windows lie in [lo, hi)
+    const size_t lo = start, hi = end;
+    const size_t a = from > lo + hh ? from - hh : lo, b = std::min(hi, to + hh);
+    std::vector<glm::dvec3> p0(b - a + 1, glm::dvec3(0)), p1(b - a + 1, glm::dvec3(0));
+    for (size_t m = a; m < b; ++m) {
+      p0[m - a + 1] = p0[m - a] + s.dir[m];
+      p1[m - a + 1] = p1[m - a] + double(m - a) * s.dir[m];
+    }
+    for (size_t i = from; i < to; ++i) {
+      const size_t w = std::min<size_t>({hh, i - start, end - 1 - i});
+      if (w == hh) continue;
+      if (w < 1) {  // a run's first or last sample: the one-sided difference
+        if (end - start >= 2) velocity[i] = static_cast<float>(kDeg * glm::length(s.dir[i == start ? i + 1 : i - 1] - s.dir[i]) / s.dt);
+        continue;
+      }
+      const size_t l = i - w - a, r = i + w + 1 - a;
+      const glm::dvec3 moment = (p1[r] - p1[l]) - double(i - a) * (p0[r] - p0[l]);
+      const double w2 = double(w) * (w + 1) * (2 * w + 1) / 3;  // Σ k² over |k| ≤ w
+      velocity[i] = static_cast<float>(kDeg * glm::length(moment) / (w2 * s.dt));
+    }
+  };
+  const size_t left_end = std::min(end, start + hh), right_start = std::max(left_end, end > hh ? end - hh : start);
+  edge(start, left_end);
+  edge(right_start, end);
+}
+
+void line_velocity(const Signal& s, int h, std::vector<float>& velocity) {
+  velocity.assign(s.n, NAN);
   const SavitzkyGolay sg(h);  // the narrower windows' weights, near the runs' edges
   for (size_t start = 0; start < s.n;) {
     if (!s.valid[start]) {
       ++start;
       continue;
     }
-    const size_t end = s.run_end[start];
-    std::vector<float> narrow;
-    if (end - start > 2 * hh) {
-      // Centres i in [start + h, end − h): full windows
-      glm::dvec3 a(0), b(0);
-      size_t since = 512;
-      for (size_t i = start + hh; i + hh < end; ++i) {
-        if (since >= 512) {
-          a = b = glm::dvec3(0);
-          for (int k = -h; k <= h; ++k) {
-            a += s.dir[i + k];
-            b += double(k) * s.dir[i + k];
-          }
-          since = 0;
-        }
-        velocity[i] = static_cast<float>(scale * glm::length(b));
-        if (i + hh + 1 < end) {  // slide to i + 1
-          b += -a + double(h + 1) * s.dir[i - hh] + double(h) * s.dir[i + hh + 1];
-          a += s.dir[i + hh + 1] - s.dir[i - hh];
-          ++since;
-        }
-      }
-    }
-    // The edges: the largest centred window that fits
-    for (size_t i = start; i < end; ++i) {
-      const size_t hi = std::min<size_t>({hh, i - start, end - 1 - i});
-      if (hi == hh) continue;
-      if (hi < 1) {  // a run's first or last sample: the one-sided difference
-        if (end - start >= 2) velocity[i] = static_cast<float>(kDeg * glm::length(s.dir[i == start ? i + 1 : i - 1] - s.dir[i]) / s.dt);
-        continue;
-      }
-      glm::dvec3 v(0);
-      for (size_t k = 0; k <= 2 * hi; ++k) v += sg.d1[hi][k] * s.dir[i - hi + k];
-      velocity[i] = static_cast<float>(kDeg * glm::length(v) / s.dt);
-    }
-    start = end;
+    line_velocity_run(s, h, sg, start, s.run_end[start], velocity);
+    start = s.run_end[start];
   }
 }
 
 // Pursuit in the intersaccadic runs (nhp): a least-squares line's velocity over a longer window.
-void label_pursuit(const Signal& s, const EventParams& p, std::vector<EventLabel>& labels) {
+void label_pursuit(const Signal& s, const PursuitParams& pursuit, std::vector<EventLabel>& labels) {
   std::vector<float> slow;
-  line_velocity(s, half_width(p.pursuit.window_s, s.dt), slow);
-  const double min_pursuit = p.pursuit.min_s - 1e-6;
+  line_velocity(s, half_width(pursuit.window_s, s.dt), slow);
+  const double min_pursuit = pursuit.min_s - 1e-6;
   for (size_t i = 0; i < s.n;) {
-    if (!(free_sample(labels, s, i) && slow[i] > p.pursuit.velocity_deg_s)) {
+    if (!(free_sample(labels, s, i) && slow[i] > pursuit.velocity_deg_s)) {
       ++i;
       continue;
     }
     size_t j = i;
-    while (j < s.n && free_sample(labels, s, j) && slow[j] > p.pursuit.velocity_deg_s) ++j;
+    while (j < s.n && free_sample(labels, s, j) && slow[j] > pursuit.velocity_deg_s) ++j;
     const double duration = (j - i) * s.dt;
     const double travelled = angle_between_deg(s.dir[i], s.dir[j - 1]);
-    if (duration >= min_pursuit && travelled >= 0.5 * p.pursuit.velocity_deg_s * duration)
+    if (duration >= min_pursuit && travelled >= pursuit.travel_fraction * pursuit.velocity_deg_s * duration)
       for (size_t k = i; k < j; ++k) labels[k] = EventLabel::pursuit;
     i = j;
+  }
+}
+
+// Pursuit in the intersaccadic intervals (nhr): the least-squares line's velocity over a window
+// that stays inside each interval (a window reaching into the saccade before or after would take
+// its movement for pursuit).
+void label_pursuit_in_intervals(const Signal& s, const EventParams& p, std::vector<EventLabel>& labels) {
+  const PursuitParams& pursuit = p.slow_pursuit;
+  const int h = half_width(pursuit.window_s, s.dt);
+  const SavitzkyGolay sg(h);
+  std::vector<float> slow(s.n, NAN);
+  const double min_pursuit = pursuit.min_s - 1e-6;
+  const double keep = p.pursuit_keep, relax = p.context_relax, cos_min = p.context_cos, relax_min = p.context_min_fraction;
+  const size_t settle = static_cast<size_t>(std::lround(p.settle_s / s.dt));
+  auto moving = [&](size_t k) { return labels[k] == EventLabel::saccade || labels[k] == EventLabel::pso; };
+  // Candidate runs of one free stretch [start, end) above `velocity`, extended while above keep·velocity
+  auto label_runs_above = [&](size_t start, size_t end, double velocity, double min_s, const glm::dvec3* along) {
+    for (size_t i = start; i < end;) {
+      if (!(slow[i] > velocity)) {
+        ++i;
+        continue;
+      }
+      size_t j = i;
+      while (j < end && slow[j] > keep * velocity) ++j;
+      while (i > start && slow[i - 1] > keep * velocity) --i;
+      const bool after_saccade = start > 0 && moving(start - 1);
+      const size_t from = after_saccade ? std::max(i, std::min(j, start + settle)) : i;  // the eye settling after a saccade does not count
+      const double duration = (j - from) * s.dt;
+      const double travelled = angle_between_deg(s.dir[i], s.dir[j - 1]);
+      bool ok = duration >= min_s && travelled >= pursuit.travel_fraction * velocity * (j - i) * s.dt;
+      if (ok && along) {
+        const glm::dvec3 d = s.dir[j - 1] - s.dir[i];
+        ok = glm::dot(d, *along) >= cos_min * glm::length(d) * glm::length(*along);
+      }
+      if (ok)
+        for (size_t k = i; k < j; ++k) labels[k] = EventLabel::pursuit;
+      i = j;
+    }
+  };
+  for (size_t start = 0; start < s.n;) {
+    if (!free_sample(labels, s, start)) {
+      ++start;
+      continue;
+    }
+    size_t end = start;
+    while (end < s.n && free_sample(labels, s, end) && s.run_start[end] == s.run_start[start]) ++end;
+    line_velocity_run(s, h, sg, start, end, slow);
+    label_runs_above(start, end, pursuit.velocity_deg_s, min_pursuit, nullptr);
+    start = end;
+  }
+  if (relax <= 0) return;
+  // Context: pursuit continues across catch-up saccades; a slower stretch next to a pursuit (across
+  // at most a saccade and its PSO) that moves the same way is pursuit too
+  const size_t context = static_cast<size_t>(std::lround(p.context_s / s.dt));
+  auto pursuit_direction = [&](size_t k) {  // the pursuit run through k: its net movement
+    size_t a = k, b = k;
+    while (a > 0 && labels[a - 1] == EventLabel::pursuit) --a;
+    while (b + 1 < s.n && labels[b + 1] == EventLabel::pursuit) ++b;
+    return s.dir[b] - s.dir[a];
+  };
+  for (int pass = 0; pass < 4; ++pass) {
+    bool changed = false;
+    for (size_t start = 0; start < s.n;) {
+      if (!free_sample(labels, s, start)) {
+        ++start;
+        continue;
+      }
+      size_t end = start;
+      while (end < s.n && free_sample(labels, s, end) && s.run_start[end] == s.run_start[start]) ++end;
+      std::optional<glm::dvec3> along;
+      size_t k = start, steps = 0;
+      while (k > 0 && steps < context && moving(k - 1)) --k, ++steps;
+      if (k > 0 && labels[k - 1] == EventLabel::pursuit) along = pursuit_direction(k - 1);
+      k = end, steps = 0;
+      while (!along && k < s.n && steps < context && moving(k)) ++k, ++steps;
+      if (!along && k < s.n && labels[k] == EventLabel::pursuit && k != end) along = pursuit_direction(k);
+      if (!along && end < s.n && labels[end] == EventLabel::pursuit) along = pursuit_direction(end);
+      if (!along && start > 0 && labels[start - 1] == EventLabel::pursuit) along = pursuit_direction(start - 1);
+      if (along) {
+        const size_t before = std::count(labels.begin() + start, labels.begin() + end, EventLabel::pursuit);
+        label_runs_above(start, end, relax * pursuit.velocity_deg_s, relax_min * min_pursuit, &*along);
+        changed |= std::count(labels.begin() + start, labels.begin() + end, EventLabel::pursuit) != static_cast<long>(before);
+      }
+      start = end;
+    }
+    if (!changed) break;
   }
 }
 
@@ -483,15 +690,16 @@ EventDetection detect_events(const Recording& r, const GazeGeometry& g, EventMet
   out.method = method;
   Signal s = prepare(r, g);
   out.sampling_hz = 1 / s.dt;
-  const bool adaptive = method == EventMethod::nh || method == EventMethod::nhp;
+  const bool adaptive = method == EventMethod::nh || method == EventMethod::nhp || method == EventMethod::nhr;
   std::vector<float> acceleration;  // nh, nhp: for the noise test
-  savitzky_golay(s, half_width(p.filter_window_s, s.dt), out.velocity_deg_s, adaptive ? &acceleration : nullptr);
+  const double filter_window = method == EventMethod::nhr ? p.robust_filter_window_s : p.filter_window_s;
+  savitzky_golay(s, half_width(filter_window, s.dt), out.velocity_deg_s, adaptive ? &acceleration : nullptr);
   const std::vector<float>& v = out.velocity_deg_s;
   out.labels.assign(s.n, EventLabel::undefined);
   auto& labels = out.labels;
   // The blink rule's pupil test (not for ivt/idt, whose lost samples are their blinks)
   std::optional<PupilTest> pupil;
-  if (method != EventMethod::ivt && method != EventMethod::idt) pupil.emplace(r, p.pupil_deviation);
+  if (method != EventMethod::ivt && method != EventMethod::idt && method != EventMethod::ivvt) pupil.emplace(r, p.pupil_deviation);
 
   switch (method) {
     case EventMethod::ivt:
@@ -501,8 +709,22 @@ EventDetection detect_events(const Recording& r, const GazeGeometry& g, EventMet
       labels = labels_from_fixations(r, f);
       break;
     }
+    case EventMethod::ivvt: {
+      // The causal filter that replay and view follow the eye with, sample by sample as a tracker
+      // delivers them: its fixations, pursuits, the rest of the valid samples saccades
+      FixationTracker tracker(FixationMethod::ivvt, fixation, g);
+      for (size_t i = 0; i < s.n; ++i) {
+        tracker.push(r.samples[i]);
+        labels[i] = !s.valid[i]             ? EventLabel::blink
+                    : tracker.in_pursuit()  ? EventLabel::pursuit
+                    : tracker.in_fixation() ? EventLabel::fixation
+                                            : EventLabel::saccade;
+      }
+      break;
+    }
     case EventMethod::nh:
-    case EventMethod::nhp: {
+    case EventMethod::nhp:
+    case EventMethod::nhr: {
       // Physiologically impossible samples are noise: out of the threshold's statistics
       std::vector<float> clean = v;
       for (size_t i = 0; i < s.n; ++i)
@@ -510,25 +732,50 @@ EventDetection detect_events(const Recording& r, const GazeGeometry& g, EventMet
           s.noise[i] = true;
           clean[i] = NAN;
         }
-      const std::pair<double, double> thresholds = adaptive_velocity_thresholds(clean, p.initial_peak_deg_s);
-      const double peak = thresholds.first, onset = thresholds.second;  // (clang: no structured bindings in lambdas)
-      out.peak_threshold_deg_s = peak;
-      out.onset_threshold_deg_s = onset;
-      // Noise next to a loss is the lid's (a blink); elsewhere it stays undefined
-      label_blinks(
-          r, s, p, [&](size_t i) { return s.noise[i] || !(v[i] < onset) || (*pupil)(r.samples[i]); }, labels);
       // The smoother velocity that finds small saccades in noise (its own thresholds; none when off)
       std::vector<float> coarse;
-      double coarse_peak = INFINITY;
       if (p.detection_window_s > 0) {
         line_velocity(s, half_width(p.detection_window_s, s.dt), coarse);
         for (size_t i = 0; i < s.n; ++i)
           if (s.noise[i]) coarse[i] = NAN;
-        coarse_peak = adaptive_velocity_thresholds(coarse, p.initial_peak_deg_s).first;
       }
-      label_saccades_nh(s, p, clean, peak, onset, coarse, coarse_peak, labels);
+      SampleThresholds th;
+      if (method == EventMethod::nhr) {
+        // Local, robust thresholds (median and MAD per window)
+        const size_t window = std::max<size_t>(8, static_cast<size_t>(std::lround(p.threshold_window_s / s.dt)));
+        const LocalStatistics fine = local_statistics(clean, window);
+        th.peak.resize(s.n);
+        th.onset.resize(s.n);
+        for (size_t i = 0; i < s.n; ++i) {
+          const size_t b = i / fine.block;
+          th.peak[i] = static_cast<float>(std::max(p.min_peak_deg_s, fine.median[b] + p.robust_peak_k * fine.mad[b]));
+          th.onset[i] = static_cast<float>(std::max(0.5 * p.min_peak_deg_s, fine.median[b] + p.robust_onset_k * fine.mad[b]));
+        }
+        if (!coarse.empty()) {
+          const LocalStatistics slow = local_statistics(coarse, window);
+          th.coarse_peak.resize(s.n);
+          for (size_t i = 0; i < s.n; ++i) {
+            const size_t b = i / slow.block;
+            th.coarse_peak[i] = static_cast<float>(std::max(p.min_peak_deg_s, slow.median[b] + p.robust_peak_k * slow.mad[b]));
+          }
+        }
+        out.peak_threshold_deg_s = median_of({th.peak.begin(), th.peak.end()});
+        out.onset_threshold_deg_s = median_of({th.onset.begin(), th.onset.end()});
+      } else {
+        const std::pair<double, double> thresholds = adaptive_velocity_thresholds(clean, p.initial_peak_deg_s);
+        th.peak.assign(s.n, thresholds.first);
+        th.onset.assign(s.n, thresholds.second);
+        if (!coarse.empty()) th.coarse_peak.assign(s.n, adaptive_velocity_thresholds(coarse, p.initial_peak_deg_s).first);
+        out.peak_threshold_deg_s = thresholds.first;
+        out.onset_threshold_deg_s = thresholds.second;
+      }
+      // Noise next to a loss is the lid's (a blink); elsewhere it stays undefined
+      label_blinks(
+          r, s, p, [&](size_t i) { return s.noise[i] || !(v[i] < th.onset[i]) || (*pupil)(r.samples[i]); }, labels);
+      label_saccades_nh(s, p, clean, th, coarse, labels);
       absorb_lid_saccades(s, p, labels);
-      if (method == EventMethod::nhp) label_pursuit(s, p, labels);
+      if (method == EventMethod::nhp) label_pursuit(s, p.pursuit, labels);
+      if (method == EventMethod::nhr) label_pursuit_in_intervals(s, p, labels);
       label_fixations(s, p.min_fixation_s, labels);
       break;
     }

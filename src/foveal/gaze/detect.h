@@ -48,10 +48,10 @@
 
 namespace foveal {
 
-enum class EventMethod { ivt, idt, ek, nh, nhp };
-inline constexpr EventMethod kRecommendedEventMethod = EventMethod::nhp;
+enum class EventMethod { ivt, idt, ivvt, ek, nh, nhp, nhr };
+inline constexpr EventMethod kRecommendedEventMethod = EventMethod::nhr;
 const char* to_string(EventMethod method);
-// ivt, idt, ek, nh, nhp or auto (the recommended); throws Error naming --events.
+// ivt, idt, ivvt, ek, nh, nhp, nhr or auto (the recommended); throws Error naming --events.
 EventMethod parse_event_method(const std::string& name);
 
 struct EventParams {
@@ -74,6 +74,19 @@ struct EventParams {
   double ek_lambda = 6;
   double ek_min_saccade_s = 0.006;
   PursuitParams pursuit;  // nhp: smooth pursuit in the intersaccadic intervals
+  // nhr (tuned on the IRF recordings and the Lund 2013 training recordings only; docs/gaze.md)
+  double robust_filter_window_s = 0.010;               // Savitzky–Golay window of the velocity
+  double threshold_window_s = 0.5;                     // local thresholds: the median and MAD of this window's velocities …
+  double robust_peak_k = 8;                            // … peak threshold median + k·1.4826·MAD
+  double robust_onset_k = 4.5;                         // … onset threshold median + k·1.4826·MAD
+  double min_peak_deg_s = 10;                          // floors (a noise-free recording's MAD is 0): the peak's, half of it the onset's
+  PursuitParams slow_pursuit{3.0, 0.250, 0.150, 0.5};  // speed of a line over the window, inside one intersaccadic interval
+  double pursuit_keep = 0.7;                           // a pursuit goes on while its speed stays above this fraction of the threshold
+  double settle_s = 0.050;                             // the eye settling after a saccade: not counted toward a pursuit's duration
+  double context_s = 0.100;                            // a pursuit this close (across a saccade and its PSO) …
+  double context_relax = 0.4;                          // … lowers the speed threshold by this factor …
+  double context_min_fraction = 0.25;                  // … and the minimum duration by this one, for movement the same way:
+  double context_cos = 0.7;                            // within acos(0.7) = 46° of that pursuit's direction
 };
 // Check parameters; throws Error naming the option.
 void validate(const EventParams& params);

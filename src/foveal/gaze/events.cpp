@@ -4,6 +4,7 @@
 #include "foveal/util/text.h"
 #include "foveal/util/error.h"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -62,6 +63,7 @@ LabelFile parse_label_file(const std::string& content, const std::string& name) 
   int c_t = -1, c_label = -1;
   size_t columns = 0;
   LabelFile out;
+  out.name = name;
   while (lines.next(line)) {
     if (text::trim(line).empty()) continue;
     const auto f = text::split(line, ',');
@@ -85,12 +87,45 @@ LabelFile parse_label_file(const std::string& content, const std::string& name) 
            text::trim(f[c_label]));
     out.t_s.push_back(*t);
     out.label.push_back(*label);
+    out.line.push_back(lines.number());
   }
   if (out.label.empty()) fail("{}: no labelled samples", name);
   return out;
 }
 
 LabelFile read_label_file(const std::string& path) { return parse_label_file(text::read_file(path), path); }
+
+AlignedLabels align_labels(const LabelFile& file, const std::vector<double>& t) {
+  AlignedLabels out;
+  out.label.assign(t.size(), EventLabel::undefined);
+  out.covered.assign(t.size(), false);
+  // A quarter of the median interval (of at most 4096 evenly spread intervals)
+  std::vector<double> intervals;
+  for (size_t i = 1; i < t.size(); i += 1 + t.size() / 4096)
+    if (t[i] > t[i - 1]) intervals.push_back(t[i] - t[i - 1]);
+  double tolerance = 0;
+  if (!intervals.empty()) {
+    std::nth_element(intervals.begin(), intervals.begin() + intervals.size() / 2, intervals.end());
+    tolerance = 0.25 * intervals[intervals.size() / 2];
+  }
+  tolerance = std::max(tolerance, 1e-9);
+  size_t i = 0;
+  for (size_t j = 0; j < file.label.size(); ++j) {
+    const double tj = file.t_s[j];
+    const size_t line = j < file.line.size() ? file.line[j] : j + 2;
+    while (i < t.size() && t[i] < tj - tolerance) ++i;
+    if (i == t.size() || std::abs(t[i] - tj) > tolerance)
+      fail(
+          "{}:{}: the label at t = {:.6g} s matches no sample of the recording (its samples run from {:.6g} to {:.6g} s): "
+          "the labels must be of this recording's samples, on the same clock",
+          file.name, line, tj, t.empty() ? NAN : t.front(), t.empty() ? NAN : t.back());
+    if (out.covered[i]) fail("{}:{}: a second label for the sample at t = {:.6g} s", file.name, line, t[i]);
+    out.covered[i] = true;
+    out.label[i] = file.label[j];
+    ++out.count;
+  }
+  return out;
+}
 
 const ClassScore& Evaluation::of(EventLabel label) const {
   for (const ClassScore& c : classes)
@@ -178,6 +213,23 @@ Evaluation evaluate_labels(const std::vector<EventLabel>& test, const std::vecto
     e.classes.push_back(s);
   }
   return e;
+}
+
+Evaluation evaluate_labels(const std::vector<EventLabel>& test, const std::vector<EventLabel>& reference, const std::vector<double>& t,
+                           const std::vector<bool>& scored) {
+  if (scored.size() != t.size() || test.size() != t.size() || reference.size() != t.size())
+    fail("evaluate: {} labels against {} reference labels ({} sample times, {} scored flags): the streams must cover the same samples",
+         test.size(), reference.size(), t.size(), scored.size());
+  if (std::all_of(scored.begin(), scored.end(), [](bool b) { return b; })) return evaluate_labels(test, reference, t);
+  std::vector<EventLabel> a, b;
+  std::vector<double> u;
+  for (size_t i = 0; i < t.size(); ++i)
+    if (scored[i]) {
+      a.push_back(test[i]);
+      b.push_back(reference[i]);
+      u.push_back(t[i]);
+    }
+  return evaluate_labels(a, b, u);
 }
 
 }  // namespace foveal

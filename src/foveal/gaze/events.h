@@ -51,11 +51,25 @@ std::vector<EventLabel> labels_from_fixations(const Recording& recording, const 
 // (names or Zemblys et al.'s numbers), other columns ignored — such as the IRF recordings
 // (t_s,x_deg,y_deg,status,label). Throws Error naming file:line.
 struct LabelFile {
+  std::string name;  // the file's path (or the name given to parse_label_file), for errors
   std::vector<double> t_s;
   std::vector<EventLabel> label;
+  std::vector<size_t> line;  // each label's line in the file
 };
 LabelFile read_label_file(const std::string& path);
 LabelFile parse_label_file(const std::string& text, const std::string& name);
+
+// A label file's labels put on a recording's samples by time: each label's time must be a sample's
+// (within a quarter of the median sampling interval) and no two labels may fall on one sample —
+// labels shifted in time, or of another recording, are refused (Error naming file:line), not scored
+// as if aligned. A coder may label a part of the samples (a recording's lost tail left out): the
+// samples without a label are undefined and not `covered`.
+struct AlignedLabels {
+  std::vector<EventLabel> label;  // one per sample
+  std::vector<bool> covered;      // the file labels this sample
+  size_t count = 0;               // samples covered
+};
+AlignedLabels align_labels(const LabelFile& file, const std::vector<double>& sample_t_s);
 
 struct ClassScore {
   EventLabel label = EventLabel::fixation;
@@ -75,5 +89,8 @@ struct Evaluation {
 };
 // `test` against `reference` (same length, same sample times `t_s`).
 Evaluation evaluate_labels(const std::vector<EventLabel>& test, const std::vector<EventLabel>& reference, const std::vector<double>& t_s);
+// The same over the samples where `scored` is true only (the samples every coder labelled).
+Evaluation evaluate_labels(const std::vector<EventLabel>& test, const std::vector<EventLabel>& reference, const std::vector<double>& t_s,
+                           const std::vector<bool>& scored);
 
 }  // namespace foveal

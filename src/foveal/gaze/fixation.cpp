@@ -86,6 +86,7 @@ void validate(const PursuitParams& p) {
   require_positive(p.velocity_deg_s, "pursuit_velocity_deg_s");
   require_positive(p.window_s, "pursuit_window_s");
   require_non_negative(p.min_s, "pursuit_min_s");
+  require_non_negative(p.travel_fraction, "pursuit_travel_fraction");
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -54,6 +54,7 @@ struct PursuitParams {
   double velocity_deg_s = 6;
   double window_s = 0.040;
   double min_s = 0.080;
+  double travel_fraction = 0.5;  // a pursuit covers at least this fraction of the distance its speed implies
 };
 // Check parameters; throws Error naming the option.
 void validate(const PursuitParams& params);
