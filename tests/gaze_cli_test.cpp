@@ -341,6 +341,37 @@ TEST(GazeCli, RecommendedDetectorAgainstTheIrfExpert) {
   EXPECT_DOUBLE_EQ(self["classes"]["saccade"]["f1"].get<double>(), 1.0);
 }
 
+// The Lund 2013 training recordings (500 Hz SMI, free viewing and moving dots, two coders): the
+// recommended detector against both coders, with their agreement as the ceiling. The noisiest
+// image-viewing recording (TL28, where nhp found 104 of the coder's 513 saccade samples) and a
+// moving-dot one (pursuit). The coders' files of TH34_img_vy differ by two lost samples at the end:
+// scored over the samples both labelled.
+TEST(GazeCli, RecommendedDetectorAgainstBothLundCoders) {
+  const std::string dir = std::string(FOVEAL_DATA_DIR) + "/eye-movements/lund2013-train/";
+  if (!std::filesystem::exists(dir)) GTEST_SKIP() << "skipped: " << dir << " is absent";
+  auto score = [&](const std::string& stem, const std::string& coder, const std::string& other) {
+    const std::string mn = dir + stem + "_labelled_" + coder + ".csv", ra = dir + stem + "_labelled_" + other + ".csv";
+    const CliRun r = foveal_test::foveal("gaze " + mn + " --coords px --display 38,30,67,1024,768 --events auto --evaluate " + mn +
+                                         " --coder2 " + ra + " --json lund.json --no-scanpath");
+    EXPECT_EQ(r.status, 0) << r.err;
+    return std::make_pair(nlohmann::json::parse(std::ifstream(scratch("lund.json")))["events"], r.out);
+  };
+  for (const char* coder : {"MN", "RA"}) {
+    SCOPED_TRACE(coder);
+    const std::string other = std::string(coder) == "MN" ? "RA" : "MN";
+    const auto [img, img_out] = score("img/TL28_img_konijntjes", coder, other);
+    EXPECT_EQ(img["detector"], "nhr");
+    EXPECT_GT(img["classes"]["saccade"]["kappa"].get<double>(), 0.7);
+    EXPECT_GT(img["classes"]["saccade"]["kappa"].get<double>(), 0.8 * img["ceiling"]["classes"]["saccade"]["kappa"].get<double>());
+    EXPECT_NE(img_out.find("ceiling"), std::string::npos);
+    const auto [dots, dots_out] = score("dots/TH20_trial1", coder, other);
+    EXPECT_GT(dots["classes"]["pursuit"]["kappa"].get<double>(), 0.5);
+  }
+  const auto [vy, vy_out] = score("img/TH34_img_vy", "MN", "RA");
+  EXPECT_EQ(vy["samples"].get<size_t>(), vy["ceiling"]["samples"].get<size_t>());
+  EXPECT_NE(vy_out.find("over the 4988 of 4990 samples every coder labelled"), std::string::npos) << vy_out;
+}
+
 namespace foveal_test {
 
 // gaze --events reports each saccade's landing as the live predictor saw it: one row per detected

@@ -63,6 +63,7 @@ void validate(const EventParams& p) {
   require_positive(p.ek_lambda, "ek_lambda");
   require_non_negative(p.ek_min_saccade_s, "ek_min_saccade_s");
   validate(p.pursuit);
+  require_non_negative(p.max_dropout_s, "max_dropout_s");
   require_positive(p.robust_filter_window_s, "robust_filter_window_s");
   require_positive(p.threshold_window_s, "threshold_window_s");
   require_positive(p.robust_peak_k, "robust_peak_k");
@@ -129,15 +130,17 @@ struct Signal {
   std::vector<glm::dvec3> dir;
   std::vector<uint8_t> valid;              // bytes, not std::vector<bool>: read at every sample by every pass
   std::vector<uint8_t> noise;              // nh: physiologically impossible velocity or acceleration (never free)
+  std::vector<uint8_t> filled;             // nhr: a lost sample of a dropout, filled in (and valid)
   std::vector<size_t> run_start, run_end;  // per sample: its run of contiguous valid samples [start, end)
 };
 
-Signal prepare(const Recording& r, const GazeGeometry& g) {
+Signal prepare(const Recording& r, const GazeGeometry& g, double max_fill_s = 0) {
   Signal s;
   s.n = r.samples.size();
   s.dir.assign(s.n, glm::dvec3(0, 0, 1));
   s.valid.assign(s.n, 0);
   s.noise.assign(s.n, 0);
+  s.filled.assign(s.n, 0);
   std::vector<double> intervals;
   for (size_t i = 0; i < s.n; ++i) {
     if (r.samples[i].valid) {
@@ -155,6 +158,24 @@ Signal prepare(const Recording& r, const GazeGeometry& g) {
     std::nth_element(intervals.begin(), mid, intervals.end());
     s.dt = *mid;
   }
+  // Dropouts (nhr): losses no longer than max_fill_s between two valid samples, filled along the
+  // great circle between them so that the velocity and the events run through them
+  if (max_fill_s > 0)
+    for (size_t i = 1; i + 1 < s.n; ++i) {
+      if (s.valid[i] || !s.valid[i - 1]) continue;
+      size_t j = i;
+      while (j < s.n && !s.valid[j]) ++j;
+      if (j < s.n && r.samples[j].t_s - r.samples[i - 1].t_s <= max_fill_s + 1.5 * s.dt) {
+        const glm::dvec3 a = s.dir[i - 1], b = s.dir[j];
+        for (size_t k = i; k < j; ++k) {
+          const double u = double(k - i + 1) / double(j - i + 1);
+          s.dir[k] = glm::normalize((1 - u) * a + u * b);
+          s.valid[k] = 1;
+          s.filled[k] = 1;
+        }
+      }
+      i = j;
+    }
   s.run_start.assign(s.n, 0);
   s.run_end.assign(s.n, 0);
   for (size_t i = 0; i < s.n;) {
@@ -617,7 +638,8 @@ void label_pursuit_in_intervals(const Signal& s, const EventParams& p, std::vect
   }
 }
 
-// The free valid runs left become fixations (those shorter than `min_s` stay undefined).
+// The free valid runs left become fixations (those shorter than `min_s` stay undefined). A gap in
+// the samples' times ends a fixation: the time without samples is lost, not fixated.
 void label_fixations(const Signal& s, double min_s, std::vector<EventLabel>& labels) {
   for (size_t i = 0; i < s.n;) {
     if (!free_sample(labels, s, i)) {
@@ -625,7 +647,7 @@ void label_fixations(const Signal& s, double min_s, std::vector<EventLabel>& lab
       continue;
     }
     size_t j = i;
-    while (j < s.n && free_sample(labels, s, j)) ++j;
+    while (j < s.n && free_sample(labels, s, j) && s.run_start[j] == s.run_start[i]) ++j;
     if ((j - i) * s.dt >= min_s - 1e-6)
       for (size_t k = i; k < j; ++k) labels[k] = EventLabel::fixation;
     i = j;
@@ -642,7 +664,23 @@ void list_events(const Recording& r, const Signal& s, EventDetection& out) {
   std::vector<double> t(s.n);
   for (size_t i = 0; i < s.n; ++i) t[i] = r.samples[i].t_s;
   out.events.clear();
+  // The runs of one label, split where the samples' times jump (a gap in the recording)
+  std::vector<LabelledEvent> runs;
   for (const LabelledEvent& run : label_runs(out.labels, t)) {
+    LabelledEvent part = run;
+    for (size_t k = run.first + 1; k <= run.last; ++k)
+      if (s.valid[k - 1] && s.valid[k] && s.run_start[k] != s.run_start[k - 1]) {
+        part.last = k - 1;
+        part.offset_s = t[k - 1];
+        runs.push_back(part);
+        part.first = k;
+        part.onset_s = t[k];
+      }
+    part.last = run.last;
+    part.offset_s = run.offset_s;
+    runs.push_back(part);
+  }
+  for (const LabelledEvent& run : runs) {
     if (run.label == EventLabel::undefined) continue;
     DetectedEvent e;
     e.label = run.label;
@@ -688,7 +726,7 @@ EventDetection detect_events(const Recording& r, const GazeGeometry& g, EventMet
   validate(p);
   EventDetection out;
   out.method = method;
-  Signal s = prepare(r, g);
+  Signal s = prepare(r, g, method == EventMethod::nhr ? p.max_dropout_s : 0);
   out.sampling_hz = 1 / s.dt;
   const bool adaptive = method == EventMethod::nh || method == EventMethod::nhp || method == EventMethod::nhr;
   std::vector<float> acceleration;  // nh, nhp: for the noise test

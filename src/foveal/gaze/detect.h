@@ -75,11 +75,12 @@ struct EventParams {
   double ek_min_saccade_s = 0.006;
   PursuitParams pursuit;  // nhp: smooth pursuit in the intersaccadic intervals
   // nhr (tuned on the IRF recordings and the Lund 2013 training recordings only; docs/gaze.md)
-  double robust_filter_window_s = 0.010;               // Savitzky–Golay window of the velocity
-  double threshold_window_s = 0.5;                     // local thresholds: the median and MAD of this window's velocities …
-  double robust_peak_k = 8;                            // … peak threshold median + k·1.4826·MAD
-  double robust_onset_k = 4.5;                         // … onset threshold median + k·1.4826·MAD
-  double min_peak_deg_s = 10;                          // floors (a noise-free recording's MAD is 0): the peak's, half of it the onset's
+  double max_dropout_s = 0.050;           // shorter losses are the tracker's dropouts, not blinks: filled in between their neighbours
+  double robust_filter_window_s = 0.010;  // Savitzky–Golay window of the velocity
+  double threshold_window_s = 0.5;        // local thresholds: the median and MAD of this window's velocities …
+  double robust_peak_k = 8;               // … peak threshold median + k·1.4826·MAD
+  double robust_onset_k = 4.5;            // … onset threshold median + k·1.4826·MAD
+  double min_peak_deg_s = 10;             // floors (a noise-free recording's MAD is 0): the peak's, half of it the onset's
   PursuitParams slow_pursuit{3.0, 0.250, 0.150, 0.5};  // speed of a line over the window, inside one intersaccadic interval
   double pursuit_keep = 0.7;                           // a pursuit goes on while its speed stays above this fraction of the threshold
   double settle_s = 0.050;                             // the eye settling after a saccade: not counted toward a pursuit's duration

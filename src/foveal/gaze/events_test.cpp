@@ -139,3 +139,33 @@ TEST(Events, DegreesMapThroughTheDisplay) {
   EXPECT_NEAR(r.samples[2].px.y, 250 + std::tan(glm::radians(5.0)) * 50 * 500 / 20, 1e-9);  // y up: below the centre
   EXPECT_THROW(parse_recording("t,x_deg,y_deg\n0,95,0\n", "d.csv", o), Error);
 }
+
+// Labels are put on the samples by time: a coder's file that leaves the lost tail out is scored
+// over the samples it labels; labels shifted by 100 s, of another rate, or twice for one sample are
+// refused with the file and line (issue 36's finding 12: the order alone was checked).
+TEST(Events, LabelsAreMatchedToTheSamplesByTime) {
+  const std::vector<double> t = ms(6);
+  const LabelFile whole = parse_label_file("t,label\n0,1\n0.001,1\n0.002,2\n0.003,2\n0.004,1\n0.005,1\n", "a.csv");
+  const AlignedLabels a = align_labels(whole, t);
+  EXPECT_EQ(a.count, 6u);
+  EXPECT_EQ(a.label, labels("FFSSFF"));
+  const AlignedLabels shorter = align_labels(parse_label_file("t,label\n0,1\n0.001,1\n0.002,2\n0.003,2\n", "b.csv"), t);
+  EXPECT_EQ(shorter.count, 4u);
+  EXPECT_EQ(shorter.label, labels("FFSSUU"));
+  EXPECT_EQ(shorter.covered, (std::vector<bool>{true, true, true, true, false, false}));
+  // Scored over the covered samples only: the test's two extra samples do not count
+  const Evaluation e = evaluate_labels(labels("FFSSBB"), shorter.label, t, shorter.covered);
+  EXPECT_EQ(e.samples, 4u);
+  EXPECT_DOUBLE_EQ(e.kappa, 1.0);
+  auto error_of = [&](const std::string& text) {
+    try {
+      align_labels(parse_label_file(text, "c.csv"), t);
+    } catch (const Error& x) {
+      return std::string(x.what());
+    }
+    return std::string("no error");
+  };
+  EXPECT_NE(error_of("t,label\n100,1\n100.001,1\n").find("c.csv:2: the label at t = 100 s matches no sample"), std::string::npos);
+  EXPECT_NE(error_of("t,label\n0,1\n0.0005,1\n").find("c.csv:3:"), std::string::npos);  // between two samples
+  EXPECT_NE(error_of("t,label\n0.001,1\n0.001,2\n").find("c.csv:3: a second label for the sample at t = 0.001 s"), std::string::npos);
+}
