@@ -17,7 +17,7 @@ namespace {
 struct BenchEventsOptions {
   double seconds = 60;
   std::string rates = "250,500,1000,2000", noise = "0.02,0.05,0.1,0.2,0.3", loss = "0,0.05,0.1,0.15", methods = "nhr,nhp";
-  double burst_ms = 20;
+  double burst_ms = 10;
   unsigned seed = 11;
   std::string json, markdown;
 };

@@ -18,7 +18,7 @@ struct DegradationParams {
   std::vector<double> rates_hz{250, 500, 1000, 2000};
   std::vector<double> noise_rms_deg{0.02, 0.05, 0.1, 0.2, 0.3};
   std::vector<double> loss_fractions{0, 0.05, 0.10, 0.15};
-  double burst_s = 0.020;  // lost bursts of 10–30 ms
+  double burst_s = 0.010;  // lost bursts of 5–15 ms (the tracker's dropouts; blinks are in the signal)
   std::vector<EventMethod> methods{EventMethod::nhr, EventMethod::nhp};
   unsigned seed = 11;
 };

@@ -75,7 +75,7 @@ struct EventParams {
   double ek_min_saccade_s = 0.006;
   PursuitParams pursuit;  // nhp: smooth pursuit in the intersaccadic intervals
   // nhr (tuned on the IRF recordings and the Lund 2013 training recordings only; docs/gaze.md)
-  double max_dropout_s = 0.050;           // shorter losses are the tracker's dropouts, not blinks: filled in between their neighbours
+  double max_dropout_s = 0.025;           // shorter losses are the tracker's dropouts, not blinks: filled in between their neighbours
   double robust_filter_window_s = 0.010;  // Savitzky–Golay window of the velocity
   double threshold_window_s = 0.5;        // local thresholds: the median and MAD of this window's velocities …
   double robust_peak_k = 8;               // … peak threshold median + k·1.4826·MAD

@@ -38,7 +38,7 @@ struct SyntheticSignal {
   struct Degradation {
     double noise_rms_deg = 0.05;  // 2-D RMS of white noise on every sample
     double loss_fraction = 0;     // share of samples lost, in bursts …
-    double burst_s = 0.020;       // … of about this length (uniform in [0.5, 1.5]×), placed at random
+    double burst_s = 0.010;       // … of about this length (uniform in [0.5, 1.5]×: dropouts of a few samples), placed at random
     unsigned seed = 7;
   };
   // The samples (directions through the display of make_synthetic_geometry), t from `t0_s`, and
