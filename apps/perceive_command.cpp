@@ -373,11 +373,11 @@ std::function<int()> add_perceive_command(CLI::App& app) {
   cmd->add_option("--field-map", o->field_map, "also write the visual field's loss map, ±30°, with the test locations (PNG)");
   cmd->add_option("--threads", o->threads, "worker threads (0 = all cores)")->capture_default_str()->check(CLI::Range(0, 4096));
   cmd->add_flag("-q,--quiet", o->quiet, "print nothing on success");
-  o->gaze_options.fixation = "nhp";  // the field moves from fixation to fixation
-  add_gaze_options(
-      *cmd, o->gaze_options,
-      "where the fixations come from: nhp (the recommended event detector; pursuit a step every 100 ms), ivt (velocity threshold), "
-      "idt (dispersion threshold) or tracker (the recording's own fixation events)");
+  o->gaze_options.fixation = "auto";  // the field moves from fixation to fixation
+  add_gaze_options(*cmd, o->gaze_options,
+                   "where the fixations come from: auto (= nhr, the recommended event detector; pursuit a step every 100 ms), nhp, ivt "
+                   "(velocity threshold), "
+                   "idt (dispersion threshold) or tracker (the recording's own fixation events)");
 
   return [o] { return run_perceive(*o); };
 }

@@ -332,11 +332,11 @@ std::function<int()> add_simulate_command(CLI::App& app) {
       "--gaze", o->gaze_source,
       "real eye movements instead of simulated saccades: a recording (EyeLink .asc, Pupil gaze_positions.csv, Tobii .tsv, t,x,y CSV; "
       "one step per fixation, every fixation unless --steps) or a live tracker pupil://HOST:PORT[?surface=NAME] (a step per new fixation)");
-  o->gaze.fixation = "nhp";  // steps go from fixation to fixation
-  add_gaze_options(
-      *cmd, o->gaze,
-      "--gaze: where the steps' fixations come from: nhp (the recommended event detector; pursuit a step every 100 ms; live: I-VVT), "
-      "ivt (velocity threshold), idt (dispersion threshold) or tracker (the recording's own fixation events)");
+  o->gaze.fixation = "auto";  // steps go from fixation to fixation
+  add_gaze_options(*cmd, o->gaze,
+                   "--gaze: where the steps' fixations come from: auto (= nhr, the recommended event detector; pursuit a step every 100 "
+                   "ms; live: I-VVT), nhp, "
+                   "ivt (velocity threshold), idt (dispersion threshold) or tracker (the recording's own fixation events)");
   cmd->add_option("--display", o->gaze_display, "--gaze: the recording's screen W_CM,H_CM,DIST_CM (angles for the fixation filter)")
       ->capture_default_str()
       ->needs(gaze_option);

@@ -31,8 +31,8 @@ inline void fuzz_recording(const uint8_t* data, size_t size, foveal::GazeFormat 
         if (const auto g = tracker.current(); g && !(std::isfinite(g->x) && std::isfinite(g->y))) __builtin_trap();
       }
     }
-    for (foveal::EventMethod m :
-         {foveal::EventMethod::ivt, foveal::EventMethod::idt, foveal::EventMethod::ek, foveal::EventMethod::nh, foveal::EventMethod::nhp}) {
+    for (foveal::EventMethod m : {foveal::EventMethod::ivt, foveal::EventMethod::idt, foveal::EventMethod::ivvt, foveal::EventMethod::ek,
+                                  foveal::EventMethod::nh, foveal::EventMethod::nhp, foveal::EventMethod::nhr}) {
       const foveal::EventDetection d = foveal::detect_events(r, geometry, m, {}, {});
       if (d.labels.size() != r.samples.size()) __builtin_trap();
       (void)foveal::events_tsv(d, r);

@@ -11,17 +11,20 @@
 namespace foveal {
 
 StepFixations parse_step_fixations(const std::string& name) {
-  if (name == "nhp" || name == "auto") return StepFixations::nhp;
+  if (name == "nhr" || name == "auto") return StepFixations::nhr;
+  if (name == "nhp") return StepFixations::nhp;
   if (name == "ivt") return StepFixations::ivt;
   if (name == "idt") return StepFixations::idt;
   if (name == "tracker") return StepFixations::tracker;
   if (name == "mean")
     fail("fixation: 'mean' gives a gaze point per frame, not fixations; simulate steps from fixation to fixation: use ivt, idt or tracker");
-  fail("fixation: unknown filter '{}' (nhp, ivt, idt or tracker: the recording's own fixation events)", name);
+  fail("fixation: unknown filter '{}' (auto = nhr, nhp, ivt, idt or tracker: the recording's own fixation events)", name);
 }
 
 const char* to_string(StepFixations source) {
   switch (source) {
+    case StepFixations::nhr:
+      return "nhr";
     case StepFixations::nhp:
       return "nhp";
     case StepFixations::ivt:
@@ -36,6 +39,7 @@ const char* to_string(StepFixations source) {
 
 FixationMethod live_filter(StepFixations source) {
   switch (source) {
+    case StepFixations::nhr:
     case StepFixations::nhp:
       return FixationMethod::ivvt;
     case StepFixations::ivt:
@@ -45,7 +49,7 @@ FixationMethod live_filter(StepFixations source) {
     case StepFixations::tracker:
       break;
   }
-  fail("fixation: a live tracker sends gaze, not fixation events: use nhp, ivt or idt");
+  fail("fixation: a live tracker sends gaze, not fixation events: use auto, ivt or idt");
 }
 
 std::vector<GazeEvent> invalid_gap_blinks(const std::vector<GazeSample>& samples) {
@@ -68,10 +72,11 @@ std::vector<GazeStep> recording_steps(const Recording& r, const GazeGeometry& ge
                                       const FixationParams& params) {
   std::vector<GazeEvent> fixations, detected_blinks;
   switch (source) {
+    case StepFixations::nhr:
     case StepFixations::nhp: {
       EventParams ep;
       ep.pursuit = params.pursuit;
-      const EventDetection d = detect_events(r, geometry, EventMethod::nhp, ep, params);
+      const EventDetection d = detect_events(r, geometry, source == StepFixations::nhr ? EventMethod::nhr : EventMethod::nhp, ep, params);
       for (const DetectedEvent& e : d.events) {
         const double end_s = r.samples[e.last].t_s;
         if (e.label == EventLabel::fixation) {
@@ -106,9 +111,9 @@ std::vector<GazeStep> recording_steps(const Recording& r, const GazeGeometry& ge
       fixations = r.fixations;
       break;
   }
-  const std::vector<GazeEvent> blinks = !r.blinks.empty()              ? r.blinks
-                                        : source == StepFixations::nhp ? detected_blinks
-                                                                       : invalid_gap_blinks(r.samples);
+  const std::vector<GazeEvent> blinks = !r.blinks.empty()                                              ? r.blinks
+                                        : source == StepFixations::nhp || source == StepFixations::nhr ? detected_blinks
+                                                                                                       : invalid_gap_blinks(r.samples);
   std::vector<GazeStep> steps;
   double previous_end = -INFINITY;
   size_t b = 0;

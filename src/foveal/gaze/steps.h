@@ -1,9 +1,10 @@
 // foveal/gaze/steps.h — real eye movements as the vision simulation's time steps.
 //
 // The simulation's time step is one fixation (the second paper's loop). A recording gives its
-// fixations from the recommended event detector (nhp: its fixations, and a step every 100 ms of a
-// smooth pursuit, whose fovea moves), a filter (I-VT, I-DT) or the tracker's own fixation events;
-// a live tracker gives one each time its causal filter (nhp: I-VVT) establishes a new fixation. A blink between two fixations makes
+// fixations from the recommended event detector (auto = nhr, or nhp: its fixations, and a step
+// every 100 ms of a smooth pursuit, whose fovea moves), a filter (I-VT, I-DT) or the tracker's own
+// fixation events; a live tracker gives one each time its causal filter (nhr, nhp: I-VVT)
+// establishes a new fixation. A blink between two fixations makes
 // the sharpness field forget: the tracker's own blink events where the recording has them, else
 // a run of invalid samples lasting a blink's duration (70–500 ms; shorter runs are lost samples,
 // longer ones the eye leaving the tracker).
@@ -19,10 +20,10 @@
 namespace foveal {
 
 // Where the steps' fixations come from.
-enum class StepFixations { nhp, ivt, idt, tracker };
+enum class StepFixations { nhr, nhp, ivt, idt, tracker };
 StepFixations parse_step_fixations(const std::string& name);  // throws Error naming --fixation
 const char* to_string(StepFixations source);
-// The causal filter whose fixation onsets are a live tracker's steps (nhp: I-VVT); throws Error
+// The causal filter whose fixation onsets are a live tracker's steps (nhr, nhp: I-VVT); throws Error
 // for `tracker`, which a live tracker does not send.
 FixationMethod live_filter(StepFixations source);
 
