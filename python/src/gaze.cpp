@@ -203,7 +203,7 @@ void bind_gaze(nb::module_& m) {
         if (fm == FixationMethod::ivvt)
           fail(
               "fixations: 'ivvt' is the causal filter for the fovea (FixationTracker); for offline fixations use ivt or idt, "
-              "for pursuit the events (method nhp)");
+              "for pursuit the event detector (foveal gaze RECORDING --events auto)");
         Recording r = recording_from(t, x, y, confidence, valid, screen, directions);
         if (block_starts && !block_starts->empty()) {
           for (size_t b : *block_starts)
