@@ -10,6 +10,7 @@
 #include <fmt/core.h>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <memory>
 
@@ -47,9 +48,15 @@ std::function<int()> add_compare_command(CLI::App& app) {
   cmd->add_flag("-q,--quiet", o->quiet, "print nothing on success");
 
   return [o] {
-    const Image a = load_image(o->a), b = load_image(o->b);
+    auto load_finite = [](const std::string& path) {  // a NaN pixel would make every error NaN: "identical"
+      Image im = load_image(path);
+      const auto bad = std::count_if(im.pixels.begin(), im.pixels.end(), [](float v) { return !std::isfinite(v); });
+      if (bad) fail("{}: {} NaN or infinite values; compare needs finite pixels", path, bad);
+      return im;
+    };
+    const Image a = load_finite(o->a), b = load_finite(o->b);
     std::optional<Image> b2;
-    if (!o->b2.empty()) b2 = load_image(o->b2);
+    if (!o->b2.empty()) b2 = load_finite(o->b2);
     const Display display = resolve_display(o->display, {a.width, a.height});
     const glm::dvec2 gaze = o->gaze.empty() ? glm::dvec2(a.width * 0.5, a.height * 0.5) : parse_vec2("--gaze", o->gaze);
     FoveationParams params;

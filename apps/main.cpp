@@ -1,6 +1,7 @@
 // apps/main.cpp — the `foveal` command line: parse, run one subcommand, report errors in one line.
 #include "commands.h"
 #include "foveal/util/error.h"
+#include "foveal/util/files.h"
 #include "foveal/util/memory.h"
 
 #include <fmt/core.h>
@@ -10,6 +11,7 @@
 
 int main(int argc, char** argv) {
   foveal::keep_freed_memory();
+  foveal::set_input_guard(true);  // no writer of this run may write over one of its inputs
   CLI::App app{"foveal — gaze-contingent ray tracing: foveated ambient occlusion, eye-tracker gaze, simulated human vision", "foveal"};
   app.require_subcommand(1);
   app.set_version_flag("--version", "foveal 0.1.0");

@@ -9,6 +9,8 @@
 #include "foveal/io/image_io.h"
 #include "foveal/io/video.h"
 #include "foveal/util/error.h"
+#include "foveal/util/files.h"
+#include "foveal/util/gaze_point.h"
 #include "foveal/util/parallel.h"
 #include "foveal/util/parse.h"
 #include "foveal/util/timer.h"
@@ -52,21 +54,16 @@ float srgb_to_linear(float v) { return v <= 0.04045f ? v / 12.92f : std::pow((v 
 
 // An input frame as linear RGB: 8/16-bit files are sRGB-decoded, EXR/PFM kept as stored
 Image load_linear(const std::string& path) {
-  Image im = load_image(path);
+  Image im = load_image(path, true);
   if (im.channels == 1) {  // grey: three equal channels
     Image rgb(im.width, im.height, 3);
     for (size_t i = 0; i < im.pixels.size(); ++i) rgb.pixels[i * 3] = rgb.pixels[i * 3 + 1] = rgb.pixels[i * 3 + 2] = im.pixels[i];
     im = std::move(rgb);
   }
-  if (im.channels == 4) {  // alpha dropped
-    Image rgb(im.width, im.height, 3);
-    for (size_t i = 0; i < size_t(im.width) * im.height; ++i)
-      for (int c = 0; c < 3; ++c) rgb.pixels[i * 3 + c] = im.pixels[i * 4 + c];
-    im = std::move(rgb);
-  }
-  if (im.channels != 3) fail("{}: {} channels; perceive reads grey, RGB or RGBA images", path, im.channels);
+  if (im.channels != 3 && im.channels != 4) fail("{}: {} channels; perceive reads grey, RGB or RGBA images", path, im.channels);
   if (!is_float_format(path))
-    for (float& v : im.pixels) v = srgb_to_linear(v);
+    for (size_t i = 0; i < im.pixels.size(); ++i)
+      if (im.channels == 3 || i % 4 != 3) im.pixels[i] = srgb_to_linear(im.pixels[i]);  // alpha is no colour
   return im;
 }
 
@@ -95,9 +92,27 @@ struct Perceiver {
   std::unique_ptr<ImpairmentPasses> passes;
 
   // One frame seen while fixating `gaze` (image pixels)
+  // An RGBA frame: the eye sees its colour, the alpha passes through unchanged (transparent stays
+  // transparent: issue 36's finding 4)
   Image see(const Image& in, glm::dvec2 gaze) const {
+    if (in.channels == 4) {
+      Image rgb(in.width, in.height, 3);
+      const size_t n = size_t(in.width) * in.height;
+      for (size_t i = 0; i < n; ++i)
+        for (int c = 0; c < 3; ++c) rgb.pixels[i * 3 + c] = in.pixels[i * 4 + c];
+      const Image seen = see_rgb(rgb, gaze);
+      Image out = in;
+      for (size_t i = 0; i < n; ++i)
+        for (int c = 0; c < 3; ++c) out.pixels[i * 4 + c] = seen.pixels[i * 3 + c];
+      return out;
+    }
+    return see_rgb(in, gaze);
+  }
+
+  Image see_rgb(const Image& in, glm::dvec2 gaze) const {
     if (depth && (depth->width != in.width || depth->height != in.height))
       fail("--depth: {}x{}, the input is {}x{}", depth->width, depth->height, in.width, in.height);
+    check_gaze_point("--gaze", gaze.x, gaze.y, in.width, in.height);
     const Display d = resolve_display_for(in);
     const Retinotopy r = display_retinotopy(d, in.width, in.height, gaze);
     Image out = in;
@@ -105,12 +120,12 @@ struct Perceiver {
       // The eye accommodates to the fixated point; a pixel's CoC is A·|1/D − v| plus the peripheral
       // penalty × its eccentricity (as simulate; without depth the stimulus is a plane at the viewing distance)
       const double plane_m = d.distance_cm / 100.0;
-      auto depth_at = [&](int x, int y) {
+      auto depth_at = [&](double x, double y) {  // clamped in floating point: a far gaze is no int overflow
         if (!depth) return plane_m;
-        const double v = depth->at(std::clamp(x, 0, in.width - 1), std::clamp(y, 0, in.height - 1), 0);
-        return std::isfinite(v) && v > 0 ? v : std::numeric_limits<double>::infinity();
+        const int xi = static_cast<int>(std::clamp(x, 0.0, in.width - 1.0)), yi = static_cast<int>(std::clamp(y, 0.0, in.height - 1.0));
+        return static_cast<double>(depth->at(xi, yi, 0));  // finite and > 0, or +inf (far): checked when loaded
       };
-      const double v = accommodate(eye.eye, depth_at(int(gaze.x), int(gaze.y)));
+      const double v = accommodate(eye.eye, depth_at(gaze.x, gaze.y));
       const double penalty = peripheral_penalty_per_deg(eye.eye);
       std::vector<float> coc(size_t(in.width) * in.height);
       CocShape shape;
@@ -157,6 +172,26 @@ struct PerceiveOptions {
   GazeOptions gaze_options;
 };
 
+// A depth map: metres from the eye per pixel, each finite and > 0 or +inf (far away). NaN, zero or
+// negative depths are refused with their count and the first one's pixel (they were silently taken
+// for infinitely far: issue 36's finding 13).
+Image load_depth(const std::string& path) {
+  Image d = load_image(path);
+  size_t bad = 0;
+  glm::ivec2 first(-1);
+  for (int y = 0; y < d.height; ++y)
+    for (int x = 0; x < d.width; ++x) {
+      const float v = d.at(x, y, 0);
+      if (!(v > 0)) {  // NaN, zero, negative (+inf passes: far)
+        if (bad++ == 0) first = {x, y};
+      }
+    }
+  if (bad)
+    fail("{}: {} depths are NaN, zero or negative (the first at pixel {},{}: {}); depths are metres from the eye, > 0, or inf for far away",
+         path, bad, first.x, first.y, d.at(first.x, first.y, 0));
+  return d;
+}
+
 // The eye, the display and the passes, from the options.
 Perceiver make_perceiver(const PerceiveOptions& o) {
   Perceiver p;
@@ -166,7 +201,8 @@ Perceiver make_perceiver(const PerceiveOptions& o) {
   p.display = parse_display(o.display);
   if (std::count(o.display.begin(), o.display.end(), ',') == 2) p.display.res_x = p.display.res_y = 0;  // the input's size
   if (!(o.fps > 0 && std::isfinite(o.fps))) fail("--fps: must be positive, got {}", o.fps);
-  if (!o.depth.empty()) p.depth = load_image(o.depth);
+  if (!(o.start >= 0 && std::isfinite(o.start))) fail("--start: must be a finite number of seconds >= 0, got {}", o.start);
+  if (!o.depth.empty()) p.depth = load_depth(o.depth);
   p.passes = std::make_unique<ImpairmentPasses>(p.eye.impair.any() ? p.eye.impair : Impairments{});
   return p;
 }
@@ -199,8 +235,13 @@ PerceiveInput open_input(const PerceiveOptions& o) {
   in.lamps = o.input == "builtin:lamps";
   in.folder = !in.amsler && fs::is_directory(o.input);
   in.video = !in.amsler && !in.folder && is_video(o.input);
+  check_output_is_not_input(o.output, o.input, "-o");
+  for (const std::string* extra : {&o.amsler, &o.field_map})
+    if (!extra->empty()) check_output_is_not_input(*extra, o.input, extra == &o.amsler ? "--amsler" : "--field-map");
   if (in.folder && fs::exists(o.output) && !fs::is_directory(o.output))
     fail("-o {}: a folder of images needs a folder as output", o.output);
+  if (in.folder && (is_video(o.output) || is_image(o.output)))
+    fail("-o {}: a folder of images is written as a folder of images (one per input); give a folder name", o.output);
   if (in.video && !is_video(o.output)) fail("-o {}: a video needs a video file as output (.mp4, .mkv, .mov, .webm)", o.output);
   if (in.amsler) {
     if (!o.gaze.empty()) fail("--gaze: the Amsler grid is always fixated at its centre");
@@ -251,8 +292,11 @@ struct PerceiveGaze {
 
 PerceiveGaze open_gaze(const PerceiveOptions& o, const PerceiveInput& in) {
   PerceiveGaze g;
-  const bool recording_gaze =
-      !o.gaze.empty() && !std::isdigit(static_cast<unsigned char>(o.gaze[0])) && o.gaze[0] != '-' && o.gaze[0] != '.';
+  // A point is X,Y (numbers, or anything else with one comma that is no file: "nan,nan" is a bad
+  // point, not a recording's name); the rest names a recording
+  std::error_code ec;
+  const bool point_like = std::count(o.gaze.begin(), o.gaze.end(), ',') == 1 && !fs::exists(o.gaze, ec);
+  const bool recording_gaze = !o.gaze.empty() && !point_like;
   if (!recording_gaze) {
     if (!o.gaze.empty()) g.fixed = parse_vec2("--gaze", o.gaze);
     return g;
@@ -271,18 +315,19 @@ PerceiveGaze open_gaze(const PerceiveOptions& o, const PerceiveInput& in) {
       recording_steps(recording, geometry, parse_step_fixations(o.gaze_options.fixation), resolve_fixation_params(o.gaze_options));
   if (g.fixations.empty()) fail("{}: no fixations", recording.source);
   g.t0 = recording.samples.front().t_s + o.start;
+  const double length = recording.samples.back().t_s - recording.samples.front().t_s;
+  if (o.start > length) fail("--start {}: the recording {} lasts {:.3f} s", o.start, recording.source, length);
   g.mapping = make_screen_mapping(recording.screen_px, {0, 0}, o.stimulus);
   return g;
 }
 
 // Every frame seen by the eye and written (a video's through ffmpeg); returns the time, ms.
 double see_frames(const PerceiveOptions& o, const Perceiver& p, const PerceiveInput& in, const PerceiveGaze& gaze) {
-  const fs::path out_dir = in.folder ? fs::path(o.output) : in.video ? fs::path(in.frame_dir) : fs::path();
-  if (in.folder) {
-    std::error_code ec;
-    fs::create_directories(out_dir, ec);
-    if (ec) fail("{}: cannot create the output folder: {}", o.output, ec.message());
-  }
+  // A folder's frames go into a staging folder beside the output, moved into place when every
+  // frame is seen: one corrupt image leaves no half-written folder (issue 36's finding 2)
+  std::optional<StagedFolder> staged;
+  if (in.folder) staged.emplace(o.output);
+  const fs::path out_dir = in.folder ? fs::path(staged->path()) : in.video ? fs::path(in.frame_dir) : fs::path();
   const bool show = !o.quiet && isatty(fileno(stderr));
   const Timer clock;
   double frame_ms = 0;
@@ -306,6 +351,7 @@ double see_frames(const PerceiveOptions& o, const Perceiver& p, const PerceiveIn
   if (in.video) {
     encode_video((fs::path(in.frame_dir) / "out_%06d.png").string(), in.fps, o.output);
   }
+  if (staged) staged->commit();
   return frame_ms;
 }
 

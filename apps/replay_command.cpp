@@ -5,6 +5,7 @@
 #include "foveal/render/outputs.h"
 #include "foveal/io/video.h"
 #include "foveal/experiments/replay.h"
+#include "foveal/util/files.h"
 #include "foveal/util/error.h"
 #include "foveal/util/parallel.h"
 #include "foveal/util/parse.h"
@@ -59,10 +60,9 @@ ReplaySettings replay_settings(const ReplayOptions& o) {
 // The frames' writer: frame_NNNNN.png (the gaze marked with --mark) and a line of frames.csv each.
 class FrameWriter {
  public:
-  FrameWriter(const ReplayOptions& o) : o_(o), dir_(o.output) {
-    std::error_code ec;
-    std::filesystem::create_directories(dir_, ec);
-    if (ec) fail("{}: cannot create the output folder: {}", o.output, ec.message());
+  // The frames go into a staging folder beside the output, moved into place by commit(): a run that
+  // fails (on its first frame, say) leaves no half-written folder behind
+  FrameWriter(const ReplayOptions& o) : o_(o), staged_(o.output), dir_(staged_.path()) {
     csv_path_ = (dir_ / "frames.csv").string();
     csv_.open(csv_path_);
     if (!csv_) fail("{}: cannot write", csv_path_);
@@ -82,11 +82,13 @@ class FrameWriter {
     csv_.flush();
   }
   void close() { csv_.close(); }
-  const std::string& csv_path() const { return csv_path_; }
-  std::string pattern() const { return (dir_ / "frame_%05d.png").string(); }
+  void commit() { staged_.commit(); }
+  std::string csv_path() const { return (std::filesystem::path(o_.output) / "frames.csv").string(); }
+  std::string pattern() const { return (std::filesystem::path(o_.output) / "frame_%05d.png").string(); }  // after commit()
 
  private:
   const ReplayOptions& o_;
+  StagedFolder staged_;
   std::filesystem::path dir_;
   std::string csv_path_;
   std::ofstream csv_;
@@ -192,6 +194,7 @@ int run_replay(const ReplayOptions& o) {
     }
   }
   writer.close();
+  writer.commit();  // whole: every frame rendered (a live session that stopped: up to the stop, as frames.csv says)
   if (!o.video.empty() && summary.frames > 0) encode_video(writer.pattern(), o.fps, o.video);
   if (!o.stats.empty())
     write_json_file(o.stats, replay_stats_json(o, summary, params, *renderer, scene, recording, live, threads.threads(), device));

@@ -800,12 +800,17 @@ EventDetection detect_events(const Recording& r, const GazeGeometry& g, EventMet
         out.peak_threshold_deg_s = median_of({th.peak.begin(), th.peak.end()});
         out.onset_threshold_deg_s = median_of({th.onset.begin(), th.onset.end()});
       } else {
-        const std::pair<double, double> thresholds = adaptive_velocity_thresholds(clean, p.initial_peak_deg_s);
-        th.peak.assign(s.n, thresholds.first);
-        th.onset.assign(s.n, thresholds.second);
-        if (!coarse.empty()) th.coarse_peak.assign(s.n, adaptive_velocity_thresholds(coarse, p.initial_peak_deg_s).first);
-        out.peak_threshold_deg_s = thresholds.first;
-        out.onset_threshold_deg_s = thresholds.second;
+        // The paper's iteration, floored as nhr's thresholds are: a noise-free recording's σ is 0,
+        // and 1e-12 °/s would make every sample a saccade (issue 36's finding 16)
+        const std::pair<double, double> found = adaptive_velocity_thresholds(clean, p.initial_peak_deg_s);
+        const double peak = std::max(found.first, p.min_peak_deg_s), onset = std::max(found.second, 0.5 * p.min_peak_deg_s);
+        th.peak.assign(s.n, static_cast<float>(peak));
+        th.onset.assign(s.n, static_cast<float>(onset));
+        if (!coarse.empty())
+          th.coarse_peak.assign(
+              s.n, static_cast<float>(std::max(adaptive_velocity_thresholds(coarse, p.initial_peak_deg_s).first, p.min_peak_deg_s)));
+        out.peak_threshold_deg_s = peak;
+        out.onset_threshold_deg_s = onset;
       }
       // Noise next to a loss is the lid's (a blink); elsewhere it stays undefined
       label_blinks(

@@ -345,11 +345,15 @@ TEST(Detect, AGapInTimeEndsTheFixation) {
 TEST(Detect, ConstantSamplesKeepTheThresholdsAtTheirFloors) {
   Synthetic s(1000, 1);
   s.fixation(1000);
-  const EventDetection d = run(s.recording({0}), EventMethod::nhr);
-  EXPECT_DOUBLE_EQ(d.peak_threshold_deg_s, EventParams{}.min_peak_deg_s);
-  EXPECT_DOUBLE_EQ(d.onset_threshold_deg_s, 0.5 * EventParams{}.min_peak_deg_s);
-  ASSERT_EQ(d.events.size(), 1u);
-  EXPECT_EQ(d.events[0].label, EventLabel::fixation);
+  const Recording r = s.recording({0});
+  for (EventMethod m : {EventMethod::nh, EventMethod::nhp, EventMethod::nhr}) {
+    SCOPED_TRACE(to_string(m));
+    const EventDetection d = run(r, m);
+    EXPECT_DOUBLE_EQ(d.peak_threshold_deg_s, EventParams{}.min_peak_deg_s);
+    EXPECT_DOUBLE_EQ(d.onset_threshold_deg_s, 0.5 * EventParams{}.min_peak_deg_s);
+    ASSERT_EQ(d.events.size(), 1u);
+    EXPECT_EQ(d.events[0].label, EventLabel::fixation);
+  }
 }
 
 // The recommended detector on the standard signal: its saccades, PSOs, the pursuit ramp, the blink.

@@ -117,6 +117,33 @@ GazeFormat detect_gaze_format(const std::string& text, const std::string& name) 
   return GazeFormat::csv;
 }
 
+// Samples that repeat the time of the sample before are one sample given twice: the first valid
+// one is kept and the drop is a warning (they made the summary's rate 1005 Hz where the detector
+// saw 500 Hz, and events shorter than their minimum: issue 36's finding 11).
+void drop_repeated_times(Recording& r) {
+  std::vector<GazeSample> kept;
+  std::vector<size_t> index(r.samples.size());  // each sample's place among the kept (block starts move with it)
+  kept.reserve(r.samples.size());
+  size_t dropped = 0;
+  for (size_t i = 0; i < r.samples.size(); ++i) {
+    const GazeSample& s = r.samples[i];
+    if (!kept.empty() && s.t_s == kept.back().t_s) {
+      if (s.valid && !kept.back().valid) kept.back() = s;
+      ++dropped;
+      index[i] = kept.size() - 1;
+      continue;
+    }
+    index[i] = kept.size();
+    kept.push_back(s);
+  }
+  if (dropped == 0) return;
+  r.samples = std::move(kept);
+  for (size_t& b : r.block_starts)
+    if (b < index.size()) b = index[b];
+  r.block_starts.erase(std::unique(r.block_starts.begin(), r.block_starts.end()), r.block_starts.end());
+  r.warnings.push_back(fmt::format("{} samples repeat the time of the sample before: dropped (one sample per time)", dropped));
+}
+
 Recording parse_recording(const std::string& text, const std::string& name, const ReadOptions& options) {
   if (text::has_bom(text)) return parse_recording(text.substr(3), name, options);
   if (text.find_first_not_of(" \t\r\n") == std::string::npos) fail("{}: empty recording", name);
@@ -139,6 +166,7 @@ Recording parse_recording(const std::string& text, const std::string& name, cons
   r.source = name;
   r.format = format;
   if (r.samples.empty()) fail("{}: no gaze samples", name);
+  drop_repeated_times(r);
   return r;
 }
 

@@ -2,6 +2,7 @@
 #include "foveal/impair/field_picture.h"
 
 #include "foveal/util/error.h"
+#include "foveal/util/files.h"
 
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -11,6 +12,7 @@
 namespace foveal {
 
 void write_field_picture(const VisualField& field, const FieldMap& map, const std::string& path) {
+  check_not_an_input(path);
   constexpr int kSize = 600;
   constexpr double kPpd = 10, kHalf = 30;
   cv::Mat img(kSize, kSize, CV_8UC3);

@@ -8,6 +8,7 @@
 
 #include <filesystem>
 #include <map>
+#include <set>
 #include <sstream>
 
 namespace foveal {
@@ -36,6 +37,8 @@ void add_field(VisualField& field, const std::string& spec, const std::string& b
   auto path_of = [&](const std::string& p) {
     return std::filesystem::path(p).is_absolute() ? p : (std::filesystem::path(base_dir) / p).lexically_normal().string();
   };
+  std::error_code ec;
+  if (!spec.empty() && std::filesystem::is_directory(path_of(spec), ec)) fail("field: {}: is a folder, not a file", path_of(spec));
   if (is_grid(head)) {
     if (colon == std::string::npos) fail("field:{}: name the file of values (field:{}:FILE.csv)", spec, head);
     const std::string path = path_of(spec.substr(colon + 1));
@@ -68,10 +71,20 @@ EyeSpec parse_eye_spec(const std::string& text) {
   double age = -1;
   std::vector<std::function<void()>> reads;  // files are read once the age is known
   Impairments& im = spec.impair;
+  if (!joined.empty() && (joined.front() == '+' || joined.back() == '+' || joined.find("++") != std::string::npos))
+    fail("eye: '{}': a '+' needs a preset on each side", text);
+  std::map<std::string, std::string> given;  // each setting once: "cataract:0.3+cataract:0.9" is a conflict, not the last one winning
   std::stringstream parts(joined);
   for (std::string part; std::getline(parts, part, '+');) {
     const auto colon = part.find(':');
     const std::string name = part.substr(0, colon), value = colon == std::string::npos ? "" : part.substr(colon + 1);
+    const bool colour = name == "cvd" || name == "achromatopsia" || name == "protanopia" || name == "deuteranopia" || name == "tritanopia";
+    const std::string setting = colour ? "colour vision" : name == "amd" || name == "metamorphopsia" ? "metamorphopsia" : name;
+    if (!is_optics(name) && name != "field") {
+      if (const auto it = given.find(setting); it != given.end())
+        fail("eye: '{}' and '{}' both set {}; give it once", it->second, part, setting);
+      given[setting] = part;
+    }
     if (is_optics(name)) {
       optics += (optics.empty() ? "" : "+") + part;
       if (name == "presbyopia") age_from_presbyopia = true;
@@ -183,7 +196,18 @@ class Reader {
 EyeSpec parse_eye_profile(const std::string& text, const std::string& name, const std::string& base_dir) {
   json j;
   try {
-    j = json::parse(text::strip_bom(text));
+    // A key given twice in one object is refused (nlohmann::json would keep the last silently)
+    std::vector<std::set<std::string>> keys;
+    std::string duplicate;
+    const json::parser_callback_t check = [&](int, json::parse_event_t event, json& parsed) {
+      if (event == json::parse_event_t::object_start) keys.emplace_back();
+      if (event == json::parse_event_t::object_end && !keys.empty()) keys.pop_back();
+      if (event == json::parse_event_t::key && !keys.empty() && !keys.back().insert(parsed.get<std::string>()).second && duplicate.empty())
+        duplicate = parsed.get<std::string>();
+      return true;
+    };
+    j = json::parse(text::strip_bom(text), check);
+    if (!duplicate.empty()) fail("{}: the key \"{}\" is given twice in one object", name, duplicate);
   } catch (const json::parse_error& e) {
     fail("{}: not valid JSON (byte {}): {}", name, e.byte, e.what());
   } catch (const json::exception& e) {  // e.g. a number beyond double's range

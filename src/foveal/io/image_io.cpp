@@ -2,6 +2,8 @@
 #include "foveal/io/image_io.h"
 
 #include "foveal/util/error.h"
+#include "foveal/util/files.h"
+#include "foveal/util/text.h"
 
 #include <ImfChannelList.h>
 #include <ImfFrameBuffer.h>
@@ -18,6 +20,10 @@
 #include <bit>
 #include <cmath>
 #include <cstring>
+#include <fcntl.h>
+#include <mutex>
+#include <unistd.h>
+#include <optional>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -124,40 +130,114 @@ void save_rgba8(const Rgba8& image, const std::string& path) {
 }
 
 void save_image(const Image& image, const std::string& path, bool srgb) {
+  check_not_an_input(path);
   if (image.empty()) fail("{}: cannot write an empty image", path);
   const std::string ext = extension(path);
   if (ext == ".pfm") return save_pfm(image, path);
   if (ext == ".exr") return save_exr(image, path);
-  // 8-bit, BGR order for OpenCV
-  const int type = image.channels == 1 ? CV_8UC1 : CV_8UC3;
+  // 8-bit, BGR(A) order for OpenCV; alpha is stored linearly (it is a coverage, not a colour)
+  if (image.channels != 1 && image.channels != 3 && image.channels != 4)
+    fail("{}: {} channels; 8-bit images hold 1 (grey), 3 (RGB) or 4 (RGBA)", path, image.channels);
+  if (image.channels == 4 && ext != ".png") fail("{}: '{}' keeps no alpha channel; write the RGBA image as .png", path, ext);
+  const int type = image.channels == 1 ? CV_8UC1 : image.channels == 3 ? CV_8UC3 : CV_8UC4;
+  auto linear_byte = [](float v) {
+    return static_cast<uint8_t>(std::lround(std::clamp(std::isfinite(v) ? v : 0.0f, 0.0f, 1.0f) * 255.0f));
+  };
   cv::Mat mat(image.height, image.width, type);
   for (int y = 0; y < image.height; ++y)
     for (int x = 0; x < image.width; ++x)
-      for (int c = 0; c < std::min(3, image.channels); ++c) {
+      for (int c = 0; c < image.channels; ++c) {
         const float v = image.at(x, y, c);
-        const int channel = image.channels == 1 ? 0 : 2 - c;
-        mat.ptr<uint8_t>(y)[x * mat.channels() + channel] =
-            srgb ? srgb_byte(v) : static_cast<uint8_t>(std::lround(std::clamp(std::isfinite(v) ? v : 0.0f, 0.0f, 1.0f) * 255.0f));
+        const int channel = image.channels == 1 || c == 3 ? c : 2 - c;
+        mat.ptr<uint8_t>(y)[x * mat.channels() + channel] = srgb && c < 3 ? srgb_byte(v) : linear_byte(v);
       }
   write_8bit(mat, path);
 }
 
-Image load_image(const std::string& path) {
+namespace {
+
+// The width and height a PNG, JPEG or BMP header states, read from its first bytes before anything
+// is decoded; nullopt for other formats or a header too short to say. By hand because OpenCV 4.6
+// offers no header-only read (its own limit, 2^30 pixels, is read from the environment when the
+// library loads, and a decode near it needs ~40 GB here).
+std::optional<std::pair<uint64_t, uint64_t>> header_size(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::array<unsigned char, 32> h{};
+  in.read(reinterpret_cast<char*>(h.data()), h.size());
+  const auto got = static_cast<size_t>(in.gcount());
+  auto be32 = [&](size_t i) { return uint64_t(h[i]) << 24 | uint64_t(h[i + 1]) << 16 | uint64_t(h[i + 2]) << 8 | h[i + 3]; };
+  auto le32 = [&](size_t i) { return uint64_t(h[i]) | uint64_t(h[i + 1]) << 8 | uint64_t(h[i + 2]) << 16 | uint64_t(h[i + 3]) << 24; };
+  if (got >= 24 && h[0] == 0x89 && h[1] == 'P' && h[2] == 'N' && h[3] == 'G') return std::make_pair(be32(16), be32(20));  // IHDR
+  if (got >= 26 && h[0] == 'B' && h[1] == 'M') {
+    const auto height = static_cast<int32_t>(le32(22));  // negative: rows stored top-down
+    return std::make_pair(le32(18), uint64_t(height < 0 ? -int64_t(height) : height));
+  }
+  if (got >= 4 && h[0] == 0xFF && h[1] == 0xD8) {  // JPEG: the segments up to the first start-of-frame
+    in.clear();
+    in.seekg(2);
+    for (int segments = 0; segments < 4096 && in; ++segments) {
+      unsigned char m[4];
+      if (!in.read(reinterpret_cast<char*>(m), 4) || m[0] != 0xFF) return std::nullopt;
+      const unsigned length = unsigned(m[2]) << 8 | m[3];
+      const bool sof = m[1] >= 0xC0 && m[1] <= 0xCF && m[1] != 0xC4 && m[1] != 0xC8 && m[1] != 0xCC;
+      if (sof) {
+        unsigned char f[5];
+        if (!in.read(reinterpret_cast<char*>(f), 5)) return std::nullopt;
+        return std::make_pair(uint64_t(f[3]) << 8 | f[4], uint64_t(f[1]) << 8 | f[2]);
+      }
+      if (length < 2) return std::nullopt;
+      in.seekg(length - 2, std::ios::cur);
+    }
+  }
+  return std::nullopt;
+}
+
+void check_image_size(const std::string& path, uint64_t width, uint64_t height) {
+  if (width * height > kMaxImagePixels)
+    fail("{}: {}x{} pixels, more than the {} million foveal reads (perceive holds up to {} bytes per pixel); scale it down first", path,
+         width, height, kMaxImagePixels / 1000000, kPerceiveBytesPerPixel);
+}
+
+}  // namespace
+
+Image load_image(const std::string& path, bool keep_alpha) {
   std::error_code ec;
   if (!std::filesystem::exists(path, ec)) fail("{}: no such file", path);
+  if (std::filesystem::is_directory(path, ec)) fail("{}: is a folder, not an image", path);
+  note_input(path);
   const std::string ext = extension(path);
   if (ext == ".pfm") return load_pfm(path);
   if (ext == ".exr") return load_exr(path);
-  cv::Mat mat = cv::imread(path, cv::IMREAD_UNCHANGED);
+  if (const auto size = header_size(path)) check_image_size(path, size->first, size->second);
+  cv::Mat mat;
+  try {
+    // The decoders' own complaints ("libpng error: Read Error") would come before foveal's line
+    // naming the file: stderr is closed to them while they decode (one decode at a time)
+    static std::mutex decoding;
+    const std::lock_guard lock(decoding);
+    const int saved = ::dup(STDERR_FILENO), null = ::open("/dev/null", O_WRONLY);
+    if (saved >= 0 && null >= 0) ::dup2(null, STDERR_FILENO);
+    struct Restore {
+      int saved, null;
+      ~Restore() {
+        if (saved >= 0) ::dup2(saved, STDERR_FILENO), ::close(saved);
+        if (null >= 0) ::close(null);
+      }
+    } restore{saved, null};
+    mat = cv::imread(path, cv::IMREAD_UNCHANGED);
+  } catch (const cv::Exception& e) {  // OpenCV's own assertions: with the file's name, on one line
+    fail("{}: cannot read image: {}", path, e.err);
+  }
   if (mat.empty()) fail("{}: cannot read image (unknown or corrupt format)", path);
-  if (mat.channels() == 4) cv::cvtColor(mat, mat, cv::COLOR_BGRA2BGR);
+  if (mat.channels() == 4 && !keep_alpha) cv::cvtColor(mat, mat, cv::COLOR_BGRA2BGR);
+  if (mat.channels() == 2) cv::cvtColor(mat, mat, cv::COLOR_BGRA2BGR);  // grey + alpha: not a layout foveal keeps
   const double scale = mat.depth() == CV_16U ? 1.0 / 65535.0 : mat.depth() == CV_8U ? 1.0 / 255.0 : 1.0;
   mat.convertTo(mat, CV_MAKETYPE(CV_32F, mat.channels()), scale);
-  Image image(mat.cols, mat.rows, mat.channels() == 1 ? 1 : 3);
+  Image image(mat.cols, mat.rows, mat.channels() == 1 ? 1 : mat.channels() == 4 ? 4 : 3);
   for (int y = 0; y < image.height; ++y)
     for (int x = 0; x < image.width; ++x)
       for (int c = 0; c < image.channels; ++c)
-        image.at(x, y, c) = mat.ptr<float>(y)[x * mat.channels() + (image.channels == 1 ? 0 : 2 - c)];
+        image.at(x, y, c) = mat.ptr<float>(y)[x * mat.channels() + (image.channels == 1 || c == 3 ? c : 2 - c)];
   return image;
 }
 
@@ -208,13 +288,7 @@ Image parse_pfm(const std::string& bytes, const std::string& name) {
   return image;
 }
 
-Image load_pfm(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) fail("{}: cannot open", path);
-  std::stringstream buffer;
-  buffer << in.rdbuf();
-  return parse_pfm(buffer.str(), path);
-}
+Image load_pfm(const std::string& path) { return parse_pfm(text::read_file(path), path); }
 
 void save_exr(const Image& image, const std::string& path) {
   if (image.channels != 1 && image.channels != 3) fail("{}: EXR writer takes 1 or 3 channels, not {}", path, image.channels);
@@ -240,6 +314,8 @@ Image load_exr(const std::string& path) {
     Imf::InputFile file(path.c_str());
     const Imath::Box2i dw = file.header().dataWindow();
     const int w = dw.max.x - dw.min.x + 1, h = dw.max.y - dw.min.y + 1;
+    if (w < 1 || h < 1) fail("{}: an EXR data window of {}x{}", path, w, h);
+    check_image_size(path, uint64_t(w), uint64_t(h));
     const bool gray = file.header().channels().findChannel("Y") != nullptr && file.header().channels().findChannel("R") == nullptr;
     const int n = gray ? 1 : 3;
     Image image(w, h, n);
@@ -251,6 +327,8 @@ Image load_exr(const std::string& path) {
     file.setFrameBuffer(fb);
     file.readPixels(dw.min.y, dw.max.y);
     return image;
+  } catch (const Error&) {
+    throw;
   } catch (const std::exception& e) {
     fail("{}: cannot read EXR: {}", path, e.what());
   }

@@ -17,12 +17,21 @@ Rgba8 to_rgba8(const Image& linear);
 // Write 8-bit RGBA as PNG/JPEG/BMP (alpha dropped); throws Error naming the file.
 void save_rgba8(const Rgba8& image, const std::string& path);
 
-// Write by extension: .png (8-bit; `srgb` encodes linear values), .pfm or .exr (float, as is).
+// The largest image foveal reads, in pixels (8192 × 8192, an 8K frame fits): perceive holds up to
+// kPerceiveBytesPerPixel bytes per pixel (with the eye's optics; 32 without: BENCHMARKS.md), so a
+// frame at the cap peaks near 5.6 GB. Larger PNG, JPEG, BMP and EXR files are refused from their
+// header, before anything is decoded; other formats meet OpenCV's own limit (2^30 pixels).
+inline constexpr uint64_t kMaxImagePixels = uint64_t(8192) * 8192;
+inline constexpr int kPerceiveBytesPerPixel = 84;
+
+// Write by extension: .png (8-bit; `srgb` encodes linear colour, alpha is stored as is), .jpg/.bmp
+// (8-bit, no alpha), .pfm or .exr (float, as is). 1, 3 or 4 (RGBA, PNG only) channels.
 // Throws Error naming the file on failure.
 void save_image(const Image& image, const std::string& path, bool srgb = true);
 // Read by extension: .pfm, .exr (float, as stored), or any format OpenCV reads (values in [0,1],
-// as stored: no sRGB decoding). Throws Error naming the file and the reason.
-Image load_image(const std::string& path);
+// as stored: no sRGB decoding). RGBA files give 3 channels, or 4 with `keep_alpha` (alpha in
+// [0,1]). Throws Error naming the file and the reason.
+Image load_image(const std::string& path, bool keep_alpha = false);
 
 // Portable float map (1 or 3 channels); written by hand since it is a 3-line header and raw floats.
 void save_pfm(const Image& image, const std::string& path);

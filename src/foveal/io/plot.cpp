@@ -2,6 +2,7 @@
 #include "foveal/io/plot.h"
 
 #include "foveal/util/error.h"
+#include "foveal/util/files.h"
 
 #include <fmt/format.h>
 #include <opencv2/imgcodecs.hpp>
@@ -30,6 +31,7 @@ glm::u8vec3 heat_colour(float t) {
 }
 
 void save_plot(const Plot& plot, const std::string& path) {
+  check_not_an_input(path);
   const std::string ext = std::filesystem::path(path).extension().string();
   if (ext == ".svg") {
     std::ofstream out(path);

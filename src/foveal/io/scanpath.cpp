@@ -3,6 +3,7 @@
 
 #include "foveal/io/image_io.h"
 #include "foveal/util/error.h"
+#include "foveal/util/files.h"
 
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
@@ -14,6 +15,7 @@
 namespace foveal {
 
 void write_scanpath(const Recording& r, const FixationResult& result, const std::string& path, const ScanpathStyle& style) {
+  check_not_an_input(path);
   const glm::dvec2 screen(std::max(1, r.screen_px.x), std::max(1, r.screen_px.y));
   const double scale = std::min(1.0, style.max_width / screen.x);
   const int margin = 24;

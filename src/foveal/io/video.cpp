@@ -3,6 +3,7 @@
 
 #include "foveal/util/text.h"
 #include "foveal/util/error.h"
+#include "foveal/util/files.h"
 
 #include <fmt/format.h>
 
@@ -58,6 +59,7 @@ void run_program(std::vector<std::string> args, const std::string& what, const s
 
 void encode_video(const std::string& pattern, double fps, const std::string& output) {
   namespace fs = std::filesystem;
+  check_not_an_input(output);
   const std::string ext = fs::path(output).extension().string();
   std::vector<std::string> args{"ffmpeg", "-y", "-nostdin", "-loglevel", "error", "-framerate", fmt::format("{}", fps), "-start_number",
                                 "0", "-i", pattern,
@@ -74,13 +76,20 @@ void encode_video(const std::string& pattern, double fps, const std::string& out
 double decode_video(const std::string& input, const std::string& frame_pattern) {
   namespace fs = std::filesystem;
   if (!fs::is_regular_file(input)) fail("{}: no such video file", input);
+  note_input(input);
   // the frame rate, as ffprobe states it ("30000/1001")
   const std::string rate_file = (fs::temp_directory_path() / fmt::format("foveal-rate-{}.txt", getpid())).string();
+  struct Remove {  // however ffprobe ends, the file goes
+    std::string path;
+    ~Remove() {
+      std::error_code ec;
+      std::filesystem::remove(path, ec);
+    }
+  } remove{rate_file};
   run_program({"ffprobe", "-v", "error", "-select_streams", "v:0", "-show_entries", "stream=avg_frame_rate", "-of",
                "default=noprint_wrappers=1:nokey=1", input},
               input, rate_file);
   std::string rate = text::read_file(rate_file);
-  fs::remove(rate_file);
   while (!rate.empty() && std::isspace(static_cast<unsigned char>(rate.back()))) rate.pop_back();
   double num = 0, den = 1;
   if (std::sscanf(rate.c_str(), "%lf/%lf", &num, &den) < 1 || !(num > 0) || !(den > 0))

@@ -42,9 +42,9 @@ Display parse_display(const std::string& text, Display defaults) {
 }
 
 void validate(const Display& d) {
-  if (!(d.width_cm > 0) || !std::isfinite(d.width_cm)) fail("display width must be > 0 cm, got {}", d.width_cm);
-  if (!(d.height_cm > 0) || !std::isfinite(d.height_cm)) fail("display height must be > 0 cm, got {}", d.height_cm);
-  if (!(d.distance_cm > 0) || !std::isfinite(d.distance_cm)) fail("viewing distance must be > 0 cm, got {}", d.distance_cm);
+  if (!(d.width_cm > 0) || !std::isfinite(d.width_cm)) fail("display width must be a finite number > 0 cm, got {}", d.width_cm);
+  if (!(d.height_cm > 0) || !std::isfinite(d.height_cm)) fail("display height must be a finite number > 0 cm, got {}", d.height_cm);
+  if (!(d.distance_cm > 0) || !std::isfinite(d.distance_cm)) fail("viewing distance must be a finite number > 0 cm, got {}", d.distance_cm);
   if (d.res_x < 1 || d.res_y < 1) fail("display resolution must be at least 1x1, got {}x{}", d.res_x, d.res_y);
 }
 

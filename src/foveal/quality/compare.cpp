@@ -27,6 +27,12 @@ void check_same(const Image& a, const Image& b, const char* what) {
     fail("compare: {} is {}x{}x{}, the reference {}x{}x{}: the images must have the same size and channels", what, a.width, a.height,
          a.channels, b.width, b.height, b.channels);
   if (a.empty()) fail("compare: empty image");
+  // NaN or infinite values make every error NaN, and a NaN error would read as "identical" (PSNR inf)
+  auto non_finite = [](const Image& im) {
+    return std::count_if(im.pixels.begin(), im.pixels.end(), [](float v) { return !std::isfinite(v); });
+  };
+  if (const auto n = non_finite(a)) fail("compare: {} has {} NaN or infinite values; errors need finite pixels", what, n);
+  if (const auto n = non_finite(b)) fail("compare: the reference has {} NaN or infinite values; errors need finite pixels", n);
 }
 
 cv::Mat channel(const Image& img, int c) {

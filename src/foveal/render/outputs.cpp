@@ -4,6 +4,7 @@
 #include "foveal/io/image_io.h"
 #include "foveal/io/plot.h"
 #include "foveal/util/error.h"
+#include "foveal/util/files.h"
 
 #include <fmt/format.h>
 #include <opencv2/imgcodecs.hpp>
@@ -222,6 +223,7 @@ double peak_rss_mib() {
 }
 
 void write_text_file(const std::string& path, const std::string& text) {
+  check_not_an_input(path);
   std::ofstream out(path);
   out << text;
   out.close();

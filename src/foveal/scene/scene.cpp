@@ -3,6 +3,8 @@
 #include "foveal/util/memory.h"
 
 #include "foveal/util/error.h"
+#include "foveal/util/files.h"
+#include "foveal/util/text.h"
 
 #include <glm/gtc/matrix_inverse.hpp>
 
@@ -198,12 +200,9 @@ Scene load_scene(const std::string& spec) {
     std::string ext = fs::path(spec).extension().string();
     std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
     if (ext == ".json") {
-      std::ifstream in(spec, std::ios::binary);
-      if (!in) fail("{}: cannot open", spec);
-      std::stringstream text;
-      text << in.rdbuf();
-      scene = parse_scene_json(text.str(), spec, fs::path(spec).parent_path().string());
+      scene = parse_scene_json(text::read_file(spec), spec, fs::path(spec).parent_path().string());
     } else {
+      note_input(spec);
       append_mesh_file(scene, spec, glm::mat4(1.0f));
     }
   }

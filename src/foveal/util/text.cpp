@@ -2,9 +2,12 @@
 #include "foveal/util/text.h"
 
 #include "foveal/util/error.h"
+#include "foveal/util/files.h"
 
 #include <charconv>
 #include <cmath>
+#include <array>
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 
@@ -70,13 +73,25 @@ std::optional<double> to_number(std::string_view field, bool decimal_comma) {
   return value;
 }
 
-std::string read_file(const std::string& path) {
+std::string read_file(const std::string& path, size_t max_bytes) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec)) fail("{}: is a folder, not a file", path);
   std::ifstream in(path, std::ios::binary);
   if (!in) fail("{}: cannot open file", path);
-  std::ostringstream buffer;
-  buffer << in.rdbuf();
+  note_input(path);
+  // Bounded: an endless or huge input (/dev/zero, a disk image given by mistake) is refused once it
+  // passes the limit instead of reading until memory runs out
+  std::string out;
+  std::array<char, 1 << 16> chunk;
+  while (in) {
+    in.read(chunk.data(), chunk.size());
+    const size_t got = static_cast<size_t>(in.gcount());
+    if (out.size() + got > max_bytes)
+      fail("{}: more than {} MiB; foveal reads text inputs of up to {} MiB", path, max_bytes >> 20, max_bytes >> 20);
+    out.append(chunk.data(), got);
+  }
   if (in.bad()) fail("{}: read error", path);
-  return buffer.str();
+  return out;
 }
 
 }  // namespace foveal::text

@@ -31,8 +31,11 @@ std::string_view trim(std::string_view s);
 // With decimal_comma, "1,5" reads as 1.5 (Tobii Pro Lab in some locales).
 std::optional<double> to_number(std::string_view field, bool decimal_comma = false);
 
-// Read a whole file; throws Error naming the file.
-std::string read_file(const std::string& path);
+// A whole file; throws Error naming it when it cannot be opened, is a folder, or is larger than
+// `max_bytes` (default 1 GiB, some 15 million samples of an EyeLink ASC file: an endless input such
+// as /dev/zero is refused, not read until memory runs out).
+inline constexpr size_t kMaxTextBytes = size_t(1) << 30;
+std::string read_file(const std::string& path, size_t max_bytes = kMaxTextBytes);
 // A UTF-8 byte-order mark at the start (spreadsheet programs on Windows write one): every text
 // reader drops it.
 inline bool has_bom(std::string_view text) { return text.substr(0, 3) == "\xEF\xBB\xBF"; }

@@ -1,0 +1,45 @@
+// foveal/util/files.h — two rules every writer follows.
+//
+// Never over an input: an output that is (or will be) the same file as one of the run's inputs is
+// refused before anything is written (`perceive x.png -o x.png` overwrote its input: issue 36's
+// finding 1). check_output_is_not_input is the explicit check a command makes up front; with the
+// input guard on (the command line turns it on), every input read through foveal's readers is
+// remembered and every writer refuses to write over one — one rule for every writer. A Python
+// session may rewrite its own files, so the guard is off unless turned on.
+//
+// All or nothing: a folder of outputs is written into a staging folder beside it and moved into
+// place when the run succeeds, so a failed run leaves no partial output (finding 2).
+#pragma once
+
+#include <string>
+#include <vector>
+
+namespace foveal {
+
+// Throws Error ("OPTION OUTPUT: is the input INPUT; foveal never writes over its inputs") when
+// `output` names the same file or folder as `input` (after resolving links, . and ..).
+void check_output_is_not_input(const std::string& output, const std::string& input, const char* option);
+
+void set_input_guard(bool on);
+void note_input(const std::string& path);            // a reader's input (no effect with the guard off)
+void check_not_an_input(const std::string& output);  // a writer's target; throws Error naming it
+
+// A staging folder for a folder of outputs: files go into path(), commit() moves them into the
+// target folder (created if missing; files of the same name replaced), and a StagedFolder that was
+// never committed removes itself with everything in it.
+class StagedFolder {
+ public:
+  explicit StagedFolder(std::string target);
+  ~StagedFolder();
+  StagedFolder(const StagedFolder&) = delete;
+  StagedFolder& operator=(const StagedFolder&) = delete;
+  const std::string& path() const { return staging_; }
+  const std::string& target() const { return target_; }
+  void commit();
+
+ private:
+  std::string target_, staging_;
+  bool committed_ = false;
+};
+
+}  // namespace foveal
