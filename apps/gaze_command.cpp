@@ -294,7 +294,7 @@ void print_gaze(const GazeCommandOptions& o, const Recording& recording, const G
                 const EventsRun& run) {
   fmt::print("{}", format_summary(recording, summary));
   if (method == FixationMethod::mean || method == FixationMethod::ivvt)
-    fmt::print("  ({} is a causal filter for the fovea: the scan path shows I-VT's fixations; --events nhp labels pursuit)\n",
+    fmt::print("  ({} is a causal filter for the fovea: the scan path shows I-VT's fixations; --events auto labels pursuit)\n",
                to_string(method));
   for (const std::string* written : {&o.json, &o.samples, &o.samples_out, &o.events_out, &o.landings_out})
     if (!written->empty()) fmt::print("  wrote     {}\n", *written);

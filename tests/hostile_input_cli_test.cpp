@@ -139,6 +139,30 @@ TEST(HostileInput, PerceiveStartIsChecked) {
                         "the recording h9.csv lasts 0.300 s");
 }
 
+// 10. An hour-long gap in a recording is lost data: no event spans it (every detector and filter),
+// and the summary's rate is the recording's, not samples per second of the whole span.
+TEST(HostileInput, AnHourLongGapIsLostDataNotAFixation) {
+  std::string csv = "t,x,y\n";
+  for (int i = 0; i < 200; ++i) csv += std::to_string(i * 0.002) + ",500,400\n";
+  for (int i = 0; i < 200; ++i) csv += std::to_string(3600 + i * 0.002) + ",500,400\n";
+  write(scratch("h10.csv"), csv);
+  for (const char* method : {"auto", "nhp", "ivt", "idt", "ek"}) {
+    const CliRun r = run(std::string("gaze h10.csv --screen 1000x800 --no-scanpath --events ") + method + " --events-out h10.tsv");
+    ASSERT_EQ(r.status, 0) << r.err;
+    EXPECT_NE(r.out.find("500.0 Hz"), std::string::npos) << r.out;
+    std::ifstream tsv(scratch("h10.tsv"));
+    std::string line;
+    std::getline(tsv, line);
+    int rows = 0;
+    while (std::getline(tsv, line)) {
+      ++rows;
+      const double duration = std::stod(line.substr(line.find('\t') + 1));
+      EXPECT_LT(duration, 1.0) << method << ": " << line;
+    }
+    EXPECT_GE(rows, 2) << method;
+  }
+}
+
 // 11. Samples that repeat a time are dropped with a warning: the rate is the recording's, and the
 // summary and the detector agree.
 TEST(HostileInput, RepeatedSampleTimesAreDroppedAndSaid) {

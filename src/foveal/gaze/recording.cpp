@@ -67,14 +67,28 @@ double Recording::recorded_s() const {
   return total;
 }
 
+// Samples per second within blocks, leaving out gaps in time (intervals over ten times the median:
+// a recording with one hour-long gap read as 0.1 Hz) — a rate for irregular trackers too (Pupil
+// merges its eyes' streams).
 double Recording::rate_hz() const {
-  double span = 0;
-  size_t intervals = 0;
+  std::vector<double> intervals;
   for_each_block(*this, [&](size_t first, size_t last) {
-    span += samples[last - 1].t_s - samples[first].t_s;
-    intervals += last - first - 1;
+    for (size_t i = first + 1; i < last; ++i)
+      if (samples[i].t_s > samples[i - 1].t_s) intervals.push_back(samples[i].t_s - samples[i - 1].t_s);
   });
-  return span > 0 ? static_cast<double>(intervals) / span : 0.0;
+  if (intervals.empty()) return 0.0;
+  std::vector<double> sorted = intervals;
+  auto mid = sorted.begin() + sorted.size() / 2;
+  std::nth_element(sorted.begin(), mid, sorted.end());
+  const double gap = 10 * *mid;
+  double span = 0;
+  size_t count = 0;
+  for (double d : intervals)
+    if (d <= gap) {
+      span += d;
+      ++count;
+    }
+  return span > 0 ? static_cast<double>(count) / span : 0.0;
 }
 
 bool plausible_point(glm::dvec2 px, glm::ivec2 screen) {

@@ -86,7 +86,7 @@ struct Recording {
   double duration_s() const;
   // Recorded time: the sum of each block's span (gaps between blocks excluded), seconds.
   double recorded_s() const;
-  // Sampling rate: intervals within blocks per second of recorded time.
+  // Sampling rate: samples per second within blocks, gaps in time (over 10× the median interval) left out.
   double rate_hz() const;
 };
 
