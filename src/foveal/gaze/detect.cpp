@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <array>
 #include <cstdlib>
+#include <bit>
 #include <cmath>
 #include <memory>
 #include <optional>
@@ -64,6 +65,7 @@ void validate(const EventParams& p) {
   require_non_negative(p.ek_min_saccade_s, "ek_min_saccade_s");
   validate(p.pursuit);
   require_non_negative(p.max_dropout_s, "max_dropout_s");
+  require_non_negative(p.robust_pso_window_s, "robust_pso_window_s");
   require_positive(p.robust_filter_window_s, "robust_filter_window_s");
   require_positive(p.threshold_window_s, "threshold_window_s");
   require_positive(p.robust_peak_k, "robust_peak_k");
@@ -140,17 +142,17 @@ Signal prepare(const Recording& r, const GazeGeometry& g, double max_fill_s = 0)
   s.dir.assign(s.n, glm::dvec3(0, 0, 1));
   s.valid.assign(s.n, 0);
   s.noise.assign(s.n, 0);
-  s.filled.assign(s.n, 0);
-  std::vector<double> intervals;
-  for (size_t i = 0; i < s.n; ++i) {
+  if (max_fill_s > 0) s.filled.assign(s.n, 0);
+  for (size_t i = 0; i < s.n; ++i)
     if (r.samples[i].valid) {
       s.valid[i] = true;
       s.dir[i] = g.direction(r.samples[i]);
     }
-    // The sampling interval: the median of (at most 4096, evenly spread) intervals
-    if (i > 0 && i % (1 + s.n / 4096) == 0 && r.samples[i].t_s > r.samples[i - 1].t_s)
-      intervals.push_back(r.samples[i].t_s - r.samples[i - 1].t_s);
-  }
+  // The sampling interval: the median of (at most 4096, evenly spread) intervals
+  std::vector<double> intervals;
+  intervals.reserve(4097);
+  for (size_t i = 1 + s.n / 4096, stride = 1 + s.n / 4096; i < s.n; i += stride)
+    if (r.samples[i].t_s > r.samples[i - 1].t_s) intervals.push_back(r.samples[i].t_s - r.samples[i - 1].t_s);
   if (intervals.empty()) {
     s.dt = 0.001;
   } else {
@@ -198,13 +200,60 @@ Signal prepare(const Recording& r, const GazeGeometry& g, double max_fill_s = 0)
 // Angular velocity (°/s) and acceleration (°/s²) of the directions by Savitzky–Golay over half-width
 // h; the velocity's window shrinks near the edges of a valid run (a run's first and last sample:
 // the one-sided difference; one-sample runs: NaN), the acceleration is NaN there.
-void savitzky_golay(const Signal& s, int h, std::vector<float>& velocity, std::vector<float>* acceleration) {
+// `running`: the full windows by running sums (O(1) per sample whatever the window; recomputed
+// exactly every 512 samples so that rounding cannot build up) — the same filter to float rounding.
+void savitzky_golay(const Signal& s, int h, std::vector<float>& velocity, std::vector<float>* acceleration, bool running = false) {
   const SavitzkyGolay sg(h);
   velocity.assign(s.n, NAN);
   if (acceleration) acceleration->assign(s.n, NAN);
+  if (running) {
+    // Σk², the mean of k², Σ(k² − m)²: the weights' normalisers
+    double s2 = 0, s4 = 0;
+    for (int k = -h; k <= h; ++k) s2 += double(k) * k;
+    const double m = s2 / (2 * h + 1);
+    for (int k = -h; k <= h; ++k) s4 += (k * k - m) * (k * k - m);
+    const size_t hh = static_cast<size_t>(h);
+    const double vscale = kDeg / (s2 * s.dt), ascale = 2 * kDeg / (s4 * s.dt * s.dt);
+    const double h2 = double(h) * h, h1 = double(h + 1), h12 = h1 * h1;
+    for (size_t start = 0; start < s.n;) {
+      if (!s.valid[start]) {
+        ++start;
+        continue;
+      }
+      const size_t end = s.run_end[start];
+      if (end - start > 2 * hh) {
+        glm::dvec3 a(0), b(0), c(0);  // Σ d, Σ k·d, Σ k²·d over the window
+        size_t since = 512;
+        for (size_t i = start + hh; i + hh < end; ++i) {
+          if (since >= 512) {
+            a = b = c = glm::dvec3(0);
+            for (int k = -h; k <= h; ++k) {
+              a += s.dir[i + k];
+              b += double(k) * s.dir[i + k];
+              c += double(k) * k * s.dir[i + k];
+            }
+            since = 0;
+          }
+          velocity[i] = static_cast<float>(vscale * glm::length(b));
+          if (acceleration) (*acceleration)[i] = static_cast<float>(ascale * glm::length(c - m * a));
+          if (i + hh + 1 < end) {  // slide to i + 1
+            const glm::dvec3 out = s.dir[i - hh], in = s.dir[i + hh + 1];
+            const glm::dvec3 a1 = a - out + in;
+            const glm::dvec3 b1 = b + double(h) * out + h1 * in - a1;
+            c = (c - h2 * out + h12 * in) - 2.0 * (b + double(h) * out + h1 * in) + a1;
+            a = a1;
+            b = b1;
+            ++since;
+          }
+        }
+      }
+      start = end;
+    }
+  }
   for (size_t i = 0; i < s.n; ++i) {
     if (!s.valid[i]) continue;
     const int hi = static_cast<int>(std::min<size_t>({static_cast<size_t>(h), i - s.run_start[i], s.run_end[i] - 1 - i}));
+    if (running && hi == h) continue;  // done above
     if (hi < 1) {
       // A run's first or last sample: the one-sided difference
       if (s.run_end[i] - s.run_start[i] < 2) continue;
@@ -310,7 +359,7 @@ bool free_sample(const std::vector<EventLabel>& labels, const Signal& s, size_t 
 // Nyström & Holmqvist 2010: saccades and PSOs into `labels` (blinks already there).
 // The median and the scaled median absolute deviation (1.4826·MAD: the standard deviation of
 // normal data) of the finite values in a window of `window` samples around each block of
-// window/8 samples (the window kept whole near the ends), from a sliding histogram of 0.25 °/s
+// about window/8 samples (the power of two at most that) (the window kept whole near the ends), from a sliding histogram of 0.25 °/s
 // bins: O(1) per sample plus one search per block. Windows with fewer than 16 finite values take
 // the whole recording's.
 struct LocalStatistics {
@@ -366,7 +415,7 @@ LocalStatistics local_statistics(const std::vector<float>& v, size_t window) {
   for (float x : v) all.add(x, +1);
   const auto [all_median, all_mad] = all.total() ? all.median_mad() : std::pair<double, double>{NAN, NAN};
   window = std::min(window, n);
-  out.block = std::max<size_t>(1, window / 8);
+  out.block = std::bit_floor(std::max<size_t>(1, window / 8));  // a power of two: a sample's block is a shift
   auto hist = std::make_unique<VelocityHistogram>();
   size_t lo = 0, hi = 0;  // the histogram holds v[lo, hi)
   for (size_t b0 = 0; b0 < n; b0 += out.block) {
@@ -382,46 +431,51 @@ LocalStatistics local_statistics(const std::vector<float>& v, size_t window) {
   return out;
 }
 
-// Thresholds per sample (°/s): constant for nh/nhp, local for nhr.
+// Thresholds per sample (°/s), stored per block of 2^shift samples: one block for nh/nhp, the
+// local statistics' blocks for nhr (a shift, not a division, per lookup).
 struct SampleThresholds {
-  std::vector<float> peak, onset, coarse_peak;  // coarse_peak: the smoother velocity's peak threshold (empty: no smoother velocity)
+  unsigned shift = 63;
+  std::vector<float> peaks, onsets, coarse_peaks;  // per block; coarse: the smoother velocity's peak threshold (empty: none)
+  float peak(size_t i) const { return peaks[i >> shift]; }
+  float onset(size_t i) const { return onsets[i >> shift]; }
+  float coarse_peak(size_t i) const { return coarse_peaks[i >> shift]; }
 };
 
 void label_saccades_nh(const Signal& s, const EventParams& p, const std::vector<float>& v, const SampleThresholds& th,
-                       const std::vector<float>& coarse, std::vector<EventLabel>& labels) {
+                       const std::vector<float>& coarse, double pso_window_s, std::vector<EventLabel>& labels) {
   const size_t n = s.n;
-  const size_t pso_window = static_cast<size_t>(std::lround(p.pso_window_s / s.dt));
+  const size_t pso_window = static_cast<size_t>(std::lround(pso_window_s / s.dt));
   const size_t noise_window = static_cast<size_t>(std::max(1L, std::lround(p.local_noise_s / s.dt)));
   const double min_saccade = p.min_saccade_s - 1e-6;
   auto usable = [&](size_t i) { return free_sample(labels, s, i) && std::isfinite(v[i]); };
   for (size_t i = 0; i < n; ++i) {
     if (!usable(i)) continue;
     size_t p1 = i;
-    if (v[i] > th.peak[i]) {
+    if (v[i] > th.peak(i)) {
       // A peak: samples above the peak threshold from i
-      while (p1 + 1 < n && usable(p1 + 1) && v[p1 + 1] > th.peak[p1 + 1]) ++p1;
-    } else if (!coarse.empty() && coarse[i] > th.coarse_peak[i]) {
+      while (p1 + 1 < n && usable(p1 + 1) && v[p1 + 1] > th.peak(p1 + 1)) ++p1;
+    } else if (!coarse.empty() && coarse[i] > th.coarse_peak(i)) {
       // A peak of the smoother velocity only (a small saccade in noise): the saccade is around the
       // fine velocity's largest sample under it, if that is above the onset threshold
       size_t c1 = i, m = i;
-      while (c1 + 1 < n && usable(c1 + 1) && coarse[c1 + 1] > th.coarse_peak[c1 + 1]) {
+      while (c1 + 1 < n && usable(c1 + 1) && coarse[c1 + 1] > th.coarse_peak(c1 + 1)) {
         ++c1;
         if (v[c1] > v[m]) m = c1;
       }
-      if (!(v[m] >= th.onset[m])) {
+      if (!(v[m] >= th.onset(m))) {
         i = c1;
         continue;
       }
       i = p1 = m;
-      while (p1 + 1 < n && usable(p1 + 1) && v[p1 + 1] > th.peak[p1 + 1]) ++p1;
+      while (p1 + 1 < n && usable(p1 + 1) && v[p1 + 1] > th.peak(p1 + 1)) ++p1;
     } else {
       continue;
     }
     // Onset: back to the first sample below the onset threshold (the threshold crossing; waiting
     // for the local minimum as well starts saccades 2 ms early on the IRF data)
     size_t a = i;
-    while (a > 0 && usable(a - 1) && v[a] >= th.onset[a]) --a;
-    const double onset = th.onset[a], peak = th.peak[a];
+    while (a > 0 && usable(a - 1) && v[a] >= th.onset(a)) --a;
+    const double onset = th.onset(a), peak = th.peak(a);
     // Offset threshold from the local noise before the onset
     double sum = 0, sum2 = 0;
     size_t count = 0;
@@ -731,7 +785,7 @@ EventDetection detect_events(const Recording& r, const GazeGeometry& g, EventMet
   const bool adaptive = method == EventMethod::nh || method == EventMethod::nhp || method == EventMethod::nhr;
   std::vector<float> acceleration;  // nh, nhp: for the noise test
   const double filter_window = method == EventMethod::nhr ? p.robust_filter_window_s : p.filter_window_s;
-  savitzky_golay(s, half_width(filter_window, s.dt), out.velocity_deg_s, adaptive ? &acceleration : nullptr);
+  savitzky_golay(s, half_width(filter_window, s.dt), out.velocity_deg_s, adaptive ? &acceleration : nullptr, method == EventMethod::nhr);
   const std::vector<float>& v = out.velocity_deg_s;
   out.labels.assign(s.n, EventLabel::undefined);
   auto& labels = out.labels;
@@ -782,40 +836,42 @@ EventDetection detect_events(const Recording& r, const GazeGeometry& g, EventMet
         // Local, robust thresholds (median and MAD per window)
         const size_t window = std::max<size_t>(8, static_cast<size_t>(std::lround(p.threshold_window_s / s.dt)));
         const LocalStatistics fine = local_statistics(clean, window);
-        th.peak.resize(s.n);
-        th.onset.resize(s.n);
-        for (size_t i = 0; i < s.n; ++i) {
-          const size_t b = i / fine.block;
-          th.peak[i] = static_cast<float>(std::max(p.min_peak_deg_s, fine.median[b] + p.robust_peak_k * fine.mad[b]));
-          th.onset[i] = static_cast<float>(std::max(0.5 * p.min_peak_deg_s, fine.median[b] + p.robust_onset_k * fine.mad[b]));
+        th.shift = static_cast<unsigned>(std::countr_zero(fine.block));
+        th.peaks.resize(fine.median.size());
+        th.onsets.resize(fine.median.size());
+        std::vector<double> block_peak(fine.median.size()), block_onset(fine.median.size());
+        for (size_t b = 0; b < fine.median.size(); ++b) {
+          block_peak[b] = std::max(p.min_peak_deg_s, fine.median[b] + p.robust_peak_k * fine.mad[b]);
+          block_onset[b] = std::max(0.5 * p.min_peak_deg_s, fine.median[b] + p.robust_onset_k * fine.mad[b]);
+          th.peaks[b] = static_cast<float>(block_peak[b]);
+          th.onsets[b] = static_cast<float>(block_onset[b]);
         }
         if (!coarse.empty()) {
-          const LocalStatistics slow = local_statistics(coarse, window);
-          th.coarse_peak.resize(s.n);
-          for (size_t i = 0; i < s.n; ++i) {
-            const size_t b = i / slow.block;
-            th.coarse_peak[i] = static_cast<float>(std::max(p.min_peak_deg_s, slow.median[b] + p.robust_peak_k * slow.mad[b]));
-          }
+          const LocalStatistics slow = local_statistics(coarse, window);  // the same blocks
+          th.coarse_peaks.resize(slow.median.size());
+          for (size_t b = 0; b < slow.median.size(); ++b)
+            th.coarse_peaks[b] = static_cast<float>(std::max(p.min_peak_deg_s, slow.median[b] + p.robust_peak_k * slow.mad[b]));
         }
-        out.peak_threshold_deg_s = median_of({th.peak.begin(), th.peak.end()});
-        out.onset_threshold_deg_s = median_of({th.onset.begin(), th.onset.end()});
+        // Reported: the median over the blocks (all of one size but the last)
+        out.peak_threshold_deg_s = median_of(std::move(block_peak));
+        out.onset_threshold_deg_s = median_of(std::move(block_onset));
       } else {
         // The paper's iteration, floored as nhr's thresholds are: a noise-free recording's σ is 0,
         // and 1e-12 °/s would make every sample a saccade (issue 36's finding 16)
         const std::pair<double, double> found = adaptive_velocity_thresholds(clean, p.initial_peak_deg_s);
         const double peak = std::max(found.first, p.min_peak_deg_s), onset = std::max(found.second, 0.5 * p.min_peak_deg_s);
-        th.peak.assign(s.n, static_cast<float>(peak));
-        th.onset.assign(s.n, static_cast<float>(onset));
+        th.peaks = {static_cast<float>(peak)};
+        th.onsets = {static_cast<float>(onset)};
         if (!coarse.empty())
-          th.coarse_peak.assign(
-              s.n, static_cast<float>(std::max(adaptive_velocity_thresholds(coarse, p.initial_peak_deg_s).first, p.min_peak_deg_s)));
+          th.coarse_peaks = {
+              static_cast<float>(std::max(adaptive_velocity_thresholds(coarse, p.initial_peak_deg_s).first, p.min_peak_deg_s))};
         out.peak_threshold_deg_s = peak;
         out.onset_threshold_deg_s = onset;
       }
       // Noise next to a loss is the lid's (a blink); elsewhere it stays undefined
       label_blinks(
-          r, s, p, [&](size_t i) { return s.noise[i] || !(v[i] < th.onset[i]) || (*pupil)(r.samples[i]); }, labels);
-      label_saccades_nh(s, p, clean, th, coarse, labels);
+          r, s, p, [&](size_t i) { return s.noise[i] || !(v[i] < th.onset(i)) || (*pupil)(r.samples[i]); }, labels);
+      label_saccades_nh(s, p, clean, th, coarse, method == EventMethod::nhr ? p.robust_pso_window_s : p.pso_window_s, labels);
       absorb_lid_saccades(s, p, labels);
       if (method == EventMethod::nhp) label_pursuit(s, p.pursuit, labels);
       if (method == EventMethod::nhr) label_pursuit_in_intervals(s, p, labels);

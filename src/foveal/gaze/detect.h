@@ -80,6 +80,7 @@ struct EventParams {
   double threshold_window_s = 0.5;        // local thresholds: the median and MAD of this window's velocities …
   double robust_peak_k = 8;               // … peak threshold median + k·1.4826·MAD
   double robust_onset_k = 4.5;            // … onset threshold median + k·1.4826·MAD
+  double robust_pso_window_s = 0.020;     // a PSO begins within this time of the saccade's offset (nh: pso_window_s, 40 ms)
   double min_peak_deg_s = 10;             // floors (a noise-free recording's MAD is 0; nh, nhp too): the peak's, half of it the onset's
   PursuitParams slow_pursuit{3.0, 0.250, 0.150, 0.5};  // speed of a line over the window, inside one intersaccadic interval
   double pursuit_keep = 0.7;                           // a pursuit goes on while its speed stays above this fraction of the threshold

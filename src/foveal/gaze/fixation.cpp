@@ -27,13 +27,6 @@ GazeGeometry::GazeGeometry(const Display& display, glm::ivec2 screen_px)
   if (screen_px.x < 1 || screen_px.y < 1) fail("gaze screen must be at least 1x1 pixels");
 }
 
-glm::dvec3 GazeGeometry::direction(glm::dvec2 px) const {
-  const glm::dvec2 cm = (px - 0.5 * glm::dvec2(screen_)) * cm_per_px_;
-  return glm::normalize(glm::dvec3(cm.x, cm.y, distance_cm_));
-}
-
-glm::dvec3 GazeGeometry::direction(const GazeSample& s) const { return s.direction ? *s.direction : direction(s.px); }
-
 glm::dvec2 GazeGeometry::angles_deg(glm::dvec3 d) { return glm::degrees(glm::dvec2(std::atan2(d.x, d.z), std::atan2(d.y, d.z))); }
 
 double GazeGeometry::pixels_per_degree() const {

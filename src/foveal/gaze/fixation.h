@@ -22,10 +22,14 @@ class GazeGeometry {
  public:
   // The display's physical size and distance; the screen's pixels span its full width and height.
   GazeGeometry(const Display& display, glm::ivec2 screen_px);
-  // Unit direction from the eye through a screen point (+z towards the screen, +y down).
-  glm::dvec3 direction(glm::dvec2 px) const;
+  // Unit direction from the eye through a screen point (+z towards the screen, +y down). Inline:
+  // the detectors call it once per sample.
+  glm::dvec3 direction(glm::dvec2 px) const {
+    const glm::dvec2 cm = (px - 0.5 * glm::dvec2(screen_)) * cm_per_px_;
+    return glm::normalize(glm::dvec3(cm.x, cm.y, distance_cm_));
+  }
   // Direction of a sample: the tracker's own where it has one, else through its screen point.
-  glm::dvec3 direction(const GazeSample& sample) const;
+  glm::dvec3 direction(const GazeSample& sample) const { return sample.direction ? *sample.direction : direction(sample.px); }
   // Horizontal and vertical angles of a direction from straight ahead, degrees.
   static glm::dvec2 angles_deg(glm::dvec3 direction);
   // Pixels per degree at the screen centre (horizontal).
