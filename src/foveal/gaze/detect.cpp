@@ -132,7 +132,6 @@ struct Signal {
   std::vector<glm::dvec3> dir;
   std::vector<uint8_t> valid;              // bytes, not std::vector<bool>: read at every sample by every pass
   std::vector<uint8_t> noise;              // nh: physiologically impossible velocity or acceleration (never free)
-  std::vector<uint8_t> filled;             // nhr: a lost sample of a dropout, filled in (and valid)
   std::vector<size_t> run_start, run_end;  // per sample: its run of contiguous valid samples [start, end)
 };
 
@@ -142,7 +141,6 @@ Signal prepare(const Recording& r, const GazeGeometry& g, double max_fill_s = 0)
   s.dir.assign(s.n, glm::dvec3(0, 0, 1));
   s.valid.assign(s.n, 0);
   s.noise.assign(s.n, 0);
-  if (max_fill_s > 0) s.filled.assign(s.n, 0);
   for (size_t i = 0; i < s.n; ++i)
     if (r.samples[i].valid) {
       s.valid[i] = true;
@@ -173,7 +171,6 @@ Signal prepare(const Recording& r, const GazeGeometry& g, double max_fill_s = 0)
           const double u = double(k - i + 1) / double(j - i + 1);
           s.dir[k] = glm::normalize((1 - u) * a + u * b);
           s.valid[k] = 1;
-          s.filled[k] = 1;
         }
       }
       i = j;
@@ -518,7 +515,7 @@ void label_saccades_nh(const Signal& s, const EventParams& p, const std::vector<
 // by running sums: O(1) per sample whatever the window, recomputed exactly every 512 samples so
 // that rounding cannot build up; near a run's edges, narrower windows as in savitzky_golay.
 // One run [start, end) of samples.
-void line_velocity_run(const Signal& s, int h, const SavitzkyGolay& sg, size_t start, size_t end, std::vector<float>& velocity) {
+void line_velocity_run(const Signal& s, int h, size_t start, size_t end, std::vector<float>& velocity) {
   double s2 = 0;
   for (int k = -h; k <= h; ++k) s2 += double(k) * k;
   const double scale = kDeg / (s2 * s.dt);
@@ -546,7 +543,6 @@ void line_velocity_run(const Signal& s, int h, const SavitzkyGolay& sg, size_t s
   }
   // The edges: the largest centred window that fits, from sums over the edge's stretch (O(1) per
   // sample: Σ_k k·d[i+k] over |k| ≤ w is Σ m·d[m] − i·Σ d[m] over m in [i − w, i + w])
-  (void)sg;
   auto edge = [&](size_t from, size_t to) {  // centres in [from, to); their windows lie in [lo, hi)
     const size_t lo = start, hi = end;
     const size_t a = from > lo + hh ? from - hh : lo, b = std::min(hi, to + hh);
@@ -575,13 +571,12 @@ void line_velocity_run(const Signal& s, int h, const SavitzkyGolay& sg, size_t s
 
 void line_velocity(const Signal& s, int h, std::vector<float>& velocity) {
   velocity.assign(s.n, NAN);
-  const SavitzkyGolay sg(h);  // the narrower windows' weights, near the runs' edges
   for (size_t start = 0; start < s.n;) {
     if (!s.valid[start]) {
       ++start;
       continue;
     }
-    line_velocity_run(s, h, sg, start, s.run_end[start], velocity);
+    line_velocity_run(s, h, start, s.run_end[start], velocity);
     start = s.run_end[start];
   }
 }
@@ -606,20 +601,37 @@ void label_pursuit(const Signal& s, const PursuitParams& pursuit, std::vector<Ev
   }
 }
 
+// Each stretch [start, end) of free samples (valid, not noise, not yet labelled) without a gap in
+// time: the intersaccadic intervals, as the pursuit and fixation passes see them.
+template <typename Fn>
+void for_each_free_interval(const Signal& s, const std::vector<EventLabel>& labels, Fn&& fn) {
+  for (size_t start = 0; start < s.n;) {
+    if (!free_sample(labels, s, start)) {
+      ++start;
+      continue;
+    }
+    size_t end = start;
+    while (end < s.n && free_sample(labels, s, end) && s.run_start[end] == s.run_start[start]) ++end;
+    fn(start, end);
+    start = end;
+  }
+}
+
 // Pursuit in the intersaccadic intervals (nhr): the least-squares line's velocity over a window
 // that stays inside each interval (a window reaching into the saccade before or after would take
 // its movement for pursuit).
 void label_pursuit_in_intervals(const Signal& s, const EventParams& p, std::vector<EventLabel>& labels) {
   const PursuitParams& pursuit = p.slow_pursuit;
   const int h = half_width(pursuit.window_s, s.dt);
-  const SavitzkyGolay sg(h);
   std::vector<float> slow(s.n, NAN);
   const double min_pursuit = pursuit.min_s - 1e-6;
   const double keep = p.pursuit_keep, relax = p.context_relax, cos_min = p.context_cos, relax_min = p.context_min_fraction;
   const size_t settle = static_cast<size_t>(std::lround(p.settle_s / s.dt));
   auto moving = [&](size_t k) { return labels[k] == EventLabel::saccade || labels[k] == EventLabel::pso; };
-  // Candidate runs of one free stretch [start, end) above `velocity`, extended while above keep·velocity
+  // Candidate runs of one free stretch [start, end) above `velocity`, extended while above
+  // keep·velocity; returns whether any became pursuit
   auto label_runs_above = [&](size_t start, size_t end, double velocity, double min_s, const glm::dvec3* along) {
+    bool labelled = false;
     for (size_t i = start; i < end;) {
       if (!(slow[i] > velocity)) {
         ++i;
@@ -637,22 +649,18 @@ void label_pursuit_in_intervals(const Signal& s, const EventParams& p, std::vect
         const glm::dvec3 d = s.dir[j - 1] - s.dir[i];
         ok = glm::dot(d, *along) >= cos_min * glm::length(d) * glm::length(*along);
       }
-      if (ok)
+      if (ok) {
         for (size_t k = i; k < j; ++k) labels[k] = EventLabel::pursuit;
+        labelled = true;
+      }
       i = j;
     }
+    return labelled;
   };
-  for (size_t start = 0; start < s.n;) {
-    if (!free_sample(labels, s, start)) {
-      ++start;
-      continue;
-    }
-    size_t end = start;
-    while (end < s.n && free_sample(labels, s, end) && s.run_start[end] == s.run_start[start]) ++end;
-    line_velocity_run(s, h, sg, start, end, slow);
+  for_each_free_interval(s, labels, [&](size_t start, size_t end) {
+    line_velocity_run(s, h, start, end, slow);
     label_runs_above(start, end, pursuit.velocity_deg_s, min_pursuit, nullptr);
-    start = end;
-  }
+  });
   if (relax <= 0) return;
   // Context: pursuit continues across catch-up saccades; a slower stretch next to a pursuit (across
   // at most a saccade and its PSO) that moves the same way is pursuit too
@@ -665,29 +673,16 @@ void label_pursuit_in_intervals(const Signal& s, const EventParams& p, std::vect
   };
   for (int pass = 0; pass < 4; ++pass) {
     bool changed = false;
-    for (size_t start = 0; start < s.n;) {
-      if (!free_sample(labels, s, start)) {
-        ++start;
-        continue;
-      }
-      size_t end = start;
-      while (end < s.n && free_sample(labels, s, end) && s.run_start[end] == s.run_start[start]) ++end;
+    for_each_free_interval(s, labels, [&](size_t start, size_t end) {
+      // The pursuit next to this stretch, across at most `context` saccade or PSO samples, before or after
       std::optional<glm::dvec3> along;
       size_t k = start, steps = 0;
       while (k > 0 && steps < context && moving(k - 1)) --k, ++steps;
       if (k > 0 && labels[k - 1] == EventLabel::pursuit) along = pursuit_direction(k - 1);
-      k = end, steps = 0;
-      while (!along && k < s.n && steps < context && moving(k)) ++k, ++steps;
-      if (!along && k < s.n && labels[k] == EventLabel::pursuit && k != end) along = pursuit_direction(k);
-      if (!along && end < s.n && labels[end] == EventLabel::pursuit) along = pursuit_direction(end);
-      if (!along && start > 0 && labels[start - 1] == EventLabel::pursuit) along = pursuit_direction(start - 1);
-      if (along) {
-        const size_t before = std::count(labels.begin() + start, labels.begin() + end, EventLabel::pursuit);
-        label_runs_above(start, end, relax * pursuit.velocity_deg_s, relax_min * min_pursuit, &*along);
-        changed |= std::count(labels.begin() + start, labels.begin() + end, EventLabel::pursuit) != static_cast<long>(before);
-      }
-      start = end;
-    }
+      for (k = end, steps = 0; !along && k < s.n && steps < context && moving(k); ++k, ++steps) {}
+      if (!along && k < s.n && labels[k] == EventLabel::pursuit) along = pursuit_direction(k);
+      if (along) changed |= label_runs_above(start, end, relax * pursuit.velocity_deg_s, relax_min * min_pursuit, &*along);
+    });
     if (!changed) break;
   }
 }
@@ -695,17 +690,9 @@ void label_pursuit_in_intervals(const Signal& s, const EventParams& p, std::vect
 // The free valid runs left become fixations (those shorter than `min_s` stay undefined). A gap in
 // the samples' times ends a fixation: the time without samples is lost, not fixated.
 void label_fixations(const Signal& s, double min_s, std::vector<EventLabel>& labels) {
-  for (size_t i = 0; i < s.n;) {
-    if (!free_sample(labels, s, i)) {
-      ++i;
-      continue;
-    }
-    size_t j = i;
-    while (j < s.n && free_sample(labels, s, j) && s.run_start[j] == s.run_start[i]) ++j;
-    if ((j - i) * s.dt >= min_s - 1e-6)
-      for (size_t k = i; k < j; ++k) labels[k] = EventLabel::fixation;
-    i = j;
-  }
+  for_each_free_interval(s, labels, [&](size_t start, size_t end) {
+    if ((end - start) * s.dt >= min_s - 1e-6) std::fill(labels.begin() + start, labels.begin() + end, EventLabel::fixation);
+  });
 }
 
 }  // namespace

@@ -18,7 +18,7 @@ using namespace foveal;
 
 namespace {
 
-const Display kDisplay{53.3, 30.1, 56.5, 1920, 1080};
+const Display kDisplay = synthetic_display();  // the IRF set's display
 
 using Synthetic = SyntheticSignal;
 using TrueEvent = SyntheticEvent;

@@ -6,7 +6,9 @@
 #include <atomic>
 #include <filesystem>
 #include <mutex>
+#include <optional>
 #include <set>
+#include <sys/stat.h>
 #include <unistd.h>
 
 namespace foveal {
@@ -30,9 +32,17 @@ bool same_file(const std::string& a, const std::string& b) {
   return resolved(a) == resolved(b);
 }
 
+// The file behind a path (device, inode), where it exists: hard links and other spellings of one file
+std::optional<std::pair<dev_t, ino_t>> file_id(const std::string& path) {
+  struct stat st {};
+  if (::stat(path.c_str(), &st) != 0) return std::nullopt;
+  return std::make_pair(st.st_dev, st.st_ino);
+}
+
 struct Guard {
   std::mutex mutex;
-  std::set<std::string> inputs;  // resolved paths
+  std::set<std::string> paths;              // resolved
+  std::set<std::pair<dev_t, ino_t>> files;  // of the inputs that exist
   std::atomic<bool> on{false};
 };
 Guard& guard() {
@@ -53,17 +63,20 @@ void note_input(const std::string& path) {
   Guard& g = guard();
   if (!g.on) return;
   const std::string r = resolved(path);
+  const auto id = file_id(path);
   const std::lock_guard lock(g.mutex);
-  g.inputs.insert(r);
+  g.paths.insert(r);
+  if (id) g.files.insert(*id);
 }
 
+// Two lookups per write, whatever the number of inputs (a folder of a thousand frames).
 void check_not_an_input(const std::string& output) {
   Guard& g = guard();
   if (!g.on) return;
   const std::string r = resolved(output);
+  const auto id = file_id(output);
   const std::lock_guard lock(g.mutex);
-  for (const std::string& in : g.inputs)
-    if (in == r || same_file(in, output)) fail("{}: is an input of this run; foveal never writes over its inputs", output);
+  if (g.paths.count(r) || (id && g.files.count(*id))) fail("{}: is an input of this run; foveal never writes over its inputs", output);
 }
 
 StagedFolder::StagedFolder(std::string target) : target_(std::move(target)) {
