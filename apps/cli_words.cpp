@@ -34,6 +34,7 @@ constexpr std::array kOptions = std::to_array<ParameterName>({
     {"aov", "--aov"},
     {"display", "--display"},
     {"fps", "--fps"},
+    {"depth", "--depth"},
     {"frames", "--frames"},
     {"start_s", "--start"},
     {"duration_s", "--duration"},
