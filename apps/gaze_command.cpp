@@ -181,16 +181,11 @@ EventsRun detect_and_score(const GazeCommandOptions& o, const Recording& recordi
   run.detector = run.detection->method ? to_string(*run.detection->method) : o.events;
   run.landings = evaluate_landings(recording, geometry, *run.detection);
   if (!o.evaluate.empty()) {
-    // Scored over the samples every coder labelled (a coder may leave a recording's lost tail out)
-    const AlignedLabels expert = read_labels(o.evaluate);
-    std::vector<bool> scored = expert.covered;
-    std::optional<AlignedLabels> second;
-    if (!o.coder2.empty()) {
-      second = read_labels(o.coder2);
-      for (size_t i = 0; i < scored.size(); ++i) scored[i] = scored[i] && second->covered[i];
-    }
-    run.evaluation = evaluate_labels(run.detection->labels, expert.label, t, scored);
-    if (second) run.ceiling = evaluate_labels(second->label, expert.label, t, scored);
+    std::optional<LabelFile> second;
+    if (!o.coder2.empty()) second = read_label_file(o.coder2);
+    CoderEvaluation scores = evaluate_against_coders(run.detection->labels, t, read_label_file(o.evaluate), second);
+    run.evaluation = std::move(scores.evaluation);
+    run.ceiling = std::move(scores.ceiling);
   }
   return run;
 }
@@ -247,20 +242,7 @@ nlohmann::json landings_json(const std::vector<LandingReport>& reports) {
 // The "events" entry of --json: detector, thresholds, counts per class, and the scores.
 nlohmann::json events_json(const GazeCommandOptions& o, const EventsRun& run) {
   auto number = [](double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); };
-  auto scores = [&](const Evaluation& e) {
-    nlohmann::json classes = nlohmann::json::object();
-    for (const ClassScore& c : e.classes)
-      classes[to_string(c.label)] = {{"kappa", number(c.kappa)},
-                                     {"f1", number(c.f1)},
-                                     {"hits", c.hits},
-                                     {"misses", c.misses},
-                                     {"false_alarms", c.false_alarms},
-                                     {"reference_events", c.reference_events},
-                                     {"test_events", c.test_events},
-                                     {"rto_ms", c.rto_ms},
-                                     {"rtd_ms", c.rtd_ms}};
-    return nlohmann::json{{"samples", e.samples}, {"kappa", number(e.kappa)}, {"accuracy", e.accuracy}, {"classes", classes}};
-  };
+  auto scores = [](const Evaluation& e) { return evaluation_json(e); };
   const EventDetection& d = *run.detection;
   nlohmann::json counts = nlohmann::json::object();
   for (EventLabel c : kEventClasses) counts[to_string(c)] = 0;

@@ -5,7 +5,10 @@
 ``PupilSource`` is the live Pupil Capture connection and ``LslSource`` a Lab Streaming Layer gaze
 stream (through pylsl). Samples are a NumPy structured array with the fields
 ``t_s`` (seconds, the tracker's clock), ``x``, ``y`` (screen pixels, origin top-left, NaN where
-the eye was lost), ``confidence`` (0–1) and ``valid`` (bool).
+the eye was lost), ``confidence`` (0–1), ``valid`` (bool) and ``pupil`` (the tracker's pupil
+size in its own units, NaN where it gives none). ``events`` labels every sample (fixation,
+saccade, PSO, pursuit, blink) with the command line's detectors and ``evaluate`` scores labels
+against human coders.
 """
 
 from __future__ import annotations
@@ -19,11 +22,21 @@ import numpy as np
 
 from . import _core
 
-SAMPLE_DTYPE = np.dtype([("t_s", "f8"), ("x", "f8"), ("y", "f8"), ("confidence", "f4"), ("valid", "?")])
+SAMPLE_DTYPE = np.dtype([("t_s", "f8"), ("x", "f8"), ("y", "f8"), ("confidence", "f4"), ("valid", "?"), ("pupil", "f4")])
 EVENT_DTYPE = np.dtype([("start_s", "f8"), ("end_s", "f8"), ("x", "f8"), ("y", "f8")])
 FIXATION_DTYPE = np.dtype([("start_s", "f8"), ("end_s", "f8"), ("x", "f8"), ("y", "f8"), ("first", "i8"), ("last", "i8")])
 
-__all__ = ["Recording", "read", "fixations", "PupilSource", "LslSource", "SAMPLE_DTYPE", "EVENT_DTYPE", "FIXATION_DTYPE"]
+#: The label codes of ``events`` (Zemblys et al. 2018's numbering: 0 undefined, 1 fixation, 2
+#: saccade, 3 PSO, 4 pursuit, 5 blink); ``LABELS[code]`` is the name.
+LABELS = ("undefined", "fixation", "saccade", "pso", "pursuit", "blink")
+#: One detected event (a run of samples with one label); angles in degrees from the screen centre,
+#: x right, y up; NaN where undefined (a blink's amplitude).
+EVENTS_DTYPE = np.dtype([("label", "U9"), ("first", "i8"), ("last", "i8"), ("onset_s", "f8"), ("duration_s", "f8"),
+                         ("amplitude_deg", "f8"), ("peak_velocity_deg_s", "f8"), ("start_x_deg", "f8"),
+                         ("start_y_deg", "f8"), ("end_x_deg", "f8"), ("end_y_deg", "f8")])
+
+__all__ = ["Recording", "Events", "read", "fixations", "events", "evaluate", "PupilSource", "LslSource", "SAMPLE_DTYPE",
+           "EVENT_DTYPE", "FIXATION_DTYPE", "EVENTS_DTYPE", "LABELS"]
 
 
 def _samples(columns: Dict[str, np.ndarray]) -> np.ndarray:
@@ -31,6 +44,41 @@ def _samples(columns: Dict[str, np.ndarray]) -> np.ndarray:
     for name in SAMPLE_DTYPE.names:
         out[name] = columns[name]
     return out
+
+
+def _columns(samples, screen, argument: str = "recording") -> Dict[str, object]:
+    """A Recording (or a structured sample array with ``screen``) as the columns the core reads."""
+    extra: Dict[str, object] = {}
+    if isinstance(samples, Recording):
+        screen = screen or samples.screen
+        extra["block_starts"] = list(samples.block_starts)
+        if samples.directions is not None:
+            extra["directions"] = np.ascontiguousarray(samples.directions, dtype=np.float64).reshape(-1)
+        extra["fixations"] = {k: np.ascontiguousarray(samples.fixations[k], dtype=np.float64) for k in EVENT_DTYPE.names}
+        extra["has_tracker_fixations"] = bool(samples.has_tracker_fixations)
+        extra["tracker"] = samples.tracker
+        samples = samples.samples
+    if screen is None:
+        raise ValueError(f"{argument}: give screen=(W, H) in pixels with a bare sample array")
+    samples = np.asarray(samples)
+    required = ("t_s", "x", "y", "confidence", "valid")
+    if samples.dtype.names is None or not set(required) <= set(samples.dtype.names):
+        raise TypeError(f"{argument}: expected a foveal.gaze.Recording or samples with the fields {', '.join(required)}, "
+                        f"got {type(samples).__name__} of dtype {samples.dtype}")
+    col = lambda name: np.ascontiguousarray(samples[name], dtype=np.float64)  # noqa: E731
+    columns: Dict[str, object] = {name: col(name) for name in required}
+    columns["pupil"] = col("pupil") if "pupil" in samples.dtype.names else np.full(len(samples), np.nan)
+    columns["screen"] = (int(screen[0]), int(screen[1]))
+    columns.update(extra)
+    return columns
+
+
+def _display(display, screen) -> "_core.Display":
+    if display is None:
+        return _core.Display(47.5, 30.0, 60.0, int(screen[0]), int(screen[1]))
+    if not isinstance(display, _core.Display):
+        raise TypeError(f"display: expected a foveal.Display, got {type(display).__name__}")
+    return display
 
 
 def _events(columns: Dict[str, np.ndarray], dtype: np.dtype = EVENT_DTYPE) -> np.ndarray:
@@ -71,24 +119,36 @@ class Recording:
 _TIME_SCALES = {"s": 1.0, "ms": 1e-3, "us": 1e-6}
 
 
-def read(path: str, format: str = "auto", screen: Optional[Tuple[int, int]] = None, eye: str = "average",
+def read(path, format: str = "auto", screen: Optional[Tuple[int, int]] = None, eye: str = "average",
          min_confidence: float = 0.6, time_unit: str = "s", coords: str = "px", origin: str = "top-left",
-         fixations_file: str = "", blinks_file: str = "", display_resolution: Tuple[int, int] = (1680, 1050)) -> Recording:
+         fixations_file: str = "", blinks_file: str = "", display_resolution: Tuple[int, int] = (1680, 1050),
+         display: Optional[_core.Display] = None) -> Recording:
     """Read a recording (the options of ``foveal gaze``).
 
-    format: auto, asc (EyeLink), pupil, tobii or csv. screen: (W, H) pixels for normalised
-    coordinates or to override the file's (default: what the file states, else
-    ``display_resolution``). eye: average, left or right. For csv: time_unit s/ms/us, coords
-    px/norm, origin top-left/bottom-left. Raises ValueError naming file:line on malformed input.
+    ``path``: the recording (EyeLink .asc, a Pupil Player export's gaze_positions.csv, a Tobii
+    TSV, a t,x,y CSV). ``format``: auto, asc, pupil, tobii or csv. ``screen``: (W, H) pixels for
+    normalised coordinates or to override the file's (default: what the file states, else the
+    display's resolution). ``eye``: average, left or right. For csv: ``time_unit`` s/ms/us,
+    ``coords`` px, norm (0–1) or deg (degrees from the screen centre, x right, y up: converted
+    with ``display``), ``origin`` top-left/bottom-left. ``min_confidence``: samples below it are
+    invalid. ``fixations_file``/``blinks_file``: a Pupil export's side files (default: found
+    beside it). ``display``: the physical screen (default 47.5×30 cm at 60 cm with
+    ``display_resolution`` pixels, the command line's --display). Raises ValueError naming
+    file:line on malformed input, FileNotFoundError for a missing file.
     """
     if time_unit not in _TIME_SCALES:
         raise ValueError(f"time_unit: unknown unit '{time_unit}' (expected s, ms or us)")
-    if coords not in ("px", "norm"):
-        raise ValueError(f"coords: expected px or norm, got '{coords}'")
+    if coords not in ("px", "norm", "deg"):
+        raise ValueError(f"coords: expected px, norm or deg, got '{coords}'")
     if origin not in ("top-left", "bottom-left"):
         raise ValueError(f"origin: expected top-left or bottom-left, got '{origin}'")
-    d = _core._read_recording(str(path), format, screen, eye, float(min_confidence), _TIME_SCALES[time_unit],
-                              coords == "norm", origin == "bottom-left", fixations_file, blinks_file, display_resolution)
+    if display is None:
+        display = _core.Display(47.5, 30.0, 60.0, int(display_resolution[0]), int(display_resolution[1]))
+    elif not isinstance(display, _core.Display):
+        raise TypeError(f"display: expected a foveal.Display, got {type(display).__name__}")
+    import os
+    d = _core._read_recording(os.fspath(path), format, screen, eye, float(min_confidence), _TIME_SCALES[time_unit],
+                              coords, origin == "bottom-left", os.fspath(fixations_file), os.fspath(blinks_file), display)
     for message in d["warnings"]:
         _warnings.warn(message, stacklevel=2)
     return Recording(samples=_samples(d["samples"]), fixations=_events(d["fixations"]), blinks=_events(d["blinks"]),
@@ -101,6 +161,17 @@ def read(path: str, format: str = "auto", screen: Optional[Tuple[int, int]] = No
 
 _PARAMETERS = ("velocity_threshold_deg_s", "velocity_window_s", "gap_fill_s", "merge_gap_s", "merge_angle_deg",
                "min_fixation_s", "median_window", "dispersion_deg", "min_duration_s")
+_PURSUIT_PARAMETERS = ("pursuit_velocity_deg_s", "pursuit_window_s", "min_pursuit_s")
+_EVENT_PARAMETERS = ("filter_window_s", "detection_window_s", "ek_lambda", "blink_flank_s", "max_blink_s")
+
+
+def _parameters(params: Dict[str, float], known: Sequence[str]) -> Dict[str, float]:
+    for key, value in params.items():
+        if key not in known:
+            raise ValueError(f"{key}: unknown parameter (known: {', '.join(known)})")
+        if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
+            raise TypeError(f"{key}: expected a number, got {type(value).__name__}")
+    return {k: float(v) for k, v in params.items()}
 
 
 def fixations(samples, method: str = "ivt", display: Optional[_core.Display] = None,
@@ -108,35 +179,155 @@ def fixations(samples, method: str = "ivt", display: Optional[_core.Display] = N
     """Fixations of a recording (or a SAMPLE_DTYPE array) by I-VT or I-DT, as ``foveal gaze`` finds them.
 
     ``samples``: a Recording (its screen and blocks are used) or a structured sample array (then
-    give ``screen``). ``display``: the physical screen for the angles (default 47.5×30 cm at 60 cm,
-    the command line's). ``params`` (defaults as the command line's): velocity_threshold_deg_s (30),
+    give ``screen``). ``method``: ivt or idt (for pursuit, saccades and PSOs: ``events``).
+    ``display``: the physical screen for the angles (default 47.5×30 cm at 60 cm, the command
+    line's). ``params`` (defaults as the command line's): velocity_threshold_deg_s (30),
     velocity_window_s (0.02), gap_fill_s (0.075), merge_gap_s (0.075), merge_angle_deg (0.5),
     min_fixation_s (0.06), median_window (1), dispersion_deg (1.0), min_duration_s (0.08).
     Returns a structured array of FIXATION_DTYPE (``first``/``last`` are sample indices); with
     ``labels=True`` also each sample's fixation index (−1: none).
     """
-    blocks, directions = None, None
-    if isinstance(samples, Recording):
-        screen = screen or samples.screen
-        blocks = samples.block_starts
-        if samples.directions is not None:
-            directions = np.ascontiguousarray(samples.directions, dtype=np.float64).reshape(-1)
-        samples = samples.samples
-    if screen is None:
-        raise ValueError("fixations: give screen=(W, H) in pixels with a bare sample array")
-    samples = np.asarray(samples)
-    if samples.dtype.names is None or not set(SAMPLE_DTYPE.names) <= set(samples.dtype.names):
-        raise ValueError(f"fixations: expected samples with the fields {', '.join(SAMPLE_DTYPE.names)}")
-    unknown = set(params) - set(_PARAMETERS)
-    if unknown:
-        raise ValueError(f"fixations: unknown parameter '{sorted(unknown)[0]}' ({', '.join(_PARAMETERS)})")
-    if display is None:
-        display = _core.Display(47.5, 30.0, 60.0, int(screen[0]), int(screen[1]))
-    col = lambda name: np.ascontiguousarray(samples[name], dtype=np.float64)  # noqa: E731
-    d = _core._fixations(col("t_s"), col("x"), col("y"), col("confidence"), col("valid"), (int(screen[0]), int(screen[1])),
-                         display, method, {k: float(v) for k, v in params.items()}, blocks, directions)
+    if method in ("auto", "nhr", "nhp", "nh", "ek"):
+        raise ValueError(f"method: '{method}' is an event detector: foveal.gaze.events(recording, method='{method}') labels "
+                         "fixations, saccades, PSOs, pursuit and blinks")
+    columns = _columns(samples, screen, "samples")
+    d = _core._fixations(columns, _display(display, columns["screen"]), method, _parameters(params, _PARAMETERS))
     result = _events(d, FIXATION_DTYPE)
     return (result, np.asarray(d["label"])) if labels else result
+
+
+@dataclass
+class Events:
+    """What ``events`` found: a label per sample and the events (runs of one label)."""
+
+    labels: np.ndarray          #: uint8 per sample, codes of LABELS (0 undefined … 5 blink)
+    table: np.ndarray           #: the events, EVENTS_DTYPE (undefined runs left out)
+    t_s: np.ndarray             #: each sample's time (the recording's clock), seconds
+    velocity_deg_s: np.ndarray  #: each sample's angular velocity, deg/s (NaN where the eye was lost)
+    method: str = ""            #: the detector (auto resolved)
+    sampling_hz: float = 0.0
+    peak_threshold_deg_s: float = float("nan")   #: the adaptive thresholds (nh, nhp; ek: mean η)
+    onset_threshold_deg_s: float = float("nan")
+    tsv: str = ""               #: the BIDS-style events table, as ``foveal gaze --events-out`` writes it
+
+    def __len__(self) -> int:
+        return len(self.table)
+
+    @property
+    def label_names(self) -> np.ndarray:
+        """Each sample's label as a name (fixation, saccade, pso, pursuit, blink, undefined)."""
+        return np.asarray(LABELS, dtype="U9")[self.labels]
+
+    def counts(self) -> Dict[str, int]:
+        """Events per class."""
+        return {name: int(np.count_nonzero(self.table["label"] == name)) for name in LABELS[1:]}
+
+    def to_dataframe(self):
+        """The events table as a pandas DataFrame (pandas is not a dependency: install it to use this)."""
+        try:
+            import pandas as pd
+        except ImportError as error:
+            raise RuntimeError("to_dataframe needs pandas (pip install pandas); the table is also Events.table, "
+                               "a NumPy structured array") from error
+        return pd.DataFrame({name: self.table[name] for name in EVENTS_DTYPE.names})
+
+    def write_bids(self, path) -> None:
+        """Write the events as a BIDS-style events.tsv (onset, duration, trial_type, amplitude_deg,
+        peak_velocity_deg_s, start/end x/y in degrees; onsets from the first sample) — the file of
+        ``foveal gaze --events-out``. An existing file is replaced only once the new one is whole."""
+        import os
+        import tempfile
+        path = os.fspath(path)
+        folder = os.path.dirname(os.path.abspath(path))
+        handle, temporary = tempfile.mkstemp(prefix=".events-", suffix=".tsv", dir=folder)
+        try:
+            with os.fdopen(handle, "w", encoding="utf-8", newline="") as out:
+                out.write(self.tsv)
+            os.replace(temporary, path)
+        except BaseException:
+            if os.path.exists(temporary):
+                os.unlink(temporary)
+            raise
+
+
+def events(recording, method: str = "auto", display: Optional[_core.Display] = None,
+           screen: Optional[Tuple[int, int]] = None, **params) -> Events:
+    """Label every sample and list the events, as ``foveal gaze RECORDING --events METHOD``.
+
+    ``recording``: a Recording (from ``read``) or a structured sample array (then give
+    ``screen``). ``method``: auto (= nhr, the recommended: saccades on local robust thresholds,
+    PSOs, pursuit in context), nhr, nhp, nh (Nyström & Holmqvist 2010), ek (Engbert & Kliegl
+    2003), ivt or idt (docs/gaze.md). ``display``: the physical screen for the angles (default
+    47.5×30 cm at 60 cm and the recording's screen in pixels, the command line's). ``params``, in
+    seconds and degrees: the fixation filters' (see ``fixations``), pursuit_velocity_deg_s (6),
+    pursuit_window_s (0.04), min_pursuit_s (0.08), filter_window_s (the Savitzky–Golay window;
+    default the detector's: 0.006 nh/nhp, 0.010 nhr), detection_window_s (0.02), ek_lambda (6),
+    blink_flank_s (0.1), max_blink_s (2). Returns an ``Events``; the GIL is released while it runs.
+    """
+    if not isinstance(method, str):
+        raise TypeError(f"method: expected a detector's name, got {type(method).__name__}")
+    columns = _columns(recording, screen)
+    d = _core._events(columns, _display(display, columns["screen"]), method,
+                      _parameters(params, _PARAMETERS + _PURSUIT_PARAMETERS + _EVENT_PARAMETERS))
+    t = d["table"]
+    table = np.empty(len(t["onset_s"]), EVENTS_DTYPE)
+    table["label"] = np.asarray(LABELS, dtype="U9")[np.asarray(t["label"], dtype=np.intp)]
+    for name in EVENTS_DTYPE.names[1:]:
+        table[name] = t[name]
+    return Events(labels=np.asarray(d["labels"]), table=table, t_s=columns["t_s"],
+                  velocity_deg_s=np.asarray(d["velocity_deg_s"]), method=d["method"], sampling_hz=d["sampling_hz"],
+                  peak_threshold_deg_s=d["peak_threshold_deg_s"], onset_threshold_deg_s=d["onset_threshold_deg_s"],
+                  tsv=d["tsv"])
+
+
+def _label_codes(labels, argument: str) -> np.ndarray:
+    array = np.asarray(labels)
+    if array.ndim != 1:
+        raise ValueError(f"{argument}: expected one label per sample (1-D), got shape {array.shape}")
+    if array.dtype.kind in "USO":
+        names = {name: code for code, name in enumerate(LABELS)}
+        try:
+            return np.asarray([names[str(v).lower()] for v in array], dtype=np.uint8)
+        except KeyError as error:
+            raise ValueError(f"{argument}: unknown label {error.args[0]!r} (known: {', '.join(LABELS)})") from None
+    if array.dtype.kind not in "iub":
+        raise TypeError(f"{argument}: expected label codes 0–5 or names, got dtype {array.dtype}")
+    if array.size and (array.min() < 0 or array.max() >= len(LABELS)):
+        raise ValueError(f"{argument}: label codes are 0–5 ({', '.join(LABELS)}), got {array.min()}…{array.max()}")
+    return np.ascontiguousarray(array, dtype=np.uint8)
+
+
+def evaluate(labels, coder, coder2=None, t_s=None) -> dict:
+    """Score labels against a human coder's, as ``foveal gaze --events … --evaluate CODER --coder2 CODER2``.
+
+    ``labels``: an ``Events`` (its labels and sample times) or one label per sample (codes 0–5 or
+    names; then give ``t_s``, each sample's time). ``coder``, ``coder2``: a label file (CSV with a
+    time column t/t_s/time and a ``label`` column, e.g. the IRF or Lund 2013 recordings; matched to
+    the samples by time) or one label per sample. With ``coder2`` the second coder's agreement with
+    the first is the ``ceiling``. Scores are over the samples every coder labelled: ``samples``,
+    ``kappa`` (Cohen's, all classes), ``accuracy``, and per class in ``classes``: ``kappa``, ``f1``
+    (Hooge et al. 2018's event matching), ``hits``, ``misses``, ``false_alarms``,
+    ``reference_events``, ``test_events``, ``rto_ms``, ``rtd_ms`` (None where undefined).
+    """
+    if isinstance(labels, Events):
+        t_s = labels.t_s if t_s is None else t_s
+        labels = labels.labels
+    if t_s is None:
+        raise ValueError("t_s: give each sample's time with bare labels (or pass the Events from foveal.gaze.events)")
+    codes = _label_codes(labels, "labels")
+    times = np.ascontiguousarray(t_s, dtype=np.float64)
+    if times.ndim != 1 or len(times) != len(codes):
+        raise ValueError(f"t_s: expected {len(codes)} times (one per label), got shape {times.shape}")
+
+    def coder_of(value, argument):
+        if value is None:
+            return None
+        if isinstance(value, (str, bytes)) or hasattr(value, "__fspath__"):
+            import os
+            return os.fspath(value)
+        return _label_codes(value, argument)
+
+    return _core._evaluate(codes, times, coder_of(coder, "coder"), coder_of(coder2, "coder2"))
 
 
 class _LiveSource:

@@ -5,6 +5,9 @@
 #include <nanobind/ndarray.h>
 #include <nlohmann/json.hpp>
 
+#include "foveal/gaze/detect.h"
+#include "foveal/gaze/recording.h"
+
 #include <initializer_list>
 #include <vector>
 
@@ -20,5 +23,13 @@ nb::ndarray<nb::numpy, float> owned_array(std::vector<float>&& values, std::init
 
 // foveal._core's gaze functions (gaze.cpp).
 void bind_gaze(nb::module_& m);
+// A recording from foveal.gaze's columns (t_s, x, y, confidence, valid, pupil, screen; directions
+// and block_starts when given).
+Recording recording_from(const nb::dict& columns);
+// The filter's (and, given `events`, the detectors') parameters by keyword; throws Error naming one
+// it does not know.
+void set_parameters(const nb::dict& params, FixationParams& fixation, EventParams* events);
+// foveal._core's perceive (perceive.cpp).
+void bind_perceive(nb::module_& m);
 
 }  // namespace foveal::python

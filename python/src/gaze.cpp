@@ -3,6 +3,7 @@
 // structured array).
 #include "bindings.h"
 
+#include "foveal/gaze/detect.h"
 #include "foveal/gaze/fixation.h"
 #include "foveal/gaze/recording.h"
 #include "foveal/gaze/source.h"
@@ -33,7 +34,7 @@ nb::ndarray<nb::numpy, T> column(std::vector<T>&& values) {
 // Samples as columns: t_s, x, y, confidence, valid.
 nb::dict sample_columns(const std::vector<GazeSample>& samples) {
   std::vector<double> t, x, y;
-  std::vector<float> confidence;
+  std::vector<float> confidence, pupil;
   std::vector<uint8_t> valid;
   for (const GazeSample& s : samples) {
     t.push_back(s.t_s);
@@ -41,6 +42,7 @@ nb::dict sample_columns(const std::vector<GazeSample>& samples) {
     y.push_back(s.px.y);
     confidence.push_back(s.confidence);
     valid.push_back(s.valid ? 1 : 0);
+    pupil.push_back(s.pupil);
   }
   nb::dict d;
   d["t_s"] = column(std::move(t));
@@ -48,6 +50,7 @@ nb::dict sample_columns(const std::vector<GazeSample>& samples) {
   d["y"] = column(std::move(y));
   d["confidence"] = column(std::move(confidence));
   d["valid"] = column(std::move(valid));
+  d["pupil"] = column(std::move(pupil));
   return d;
 }
 
@@ -69,13 +72,21 @@ nb::dict event_columns(const std::vector<GazeEvent>& events) {
 
 using Column = nb::ndarray<const double, nb::ndim<1>, nb::c_contig, nb::device::cpu>;
 
-// A recording rebuilt from columns (what foveal.gaze.fixations is given).
-Recording recording_from(const Column& t, const Column& x, const Column& y, const Column& confidence, const Column& valid,
-                         std::array<int, 2> screen, const std::optional<Column>& directions) {
+}  // namespace
+
+// A recording rebuilt from the columns foveal.gaze hands over (gaze.py's _columns): t_s, x, y,
+// confidence, valid, pupil (float64 arrays of one length), screen (W, H), and optionally
+// directions (3 per sample) and block_starts.
+Recording recording_from(const nb::dict& columns) {
+  auto get = [&](const char* name) { return nb::cast<Column>(columns[name]); };
+  const Column t = get("t_s"), x = get("x"), y = get("y"), confidence = get("confidence"), valid = get("valid"), pupil = get("pupil");
+  const auto screen = nb::cast<std::array<int, 2>>(columns["screen"]);
+  std::optional<Column> directions;
+  if (columns.contains("directions") && !columns["directions"].is_none()) directions = get("directions");
   const size_t n = t.shape(0);
   if (directions && directions->shape(0) != 3 * n) fail("directions: expected 3 values per sample");
-  if (x.shape(0) != n || y.shape(0) != n || confidence.shape(0) != n || valid.shape(0) != n)
-    fail("samples: the columns t_s, x, y, confidence and valid must have the same length");
+  if (x.shape(0) != n || y.shape(0) != n || confidence.shape(0) != n || valid.shape(0) != n || pupil.shape(0) != n)
+    fail("samples: the columns t_s, x, y, confidence, valid and pupil must have the same length");
   if (screen[0] <= 0 || screen[1] <= 0) fail("screen: must be positive pixels, got {}x{}", screen[0], screen[1]);
   Recording r;
   r.source = "samples";
@@ -89,14 +100,83 @@ Recording recording_from(const Column& t, const Column& x, const Column& y, cons
     s.px = {x.data()[i], y.data()[i]};
     s.confidence = static_cast<float>(confidence.data()[i]);
     s.valid = valid.data()[i] != 0 && std::isfinite(s.px.x) && std::isfinite(s.px.y);
+    s.pupil = static_cast<float>(pupil.data()[i]);
     if (directions) {
       const double* d = directions->data() + 3 * i;
       if (std::isfinite(d[0]) && std::isfinite(d[1]) && std::isfinite(d[2])) s.direction = glm::dvec3(d[0], d[1], d[2]);
     }
   }
+  // The tracker's own fixations (for fixation='tracker')
+  if (columns.contains("fixations") && !columns["fixations"].is_none()) {
+    const nb::dict f = nb::cast<nb::dict>(columns["fixations"]);
+    const Column start = nb::cast<Column>(f["start_s"]), end = nb::cast<Column>(f["end_s"]), fx = nb::cast<Column>(f["x"]),
+                 fy = nb::cast<Column>(f["y"]);
+    if (end.shape(0) != start.shape(0) || fx.shape(0) != start.shape(0) || fy.shape(0) != start.shape(0))
+      fail("fixations: the columns start_s, end_s, x and y must have the same length");
+    for (size_t i = 0; i < start.shape(0); ++i) r.fixations.push_back({start.data()[i], end.data()[i], {fx.data()[i], fy.data()[i]}});
+    r.has_tracker_fixations = nb::cast<bool>(columns["has_tracker_fixations"]);
+    r.tracker = nb::cast<std::string>(columns["tracker"]);
+  }
   r.block_starts = {0};
+  if (columns.contains("block_starts") && !columns["block_starts"].is_none()) {
+    const auto blocks = nb::cast<std::vector<size_t>>(columns["block_starts"]);
+    for (size_t b : blocks)
+      if (b >= n && n > 0) fail("samples: block start {} is past the last sample", b);
+    if (!blocks.empty()) r.block_starts = blocks;
+  }
   return r;
 }
+
+// The filters' and detectors' parameters by keyword (seconds and degrees, as the library's fields).
+void set_parameters(const nb::dict& params, FixationParams& f, EventParams* e) {
+  for (auto [key, value] : params) {
+    const std::string k = nb::cast<std::string>(key);
+    const double v = nb::cast<double>(value);
+    if (k == "velocity_threshold_deg_s")
+      f.velocity_threshold_deg_s = v;
+    else if (k == "velocity_window_s")
+      f.velocity_window_s = v;
+    else if (k == "gap_fill_s")
+      f.gap_fill_s = v;
+    else if (k == "merge_gap_s")
+      f.merge_gap_s = v;
+    else if (k == "merge_angle_deg")
+      f.merge_angle_deg = v;
+    else if (k == "min_fixation_s")
+      f.min_fixation_s = v;
+    else if (k == "median_window")
+      f.median_window = static_cast<int>(v);
+    else if (k == "dispersion_deg")
+      f.dispersion_deg = v;
+    else if (k == "min_duration_s")
+      f.min_duration_s = v;
+    else if (k == "pursuit_velocity_deg_s")
+      f.pursuit.velocity_deg_s = v;
+    else if (k == "pursuit_window_s")
+      f.pursuit.window_s = v;
+    else if (k == "min_pursuit_s")
+      f.pursuit.min_s = v;
+    else if (e && k == "filter_window_s")
+      e->filter_window_s = e->robust_filter_window_s = v;
+    else if (e && k == "detection_window_s")
+      e->detection_window_s = v;
+    else if (e && k == "ek_lambda")
+      e->ek_lambda = v;
+    else if (e && k == "blink_flank_s")
+      e->blink_flank_s = v;
+    else if (e && k == "max_blink_s")
+      e->max_blink_s = v;
+    else
+      fail("params: unknown parameter '{}'", k);
+  }
+  validate(f);
+  if (e) {
+    e->pursuit = f.pursuit;
+    validate(*e);
+  }
+}
+
+namespace {
 
 struct PyPupilSource {
   std::unique_ptr<PupilSource> source;
@@ -112,11 +192,15 @@ void bind_gaze(nb::module_& m) {
   m.def(
       "_read_recording",
       [](const std::string& path, const std::string& format, std::optional<std::array<int, 2>> screen, const std::string& eye,
-         double min_confidence, double time_scale, bool normalised, bool origin_bottom_left, const std::string& fixations_file,
-         const std::string& blinks_file, std::array<int, 2> default_screen) {
+         double min_confidence, double time_scale, const std::string& coords, bool origin_bottom_left, const std::string& fixations_file,
+         const std::string& blinks_file, const Display& display) {
         ReadOptions o;
         o.format = parse_gaze_format(format);
-        o.screen_px = {default_screen[0], default_screen[1]};
+        validate(display);
+        o.screen_px = {display.res_x, display.res_y};
+        o.display_width_cm = display.width_cm;
+        o.display_height_cm = display.height_cm;
+        o.display_distance_cm = display.distance_cm;
         if (screen) {
           if ((*screen)[0] <= 0 || (*screen)[1] <= 0) fail("screen: must be positive pixels, got {}x{}", (*screen)[0], (*screen)[1]);
           o.screen_px = {(*screen)[0], (*screen)[1]};
@@ -126,7 +210,9 @@ void bind_gaze(nb::module_& m) {
         if (!(min_confidence >= 0 && min_confidence <= 1)) fail("min_confidence: must be in [0, 1], got {}", min_confidence);
         o.min_confidence = static_cast<float>(min_confidence);
         o.csv_time_scale = time_scale;
-        o.csv_normalised = normalised;
+        if (coords != "px" && coords != "norm" && coords != "deg") fail("coords: expected px, norm or deg, got '{}'", coords);
+        o.csv_normalised = coords == "norm";
+        o.csv_degrees = coords == "deg";
         o.csv_origin_bottom_left = origin_bottom_left;
         o.fixations_file = fixations_file;
         o.blinks_file = blinks_file;
@@ -160,56 +246,22 @@ void bind_gaze(nb::module_& m) {
         d["warnings"] = r.warnings;
         return d;
       },
-      "path"_a, "format"_a, "screen"_a, "eye"_a, "min_confidence"_a, "time_scale"_a, "normalised"_a, "origin_bottom_left"_a,
-      "fixations_file"_a, "blinks_file"_a, "default_screen"_a);
+      "path"_a, "format"_a, "screen"_a, "eye"_a, "min_confidence"_a, "time_scale"_a, "coords"_a, "origin_bottom_left"_a, "fixations_file"_a,
+      "blinks_file"_a, "display"_a);
 
   m.def(
       "_fixations",
-      [](const Column& t, const Column& x, const Column& y, const Column& confidence, const Column& valid, std::array<int, 2> screen,
-         const Display& display, const std::string& method, const nb::dict& params, std::optional<std::vector<size_t>> block_starts,
-         std::optional<Column> directions) {
+      [](const nb::dict& columns, const Display& display, const std::string& method, const nb::dict& params) {
         FixationParams p;
-        for (auto [key, value] : params) {
-          const std::string k = nb::cast<std::string>(key);
-          const double v = nb::cast<double>(value);
-          if (k == "velocity_threshold_deg_s")
-            p.velocity_threshold_deg_s = v;
-          else if (k == "velocity_window_s")
-            p.velocity_window_s = v;
-          else if (k == "gap_fill_s")
-            p.gap_fill_s = v;
-          else if (k == "merge_gap_s")
-            p.merge_gap_s = v;
-          else if (k == "merge_angle_deg")
-            p.merge_angle_deg = v;
-          else if (k == "min_fixation_s")
-            p.min_fixation_s = v;
-          else if (k == "median_window")
-            p.median_window = static_cast<int>(v);
-          else if (k == "dispersion_deg")
-            p.dispersion_deg = v;
-          else if (k == "min_duration_s")
-            p.min_duration_s = v;
-          else
-            fail(
-                "fixations: unknown parameter '{}' (velocity_threshold_deg_s, velocity_window_s, gap_fill_s, merge_gap_s, "
-                "merge_angle_deg, min_fixation_s, median_window, dispersion_deg, min_duration_s)",
-                k);
-        }
-        validate(p);
+        set_parameters(params, p, nullptr);
         validate(display);
         const FixationMethod fm = parse_fixation_method(method);
-        if (fm == FixationMethod::mean) fail("fixations: 'mean' is a per-frame average, not a fixation filter: use ivt or idt");
+        if (fm == FixationMethod::mean) fail("method: 'mean' is a per-frame average, not a fixation filter: use ivt or idt");
         if (fm == FixationMethod::ivvt)
           fail(
-              "fixations: 'ivvt' is the causal filter for the fovea (FixationTracker); for offline fixations use ivt or idt, "
-              "for pursuit the event detector (foveal gaze RECORDING --events auto)");
-        Recording r = recording_from(t, x, y, confidence, valid, screen, directions);
-        if (block_starts && !block_starts->empty()) {
-          for (size_t b : *block_starts)
-            if (b >= r.samples.size() && !r.samples.empty()) fail("fixations: block start {} is past the last sample", b);
-          r.block_starts = *block_starts;
-        }
+              "method: 'ivvt' is the causal filter for the fovea (FixationTracker); for offline fixations use ivt or idt, "
+              "for pursuit the event detectors (foveal.gaze.events(recording, method='auto'))");
+        const Recording r = recording_from(columns);
         FixationResult result;
         {
           nb::gil_scoped_release release;
@@ -231,8 +283,106 @@ void bind_gaze(nb::module_& m) {
         d["label"] = column(std::move(label));
         return d;
       },
-      "t"_a, "x"_a, "y"_a, "confidence"_a, "valid"_a, "screen"_a, "display"_a, "method"_a, "params"_a, "block_starts"_a = nb::none(),
-      "directions"_a = nb::none());
+      "columns"_a, "display"_a, "method"_a, "params"_a);
+
+  m.def(
+      "_events",
+      [](const nb::dict& columns, const Display& display, const std::string& method, const nb::dict& params) {
+        FixationParams fp;
+        EventParams ep;
+        set_parameters(params, fp, &ep);
+        validate(display);
+        const EventMethod em = parse_event_method(method);
+        const Recording r = recording_from(columns);
+        EventDetection d;
+        std::string tsv;
+        {
+          nb::gil_scoped_release release;
+          const GazeGeometry geometry(display, r.screen_px);
+          d = detect_events(r, geometry, em, ep, fp);
+          tsv = events_tsv(d, r);
+        }
+        std::vector<uint8_t> labels(d.labels.size());
+        for (size_t i = 0; i < labels.size(); ++i) labels[i] = static_cast<uint8_t>(d.labels[i]);
+        std::vector<uint8_t> label;
+        std::vector<int64_t> first, last;
+        std::vector<double> onset, duration, amplitude, peak, sx, sy, ex, ey;
+        for (const DetectedEvent& e : d.events) {
+          label.push_back(static_cast<uint8_t>(e.label));
+          first.push_back(static_cast<int64_t>(e.first));
+          last.push_back(static_cast<int64_t>(e.last));
+          onset.push_back(e.onset_s);
+          duration.push_back(e.duration_s);
+          amplitude.push_back(e.amplitude_deg);
+          peak.push_back(e.peak_velocity_deg_s);
+          sx.push_back(e.start_deg.x);
+          sy.push_back(e.start_deg.y);
+          ex.push_back(e.end_deg.x);
+          ey.push_back(e.end_deg.y);
+        }
+        nb::dict table;
+        table["label"] = column(std::move(label));
+        table["first"] = column(std::move(first));
+        table["last"] = column(std::move(last));
+        table["onset_s"] = column(std::move(onset));
+        table["duration_s"] = column(std::move(duration));
+        table["amplitude_deg"] = column(std::move(amplitude));
+        table["peak_velocity_deg_s"] = column(std::move(peak));
+        table["start_x_deg"] = column(std::move(sx));
+        table["start_y_deg"] = column(std::move(sy));
+        table["end_x_deg"] = column(std::move(ex));
+        table["end_y_deg"] = column(std::move(ey));
+        nb::dict out;
+        out["labels"] = column(std::move(labels));
+        out["table"] = table;
+        out["velocity_deg_s"] = column(std::vector<float>(d.velocity_deg_s));
+        out["method"] = std::string(to_string(em));
+        out["sampling_hz"] = d.sampling_hz;
+        out["peak_threshold_deg_s"] = d.peak_threshold_deg_s;
+        out["onset_threshold_deg_s"] = d.onset_threshold_deg_s;
+        out["tsv"] = tsv;
+        return out;
+      },
+      "columns"_a, "display"_a, "method"_a, "params"_a);
+
+  m.def(
+      "_evaluate",
+      [](const nb::ndarray<const uint8_t, nb::ndim<1>, nb::c_contig, nb::device::cpu>& labels, const Column& t, const nb::object& coder,
+         const nb::object& coder2) {
+        const size_t n = labels.shape(0);
+        if (t.shape(0) != n) fail("t_s: {} times for {} labels", t.shape(0), n);
+        std::vector<EventLabel> test(n);
+        std::vector<double> times(t.data(), t.data() + n);
+        for (size_t i = 0; i < n; ++i) {
+          if (labels.data()[i] > static_cast<uint8_t>(EventLabel::blink))
+            fail("labels: labels[{}] = {} is no label (0–5)", i, labels.data()[i]);
+          test[i] = static_cast<EventLabel>(labels.data()[i]);
+        }
+        // A coder: a label file's path, or its labels of these samples (codes 0–5)
+        auto coder_file = [&](const nb::object& c, const char* name) {
+          if (nb::isinstance<nb::str>(c)) return read_label_file(nb::cast<std::string>(c));
+          const auto a = nb::cast<nb::ndarray<const uint8_t, nb::ndim<1>, nb::c_contig, nb::device::cpu>>(c);
+          if (a.shape(0) != n) fail("{}: {} labels for {} samples", name, a.shape(0), n);
+          LabelFile f;
+          f.name = name;
+          f.t_s = times;
+          for (size_t i = 0; i < n; ++i) {
+            if (a.data()[i] > static_cast<uint8_t>(EventLabel::blink))
+              fail("{}: {}[{}] = {} is no label (0–5)", name, name, i, a.data()[i]);
+            f.label.push_back(static_cast<EventLabel>(a.data()[i]));
+            f.line.push_back(i);
+          }
+          return f;
+        };
+        std::optional<LabelFile> second;
+        if (!coder2.is_none()) second = coder_file(coder2, "coder2");
+        const CoderEvaluation e = evaluate_against_coders(test, times, coder_file(coder, "coder"), second);
+        nlohmann::json j = evaluation_json(e.evaluation);
+        if (e.ceiling) j["ceiling"] = evaluation_json(*e.ceiling);
+        j["matching"] = "Hooge et al. 2018: earliest overlapping event of the same class";
+        return to_python(j);
+      },
+      "labels"_a, "t_s"_a, "coder"_a, "coder2"_a = nb::none());
 
   nb::class_<PyPupilSource>(m, "_PupilSource")
       .def(

@@ -42,6 +42,25 @@ nb::ndarray<nb::numpy, float> owned_array(std::vector<float>&& values, std::init
 
 namespace {
 
+// A message as valid UTF-8 (Python's strings must be): bytes that are not are written \xNN.
+std::string valid_utf8(const std::string& in) {
+  std::string out;
+  for (size_t i = 0; i < in.size();) {
+    const auto c = static_cast<unsigned char>(in[i]);
+    const size_t n = c < 0x80 ? 1 : (c >> 5) == 0x6 ? 2 : (c >> 4) == 0xE ? 3 : (c >> 3) == 0x1E ? 4 : 0;
+    bool ok = n > 0 && i + n <= in.size();
+    for (size_t k = 1; ok && k < n; ++k) ok = (static_cast<unsigned char>(in[i + k]) >> 6) == 0x2;
+    if (ok) {
+      out.append(in, i, n);
+      i += n;
+    } else {
+      out += fmt::format("\\x{:02x}", c);
+      ++i;
+    }
+  }
+  return out;
+}
+
 using Vec3 = std::array<float, 3>;
 glm::vec3 vec(const Vec3& v) { return {v[0], v[1], v[2]}; }
 Vec3 tuple(glm::vec3 v) { return {v.x, v.y, v.z}; }
@@ -208,6 +227,10 @@ struct PyVision {
   SimulateParams params;
   Camera camera;
   int threads = 0;
+  // One step at a time: a step changes the simulation's state (the field, the eye, the step count)
+  // and its images are read after it, so steps from several Python threads take turns (the GIL is
+  // released while one runs)
+  std::unique_ptr<std::mutex> mutex = std::make_unique<std::mutex>();
 };
 
 struct PyVisionStep {
@@ -244,13 +267,15 @@ std::unique_ptr<PyVision> make_vision(const PyScene& s, const std::string& eye, 
 }
 
 PyVisionStep vision_step(PyVision& v, std::optional<std::array<float, 2>> fixation, const nb::object& camera) {
-  if (!camera.is_none()) v.camera = resolve_camera(*v.scene, camera);
+  const std::optional<Camera> view = camera.is_none() ? std::nullopt : std::optional<Camera>(resolve_camera(*v.scene, camera));
   StepStats s;
   Image perceived, color;
   std::vector<float> coc;
   {
     nb::gil_scoped_release release;
+    const std::lock_guard<std::mutex> lock(*v.mutex);
     const ThreadScope scope(v.threads);
+    if (view) v.camera = *view;  // the camera stays for the steps after
     std::optional<glm::vec2> fix;
     if (fixation) fix = glm::vec2((*fixation)[0], (*fixation)[1]);
     s = v.sim->step(v.camera, fix);
@@ -293,7 +318,7 @@ NB_MODULE(_core, m) {
       static constexpr ParameterName kKeywords[] = {
           {"pupil_diameter_mm", "pupil_mm"}, {"ellipse_ratio", "ellipse"}, {"gaze_px", "gaze"},
           {"fixation_px", "fixation"},       {"gaze_eye", "eye"},          {"device cuda", "device='cuda'"}};
-      const std::string what = in_words(e.what(), kKeywords);
+      const std::string what = valid_utf8(in_words(e.what(), kKeywords));
       // A file that is not there (the readers say "no such file", or "cannot open" a path that does not exist)
       const size_t cannot = what.find(": cannot open");
       const bool missing = what.find(": no such ") != std::string::npos || what.ends_with(" not found") ||
@@ -554,7 +579,13 @@ NB_MODULE(_core, m) {
            "One step: the next fixation (simulated saccade, or `fixation` (x, y) in render pixels from real gaze), "
            "accommodation, the sharpness field, the blur and the impairments. Returns a VisionStep.")
       .def(
-          "blink", [](PyVision& v) { v.sim->blink_before_next_step(); }, "The eye blinks before the next step (the field forgets).")
+          "blink",
+          [](PyVision& v) {
+            nb::gil_scoped_release release;
+            const std::lock_guard<std::mutex> lock(*v.mutex);
+            v.sim->blink_before_next_step();
+          },
+          "The eye blinks before the next step (the field forgets).")
       .def_prop_ro("on_gpu", [](const PyVision& v) { return v.sim->on_gpu(); })
       .def_prop_ro(
           "optics", [](const PyVision& v) { return to_python(optics_json(v.params.eye)); },
@@ -607,4 +638,5 @@ NB_MODULE(_core, m) {
       "device_description", [] { return availability().describe(); }, "The GPU, or why there is none.");
 
   bind_gaze(m);
+  bind_perceive(m);
 }

@@ -232,4 +232,35 @@ Evaluation evaluate_labels(const std::vector<EventLabel>& test, const std::vecto
   return evaluate_labels(a, b, u);
 }
 
+CoderEvaluation evaluate_against_coders(const std::vector<EventLabel>& test, const std::vector<double>& t_s, const LabelFile& coder,
+                                        const std::optional<LabelFile>& coder2) {
+  if (test.size() != t_s.size()) fail("labels: {} labels for {} samples", test.size(), t_s.size());
+  const AlignedLabels expert = align_labels(coder, t_s);
+  std::vector<bool> scored = expert.covered;
+  std::optional<AlignedLabels> second;
+  if (coder2) {
+    second = align_labels(*coder2, t_s);
+    for (size_t i = 0; i < scored.size(); ++i) scored[i] = scored[i] && second->covered[i];
+  }
+  CoderEvaluation out{evaluate_labels(test, expert.label, t_s, scored), std::nullopt};
+  if (second) out.ceiling = evaluate_labels(second->label, expert.label, t_s, scored);
+  return out;
+}
+
+nlohmann::json evaluation_json(const Evaluation& e) {
+  auto number = [](double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); };
+  nlohmann::json classes = nlohmann::json::object();
+  for (const ClassScore& c : e.classes)
+    classes[to_string(c.label)] = {{"kappa", number(c.kappa)},
+                                   {"f1", number(c.f1)},
+                                   {"hits", c.hits},
+                                   {"misses", c.misses},
+                                   {"false_alarms", c.false_alarms},
+                                   {"reference_events", c.reference_events},
+                                   {"test_events", c.test_events},
+                                   {"rto_ms", c.rto_ms},
+                                   {"rtd_ms", c.rtd_ms}};
+  return nlohmann::json{{"samples", e.samples}, {"kappa", number(e.kappa)}, {"accuracy", e.accuracy}, {"classes", classes}};
+}
+
 }  // namespace foveal

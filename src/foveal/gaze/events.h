@@ -15,6 +15,8 @@
 
 #include "foveal/gaze/fixation.h"
 
+#include <nlohmann/json.hpp>
+
 #include <array>
 #include <cstdint>
 #include <optional>
@@ -92,5 +94,20 @@ Evaluation evaluate_labels(const std::vector<EventLabel>& test, const std::vecto
 // The same over the samples where `scored` is true only (the samples every coder labelled).
 Evaluation evaluate_labels(const std::vector<EventLabel>& test, const std::vector<EventLabel>& reference, const std::vector<double>& t_s,
                            const std::vector<bool>& scored);
+
+// `test` (labels of the samples at `t_s`) against a coder's label file, and the second coder's
+// agreement with the first (the ceiling) where one is given; both over the samples every coder
+// labelled (a coder may leave a recording's lost tail out). Files are aligned by align_labels.
+struct CoderEvaluation {
+  Evaluation evaluation;
+  std::optional<Evaluation> ceiling;
+};
+CoderEvaluation evaluate_against_coders(const std::vector<EventLabel>& test, const std::vector<double>& t_s, const LabelFile& coder,
+                                        const std::optional<LabelFile>& coder2 = std::nullopt);
+
+// An evaluation as JSON (what `foveal gaze --json` and foveal.gaze.evaluate give): samples, kappa,
+// accuracy and per class kappa, f1, hits, misses, false_alarms, reference_events, test_events,
+// rto_ms, rtd_ms (null where undefined).
+nlohmann::json evaluation_json(const Evaluation& evaluation);
 
 }  // namespace foveal

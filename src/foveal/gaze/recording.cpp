@@ -118,6 +118,12 @@ GazeFormat detect_gaze_format(const std::string& text, const std::string& name) 
   if (text::has_bom(text)) return detect_gaze_format(text.substr(3), name);
   const std::string_view head = std::string_view(text).substr(0, std::min<size_t>(text.size(), 1 << 16));
   const std::string_view first = head.substr(0, head.find('\n'));
+  // A binary file (an image, an EDF not yet converted): NUL bytes, which no text recording has
+  if (const size_t nul = head.substr(0, 4096).find('\0'); nul != std::string_view::npos)
+    fail(
+        "{}: binary data (a NUL byte at offset {}), not a gaze recording: give an EyeLink .asc (edf2asc converts an .edf), "
+        "a Pupil Player gaze_positions.csv, a Tobii TSV or a t,x,y CSV",
+        name, nul);
   auto has = [](std::string_view s, std::string_view what) { return s.find(what) != std::string_view::npos; };
   if (has(first, "gaze_timestamp") && has(first, "norm_pos_x")) return GazeFormat::pupil;
   if (has(first, "start_timestamp") && has(first, "dispersion"))

@@ -39,6 +39,8 @@ std::string extension(const std::string& path) {
 
 }  // namespace
 
+float srgb_to_linear(float v) { return v <= 0.04045f ? v / 12.92f : std::pow((v + 0.055f) / 1.055f, 2.4f); }
+
 float linear_to_srgb(float v) {
   if (!(v > 0)) return 0.0f;
   if (v >= 1) return 1.0f;
@@ -199,6 +201,16 @@ void check_image_size(const std::string& path, uint64_t width, uint64_t height) 
 }
 
 }  // namespace
+
+Image image_from_integers(const void* pixels, int width, int height, int channels, int bits) {
+  if (bits != 8 && bits != 16) fail("image: {}-bit pixels; 8 or 16 bits are read", bits);
+  if (channels < 1 || channels > 4 || width <= 0 || height <= 0) fail("image: {}x{} with {} channels", width, height, channels);
+  const cv::Mat mat(height, width, CV_MAKETYPE(bits == 8 ? CV_8U : CV_16U, channels), const_cast<void*>(pixels));
+  Image img(width, height, channels);
+  cv::Mat out(height, width, CV_MAKETYPE(CV_32F, channels), img.pixels.data());
+  mat.convertTo(out, CV_MAKETYPE(CV_32F, channels), bits == 16 ? 1.0 / 65535.0 : 1.0 / 255.0);  // load_image's scale
+  return img;
+}
 
 Image load_image(const std::string& path, bool keep_alpha) {
   std::error_code ec;

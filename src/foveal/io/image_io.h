@@ -10,6 +10,8 @@ namespace foveal {
 
 // Linear value → sRGB-encoded value in [0, 1].
 float linear_to_srgb(float v);
+// The inverse of the sRGB curve (IEC 61966-2-1) on a value in [0, 1]: display-encoded to linear.
+float srgb_to_linear(float v);
 // Linear value → sRGB byte, lround(255·linear_to_srgb(v)) by table (what 8-bit files and the viewer show).
 uint8_t srgb_byte(float v);
 // Linear RGB (or grey) → sRGB bytes with alpha 255, as save_image() writes a PNG.
@@ -32,6 +34,10 @@ void save_image(const Image& image, const std::string& path, bool srgb = true);
 // as stored: no sRGB decoding). RGBA files give 3 channels, or 4 with `keep_alpha` (alpha in
 // [0,1]). Throws Error naming the file and the reason.
 Image load_image(const std::string& path, bool keep_alpha = false);
+// Integer pixels (8- or 16-bit, `bits`; interleaved, rows top to bottom) as values in [0, 1]
+// exactly as load_image gives a file's (the same conversion, to the last bit): what the Python
+// package does with a uint8/uint16 array.
+Image image_from_integers(const void* pixels, int width, int height, int channels, int bits);
 
 // Portable float map (1 or 3 channels); written by hand since it is a 3-line header and raw floats.
 void save_pfm(const Image& image, const std::string& path);

@@ -1,6 +1,7 @@
 // foveal/vision/perceive.cpp — a person's eye applied to a stimulus image.
 #include "foveal/vision/perceive.h"
 
+#include "foveal/io/image_io.h"
 #include "foveal/perception/eye.h"
 #include "foveal/util/error.h"
 #include "foveal/util/gaze_point.h"
@@ -12,12 +13,6 @@
 #include <cmath>
 
 namespace foveal {
-
-namespace {
-
-float srgb_to_linear(float v) { return v <= 0.04045f ? v / 12.92f : std::pow((v + 0.055f) / 1.055f, 2.4f); }
-
-}  // namespace
 
 Perceiver::Perceiver(PerceiveParams params) : params_(std::move(params)) {
   validate(params_.eye.eye);
