@@ -59,7 +59,7 @@ def _columns(samples, screen, argument: str = "recording") -> Dict[str, object]:
         extra["tracker"] = samples.tracker
         samples = samples.samples
     if screen is None:
-        raise ValueError(f"{argument}: give screen=(W, H) in pixels with a bare sample array")
+        raise ValueError(f"screen: give screen=(W, H) in pixels with a bare sample array as {argument}")
     samples = np.asarray(samples)
     required = ("t_s", "x", "y", "confidence", "valid")
     if samples.dtype.names is None or not set(required) <= set(samples.dtype.names):

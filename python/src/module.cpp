@@ -19,6 +19,7 @@
 #include "foveal/vision/simulate.h"
 
 #include <nanobind/stl/array.h>
+#include <nanobind/stl/filesystem.h>
 #include <nanobind/stl/optional.h>
 #include <nanobind/stl/string.h>
 #include <nanobind/stl/tuple.h>
@@ -315,9 +316,13 @@ NB_MODULE(_core, m) {
     try {
       std::rethrow_exception(p);
     } catch (const Error& e) {
-      static constexpr ParameterName kKeywords[] = {
-          {"pupil_diameter_mm", "pupil_mm"}, {"ellipse_ratio", "ellipse"}, {"gaze_px", "gaze"},
-          {"fixation_px", "fixation"},       {"gaze_eye", "eye"},          {"device cuda", "device='cuda'"}};
+      static constexpr ParameterName kKeywords[] = {{"pupil_diameter_mm", "pupil_mm"},
+                                                    {"ellipse_ratio", "ellipse"},
+                                                    {"gaze_px", "gaze"},
+                                                    {"fixation_px", "fixation"},
+                                                    {"gaze_eye", "eye"},
+                                                    {"device cuda", "device='cuda'"},
+                                                    {"events", "method"}};
       const std::string what = valid_utf8(in_words(e.what(), kKeywords));
       // A file that is not there (the readers say "no such file", or "cannot open" a path that does not exist)
       const size_t cannot = what.find(": cannot open");
@@ -380,7 +385,8 @@ NB_MODULE(_core, m) {
   nb::class_<PyScene>(m, "Scene", "A scene: a mesh file, a scene .json, or builtin:box|sphere-plane|plane.")
       .def(
           "__init__",
-          [](PyScene* s, const std::string& spec) {
+          [](PyScene* s, const std::filesystem::path& path) {
+            const std::string spec = path.string();
             std::shared_ptr<const Scene> scene;
             {
               nb::gil_scoped_release release;
@@ -440,7 +446,7 @@ NB_MODULE(_core, m) {
           "library_ms", [](const PyFrame& f) { return f.wall_ms; },
           "Wall time of the library's render call alone, ms (for measuring the binding's own overhead).")
       .def(
-          "save", [](const PyFrame& f, const std::string& path) { save_image(f.frame.color, path); }, "path"_a,
+          "save", [](const PyFrame& f, const std::filesystem::path& path) { save_image(f.frame.color, path.string()); }, "path"_a,
           "Write the image as the CLI does (.png sRGB; .pfm/.exr linear floats).");
 
   nb::class_<PyRenderer>(m, "Renderer", "The foveated-AO renderer of one scene on one device.")
@@ -620,16 +626,16 @@ NB_MODULE(_core, m) {
 
   m.def(
       "load_image",
-      [](const std::string& path) {
-        Image img = load_image(path);
+      [](const std::filesystem::path& path) {
+        Image img = load_image(path.string());
         const size_t h = img.height, w = img.width, c = img.channels;
         return owned_array(std::move(img.pixels), {h, w, c});
       },
       "path"_a, "Read an image as the CLI does: PNG/JPEG decoded from sRGB to linear, PFM/EXR as stored (float32 H×W×C).");
   m.def(
       "save_image",
-      [](const nb::ndarray<const float, nb::ndim<3>, nb::c_contig, nb::device::cpu>& a, const std::string& path) {
-        save_image(image_from(a), path);
+      [](const nb::ndarray<const float, nb::ndim<3>, nb::c_contig, nb::device::cpu>& a, const std::filesystem::path& path) {
+        save_image(image_from(a), path.string());
       },
       "image"_a, "path"_a, "Write a linear float32 H×W×3 image as the CLI does (.png sRGB; .pfm/.exr exact).");
   m.def(

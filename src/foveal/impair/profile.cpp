@@ -309,7 +309,14 @@ EyeSpec read_eye_profile(const std::string& path) {
 }
 
 EyeSpec resolve_eye(const std::string& spec, const EyeOverrides& overrides) {
-  EyeSpec eye = parse_eye_spec(spec);
+  EyeSpec eye;
+  try {
+    eye = parse_eye_spec(spec);
+  } catch (const Error& e) {  // every error of the eye names it (a preset's own message may not)
+    const std::string_view what = e.what();
+    if (what.starts_with("eye:") || what.starts_with(spec)) throw;
+    fail("eye: '{}': {}", spec, what);
+  }
   if (overrides.pupil_diameter_mm) eye.eye.pupil_diameter_mm = *overrides.pupil_diameter_mm;
   if (overrides.image_distance_mm) eye.eye.image_distance_mm = *overrides.image_distance_mm;
   validate(eye.eye);
