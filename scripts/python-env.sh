@@ -3,7 +3,7 @@
 # site-packages) with nanobind (the module's build), NumPy, the test tools, pylsl and the parts
 # of PsychoPy the examples use. foveal itself is the module of the CMake build: a .pth file makes
 # build/python (where `cmake --build build` puts foveal/ with its _core module) importable from
-# .venv, so the set-up compiles the library once. (`pip install .` still builds a wheel on its own:
+# .venv, and .venv/bin/foveal is that build's command line, so the set-up compiles the library once. (`pip install .` still builds a wheel on its own:
 # docs/python.md.)
 # Usage: scripts/python-env.sh   (PYTHON=... to pick another interpreter ≥ 3.9)
 set -euo pipefail
@@ -20,3 +20,5 @@ if [ "$(cat "$stamp" 2> /dev/null)" != "$wanted" ]; then
 fi
 site=$(.venv/bin/python -c 'import sysconfig; print(sysconfig.get_paths()["purelib"])')
 echo "$PWD/build/python" > "$site/foveal-build.pth"
+# ... and the command line of that build on the environment's PATH, as `pip install .` puts it there
+ln -sfn "$PWD/build/foveal" .venv/bin/foveal

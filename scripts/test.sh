@@ -31,11 +31,14 @@ ctest --test-dir build --output-on-failure --parallel "$jobs"
 phase "Release tests"
 
 echo "== Python package: its tests (the module of the Release build, against its command line) and install rules"
+.venv/bin/foveal --version > /dev/null  # the command line from the virtual environment, as pip install . gives it
 FOVEAL_CLI="$PWD/build/foveal" .venv/bin/python -m pytest -q python/tests
 rm -rf build/python-install
 cmake --install build --component python --prefix build/python-install > /dev/null
 PYTHONPATH="$PWD/build/python-install" .venv/bin/python -c "import foveal; assert '/python-install/' in foveal.__file__, foveal.__file__; \
 foveal.Scene('builtin:plane'); print('  the installed package imports:', foveal.__file__)"
+build/python-install/bin/foveal --version > /dev/null  # the command line is part of the package's install
+echo "  the installed command line runs: $(build/python-install/bin/foveal --version)"
 phase "Python tests"
 
 echo "== AddressSanitizer + UndefinedBehaviorSanitizer build and tests"

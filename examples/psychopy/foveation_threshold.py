@@ -12,9 +12,17 @@ and a .psydat) under --out.
     python examples/psychopy/foveation_threshold.py --participant P01
     xvfb-run -a python examples/psychopy/foveation_threshold.py --simulate 3.0 --trials 40
 
-``--simulate GAMMA`` replaces the person with a simulated observer whose psychometric function is
-QUEST's own Weibull with its threshold at γ = GAMMA (so the experiment can run unattended, and a
-test can check that QUEST finds GAMMA); the stimuli are still rendered and shown.
+``--simulate GAMMA`` replaces the person with a model observer that looks at the images: it
+measures each trial's visible difference between the foveated frame and the reference (the
+acuity-weighted RMSE of foveal.compare: errors weighted by the visual acuity at their
+eccentricity, Geisler & Perry 1998's falloff) and detects it with QUEST's own Weibull on log10 of
+that difference, its threshold set at the difference the frame at γ = GAMMA makes. Frames that do
+not differ are never detected (chance), so the experiment can run unattended and a test can check
+that QUEST finds GAMMA through the rendered images.
+
+A display at which foveation changes no pixel (a small window: at 320×200 pixels over 47.5 cm
+every pixel keeps the reference's value at every γ in QUEST's range) would measure nothing: the
+experiment checks the largest γ first and refuses such a geometry, saying so.
 """
 
 from __future__ import annotations
@@ -47,6 +55,7 @@ def parse_args(argv=None):
 
 # QUEST's psychometric function (Watson & Pelli 1983, as PsychoPy's QuestHandler uses it)
 BETA, DELTA, GUESS, P_THRESHOLD = 3.5, 0.01, 0.5, 0.82
+MAX_GAMMA = 12.0  # QUEST's range of γ: 1 … 12
 
 
 def weibull(log_gamma: float, log_threshold: float) -> float:
@@ -56,6 +65,15 @@ def weibull(log_gamma: float, log_threshold: float) -> float:
     shift = math.log10(-math.log(1 - p0)) / BETA  # the Weibull is at p0 of its range when x − xt = shift
     x = log_gamma - log_threshold + shift
     return DELTA * GUESS + (1 - DELTA) * (1 - (1 - GUESS) * math.exp(-10 ** (BETA * x)))
+
+
+def model_observer_p(difference: float, threshold_difference: float) -> float:
+    """The model observer's P(correct) for a frame whose visible difference from the reference is
+    `difference`: QUEST's Weibull on log10 of the difference, at P_THRESHOLD where it equals
+    `threshold_difference`; no difference is chance (the guess rate)."""
+    if not difference > 0:
+        return GUESS
+    return weibull(math.log10(difference), math.log10(threshold_difference))
 
 
 def to_psychopy(image: np.ndarray) -> np.ndarray:
@@ -78,13 +96,29 @@ def main(argv=None) -> int:
     display = foveal.Display(wcm, hcm, dcm, w, h)
     renderer = foveal.Renderer(foveal.Scene(args.scene), device=args.device)
     gaze = (w / 2.0, h / 2.0)
-    reference = to_psychopy(renderer.render(size=(w, h), gaze=gaze, mode="full", max_rays=args.max_rays, display=display).image)
+    reference_linear = renderer.render(size=(w, h), gaze=gaze, mode="full", max_rays=args.max_rays, display=display).image.copy()
+    reference = to_psychopy(reference_linear)
+
+    def foveated_at(gamma: float):
+        return renderer.render(size=(w, h), gaze=gaze, max_rays=args.max_rays, gamma=gamma, display=display)
+
+    def visible_difference(image: np.ndarray) -> float:
+        return foveal.compare(image, reference_linear, gaze=gaze, display=display)["acuity_weighted_rmse"]
+
+    # A geometry at which foveation changes nothing measures nothing: check QUEST's largest γ first
+    if np.array_equal(foveated_at(MAX_GAMMA).image, reference_linear):
+        raise SystemExit(
+            f"foveation_threshold: at {w}x{h} pixels on a {wcm:g}x{hcm:g} cm display seen from {dcm:g} cm "
+            f"({display.pixels_per_degree:.1f} px/deg), the foveated frame at γ = {MAX_GAMMA:g} (the largest QUEST tries) is "
+            f"identical to the reference: foveation changes no pixel, so no threshold could be measured. Use a larger "
+            f"--size (840x525 differs at every γ on this display) or another --max-rays.")
+    threshold_difference = visible_difference(foveated_at(args.simulate).image) if args.simulate is not None else None
 
     os.makedirs(args.out, exist_ok=True)
     rng = np.random.default_rng(args.seed)
     quest = data.QuestHandler(startVal=math.log10(args.start_gamma), startValSd=0.4, pThreshold=P_THRESHOLD,
                               nTrials=args.trials, beta=BETA, delta=DELTA, gamma=GUESS, grain=0.005,
-                              minVal=math.log10(1.0), maxVal=math.log10(12.0), name="gamma")
+                              minVal=math.log10(1.0), maxVal=math.log10(MAX_GAMMA), name="gamma")
     exp = data.ExperimentHandler(name="foveation_threshold", extraInfo={"participant": args.participant, "scene": args.scene,
                                                                           "simulated_threshold": args.simulate},
                                  dataFileName=os.path.join(args.out, f"{args.participant}_foveation_threshold"))
@@ -99,7 +133,7 @@ def main(argv=None) -> int:
 
     for log_gamma in quest:
         gamma = 10 ** log_gamma
-        frame = renderer.render(size=(w, h), gaze=gaze, max_rays=args.max_rays, gamma=gamma, display=display)
+        frame = foveated_at(gamma)
         foveated = to_psychopy(frame.image)
         degraded_first = bool(rng.random() < 0.5)
         for image in ((foveated, reference) if degraded_first else (reference, foveated)):
@@ -115,7 +149,10 @@ def main(argv=None) -> int:
         prompt.draw()
         win.flip()
         if args.simulate is not None:
-            correct = bool(rng.random() < weibull(log_gamma, math.log10(args.simulate)))
+            # The model observer sees the images: this frame's visible difference against the threshold's
+            difference = visible_difference(frame.image)
+            correct = bool(rng.random() < model_observer_p(difference, threshold_difference))
+            exp.addData("visible_difference", difference)
             answer = (1 if degraded_first else 2) if correct else (2 if degraded_first else 1)
             rt = float("nan")
         else:
@@ -136,7 +173,8 @@ def main(argv=None) -> int:
     estimate = 10 ** quest.mean()
     summary = {"participant": args.participant, "trials": quest.thisTrialN + 1, "threshold_gamma": estimate,
                "threshold_gamma_sd_log10": quest.sd(), "simulated_threshold_gamma": args.simulate,
-               "p_threshold": P_THRESHOLD}
+               "p_threshold": P_THRESHOLD, "observer": "model (acuity-weighted RMSE)" if args.simulate is not None else "person",
+               "threshold_visible_difference": threshold_difference}
     with open(os.path.join(args.out, f"{args.participant}_summary.json"), "w") as f:
         json.dump(summary, f, indent=2)
     exp.close()  # writes the .csv and .psydat

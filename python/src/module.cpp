@@ -235,10 +235,10 @@ struct PyVision {
 };
 
 struct PyVisionStep {
-  nb::object perceived, color, coc;  // NumPy arrays owning the step's copies
+  nb::ndarray<nb::numpy, float> perceived, color, coc;  // NumPy arrays owning the step's copies
   std::array<float, 2> fixation{};
   double sharp_fraction = 0;
-  nb::object stats;
+  nb::dict stats;
 };
 
 std::unique_ptr<PyVision> make_vision(const PyScene& s, const std::string& eye, const std::array<int, 2>& size, uint64_t seed,
@@ -286,12 +286,12 @@ PyVisionStep vision_step(PyVision& v, std::optional<std::array<float, 2>> fixati
   }
   PyVisionStep r;
   const size_t w = static_cast<size_t>(v.params.width), h = static_cast<size_t>(v.params.height);
-  r.perceived = nb::cast(owned_array(std::move(perceived.pixels), {h, w, 3}));
-  r.color = nb::cast(owned_array(std::move(color.pixels), {h, w, 3}));
-  r.coc = nb::cast(owned_array(std::move(coc), {h, w}));
+  r.perceived = owned_array(std::move(perceived.pixels), {h, w, 3});
+  r.color = owned_array(std::move(color.pixels), {h, w, 3});
+  r.coc = owned_array(std::move(coc), {h, w});
   r.fixation = {s.focus_px.x, s.focus_px.y};
   r.sharp_fraction = s.sharp_fraction;
-  r.stats = to_python(step_stats_json(s));
+  r.stats = nb::cast<nb::dict>(to_python(step_stats_json(s)));
   return r;
 }
 
@@ -431,7 +431,8 @@ NB_MODULE(_core, m) {
       .def_prop_ro(
           "stats",
           [](const PyFrame& f) {
-            return to_python(frame_stats_json(f.frame, f.params, *f.scene, f.triangles, f.build_ms, f.threads, f.device, f.trace_api));
+            return nb::cast<nb::dict>(
+                to_python(frame_stats_json(f.frame, f.params, *f.scene, f.triangles, f.build_ms, f.threads, f.device, f.trace_api)));
           },
           "Timings and ray counts: the same fields as `foveal render --stats`.")
       .def_prop_ro(
@@ -594,7 +595,7 @@ NB_MODULE(_core, m) {
           "The eye blinks before the next step (the field forgets).")
       .def_prop_ro("on_gpu", [](const PyVision& v) { return v.sim->on_gpu(); })
       .def_prop_ro(
-          "optics", [](const PyVision& v) { return to_python(optics_json(v.params.eye)); },
+          "optics", [](const PyVision& v) { return nb::cast<nb::dict>(to_python(optics_json(v.params.eye))); },
           "The eye's optics as resolved (as `simulate --stats` writes them): preset, pupil_mm, image_distance_mm, "
           "refraction_d, cylinder_d, axis_deg, age_years, glaucoma.");
 

@@ -46,22 +46,40 @@ def test_gaze_contingent_follows_the_mouse_gaze_and_logs_latency(tmp_path):
     assert summary["gaze_to_flip_refreshes_median"] <= 2.0
 
 
-def test_foveation_threshold_quest_converges_to_the_simulated_observer(tmp_path):
+def test_foveation_threshold_quest_converges_to_the_model_observers_threshold(tmp_path):
+    # The model observer detects the rendered difference (acuity-weighted RMSE against the
+    # reference); its threshold is the difference the frame at γ = 3 (then 6) makes
     threshold = 3.0
     trials = 40
-    run_example("foveation_threshold.py", ["--simulate", threshold, "--trials", trials, "--size", "160x100", "--max-rays", 16,
+    run_example("foveation_threshold.py", ["--simulate", threshold, "--trials", trials, "--size", "840x525", "--max-rays", 16,
                                            "--device", "cpu", "--seed", 1, "--out", "data"], tmp_path)
     summary = json.loads((tmp_path / "data" / "sim_summary.json").read_text())
-    assert summary["trials"] == trials
+    assert summary["trials"] == trials and summary["observer"].startswith("model")
     assert abs(summary["threshold_gamma"] - threshold) <= 0.2 * threshold
-    # PsychoPy's standard data files: one row per trial, the γ QUEST chose on each
+    # PsychoPy's standard data files: one row per trial, the γ QUEST chose on each and what the observer saw
     rows = list(csv.DictReader(open(tmp_path / "data" / "sim_foveation_threshold.csv", encoding="utf-8-sig")))
     assert len(rows) == trials
     gammas = [float(r["gamma"]) for r in rows]
     assert min(gammas) >= 1.0 and max(gammas) <= 12.0 and len(set(gammas)) > 5
+    # The visible difference grows with γ (the observer's evidence comes from the images)
+    differences = [float(r["visible_difference"]) for r in rows]
+    order = sorted(range(trials), key=lambda i: gammas[i])
+    assert differences[order[-1]] > differences[order[0]] > 0
     assert (tmp_path / "data" / "sim_foveation_threshold.psydat").exists()
     # Another threshold moves the estimate with it
-    run_example("foveation_threshold.py", ["--simulate", 6.0, "--trials", trials, "--size", "160x100", "--max-rays", 16,
+    run_example("foveation_threshold.py", ["--simulate", 6.0, "--trials", trials, "--size", "840x525", "--max-rays", 16,
                                            "--device", "cpu", "--seed", 2, "--out", "data6", "--participant", "s6"], tmp_path)
     six = json.loads((tmp_path / "data6" / "s6_summary.json").read_text())
     assert abs(six["threshold_gamma"] - 6.0) <= 0.2 * 6.0
+
+
+def test_foveation_threshold_refuses_a_display_where_foveation_changes_no_pixel(tmp_path):
+    if shutil.which("xvfb-run") is None:
+        pytest.skip("xvfb-run is not installed")
+    pytest.importorskip("psychopy")
+    command = ["xvfb-run", "-a", sys.executable, str(EXAMPLES / "foveation_threshold.py"), "--simulate", "3", "--trials", "5",
+               "--size", "320x200", "--max-rays", "16", "--device", "cpu", "--out", "data"]
+    result = subprocess.run(command, cwd=tmp_path, capture_output=True, text=True, timeout=600)
+    assert result.returncode != 0
+    assert "foveation changes no pixel" in result.stderr and "320x200" in result.stderr
+    assert not (tmp_path / "data").exists()
