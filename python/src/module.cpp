@@ -62,6 +62,15 @@ std::string valid_utf8(const std::string& in) {
   return out;
 }
 
+// A gaze point more than the frame's own size off the frame is legal (the whole frame is then far
+// periphery) but rarely meant: a Python warning says so (farther than the library's reach, it raises).
+void warn_if_far(const char* name, double x, double y, int width, int height) {
+  if (!(x < -width || x > 2.0 * width || y < -height || y > 2.0 * height)) return;
+  const std::string message = fmt::format(
+      "{}: ({}, {}) is more than the frame's size ({}x{}) off the frame: the whole image is far periphery", name, x, y, width, height);
+  if (PyErr_WarnEx(PyExc_UserWarning, message.c_str(), 1) != 0) throw nb::python_error();  // warnings turned into errors
+}
+
 using Vec3 = std::array<float, 3>;
 glm::vec3 vec(const Vec3& v) { return {v[0], v[1], v[2]}; }
 Vec3 tuple(glm::vec3 v) { return {v.x, v.y, v.z}; }
@@ -136,6 +145,7 @@ struct PyRenderer {
     p.reuse.temporal_frames = temporal_frames;
     p.reuse.tolerance = tolerance;
     validate(p);
+    if (gaze) warn_if_far("gaze", (*gaze)[0], (*gaze)[1], p.width, p.height);
     const Camera camera = resolve_camera(*scene, camera_arg);
     out->scene = scene;
     out->build_ms = renderer->build_ms();
@@ -268,6 +278,7 @@ std::unique_ptr<PyVision> make_vision(const PyScene& s, const std::string& eye, 
 }
 
 PyVisionStep vision_step(PyVision& v, std::optional<std::array<float, 2>> fixation, const nb::object& camera) {
+  if (fixation) warn_if_far("fixation", (*fixation)[0], (*fixation)[1], v.params.width, v.params.height);
   const std::optional<Camera> view = camera.is_none() ? std::nullopt : std::optional<Camera>(resolve_camera(*v.scene, camera));
   StepStats s;
   Image perceived, color;

@@ -90,3 +90,13 @@ def test_every_error_speaks_pythons_words(box, tmp_path):
         message = str(error.value)
         assert message.startswith(name), f"{name}: {message}"
         assert "--" not in message, message
+
+
+def test_a_gaze_far_off_the_frame_warns_and_beyond_reach_raises(box):
+    renderer = foveal.Renderer(box, device="cpu")
+    with pytest.warns(UserWarning, match="^gaze: .* off the frame"):
+        renderer.render(size=(32, 20), gaze=(32 * 4, 10), max_rays=4)
+    with pytest.warns(UserWarning, match="^fixation: .* off the frame"):
+        foveal.VisionSimulation(box, size=(32, 20), device="cpu").step(fixation=(-100.0, 10.0))
+    with pytest.raises(ValueError, match="^gaze"):
+        renderer.render(size=(32, 20), gaze=(32 * 40, 10), max_rays=4)

@@ -20,6 +20,26 @@ def _cli_events(cli, tmp_path, recording, display, method, *extra):
     return labels, events.read_text(), json.loads(report.read_text())["events"]
 
 
+@pytest.mark.parametrize("parts, options", [
+    (("eye-movements", "lund2013-train", "video", "TH38_video_dolphin_fov_labelled_MN.csv"),
+     ["--display", LUND_DISPLAY[0], "--coords", "px"]),
+    (("gaze", "eyelink", "monoRemote500.asc"), []),
+    (("gaze", "pupil_labs", "gaze_positions.csv"), []),
+    (("gaze", "tobii", "tx300_participant1_trial2.tsv"), []),
+])
+def test_events_equal_the_command_lines_on_the_shared_recordings(cli, tmp_path, parts, options):
+    recording = shared(*parts)
+    samples, events = tmp_path / "s.csv", tmp_path / "e.tsv"
+    run_cli(cli, "gaze", recording, *options, "--events", "auto", "--samples-out", samples, "--events-out", events,
+            "--no-scanpath", "-q")
+    labels = np.asarray([row["label"] for row in csv.DictReader(open(samples))])
+    display = LUND_DISPLAY[1] if options else None
+    rec = foveal.gaze.read(recording, **({"coords": "px", "display": display} if options else {}))
+    found = foveal.gaze.events(rec, display=display)
+    assert np.array_equal(found.label_names, labels)
+    assert found.tsv == events.read_text()
+
+
 @pytest.mark.parametrize("method", ["auto", "nhp", "ek", "ivt"])
 def test_events_equal_the_command_lines_on_an_irf_recording(cli, tmp_path, method):
     recording = shared("eye-movements", "irf", "lookAtPoint_EL_S1.csv")
