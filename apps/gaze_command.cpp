@@ -2,6 +2,7 @@
 // compare them with the tracker's own, draw the scan path.
 #include "commands.h"
 #include "foveal/gaze/detect.h"
+#include "foveal/gaze/bids.h"
 #include "foveal/gaze/events.h"
 #include "foveal/gaze/landing.h"
 #include "foveal/util/stats.h"
@@ -133,8 +134,9 @@ namespace {
 
 // The command's options as typed.
 struct GazeCommandOptions {
-  std::string recording, json, samples, scanpath = "scanpath.png", display = "47.5,30,60", events, samples_out, events_out, evaluate,
-                                        coder2, landings_out;
+  std::string recording, json, samples, scanpath = "scanpath.png", display, events, samples_out, events_out, evaluate, coder2, landings_out;
+  std::string to_bids;  // --to-bids DIR, with the entities below
+  BidsEntities bids;
   GazeOptions gaze;
   std::optional<double> filter_window_ms;  // default: the detector's (6 ms nh/nhp, 10 ms nhr)
   double detection_window_ms = 20, ek_lambda = 6, blink_flank_ms = 100, max_blink_ms = 2000;
@@ -332,12 +334,22 @@ int run_gaze(const GazeCommandOptions& o) {
   if (o.events.empty() && (!o.samples_out.empty() || !o.evaluate.empty() || !o.events_out.empty() || !o.landings_out.empty()))
     fail("--samples-out, --events-out, --landings-out and --evaluate need --events");
   if (!o.coder2.empty() && o.evaluate.empty()) fail("--coder2 needs --evaluate (the first coder's labels)");
-  Display display = parse_display(o.display, Display{});
-  const bool display_has_resolution = parse_numbers("--display", o.display).size() == 5;
+  if (o.to_bids.empty() && (!o.bids.subject.empty() || !o.bids.task.empty() || !o.bids.session.empty() || !o.bids.run.empty()))
+    fail("--subject, --task, --session and --run name a recording in the dataset of --to-bids DIR");
+  if (!o.to_bids.empty()) bids_stem(o.bids);  // the entities checked before anything is read
+  // The display: as given, else the recording's own (a BIDS sidecar states it), else 47.5 x 30 cm at 60 cm
+  const std::string display_text = o.display.empty() ? "47.5,30,60" : o.display;
+  Display display = parse_display(display_text, Display{});
+  const bool display_has_resolution = parse_numbers("--display", display_text).size() == 5;
   const ReadOptions read = resolve_read_options(o.gaze, display);
   const FixationParams params = resolve_fixation_params(o.gaze);
   const FixationMethod method = parse_fixation_method(o.gaze.fixation);
   const Recording recording = read_recording_warned(o.recording, read);
+  if (o.display.empty() && recording.screen_cm) {
+    display.width_cm = recording.screen_cm->x;
+    display.height_cm = recording.screen_cm->y;
+    display.distance_cm = recording.screen_cm->z;
+  }
   if (!display_has_resolution) {
     display.res_x = recording.screen_px.x;
     display.res_y = recording.screen_px.y;
@@ -345,6 +357,15 @@ int run_gaze(const GazeCommandOptions& o) {
   const GazeSummary summary = summarize_recording(recording, display, params);
   const EventsRun run = detect_and_score(o, recording, display, params);
   write_event_files(o, recording, run);
+  if (!o.to_bids.empty()) {
+    const std::string physio =
+        write_bids_recording(recording, o.bids, o.to_bids, {display.width_cm, display.height_cm, display.distance_cm});
+    if (!o.quiet) fmt::print("  bids      {}\n", physio);
+    if (run.detection) {
+      const std::string events = write_bids_events(*run.detection, recording, o.bids, o.to_bids, events_json(o, run));
+      if (!o.quiet) fmt::print("  bids      {}\n", events);
+    }
+  }
   if (!o.json.empty()) {
     nlohmann::json j = summary.json;
     if (run.detection) j["events"] = events_json(o, run);
@@ -372,9 +393,16 @@ std::function<int()> add_gaze_command(CLI::App& app) {
   cmd->add_option("RECORDING", o->recording, "EyeLink .asc, Pupil gaze_positions.csv, Tobii .tsv or a t,x,y CSV")->required();
   add_gaze_options(*cmd, o->gaze);
   cmd->add_option("--display", o->display,
-                  "the recording's screen W_CM,H_CM,DIST_CM[,RES_X,RES_Y] (angles for the filters); the resolution defaults to the "
-                  "recording's screen")
-      ->capture_default_str();
+                  "the recording's screen W_CM,H_CM,DIST_CM[,RES_X,RES_Y] (angles for the filters; default: what the recording "
+                  "states, a BIDS sidecar's screen, else 47.5,30,60); the resolution defaults to the recording's screen");
+  cmd->add_option("--to-bids", o->to_bids,
+                  "also write the recording into the BIDS dataset DIR (created where absent): sub-S/[ses-X/]beh/…_physio.tsv.gz with "
+                  "its sidecar, the tracker's events and the screen; with --events, the events as a derivative "
+                  "(derivatives/foveal/…_desc-foveal_physioevents.tsv.gz)");
+  cmd->add_option("--subject", o->bids.subject, "--to-bids: the participant's label (letters and digits)");
+  cmd->add_option("--task", o->bids.task, "--to-bids: the task's label");
+  cmd->add_option("--session", o->bids.session, "--to-bids: the session's label (optional)");
+  cmd->add_option("--run", o->bids.run, "--to-bids: the run number (optional)");
   cmd->add_option("--json", o->json, "write the summary as JSON");
   cmd->add_option("--events", o->events,
                   "label every sample and list the events: nhr (saccades on local robust thresholds + PSO + pursuit in context + "

@@ -5,7 +5,7 @@ set -euo pipefail
 packages=(
   build-essential cmake ninja-build pkg-config clang libclang-rt-14-dev clang-format
   libembree-dev libtbb-dev libassimp-dev libglm-dev libcli11-dev nlohmann-json3-dev libfmt-dev
-  libopenexr-dev libopencv-core-dev libopencv-imgproc-dev libopencv-imgcodecs-dev libopencv-features2d-dev
+  zlib1g-dev libopenexr-dev libopencv-core-dev libopencv-imgproc-dev libopencv-imgcodecs-dev libopencv-features2d-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   cppzmq-dev libmsgpack-cxx-dev ffmpeg jq
   libglfw3-dev libimgui-dev libgl-dev xvfb xauth libgl1-mesa-dri libglu1-mesa

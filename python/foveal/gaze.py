@@ -73,8 +73,11 @@ def _columns(samples, screen, argument: str = "recording") -> Dict[str, object]:
     return columns
 
 
-def _display(display, screen) -> "_core.Display":
+def _display(display, screen, recording=None) -> "_core.Display":
     if display is None:
+        if isinstance(recording, Recording) and recording.screen_cm is not None:
+            w, h, d = recording.screen_cm
+            return _core.Display(float(w), float(h), float(d), int(screen[0]), int(screen[1]))
         return _core.Display(47.5, 30.0, 60.0, int(screen[0]), int(screen[1]))
     if not isinstance(display, _core.Display):
         raise TypeError(f"display: expected a foveal.Display, got {type(display).__name__}")
@@ -111,6 +114,9 @@ class Recording:
     #: the tracker's 3-D gaze direction per sample (N×3, NaN where none), where it gives one (Pupil's
     #: gaze_point_3d); the filters measure angles with it, as the command line does
     directions: Optional[np.ndarray] = None
+    #: the display's (width_cm, height_cm, distance_cm) where the file states it (a BIDS sidecar):
+    #: the default display of ``fixations`` and ``events``
+    screen_cm: Optional[Tuple[float, float, float]] = None
 
     def __len__(self) -> int:
         return len(self.samples)
@@ -126,7 +132,8 @@ def read(path, format: str = "auto", screen: Optional[Tuple[int, int]] = None, e
     """Read a recording (the options of ``foveal gaze``).
 
     ``path``: the recording (EyeLink .asc, a Pupil Player export's gaze_positions.csv, a Tobii
-    TSV, a t,x,y CSV). ``format``: auto, asc, pupil, tobii or csv. ``screen``: (W, H) pixels for
+    TSV, a t,x,y CSV, a BIDS ``*_physio.tsv.gz`` with its sidecar beside it). ``format``: auto,
+    asc, pupil, tobii, csv or bids. ``screen``: (W, H) pixels for
     normalised coordinates or to override the file's (default: what the file states, else the
     display's resolution). ``eye``: average, left or right. For csv: ``time_unit`` s/ms/us,
     ``coords`` px, norm (0–1) or deg (degrees from the screen centre, x right, y up: converted
@@ -156,7 +163,8 @@ def read(path, format: str = "auto", screen: Optional[Tuple[int, int]] = None, e
                      eyes=d["eyes"], rate_hz=d["rate_hz"], nominal_rate_hz=d["nominal_rate_hz"],
                      has_tracker_fixations=d["has_tracker_fixations"], block_starts=list(d["block_starts"]),
                      notes=list(d["notes"]), warnings=list(d["warnings"]),
-                     directions=None if d["directions"] is None else np.asarray(d["directions"]).reshape(-1, 3))
+                     directions=None if d["directions"] is None else np.asarray(d["directions"]).reshape(-1, 3),
+                     screen_cm=None if d["screen_cm"] is None else tuple(d["screen_cm"]))
 
 
 _PARAMETERS = ("velocity_threshold_deg_s", "velocity_window_s", "gap_fill_s", "merge_gap_s", "merge_angle_deg",
@@ -191,7 +199,7 @@ def fixations(samples, method: str = "ivt", display: Optional[_core.Display] = N
         raise ValueError(f"method: '{method}' is an event detector: foveal.gaze.events(recording, method='{method}') labels "
                          "fixations, saccades, PSOs, pursuit and blinks")
     columns = _columns(samples, screen, "samples")
-    d = _core._fixations(columns, _display(display, columns["screen"]), method, _parameters(params, _PARAMETERS))
+    d = _core._fixations(columns, _display(display, columns["screen"], samples), method, _parameters(params, _PARAMETERS))
     result = _events(d, FIXATION_DTYPE)
     return (result, np.asarray(d["label"])) if labels else result
 
@@ -267,7 +275,7 @@ def events(recording, method: str = "auto", display: Optional[_core.Display] = N
     if not isinstance(method, str):
         raise TypeError(f"method: expected a detector's name, got {type(method).__name__}")
     columns = _columns(recording, screen)
-    d = _core._events(columns, _display(display, columns["screen"]), method,
+    d = _core._events(columns, _display(display, columns["screen"], recording), method,
                       _parameters(params, _PARAMETERS + _PURSUIT_PARAMETERS + _EVENT_PARAMETERS))
     t = d["table"]
     table = np.empty(len(t["onset_s"]), EVENTS_DTYPE)

@@ -237,6 +237,7 @@ void bind_gaze(nb::module_& m) {
         d["format"] = std::string(to_string(r.format));
         d["tracker"] = r.tracker;
         d["screen"] = nb::make_tuple(r.screen_px.x, r.screen_px.y);
+        d["screen_cm"] = r.screen_cm ? nb::object(nb::make_tuple(r.screen_cm->x, r.screen_cm->y, r.screen_cm->z)) : nb::none();
         d["eyes"] = r.eyes;
         d["nominal_rate_hz"] = r.nominal_rate_hz;
         d["rate_hz"] = r.rate_hz();

@@ -570,9 +570,15 @@ NB_MODULE(_core, m) {
           "device", [](const PyLoop& l) { return l.renderer->describe(); }, "Where the loop renders.");
 
   nb::class_<PyVisionStep>(m, "VisionStep", "One step of the vision simulation (arrays are the step's own copies).")
-      .def_ro("perceived", &PyVisionStep::perceived, "What the eye perceives: float32 H×W×3, linear RGB.")
-      .def_ro("color", &PyVisionStep::color, "The sharp ray-cast image: float32 H×W×3, linear RGB.")
-      .def_ro("coc", &PyVisionStep::coc, "Per-pixel circle-of-confusion diameter used for the blur, pixels (H×W).")
+      .def_prop_ro(
+          "perceived", [](const PyVisionStep& s) { return s.perceived; }, nb::rv_policy::automatic,
+          "What the eye perceives: float32 H×W×3, linear RGB.")
+      .def_prop_ro(
+          "color", [](const PyVisionStep& s) { return s.color; }, nb::rv_policy::automatic,
+          "The sharp ray-cast image: float32 H×W×3, linear RGB.")
+      .def_prop_ro(
+          "coc", [](const PyVisionStep& s) { return s.coc; }, nb::rv_policy::automatic,
+          "Per-pixel circle-of-confusion diameter used for the blur, pixels (H×W).")
       .def_ro("fixation", &PyVisionStep::fixation, "The fixation of this step, render pixels.")
       .def_ro("sharp_fraction", &PyVisionStep::sharp_fraction, "Share of pixels remembered sharp.")
       .def_ro("stats", &PyVisionStep::stats,

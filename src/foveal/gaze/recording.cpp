@@ -1,6 +1,8 @@
 // foveal/gaze/recording.cpp — format names, detection, statistics, Pupil and plain-CSV readers.
 #include "foveal/gaze/recording.h"
 
+#include "foveal/gaze/bids.h"
+
 #include "foveal/util/text.h"
 #include "foveal/util/error.h"
 
@@ -23,14 +25,16 @@ const char* to_string(GazeFormat format) {
       return "tobii";
     case GazeFormat::csv:
       return "csv";
+    case GazeFormat::bids:
+      return "bids";
   }
   return "?";
 }
 
 GazeFormat parse_gaze_format(const std::string& name) {
-  for (GazeFormat f : {GazeFormat::automatic, GazeFormat::asc, GazeFormat::pupil, GazeFormat::tobii, GazeFormat::csv})
+  for (GazeFormat f : {GazeFormat::automatic, GazeFormat::asc, GazeFormat::pupil, GazeFormat::tobii, GazeFormat::csv, GazeFormat::bids})
     if (name == to_string(f)) return f;
-  fail("format: unknown recording format '{}' (expected auto, asc, pupil, tobii or csv)", name);
+  fail("format: unknown recording format '{}' (expected auto, asc, pupil, tobii, csv or bids)", name);
 }
 
 EyeSelection parse_eye_selection(const std::string& name) {
@@ -179,6 +183,8 @@ Recording parse_recording(const std::string& text, const std::string& name, cons
     case GazeFormat::tobii:
       r = parse_tobii(text, name, options);
       break;
+    case GazeFormat::bids:
+      fail("{}: a BIDS recording is read from its file, with its sidecar beside it (…_physio.tsv.gz and …_physio.json)", name);
     default:
       r = parse_gaze_csv(text, name, options);
       break;
@@ -192,6 +198,8 @@ Recording parse_recording(const std::string& text, const std::string& name, cons
 
 Recording read_recording(const std::string& path, const ReadOptions& options) {
   if (std::filesystem::is_directory(path)) fail("{}: is a folder; give the recording file", path);
+  if (options.format == GazeFormat::bids || (options.format == GazeFormat::automatic && is_bids_physio(path)))
+    return read_bids_physio(path, options);
   const std::string text = text::read_file(path);
   const ReadOptions& o = options;
   Recording r = parse_recording(text, path, o);

@@ -20,7 +20,7 @@
 
 namespace foveal {
 
-enum class GazeFormat { automatic, asc, pupil, tobii, csv };
+enum class GazeFormat { automatic, asc, pupil, tobii, csv, bids };
 const char* to_string(GazeFormat format);
 GazeFormat parse_gaze_format(const std::string& name);  // throws Error for an unknown name
 
@@ -67,19 +67,20 @@ struct ReadOptions {
 struct Recording {
   std::string source;  // path (or name given to parse_recording)
   GazeFormat format = GazeFormat::csv;
-  std::string tracker;                 // "EyeLink", "Pupil Player export", …
-  std::vector<GazeSample> samples;     // time never decreases
-  std::vector<size_t> block_starts;    // index of each recording block's first sample (EyeLink START…END)
-  glm::ivec2 screen_px{0};             // screen the points are in
-  bool screen_from_file = false;       // the file stated the screen size
-  std::string eyes;                    // "left", "right", "binocular (average)", …
-  double nominal_rate_hz = 0;          // as the file states it (EyeLink RATE), else 0
-  std::vector<GazeEvent> fixations;    // the tracker's own fixations (empty if none)
-  std::vector<GazeEvent> blinks;       // the tracker's own blinks
-  bool has_tracker_fixations = false;  // the format carries fixation events (even if there are none)
-  std::vector<std::string> notes;      // what the reader did beyond the obvious (side files read, …)
-  std::vector<std::string> warnings;   // what the user must hear (a block cut short: the file may be truncated);
-                                       // the commands print them on stderr, the data read stays usable
+  std::string tracker;                  // "EyeLink", "Pupil Player export", …
+  std::vector<GazeSample> samples;      // time never decreases
+  std::vector<size_t> block_starts;     // index of each recording block's first sample (EyeLink START…END)
+  glm::ivec2 screen_px{0};              // screen the points are in
+  bool screen_from_file = false;        // the file stated the screen size
+  std::optional<glm::dvec3> screen_cm;  // the display's width, height and viewing distance, cm, where the file states them (BIDS)
+  std::string eyes;                     // "left", "right", "binocular (average)", …
+  double nominal_rate_hz = 0;           // as the file states it (EyeLink RATE), else 0
+  std::vector<GazeEvent> fixations;     // the tracker's own fixations (empty if none)
+  std::vector<GazeEvent> blinks;        // the tracker's own blinks
+  bool has_tracker_fixations = false;   // the format carries fixation events (even if there are none)
+  std::vector<std::string> notes;       // what the reader did beyond the obvious (side files read, …)
+  std::vector<std::string> warnings;    // what the user must hear (a block cut short: the file may be truncated);
+                                        // the commands print them on stderr, the data read stays usable
 
   size_t valid_count() const;
   // Time from the first to the last sample, seconds.
