@@ -4,6 +4,8 @@
 #include "foveal/util/error.h"
 
 #include <atomic>
+#include <cerrno>
+#include <csignal>
 #include <filesystem>
 #include <mutex>
 #include <optional>
@@ -79,10 +81,31 @@ void check_not_an_input(const std::string& output) {
   if (g.paths.count(r) || (id && g.files.count(*id))) fail("{}: is an input of this run; foveal never writes over its inputs", output);
 }
 
+void remove_stale_partials(const std::string& target) {
+  const fs::path t = fs::absolute(target).lexically_normal();
+  const std::string name = (t.has_filename() ? t.filename() : t.parent_path().filename()).string();
+  const fs::path parent = t.has_filename() ? t.parent_path() : t.parent_path().parent_path();
+  const std::string prefix = "." + name + ".partial-";
+  std::error_code ec;
+  for (fs::directory_iterator it(parent, ec), end; !ec && it != end; it.increment(ec)) {
+    const std::string entry = it->path().filename().string();
+    if (entry.rfind(prefix, 0) != 0) continue;
+    // .NAME.partial-PID-N: left by a process that no longer runs (killed before it could clean up)
+    const std::string rest = entry.substr(prefix.size());
+    const size_t dash = rest.find('-');
+    if (dash == std::string::npos || dash == 0 || rest.find_first_not_of("0123456789") != dash) continue;
+    const pid_t pid = static_cast<pid_t>(std::stol(rest.substr(0, dash)));
+    if (pid == getpid() || ::kill(pid, 0) == 0 || errno != ESRCH) continue;
+    std::error_code removed;
+    fs::remove_all(it->path(), removed);
+  }
+}
+
 StagedFolder::StagedFolder(std::string target) : target_(std::move(target)) {
   const fs::path t = fs::absolute(target_).lexically_normal();
   const std::string name = (t.has_filename() ? t.filename() : t.parent_path().filename()).string();
   const fs::path parent = t.has_filename() ? t.parent_path() : t.parent_path().parent_path();
+  remove_stale_partials(target_);
   static std::atomic<int> counter{0};
   staging_ = (parent / fmt::format(".{}.partial-{}-{}", name, getpid(), counter++)).string();
   std::error_code ec;

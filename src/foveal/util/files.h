@@ -24,6 +24,10 @@ void set_input_guard(bool on);
 void note_input(const std::string& path);            // a reader's input (no effect with the guard off)
 void check_not_an_input(const std::string& output);  // a writer's target; throws Error naming it
 
+// Remove what a killed run left beside `target` (".NAME.partial-PID-N" of a process that no longer
+// runs): StagedFolder and write_file_atomically call it before they stage.
+void remove_stale_partials(const std::string& target);
+
 // A staging folder for a folder of outputs: files go into path(), commit() moves them into the
 // target folder (created if missing; files of the same name replaced), and a StagedFolder that was
 // never committed removes itself with everything in it.

@@ -45,6 +45,7 @@ std::string read_gzip_file(const std::string& path, size_t max_bytes) {
 
 void write_file_atomically(const std::string& path, const std::string& bytes, bool compress) {
   check_not_an_input(path);
+  remove_stale_partials(path);
   static std::atomic<unsigned> counter{0};
   const std::filesystem::path target(path);
   const std::string temporary =

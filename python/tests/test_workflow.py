@@ -1,0 +1,103 @@
+"""The study workflow (workflows/study, Snakemake) on a two-subject BIDS dataset made from the
+shared recordings: every target made, a second run does nothing, touching one recording reruns
+only its targets, a run killed midway completes when rerun with nothing partial left, and the
+group summary's numbers are what `foveal gaze --json` prints for each recording."""
+import csv
+import gzip
+import json
+import os
+import pathlib
+import signal
+import subprocess
+import sys
+import time
+
+import pytest
+
+from conftest import REPO, run_cli, shared
+
+SNAKEFILE = REPO / "workflows" / "study" / "Snakefile"
+SUBJECTS = {"01": ("gaze", "eyelink", "monoRemote500.asc"), "02": ("gaze", "tobii", "tx300_participant1_trial2.tsv")}
+SMALL = "{scene: builtin:box, size: 96x60, max_rays: 8, fps: 30, frames: 8}"
+
+
+def snakemake(cli, cwd, *args, check=True, replay=SMALL):
+    pytest.importorskip("snakemake")
+    command = [sys.executable, "-m", "snakemake", "-s", str(SNAKEFILE), "--cores", "2", "--config", f"foveal={cli}",
+               f"replay={replay}", "--rerun-incomplete", *args]
+    result = subprocess.run(command, cwd=cwd, capture_output=True, text=True, timeout=900)
+    if check and result.returncode != 0:
+        raise AssertionError(result.stdout[-3000:] + result.stderr[-3000:])
+    return result
+
+
+@pytest.fixture()
+def study(cli, tmp_path):
+    for subject, parts in SUBJECTS.items():
+        run_cli(cli, "gaze", shared(*parts), "--to-bids", tmp_path / "bids", "--subject", subject, "--task", "free", "--no-scanpath", "-q")
+    return tmp_path
+
+
+def outputs(root):
+    out = root / "derivatives" / "foveal-study"
+    return {p.relative_to(out).as_posix(): p.stat().st_mtime_ns for p in out.rglob("*") if p.is_file()}
+
+
+def test_the_workflow_makes_every_target_and_reruns_only_what_changed(cli, study):
+    snakemake(cli, study)
+    made = outputs(study)
+    for subject in SUBJECTS:
+        stem = f"sub-{subject}_task-free_recording-eye1"
+        for name in ("gaze.json", "events.tsv", "replay.mp4", "eye-healthy.mp4", "eye-cataract.mp4"):
+            assert f"{stem}/{stem}_{name}" in made, (stem, name)
+        assert not any(k.startswith(f"{stem}/{stem}_replay_frames") for k in made), "the replay's frames are temporary"
+    assert "group/summary.tsv" in made and "group/summary.png" in made
+    # The summary's numbers are foveal gaze --json's
+    rows = {r["subject"]: r for r in csv.DictReader(open(study / "derivatives" / "foveal-study" / "group" / "summary.tsv"), delimiter="\t")}
+    for subject in SUBJECTS:
+        physio = study / "bids" / f"sub-{subject}" / "beh" / f"sub-{subject}_task-free_recording-eye1_physio.tsv.gz"
+        run_cli(cli, "gaze", physio, "--events", "auto", "--json", study / "check.json", "--no-scanpath", "-q")
+        report = json.loads((study / "check.json").read_text())
+        row = rows[subject]
+        assert int(row["samples"]) == report["samples"]
+        for name, count in report["events"]["counts"].items():
+            assert int(row[f"{name}_events"]) == count, (subject, name)
+    # A second run does nothing
+    again = snakemake(cli, study, "--dry-run")
+    assert "Nothing to be done" in again.stdout + again.stderr
+    assert outputs(study) == made
+    # Changing one recording (its last sample lost) reruns its targets and the summary, nothing of the
+    # other's (Snakemake compares the inputs' checksums: a bare touch is no change)
+    touched = study / "bids" / "sub-02" / "beh" / "sub-02_task-free_recording-eye1_physio.tsv.gz"
+    rows = gzip.open(touched, "rt").read().splitlines()
+    fields = rows[-1].split("\t")
+    rows[-1] = "\t".join([fields[0], "n/a", "n/a"] + fields[3:])
+    with gzip.open(touched, "wt") as f:
+        f.write("\n".join(rows) + "\n")
+    snakemake(cli, study)
+    now = outputs(study)
+    changed = {k for k in now if now[k] != made.get(k)}
+    assert changed and all(k.startswith("sub-02") or k.startswith("group/") for k in changed), changed
+    assert any(k.startswith("sub-02") for k in changed) and not any(k.startswith("sub-01") for k in changed)
+
+
+def test_a_run_killed_midway_completes_when_rerun_with_nothing_partial_left(cli, study):
+    pytest.importorskip("snakemake")
+    slow = "{scene: builtin:box, size: 320x200, max_rays: 64, fps: 30, frames: 90}"
+    command = [sys.executable, "-m", "snakemake", "-s", str(SNAKEFILE), "--cores", "1", "--config", f"foveal={cli}",
+               f"replay={slow}"]
+    process = subprocess.Popen(command, cwd=study, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
+    frames = study / "derivatives" / "foveal-study"
+    deadline = time.time() + 120
+    while time.time() < deadline and not any(frames.rglob("frame_*.png")):  # a replay is under way
+        time.sleep(0.1)
+    os.killpg(process.pid, signal.SIGKILL)  # snakemake and its jobs, at once: no clean-up of theirs
+    process.wait()
+    snakemake(cli, study, "--unlock", replay=SMALL)  # the killed run's lock (Snakemake's own rule after a kill)
+    snakemake(cli, study, replay=SMALL)
+    made = outputs(study)
+    assert "group/summary.png" in made
+    leftovers = [k for k in made if ".partial" in k or "_replay_frames" in k or pathlib.Path(k).name.startswith(".")]
+    assert not leftovers, leftovers
+    again = snakemake(cli, study, "--dry-run", replay=SMALL)
+    assert "Nothing to be done" in again.stdout + again.stderr

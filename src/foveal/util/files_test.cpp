@@ -1,0 +1,52 @@
+// A killed run's staging files are removed by the next run into the same target; a live one's kept.
+#include "foveal/util/files.h"
+#include "foveal/util/gzip.h"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <sys/wait.h>
+#include <unistd.h>
+
+namespace fs = std::filesystem;
+
+namespace {
+
+pid_t a_process_that_has_ended() {
+  const pid_t child = fork();
+  if (child == 0) _exit(0);
+  int status = 0;
+  waitpid(child, &status, 0);
+  return child;
+}
+
+}  // namespace
+
+TEST(Files, AKilledRunsPartialsAreRemovedByTheNextRunAndALiveOnesKept) {
+  const fs::path dir = fs::temp_directory_path() / ("foveal-files-test-" + std::to_string(getpid()));
+  fs::create_directories(dir);
+  const fs::path dead = dir / (".out.partial-" + std::to_string(a_process_that_has_ended()) + "-0");
+  const fs::path live = dir / (".out.partial-" + std::to_string(getppid()) + "-0");  // the parent runs
+  const fs::path other = dir / (".other.partial-" + std::to_string(a_process_that_has_ended()) + "-0");
+  for (const fs::path& p : {dead, live, other}) {
+    fs::create_directories(p);
+    std::ofstream(p / "frame.png") << "x";
+  }
+  {
+    foveal::StagedFolder staged((dir / "out").string());
+    std::ofstream(fs::path(staged.path()) / "a.png") << "a";
+    staged.commit();
+  }
+  EXPECT_FALSE(fs::exists(dead));
+  EXPECT_TRUE(fs::exists(live));
+  EXPECT_TRUE(fs::exists(other));  // another target's
+  EXPECT_TRUE(fs::exists(dir / "out" / "a.png"));
+  // A file written atomically clears its own target's leftovers too
+  const fs::path dead_file = dir / (".t.tsv.gz.partial-" + std::to_string(a_process_that_has_ended()) + "-3");
+  std::ofstream(dead_file) << "partial";
+  foveal::write_file_atomically((dir / "t.tsv.gz").string(), "1\t2\n", true);
+  EXPECT_FALSE(fs::exists(dead_file));
+  EXPECT_EQ(foveal::read_gzip_file((dir / "t.tsv.gz").string()), "1\t2\n");
+  fs::remove_all(dir);
+}
