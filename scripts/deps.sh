@@ -8,6 +8,7 @@ packages=(
   zlib1g-dev libopenexr-dev libopencv-core-dev libopencv-imgproc-dev libopencv-imgcodecs-dev libopencv-features2d-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   cppzmq-dev libmsgpack-cxx-dev ffmpeg jq
+  slurmctld slurmd slurm-client munge
   libglfw3-dev libimgui-dev libgl-dev xvfb xauth libgl1-mesa-dri libglu1-mesa
   python3 python3-venv python3-dev python3-pip
 )

@@ -101,3 +101,60 @@ def test_a_run_killed_midway_completes_when_rerun_with_nothing_partial_left(cli,
     assert not leftovers, leftovers
     again = snakemake(cli, study, "--dry-run", replay=SMALL)
     assert "Nothing to be done" in again.stdout + again.stderr
+
+
+def _free_port():
+    import socket
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+@pytest.fixture()
+def slurm(tmp_path):
+    """A one-node Slurm on this machine (workflows/study/tests/slurm-single-node.sh), stopped after."""
+    import shutil
+    tools = ("slurmctld", "slurmd", "sbatch", "squeue", "sacct", "munged", "runuser")
+    missing = [t for t in tools if shutil.which(t) is None and not os.path.exists(f"/usr/sbin/{t}")]
+    if missing:
+        pytest.skip(f"no Slurm here ({', '.join(missing)} missing: scripts/deps.sh installs slurmctld, slurmd, slurm-client, munge)")
+    if os.geteuid() != 0:
+        pytest.skip("starting slurmctld, slurmd and munged needs root")
+    script = REPO / "workflows" / "study" / "tests" / "slurm-single-node.sh"
+    folder = tmp_path / "slurm"
+    started = subprocess.run([str(script), "start", str(folder), str(_free_port()), str(_free_port())], capture_output=True, text=True,
+                             timeout=120)
+    try:
+        assert started.returncode == 0, started.stderr
+        yield started.stdout.strip()
+    finally:
+        subprocess.run([str(script), "stop", str(folder)], timeout=60)
+
+
+def test_the_same_workflow_runs_through_a_single_node_slurm(cli, study, slurm, tmp_path):
+    env = {**os.environ, "SLURM_CONF": slurm, "PATH": f"{pathlib.Path(sys.executable).parent}:{os.environ['PATH']}"}
+    profile = REPO / "workflows" / "study" / "profiles" / "slurm"
+    command = [sys.executable, "-m", "snakemake", "-s", str(SNAKEFILE), "--profile", str(profile), "--config", f"foveal={cli}",
+               f"replay={SMALL}", "--default-resources", "slurm_partition=debug", "mem_mb=500", "runtime=10",
+               "--set-threads", "replay=1", "perceive=1", "--set-resources", "replay:mem_mb=500", "perceive:mem_mb=500",
+               "--slurm-no-account", "--slurm-status-command", "squeue", "--slurm-init-seconds-before-status-checks", "1"]
+    result = subprocess.run(command, cwd=study, env=env, capture_output=True, text=True, timeout=900)
+    assert result.returncode == 0, result.stdout[-3000:] + result.stderr[-3000:]
+    # sacct (from Slurm's job-completion records) shows every job of the run completed
+    jobs = 2 * (1 + 1 + 2) + 1  # per recording: events, replay, two eye profiles; then the summary
+    listing = subprocess.run(["sacct", "-c", "-n", "-P", "-o", "jobid,jobname,state"], env=env, capture_output=True, text=True, timeout=60)
+    rows = [line.split("|") for line in listing.stdout.splitlines() if line.strip()]
+    assert len(rows) == jobs and all(r[2] == "COMPLETED" for r in rows), listing.stdout
+    # The outputs are the local run's
+    local = tmp_path / "local"
+    local.mkdir()
+    os.symlink(study / "bids", local / "bids")
+    snakemake(cli, local)
+    for relative in outputs(study):
+        a, b = study / "derivatives" / "foveal-study" / relative, local / "derivatives" / "foveal-study" / relative
+        if relative.endswith("_gaze.json"):  # its detect_ms is a timing
+            ja, jb = json.loads(a.read_text()), json.loads(b.read_text())
+            ja["events"].pop("detect_ms"), jb["events"].pop("detect_ms")
+            assert ja == jb, relative
+        elif not relative.endswith(".png"):  # the figure: matplotlib's metadata
+            assert a.read_bytes() == b.read_bytes(), relative
