@@ -21,10 +21,10 @@ SUBJECTS = {"01": ("gaze", "eyelink", "monoRemote500.asc"), "02": ("gaze", "tobi
 SMALL = "{scene: builtin:box, size: 96x60, max_rays: 8, fps: 30, frames: 8}"
 
 
-def snakemake(cli, cwd, *args, check=True, replay=SMALL):
+def snakemake(cli, cwd, *args, check=True, replay=SMALL, config=()):
     pytest.importorskip("snakemake")
     command = [sys.executable, "-m", "snakemake", "-s", str(SNAKEFILE), "--cores", "2", "--config", f"foveal={cli}",
-               f"replay={replay}", "--rerun-incomplete", *args]
+               f"replay={replay}", *config, "--rerun-incomplete", *args]
     result = subprocess.run(command, cwd=cwd, capture_output=True, text=True, timeout=900)
     if check and result.returncode != 0:
         raise AssertionError(result.stdout[-3000:] + result.stderr[-3000:])
@@ -158,3 +158,18 @@ def test_the_same_workflow_runs_through_a_single_node_slurm(cli, study, slurm, t
             assert ja == jb, relative
         elif not relative.endswith(".png"):  # the figure: matplotlib's metadata
             assert a.read_bytes() == b.read_bytes(), relative
+
+
+def test_a_recording_with_expert_labels_is_scored(cli, tmp_path):
+    irf = shared("eye-movements", "irf", "lookAtPoint_EL_S1.csv")
+    run_cli(cli, "gaze", irf, "--display", "53.3,30.1,56.5,1920,1080", "--to-bids", tmp_path / "bids", "--subject", "irf1",
+            "--task", "fixate", "--no-scanpath", "-q")
+    stem = "sub-irf1_task-fixate_recording-eye1"
+    target = f"derivatives/foveal-study/{stem}/{stem}_gaze.json"
+    snakemake(cli, tmp_path, target, config=[f"events={{method: auto, labels: {{{stem}: {irf}}}}}"])
+    report = json.loads((tmp_path / target).read_text())["events"]
+    # The same score as foveal gaze --evaluate on the original recording (BENCHMARKS.md: kappa 0.82 on S1)
+    run_cli(cli, "gaze", irf, "--display", "53.3,30.1,56.5,1920,1080", "--events", "auto", "--evaluate", irf, "--json",
+            tmp_path / "direct.json", "--no-scanpath", "-q")
+    direct = json.loads((tmp_path / "direct.json").read_text())["events"]
+    assert report["kappa"] == pytest.approx(direct["kappa"]) and report["kappa"] > 0.7
