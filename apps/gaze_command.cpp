@@ -362,7 +362,7 @@ int run_gaze(const GazeCommandOptions& o) {
         write_bids_recording(recording, o.bids, o.to_bids, {display.width_cm, display.height_cm, display.distance_cm});
     if (!o.quiet) fmt::print("  bids      {}\n", physio);
     if (run.detection) {
-      const std::string events = write_bids_events(*run.detection, recording, o.bids, o.to_bids, events_json(o, run));
+      const std::string events = write_bids_events(*run.detection, o.bids, o.to_bids, events_json(o, run));
       if (!o.quiet) fmt::print("  bids      {}\n", events);
     }
   }

@@ -42,7 +42,15 @@ inline CliRun run_foveal(const std::string& launcher, const std::string& args) {
 }
 inline CliRun foveal(const std::string& args) { return run_foveal("", args); }
 
-inline fs::path scratch(const std::string& name) { return fs::temp_directory_path() / ("foveal_cli_" + std::to_string(::getpid())) / name; }
+// A path in this test process's scratch folder (made the first time it is asked for).
+inline fs::path scratch(const std::string& name) {
+  static const fs::path folder = [] {
+    const fs::path f = fs::temp_directory_path() / ("foveal_cli_" + std::to_string(::getpid()));
+    fs::create_directories(f);
+    return f;
+  }();
+  return folder / name;
+}
 
 inline size_t lines(const std::string& s) {
   size_t n = 0;

@@ -25,10 +25,6 @@ namespace {
 
 CliRun run(const std::string& args) { return foveal_test::foveal(args); }
 
-struct ScratchFolder {
-  ScratchFolder() { fs::create_directories(scratch("")); }
-} scratch_folder;
-
 foveal::Image card(int w, int h, int channels = 3) {
   foveal::Image im(w, h, channels);
   for (int y = 0; y < h; ++y)

@@ -20,11 +20,6 @@ namespace {
 
 CliRun run_cli(const std::string& args) { return foveal_test::foveal(args); }
 
-// The scratch folder the runs use, made before a test writes its inputs there
-struct ScratchFolder {
-  ScratchFolder() { fs::create_directories(scratch("")); }
-} scratch_folder;
-
 // A colourful linear test image
 foveal::Image test_image(int w, int h) {
   foveal::Image im(w, h, 3);

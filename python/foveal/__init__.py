@@ -16,7 +16,6 @@ Errors are the command line's one-line messages, raised as ``ValueError`` (bad i
 from __future__ import annotations
 
 import os
-import warnings as _warnings
 from typing import Any, List, Optional, Sequence, Tuple, Union
 
 import numpy as np
@@ -224,11 +223,13 @@ def perceive(stimulus: Any, eye: str = "healthy", gaze: Any = None, display: Any
     srgb = False
     if isinstance(stimulus, (str, os.PathLike)):
         path = os.fspath(stimulus)
+        single = not os.path.isdir(path) and not path.lower().endswith(_VIDEO)  # one image (or card)
         if encoding != "auto":
             raise ValueError("encoding: files say their own encoding (PNG/JPEG sRGB, EXR/PFM linear); leave it 'auto'")
     else:
         if output is not None:
             raise ValueError("output: writes a path stimulus as the command line does; save arrays with foveal.save_image")
+        single = not isinstance(stimulus, (list, tuple)) and _array(stimulus, "stimulus").ndim != 4
         frames, srgb = _stimulus_frames(stimulus, encoding)
     depth_array = None
     if depth is not None:
@@ -256,15 +257,6 @@ def perceive(stimulus: Any, eye: str = "healthy", gaze: Any = None, display: Any
             raise ValueError(f"gaze: expected (x, y), one (x, y) per frame (N×2) or a recording, got shape {g.shape}")
         if not np.all(np.isfinite(g)):
             raise ValueError("gaze: must be finite image pixels")
-        sizes = [f.shape[:2] for f in frames]
-        for k, (x, y) in enumerate(g.reshape(-1, 2)):
-            if not sizes:
-                break
-            h, w = sizes[min(k, len(sizes) - 1)]
-            if x < -w or x > 2 * w or y < -h or y > 2 * h:
-                _warnings.warn(f"gaze: ({x:g}, {y:g}) is more than the frame's size ({w}×{h}) off the frame: "
-                               "the whole image is far periphery", stacklevel=2)
-                break
     if stimulus_rect is not None:
         rect = tuple(int(v) for v in stimulus_rect)
         if len(rect) != 4:
@@ -278,8 +270,6 @@ def perceive(stimulus: Any, eye: str = "healthy", gaze: Any = None, display: Any
                              recording, fixation, params, float(start_s), rect_text, int(threads))
     if result is None:
         return None
-    single = (path and not os.path.isdir(path) and not path.lower().endswith(_VIDEO)) or \
-        (not path and not isinstance(stimulus, (list, tuple)) and _array(stimulus, "stimulus").ndim != 4)
     return result[0] if single else list(result)
 
 

@@ -7,6 +7,7 @@
 
 #include "foveal/gaze/detect.h"
 #include "foveal/gaze/recording.h"
+#include "foveal/util/image.h"
 
 #include <initializer_list>
 #include <vector>
@@ -18,6 +19,14 @@ namespace foveal::python {
 
 // A JSON document as Python objects (through the json module: dicts, lists, numbers, strings).
 nb::object to_python(const nlohmann::json& j);
+// A C-contiguous float32 H×W×C array, and the library's image of it (a copy).
+using FloatImage = nb::ndarray<const float, nb::ndim<3>, nb::c_contig, nb::device::cpu>;
+Image image_from(const FloatImage& array);
+Image image_from(const float* pixels, int width, int height, int channels);  // interleaved rows, top first
+// A gaze point more than the frame's own size off a width × height frame is legal (the whole frame
+// is then far periphery) but rarely meant: a Python UserWarning naming `name` says so (beyond the
+// library's reach it raises instead). Returns whether it warned.
+bool warn_if_far(const char* name, double x, double y, int width, int height);
 // A NumPy array that owns `values`.
 nb::ndarray<nb::numpy, float> owned_array(std::vector<float>&& values, std::initializer_list<size_t> shape);
 

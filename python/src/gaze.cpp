@@ -305,34 +305,24 @@ void bind_gaze(nb::module_& m) {
         }
         std::vector<uint8_t> labels(d.labels.size());
         for (size_t i = 0; i < labels.size(); ++i) labels[i] = static_cast<uint8_t>(d.labels[i]);
-        std::vector<uint8_t> label;
-        std::vector<int64_t> first, last;
-        std::vector<double> onset, duration, amplitude, peak, sx, sy, ex, ey;
-        for (const DetectedEvent& e : d.events) {
-          label.push_back(static_cast<uint8_t>(e.label));
-          first.push_back(static_cast<int64_t>(e.first));
-          last.push_back(static_cast<int64_t>(e.last));
-          onset.push_back(e.onset_s);
-          duration.push_back(e.duration_s);
-          amplitude.push_back(e.amplitude_deg);
-          peak.push_back(e.peak_velocity_deg_s);
-          sx.push_back(e.start_deg.x);
-          sy.push_back(e.start_deg.y);
-          ex.push_back(e.end_deg.x);
-          ey.push_back(e.end_deg.y);
-        }
+        // The events as columns, one per field
         nb::dict table;
-        table["label"] = column(std::move(label));
-        table["first"] = column(std::move(first));
-        table["last"] = column(std::move(last));
-        table["onset_s"] = column(std::move(onset));
-        table["duration_s"] = column(std::move(duration));
-        table["amplitude_deg"] = column(std::move(amplitude));
-        table["peak_velocity_deg_s"] = column(std::move(peak));
-        table["start_x_deg"] = column(std::move(sx));
-        table["start_y_deg"] = column(std::move(sy));
-        table["end_x_deg"] = column(std::move(ex));
-        table["end_y_deg"] = column(std::move(ey));
+        auto add = [&](const char* name, auto field) {
+          std::vector<decltype(field(DetectedEvent{}))> values;
+          for (const DetectedEvent& e : d.events) values.push_back(field(e));
+          table[name] = column(std::move(values));
+        };
+        add("label", [](const DetectedEvent& e) { return static_cast<uint8_t>(e.label); });
+        add("first", [](const DetectedEvent& e) { return static_cast<int64_t>(e.first); });
+        add("last", [](const DetectedEvent& e) { return static_cast<int64_t>(e.last); });
+        add("onset_s", [](const DetectedEvent& e) { return e.onset_s; });
+        add("duration_s", [](const DetectedEvent& e) { return e.duration_s; });
+        add("amplitude_deg", [](const DetectedEvent& e) { return e.amplitude_deg; });
+        add("peak_velocity_deg_s", [](const DetectedEvent& e) { return e.peak_velocity_deg_s; });
+        add("start_x_deg", [](const DetectedEvent& e) { return e.start_deg.x; });
+        add("start_y_deg", [](const DetectedEvent& e) { return e.start_deg.y; });
+        add("end_x_deg", [](const DetectedEvent& e) { return e.end_deg.x; });
+        add("end_y_deg", [](const DetectedEvent& e) { return e.end_deg.y; });
         nb::dict out;
         out["labels"] = column(std::move(labels));
         out["table"] = table;

@@ -41,35 +41,25 @@ nb::ndarray<nb::numpy, float> owned_array(std::vector<float>&& values, std::init
   return nb::ndarray<nb::numpy, float>(data->data(), shape, owner);
 }
 
-namespace {
-
-// A message as valid UTF-8 (Python's strings must be): bytes that are not are written \xNN.
-std::string valid_utf8(const std::string& in) {
-  std::string out;
-  for (size_t i = 0; i < in.size();) {
-    const auto c = static_cast<unsigned char>(in[i]);
-    const size_t n = c < 0x80 ? 1 : (c >> 5) == 0x6 ? 2 : (c >> 4) == 0xE ? 3 : (c >> 3) == 0x1E ? 4 : 0;
-    bool ok = n > 0 && i + n <= in.size();
-    for (size_t k = 1; ok && k < n; ++k) ok = (static_cast<unsigned char>(in[i + k]) >> 6) == 0x2;
-    if (ok) {
-      out.append(in, i, n);
-      i += n;
-    } else {
-      out += fmt::format("\\x{:02x}", c);
-      ++i;
-    }
-  }
-  return out;
-}
-
-// A gaze point more than the frame's own size off the frame is legal (the whole frame is then far
-// periphery) but rarely meant: a Python warning says so (farther than the library's reach, it raises).
-void warn_if_far(const char* name, double x, double y, int width, int height) {
-  if (!(x < -width || x > 2.0 * width || y < -height || y > 2.0 * height)) return;
+bool warn_if_far(const char* name, double x, double y, int width, int height) {
+  if (!(x < -width || x > 2.0 * width || y < -height || y > 2.0 * height)) return false;
   const std::string message = fmt::format(
       "{}: ({}, {}) is more than the frame's size ({}x{}) off the frame: the whole image is far periphery", name, x, y, width, height);
   if (PyErr_WarnEx(PyExc_UserWarning, message.c_str(), 1) != 0) throw nb::python_error();  // warnings turned into errors
+  return true;
 }
+
+Image image_from(const float* pixels, int width, int height, int channels) {
+  Image img(width, height, channels);
+  std::memcpy(img.pixels.data(), pixels, img.pixels.size() * sizeof(float));
+  return img;
+}
+
+Image image_from(const FloatImage& a) {
+  return image_from(a.data(), static_cast<int>(a.shape(1)), static_cast<int>(a.shape(0)), static_cast<int>(a.shape(2)));
+}
+
+namespace {
 
 using Vec3 = std::array<float, 3>;
 glm::vec3 vec(const Vec3& v) { return {v[0], v[1], v[2]}; }
@@ -306,12 +296,6 @@ PyVisionStep vision_step(PyVision& v, std::optional<std::array<float, 2>> fixati
   return r;
 }
 
-Image image_from(const nb::ndarray<const float, nb::ndim<3>, nb::c_contig, nb::device::cpu>& a) {
-  Image img(static_cast<int>(a.shape(1)), static_cast<int>(a.shape(0)), static_cast<int>(a.shape(2)));
-  std::memcpy(img.pixels.data(), a.data(), img.pixels.size() * sizeof(float));
-  return img;
-}
-
 }  // namespace
 }  // namespace foveal::python
 
@@ -334,14 +318,17 @@ NB_MODULE(_core, m) {
                                                     {"gaze_eye", "eye"},
                                                     {"device cuda", "device='cuda'"},
                                                     {"events", "method"}};
-      const std::string what = valid_utf8(in_words(e.what(), kKeywords));
+      const std::string what = in_words(e.what(), kKeywords);
       // A file that is not there (the readers say "no such file", or "cannot open" a path that does not exist)
       const size_t cannot = what.find(": cannot open");
       const bool missing = what.find(": no such ") != std::string::npos || what.ends_with(" not found") ||
                            (cannot != std::string::npos && what.find("for writing") == std::string::npos &&
                             !std::filesystem::exists(what.substr(0, cannot)));
       const bool device = what.rfind("device='cuda'", 0) == 0;
-      PyErr_SetString(missing ? PyExc_FileNotFoundError : device ? PyExc_RuntimeError : PyExc_ValueError, what.c_str());
+      // Decoded leniently: a message quoting a binary file's bytes keeps them as \xNN escapes
+      PyObject* text = PyUnicode_DecodeUTF8(what.data(), static_cast<Py_ssize_t>(what.size()), "backslashreplace");
+      PyErr_SetObject(missing ? PyExc_FileNotFoundError : device ? PyExc_RuntimeError : PyExc_ValueError, text);
+      Py_XDECREF(text);
     }
   });
 

@@ -13,13 +13,12 @@
 #include <nanobind/stl/string.h>
 #include <nanobind/stl/vector.h>
 
-#include <cstring>
+#include <algorithm>
 
 namespace foveal::python {
 
 namespace {
 
-using ImageArray = nb::ndarray<const float, nb::ndim<3>, nb::c_contig, nb::device::cpu>;
 using AnyImage = nb::ndarray<nb::ndim<3>, nb::c_contig, nb::device::cpu>;
 using Points = nb::ndarray<const double, nb::ndim<2>, nb::c_contig, nb::device::cpu>;
 
@@ -29,15 +28,7 @@ Image frame_of(const AnyImage& a, size_t k) {
   if (a.dtype() == nb::dtype<uint8_t>()) return image_from_integers(a.data(), w, h, c, 8);
   if (a.dtype() == nb::dtype<uint16_t>()) return image_from_integers(a.data(), w, h, c, 16);
   if (a.dtype() != nb::dtype<float>()) fail("image: frame {}: float32, uint8 or uint16 pixels", k);
-  Image img(w, h, c);
-  std::memcpy(img.pixels.data(), a.data(), img.pixels.size() * sizeof(float));
-  return img;
-}
-
-Image image_of(const ImageArray& a) {
-  Image img(static_cast<int>(a.shape(1)), static_cast<int>(a.shape(0)), static_cast<int>(a.shape(2)));
-  std::memcpy(img.pixels.data(), a.data(), img.pixels.size() * sizeof(float));
-  return img;
+  return image_from(static_cast<const float*>(a.data()), w, h, c);
 }
 
 nb::object array_of(Image&& img) {
@@ -61,7 +52,7 @@ void bind_perceive(nb::module_& m) {
   m.def(
       "_perceive",
       [](const std::vector<AnyImage>& frames, bool srgb, const std::string& path, const std::string& output, const std::string& eye,
-         std::optional<double> pupil_mm, std::array<double, 5> display, std::optional<ImageArray> depth, bool optics, int blur_taps,
+         std::optional<double> pupil_mm, std::array<double, 5> display, std::optional<FloatImage> depth, bool optics, int blur_taps,
          double fps, std::optional<std::array<double, 2>> point, std::optional<Points> points, std::optional<nb::dict> recording,
          const std::string& fixation, const nb::dict& fixation_params, double start_s, const std::string& stimulus,
          int threads) -> nb::object {
@@ -74,7 +65,7 @@ void bind_perceive(nb::module_& m) {
         if (p.display.res_x > 0) validate(p.display);
         if (depth) {
           if (depth->shape(2) != 1) fail("depth: expected one channel of metres (H×W), got {}", depth->shape(2));
-          p.depth = image_of(*depth);
+          p.depth = image_from(*depth);
         }
         if (!(fps > 0 && std::isfinite(fps))) fail("fps: must be positive, got {}", fps);
         // Each frame's gaze: a point, a recording's fixations, or one point per frame
@@ -92,6 +83,12 @@ void bind_perceive(nb::module_& m) {
         }
         std::vector<Image> in;
         for (const AnyImage& a : frames) in.push_back(stimulus_to_linear(frame_of(a, in.size()), srgb, "image"));
+        // A gaze far off its frame warns (once), as Renderer.render and VisionSimulation.step do
+        const size_t given = points ? std::min<size_t>(points->shape(0), in.size()) : point ? in.size() : 0;
+        for (size_t k = 0; k < given; ++k) {
+          const double x = points ? points->data()[2 * k] : (*point)[0], y = points ? points->data()[2 * k + 1] : (*point)[1];
+          if (warn_if_far("gaze", x, y, in[k].width, in[k].height)) break;
+        }
         std::vector<Image> seen;
         {
           nb::gil_scoped_release release;

@@ -116,3 +116,11 @@ def test_a_binary_file_given_as_a_recording_names_the_file_and_the_problem():
     with pytest.raises(ValueError) as error:
         foveal.gaze.read(image)
     assert str(image) in str(error.value) and "binary" in str(error.value)
+
+
+def test_a_message_quoting_bytes_that_are_not_utf8_keeps_them_escaped(tmp_path):
+    path = tmp_path / "bad.csv"
+    path.write_bytes(b"t,x,\xff\xfe\n1,2,3\n")
+    with pytest.raises(ValueError) as error:
+        foveal.gaze.read(path)
+    assert str(path) in str(error.value) and "\\xff\\xfe" in str(error.value)

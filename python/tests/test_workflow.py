@@ -5,6 +5,7 @@ group summary's numbers are what `foveal gaze --json` prints for each recording.
 import csv
 import gzip
 import json
+import math
 import os
 import pathlib
 import signal
@@ -173,3 +174,16 @@ def test_a_recording_with_expert_labels_is_scored(cli, tmp_path):
             tmp_path / "direct.json", "--no-scanpath", "-q")
     direct = json.loads((tmp_path / "direct.json").read_text())["events"]
     assert report["kappa"] == pytest.approx(direct["kappa"]) and report["kappa"] > 0.7
+
+
+def test_the_summarys_main_sequence_fit_recovers_a_known_power_law():
+    import importlib.util
+    spec = importlib.util.spec_from_file_location("summary", REPO / "workflows" / "study" / "scripts" / "summary.py")
+    summary = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(summary)
+    amplitudes = [0.5, 1, 2, 4, 8, 16, float("nan"), -1]
+    velocities = [100 * a ** 0.6 if a > 0 else 50 for a in amplitudes]  # V = 100·A^0.6, plus two unusable saccades
+    a, b = summary.power_law(amplitudes, velocities)
+    assert a == pytest.approx(100) and b == pytest.approx(0.6)
+    assert summary.median([3, float("nan"), 1, 2]) == 2
+    assert all(math.isnan(v) for v in summary.power_law([1, 1], [2, 2]))

@@ -102,6 +102,16 @@ Image load_stimulus(const PerceiveInput& in, size_t k) {
   return stimulus_to_linear(load_image(path, true), !is_float_image_path(path), path);
 }
 
+namespace {
+
+// Frame k as the eye sees it, at its gaze.
+Image see_frame(const Perceiver& perceiver, const PerceiveInput& in, const FrameGaze& gaze, size_t k) {
+  const Image image = load_stimulus(in, k);
+  return perceiver.see(image, gaze.at(k, in.fps, image.width, image.height));
+}
+
+}  // namespace
+
 FrameGaze::FrameGaze(const Recording& recording, const Display& screen, StepFixations source, const FixationParams& params, double start_s,
                      const std::string& stimulus) {
   if (recording.samples.empty()) fail("{}: no samples", recording.source);
@@ -111,22 +121,19 @@ FrameGaze::FrameGaze(const Recording& recording, const Display& screen, StepFixa
   const GazeGeometry geometry(screen, recording.screen_px);
   fixations_ = recording_steps(recording, geometry, source, params);
   if (fixations_.empty()) fail("{}: no fixations", recording.source);
+  std::stable_sort(fixations_.begin(), fixations_.end(), [](const GazeStep& a, const GazeStep& b) { return a.start_s < b.start_s; });
   t0_ = recording.samples.front().t_s + start_s;
   mapping_ = make_screen_mapping(recording.screen_px, {0, 0}, stimulus);
 }
 
 glm::dvec2 FrameGaze::at(size_t k, double fps, int w, int h) const {
-  glm::dvec2 gaze = fixed_.value_or(glm::dvec2(w / 2.0, h / 2.0));
   const double time = t0_ + k / fps;
-  const GazeStep* now = nullptr;
-  for (const GazeStep& g : fixations_)
-    if (g.start_s <= time) now = &g;
-  if (now) {
-    ScreenMapping m = *mapping_;
-    m.render_px = {w, h};
-    gaze = m.to_render(now->screen_px);
-  }
-  return gaze;
+  // The last fixation begun by then (the steps are in time order)
+  const auto next = std::upper_bound(fixations_.begin(), fixations_.end(), time, [](double t, const GazeStep& g) { return t < g.start_s; });
+  if (next == fixations_.begin()) return fixed_.value_or(glm::dvec2(w / 2.0, h / 2.0));
+  ScreenMapping m = *mapping_;
+  m.render_px = {w, h};
+  return m.to_render(std::prev(next)->screen_px);
 }
 
 double perceive_files(const Perceiver& perceiver, const PerceiveInput& in, const FrameGaze& gaze, const std::string& output,
@@ -143,8 +150,7 @@ double perceive_files(const Perceiver& perceiver, const PerceiveInput& in, const
   double frame_ms = 0;
   for (size_t k = 0; k < in.frames.size(); ++k) {
     const auto started = std::chrono::steady_clock::now();
-    const Image image = load_stimulus(in, k);
-    const Image seen = perceiver.see(image, gaze.at(k, in.fps, image.width, image.height));
+    const Image seen = see_frame(perceiver, in, gaze, k);
     std::string target;
     if (in.folder)
       target = (out_dir / in.frames[k].filename()).string();
@@ -167,10 +173,7 @@ std::vector<Image> perceive_frames(const Perceiver& perceiver, const PerceiveInp
     out.push_back(amsler_grid(perceiver.passes(), 20));
     return out;
   }
-  for (size_t k = 0; k < in.frames.size(); ++k) {
-    const Image image = load_stimulus(in, k);
-    out.push_back(perceiver.see(image, gaze.at(k, in.fps, image.width, image.height)));
-  }
+  for (size_t k = 0; k < in.frames.size(); ++k) out.push_back(see_frame(perceiver, in, gaze, k));
   return out;
 }
 

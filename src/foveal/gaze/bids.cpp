@@ -11,7 +11,6 @@
 #include <cctype>
 #include <cmath>
 #include <filesystem>
-#include <map>
 
 namespace foveal {
 
@@ -390,7 +389,7 @@ std::string write_bids_recording(const Recording& r, const BidsEntities& entitie
   return physio;
 }
 
-std::string write_bids_events(const EventDetection& d, const Recording& r, const BidsEntities& entities, const std::string& root,
+std::string write_bids_events(const EventDetection& d, const BidsEntities& entities, const std::string& root,
                               const nlohmann::json& parameters) {
   const std::string stem = bids_stem(entities);
   const fs::path base = fs::path(root) / "derivatives" / "foveal";
@@ -435,7 +434,6 @@ std::string write_bids_events(const EventDetection& d, const Recording& r, const
   const std::string path = (folder / (stem + "_desc-foveal_physioevents.tsv.gz")).string();
   write_json((folder / (stem + "_desc-foveal_physioevents.json")).string(), side);
   write_file_atomically(path, tsv, true);
-  (void)r;
   return path;
 }
 

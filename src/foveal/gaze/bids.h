@@ -63,7 +63,7 @@ std::string write_bids_recording(const Recording& recording, const BidsEntities&
 // STEM_desc-foveal_physioevents.tsv.gz (onset in the recording's timestamps, duration, trial_type,
 // amplitude, peak velocity, start/end in degrees) with a sidecar naming the detector and its
 // parameters (`parameters`). Returns its path.
-std::string write_bids_events(const EventDetection& detection, const Recording& recording, const BidsEntities& entities,
-                              const std::string& root, const nlohmann::json& parameters);
+std::string write_bids_events(const EventDetection& detection, const BidsEntities& entities, const std::string& root,
+                              const nlohmann::json& parameters);
 
 }  // namespace foveal

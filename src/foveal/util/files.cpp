@@ -81,11 +81,21 @@ void check_not_an_input(const std::string& output) {
   if (g.paths.count(r) || (id && g.files.count(*id))) fail("{}: is an input of this run; foveal never writes over its inputs", output);
 }
 
-void remove_stale_partials(const std::string& target) {
+namespace {
+
+// Where a target's partial copies go: its folder, and the prefix ".NAME.partial-" (NAME the target's
+// last component, a trailing '/' aside).
+std::pair<fs::path, std::string> partial_place(const std::string& target) {
   const fs::path t = fs::absolute(target).lexically_normal();
-  const std::string name = (t.has_filename() ? t.filename() : t.parent_path().filename()).string();
-  const fs::path parent = t.has_filename() ? t.parent_path() : t.parent_path().parent_path();
-  const std::string prefix = "." + name + ".partial-";
+  const bool named = t.has_filename();
+  return {named ? t.parent_path() : t.parent_path().parent_path(),
+          fmt::format(".{}.partial-", (named ? t.filename() : t.parent_path().filename()).string())};
+}
+
+}  // namespace
+
+void remove_stale_partials(const std::string& target) {
+  const auto [parent, prefix] = partial_place(target);
   std::error_code ec;
   for (fs::directory_iterator it(parent, ec), end; !ec && it != end; it.increment(ec)) {
     const std::string entry = it->path().filename().string();
@@ -101,13 +111,14 @@ void remove_stale_partials(const std::string& target) {
   }
 }
 
-StagedFolder::StagedFolder(std::string target) : target_(std::move(target)) {
-  const fs::path t = fs::absolute(target_).lexically_normal();
-  const std::string name = (t.has_filename() ? t.filename() : t.parent_path().filename()).string();
-  const fs::path parent = t.has_filename() ? t.parent_path() : t.parent_path().parent_path();
-  remove_stale_partials(target_);
+std::string partial_path(const std::string& target) {
+  remove_stale_partials(target);
   static std::atomic<int> counter{0};
-  staging_ = (parent / fmt::format(".{}.partial-{}-{}", name, getpid(), counter++)).string();
+  const auto [parent, prefix] = partial_place(target);
+  return (parent / fmt::format("{}{}-{}", prefix, getpid(), counter++)).string();
+}
+
+StagedFolder::StagedFolder(std::string target) : target_(std::move(target)), staging_(partial_path(target_)) {
   std::error_code ec;
   fs::create_directories(staging_, ec);
   if (ec) fail("{}: cannot create a folder beside it for the output ({}): {}", target_, staging_, ec.message());

@@ -25,8 +25,11 @@ void note_input(const std::string& path);            // a reader's input (no eff
 void check_not_an_input(const std::string& output);  // a writer's target; throws Error naming it
 
 // Remove what a killed run left beside `target` (".NAME.partial-PID-N" of a process that no longer
-// runs): StagedFolder and write_file_atomically call it before they stage.
+// runs).
 void remove_stale_partials(const std::string& target);
+// A fresh path beside `target` for its partial copy, ".NAME.partial-PID-N" (after removing a killed
+// run's): what StagedFolder and write_file_atomically (util/gzip.h) stage into.
+std::string partial_path(const std::string& target);
 
 // A staging folder for a folder of outputs: files go into path(), commit() moves them into the
 // target folder (created if missing; files of the same name replaced), and a StagedFolder that was

@@ -6,11 +6,9 @@
 
 #include <zlib.h>
 
-#include <atomic>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
-#include <unistd.h>
 #include <vector>
 
 namespace foveal {
@@ -45,11 +43,8 @@ std::string read_gzip_file(const std::string& path, size_t max_bytes) {
 
 void write_file_atomically(const std::string& path, const std::string& bytes, bool compress) {
   check_not_an_input(path);
-  remove_stale_partials(path);
-  static std::atomic<unsigned> counter{0};
   const std::filesystem::path target(path);
-  const std::string temporary =
-      (target.parent_path() / fmt::format(".{}.partial-{}-{}", target.filename().string(), getpid(), counter++)).string();
+  const std::string temporary = partial_path(path);
   bool ok = false;
   if (compress) {
     // zlib's gzip stream: level 6, no file name, modification time 0 — the same bytes every run

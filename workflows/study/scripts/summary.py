@@ -16,6 +16,8 @@ import os
 import sys
 import tempfile
 
+import numpy as np
+
 CLASSES = ("fixation", "saccade", "pso", "pursuit", "blink")
 COLUMNS = ["recording", "subject", "session", "task", "run", "samples", "duration_s", "rate_hz", "valid_fraction", "detector",
            *[f"{c}_events" for c in CLASSES], "fixation_duration_ms_median", "saccade_amplitude_deg_median",
@@ -28,24 +30,18 @@ def entities(stem):
 
 
 def median(values):
-    v = sorted(values)
-    if not v:
-        return float("nan")
-    return v[len(v) // 2] if len(v) % 2 else 0.5 * (v[len(v) // 2 - 1] + v[len(v) // 2])
+    finite = [v for v in values if math.isfinite(v)]
+    return float(np.median(finite)) if finite else float("nan")
 
 
 def power_law(amplitudes, velocities):
-    """Least squares of log V = log a + b log A over saccades with both positive."""
-    pairs = [(math.log(a), math.log(v)) for a, v in zip(amplitudes, velocities) if a > 0 and v > 0]
-    if len(pairs) < 3:
+    """V = a·A^b by least squares on log V = log a + b log A, over saccades with both positive."""
+    a, v = np.asarray(amplitudes, float), np.asarray(velocities, float)
+    keep = (a > 0) & (v > 0)
+    if keep.sum() < 3 or np.ptp(np.log(a[keep])) == 0:
         return float("nan"), float("nan")
-    mx = sum(p[0] for p in pairs) / len(pairs)
-    my = sum(p[1] for p in pairs) / len(pairs)
-    sxx = sum((p[0] - mx) ** 2 for p in pairs)
-    if sxx == 0:
-        return float("nan"), float("nan")
-    b = sum((p[0] - mx) * (p[1] - my) for p in pairs) / sxx
-    return math.exp(my - b * mx), b
+    b, log_a = np.polyfit(np.log(a[keep]), np.log(v[keep]), 1)
+    return float(np.exp(log_a)), float(b)
 
 
 def number(text):
