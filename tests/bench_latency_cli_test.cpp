@@ -56,6 +56,10 @@ TEST(BenchLatencyCli, ThreeLoopsUnderTheModelClockWriteTheDocumentedJson) {
       EXPECT_GT(s["ray_bound_ms"].get<double>(), 0);
     }
   }
+  // The eye returns to where it looked first, a fovea the deadline loops converged then: the frame
+  // on screen when it lands already shows it (0 ms, not the wait for the next refresh)
+  for (const char* loop : {"deadline", "deadline+prediction"})
+    EXPECT_EQ(r[loop]["saccades"][1]["landing_to_converged_ms"].get<double>(), 0.0) << loop;
   // The deadline loops make a frame every refresh and never miss one under the model clock
   EXPECT_EQ(r["deadline"]["frames_late"], 0);
   EXPECT_GE(r["deadline"]["frames"].get<int>(), 89);

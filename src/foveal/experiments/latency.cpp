@@ -98,15 +98,43 @@ size_t followed_saccade(const Segment& s, double t) {
   return k;
 }
 
-// Judge a shown frame: each landed, not yet converged saccade's fovea; the timeline's error.
-void judge_frame(const Segment& s, const Image& image, double shown_s, LatencyLoop& loop, LatencyFrame& frame) {
+// Judge a shown frame, on screen from `shown_s` until the next frame's refresh `until_s`: every
+// saccade that lands before `until_s` and whose fovea has not converged yet is judged on it. The
+// frame on screen when the eye lands counts too: one made ready before the landing (at the
+// predicted landing) shows a converged fovea 0 ms after it. Also the timeline's error.
+void judge_frame(const Segment& s, const Image& image, double shown_s, double until_s, LatencyLoop& loop, LatencyFrame& frame) {
   for (size_t j = 0; j < s.saccades.size(); ++j) {
     LatencySaccade& sac = loop.saccades[j];
-    if (sac.converged_ms || sac.landing_s > shown_s) continue;
-    if (fovea_error(s.masks[j], image, s.ref).second) sac.converged_ms = (shown_s - sac.landing_s) * 1000;
+    if (sac.converged_ms || sac.landing_s >= until_s) continue;
+    if (fovea_error(s.masks[j], image, s.ref).second) sac.converged_ms = std::max(0.0, shown_s - sac.landing_s) * 1000;
   }
   if (!s.saccades.empty()) frame.fovea_error = fovea_error(s.masks[followed_saccade(s, shown_s)], image, s.ref).first;
 }
+
+// The display: the frame on screen, judged once the next frame's refresh is known.
+struct Screen {
+  Image image;
+  double shown_s = 0;
+  size_t frame = 0;     // its index in the loop's timeline
+  bool judged = false;  // a frame at the loop's full resolution (the references' size)
+  bool any = false;
+  // A new frame shown at `shown_s`: the one it replaces is judged over the time it was on screen,
+  // and returned (for the loop to compose into again)
+  Image show(const Segment& s, LatencyLoop& loop, Image next, double next_shown_s, bool next_judged) {
+    finish(s, loop, next_shown_s);
+    Image old = std::move(image);
+    image = std::move(next);
+    shown_s = next_shown_s;
+    frame = loop.timeline.size() - 1;
+    judged = next_judged;
+    any = true;
+    return old;
+  }
+  void finish(const Segment& s, LatencyLoop& loop, double until_s) {
+    if (any && judged) judge_frame(s, image, shown_s, until_s, loop, loop.timeline[frame]);
+    any = false;
+  }
+};
 
 // The clock: a frame of `cost_ms` started at `start` is shown at the first refresh after it is done.
 double shown_at(double start, double cost_ms, double period_s, int& missed) {
@@ -129,6 +157,7 @@ LatencyLoop run_whole_frame(const LatencyRun& run, const Segment& s, const Laten
   loop.saccades = s.saccades;
   const double period = 1.0 / p.refresh_hz;
   std::vector<double> frame_ms;
+  Screen screen;
   size_t next = 0;
   std::optional<glm::dvec2> gaze;
   for (double t = s.begin; t < s.end;) {
@@ -140,7 +169,7 @@ LatencyLoop run_whole_frame(const LatencyRun& run, const Segment& s, const Laten
     options.outputs = FrameOutputs::colour_only();
     options.use_history = false;
     const Timer timer;
-    const Frame f = run.renderer->render(run.camera, params, options);
+    Frame f = run.renderer->render(run.camera, params, options);
     const double ms = timer.ms();
     const double cost = p.clock == LoopClock::model ? model_fixed + static_cast<double>(f.stats.ao_rays) / model_rate : ms;
     frame_ms.push_back(cost);
@@ -150,10 +179,11 @@ LatencyLoop run_whole_frame(const LatencyRun& run, const Segment& s, const Laten
     lf.cost_ms = cost;
     lf.shown_s = shown_at(t, cost, period, loop.refreshes_missed);
     lf.gaze_px = f.gaze_px;
-    judge_frame(s, f.color, lf.shown_s, loop, lf);
     loop.timeline.push_back(lf);
+    screen.show(s, loop, std::move(f.color), lf.shown_s, true);
     t = lf.shown_s;
   }
+  screen.finish(s, loop, INFINITY);
   finish_loop(loop, frame_ms);
   return loop;
 }
@@ -179,9 +209,10 @@ LatencyLoop run_deadline(const LatencyRun& run, const Segment& s, const LatencyP
   const double period = 1.0 / p.refresh_hz;
   std::vector<double> frame_ms;
   std::vector<std::pair<double, glm::dvec2>> predictions;  // frame start, predicted landing
+  Screen screen;
   for (double t = s.begin; t < s.end;) {
     for (; next < s.t.size() && s.t[next] + s.latency_s <= t; ++next) rt.push_gaze(s.t[next], s.px[next]);
-    const LoopFrame f = rt.frame(run.camera);
+    LoopFrame f = rt.frame(run.camera);
     frame_ms.push_back(f.cost_ms);
     loop.frames_late += f.late ? 1 : 0;
     LatencyFrame lf;
@@ -191,10 +222,11 @@ LatencyLoop run_deadline(const LatencyRun& run, const Segment& s, const LatencyP
     lf.gaze_px = f.gaze_px / rt.scale();
     lf.predicted = f.predicted;
     if (f.predicted) predictions.emplace_back(t, lf.gaze_px);
-    if (rt.scale() == 1.0) judge_frame(s, f.color, lf.shown_s, loop, lf);
     loop.timeline.push_back(lf);
+    rt.recycle(screen.show(s, loop, std::move(f.color), lf.shown_s, rt.scale() == 1.0));
     t = lf.shown_s;
   }
+  screen.finish(s, loop, INFINITY);
   loop.scale = rt.scale();
   for (LatencySaccade& sac : loop.saccades)  // the last prediction made before the landing
     for (const auto& [start, at] : predictions)
@@ -204,7 +236,7 @@ LatencyLoop run_deadline(const LatencyRun& run, const Segment& s, const LatencyP
   return loop;
 }
 
-// The segment's samples in render pixels, and its saccades (nhp) landing inside it.
+// The segment's samples in render pixels, and its saccades (nhr, the recommended detector) landing inside it.
 Segment make_segment(const Recording& rec, const LatencyParams& p) {
   Segment s;
   if (rec.samples.empty()) fail("recording {}: no samples", rec.source);
@@ -266,6 +298,7 @@ nlohmann::json loop_json(const LatencyLoop& l) {
     js["amplitude_deg"] = s.amplitude_deg;
     js["duration_ms"] = s.duration_ms;
     js["landing_s"] = s.landing_s;
+    js["landing_px"] = {s.landing_px.x, s.landing_px.y};
     js["landing_to_converged_ms"] = s.converged_ms ? nlohmann::json(*s.converged_ms) : nlohmann::json(nullptr);
     js["ray_bound_ms"] = s.ray_bound_ms;
     if (s.predicted_error_deg) js["predicted_error_deg"] = *s.predicted_error_deg;

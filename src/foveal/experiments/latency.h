@@ -10,8 +10,9 @@
 //   whole-frame          today's: render a whole foveated frame for the latest gaze, then show it;
 //   deadline             RealtimeLoop (render/realtime.h) without prediction;
 //   deadline+prediction  RealtimeLoop placing the fovea at each saccade's predicted landing.
-// For every saccade (detected in the recording, nhp) landing in the segment: the time from its
-// landing to the first shown frame whose fovea — the q = 1 region around the true landing — is
+// For every saccade (detected in the recording, nhr) landing in the segment: the time from its
+// landing to the first frame on screen from then on (the one shown when the eye lands included:
+// 0 ms if it was ready) whose fovea — the q = 1 region around the true landing — is
 // within the full-frame reference's own noise (RMSE against a reference of n_max rays per pixel,
 // as a multiple of a second reference's RMSE against it: ratio ≤ 1 + 2 standard errors, as
 // `bench quality` judges), and the ray-bound limit: that fovea's pixels × n_max over the raw
@@ -53,7 +54,7 @@ struct LatencySaccade {
   double duration_ms = 0;
   double landing_s = 0;                       // seconds from the recording's first sample
   glm::dvec2 landing_px{0};                   // render pixels
-  std::optional<double> converged_ms;         // landing → a shown frame with the fovea within noise (unset: not in the segment)
+  std::optional<double> converged_ms;         // landing → a frame on screen with the fovea within noise (unset: not in the segment)
   double ray_bound_ms = 0;                    // the fovea's pixels × n_max / the raw rate
   std::optional<double> predicted_error_deg;  // deadline+prediction: the last prediction shown before the landing, from it
 };

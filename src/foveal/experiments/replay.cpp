@@ -64,6 +64,7 @@ class LoopMaker {
   }
   void push(const GazeSample& g, std::optional<glm::dvec2> render_px) { loop_.push_gaze(g.t_s, g.valid ? render_px : std::nullopt); }
   const Frame& make(ReplayFrame& info) {
+    loop_.recycle(std::move(frame_.color));  // the last frame is written: composed into again
     LoopFrame f = loop_.frame(camera_);
     info.render_gaze = f.gaze_px / loop_.scale();
     info.ao_rays = f.rays;

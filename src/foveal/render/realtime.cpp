@@ -22,6 +22,8 @@ namespace {
 
 constexpr uint32_t kFirstRound = 16;  // a pixel's first round of rays (adaptive sampling's)
 constexpr int kBuckets = 64;          // priority buckets of the periphery (half powers of two)
+constexpr double kSlipDecay = 0.995;  // per frame: the margin's memory of a late end
+constexpr double kSlipPad = 0.5;      // ms kept beyond the latest slip
 
 // body(i) for every pixel, in parallel blocks of 4096
 template <class Body>
@@ -231,8 +233,18 @@ size_t RealtimeLoop::plan_round(uint64_t ray_limit, bool periphery) {
   return tasks_.size();
 }
 
-void RealtimeLoop::compose(Image& color) const {
-  color = Image(params_.width, params_.height, 3);
+void RealtimeLoop::recycle(Image&& image) {
+  if (image.width == params_.width && image.height == params_.height && image.channels == 3) spare_ = std::move(image);
+}
+
+void RealtimeLoop::compose(Image& color) {
+  // Into a handed-back image where there is one: a fresh 5 MB image costs its page faults, which
+  // measured 1–5 ms on a shared VM (the frames that came late), against ~1 ms reused
+  if (spare_.width == params_.width && spare_.height == params_.height && spare_.channels == 3)
+    color = std::move(spare_);
+  else
+    color = Image(params_.width, params_.height, 3);
+  spare_ = Image();
   const float k_const = params_.ambient_constant.value_or(1.0f);
   const size_t n = cast_.size();
   for_each_pixel(n, [&](size_t i) {
@@ -286,7 +298,9 @@ LoopFrame RealtimeLoop::frame(const Camera& camera) {
   // AO rays, in rounds, within what the frame may spend on them
   double trace_ms = 0;
   const bool wall = settings_.clock == LoopClock::wall;
-  const double deadline = settings_.budget_ms - settings_.margin_ms - finish_ms_;
+  // The margin: at least the settings', more where frames have lately ended later than planned
+  const double margin = std::min(std::max(settings_.margin_ms, slip_ms_), 0.25 * settings_.budget_ms);
+  const double deadline = settings_.budget_ms - margin - finish_ms_;
   const double model_fixed = settings_.model_fixed_ms * scale_ * scale_;  // the model's fixed cost scales with the pixels
   uint64_t allowance = wall ? 0 : static_cast<uint64_t>(std::max(0.0, (settings_.budget_ms - model_fixed) * settings_.model_rays_per_ms));
   for (;;) {
@@ -352,6 +366,13 @@ LoopFrame RealtimeLoop::frame(const Camera& camera) {
   out.trace_ms = trace_ms;
   out.cost_ms = wall ? out.ms : model_fixed + static_cast<double>(out.rays) / settings_.model_rays_per_ms;
   out.late = out.cost_ms > settings_.budget_ms;
+  if (wall) {
+    // How much later than planned the frame ended (the machine's pauses: a thread descheduled, page
+    // faults), kept as a slowly decaying maximum (halved in ~2 s at 60 Hz): the margin for the
+    // next frames. A fixed 2 ms left 1–4 frames in 600 late on a shared 2-core VM.
+    const double slip = out.ms - (settings_.budget_ms - margin);
+    slip_ms_ = std::max(slip_ms_ * kSlipDecay, slip + kSlipPad);
+  }
   // Where the frame's fixed part alone (surfaces, maps, composing) takes most of the budget, the
   // next frames render smaller
   // (a new view counts when views follow one another: a moving camera; a still one pays it once)

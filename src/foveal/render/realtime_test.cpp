@@ -129,7 +129,9 @@ TEST(RealtimeLoop, AfterAGazeJumpTheFoveaReachesItsAnalyticAoBeforeThePeripheryG
   EXPECT_GT(added, 0u);
 }
 
-std::vector<std::vector<float>> run_frames(int threads, bool predict) {
+// With `recycle`, each frame's image is handed back once the next is made; `reused` counts the
+// frames composed into the image handed back.
+std::vector<std::vector<float>> run_frames(int threads, bool predict, bool recycle = false, int* reused = nullptr) {
   const ThreadScope scope(threads);
   const std::unique_ptr<FrameRenderer> renderer = make_frame_renderer(box(), ComputeDevice::cpu);
   LoopSettings settings = model_clock(1500);
@@ -137,9 +139,16 @@ std::vector<std::vector<float>> run_frames(int threads, bool predict) {
   RealtimeLoop loop(*renderer, box(), loop_params(160, 100, 64), settings);
   std::vector<std::vector<float>> images;
   double t = 0;
+  const float* handed_back = nullptr;
   for (int k = 0; k < 12; ++k) {
     for (int s = 0; s < 16; ++s, t += 0.001) loop.push_gaze(t, glm::dvec2(40 + (k > 5 ? 60 : 0) + 0.01 * s, 50));
-    images.push_back(loop.frame(box().cameras.front()).color.pixels);
+    LoopFrame f = loop.frame(box().cameras.front());
+    if (reused && handed_back && f.color.pixels.data() == handed_back) ++*reused;
+    images.push_back(f.color.pixels);
+    if (recycle) {
+      handed_back = f.color.pixels.data();
+      loop.recycle(std::move(f.color));
+    }
   }
   return images;
 }
@@ -152,6 +161,14 @@ TEST(RealtimeLoop, TheModelClockGivesTheSameFramesWhateverTheThreadCount) {
     EXPECT_EQ(0, std::memcmp(a[k].data(), c[k].data(), a[k].size() * sizeof(float))) << "frame " << k << " on one thread";
   }
   EXPECT_NE(a[0], a[11]);  // the frames do change: rays arrive
+}
+
+TEST(RealtimeLoop, AHandedBackImageIsComposedIntoWithTheSameResult) {
+  int reused = 0;
+  const auto a = run_frames(0, true), b = run_frames(0, true, true, &reused);
+  EXPECT_EQ(reused, 11);  // every frame after the first went into the previous one's memory
+  ASSERT_EQ(a.size(), b.size());
+  for (size_t k = 0; k < a.size(); ++k) EXPECT_EQ(a[k], b[k]) << "frame " << k;
 }
 
 TEST(RealtimeLoop, WhereTheBaseShadingCannotFitTheResolutionScalesDownAndSaysSo) {
