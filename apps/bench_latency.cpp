@@ -23,7 +23,7 @@ struct BenchLatencyOptions {
   std::string json, markdown, timeline, loops = "whole-frame,deadline,deadline+prediction";
   std::vector<std::string> recordings;
   double start = 0, duration = 3, refresh_hz = 60, min_amplitude = 2;
-  std::optional<double> budget_ms, latency_ms, model_rays_per_ms, model_fixed_ms;
+  std::optional<double> budget_ms, latency_ms, model_rays_per_ms, model_fixed_ms, margin_ms;
   int max_rays = 400, threads = 0, timeline_saccade = 0;
   double tolerance = AoReuseParams{}.tolerance;
   uint64_t seed = 1;
@@ -47,6 +47,7 @@ int run_bench_latency(const BenchLatencyOptions& o) {
   p.refresh_hz = o.refresh_hz;
   p.budget_ms = o.budget_ms;
   p.tracker_latency_ms = o.latency_ms;
+  p.margin_ms = o.margin_ms;
   p.clock = parse_loop_clock(o.clock);
   p.model_rays_per_ms = o.model_rays_per_ms;
   p.model_fixed_ms = o.model_fixed_ms;
@@ -128,6 +129,9 @@ std::function<int()> add_bench_latency_command(CLI::App& bench) {
   cmd->add_option("--seed", o->seed, "seed of the loops (the references use seed+1000 and seed+2000)")->capture_default_str();
   cmd->add_option("--refresh-hz", o->refresh_hz, "display refresh rate, Hz")->capture_default_str()->check(CLI::Range(1.0, 1000.0));
   cmd->add_option("--frame-budget-ms", o->budget_ms, "each frame's budget, ms (default: one refresh)");
+  cmd->add_option("--margin-ms", o->margin_ms,
+                  "wall clock: the least time each deadline frame keeps free for the machine's pauses, ms (default 2; more "
+                  "after frames that ended late, at most a quarter of the budget)");
   cmd->add_option("--latency-ms", o->latency_ms,
                   "tracker latency: a sample reaches the renderer this long after it was taken (default: "
                   "the sample period + 2 ms)");

@@ -53,6 +53,7 @@ constexpr std::array kOptions = std::to_array<ParameterName>({
     {"loops", "--loops"},
     {"model_rays_per_ms", "--model-rays-per-ms"},
     {"model_fixed_ms", "--model-fixed-ms"},
+    {"margin_ms", "--margin-ms"},
     {"device cuda", "--device cuda"},
     // the eye, the vision simulation, the viewer, compare
     {"eye", "--eye"},

@@ -200,6 +200,7 @@ LatencyLoop run_deadline(const LatencyRun& run, const Segment& s, const LatencyP
   settings.clock = p.clock;
   settings.model_rays_per_ms = model_rate;
   settings.model_fixed_ms = model_fixed;
+  if (p.margin_ms) settings.margin_ms = *p.margin_ms;
   RealtimeLoop rt(*run.renderer, *run.scene, p.render, settings);
   // Samples from a second before the segment: the predictor and the fovea start where the eye is
   size_t next = 0;
@@ -349,6 +350,9 @@ void validate(const LatencyParams& p) {
   if ((p.model_rays_per_ms || p.model_fixed_ms) && p.clock != LoopClock::model) fail("model_rays_per_ms: needs the model clock");
   if (p.model_rays_per_ms.has_value() != p.model_fixed_ms.has_value())
     fail("model_fixed_ms: give both parts of the cost model, or neither");
+  const double budget = p.budget_ms.value_or(1000.0 / p.refresh_hz);
+  if (p.margin_ms && !(*p.margin_ms >= 0 && *p.margin_ms < budget))
+    fail("margin_ms: must be in [0, the frame budget {:.1f} ms), got {}", budget, *p.margin_ms);
   for (const std::string& l : p.loops)
     if (l != "whole-frame" && l != "deadline" && l != "deadline+prediction")
       fail("loops: unknown loop '{}' (known: whole-frame, deadline, deadline+prediction)", l);

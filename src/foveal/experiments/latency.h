@@ -45,6 +45,7 @@ struct LatencyParams {
   double start_s = 0, duration_s = 3;  // the segment replayed (seconds from the recording's first sample)
   double min_amplitude_deg = 2;        // smaller saccades are not judged
   std::vector<std::string> loops = {"whole-frame", "deadline", "deadline+prediction"};
+  std::optional<double> margin_ms;  // the deadline loops' least margin (unset: LoopSettings' 2 ms)
 };
 // Check the parameters; throws Error naming the option.
 void validate(const LatencyParams& params);

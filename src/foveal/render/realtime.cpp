@@ -299,7 +299,7 @@ LoopFrame RealtimeLoop::frame(const Camera& camera) {
   double trace_ms = 0;
   const bool wall = settings_.clock == LoopClock::wall;
   // The margin: at least the settings', more where frames have lately ended later than planned
-  const double margin = std::min(std::max(settings_.margin_ms, slip_ms_), 0.25 * settings_.budget_ms);
+  const double margin = std::max(settings_.margin_ms, slip_ms_);  // (slip_ms_ at most a quarter of the budget)
   const double deadline = settings_.budget_ms - margin - finish_ms_;
   const double model_fixed = settings_.model_fixed_ms * scale_ * scale_;  // the model's fixed cost scales with the pixels
   uint64_t allowance = wall ? 0 : static_cast<uint64_t>(std::max(0.0, (settings_.budget_ms - model_fixed) * settings_.model_rays_per_ms));
@@ -366,12 +366,13 @@ LoopFrame RealtimeLoop::frame(const Camera& camera) {
   out.trace_ms = trace_ms;
   out.cost_ms = wall ? out.ms : model_fixed + static_cast<double>(out.rays) / settings_.model_rays_per_ms;
   out.late = out.cost_ms > settings_.budget_ms;
-  if (wall) {
+  if (wall && !out.new_view) {
     // How much later than planned the frame ended (the machine's pauses: a thread descheduled, page
     // faults), kept as a slowly decaying maximum (halved in ~2 s at 60 Hz): the margin for the
-    // next frames. A fixed 2 ms left 1–4 frames in 600 late on a shared 2-core VM.
+    // next frames. A fixed 2 ms left 1–4 frames in 600 late on a shared 2-core VM. (A new view's
+    // surfaces are no slip: a moving camera's frames are made smaller instead, rescale.)
     const double slip = out.ms - (settings_.budget_ms - margin);
-    slip_ms_ = std::max(slip_ms_ * kSlipDecay, slip + kSlipPad);
+    slip_ms_ = std::min(std::max(slip_ms_ * kSlipDecay, slip + kSlipPad), 0.25 * settings_.budget_ms);
   }
   // Where the frame's fixed part alone (surfaces, maps, composing) takes most of the budget, the
   // next frames render smaller
