@@ -52,8 +52,10 @@ TEST(BenchLatencyCli, ThreeLoopsUnderTheModelClockWriteTheDocumentedJson) {
     ASSERT_EQ(l["saccades"].size(), 2u);  // the two 20° saccades
     for (const auto& s : l["saccades"]) {
       EXPECT_NEAR(s["amplitude_deg"].get<double>(), 20, 4);
-      for (const char* key : {"landing_s", "landing_to_converged_ms", "ray_bound_ms"}) EXPECT_TRUE(s.contains(key)) << key;
+      for (const char* key : {"landing_s", "landing_to_converged_ms", "ray_bound_ms", "fixation_ms"}) EXPECT_TRUE(s.contains(key)) << key;
       EXPECT_GT(s["ray_bound_ms"].get<double>(), 0);
+      // the eye stays ~0.53 s: until the saccade back, and after it until the recording ends
+      EXPECT_NEAR(s["fixation_ms"].get<double>(), 534, 40);
     }
   }
   // The eye returns to where it looked first, a fovea the deadline loops converged then: the frame

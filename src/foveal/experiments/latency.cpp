@@ -273,6 +273,13 @@ Segment make_segment(const Recording& rec, const LatencyParams& p) {
     const glm::dvec2 px = rest * scale;
     if (px.x < 0 || px.y < 0 || px.x >= p.render.width || px.y >= p.render.height) continue;
     LatencySaccade sac;
+    // How long the eye stayed: until its next saccade (of any size) or blink
+    sac.fixation_ms = (rec.samples.back().t_s - last.t_s) * 1000;
+    for (size_t k = static_cast<size_t>(&e - events.events.data()) + 1; k < events.events.size(); ++k)
+      if (events.events[k].label == EventLabel::saccade || events.events[k].label == EventLabel::blink) {
+        sac.fixation_ms = (rec.samples[events.events[k].first].t_s - last.t_s) * 1000;
+        break;
+      }
     sac.amplitude_deg = e.amplitude_deg;
     sac.duration_ms = e.duration_s * 1000;
     sac.landing_s = landing;
@@ -302,6 +309,7 @@ nlohmann::json loop_json(const LatencyLoop& l) {
     js["landing_px"] = {s.landing_px.x, s.landing_px.y};
     js["landing_to_converged_ms"] = s.converged_ms ? nlohmann::json(*s.converged_ms) : nlohmann::json(nullptr);
     js["ray_bound_ms"] = s.ray_bound_ms;
+    js["fixation_ms"] = s.fixation_ms;
     if (s.predicted_error_deg) js["predicted_error_deg"] = *s.predicted_error_deg;
     j["saccades"].push_back(js);
   }
@@ -468,8 +476,10 @@ LatencyReport run_latency_bench(const LatencyRun& run, const std::vector<Recordi
         "median ray bound {:.0f} ms)\n\n",
         r.recording, r.sampling_hz, r.tracker_latency_ms, bounds_ms.size(), p.min_amplitude_deg, quantile(durations, 0.5),
         r.raw_rays_per_ms, bound);
-    md += "| loop | frames | late | refreshes missed | frame ms p50 | p99 | landing → converged fovea, median ms | × ray bound |\n";
-    md += "|---|---:|---:|---:|---:|---:|---:|---:|\n";
+    md +=
+        "| loop | frames | late | refreshes missed | frame ms p50 | p99 | landing → converged fovea, median ms | × ray bound | "
+        "converged while the eye stayed |\n";
+    md += "|---|---:|---:|---:|---:|---:|---:|---:|---:|\n";
     nlohmann::json jr;
     jr["recording"] = r.recording;
     jr["sampling_hz"] = r.sampling_hz;
@@ -478,9 +488,11 @@ LatencyReport run_latency_bench(const LatencyRun& run, const std::vector<Recordi
     if (p.clock == LoopClock::model) jr["model"] = {{"rays_per_ms", r.model_rays_per_ms}, {"fixed_ms", r.model_fixed_ms}};
     for (const LatencyLoop& l : r.loops) {
       const auto median = l.median_converged_ms();
-      md += fmt::format("| {} | {} | {} | {} | {:.1f} | {:.1f} | {} | {} |\n", l.name, l.frames, l.frames_late, l.refreshes_missed,
-                        l.frame_ms_p50, l.frame_ms_p99, ms_or_dash(median),
-                        median && bound > 0 ? fmt::format("{:.2f}", *median / bound) : "—");
+      size_t stayed = 0;
+      for (const LatencySaccade& sac : l.saccades) stayed += sac.converged_ms && *sac.converged_ms <= sac.fixation_ms ? 1 : 0;
+      md += fmt::format("| {} | {} | {} | {} | {:.1f} | {:.1f} | {} | {} | {} of {} |\n", l.name, l.frames, l.frames_late,
+                        l.refreshes_missed, l.frame_ms_p50, l.frame_ms_p99, ms_or_dash(median),
+                        median && bound > 0 ? fmt::format("{:.2f}", *median / bound) : "—", stayed, l.saccades.size());
       jr[l.name] = loop_json(l);
     }
     md += "\n";
