@@ -111,7 +111,7 @@ class RealtimeLoop {
 
  private:
   void new_view(const Camera& camera);
-  void update_maps(glm::dvec2 gaze_px);
+  void update_maps(glm::dvec2 gaze_px, bool predicted);  // predicted: the fovea's pixels centre-out
   size_t plan_round(uint64_t ray_limit, bool periphery);
   void compose(Image& color);
   void rescale(double fixed_ms);
@@ -134,6 +134,7 @@ class RealtimeLoop {
   FoveationMaps maps_;
   std::vector<glm::vec3> rays_;  // each pixel's unit eye ray (the maps' input that the gaze leaves alone)
   std::optional<glm::dvec2> maps_gaze_;
+  bool maps_predicted_ = false;  // the maps are at a predicted landing
   std::vector<uint32_t> cast_, open_;
   Image spare_;  // a shown frame's image handed back (recycle)
   std::vector<AoRayTask> tasks_;
