@@ -267,10 +267,27 @@ void RealtimeLoop::compose(Image& color) {
   else
     color = Image(params_.width, params_.height, 3);
   spare_ = Image();
-  const float k_const = params_.ambient_constant.value_or(1.0f);
+  // The constant ambient term, for pixels without AO (n(E) = 0, or no ray yet): as given, or, unset,
+  // the renderer's auto constant — the mean visibility of the fovea's pixels (here of those with
+  // rays so far; a finished fovea gives the paper's value). A pixel without a ray used to show
+  // visibility 1 (no occlusion at all): a fresh fovea was a flat bright patch until its rays came,
+  // up to 20× the reference's noise over the landed fovea in the frame after a saccade
+  float k_const = 1.0f;
+  if (params_.ambient_constant) {
+    k_const = *params_.ambient_constant;
+  } else {
+    double sum = 0;  // in the fovea's order: pixel order once it is measured, as the renderer sums
+    size_t count = 0;
+    for (const uint32_t i : fovea_)
+      if (cast_[i] > 0) {
+        sum += static_cast<float>(open_[i]) / static_cast<float>(cast_[i]);
+        ++count;
+      }
+    if (count > 0) k_const = static_cast<float>(sum / static_cast<double>(count));
+  }
   const size_t n = cast_.size();
   for_each_pixel(n, [&](size_t i) {
-    const float v = cast_[i] > 0 ? static_cast<float>(open_[i]) / static_cast<float>(cast_[i]) : 1.0f;
+    const float v = cast_[i] > 0 ? static_cast<float>(open_[i]) / static_cast<float>(cast_[i]) : k_const;
     const float b = maps_.blend[i];
     const float ka = b * v + (1 - b) * k_const;
     const glm::vec3 c = lit_[i] + ka * ambient_[i];

@@ -79,7 +79,8 @@ struct LoopFrame {
 class RealtimeLoop {
  public:
   // `renderer` and `scene` must outlive the loop. params: size, display, foveation, seed, AO
-  // distance, ambient constant (unset: 1), reuse.tolerance (τ); the mode must be foveated.
+  // distance, ambient constant (unset: auto, the mean visibility of the fovea's pixels with rays, as
+  // the renderer's), reuse.tolerance (τ); the mode must be foveated.
   RealtimeLoop(FrameRenderer& renderer, const Scene& scene, const RenderParams& params, const LoopSettings& settings);
 
   // A tracker sample: its time (seconds, the tracker's clock) and point in render pixels (unset or

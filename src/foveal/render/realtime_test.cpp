@@ -339,6 +339,27 @@ namespace {
 // of the same seed: each pixel's rays are the first of its own sequence. (The loop evaluates the
 // foveation model in single precision: where n_max·q² lies within float rounding of a half-integer
 // a pixel's n(E) may differ by one ray: under one pixel in a hundred.)
+// A pixel the loop has not reached yet shows the constant ambient term (as a pixel without AO in
+// the paper's frame), not an unoccluded one.
+TEST(RealtimeLoop, APixelWithoutRaysYetShowsTheConstantAmbientTerm) {
+  const std::unique_ptr<FrameRenderer> renderer = make_frame_renderer(box(), ComputeDevice::cpu);
+  RenderParams params = loop_params(160, 100, 64);
+  params.ambient_constant = 0.5f;
+  RealtimeLoop loop(*renderer, box(), params, model_clock(50));  // ~800 rays a frame
+  loop.push_gaze(0, glm::dvec2(70, 40));
+  const LoopFrame f = loop.frame(box().cameras.front());
+  RenderParams constant = params;
+  constant.foveation.max_rays = constant.foveation.min_rays = 0;  // no AO anywhere: k_a = 0.5 everywhere
+  const Frame ref = renderer->render(box().cameras.front(), constant, {});
+  size_t checked = 0;
+  for (size_t i = 0; i < loop.cast().size(); ++i) {
+    if (loop.cast()[i] > 0 || !loop.gbuffer().hit(i) || loop.maps().blend[i] < 1.0f) continue;
+    for (size_t c = 0; c < 3; ++c) EXPECT_NEAR(f.color.pixels[3 * i + c], ref.color.pixels[3 * i + c], 1e-5) << "pixel " << i;
+    ++checked;
+  }
+  EXPECT_GT(checked, 1000u);
+}
+
 TEST(RealtimeLoop, AFinishedLoopShowsThePapersFrame) {
   const std::unique_ptr<FrameRenderer> renderer = make_frame_renderer(box(), ComputeDevice::cpu);
   RenderParams params = loop_params(160, 100, 64);
