@@ -270,8 +270,7 @@ void RealtimeLoop::compose(Image& color) {
   // The constant ambient term, for pixels without AO (n(E) = 0, or no ray yet): as given, or, unset,
   // the renderer's auto constant — the mean visibility of the fovea's pixels (here of those with
   // rays so far; a finished fovea gives the paper's value). A pixel without a ray used to show
-  // visibility 1 (no occlusion at all): a fresh fovea was a flat bright patch until its rays came,
-  // up to 20× the reference's noise over the landed fovea in the frame after a saccade
+  // visibility 1, no occlusion at all, where the paper's frame shows the constant term
   float k_const = 1.0f;
   if (params_.ambient_constant) {
     k_const = *params_.ambient_constant;
