@@ -115,23 +115,23 @@ void judge_frame(const Segment& s, const Image& image, double shown_s, double un
 struct Screen {
   Image image;
   double shown_s = 0;
-  size_t frame = 0;     // its index in the loop's timeline
-  bool judged = false;  // a frame at the loop's full resolution (the references' size)
+  size_t frame = 0;        // its index in the loop's timeline
+  bool full_size = false;  // at the references' size (a deadline loop that lowered its resolution is not judged)
   bool any = false;
   // A new frame shown at `shown_s`: the one it replaces is judged over the time it was on screen,
   // and returned (for the loop to compose into again)
-  Image show(const Segment& s, LatencyLoop& loop, Image next, double next_shown_s, bool next_judged) {
+  Image show(const Segment& s, LatencyLoop& loop, Image next, double next_shown_s, bool next_full_size) {
     finish(s, loop, next_shown_s);
     Image old = std::move(image);
     image = std::move(next);
     shown_s = next_shown_s;
     frame = loop.timeline.size() - 1;
-    judged = next_judged;
+    full_size = next_full_size;
     any = true;
     return old;
   }
   void finish(const Segment& s, LatencyLoop& loop, double until_s) {
-    if (any && judged) judge_frame(s, image, shown_s, until_s, loop, loop.timeline[frame]);
+    if (any && full_size) judge_frame(s, image, shown_s, until_s, loop, loop.timeline[frame]);
     any = false;
   }
 };
@@ -254,7 +254,8 @@ Segment make_segment(const Recording& rec, const LatencyParams& p) {
   }
   const GazeGeometry geometry(p.render.display, rec.screen_px);
   const EventDetection events = detect_events(rec, geometry, kRecommendedEventMethod, EventParams{}, FixationParams{});
-  for (const DetectedEvent& e : events.events) {
+  for (size_t k = 0; k < events.events.size(); ++k) {
+    const DetectedEvent& e = events.events[k];
     if (e.label != EventLabel::saccade || !(e.amplitude_deg >= p.min_amplitude_deg)) continue;
     const GazeSample& last = rec.samples[e.last];
     const double landing = last.t_s - t0;
@@ -275,9 +276,9 @@ Segment make_segment(const Recording& rec, const LatencyParams& p) {
     LatencySaccade sac;
     // How long the eye stayed: until its next saccade (of any size) or blink
     sac.fixation_ms = (rec.samples.back().t_s - last.t_s) * 1000;
-    for (size_t k = static_cast<size_t>(&e - events.events.data()) + 1; k < events.events.size(); ++k)
-      if (events.events[k].label == EventLabel::saccade || events.events[k].label == EventLabel::blink) {
-        sac.fixation_ms = (rec.samples[events.events[k].first].t_s - last.t_s) * 1000;
+    for (size_t m = k + 1; m < events.events.size(); ++m)
+      if (events.events[m].label == EventLabel::saccade || events.events[m].label == EventLabel::blink) {
+        sac.fixation_ms = (rec.samples[events.events[m].first].t_s - last.t_s) * 1000;
         break;
       }
     sac.amplitude_deg = e.amplitude_deg;
@@ -358,9 +359,12 @@ void validate(const LatencyParams& p) {
   if ((p.model_rays_per_ms || p.model_fixed_ms) && p.clock != LoopClock::model) fail("model_rays_per_ms: needs the model clock");
   if (p.model_rays_per_ms.has_value() != p.model_fixed_ms.has_value())
     fail("model_fixed_ms: give both parts of the cost model, or neither");
-  const double budget = p.budget_ms.value_or(1000.0 / p.refresh_hz);
-  if (p.margin_ms && !(*p.margin_ms >= 0 && *p.margin_ms < budget))
-    fail("margin_ms: must be in [0, the frame budget {:.1f} ms), got {}", budget, *p.margin_ms);
+  if (p.margin_ms) {  // the loop's own rule, checked before the references are traced
+    LoopSettings loop;
+    loop.budget_ms = p.budget_ms.value_or(1000.0 / p.refresh_hz);
+    loop.margin_ms = *p.margin_ms;
+    validate(loop);
+  }
   for (const std::string& l : p.loops)
     if (l != "whole-frame" && l != "deadline" && l != "deadline+prediction")
       fail("loops: unknown loop '{}' (known: whole-frame, deadline, deadline+prediction)", l);
