@@ -438,8 +438,10 @@ struct SampleThresholds {
   float coarse_peak(size_t i) const { return coarse_peaks[i >> shift]; }
 };
 
+// nh's saccades, PSOs after them. `onset_above`: a saccade's first sample is the first above the
+// onset threshold (nhr) rather than the last below it (the paper's local minimum, nh and nhp).
 void label_saccades_nh(const Signal& s, const EventParams& p, const std::vector<float>& v, const SampleThresholds& th,
-                       const std::vector<float>& coarse, double pso_window_s, std::vector<EventLabel>& labels) {
+                       const std::vector<float>& coarse, double pso_window_s, bool onset_above, std::vector<EventLabel>& labels) {
   const size_t n = s.n;
   const size_t pso_window = static_cast<size_t>(std::lround(pso_window_s / s.dt));
   const size_t noise_window = static_cast<size_t>(std::max(1L, std::lround(p.local_noise_s / s.dt)));
@@ -491,12 +493,15 @@ void label_saccades_nh(const Signal& s, const EventParams& p, const std::vector<
     // is the PSO, not the saccade
     size_t b = p1;
     while (b + 1 < n && usable(b + 1) && v[b] >= offset && !(v[b] < peak && v[b + 1] > v[b])) ++b;
+    // (nhr: the crossing's sample below the threshold is the fixation's: with the 10 ms filter the
+    // saccade's rise reaches it early; saccades began 1–2.5 ms before both Lund coders' and IRF's)
     const double duration = (b - a + 1) * s.dt;
     if (duration < min_saccade) {
       i = b;
       continue;
     }
-    for (size_t k = a; k <= b; ++k) labels[k] = EventLabel::saccade;
+    const size_t first = onset_above && a < i && v[a] < onset ? a + 1 : a;
+    for (size_t k = first; k <= b; ++k) labels[k] = EventLabel::saccade;
     // PSO: velocity above the offset threshold again within the window after the offset
     size_t last_peak = b;
     for (size_t k = b + 1; k < n && k <= b + pso_window && usable(k); ++k)
@@ -858,7 +863,8 @@ EventDetection detect_events(const Recording& r, const GazeGeometry& g, EventMet
       // Noise next to a loss is the lid's (a blink); elsewhere it stays undefined
       label_blinks(
           r, s, p, [&](size_t i) { return s.noise[i] || !(v[i] < th.onset(i)) || (*pupil)(r.samples[i]); }, labels);
-      label_saccades_nh(s, p, clean, th, coarse, method == EventMethod::nhr ? p.robust_pso_window_s : p.pso_window_s, labels);
+      label_saccades_nh(s, p, clean, th, coarse, method == EventMethod::nhr ? p.robust_pso_window_s : p.pso_window_s,
+                        method == EventMethod::nhr, labels);
       absorb_lid_saccades(s, p, labels);
       if (method == EventMethod::nhp) label_pursuit(s, p.pursuit, labels);
       if (method == EventMethod::nhr) label_pursuit_in_intervals(s, p, labels);

@@ -31,7 +31,13 @@
 //             Komogortsev & Karpov 2013, with a velocity rather than a dispersion test, as REMoDNaV
 //             does): the velocity of a least-squares line over a longer window; samples faster than
 //             the pursuit threshold for the minimum pursuit duration, covering at least half the
-//             distance that speed implies, are pursuit. The recommended detector (auto).
+//             distance that speed implies, are pursuit.
+//   nhr       the recommended detector (auto): nh's saccades and PSOs on local, robust thresholds
+//             (median + k·MAD of a 0.5 s window; Engbert & Kliegl's estimator, REMoDNaV's windows),
+//             a 10 ms filter, a saccade's first sample the first above the onset threshold, PSOs
+//             within 20 ms of the offset, dropouts filled, and smooth pursuit inside each
+//             intersaccadic interval and in context across catch-up saccades (in the spirit of
+//             Larsson et al. 2015). Each departure and what it measured: docs/gaze.md.
 //
 // Blinks (ek, nh, nhp): a run of lost samples, widened on both sides over the lid's artefacts —
 // samples whose velocity stays above the detector's onset threshold, whose velocity or

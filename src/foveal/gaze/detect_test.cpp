@@ -392,3 +392,55 @@ TEST(Detect, TheCausalFilterAsALabelling) {
   const EventDetection p = run(prefix, EventMethod::ivvt);
   EXPECT_TRUE(std::equal(p.labels.begin(), p.labels.end(), d.labels.begin()));
 }
+
+// nhr's saccades begin at the first sample above the onset threshold, not at the crossing's sample
+// below it (nh's rule): with its 10 ms velocity filter the saccade's rise reaches that sample early,
+// and against the coders of the IRF and Lund 2013 training recordings its onsets came 1.7 ms early
+// on average (every recording and coder between −0.3 and −4 ms). Now the mean is within 0.75 ms.
+TEST(Detect, RecommendedSaccadeOnsetsAgreeWithTheCodersInTime) {
+  const std::string data = std::string(FOVEAL_DATA_DIR) + "/eye-movements";
+  struct Case {
+    std::string samples;
+    std::vector<std::string> coders;
+    Display display;
+  };
+  std::vector<Case> cases;
+  for (int s = 1; s <= 6; ++s) {
+    const std::string path = fmt::format("{}/irf/lookAtPoint_EL_S{}.csv", data, s);
+    cases.push_back({path, {path}, {53.3, 30.1, 56.5, 1920, 1080}});
+  }
+  for (const std::string stimulus : {"img", "dots", "video"}) {
+    const std::filesystem::path dir = data + "/lund2013-train/" + stimulus;
+    if (!std::filesystem::is_directory(dir)) continue;
+    for (const auto& entry : std::filesystem::directory_iterator(dir)) {
+      const std::string name = entry.path().string();
+      if (!name.ends_with("_MN.csv")) continue;
+      cases.push_back({name, {name, name.substr(0, name.size() - 7) + "_RA.csv"}, {38, 30, 67, 1024, 768}});
+    }
+  }
+  double sum = 0;
+  int scored = 0;
+  for (const Case& c : cases) {
+    if (!std::filesystem::exists(c.samples)) continue;
+    ReadOptions read;
+    read.screen_px = {c.display.res_x, c.display.res_y};
+    read.screen_from_user = true;
+    read.display_width_cm = c.display.width_cm;
+    read.display_height_cm = c.display.height_cm;
+    read.display_distance_cm = c.display.distance_cm;
+    const Recording r = read_recording(c.samples, read);
+    const EventDetection d =
+        detect_events(r, GazeGeometry(c.display, r.screen_px), kRecommendedEventMethod, EventParams{}, FixationParams{});
+    std::vector<double> t(r.samples.size());
+    for (size_t i = 0; i < t.size(); ++i) t[i] = r.samples[i].t_s;
+    for (const std::string& coder : c.coders) {
+      const ClassScore& saccades = evaluate_against_coders(d.labels, t, read_label_file(coder)).evaluation.of(EventLabel::saccade);
+      ASSERT_GE(saccades.hits, 1u) << coder;
+      sum += saccades.rto_ms;
+      ++scored;
+    }
+  }
+  if (scored == 0) GTEST_SKIP() << "skipped: no labelled recordings under " << data;
+  // (the mean over recordings and coders, as the benchmark's tables average)
+  EXPECT_LT(std::abs(sum / scored), 0.75) << "mean saccade onset difference " << sum / scored << " ms over " << scored;
+}
