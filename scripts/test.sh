@@ -32,6 +32,9 @@ phase "Release tests"
 
 echo "== Python package: its tests (the module of the Release build, against its command line) and install rules"
 .venv/bin/foveal --version > /dev/null  # the command line from the virtual environment, as pip install . gives it
+# (a foveal installed into .venv by `pip install .` comes first on the path and would be tested instead)
+.venv/bin/python -c "import foveal, sys; sys.exit(0 if '/build/python/' in foveal.__file__ else \
+'another foveal package shadows the build\'s module: ' + foveal.__file__ + ' (one installed by pip install .: .venv/bin/pip uninstall foveal)')"
 FOVEAL_CLI="$PWD/build/foveal" .venv/bin/python -m pytest -q python/tests
 rm -rf build/python-install
 cmake --install build --component python --prefix build/python-install > /dev/null
