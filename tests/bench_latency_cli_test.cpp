@@ -66,6 +66,9 @@ TEST(BenchLatencyCli, ThreeLoopsUnderTheModelClockWriteTheDocumentedJson) {
   EXPECT_EQ(r["deadline"]["frames_late"], 0);
   EXPECT_GE(r["deadline"]["frames"].get<int>(), 89);
   EXPECT_LE(r["deadline"]["frame_ms_p99"].get<double>(), 1000.0 / 60);
+  // Where late frames' pauses fell: listed for the deadline loops (none here), not the whole-frame one
+  EXPECT_EQ(r["deadline"]["late_frames"], nlohmann::json::array());
+  EXPECT_FALSE(r["whole-frame"].contains("late_frames"));
   EXPECT_TRUE(fs::exists(scratch("a.png")));
   // A given cost model: the deadline loops' figures are the same on a second run (but the ray
   // bound, whose raw rate is measured, and the whole-frame loop, whose frames' cost is)

@@ -211,11 +211,15 @@ LatencyLoop run_deadline(const LatencyRun& run, const Segment& s, const LatencyP
   std::vector<double> frame_ms;
   std::vector<std::pair<double, glm::dvec2>> predictions;  // frame start, predicted landing
   Screen screen;
+  std::vector<LatencyFramePart> parts;
   for (double t = s.begin; t < s.end;) {
     for (; next < s.t.size() && s.t[next] + s.latency_s <= t; ++next) rt.push_gaze(s.t[next], s.px[next]);
     LoopFrame f = rt.frame(run.camera);
     frame_ms.push_back(f.cost_ms);
     loop.frames_late += f.late ? 1 : 0;
+    if (p.clock == LoopClock::wall)
+      parts.push_back({static_cast<int>(parts.size()), t, f.ms, f.maps_ms, f.plan_ms, f.trace_ms, f.compose_ms,
+                       std::max(0.0, f.rays_end_ms - f.deadline_ms), std::max(0.0, (f.ms - f.rays_end_ms) - f.compose_planned_ms), ""});
     LatencyFrame lf;
     lf.start_s = t;
     lf.cost_ms = f.cost_ms;
@@ -228,6 +232,7 @@ LatencyLoop run_deadline(const LatencyRun& run, const Segment& s, const LatencyP
     t = lf.shown_s;
   }
   screen.finish(s, loop, INFINITY);
+  loop.late = late_frame_parts(parts, budget_ms);
   loop.scale = rt.scale();
   for (LatencySaccade& sac : loop.saccades)  // the last prediction made before the landing
     for (const auto& [start, at] : predictions)
@@ -290,6 +295,22 @@ Segment make_segment(const Recording& rec, const LatencyParams& p) {
   return s;
 }
 
+// "composing 2, tracing 1": the late frames' parts, most frequent first
+std::string late_summary(const std::vector<LatencyFramePart>& late) {
+  std::vector<std::pair<std::string, int>> counts;
+  for (const LatencyFramePart& f : late) {
+    auto it = std::find_if(counts.begin(), counts.end(), [&](const auto& c) { return c.first == f.part; });
+    if (it == counts.end())
+      counts.emplace_back(f.part, 1);
+    else
+      ++it->second;
+  }
+  std::stable_sort(counts.begin(), counts.end(), [](const auto& a, const auto& b) { return a.second > b.second; });
+  std::string out;
+  for (const auto& [part, n] : counts) out += fmt::format("{}{} {}", out.empty() ? "" : ", ", part, n);
+  return out;
+}
+
 std::string ms_or_dash(std::optional<double> v) { return v ? fmt::format("{:.0f}", *v) : "—"; }
 
 nlohmann::json loop_json(const LatencyLoop& l) {
@@ -324,10 +345,50 @@ nlohmann::json loop_json(const LatencyLoop& l) {
                              {"fovea_error", std::isfinite(f.fovea_error) ? nlohmann::json(f.fovea_error) : nlohmann::json(nullptr)}});
   const auto median = l.median_converged_ms();
   j["median_landing_to_converged_ms"] = median ? nlohmann::json(*median) : nlohmann::json(nullptr);
+  if (l.name != "whole-frame") {
+    j["late_frames"] = nlohmann::json::array();
+    for (const LatencyFramePart& f : l.late)
+      j["late_frames"].push_back({{"index", f.index},
+                                  {"start_s", f.start_s},
+                                  {"ms", f.ms},
+                                  {"part", f.part},
+                                  {"maps_ms", f.maps_ms},
+                                  {"plan_ms", f.plan_ms},
+                                  {"trace_ms", f.trace_ms},
+                                  {"compose_ms", f.compose_ms},
+                                  {"rays_over_ms", f.rays_over_ms},
+                                  {"compose_over_ms", f.compose_over_ms}});
+  }
   return j;
 }
 
 }  // namespace
+
+std::vector<LatencyFramePart> late_frame_parts(const std::vector<LatencyFramePart>& frames, double budget_ms) {
+  // What the maps and planning usually take where they run (most frames reuse the maps)
+  std::vector<double> maps, plan;
+  for (const LatencyFramePart& f : frames) {
+    if (f.maps_ms > 0) maps.push_back(f.maps_ms);
+    if (f.plan_ms > 0) plan.push_back(f.plan_ms);
+  }
+  const double maps_usual = maps.empty() ? 0.0 : quantile(maps, 0.5), plan_usual = plan.empty() ? 0.0 : quantile(plan, 0.5);
+  std::vector<LatencyFramePart> late;
+  for (LatencyFramePart f : frames) {
+    if (!(f.ms > budget_ms)) continue;
+    // Composing ran over its plan by more than the rays over their deadline; else the maps or a
+    // planning pass, where one took at least half the overrun longer than usual; else tracing (a
+    // thread paused inside a batch of rays, which stops only between chunks)
+    const double maps_over = f.maps_ms - maps_usual, plan_over = f.plan_ms - plan_usual;
+    if (f.compose_over_ms >= f.rays_over_ms)
+      f.part = "composing";
+    else if (std::max(maps_over, plan_over) >= 0.5 * f.rays_over_ms)
+      f.part = maps_over >= plan_over ? "maps" : "planning";
+    else
+      f.part = "tracing";
+    late.push_back(f);
+  }
+  return late;
+}
 
 std::optional<double> LatencyLoop::median_converged_ms() const {
   // Saccades never converged within the segment count as the longest (they took at least that)
@@ -500,6 +561,10 @@ LatencyReport run_latency_bench(const LatencyRun& run, const std::vector<Recordi
       jr[l.name] = loop_json(l);
     }
     md += "\n";
+    std::string late;
+    for (const LatencyLoop& l : r.loops)
+      if (!l.late.empty()) late += fmt::format("{}{}: {}", late.empty() ? "" : "; ", l.name, late_summary(l.late));
+    if (!late.empty()) md += fmt::format("Late frames, where the pause fell (docs/realtime.md): {}.\n\n", late);
     j["recordings"].push_back(jr);
   }
   report.markdown = md;

@@ -69,6 +69,23 @@ struct LatencyFrame {  // one shown frame, for the timeline picture
   double fovea_error = NAN;  // RMSE in the fovea of the saccade being followed, over the reference noise (NaN: none)
 };
 
+// One frame of a deadline loop (wall clock): its parts, and, when it came late, where the machine's
+// pause fell. The loop plans each frame to end on time: rays until a deadline (the budget less a
+// margin and the composing it expects), then composing. A late frame's composing took longer than
+// planned ("composing"), or its rays stopped after their deadline: the foveation maps or a planning
+// pass took at least half that overrun longer than usual ("maps", "planning"), else "tracing".
+struct LatencyFramePart {
+  int index = 0;       // the loop's frame within the segment
+  double start_s = 0;  // seconds from the recording's first sample
+  double ms = 0;       // the frame's wall time
+  double maps_ms = 0, plan_ms = 0, trace_ms = 0, compose_ms = 0;
+  double rays_over_ms = 0;     // rays stopped this long after their deadline (0: on time)
+  double compose_over_ms = 0;  // composing took this much longer than planned (0: not)
+  std::string part;            // late frames: maps, planning, tracing or composing
+};
+// The late frames (ms > budget_ms) of a loop's frames, each with its part (pure; tests).
+std::vector<LatencyFramePart> late_frame_parts(const std::vector<LatencyFramePart>& frames, double budget_ms);
+
 struct LatencyLoop {
   std::string name;
   double budget_ms = 0;
@@ -77,6 +94,7 @@ struct LatencyLoop {
   double scale = 1;  // the deadline loops' resolution scale
   std::vector<LatencySaccade> saccades;
   std::vector<LatencyFrame> timeline;
+  std::vector<LatencyFramePart> late;  // the deadline loops' late frames with where their pause fell (wall clock)
   std::optional<double> median_converged_ms() const;
 };
 

@@ -294,6 +294,20 @@ void RealtimeLoop::compose(Image& color) {
   });
 }
 
+bool FixedPartWindow::add(double fixed_ms, double budget_ms, size_t min_frames) {
+  ms_[next_] = fixed_ms;
+  next_ = (next_ + 1) % kFrames;
+  count_ = std::min(count_ + 1, kFrames);
+  return count_ >= std::max<size_t>(1, min_frames) && median_ms() > 0.6 * budget_ms;
+}
+
+double FixedPartWindow::median_ms() const {
+  if (count_ == 0) return 0;
+  std::array<double, kFrames> v = ms_;
+  std::sort(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(count_));
+  return count_ % 2 ? v[count_ / 2] : 0.5 * (v[count_ / 2 - 1] + v[count_ / 2]);
+}
+
 void RealtimeLoop::rescale(double fixed_ms) {
   const double target = scale_ * std::sqrt(0.5 * settings_.budget_ms / fixed_ms);
   const double scale = std::clamp(target, settings_.min_scale, 1.0);
@@ -339,6 +353,8 @@ LoopFrame RealtimeLoop::frame(const Camera& camera) {
   // The margin: at least the settings', more where frames have lately ended later than planned
   const double margin = std::max(settings_.margin_ms, slip_ms_);  // (slip_ms_ at most a quarter of the budget)
   const double deadline = settings_.budget_ms - margin - finish_ms_;
+  out.deadline_ms = deadline;
+  out.compose_planned_ms = finish_ms_;
   const double model_fixed = settings_.model_fixed_ms * scale_ * scale_;  // the model's fixed cost scales with the pixels
   uint64_t allowance = wall ? 0 : static_cast<uint64_t>(std::max(0.0, (settings_.budget_ms - model_fixed) * settings_.model_rays_per_ms));
   for (;;) {
@@ -392,6 +408,7 @@ LoopFrame RealtimeLoop::frame(const Camera& camera) {
     if (traced == 0) break;
   }
   // The image, and the fovea's state
+  out.rays_end_ms = timer.ms();
   const Timer finish_timer;
   compose(out.color);
   out.compose_ms = finish_timer.ms();
@@ -418,11 +435,11 @@ LoopFrame RealtimeLoop::frame(const Camera& camera) {
   const bool moving = out.new_view && last_new_view_;
   last_new_view_ = out.new_view;
   const double fixed = wall ? out.ms - trace_ms - (moving ? 0.0 : view_ms) : model_fixed;
-  // (on the wall clock, smoothed over frames: a first frame's page faults are no reason)
-  fixed_ms_ = frames_measured_++ == 0 ? fixed : 0.7 * fixed_ms_ + 0.3 * fixed;
-  if ((!wall || frames_measured_ >= 4) && fixed_ms_ > 0.6 * settings_.budget_ms) {
-    rescale(fixed_ms_);
-    frames_measured_ = 0;
+  // (on the wall clock over five frames at least: a first frame's page faults, one frame's pause,
+  // are no reason)
+  if (fixed_.add(fixed, settings_.budget_ms, wall ? 5 : 1)) {
+    rescale(fixed_.median_ms());
+    fixed_.clear();
   }
   return out;
 }

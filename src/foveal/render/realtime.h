@@ -34,6 +34,7 @@
 
 #include <glm/glm.hpp>
 
+#include <array>
 #include <optional>
 #include <string>
 #include <vector>
@@ -69,11 +70,34 @@ struct LoopFrame {
   double ms = 0;                                    // wall time of frame()
   double trace_ms = 0;                              // of which tracing AO rays
   double maps_ms = 0, plan_ms = 0, compose_ms = 0;  // … the foveation maps, choosing rays, composing the image
-  double cost_ms = 0;                               // the frame's cost on the loop's clock (wall: ms; model: the model's)
-  bool late = false;                                // cost_ms > the budget
-  bool new_view = false;                            // the camera changed: surfaces traced and AO started afresh
-  double fovea_converged = 0;                       // fraction of the fovea's (q = 1, hit) pixels whose AO is converged
-  bool fovea_done = false;                          // all of them: the fovea is at full quality
+  // Wall clock, from the frame's start: when rays had to stop (the budget less the margin and the
+  // composing planned), when they did, and the composing planned: a late frame's pause fell before
+  // the deadline's end (rays_end_ms > deadline_ms) or into composing (compose_ms > compose_planned_ms)
+  double deadline_ms = 0, rays_end_ms = 0, compose_planned_ms = 0;
+  double cost_ms = 0;          // the frame's cost on the loop's clock (wall: ms; model: the model's)
+  bool late = false;           // cost_ms > the budget
+  bool new_view = false;       // the camera changed: surfaces traced and AO started afresh
+  double fovea_converged = 0;  // fraction of the fovea's (q = 1, hit) pixels whose AO is converged
+  bool fovea_done = false;     // all of them: the fovea is at full quality
+};
+
+// The loop's reason to render smaller: the fixed part of its frames (surfaces, maps, planning,
+// composing: all but the rays) over the latest frames, judged by its median against 60 % of the
+// budget — a sustained cost (a moving camera, a display too large), which one frame's pause does
+// not make. (A mean of the frames before let a single 80 ms frame, a thread descheduled on a
+// shared VM, lower the resolution for the rest of a run.)
+class FixedPartWindow {
+ public:
+  static constexpr size_t kFrames = 8;
+  // This frame's fixed part; true when the median of the latest frames (at least `min_frames` of
+  // them) is above 60 % of the budget.
+  bool add(double fixed_ms, double budget_ms, size_t min_frames);
+  double median_ms() const;
+  void clear() { count_ = next_ = 0; }
+
+ private:
+  std::array<double, kFrames> ms_{};
+  size_t count_ = 0, next_ = 0;
 };
 
 class RealtimeLoop {
@@ -151,8 +175,7 @@ class RealtimeLoop {
   double slip_ms_ = 0;            // wall clock: how much later than planned frames ended, a decaying maximum
   double plan_ms_ = 0.5;          // wall clock: a round's planning, measured, smoothed
   double periphery_plan_ms_ = 1;  // wall clock: a periphery round's planning (a pass over every pixel)
-  double fixed_ms_ = 0;           // a frame's cost besides its rays, smoothed
-  int frames_measured_ = 0;       // frames in fixed_ms_ since the last rescale
+  FixedPartWindow fixed_;         // the latest frames' cost besides their rays, since the last rescale
   int index_ = 0;
 };
 

@@ -187,6 +187,27 @@ TEST(RealtimeLoop, WhereTheBaseShadingCannotFitTheResolutionScalesDownAndSaysSo)
   EXPECT_FALSE(next.late);
 }
 
+// One frame's pause (a thread descheduled for 66 ms: an 80 ms frame on a shared VM) does not lower
+// the resolution for the rest of a run; a sustained fixed part does, within five frames
+TEST(RealtimeLoop, OnePausedFrameDoesNotLowerTheResolution) {
+  const double budget = 1000.0 / 60;
+  FixedPartWindow window;
+  bool rescaled = false;
+  for (int k = 0; k < 40; ++k) rescaled |= window.add(k == 20 ? 75.0 : 5.5, budget, 5);  // the old mean: 0.7·5.5 + 0.3·75 = 26 ms
+  EXPECT_FALSE(rescaled);
+  EXPECT_NEAR(window.median_ms(), 5.5, 1e-12);
+  window.clear();
+  int frames = 0;
+  while (!window.add(12.0, budget, 5) && frames < 20) ++frames;  // 12 ms of 16.7: above 60 %
+  EXPECT_EQ(frames, 4);                                          // the fifth frame
+  window.clear();
+  for (double ms : {5.0, 30.0, 5.0, 30.0, 5.0, 5.0}) rescaled |= window.add(ms, budget, 5);
+  EXPECT_FALSE(rescaled);                               // two of six frames paused
+  EXPECT_FALSE(window.add(30.0, budget, 5));            // three of seven
+  EXPECT_TRUE(window.add(30.0, budget, 5));             // four of eight: the median is 17.5 ms
+  EXPECT_TRUE(FixedPartWindow().add(40.0, budget, 1));  // the model clock: at once
+}
+
 // A saccade from `from` to `to` (render pixels) at 1000 Hz, its velocity a symmetric bell over the
 // main sequence's duration, then the fixation; pushed up to each frame's time (60 Hz) less 3 ms.
 struct SaccadeRun {

@@ -1,0 +1,62 @@
+// bench latency's account of late frames: where the machine's pause fell (the loop's own timings
+// of each frame against its plan).
+#include "foveal/experiments/latency.h"
+
+#include "foveal/scene/scene.h"
+
+#include <gtest/gtest.h>
+
+namespace foveal {
+namespace {
+
+LatencyFramePart frame(int index, double ms, double maps, double plan, double trace, double compose, double rays_over,
+                       double compose_over) {
+  return {index, index / 60.0, ms, maps, plan, trace, compose, rays_over, compose_over, ""};
+}
+
+TEST(LatencyLateFrames, EachLateFrameNamesThePartItsPauseFellInto) {
+  std::vector<LatencyFramePart> frames;
+  for (int k = 0; k < 20; ++k)  // on time: maps every other frame, ~1 ms composing
+    frames.push_back(frame(k, 15, k % 2 ? 4.3 : 0, 0.1, k % 2 ? 9 : 13, 0.8, 0, 0));
+  frames.push_back(frame(20, 19.7, 0, 0.1, 12.5, 7.0, 0, 6.1));     // composing 7 ms against ~1 planned
+  frames.push_back(frame(21, 19.6, 0, 0.1, 15.8, 1.0, 3.0, 0.2));   // rays 3 ms past their deadline, tracing long
+  frames.push_back(frame(22, 17.3, 7.2, 0.1, 8.0, 1.0, 1.1, 0.1));  // the maps paused
+  frames.push_back(frame(23, 16.9, 0, 6.9, 8.0, 1.0, 0.6, 0.0));    // a planning pass paused
+  frames.push_back(frame(24, 16.5, 0, 0.1, 13.5, 2.9, 0, 2.0));     // a long composing, but on time: not listed
+  frames.push_back(frame(25, 17.3, 4.4, 0.1, 12.0, 0.7, 2.9, 0));   // the usual maps, then rays 2.9 ms late
+  const std::vector<LatencyFramePart> late = late_frame_parts(frames, 1000.0 / 60);
+  ASSERT_EQ(late.size(), 5u);
+  EXPECT_EQ(late[0].index, 20);
+  EXPECT_EQ(late[0].part, "composing");
+  EXPECT_EQ(late[1].part, "tracing");
+  EXPECT_EQ(late[2].part, "maps");
+  EXPECT_EQ(late[3].part, "planning");
+  EXPECT_EQ(late[4].part, "tracing");
+  EXPECT_TRUE(late_frame_parts({}, 16.7).empty());
+}
+
+// The loop's own plan of a wall-clock frame, which the account reads: the deadline inside the
+// budget, composing planned, the rays' end between the maps and the frame's end
+TEST(LatencyLateFrames, TheLoopReportsItsPlanForEachFrame) {
+  const Scene scene = make_builtin_scene("box");
+  const std::unique_ptr<FrameRenderer> renderer = make_frame_renderer(scene, ComputeDevice::cpu);
+  RenderParams params;
+  params.width = 160;
+  params.height = 100;
+  params.foveation.max_rays = 400;
+  RealtimeLoop loop(*renderer, scene, params, LoopSettings{});
+  loop.frame(scene.cameras.front());  // the view's surfaces
+  for (int k = 0; k < 5; ++k) {
+    loop.push_gaze(k / 60.0, glm::dvec2(40 + 15 * k, 50));
+    const LoopFrame f = loop.frame(scene.cameras.front());
+    EXPECT_GT(f.deadline_ms, 0);
+    EXPECT_LT(f.deadline_ms, 1000.0 / 60);
+    EXPECT_GT(f.compose_planned_ms, 0);
+    EXPECT_GE(f.rays_end_ms, f.maps_ms);
+    EXPECT_LE(f.rays_end_ms, f.ms);
+    EXPECT_GE(f.ms - f.rays_end_ms, f.compose_ms);
+  }
+}
+
+}  // namespace
+}  // namespace foveal
