@@ -434,7 +434,8 @@ TEST(Detect, RecommendedSaccadeOnsetsAgreeWithTheCodersInTime) {
     std::vector<double> t(r.samples.size());
     for (size_t i = 0; i < t.size(); ++i) t[i] = r.samples[i].t_s;
     for (const std::string& coder : c.coders) {
-      const ClassScore& saccades = evaluate_against_coders(d.labels, t, read_label_file(coder)).evaluation.of(EventLabel::saccade);
+      const CoderEvaluation scored_against = evaluate_against_coders(d.labels, t, read_label_file(coder));
+      const ClassScore& saccades = scored_against.evaluation.of(EventLabel::saccade);
       ASSERT_GE(saccades.hits, 1u) << coder;
       sum += saccades.rto_ms;
       ++scored;
