@@ -371,7 +371,7 @@ std::vector<LatencyFramePart> late_frame_parts(const std::vector<LatencyFramePar
     if (f.maps_ms > 0) maps.push_back(f.maps_ms);
     if (f.plan_ms > 0) plan.push_back(f.plan_ms);
   }
-  const double maps_usual = maps.empty() ? 0.0 : quantile(maps, 0.5), plan_usual = plan.empty() ? 0.0 : quantile(plan, 0.5);
+  const double maps_usual = median(maps), plan_usual = median(plan);
   std::vector<LatencyFramePart> late;
   for (LatencyFramePart f : frames) {
     if (!(f.ms > budget_ms)) continue;

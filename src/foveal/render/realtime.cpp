@@ -4,6 +4,7 @@
 
 #include "foveal/util/error.h"
 #include "foveal/util/gaze_point.h"
+#include "foveal/util/stats.h"
 #include "foveal/util/timer.h"
 #include "foveal/util/units.h"
 
@@ -302,10 +303,7 @@ bool FixedPartWindow::add(double fixed_ms, double budget_ms, size_t min_frames) 
 }
 
 double FixedPartWindow::median_ms() const {
-  if (count_ == 0) return 0;
-  std::array<double, kFrames> v = ms_;
-  std::sort(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(count_));
-  return count_ % 2 ? v[count_ / 2] : 0.5 * (v[count_ / 2 - 1] + v[count_ / 2]);
+  return median(std::vector<double>(ms_.begin(), ms_.begin() + static_cast<std::ptrdiff_t>(count_)));
 }
 
 void RealtimeLoop::rescale(double fixed_ms) {

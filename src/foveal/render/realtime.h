@@ -71,8 +71,9 @@ struct LoopFrame {
   double trace_ms = 0;                              // of which tracing AO rays
   double maps_ms = 0, plan_ms = 0, compose_ms = 0;  // … the foveation maps, choosing rays, composing the image
   // Wall clock, from the frame's start: when rays had to stop (the budget less the margin and the
-  // composing planned), when they did, and the composing planned: a late frame's pause fell before
-  // the deadline's end (rays_end_ms > deadline_ms) or into composing (compose_ms > compose_planned_ms)
+  // frame's end planned), when they did, and the end planned (composing, the fovea's state): a late
+  // frame's pause fell before rays stopped (rays_end_ms > deadline_ms) or into its end
+  // (ms − rays_end_ms > compose_planned_ms)
   double deadline_ms = 0, rays_end_ms = 0, compose_planned_ms = 0;
   double cost_ms = 0;          // the frame's cost on the loop's clock (wall: ms; model: the model's)
   bool late = false;           // cost_ms > the budget
