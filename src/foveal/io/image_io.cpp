@@ -220,6 +220,18 @@ Image load_image(const std::string& path, bool keep_alpha) {
   const std::string ext = extension(path);
   if (ext == ".pfm") return load_pfm(path);
   if (ext == ".exr") return load_exr(path);
+  // Only the formats foveal reads through OpenCV: it picks its decoder by the content, and other
+  // content (a DICOM file under a .jpg name, found by fuzzing) reaches decoders that abort the process
+  {
+    std::ifstream in(path, std::ios::binary);
+    std::array<unsigned char, 4> m{};
+    in.read(reinterpret_cast<char*>(m.data()), m.size());
+    const bool png = m[0] == 0x89 && m[1] == 'P' && m[2] == 'N' && m[3] == 'G', jpeg = m[0] == 0xFF && m[1] == 0xD8 && m[2] == 0xFF;
+    const bool bmp = m[0] == 'B' && m[1] == 'M',
+               tiff = (m[0] == 'I' && m[1] == 'I' && m[2] == 42 && m[3] == 0) || (m[0] == 'M' && m[1] == 'M' && m[2] == 0 && m[3] == 42);
+    if (in.gcount() < 4 || !(png || jpeg || bmp || tiff))
+      fail("{}: not a PNG, JPEG, BMP, TIFF, EXR or PFM image (its first bytes are none of theirs)", path);
+  }
   if (const auto size = header_size(path)) check_image_size(path, size->first, size->second);
   cv::Mat mat;
   try {

@@ -66,6 +66,32 @@ TEST(ImageIO, MalformedFilesGiveErrors) {
   EXPECT_THROW(save_image(Image(2, 2, 3), temp("x.tiffy")), Error);
 }
 
+// OpenCV picks its decoder by the content: a DICOM-like file under a .jpg name (found by fuzzing)
+// reached GDCM, which aborts the process on it; content of no format foveal reads is refused first
+TEST(ImageIO, ContentOfAnotherFormatIsRefusedBeforeDecoding) {
+  const std::string path = temp("dicom-like.jpg");
+  {
+    std::ofstream out(path, std::ios::binary);
+    const unsigned char bytes[] = {0xFF, 0x02, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0xD8, 0xFF, 0x2E, 0x00, 0x10, 'J', 'F', 'I', 'F'};
+    out.write(reinterpret_cast<const char*>(bytes), sizeof bytes);
+  }
+  try {
+    load_image(path);
+    ADD_FAILURE() << "accepted";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("not a PNG, JPEG, BMP, TIFF, EXR or PFM image"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();
+  }
+  fs::remove(path);
+  // A real PNG under a .jpg name still reads (decoded by its content, as before)
+  const std::string png = temp("png.png"), named = temp("png-named.jpg");
+  save_image(Image(3, 2, 3), png);
+  fs::copy_file(png, named, fs::copy_options::overwrite_existing);
+  EXPECT_EQ(load_image(named).width, 3);
+  fs::remove(png);
+  fs::remove(named);
+}
+
 TEST(ImageIO, BigEndianPfmIsSwapped) {
   // One grey pixel 1.0f stored big-endian (scale > 0)
   const std::string bytes = std::string("Pf\n1 1\n1.0\n") + std::string("\x3f\x80\x00\x00", 4);
