@@ -229,8 +229,9 @@ Image load_image(const std::string& path, bool keep_alpha) {
     const bool png = m[0] == 0x89 && m[1] == 'P' && m[2] == 'N' && m[3] == 'G', jpeg = m[0] == 0xFF && m[1] == 0xD8 && m[2] == 0xFF;
     const bool bmp = m[0] == 'B' && m[1] == 'M',
                tiff = (m[0] == 'I' && m[1] == 'I' && m[2] == 42 && m[3] == 0) || (m[0] == 'M' && m[1] == 'M' && m[2] == 0 && m[3] == 42);
-    if (in.gcount() < 4 || !(png || jpeg || bmp || tiff))
-      fail("{}: not a PNG, JPEG, BMP, TIFF, EXR or PFM image (its first bytes are none of theirs)", path);
+    const bool ppm = m[0] == 'P' && m[1] >= '2' && m[1] <= '6' && m[1] != '4';  // (what save_image writes as .ppm)
+    if (in.gcount() < 4 || !(png || jpeg || bmp || tiff || ppm))
+      fail("{}: not a PNG, JPEG, BMP, TIFF, PPM, EXR or PFM image (its first bytes are none of theirs)", path);
   }
   if (const auto size = header_size(path)) check_image_size(path, size->first, size->second);
   cv::Mat mat;
