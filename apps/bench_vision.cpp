@@ -430,7 +430,10 @@ int run_bench_vision(const BenchVisionOptions& o) {
       p.seed = o.seed;
       p.features_every_step = true;  // the paper's timing: corners every step
       p.cuda = cuda;
-      VisionRow r{scene.source, size_text, tracer.triangles()};
+      VisionRow r;
+      r.scene = scene.source;
+      r.size = size_text;
+      r.triangles = tracer.triangles();
       r.vc = run_vision_case(tracer, scene, camera, p, o.steps, cuda);
       // The trace stage's primary-ray rate against raw closest-hit tracing of the same rays
       const std::vector<Ray> rays = primary_rays_in_tiles(camera, size.x, size.y);

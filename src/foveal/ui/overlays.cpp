@@ -51,7 +51,10 @@ std::string to_string(const Overlays& o) {
   std::string s;
   for (auto [on, name] :
        {std::pair{o.gaze, "gaze"}, {o.contours, "contours"}, {o.budget, "budget"}, {o.scanpath, "scanpath"}, {o.sharp, "sharp"}})
-    if (on) s += (s.empty() ? "" : ",") + std::string(name);
+    if (on) {
+      if (!s.empty()) s += ',';
+      s += name;
+    }
   return s.empty() ? "none" : s;
 }
 
