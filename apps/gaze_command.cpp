@@ -144,12 +144,13 @@ struct GazeCommandOptions {
 };
 
 // --events: the labels of every sample (a detector's, or another tool's from a file), scored
-// against an expert coder's with --evaluate (and a second coder's ceiling with --coder2).
+// against an expert coder's with --evaluate (and against a second coder's, with the coders'
+// agreement as the ceiling, with --coder2).
 struct EventsRun {
   std::optional<EventDetection> detection;
   std::string detector;  // the method's name (auto resolved), or file:PATH
   double detect_ms = 0;
-  std::optional<Evaluation> evaluation, ceiling;
+  std::optional<Evaluation> evaluation, second, ceiling;
   std::vector<LandingReport> landings;  // each saccade's landing as the live predictor saw it
 };
 
@@ -187,6 +188,7 @@ EventsRun detect_and_score(const GazeCommandOptions& o, const Recording& recordi
     if (!o.coder2.empty()) second = read_label_file(o.coder2);
     CoderEvaluation scores = evaluate_against_coders(run.detection->labels, t, read_label_file(o.evaluate), second);
     run.evaluation = std::move(scores.evaluation);
+    run.second = std::move(scores.second);
     run.ceiling = std::move(scores.ceiling);
   }
   return run;
@@ -260,6 +262,7 @@ nlohmann::json events_json(const GazeCommandOptions& o, const EventsRun& run) {
     ev["labels"] = o.evaluate;
     ev["matching"] = "Hooge et al. 2018: earliest overlapping event of the same class";
   }
+  if (run.second) ev["coder2"] = scores(*run.second), ev["coder2"]["labels"] = o.coder2;
   if (run.ceiling) ev["ceiling"] = scores(*run.ceiling), ev["ceiling"]["labels"] = o.coder2;
   ev["landings"] = landings_json(run.landings);
   return ev;
@@ -325,6 +328,7 @@ void print_gaze(const GazeCommandOptions& o, const Recording& recording, const G
           predicted, run.landings.size(), fm, f90, tm, t90, gm);
   }
   if (run.evaluation) print_scores(*run.evaluation, fmt::format("scores    {} against {}", run.detector, o.evaluate));
+  if (run.second) print_scores(*run.second, fmt::format("scores    {} against {}", run.detector, o.coder2));
   if (run.ceiling) print_scores(*run.ceiling, fmt::format("ceiling   {} against {}", o.coder2, o.evaluate));
   if (!o.no_scanpath) fmt::print("  wrote     {}\n", o.scanpath);
 }
@@ -422,7 +426,8 @@ std::function<int()> add_gaze_command(CLI::App& app) {
                   "--events: score the labels against an expert's (CSV with t/t_s and label columns, e.g. the IRF recordings): "
                   "sample-level Cohen's kappa per class and overall, event F1 (Hooge et al. 2018 matching), RTO/RTD");
   cmd->add_option("--coder2", o->coder2,
-                  "--evaluate: a second coder's labels of the same samples: their agreement with the first is the ceiling");
+                  "--evaluate: a second coder's labels of the same samples: the labels are scored against them too, and their agreement "
+                  "with the first coder's is the ceiling");
   cmd->add_option("--filter-window-ms", o->filter_window_ms,
                   "nh, nhp, nhr: Savitzky-Golay window of the velocity, ms (default 6 nh, nhp; 10 nhr)");
   cmd->add_option(

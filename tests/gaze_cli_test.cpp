@@ -320,6 +320,9 @@ TEST(GazeCli, RecommendedDetectorAgainstTheIrfExpert) {
   EXPECT_GT(best["classes"]["pso"]["f1"].get<double>(), 0.8);
   EXPECT_EQ(best["counts"]["pursuit"], 0);  // a looking-at-points task
   EXPECT_DOUBLE_EQ(best["ceiling"]["kappa"].get<double>(), 1.0);
+  // Against a second coder identical to the first: the same scores
+  EXPECT_EQ(best["coder2"]["classes"], best["classes"]);
+  EXPECT_EQ(best["coder2"]["labels"], path);
   // The table: a header and one row per event, saccade amplitudes in degrees
   std::ifstream tsv(scratch("s2.tsv"));
   std::string line;
@@ -364,6 +367,12 @@ TEST(GazeCli, RecommendedDetectorAgainstBothLundCoders) {
     EXPECT_GT(img["classes"]["saccade"]["kappa"].get<double>(), 0.7);
     EXPECT_GT(img["classes"]["saccade"]["kappa"].get<double>(), 0.8 * img["ceiling"]["classes"]["saccade"]["kappa"].get<double>());
     EXPECT_NE(img_out.find("ceiling"), std::string::npos);
+    // Both coders' scores printed; against the second coder, what the roles swapped give against the first
+    EXPECT_NE(img_out.find("against " + dir + "img/TL28_img_konijntjes_labelled_" + other + ".csv: sample kappa"), std::string::npos)
+        << img_out;
+    const auto [swapped, swapped_out] = score("img/TL28_img_konijntjes", other, coder);
+    EXPECT_EQ(img["coder2"]["classes"], swapped["classes"]);
+    EXPECT_DOUBLE_EQ(img["coder2"]["kappa"].get<double>(), swapped["kappa"].get<double>());
     const auto [dots, dots_out] = score("dots/TH20_trial1", coder, other);
     EXPECT_GT(dots["classes"]["pursuit"]["kappa"].get<double>(), 0.5);
   }

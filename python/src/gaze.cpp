@@ -369,6 +369,7 @@ void bind_gaze(nb::module_& m) {
         if (!coder2.is_none()) second = coder_file(coder2, "coder2");
         const CoderEvaluation e = evaluate_against_coders(test, times, coder_file(coder, "coder"), second);
         nlohmann::json j = evaluation_json(e.evaluation);
+        if (e.second) j["coder2"] = evaluation_json(*e.second);
         if (e.ceiling) j["ceiling"] = evaluation_json(*e.ceiling);
         j["matching"] = "Hooge et al. 2018: earliest overlapping event of the same class";
         return to_python(j);

@@ -73,6 +73,9 @@ def test_evaluate_gives_the_command_lines_scores_and_ceiling_on_lund(cli, tmp_pa
     assert scores["kappa"] == pytest.approx(report["kappa"], abs=0) and scores["samples"] == report["samples"]
     assert scores["classes"] == report["classes"]
     assert scores["ceiling"]["classes"] == report["ceiling"]["classes"]
+    assert scores["coder2"]["classes"] == report["coder2"]["classes"]
+    # Against the second coder: what the first coder alone gives when the roles are swapped
+    assert foveal.gaze.evaluate(found, ra, coder2=mn)["classes"] == scores["coder2"]["classes"]
     # Labels given as names and times, a coder as per-sample labels: the same scores
     coder = foveal.gaze.evaluate(found.label_names, found.labels, t_s=found.t_s)
     assert coder["kappa"] == pytest.approx(1.0) and coder["accuracy"] == 1.0

@@ -242,8 +242,11 @@ CoderEvaluation evaluate_against_coders(const std::vector<EventLabel>& test, con
     second = align_labels(*coder2, t_s);
     for (size_t i = 0; i < scored.size(); ++i) scored[i] = scored[i] && second->covered[i];
   }
-  CoderEvaluation out{evaluate_labels(test, expert.label, t_s, scored), std::nullopt};
-  if (second) out.ceiling = evaluate_labels(second->label, expert.label, t_s, scored);
+  CoderEvaluation out{evaluate_labels(test, expert.label, t_s, scored), std::nullopt, std::nullopt};
+  if (second) {
+    out.second = evaluate_labels(test, second->label, t_s, scored);
+    out.ceiling = evaluate_labels(second->label, expert.label, t_s, scored);
+  }
   return out;
 }
 

@@ -95,12 +95,14 @@ Evaluation evaluate_labels(const std::vector<EventLabel>& test, const std::vecto
 Evaluation evaluate_labels(const std::vector<EventLabel>& test, const std::vector<EventLabel>& reference, const std::vector<double>& t_s,
                            const std::vector<bool>& scored);
 
-// `test` (labels of the samples at `t_s`) against a coder's label file, and the second coder's
-// agreement with the first (the ceiling) where one is given; both over the samples every coder
-// labelled (a coder may leave a recording's lost tail out). Files are aligned by align_labels.
+// `test` (labels of the samples at `t_s`) against a coder's label file and, where a second coder's
+// is given, against that one too, with the second coder's agreement with the first (the ceiling);
+// all over the samples every coder labelled (a coder may leave a recording's lost tail out).
+// Files are aligned by align_labels.
 struct CoderEvaluation {
   Evaluation evaluation;
-  std::optional<Evaluation> ceiling;
+  std::optional<Evaluation> second;   // `test` against the second coder
+  std::optional<Evaluation> ceiling;  // the second coder against the first
 };
 CoderEvaluation evaluate_against_coders(const std::vector<EventLabel>& test, const std::vector<double>& t_s, const LabelFile& coder,
                                         const std::optional<LabelFile>& coder2 = std::nullopt);
