@@ -4,6 +4,7 @@
 #include "foveal/experiments/latency.h"
 #include "foveal/render/outputs.h"
 #include "foveal/trace/tracer.h"
+#include "foveal/util/cpu_share.h"
 #include "foveal/util/error.h"
 #include "foveal/util/parallel.h"
 #include "foveal/util/parse.h"
@@ -11,6 +12,7 @@
 
 #include <fmt/core.h>
 
+#include <cmath>
 #include <filesystem>
 #include <memory>
 
@@ -88,7 +90,19 @@ int run_bench_latency(const BenchLatencyOptions& o) {
     std::fflush(stdout);
   };
   fmt::print("foveal bench latency: {} on {}\n", spec, run.device);
-  const LatencyReport report = run_latency_bench(run, recordings, p);
+  const CpuTimes before = read_cpu_times();
+  LatencyReport report = run_latency_bench(run, recordings, p);
+  // What else ran: a frame comes late when another process or the hypervisor takes its core
+  const CpuShare share = cpu_share(before, read_cpu_times());
+  if (std::isfinite(share.others)) {
+    report.json["machine"] = {{"others_cpu_fraction", share.others}, {"steal_fraction", share.steal}};
+    if (!report.markdown.ends_with("\n\n")) report.markdown += "\n";
+    report.markdown += fmt::format(
+        "The machine during the run: other processes kept {:.0f} % of all CPUs' time busy, the hypervisor took {:.0f} % "
+        "(steal){}.\n",
+        100 * share.others, 100 * share.steal,
+        share.others > 0.05 || share.steal > 0.01 ? ": wall-clock late frames may be theirs, not the loop's" : "");
+  }
   fmt::print("\n{}", report.markdown);
   if (!o.json.empty()) write_json_file(o.json, report.json);
   if (!o.markdown.empty()) write_text_file(o.markdown, report.markdown);

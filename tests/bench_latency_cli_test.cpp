@@ -70,6 +70,17 @@ TEST(BenchLatencyCli, ThreeLoopsUnderTheModelClockWriteTheDocumentedJson) {
   EXPECT_EQ(r["deadline"]["late_frames"], nlohmann::json::array());
   EXPECT_FALSE(r["whole-frame"].contains("late_frames"));
   EXPECT_TRUE(fs::exists(scratch("a.png")));
+  // What else ran on the machine meanwhile (Linux): shares of all CPUs' time
+  if (j.contains("machine")) {
+    for (const char* key : {"others_cpu_fraction", "steal_fraction"}) {
+      EXPECT_GE(j["machine"][key].get<double>(), 0.0) << key;
+      EXPECT_LE(j["machine"][key].get<double>(), 1.0) << key;
+    }
+    EXPECT_NE(a.out.find("The machine during the run: other processes kept"), std::string::npos) << a.out;
+  }
+#if defined(__linux__)
+  EXPECT_TRUE(j.contains("machine"));
+#endif
   // A given cost model: the deadline loops' figures are the same on a second run (but the ray
   // bound, whose raw rate is measured, and the whole-frame loop, whose frames' cost is)
   const CliRun b = foveal(args + " --json b.json --loops deadline,deadline+prediction");

@@ -1,0 +1,38 @@
+// foveal/util/cpu_share.h — how much of the machine's CPU time went to other processes, and to the
+// hypervisor, while a run was timed.
+//
+// A timed run on a shared machine measures the machine as much as the program: a frame comes late
+// when another process or the hypervisor takes its core. Two readings of the kernel's counters
+// (Linux: /proc/stat for all CPUs, /proc/self/stat for this process, in clock ticks) around the run
+// give the share of all CPUs' time that others were busy, and the share stolen by the hypervisor, so
+// that a benchmark can say whether its late frames may be theirs.
+#pragma once
+
+#include <cmath>
+#include <string_view>
+
+namespace foveal {
+
+// The counters at one moment, in clock ticks (known = false where they could not be read).
+struct CpuTimes {
+  double total = 0;  // all CPUs: user, nice, system, idle, iowait, irq, softirq, steal
+  double busy = 0;   // of which not idle, waiting for I/O or stolen
+  double steal = 0;  // taken by the hypervisor for other machines
+  double self = 0;   // this process (all its threads): user and system
+  bool known = false;
+};
+
+// The counters from the text of /proc/stat and /proc/self/stat (known = false where either is
+// malformed).
+CpuTimes parse_cpu_times(std::string_view proc_stat, std::string_view self_stat);
+// The counters now (known = false where /proc is not there).
+CpuTimes read_cpu_times();
+
+// Between two readings, as fractions of all CPUs' time (NaN where unknown or no time passed).
+struct CpuShare {
+  double others = NAN;  // other processes busy (this process's own time left out)
+  double steal = NAN;   // stolen by the hypervisor
+};
+CpuShare cpu_share(const CpuTimes& before, const CpuTimes& after);
+
+}  // namespace foveal
