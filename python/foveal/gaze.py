@@ -312,8 +312,9 @@ def evaluate(labels, coder, coder2=None, t_s=None) -> dict:
     names; then give ``t_s``, each sample's time). ``coder``, ``coder2``: a label file (CSV with a
     time column t/t_s/time and a ``label`` column, e.g. the IRF or Lund 2013 recordings; matched to
     the samples by time) or one label per sample. With ``coder2`` the labels are scored against it
-    too (``coder2``), and the second coder's agreement with the first is the ``ceiling``. Scores are over the samples every coder labelled: ``samples``,
-    ``kappa`` (Cohen's, all classes), ``accuracy``, and per class in ``classes``: ``kappa``, ``f1``
+    too (``coder2``), and the second coder's agreement with the first is the ``ceiling``. Scores are
+    over the samples every coder labelled: ``samples``, ``kappa`` (Cohen's, all classes),
+    ``accuracy``, and per class in ``classes``: ``kappa``, ``f1``
     (Hooge et al. 2018's event matching), ``hits``, ``misses``, ``false_alarms``,
     ``reference_events``, ``test_events``, ``rto_ms``, ``rtd_ms`` (None where undefined).
     """

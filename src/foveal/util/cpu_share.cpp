@@ -1,10 +1,11 @@
 // foveal/util/cpu_share.cpp — the kernel's CPU counters around a timed run.
 #include "foveal/util/cpu_share.h"
 
+#include "foveal/util/error.h"
+#include "foveal/util/text.h"
+
 #include <algorithm>
-#include <charconv>
-#include <fstream>
-#include <sstream>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -12,30 +13,21 @@ namespace foveal {
 
 namespace {
 
-// The whitespace-separated fields of a line, as numbers (false at the first that is not one).
-bool numbers(std::string_view text, std::vector<double>& out) {
-  out.clear();
-  size_t i = 0;
-  while (i < text.size()) {
-    while (i < text.size() && (text[i] == ' ' || text[i] == '\t')) ++i;
-    if (i >= text.size() || text[i] == '\n') break;
-    size_t j = i;
-    while (j < text.size() && text[j] != ' ' && text[j] != '\t' && text[j] != '\n') ++j;
-    unsigned long long v = 0;
-    const auto [end, ec] = std::from_chars(text.data() + i, text.data() + j, v);
-    if (ec != std::errc() || end != text.data() + j) return false;
-    out.push_back(static_cast<double>(v));
-    i = j;
-  }
-  return true;
+// The first line of `text`, as whitespace-separated fields.
+std::vector<std::string_view> first_line_fields(std::string_view text) { return text::split(text.substr(0, text.find('\n')), ' '); }
+
+// A counter: a whole non-negative number.
+std::optional<double> counter(std::string_view field) {
+  const std::optional<double> v = text::to_number(field);
+  return v && *v >= 0 ? v : std::nullopt;
 }
 
-std::string read_all(const char* path) {
-  std::ifstream in(path);
-  if (!in) return {};
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
+std::string read_or_empty(const char* path) {
+  try {
+    return text::read_file(path);
+  } catch (const Error&) {
+    return {};
+  }
 }
 
 }  // namespace
@@ -44,38 +36,33 @@ CpuTimes parse_cpu_times(std::string_view proc_stat, std::string_view self_stat)
   CpuTimes t;
   // /proc/stat's first line: "cpu  user nice system idle iowait irq softirq steal guest guest_nice"
   // (guest time is counted in user already)
-  if (proc_stat.substr(0, 4) != "cpu ") return t;
-  const size_t eol = proc_stat.find('\n');
-  std::vector<double> f;
-  if (!numbers(proc_stat.substr(4, eol == std::string_view::npos ? std::string_view::npos : eol - 4), f) || f.size() < 8) return t;
+  const std::vector<std::string_view> cpu = first_line_fields(proc_stat);
+  if (cpu.size() < 9 || cpu[0] != "cpu") return t;
+  double f[8];
+  for (size_t k = 0; k < 8; ++k) {
+    const std::optional<double> v = counter(cpu[k + 1]);
+    if (!v) return t;
+    f[k] = *v;
+  }
   const double user = f[0], nice = f[1], system = f[2], idle = f[3], iowait = f[4], irq = f[5], softirq = f[6], steal = f[7];
   // /proc/self/stat: "pid (comm) state ppid …", utime and stime the 14th and 15th fields; the
-  // command may hold spaces and parentheses, so fields are counted from its last ')'
+  // command may hold spaces and parentheses, so fields are counted from its last ')' (the state,
+  // field 3, is the first after it)
   const size_t close = self_stat.rfind(')');
   if (close == std::string_view::npos) return t;
-  std::vector<std::string_view> fields;
-  for (size_t i = close + 1; i < self_stat.size();) {
-    while (i < self_stat.size() && (self_stat[i] == ' ' || self_stat[i] == '\n')) ++i;
-    size_t j = i;
-    while (j < self_stat.size() && self_stat[j] != ' ' && self_stat[j] != '\n') ++j;
-    if (j > i) fields.push_back(self_stat.substr(i, j - i));
-    i = j;
-  }
-  if (fields.size() < 13) return t;  // state is field 3: utime and stime are the 12th and 13th after ')'
-  std::vector<double> self;
-  std::string both(fields[11]);
-  both += ' ';
-  both += fields[12];
-  if (!numbers(both, self) || self.size() != 2) return t;
+  const std::vector<std::string_view> fields = first_line_fields(self_stat.substr(close + 1));
+  if (fields.size() < 13) return t;
+  const std::optional<double> utime = counter(fields[11]), stime = counter(fields[12]);
+  if (!utime || !stime) return t;
   t.total = user + nice + system + idle + iowait + irq + softirq + steal;
   t.busy = user + nice + system + irq + softirq;
   t.steal = steal;
-  t.self = self[0] + self[1];
+  t.self = *utime + *stime;
   t.known = true;
   return t;
 }
 
-CpuTimes read_cpu_times() { return parse_cpu_times(read_all("/proc/stat"), read_all("/proc/self/stat")); }
+CpuTimes read_cpu_times() { return parse_cpu_times(read_or_empty("/proc/stat"), read_or_empty("/proc/self/stat")); }
 
 CpuShare cpu_share(const CpuTimes& before, const CpuTimes& after) {
   CpuShare s;

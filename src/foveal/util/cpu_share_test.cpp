@@ -10,7 +10,7 @@
 namespace foveal {
 namespace {
 
-// Two readings whose differences are known: 1,000 ticks of all CPUs, 600 busy, of which 250 this
+// Two readings whose differences are known: 1,000 ticks of all CPUs, 580 busy, of which 250 this
 // process's (a command with a space and a parenthesis in its name), 50 stolen
 TEST(CpuShare, OthersAndStealFromTwoReadings) {
   const CpuTimes a = parse_cpu_times("cpu  100 10 50 800 20 5 5 10 0 0\ncpu0 1 2 3 4 5 6 7 8 0 0\n",
