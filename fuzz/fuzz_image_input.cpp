@@ -1,8 +1,9 @@
 // libFuzzer target: perceive's image input path — any bytes under a PNG, JPEG, BMP or PFM name must
 // give an image within the size cap (1–4 channels, as perceive takes them) or an Error, never a
 // crash, a hang or an allocation beyond the cap. The first byte picks the extension; the rest is
-// the file. (TIFF and EXR go to libtiff and OpenEXR through the same call; they are left to those
-// libraries' own fuzzing.)
+// the file; OpenCV decodes by the content, so TIFF and PPM content (seeds here) reaches its
+// decoders under any of these names, headers checked first. (EXR goes to OpenEXR by its name; it
+// is left to that library's own fuzzing.)
 #include "foveal/io/image_io.h"
 #include "foveal/util/error.h"
 

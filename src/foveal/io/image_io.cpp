@@ -158,22 +158,90 @@ void save_image(const Image& image, const std::string& path, bool srgb) {
 
 namespace {
 
-// The width and height a PNG, JPEG or BMP header states, read from its first bytes before anything
-// is decoded; nullopt for other formats or a header too short to say. By hand because OpenCV 4.6
-// offers no header-only read (its own limit, 2^30 pixels, is read from the environment when the
-// library loads, and a decode near it needs ~40 GB here).
-std::optional<std::pair<uint64_t, uint64_t>> header_size(const std::string& path) {
+// What a PNG, JPEG, BMP, PPM or TIFF header states, read from its first bytes before anything is
+// decoded: the pixels and the bytes OpenCV allocates for them (up to 4 channels). By hand because
+// OpenCV 4.6 offers no header-only read (its own limit, 2^30 pixels, is read from the environment
+// when the library loads, and a decode near it needs ~40 GB here; it allocates the whole frame
+// before it finds a file truncated).
+struct HeaderSize {
+  uint64_t width = 0, height = 0;
+  uint64_t bytes_per_pixel = 4;  // as decoded: channels × bytes per sample
+};
+
+// PPM/PGM (P2, P3, P5, P6): width, height and maximum value as decimal numbers, between which
+// whitespace and '#' comments may fall (Netpbm's format pages).
+std::optional<HeaderSize> netpbm_header(std::istream& in, char kind) {
+  auto number = [&]() -> std::optional<uint64_t> {
+    int c = in.get();
+    while (c != EOF && (std::isspace(c) || c == '#')) {
+      if (c == '#')
+        while (c != EOF && c != '\n' && c != '\r') c = in.get();
+      c = in.get();
+    }
+    if (c == EOF || !std::isdigit(c)) return std::nullopt;
+    uint64_t v = 0;
+    for (; c != EOF && std::isdigit(c); c = in.get()) v = std::min<uint64_t>(v * 10 + uint64_t(c - '0'), uint64_t(1) << 31);
+    return v;
+  };
+  in.clear();
+  in.seekg(2);
+  const auto width = number(), height = number(), maximum = number();
+  if (!width || !height || !maximum) return std::nullopt;
+  const uint64_t channels = kind == '3' || kind == '6' ? 3 : 1;
+  return HeaderSize{*width, *height, channels * (*maximum > 255 ? 2 : 1)};
+}
+
+// TIFF (classic, not BigTIFF): the first image file directory's ImageWidth (256), ImageLength (257),
+// BitsPerSample (258) and SamplesPerPixel (277) entries (TIFF 6.0, section 2).
+std::optional<HeaderSize> tiff_header(std::istream& in, bool little) {
+  auto read = [&](uint64_t at, int n) -> std::optional<uint64_t> {
+    unsigned char b[4]{};
+    in.clear();
+    in.seekg(static_cast<std::streamoff>(at));
+    if (!in.read(reinterpret_cast<char*>(b), n)) return std::nullopt;
+    uint64_t v = 0;
+    for (int i = 0; i < n; ++i) v |= uint64_t(b[little ? i : n - 1 - i]) << (8 * i);
+    return v;
+  };
+  const auto ifd = read(4, 4);
+  const auto entries = ifd ? read(*ifd, 2) : std::nullopt;
+  if (!entries) return std::nullopt;
+  std::optional<uint64_t> width, height;
+  uint64_t bits = 1, samples = 1;
+  for (uint64_t i = 0; i < *entries; ++i) {
+    const uint64_t at = *ifd + 2 + 12 * i;
+    const auto tag = read(at, 2), type = read(at + 2, 2), count = read(at + 4, 4);
+    if (!tag || !type || !count) return std::nullopt;
+    const int size = *type == 3 ? 2 : *type == 4 ? 4 : 0;  // SHORT or LONG; others are not sizes
+    if (size == 0 || *count == 0) continue;
+    // A value that fits in four bytes is stored in the entry; otherwise the entry holds its offset
+    std::optional<uint64_t> first = *count * size <= 4 ? read(at + 8, size) : std::nullopt;
+    if (*count * size > 4)
+      if (const auto offset = read(at + 8, 4)) first = read(*offset, size);
+    if (!first) return std::nullopt;
+    if (*tag == 256) width = first;
+    if (*tag == 257) height = first;
+    if (*tag == 258) bits = std::max<uint64_t>(*first, 1);
+    if (*tag == 277) samples = std::max<uint64_t>(*first, 1);
+  }
+  if (!width || !height) return std::nullopt;
+  return HeaderSize{*width, *height, std::min<uint64_t>(samples, 4) * ((std::min<uint64_t>(bits, 64) + 7) / 8)};
+}
+
+std::optional<HeaderSize> header_size(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   std::array<unsigned char, 32> h{};
   in.read(reinterpret_cast<char*>(h.data()), h.size());
   const auto got = static_cast<size_t>(in.gcount());
   auto be32 = [&](size_t i) { return uint64_t(h[i]) << 24 | uint64_t(h[i + 1]) << 16 | uint64_t(h[i + 2]) << 8 | h[i + 3]; };
   auto le32 = [&](size_t i) { return uint64_t(h[i]) | uint64_t(h[i + 1]) << 8 | uint64_t(h[i + 2]) << 16 | uint64_t(h[i + 3]) << 24; };
-  if (got >= 24 && h[0] == 0x89 && h[1] == 'P' && h[2] == 'N' && h[3] == 'G') return std::make_pair(be32(16), be32(20));  // IHDR
+  if (got >= 24 && h[0] == 0x89 && h[1] == 'P' && h[2] == 'N' && h[3] == 'G') return HeaderSize{be32(16), be32(20), 8};  // IHDR
   if (got >= 26 && h[0] == 'B' && h[1] == 'M') {
     const auto height = static_cast<int32_t>(le32(22));  // negative: rows stored top-down
-    return std::make_pair(le32(18), uint64_t(height < 0 ? -int64_t(height) : height));
+    return HeaderSize{le32(18), uint64_t(height < 0 ? -int64_t(height) : height), 4};
   }
+  if (got >= 2 && h[0] == 'P' && h[1] >= '2' && h[1] <= '6' && h[1] != '4') return netpbm_header(in, static_cast<char>(h[1]));
+  if (got >= 8 && ((h[0] == 'I' && h[1] == 'I') || (h[0] == 'M' && h[1] == 'M'))) return tiff_header(in, h[0] == 'I');
   if (got >= 4 && h[0] == 0xFF && h[1] == 0xD8) {  // JPEG: the segments up to the first start-of-frame
     in.clear();
     in.seekg(2);
@@ -185,7 +253,7 @@ std::optional<std::pair<uint64_t, uint64_t>> header_size(const std::string& path
       if (sof) {
         unsigned char f[5];
         if (!in.read(reinterpret_cast<char*>(f), 5)) return std::nullopt;
-        return std::make_pair(uint64_t(f[3]) << 8 | f[4], uint64_t(f[1]) << 8 | f[2]);
+        return HeaderSize{uint64_t(f[3]) << 8 | f[4], uint64_t(f[1]) << 8 | f[2], 3};
       }
       if (length < 2) return std::nullopt;
       in.seekg(length - 2, std::ios::cur);
@@ -194,10 +262,20 @@ std::optional<std::pair<uint64_t, uint64_t>> header_size(const std::string& path
   return std::nullopt;
 }
 
+// The decoded frame may take at most what the largest float RGBA image does (1 GiB)
+inline constexpr uint64_t kMaxDecodedBytes = kMaxImagePixels * 4 * sizeof(float);
+
 void check_image_size(const std::string& path, uint64_t width, uint64_t height) {
   if (width * height > kMaxImagePixels)
     fail("{}: {}x{} pixels, more than the {} million foveal reads (perceive holds up to {} bytes per pixel); scale it down first", path,
          width, height, kMaxImagePixels / 1000000, kPerceiveBytesPerPixel);
+}
+
+void check_image_size(const std::string& path, const HeaderSize& size) {
+  check_image_size(path, size.width, size.height);
+  if (size.width * size.height * size.bytes_per_pixel > kMaxDecodedBytes)
+    fail("{}: {}x{} pixels of {} bytes each decode to more than {} MiB; convert it to 8 or 16 bits a sample first", path, size.width,
+         size.height, size.bytes_per_pixel, kMaxDecodedBytes >> 20);
 }
 
 }  // namespace
@@ -233,14 +311,19 @@ Image load_image(const std::string& path, bool keep_alpha) {
     if (in.gcount() < 4 || !(png || jpeg || bmp || tiff || ppm))
       fail("{}: not a PNG, JPEG, BMP, TIFF, PPM, EXR or PFM image (its first bytes are none of theirs)", path);
   }
-  if (const auto size = header_size(path)) check_image_size(path, size->first, size->second);
+  if (const auto size = header_size(path)) check_image_size(path, *size);
   cv::Mat mat;
   try {
     // The decoders' own complaints ("libpng error: Read Error") would come before foveal's line
-    // naming the file: stderr is closed to them while they decode (one decode at a time)
+    // naming the file: stderr is closed to them while they decode (one decode at a time). Not in
+    // fuzzing builds, where a crash or allocation report from inside a decoder must be seen.
     static std::mutex decoding;
     const std::lock_guard lock(decoding);
+#ifdef FOVEAL_FUZZING
+    const int saved = -1, null = -1;
+#else
     const int saved = ::dup(STDERR_FILENO), null = ::open("/dev/null", O_WRONLY);
+#endif
     if (saved >= 0 && null >= 0) ::dup2(null, STDERR_FILENO);
     struct Restore {
       int saved, null;

@@ -21,8 +21,9 @@ void save_rgba8(const Rgba8& image, const std::string& path);
 
 // The largest image foveal reads, in pixels (8192 × 8192, an 8K frame fits): perceive holds up to
 // kPerceiveBytesPerPixel bytes per pixel (with the eye's optics; 32 without: BENCHMARKS.md), so a
-// frame at the cap peaks near 5.6 GB. Larger PNG, JPEG, BMP and EXR files are refused from their
-// header, before anything is decoded; other formats meet OpenCV's own limit (2^30 pixels).
+// frame at the cap peaks near 5.6 GB. Larger images (PNG, JPEG, BMP, PPM, TIFF, EXR, PFM) are
+// refused from their header, before anything is decoded, as are those whose samples would decode
+// to more than 1 GiB (a 64-bit float TIFF); load_image reads no other format.
 inline constexpr uint64_t kMaxImagePixels = uint64_t(8192) * 8192;
 inline constexpr int kPerceiveBytesPerPixel = 84;
 

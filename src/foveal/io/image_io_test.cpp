@@ -4,10 +4,14 @@
 #include "foveal/util/error.h"
 
 #include <gtest/gtest.h>
+#include <opencv2/imgcodecs.hpp>
 
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <string>
+#include <tuple>
+#include <vector>
 
 using namespace foveal;
 namespace fs = std::filesystem;
@@ -94,6 +98,88 @@ TEST(ImageIO, ContentOfAnotherFormatIsRefusedBeforeDecoding) {
   save_image(Image(4, 3, 3), ppm);
   EXPECT_EQ(load_image(ppm).height, 3);
   fs::remove(ppm);
+}
+
+namespace {
+// A classic TIFF holding one image file directory; each entry is {tag, type (3 SHORT, 4 LONG),
+// values}: values that do not fit in the entry's four bytes go after the directory.
+std::string tiff(bool little, const std::vector<std::tuple<uint16_t, uint16_t, std::vector<uint32_t>>>& entries) {
+  std::string out = little ? std::string("II*\0", 4) : std::string("MM\0*", 4), extra;
+  auto put = [&](std::string& to, uint32_t v, int n) {
+    for (int i = 0; i < n; ++i) to += static_cast<char>((v >> (8 * (little ? i : n - 1 - i))) & 0xff);
+  };
+  put(out, 8, 4);
+  put(out, static_cast<uint32_t>(entries.size()), 2);
+  const uint32_t after = 8 + 2 + 12 * static_cast<uint32_t>(entries.size()) + 4;
+  for (const auto& [tag, type, values] : entries) {
+    const int size = type == 3 ? 2 : 4;
+    put(out, tag, 2), put(out, type, 2), put(out, static_cast<uint32_t>(values.size()), 4);
+    std::string value;
+    for (uint32_t v : values) put(value, v, size);
+    if (value.size() <= 4) {
+      out += value + std::string(4 - value.size(), '\0');
+    } else {
+      put(out, after + static_cast<uint32_t>(extra.size()), 4);
+      extra += value;
+    }
+  }
+  put(out, 0, 4);  // no next directory
+  return out + extra + std::string(64, '\0');
+}
+
+std::string refusal(const std::string& name, const std::string& bytes) {
+  const std::string path = temp(name);
+  std::ofstream(path, std::ios::binary) << bytes;
+  std::string what = "accepted";
+  try {
+    load_image(path);
+  } catch (const Error& e) {
+    what = e.what();
+  }
+  fs::remove(path);
+  return what;
+}
+}  // namespace
+
+// OpenCV allocates the frame a header states before it finds the file truncated: a PPM under a
+// .jpg name claiming 30000×30000 (found by fuzzing) took 2.7 GB. PPM and TIFF headers are read
+// first, as PNG, JPEG and BMP ones were, and a 64-bit RGBA TIFF within the pixel cap is refused
+// for the 2 GB its samples decode to.
+TEST(ImageIO, OversizedPpmAndTiffAreRefusedFromTheirHeader) {
+  EXPECT_NE(
+      refusal("huge-ppm.jpg", "P6\n# a comment 1 2 3\n30000 30000\n255\n\x01\x02").find("30000x30000 pixels, more than the 67 million"),
+      std::string::npos);
+  EXPECT_NE(refusal("huge-pgm.pgm", "P5 20000\t9000 65535 ").find("20000x9000 pixels"), std::string::npos);
+  for (bool little : {true, false}) {
+    const std::string wide = refusal("wide.tif", tiff(little, {{256, 4, {9000}}, {257, 3, {9000}}, {277, 3, {1}}}));
+    EXPECT_NE(wide.find("wide.tif: 9000x9000 pixels, more than the 67 million"), std::string::npos) << little << ": " << wide;
+    const std::string deep =
+        refusal("deep.tif", tiff(little, {{256, 3, {8000}}, {257, 3, {8000}}, {258, 3, {64, 64, 64, 64}}, {277, 3, {4}}}));
+    EXPECT_NE(deep.find("deep.tif: 8000x8000 pixels of 32 bytes each decode to more than 1024 MiB"), std::string::npos)
+        << little << ": " << deep;
+    // Within both caps the file goes on to the decoder, which finds it has no pixel data
+    const std::string small = refusal("small.tif", tiff(little, {{256, 3, {800}}, {257, 3, {600}}, {258, 3, {8}}, {277, 3, {1}}}));
+    EXPECT_NE(small.find("small.tif: cannot read image"), std::string::npos) << little << ": " << small;
+  }
+  // Real files of both formats still read: OpenCV's own TIFF (8 and 16 bits) and PPM, and a PGM
+  // with a comment
+  for (const char* ext : {".tif", ".ppm"})
+    for (int depth : {CV_8U, CV_16U}) {
+      const std::string path = temp(std::string("real") + ext);
+      cv::Mat written(7, 9, CV_MAKETYPE(depth, 3), cv::Scalar::all(depth == CV_8U ? 51 : 13107));
+      ASSERT_TRUE(cv::imwrite(path, written));
+      const Image back = load_image(path);
+      fs::remove(path);
+      ASSERT_EQ(back.width, 9) << ext;
+      EXPECT_EQ(back.height, 7) << ext;
+      EXPECT_FLOAT_EQ(back.at(8, 6, 2), 0.2f) << ext << depth;
+    }
+  const std::string pgm = temp("comment.pgm");
+  std::ofstream(pgm, std::ios::binary) << "P5\n# made by hand\n3 2\n255\n" << std::string("\x00\x80\xff\x00\x80\xff", 6);
+  const Image grey = load_image(pgm);
+  fs::remove(pgm);
+  ASSERT_EQ(grey.width, 3);
+  EXPECT_FLOAT_EQ(grey.at(2, 0, 0), 1.0f);
 }
 
 TEST(ImageIO, BigEndianPfmIsSwapped) {
