@@ -18,6 +18,7 @@
 #include <algorithm>
 #include <array>
 #include <bit>
+#include <cctype>
 #include <cmath>
 #include <cstring>
 #include <fcntl.h>
@@ -298,17 +299,24 @@ Image load_image(const std::string& path, bool keep_alpha) {
   const std::string ext = extension(path);
   if (ext == ".pfm") return load_pfm(path);
   if (ext == ".exr") return load_exr(path);
-  // Only the formats foveal reads through OpenCV: it picks its decoder by the content, and other
-  // content (a DICOM file under a .jpg name, found by fuzzing) reaches decoders that abort the process
+  // Only the formats foveal reads through OpenCV: it picks its decoder by the content, the first
+  // whose signature matches, and other content (DICOM under a .jpg name, found by fuzzing) reaches
+  // decoders that abort the process. So the whole signature each of these decoders checks is
+  // required here: "P6" followed by anything but whitespace is no PPM to OpenCV, and went on to
+  // the DICOM decoder (also found by fuzzing).
   {
     std::ifstream in(path, std::ios::binary);
-    std::array<unsigned char, 4> m{};
+    std::array<unsigned char, 8> m{};
     in.read(reinterpret_cast<char*>(m.data()), m.size());
-    const bool png = m[0] == 0x89 && m[1] == 'P' && m[2] == 'N' && m[3] == 'G', jpeg = m[0] == 0xFF && m[1] == 0xD8 && m[2] == 0xFF;
-    const bool bmp = m[0] == 'B' && m[1] == 'M',
-               tiff = (m[0] == 'I' && m[1] == 'I' && m[2] == 42 && m[3] == 0) || (m[0] == 'M' && m[1] == 'M' && m[2] == 0 && m[3] == 42);
-    const bool ppm = m[0] == 'P' && m[1] >= '2' && m[1] <= '6' && m[1] != '4';  // (what save_image writes as .ppm)
-    if (in.gcount() < 4 || !(png || jpeg || bmp || tiff || ppm))
+    const auto got = static_cast<size_t>(in.gcount());
+    const bool png = got >= 8 && std::memcmp(m.data(), "\x89PNG\r\n\x1a\n", 8) == 0;
+    const bool jpeg = got >= 3 && m[0] == 0xFF && m[1] == 0xD8 && m[2] == 0xFF;
+    const bool bmp = got >= 3 && m[0] == 'B' && m[1] == 'M';
+    const bool tiff =
+        got >= 4 && ((m[0] == 'I' && m[1] == 'I' && m[2] == 42 && m[3] == 0) || (m[0] == 'M' && m[1] == 'M' && m[2] == 0 && m[3] == 42));
+    const bool ppm =
+        got >= 3 && m[0] == 'P' && m[1] >= '2' && m[1] <= '6' && m[1] != '4' && std::isspace(m[2]);  // (what save_image writes as .ppm)
+    if (!(png || jpeg || bmp || tiff || ppm))
       fail("{}: not a PNG, JPEG, BMP, TIFF, PPM, EXR or PFM image (its first bytes are none of theirs)", path);
   }
   if (const auto size = header_size(path)) check_image_size(path, *size);

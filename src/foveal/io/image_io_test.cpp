@@ -87,6 +87,20 @@ TEST(ImageIO, ContentOfAnotherFormatIsRefusedBeforeDecoding) {
     EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();
   }
   fs::remove(path);
+  // OpenCV's decoders check whole signatures: "P6" not followed by whitespace is no PPM to it, and
+  // a "DICM" at byte 128 then reached the DICOM decoder (found by fuzzing); so is a PNG's first
+  // four bytes without the other four
+  for (const std::string& start : {std::string("P6\x01\xff", 4), std::string("\x89PNG\0\0\0\0", 8)}) {
+    const std::string named = temp("dicom-after.jpg");
+    std::ofstream(named, std::ios::binary) << start << std::string(124, '\x32') << "DICM" << std::string(16, '\0');
+    try {
+      load_image(named);
+      ADD_FAILURE() << "accepted";
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find("not a PNG, JPEG, BMP, TIFF, PPM, EXR or PFM image"), std::string::npos) << e.what();
+    }
+    fs::remove(named);
+  }
   // A real PNG under a .jpg name still reads (decoded by its content, as before)
   const std::string png = temp("png.png"), named = temp("png-named.jpg");
   save_image(Image(3, 2, 3), png);
