@@ -2,6 +2,7 @@
 #pragma once
 
 #include "foveal/util/image.h"
+#include "foveal/util/image_file.h"
 
 #include <cstdint>
 #include <string>
@@ -19,13 +20,7 @@ Rgba8 to_rgba8(const Image& linear);
 // Write 8-bit RGBA as PNG/JPEG/BMP (alpha dropped); throws Error naming the file.
 void save_rgba8(const Rgba8& image, const std::string& path);
 
-// The largest image foveal reads, in pixels (8192 × 8192, an 8K frame fits): perceive holds up to
-// kPerceiveBytesPerPixel bytes per pixel (with the eye's optics; 32 without: BENCHMARKS.md), so a
-// frame at the cap peaks near 5.6 GB. Larger images (PNG, JPEG, BMP, PPM, TIFF, EXR, PFM) are
-// refused from their header, before anything is decoded, as are those whose samples would decode
-// to more than 1 GiB (a 64-bit float TIFF); load_image reads no other format.
-inline constexpr uint64_t kMaxImagePixels = uint64_t(8192) * 8192;
-inline constexpr int kPerceiveBytesPerPixel = 84;
+// The size caps on images read (kMaxImagePixels, kPerceiveBytesPerPixel): foveal/util/image_file.h
 
 // Write by extension: .png (8-bit; `srgb` encodes linear colour, alpha is stored as is), .jpg/.bmp
 // (8-bit, no alpha), .pfm or .exr (float, as is). 1, 3 or 4 (RGBA, PNG only) channels.

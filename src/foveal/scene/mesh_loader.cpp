@@ -1,6 +1,7 @@
 // foveal/scene/mesh_loader.cpp — meshes through Assimp (OBJ+MTL, PLY, glTF, …) and their textures.
 #include "foveal/scene/scene.h"
 #include "foveal/util/error.h"
+#include "foveal/util/image_file.h"
 
 #include <assimp/Importer.hpp>
 #include <assimp/postprocess.h>
@@ -19,9 +20,20 @@ namespace {
 int load_texture(Scene& scene, std::map<std::string, int>& cache, const std::filesystem::path& file) {
   const std::string key = file.lexically_normal().string();
   if (auto it = cache.find(key); it != cache.end()) return it->second;
-  cv::Mat image = cv::imread(key, cv::IMREAD_COLOR);
+  // The same checks as every image foveal reads: OpenCV decodes by the content, and content of
+  // another format (DICOM under a .jpg name) reaches decoders that abort the process
+  cv::Mat image;
+  std::string why = "unknown or corrupt format";
+  try {
+    check_image_file(key);
+    image = cv::imread(key, cv::IMREAD_COLOR);
+  } catch (const Error& e) {
+    why = e.what();
+  } catch (const cv::Exception& e) {
+    why = e.err;
+  }
   if (image.empty()) {
-    fmt::print(stderr, "foveal: warning: texture '{}' could not be read; using the material colour\n", key);
+    fmt::print(stderr, "foveal: warning: texture '{}' could not be read ({}); using the material colour\n", key, why);
     return cache[key] = -1;
   }
   cv::cvtColor(image, image, cv::COLOR_BGR2RGB);

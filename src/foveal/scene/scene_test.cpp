@@ -101,6 +101,28 @@ TEST(Scene, ObjTexturesAreSampledInLinearColour) {
   EXPECT_NEAR(c.b, 0.0f, 1e-6f);
 }
 
+// A texture meets the same checks as every image foveal reads: content of another format under an
+// image's name (a DICOM signature after a broken PPM one, which aborted the process in OpenCV's
+// DICOM decoder) and a header beyond the size cap are warnings naming the file and the reason,
+// and the material keeps its colour
+TEST(Scene, HostileTexturesAreWarnedAboutAndSkipped) {
+  TempDir t;
+  t.write("dicom.jpg", std::string("P6\x01\xff", 4) + std::string(124, '2') + "DICM" + std::string(16, '\0'));
+  t.write("huge.ppm", "P6\n30000 30000\n255\n" + std::string(12, '\0'));
+  for (const char* texture : {"dicom.jpg", "huge.ppm"}) {
+    t.write("m.mtl", std::string("newmtl t\nKd 0.5 0.25 1\nmap_Kd ") + texture + "\n");
+    testing::internal::CaptureStderr();
+    const Scene s =
+        load_scene(t.write("tex.obj", "mtllib m.mtl\nusemtl t\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\nf 1/1 2/2 3/3\n"));
+    const std::string warned = testing::internal::GetCapturedStderr();
+    EXPECT_TRUE(s.textures.empty()) << texture;
+    EXPECT_LT(s.materials[s.material_ids[0]].diffuse_texture, 0) << texture;
+    EXPECT_NEAR(s.materials[s.material_ids[0]].diffuse.g, 0.25f, 1e-6f) << texture;
+    EXPECT_NE(warned.find(std::string(texture) + "' could not be read"), std::string::npos) << warned;
+    EXPECT_NE(warned.find(texture == std::string("dicom.jpg") ? "not a PNG, JPEG" : "30000x30000 pixels"), std::string::npos) << warned;
+  }
+}
+
 TEST(Scene, BadMeshesGiveClearErrors) {
   TempDir t;
   EXPECT_NE(error_of([&] { load_scene((t.dir / "missing.obj").string()); }).find("no such file"), std::string::npos);
