@@ -3,6 +3,7 @@
 #include "foveal/util/error.h"
 #include "foveal/util/files.h"
 #include "foveal/util/memory.h"
+#include "foveal/util/text.h"
 
 #include <fmt/core.h>
 
@@ -34,7 +35,7 @@ int main(int argc, char** argv) {
     return app.exit(e);
   } catch (const CLI::ParseError& e) {
     // One clear line instead of CLI11's usage dump
-    fmt::print(stderr, "foveal: error: {} (see 'foveal --help')\n", e.what());
+    fmt::print(stderr, "foveal: error: {} (see 'foveal --help')\n", foveal::text::printable(e.what()));
     return e.get_exit_code() != 0 ? e.get_exit_code() : 2;
   }
   try {
@@ -48,11 +49,12 @@ int main(int argc, char** argv) {
     if (app.got_subcommand("perceive")) return perceive();
     return 2;
   } catch (const foveal::Error& e) {
-    fmt::print(stderr, "foveal: error: {}\n", foveal::app::cli_words(e.what()));  // the library's parameters as options
+    fmt::print(stderr, "foveal: error: {}\n",
+               foveal::text::printable(foveal::app::cli_words(e.what())));  // the library's parameters as options
   } catch (const std::bad_alloc&) {
     fmt::print(stderr, "foveal: error: out of memory\n");
   } catch (const std::exception& e) {
-    fmt::print(stderr, "foveal: error: {}\n", e.what());
+    fmt::print(stderr, "foveal: error: {}\n", foveal::text::printable(e.what()));
   }
   return 1;
 }

@@ -236,6 +236,12 @@ TEST(HostileInput, HugeAndTruncatedImagesAreOneLineNamingTheFile) {
   expect_one_line_error("perceive h17-cut.png -o h17-out.png", "h17-cut.png: cannot read image");
 }
 
+// 17 (names). A file name or a file's bytes quoted in an error that are not UTF-8 (a Latin-1 name,
+// an EXR's corrupt channel name) are shown as \xNN, the message stays one line
+TEST(HostileInput, BytesThatAreNotUtf8AreEscapedInErrors) {
+  expect_one_line_error("perceive 'caf\xe9\n.png' -o h17-names.png", "caf\\xe9\\x0a.png: no such image");
+}
+
 // 18. Reading is bounded: an endless input is refused with its name once past the limit.
 TEST(HostileInput, AnEndlessInputIsRefusedAtTheLimit) {
   try {

@@ -15,6 +15,7 @@
 #include "foveal/render/realtime.h"
 #include "foveal/util/error.h"
 #include "foveal/util/parallel.h"
+#include "foveal/util/text.h"
 #include "foveal/util/timer.h"
 #include "foveal/vision/simulate.h"
 
@@ -325,8 +326,9 @@ NB_MODULE(_core, m) {
                            (cannot != std::string::npos && what.find("for writing") == std::string::npos &&
                             !std::filesystem::exists(what.substr(0, cannot)));
       const bool device = what.rfind("device='cuda'", 0) == 0;
-      // Decoded leniently: a message quoting a binary file's bytes keeps them as \xNN escapes
-      PyObject* text = PyUnicode_DecodeUTF8(what.data(), static_cast<Py_ssize_t>(what.size()), "backslashreplace");
+      // A message quoting a binary file's bytes keeps them as \xNN escapes, as the command line shows them
+      const std::string shown = text::printable(what);
+      PyObject* text = PyUnicode_DecodeUTF8(shown.data(), static_cast<Py_ssize_t>(shown.size()), "strict");
       PyErr_SetObject(missing ? PyExc_FileNotFoundError : device ? PyExc_RuntimeError : PyExc_ValueError, text);
       Py_XDECREF(text);
     }

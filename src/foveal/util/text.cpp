@@ -4,6 +4,8 @@
 #include "foveal/util/error.h"
 #include "foveal/util/files.h"
 
+#include <fmt/format.h>
+
 #include <charconv>
 #include <cmath>
 #include <array>
@@ -91,6 +93,39 @@ std::string read_file(const std::string& path, size_t max_bytes) {
     out.append(chunk.data(), got);
   }
   if (in.bad()) fail("{}: read error", path);
+  return out;
+}
+
+std::string printable(std::string_view message) {
+  std::string out;
+  out.reserve(message.size());
+  auto escape = [&](unsigned char b) { out += fmt::format("\\x{:02x}", b); };
+  const auto* p = reinterpret_cast<const unsigned char*>(message.data());
+  const size_t n = message.size();
+  for (size_t i = 0; i < n;) {
+    const unsigned char b = p[i];
+    if (b < 0x80) {
+      if (b < 0x20 || b == 0x7F)
+        escape(b);
+      else
+        out += static_cast<char>(b);
+      ++i;
+      continue;
+    }
+    // The length of a well-formed sequence and its second byte's range (Unicode 15, table 3-7):
+    // no overlong forms, no surrogates, nothing past U+10FFFF
+    const size_t length = b >= 0xC2 && b <= 0xDF ? 2 : b >= 0xE0 && b <= 0xEF ? 3 : b >= 0xF0 && b <= 0xF4 ? 4 : 0;
+    const unsigned char lo = b == 0xE0 ? 0xA0 : b == 0xF0 ? 0x90 : 0x80, hi = b == 0xED ? 0x9F : b == 0xF4 ? 0x8F : 0xBF;
+    bool ok = length != 0 && i + length <= n && p[i + 1] >= lo && p[i + 1] <= hi;
+    for (size_t k = 2; ok && k < length; ++k) ok = p[i + k] >= 0x80 && p[i + k] <= 0xBF;
+    if (!ok) {
+      escape(b);
+      ++i;
+      continue;
+    }
+    out.append(message.substr(i, length));
+    i += length;
+  }
   return out;
 }
 

@@ -42,4 +42,9 @@ inline bool has_bom(std::string_view text) { return text.substr(0, 3) == "\xEF\x
 // The text without its byte-order mark, if it has one.
 inline std::string_view strip_bom(std::string_view text) { return has_bom(text) ? text.substr(3) : text; }
 
+// A message for a terminal, as one line: bytes that are not valid UTF-8 (a binary file's, quoted
+// in a decoder's complaint) and control characters become \xNN, as Python's "backslashreplace"
+// shows them; valid UTF-8 (°, ×, names in any script) is kept.
+std::string printable(std::string_view message);
+
 }  // namespace foveal::text
