@@ -11,6 +11,8 @@
 #include <opencv2/imgproc.hpp>
 
 #include <filesystem>
+#include <fstream>
+#include <string_view>
 #include <map>
 
 namespace foveal {
@@ -46,6 +48,28 @@ int load_texture(Scene& scene, std::map<std::string, int>& cache, const std::fil
   return cache[key] = static_cast<int>(scene.textures.size() - 1);
 }
 
+// A PLY header must end in an "end_header" line before the file does: Assimp 5.2's PLY reader
+// loops for ever where it does not (a file cut short in its header, "end_header" followed by data
+// on the same line, or by nothing; found by mutating PLY files), so that is checked here first.
+// The header is read up to 1 MiB: PLY headers are a few hundred bytes, comments included.
+void check_ply_header(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::string head(size_t(1) << 20, '\0');
+  in.read(head.data(), static_cast<std::streamsize>(head.size()));
+  head.resize(static_cast<size_t>(in.gcount()));
+  if (!head.starts_with("ply\n") && !head.starts_with("ply\r\n")) fail("{}: not a PLY file (it does not start with a line 'ply')", path);
+  size_t line = 1;
+  for (size_t at = 0; at < head.size(); ++line) {
+    const size_t end = head.find('\n', at);
+    if (end == std::string::npos) break;  // the last line has no end: not a whole header line
+    std::string_view text(head.data() + at, end - at);
+    while (!text.empty() && (text.back() == '\r' || text.back() == ' ' || text.back() == '\t')) text.remove_suffix(1);
+    if (text == "end_header") return;
+    at = end + 1;
+  }
+  fail("{}: a PLY header without an 'end_header' line (read {} lines): the file is cut short or is not a PLY file", path, line - 1);
+}
+
 glm::vec3 colour(const aiMaterial* m, const char* key, unsigned type, unsigned index, glm::vec3 fallback) {
   aiColor3D c;
   if (m->Get(key, type, index, c) != AI_SUCCESS) return fallback;
@@ -59,17 +83,40 @@ void append_mesh_file(Scene& scene, const std::string& path, const glm::mat4& tr
   std::error_code ec;
   if (!fs::exists(path, ec)) fail("{}: no such file", path);
   if (fs::file_size(path, ec) == 0) fail("{}: file is empty", path);
+  std::string ext = fs::path(path).extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+  {
+    // Assimp picks a reader by the extension, and by the content where the extension is not its
+    std::ifstream in(path, std::ios::binary);
+    char magic[4] = {};
+    in.read(magic, 4);
+    if (ext == ".ply" || (std::string_view(magic, 3) == "ply" && (magic[3] == '\n' || magic[3] == '\r'))) check_ply_header(path);
+  }
   // Triangulate, bake node transforms, drop points and lines; append_mesh fills in missing normals
   Assimp::Importer importer;
   importer.SetPropertyInteger(AI_CONFIG_PP_SBP_REMOVE, aiPrimitiveType_POINT | aiPrimitiveType_LINE);
   // PLY is indexed already: joining identical vertices there only costs memory and time (about
   // a third of the peak on a 2-million-triangle scan); formats that store vertices per face need it
-  std::string ext = fs::path(path).extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
   const unsigned join = ext == ".ply" ? 0u : unsigned(aiProcess_JoinIdenticalVertices);
-  const unsigned flags =
-      aiProcess_Triangulate | aiProcess_PreTransformVertices | aiProcess_SortByPType | join | aiProcess_ValidateDataStructure;
-  const aiScene* ai = importer.ReadFile(path, flags);
+  // Read and validated first; then each mesh's faces are checked, and its primitive types set from
+  // them, before the steps that rely on them: Assimp 5.2's PLY reader gives a malformed binary
+  // file faces of no corners, labelled polygons, and triangulating them fails an assertion that
+  // aborts the process (found by mutating PLY files)
+  const aiScene* ai = importer.ReadFile(path, aiProcess_ValidateDataStructure);
+  if (ai == nullptr) fail("{}: cannot read mesh: {}", path, importer.GetErrorString());
+  for (unsigned mi = 0; mi < ai->mNumMeshes; ++mi) {
+    aiMesh* mesh = ai->mMeshes[mi];  // (the scene's meshes are the importer's, not const)
+    unsigned types = 0;
+    for (unsigned f = 0; f < mesh->mNumFaces; ++f) {
+      const unsigned n = mesh->mFaces[f].mNumIndices;
+      if (n == 0 || mesh->mFaces[f].mIndices == nullptr)
+        fail("{}: face {} of mesh {} has no corners: the file is malformed (cut short, or its header does not describe its data)", path, f,
+             mi);
+      types |= n == 1 ? aiPrimitiveType_POINT : n == 2 ? aiPrimitiveType_LINE : n == 3 ? aiPrimitiveType_TRIANGLE : aiPrimitiveType_POLYGON;
+    }
+    mesh->mPrimitiveTypes = types;
+  }
+  ai = importer.ApplyPostProcessing(aiProcess_Triangulate | aiProcess_PreTransformVertices | aiProcess_SortByPType | join);
   if (ai == nullptr) fail("{}: cannot read mesh: {}", path, importer.GetErrorString());
   if (!ai->HasMeshes()) fail("{}: contains no meshes", path);
 

@@ -134,6 +134,39 @@ TEST(Scene, BadMeshesGiveClearErrors) {
   EXPECT_NE(error_of([&] { load_scene("builtin:teapot"); }).find("known: box"), std::string::npos);
 }
 
+// Malformed PLY files that Assimp 5.2 loops on for ever or aborts the process on (found by mutating
+// small PLY files) are refused with the file's name: a header without an "end_header" line (cut
+// short; the marker run into the data; the file ending at it; PLY content under another name), and
+// a binary file whose header does not describe its data (a property without a name), which gave
+// faces of no corners. The same file with its header whole still reads.
+TEST(Scene, MalformedPlyFilesAreRefusedNotHungOrAborted) {
+  TempDir t;
+  const std::string header =
+      "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+      "element face 1\nproperty list uchar int vertex_indices\n";
+  const std::string data = "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
+  EXPECT_EQ(load_scene(t.write("whole.ply", header + "end_header\n" + data)).triangles.size(), 1u);
+  for (const auto& [name, text] : std::vector<std::pair<std::string, std::string>>{{"cut.ply", header.substr(0, 40)},
+                                                                                   {"run-on.ply", header + "end_headerB" + data},
+                                                                                   {"ends.ply", header + "end_header"},
+                                                                                   {"sniffed.mesh", header + "end_he9der\n" + data}}) {
+    const std::string error = error_of([&] { load_scene(t.write(name, text)); });
+    EXPECT_NE(error.find(name + ": a PLY header without an 'end_header' line"), std::string::npos) << error;
+  }
+  std::string binary =
+      "ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float \n"
+      "element face 1\nproperty list uchar int vertex_indices\nend_header\n";
+  const float xyz[9] = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+  binary.append(reinterpret_cast<const char*>(xyz), sizeof xyz);
+  const unsigned char face[13] = {3, 0, 0, 0, 0, 1, 0, 0, 0, 2, 0, 0, 0};
+  binary.append(reinterpret_cast<const char*>(face), sizeof face);
+  const std::string error = error_of([&] { load_scene(t.write("nameless.ply", binary)); });
+  EXPECT_NE(error.find("nameless.ply: face 0 of mesh 0 has no corners"), std::string::npos) << error;
+  const size_t hole = binary.find("float \n");
+  binary.replace(hole, 7, "float z\n");
+  EXPECT_EQ(load_scene(t.write("named.ply", binary)).triangles.size(), 1u);
+}
+
 TEST(Scene, JsonWithTransformsCamerasAndLights) {
   TempDir t;
   t.write("quad.obj", kQuadObj);
