@@ -197,8 +197,9 @@ int run_render(const RenderCommandOptions& o) {
   if (o.quiet) return 0;
   const FrameStats& s = frame.stats;
   fmt::print("foveal render: {} ({} triangles{}, BVH {:.0f} ms), camera '{}', {}x{}, {} mode, gaze ({:.0f}, {:.0f}), {} threads\n",
-             scene.source, triangles, scene.skipped_triangles ? fmt::format(", {} degenerate skipped", scene.skipped_triangles) : "",
-             build_ms, camera.name, p.width, p.height, to_string(p.mode), frame.gaze_px.x, frame.gaze_px.y, threads.threads());
+             scene.source, triangles,
+             scene.skipped_triangles ? fmt::format(", {} degenerate or out of range skipped", scene.skipped_triangles) : "", build_ms,
+             camera.name, p.width, p.height, to_string(p.mode), frame.gaze_px.x, frame.gaze_px.y, threads.threads());
   fmt::print("  device   {}\n", renderer->describe());
   fmt::print("  AO rays  {:.2f} M ({:.1f} per pixel, {}..{}), {:.1f} Mrays/s\n", s.ao_rays / 1e6, s.ao_rays_mean, s.ao_rays_min,
              s.ao_rays_max, s.ao_ms > 0 ? s.ao_rays / (s.ao_ms * 1e3) : 0.0);

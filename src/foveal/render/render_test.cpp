@@ -91,6 +91,26 @@ TEST(AmbientOcclusion, MaximumDistanceCutsOcclusion) {
   EXPECT_LT(estimate_visibility(tracer, {0, 0, 0}, {0, 1, 0}, 256, 10.0f, eps, 1, 0, 0), 0.9f);
 }
 
+// A view that cannot be built is an error naming the camera, never rays that are not finite (which
+// abort the process in Embree): an eye too far for single precision, eye and look equal
+TEST(Render, ACameraWithNoViewIsRefused) {
+  Camera far;
+  far.name = "far";
+  far.eye = {1e30f, 0, 0};
+  try {
+    CameraRays rays(far, 16, 10);
+    ADD_FAILURE() << "accepted";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("camera 'far': no view from eye (1e+30, 0, 0)"), std::string::npos) << e.what();
+  }
+  Camera same;
+  same.look = same.eye;
+  EXPECT_THROW(CameraRays(same, 16, 10), Error);
+  Camera distant;
+  distant.eye = {1e15f, 0, 0};
+  EXPECT_NO_THROW(CameraRays(distant, 16, 10));
+}
+
 TEST(Render, FoveaIsBitIdenticalToTheFullFrameReference) {
   const Tracer tracer(box());
   const Camera cam = box().cameras.front();

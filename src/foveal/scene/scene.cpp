@@ -33,6 +33,10 @@ const std::array<float, 256>& srgb_to_linear_table() {
 }
 
 bool finite(glm::vec3 v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
+// Finite and within ±kMaxSceneCoordinate (NaN fails the comparison)
+bool in_range(glm::vec3 v) {
+  return std::abs(v.x) <= kMaxSceneCoordinate && std::abs(v.y) <= kMaxSceneCoordinate && std::abs(v.z) <= kMaxSceneCoordinate;
+}
 
 }  // namespace
 
@@ -59,14 +63,15 @@ void append_mesh(Scene& scene, const MeshData& mesh, uint32_t material_id, const
   const auto base = static_cast<uint32_t>(scene.positions.size());
   const glm::mat3 normal_matrix = glm::inverseTranspose(glm::mat3(transform));
   for (const auto& p : mesh.positions) scene.positions.push_back(glm::vec3(transform * glm::vec4(p, 1.0f)));
-  // Triangles with zero area or non-finite vertices are dropped; the rest add area-weighted face normals
+  // Triangles with zero area or vertices that are non-finite or out of range are dropped; the rest
+  // add area-weighted face normals
   std::vector<glm::vec3> face_normals(mesh.positions.size(), glm::vec3(0.0f));
   for (const auto& t : mesh.triangles) {
     if (t.x >= mesh.positions.size() || t.y >= mesh.positions.size() || t.z >= mesh.positions.size())
       fail("triangle index {} out of range ({} vertices)", std::max({t.x, t.y, t.z}), mesh.positions.size());
     const glm::vec3 a = scene.positions[base + t.x], b = scene.positions[base + t.y], c = scene.positions[base + t.z];
     const glm::vec3 n = glm::cross(b - a, c - a);
-    if (!finite(a) || !finite(b) || !finite(c) || !finite(n) || glm::dot(n, n) <= 0.0f) {
+    if (!in_range(a) || !in_range(b) || !in_range(c) || !finite(n) || glm::dot(n, n) <= 0.0f) {
       ++scene.skipped_triangles;
       continue;
     }

@@ -121,7 +121,7 @@ struct Scene {
   glm::vec3 ambient{0.6f};               // i_a of eq. 2
   double meters_per_unit = 1.0;          // scene unit in metres
   std::optional<float> ao_distance;      // AO ray length, scene units (unset → 0.2 × diagonal)
-  size_t skipped_triangles = 0;          // degenerate or non-finite triangles dropped on load
+  size_t skipped_triangles = 0;          // degenerate, non-finite or out-of-range triangles dropped on load
 
   Bounds bounds() const;
 };
@@ -146,9 +146,15 @@ struct MeshData {
   std::vector<glm::uvec3> triangles;
 };
 
+// The largest coordinate a vertex may have, in scene units: the renderer squares distances in
+// single precision (the largest float is 3.4e38), and a vertex at 1e21 (a corrupt binary PLY) made
+// the camera framing the scene non-finite, which aborted the process in Embree.
+inline constexpr float kMaxSceneCoordinate = 1e15f;
+
 // Append a mesh with an existing material, transformed to world space: degenerate or
-// non-finite triangles are dropped (counted in skipped_triangles), missing or broken normals
-// are the area-weighted average of the adjacent faces. Throws Error for an index out of range.
+// non-finite triangles, and those with a coordinate beyond ±kMaxSceneCoordinate, are dropped
+// (counted in skipped_triangles), missing or broken normals are the area-weighted average of the
+// adjacent faces. Throws Error for an index out of range.
 void append_mesh(Scene& scene, const MeshData& mesh, uint32_t material_id, const glm::mat4& transform);
 // Make room for this many more vertices and triangles in the scene's arrays (one allocation each
 // instead of growth by doubling, which briefly holds two copies).

@@ -56,6 +56,19 @@ TEST(Scene, SkipsDegenerateTriangles) {
   for (const auto& n : s.normals) EXPECT_TRUE(std::isfinite(n.x) && std::isfinite(n.y) && std::isfinite(n.z));
 }
 
+// A vertex beyond ±1e15 (a corrupt binary PLY gave 9.4e21) drops its triangles like a non-finite
+// one: the camera framing the scene stays finite (it was not, and Embree aborted the process)
+TEST(Scene, SkipsTrianglesBeyondTheCoordinateRange) {
+  TempDir t;
+  const Scene s =
+      load_scene(t.write("far.obj", std::string(kQuadObj) + "v -9.4e21 0 0\nf 5 2 3\nv 0 0 2e15\nf 1 2 6\nv 0 0 9e14\nf 1 2 7\n"));
+  EXPECT_EQ(s.triangles.size(), 3u);  // the quad's two and the one within range
+  EXPECT_EQ(s.skipped_triangles, 2u);
+  EXPECT_LE(s.bounds().hi.z, kMaxSceneCoordinate);
+  const Camera camera = default_camera(s);
+  EXPECT_TRUE(std::isfinite(glm::dot(camera.eye - camera.look, camera.eye - camera.look)));
+}
+
 TEST(Scene, LoadsPlyWithCrlfAndObjMaterials) {
   TempDir t;
   const std::string ply =
