@@ -50,7 +50,7 @@ struct Navigator {
     const glm::vec3 f = c.look - c.eye;
     const float factor = std::pow(0.9f, wheel);
     if (!fly) {
-      c.eye = c.look - f * factor;
+      if (glm::length(f) * factor > speed * 1e-4f) c.eye = c.look - f * factor;  // the eye never reaches the look point
     } else {
       const glm::vec3 step = glm::normalize(f) * speed * 0.25f * wheel;
       c.eye += step;

@@ -26,6 +26,9 @@ TEST(Navigator, OrbitCirclesTheLookPointAndNeverCrossesThePole) {
   Camera d = start();
   nav.dolly(d, 1);
   EXPECT_NEAR(glm::length(d.eye - d.look), 4.5, 1e-5);
+  for (int i = 0; i < 2000; ++i) nav.dolly(d, 1);  // a long zoom in: the eye stops short of the look point
+  EXPECT_GT(glm::length(d.eye - d.look), nav.speed * 1e-4f * 0.9f);
+  EXPECT_LT(glm::length(d.eye - d.look), nav.speed * 1e-4f / 0.9f + 1e-6f);
 }
 
 TEST(Navigator, FlyMovesTheEyeAndTurnsTheLook) {
