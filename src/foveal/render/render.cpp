@@ -87,7 +87,7 @@ CameraRays::CameraRays(const Camera& camera, int width, int height)
   // Rays that are not finite abort the process in Embree: a camera whose view cannot be built
   // (coordinates too large for single precision, eye and look equal, up along the view) is refused
   auto finite = [](glm::vec3 v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); };
-  if (!finite(eye_) || !finite(forward_) || !finite(right_) || !finite(up_) || glm::dot(right_, right_) == 0.0f)
+  if (!finite(eye_) || !finite(forward_) || !finite(right_) || !finite(up_))
     fail("camera '{}': no view from eye ({}, {}, {}) towards ({}, {}, {}) with up ({}, {}, {}) and a {}° field of view", camera.name,
          camera.eye.x, camera.eye.y, camera.eye.z, camera.look.x, camera.look.y, camera.look.z, camera.up.x, camera.up.y, camera.up.z,
          camera.fov_deg);
