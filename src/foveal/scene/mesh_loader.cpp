@@ -2,7 +2,9 @@
 #include "foveal/scene/scene.h"
 #include "foveal/util/error.h"
 #include "foveal/util/image_file.h"
+#include "foveal/util/text.h"
 
+#include <assimp/DefaultIOSystem.h>
 #include <assimp/Importer.hpp>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
@@ -70,6 +72,43 @@ void check_ply_header(const std::string& path) {
   fail("{}: a PLY header without an 'end_header' line (read {} lines): the file is cut short or is not a PLY file", path, line - 1);
 }
 
+// The files Assimp opens, checked first where its readers crash on malformed ones: a material
+// library (.mtl) with a statement before any "newmtl" line makes Assimp 5.2's MTL reader write to
+// a material that does not exist (a segmentation fault; found by mutating MTL files). Such a file
+// is not opened, and the problem, kept here, becomes the error once Assimp returns.
+class CheckedFiles : public Assimp::DefaultIOSystem {
+ public:
+  Assimp::IOStream* Open(const char* file, const char* mode) override {
+    std::string ext = std::filesystem::path(file).extension().string();
+    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+    if (ext == ".mtl" && Exists(file)) {  // (Assimp may open it more than once)
+      try {
+        check_material_library(file);
+      } catch (const Error& e) {
+        if (problem.empty()) problem = e.what();
+        return nullptr;
+      }
+    }
+    return DefaultIOSystem::Open(file, mode);
+  }
+  std::string problem;
+
+ private:
+  static void check_material_library(const std::string& path) {
+    const std::string text = text::read_file(path);
+    text::Lines lines(text::strip_bom(text));
+    std::string_view line;
+    while (lines.next(line)) {
+      const auto fields = text::split(text::trim(line), ' ');
+      if (fields.empty() || fields[0].empty() || fields[0][0] == '#') continue;
+      if (fields[0] != "newmtl")
+        fail("{}:{}: '{}' before any 'newmtl' line (a material library starts each material with 'newmtl NAME')", path, lines.number(),
+             text::printable(fields[0]));
+      return;
+    }
+  }
+};
+
 glm::vec3 colour(const aiMaterial* m, const char* key, unsigned type, unsigned index, glm::vec3 fallback) {
   aiColor3D c;
   if (m->Get(key, type, index, c) != AI_SUCCESS) return fallback;
@@ -94,6 +133,8 @@ void append_mesh_file(Scene& scene, const std::string& path, const glm::mat4& tr
   }
   // Triangulate, bake node transforms, drop points and lines; append_mesh fills in missing normals
   Assimp::Importer importer;
+  auto* files = new CheckedFiles;  // the importer owns it
+  importer.SetIOHandler(files);
   importer.SetPropertyInteger(AI_CONFIG_PP_SBP_REMOVE, aiPrimitiveType_POINT | aiPrimitiveType_LINE);
   // PLY is indexed already: joining identical vertices there only costs memory and time (about
   // a third of the peak on a 2-million-triangle scan); formats that store vertices per face need it
@@ -103,6 +144,7 @@ void append_mesh_file(Scene& scene, const std::string& path, const glm::mat4& tr
   // file faces of no corners, labelled polygons, and triangulating them fails an assertion that
   // aborts the process (found by mutating PLY files)
   const aiScene* ai = importer.ReadFile(path, aiProcess_ValidateDataStructure);
+  if (!files->problem.empty()) fail("{}", files->problem);
   if (ai == nullptr) fail("{}: cannot read mesh: {}", path, importer.GetErrorString());
   for (unsigned mi = 0; mi < ai->mNumMeshes; ++mi) {
     aiMesh* mesh = ai->mMeshes[mi];  // (the scene's meshes are the importer's, not const)

@@ -180,6 +180,21 @@ TEST(Scene, MalformedPlyFilesAreRefusedNotHungOrAborted) {
   EXPECT_EQ(load_scene(t.write("named.ply", binary)).triangles.size(), 1u);
 }
 
+// A material library with a statement before any "newmtl" line crashed Assimp 5.2's MTL reader (a
+// segmentation fault; found by mutating MTL files): it is an error naming the file and line.
+// Comments and blank lines before the first material are fine.
+TEST(Scene, AMaterialLibraryWithoutNewmtlFirstIsRefused) {
+  TempDir t;
+  t.write("tex.ppm", std::string("P6\n1 1\n255\n\xff\x80\x00", 14));
+  const std::string obj = "mtllib m.mtl\nusemtl t\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\nf 1/1 2/2 3/3\n";
+  t.write("m.mtl", "# made by hand\n\nKd 0.5 0.5 0.5\nmap_Kd tex.ppm\n");
+  const std::string error = error_of([&] { load_scene(t.write("broken.obj", obj)); });
+  EXPECT_NE(error.find("m.mtl:3: 'Kd' before any 'newmtl' line"), std::string::npos) << error;
+  t.write("m.mtl", "# made by hand\n\nnewmtl t\nKd 0.5 0.5 0.5\nmap_Kd tex.ppm\n");
+  const Scene s = load_scene(t.write("whole.obj", obj));
+  EXPECT_EQ(s.textures.size(), 1u);
+}
+
 TEST(Scene, JsonWithTransformsCamerasAndLights) {
   TempDir t;
   t.write("quad.obj", kQuadObj);
