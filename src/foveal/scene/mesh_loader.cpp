@@ -50,26 +50,130 @@ int load_texture(Scene& scene, std::map<std::string, int>& cache, const std::fil
   return cache[key] = static_cast<int>(scene.textures.size() - 1);
 }
 
-// A PLY header must end in an "end_header" line before the file does: Assimp 5.2's PLY reader
-// loops for ever where it does not (a file cut short in its header, "end_header" followed by data
-// on the same line, or by nothing; found by mutating PLY files), so that is checked here first.
-// The header is read up to 1 MiB: PLY headers are a few hundred bytes, comments included.
-void check_ply_header(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::string head(size_t(1) << 20, '\0');
-  in.read(head.data(), static_cast<std::streamsize>(head.size()));
-  head.resize(static_cast<size_t>(in.gcount()));
+// A PLY file is checked before Assimp 5.2 reads it, where its reader fails on malformed files
+// (found by mutating small PLY files):
+// - a header without an "end_header" line (cut short, the marker run into the data, the file
+//   ending at it) made it loop for ever;
+// - a list length no face has (a corrupt binary count of 0x30000000 in a 330-byte file) made it
+//   allocate 20 GB before saying "File corrupted", and an element count beyond what the file holds
+//   made it allocate first too.
+// So the header is read (up to 1 MiB: PLY headers are a few hundred bytes), and the data walked:
+// each list's length at most 32767, the most corners Assimp keeps per face, and each element's
+// count within the bytes left. Data that ends early is left to Assimp to judge.
+struct PlyProperty {
+  int size = 0;        // bytes of a value (binary)
+  int count_size = 0;  // bytes of a list's length; 0: not a list
+  bool signed_count = false;
+};
+struct PlyElement {
+  std::string name;
+  uint64_t count = 0;
+  std::vector<PlyProperty> properties;
+};
+
+int ply_type_size(std::string_view type) {
+  if (type == "char" || type == "uchar" || type == "int8" || type == "uint8") return 1;
+  if (type == "short" || type == "ushort" || type == "int16" || type == "uint16") return 2;
+  if (type == "int" || type == "uint" || type == "int32" || type == "uint32" || type == "float" || type == "float32") return 4;
+  if (type == "double" || type == "float64") return 8;
+  return 0;
+}
+
+constexpr uint64_t kMaxPlyListLength = 32767;  // Assimp's AI_MAX_FACE_INDICES
+
+void check_ply(const std::string& path) {
+  const std::string text = text::read_file(path, size_t(1) << 34);
+  const std::string_view head = std::string_view(text).substr(0, size_t(1) << 20);
   if (!head.starts_with("ply\n") && !head.starts_with("ply\r\n")) fail("{}: not a PLY file (it does not start with a line 'ply')", path);
-  size_t line = 1;
+  std::vector<PlyElement> elements;
+  enum class Format { ascii, little, big, other } format = Format::other;
+  size_t body = std::string::npos, line = 1;
   for (size_t at = 0; at < head.size(); ++line) {
     const size_t end = head.find('\n', at);
-    if (end == std::string::npos) break;  // the last line has no end: not a whole header line
-    std::string_view text(head.data() + at, end - at);
-    while (!text.empty() && (text.back() == '\r' || text.back() == ' ' || text.back() == '\t')) text.remove_suffix(1);
-    if (text == "end_header") return;
+    if (end == std::string_view::npos) break;  // the last line has no end: not a whole header line
+    const auto f = text::split(text::trim(head.substr(at, end - at)), ' ');
     at = end + 1;
+    if (f.empty()) continue;
+    if (f[0] == "end_header" && f.size() == 1) {
+      body = at;
+      break;
+    }
+    if (f[0] == "format" && f.size() >= 2)
+      format = f[1] == "ascii"                  ? Format::ascii
+               : f[1] == "binary_little_endian" ? Format::little
+               : f[1] == "binary_big_endian"    ? Format::big
+                                                : Format::other;
+    if (f[0] == "element" && f.size() >= 3) {
+      const auto count = text::to_number(f[2]);
+      elements.push_back({std::string(f[1]), count && *count >= 0 && *count < 1e18 ? uint64_t(*count) : 0, {}});
+    }
+    if (f[0] == "property" && !elements.empty()) {
+      PlyProperty p;
+      if (f.size() >= 5 && f[1] == "list") {
+        p.count_size = ply_type_size(f[2]);
+        p.signed_count = f[2] == "char" || f[2] == "short" || f[2] == "int" || f[2] == "int8" || f[2] == "int16" || f[2] == "int32";
+        p.size = ply_type_size(f[3]);
+        if (p.count_size == 0 || p.size == 0) return;  // a type Assimp will name
+      } else if (f.size() >= 3) {
+        if ((p.size = ply_type_size(f[1])) == 0) return;
+      }
+      elements.back().properties.push_back(p);
+    }
   }
-  fail("{}: a PLY header without an 'end_header' line (read {} lines): the file is cut short or is not a PLY file", path, line - 1);
+  if (body == std::string::npos)
+    fail("{}: a PLY header without an 'end_header' line (read {} lines): the file is cut short or is not a PLY file", path, line - 1);
+  if (format == Format::other) return;  // Assimp says what is wrong with the format line
+  const std::string_view data = std::string_view(text).substr(body);
+  size_t at = 0;
+  auto too_long = [&](const PlyElement& e, uint64_t i, int64_t length) {
+    fail("{}: {} {} of {} holds a list of {} values (a face has at most {} corners): the file is corrupt", path, e.name, i, e.count, length,
+         kMaxPlyListLength);
+  };
+  for (const PlyElement& e : elements) {
+    // Each instance takes at least a byte per value (binary) or two (a digit and a space)
+    uint64_t least = 0;
+    for (const PlyProperty& p : e.properties) least += format == Format::ascii ? 2 : uint64_t(p.count_size ? p.count_size : p.size);
+    const size_t left = data.size() - std::min(at, data.size()) + (format == Format::ascii ? 1 : 0);  // (the last value may end the file)
+    if (least > 0 && e.count > left / least)
+      fail("{}: element '{}' claims {} instances, more than the {} bytes left in the file hold: the file is cut short or corrupt", path,
+           e.name, e.count, data.size() - std::min(at, data.size()));
+    for (uint64_t i = 0; i < e.count; ++i)
+      for (const PlyProperty& p : e.properties) {
+        if (format == Format::ascii) {
+          auto token = [&]() {
+            while (at < data.size() && std::isspace(static_cast<unsigned char>(data[at]))) ++at;
+            const size_t start = at;
+            while (at < data.size() && !std::isspace(static_cast<unsigned char>(data[at]))) ++at;
+            return data.substr(start, at - start);
+          };
+          const std::string_view value = token();
+          if (value.empty()) return;  // data ends early: Assimp judges
+          if (p.count_size == 0) continue;
+          const auto length = text::to_number(value);
+          if (!length) return;
+          if (*length < 0 || *length > double(kMaxPlyListLength)) too_long(e, i, static_cast<int64_t>(*length));
+          for (int64_t k = 0; k < static_cast<int64_t>(*length); ++k)
+            if (token().empty()) return;
+        } else {
+          if (p.count_size == 0) {
+            at += static_cast<size_t>(p.size);
+            continue;
+          }
+          if (at + static_cast<size_t>(p.count_size) > data.size()) return;
+          uint64_t length = 0;
+          for (int k = 0; k < p.count_size; ++k) {
+            const auto byte = static_cast<unsigned char>(data[at + static_cast<size_t>(format == Format::big ? k : p.count_size - 1 - k)]);
+            length = length << 8 | byte;
+          }
+          at += static_cast<size_t>(p.count_size);
+          const bool negative = p.signed_count && (length >> (8 * p.count_size - 1)) != 0;
+          if (negative || length > kMaxPlyListLength)
+            too_long(e, i, negative ? static_cast<int64_t>(length) - (int64_t(1) << (8 * p.count_size)) : static_cast<int64_t>(length));
+          at += static_cast<size_t>(length) * static_cast<size_t>(p.size);
+        }
+        if (at > data.size()) return;
+      }
+  }
 }
 
 // The files Assimp opens, checked first where its readers crash on malformed ones: a material
@@ -129,7 +233,7 @@ void append_mesh_file(Scene& scene, const std::string& path, const glm::mat4& tr
     std::ifstream in(path, std::ios::binary);
     char magic[4] = {};
     in.read(magic, 4);
-    if (ext == ".ply" || (std::string_view(magic, 3) == "ply" && (magic[3] == '\n' || magic[3] == '\r'))) check_ply_header(path);
+    if (ext == ".ply" || (std::string_view(magic, 3) == "ply" && (magic[3] == '\n' || magic[3] == '\r'))) check_ply(path);
   }
   // Triangulate, bake node transforms, drop points and lines; append_mesh fills in missing normals
   Assimp::Importer importer;

@@ -178,6 +178,24 @@ TEST(Scene, MalformedPlyFilesAreRefusedNotHungOrAborted) {
   const size_t hole = binary.find("float \n");
   binary.replace(hole, 7, "float z\n");
   EXPECT_EQ(load_scene(t.write("named.ply", binary)).triangles.size(), 1u);
+  // A list length no face has (Assimp allocated 20 GB for one in a 330-byte file) and an element
+  // count beyond what the file holds are refused before Assimp reads them, binary and ASCII
+  std::string huge =
+      "ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+      "element face 1\nproperty list uint int vertex_indices\nend_header\n";
+  huge.append(reinterpret_cast<const char*>(xyz), sizeof xyz);
+  const unsigned char huge_face[16] = {3, 0, 0, 0x30, 0, 0, 0, 0, 1, 0, 0, 0, 2, 0, 0, 0};  // length 0x30000003
+  huge.append(reinterpret_cast<const char*>(huge_face), sizeof huge_face);
+  std::string error2 = error_of([&] { load_scene(t.write("huge-list.ply", huge)); });
+  EXPECT_NE(error2.find("huge-list.ply: face 0 of 1 holds a list of 805306371 values (a face has at most 32767 corners)"),
+            std::string::npos)
+      << error2;
+  error2 = error_of([&] { load_scene(t.write("huge-ascii.ply", header + "end_header\n" + "0 0 0\n1 0 0\n0 1 0\n300000000 0 1 2\n")); });
+  EXPECT_NE(error2.find("face 0 of 1 holds a list of 300000000 values"), std::string::npos) << error2;
+  std::string many = header + "end_header\n" + data;
+  many.replace(many.find("element face 1"), 14, "element face 2000000000");
+  error2 = error_of([&] { load_scene(t.write("many.ply", many)); });
+  EXPECT_NE(error2.find("element 'face' claims 2000000000 instances, more than the"), std::string::npos) << error2;
 }
 
 // A material library with a statement before any "newmtl" line crashed Assimp 5.2's MTL reader (a
