@@ -88,6 +88,7 @@ void check_ply(const std::string& path) {
   std::vector<PlyElement> elements;
   enum class Format { ascii, little, big, other } format = Format::other;
   size_t body = std::string::npos, line = 1;
+  bool walkable = true;  // every property's type known
   for (size_t at = 0; at < head.size(); ++line) {
     const size_t end = head.find('\n', at);
     if (end == std::string_view::npos) break;  // the last line has no end: not a whole header line
@@ -113,16 +114,18 @@ void check_ply(const std::string& path) {
         p.count_size = ply_type_size(f[2]);
         p.signed_count = f[2] == "char" || f[2] == "short" || f[2] == "int" || f[2] == "int8" || f[2] == "int16" || f[2] == "int32";
         p.size = ply_type_size(f[3]);
-        if (p.count_size == 0 || p.size == 0) return;  // a type Assimp will name
+        walkable = walkable && p.count_size != 0 && p.size != 0;  // else a type Assimp will name
       } else if (f.size() >= 3) {
-        if ((p.size = ply_type_size(f[1])) == 0) return;
+        walkable = walkable && (p.size = ply_type_size(f[1])) != 0;
+      } else {
+        walkable = false;
       }
       elements.back().properties.push_back(p);
     }
   }
   if (body == std::string::npos)
     fail("{}: a PLY header without an 'end_header' line (read {} lines): the file is cut short or is not a PLY file", path, line - 1);
-  if (format == Format::other) return;  // Assimp says what is wrong with the format line
+  if (format == Format::other || !walkable) return;  // Assimp says what is wrong with the format or a type
   const std::string_view data = std::string_view(text).substr(body);
   size_t at = 0;
   auto too_long = [&](const PlyElement& e, uint64_t i, int64_t length) {
@@ -137,6 +140,7 @@ void check_ply(const std::string& path) {
     if (least > 0 && e.count > left / least)
       fail("{}: element '{}' claims {} instances, more than the {} bytes left in the file hold: the file is cut short or corrupt", path,
            e.name, e.count, data.size() - std::min(at, data.size()));
+    if (e.properties.empty()) continue;  // nothing to walk (and a count that holds no bytes)
     for (uint64_t i = 0; i < e.count; ++i)
       for (const PlyProperty& p : e.properties) {
         if (format == Format::ascii) {

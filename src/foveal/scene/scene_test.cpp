@@ -159,10 +159,12 @@ TEST(Scene, MalformedPlyFilesAreRefusedNotHungOrAborted) {
       "element face 1\nproperty list uchar int vertex_indices\n";
   const std::string data = "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
   EXPECT_EQ(load_scene(t.write("whole.ply", header + "end_header\n" + data)).triangles.size(), 1u);
-  for (const auto& [name, text] : std::vector<std::pair<std::string, std::string>>{{"cut.ply", header.substr(0, 40)},
-                                                                                   {"run-on.ply", header + "end_headerB" + data},
-                                                                                   {"ends.ply", header + "end_header"},
-                                                                                   {"sniffed.mesh", header + "end_he9der\n" + data}}) {
+  for (const auto& [name, text] :
+       std::vector<std::pair<std::string, std::string>>{{"cut.ply", header.substr(0, 40)},
+                                                        {"run-on.ply", header + "end_headerB" + data},
+                                                        {"ends.ply", header + "end_header"},
+                                                        {"sniffed.mesh", header + "end_he9der\n" + data},
+                                                        {"typo.ply", "ply\nformat ascii 1.0\nelement vertex 3\nproperty flaot x\n"}}) {
     const std::string error = error_of([&] { load_scene(t.write(name, text)); });
     EXPECT_NE(error.find(name + ": a PLY header without an 'end_header' line"), std::string::npos) << error;
   }
