@@ -21,20 +21,14 @@ namespace fs = std::filesystem;
 
 namespace {
 
-std::string lower_extension(const fs::path& p) {
-  std::string ext = p.extension().string();
-  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  return ext;
-}
-
 bool is_image(const fs::path& p) {
-  const std::string ext = lower_extension(p);
+  const std::string ext = lower_extension(p.string());
   return ext == ".png" || ext == ".jpg" || ext == ".jpeg" || ext == ".bmp" || ext == ".tif" || ext == ".tiff" || ext == ".exr" ||
          ext == ".pfm";
 }
 
 bool is_video(const fs::path& p) {
-  const std::string ext = lower_extension(p);
+  const std::string ext = lower_extension(p.string());
   return ext == ".mp4" || ext == ".mkv" || ext == ".mov" || ext == ".webm" || ext == ".avi" || ext == ".m4v";
 }
 

@@ -31,15 +31,7 @@
 #include <sstream>
 
 namespace foveal {
-namespace {
-
-std::string extension(const std::string& path) {
-  std::string ext = std::filesystem::path(path).extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
-  return ext;
-}
-
-}  // namespace
+namespace {}  // namespace
 
 float srgb_to_linear(float v) { return v <= 0.04045f ? v / 12.92f : std::pow((v + 0.055f) / 1.055f, 2.4f); }
 
@@ -73,7 +65,7 @@ const std::array<float, 255>& srgb_steps() {
 
 // An 8-bit BGR(A) or grey matrix to PNG/JPEG/BMP/PPM.
 void write_8bit(const cv::Mat& mat, const std::string& path) {
-  const std::string ext = extension(path);
+  const std::string ext = lower_extension(path);
   if (ext != ".png" && ext != ".jpg" && ext != ".jpeg" && ext != ".bmp" && ext != ".ppm")
     fail("{}: unknown image format '{}' (use .png, .jpg, .pfm or .exr)", path, ext);
   bool ok = false;
@@ -136,7 +128,7 @@ void save_rgba8(const Rgba8& image, const std::string& path) {
 void save_image(const Image& image, const std::string& path, bool srgb) {
   check_not_an_input(path);
   if (image.empty()) fail("{}: cannot write an empty image", path);
-  const std::string ext = extension(path);
+  const std::string ext = lower_extension(path);
   if (ext == ".pfm") return save_pfm(image, path);
   if (ext == ".exr") return save_exr(image, path);
   // 8-bit, BGR(A) order for OpenCV; alpha is stored linearly (it is a coverage, not a colour)
@@ -173,7 +165,7 @@ Image load_image(const std::string& path, bool keep_alpha) {
   if (!std::filesystem::exists(path, ec)) fail("{}: no such file", path);
   if (std::filesystem::is_directory(path, ec)) fail("{}: is a folder, not an image", path);
   note_input(path);
-  const std::string ext = extension(path);
+  const std::string ext = lower_extension(path);
   if (ext == ".pfm") return load_pfm(path);
   if (ext == ".exr") return load_exr(path);
   check_image_file(path);

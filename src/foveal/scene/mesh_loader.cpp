@@ -1,6 +1,7 @@
 // foveal/scene/mesh_loader.cpp — meshes through Assimp (OBJ+MTL, PLY, glTF, …) and their textures.
 #include "foveal/scene/scene.h"
 #include "foveal/util/error.h"
+#include "foveal/util/files.h"
 #include "foveal/util/image_file.h"
 #include "foveal/util/text.h"
 
@@ -12,6 +13,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <string_view>
@@ -106,7 +108,8 @@ void check_ply(const std::string& path) {
                                                 : Format::other;
     if (f[0] == "element" && f.size() >= 3) {
       const auto count = text::to_number(f[2]);
-      elements.push_back({std::string(f[1]), count && *count >= 0 && *count < 1e18 ? uint64_t(*count) : 0, {}});
+      // (a count beyond 1e18 is held as 1e18: no file holds that many, and the walk says so)
+      elements.push_back({std::string(f[1]), count && *count >= 0 ? uint64_t(std::min(*count, 1e18)) : 0, {}});
     }
     if (f[0] == "property" && !elements.empty()) {
       PlyProperty p;
@@ -128,9 +131,15 @@ void check_ply(const std::string& path) {
   if (format == Format::other || !walkable) return;  // Assimp says what is wrong with the format or a type
   const std::string_view data = std::string_view(text).substr(body);
   size_t at = 0;
-  auto too_long = [&](const PlyElement& e, uint64_t i, int64_t length) {
+  auto too_long = [&](const PlyElement& e, uint64_t i, double length) {
     fail("{}: {} {} of {} holds a list of {} values (a face has at most {} corners): the file is corrupt", path, e.name, i, e.count, length,
          kMaxPlyListLength);
+  };
+  auto token = [&]() {  // the next whitespace-separated value of an ASCII file; empty at its end
+    while (at < data.size() && std::isspace(static_cast<unsigned char>(data[at]))) ++at;
+    const size_t start = at;
+    while (at < data.size() && !std::isspace(static_cast<unsigned char>(data[at]))) ++at;
+    return data.substr(start, at - start);
   };
   for (const PlyElement& e : elements) {
     // Each instance takes at least a byte per value (binary) or two (a digit and a space)
@@ -144,19 +153,13 @@ void check_ply(const std::string& path) {
     for (uint64_t i = 0; i < e.count; ++i)
       for (const PlyProperty& p : e.properties) {
         if (format == Format::ascii) {
-          auto token = [&]() {
-            while (at < data.size() && std::isspace(static_cast<unsigned char>(data[at]))) ++at;
-            const size_t start = at;
-            while (at < data.size() && !std::isspace(static_cast<unsigned char>(data[at]))) ++at;
-            return data.substr(start, at - start);
-          };
           const std::string_view value = token();
           if (value.empty()) return;  // data ends early: Assimp judges
           if (p.count_size == 0) continue;
           const auto length = text::to_number(value);
           if (!length) return;
-          if (*length < 0 || *length > double(kMaxPlyListLength)) too_long(e, i, static_cast<int64_t>(*length));
-          for (int64_t k = 0; k < static_cast<int64_t>(*length); ++k)
+          if (*length < 0 || *length > double(kMaxPlyListLength)) too_long(e, i, *length);
+          for (int k = 0; k < static_cast<int>(*length); ++k)
             if (token().empty()) return;
         } else {
           if (p.count_size == 0) {
@@ -172,7 +175,7 @@ void check_ply(const std::string& path) {
           at += static_cast<size_t>(p.count_size);
           const bool negative = p.signed_count && (length >> (8 * p.count_size - 1)) != 0;
           if (negative || length > kMaxPlyListLength)
-            too_long(e, i, negative ? static_cast<int64_t>(length) - (int64_t(1) << (8 * p.count_size)) : static_cast<int64_t>(length));
+            too_long(e, i, negative ? double(length) - std::ldexp(1.0, 8 * p.count_size) : double(length));
           at += static_cast<size_t>(length) * static_cast<size_t>(p.size);
         }
         if (at > data.size()) return;
@@ -187,9 +190,7 @@ void check_ply(const std::string& path) {
 class CheckedFiles : public Assimp::DefaultIOSystem {
  public:
   Assimp::IOStream* Open(const char* file, const char* mode) override {
-    std::string ext = std::filesystem::path(file).extension().string();
-    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
-    if (ext == ".mtl" && Exists(file)) {  // (Assimp may open it more than once)
+    if (lower_extension(file) == ".mtl" && Exists(file)) {  // (Assimp may open it more than once)
       try {
         check_material_library(file);
       } catch (const Error& e) {
@@ -230,8 +231,7 @@ void append_mesh_file(Scene& scene, const std::string& path, const glm::mat4& tr
   std::error_code ec;
   if (!fs::exists(path, ec)) fail("{}: no such file", path);
   if (fs::file_size(path, ec) == 0) fail("{}: file is empty", path);
-  std::string ext = fs::path(path).extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+  const std::string ext = lower_extension(path);
   {
     // Assimp picks a reader by the extension, and by the content where the extension is not its
     std::ifstream in(path, std::ios::binary);

@@ -202,8 +202,7 @@ Scene load_scene(const std::string& spec) {
     if (!fs::exists(spec, ec)) fail("{}: no such file", spec);
     if (fs::is_directory(spec, ec)) fail("{}: is a directory, not a scene file", spec);
     if (fs::file_size(spec, ec) == 0) fail("{}: file is empty", spec);
-    std::string ext = fs::path(spec).extension().string();
-    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+    const std::string ext = lower_extension(spec);
     if (ext == ".json") {
       scene = parse_scene_json(text::read_file(spec), spec, fs::path(spec).parent_path().string());
     } else {

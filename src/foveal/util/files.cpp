@@ -4,6 +4,7 @@
 #include "foveal/util/error.h"
 
 #include <atomic>
+#include <cctype>
 #include <cerrno>
 #include <csignal>
 #include <filesystem>
@@ -53,6 +54,12 @@ Guard& guard() {
 }
 
 }  // namespace
+
+std::string lower_extension(const std::string& path) {
+  std::string ext = fs::path(path).extension().string();
+  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return ext;
+}
 
 void check_output_is_not_input(const std::string& output, const std::string& input, const char* option) {
   if (output.empty() || input.empty()) return;

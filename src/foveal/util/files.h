@@ -20,6 +20,10 @@ namespace foveal {
 // `output` names the same file or folder as `input` (after resolving links, . and ..).
 void check_output_is_not_input(const std::string& output, const std::string& input, const char* option);
 
+// The file name's extension in lower case, with its dot (".PLY" → ".ply"; "" for none): what
+// every reader that picks a format by the name compares.
+std::string lower_extension(const std::string& path);
+
 void set_input_guard(bool on);
 void note_input(const std::string& path);            // a reader's input (no effect with the guard off)
 void check_not_an_input(const std::string& output);  // a writer's target; throws Error naming it

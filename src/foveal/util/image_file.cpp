@@ -83,8 +83,9 @@ std::optional<HeaderSize> tiff_header(std::istream& in, bool little) {
   return HeaderSize{*width, *height, std::min<uint64_t>(samples, 4) * ((std::min<uint64_t>(bits, 64) + 7) / 8)};
 }
 
-std::optional<HeaderSize> header_size(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
+std::optional<HeaderSize> header_size(std::istream& in) {
+  in.clear();
+  in.seekg(0);
   std::array<unsigned char, 32> h{};
   in.read(reinterpret_cast<char*>(h.data()), h.size());
   const auto got = static_cast<size_t>(in.gcount());
@@ -145,7 +146,7 @@ void check_image_file(const std::string& path) {
       got >= 3 && m[0] == 'P' && m[1] >= '2' && m[1] <= '6' && m[1] != '4' && std::isspace(m[2]);  // (what save_image writes as .ppm)
   if (!(png || jpeg || bmp || tiff || ppm))
     fail("{}: not a PNG, JPEG, BMP, TIFF, PPM, EXR or PFM image (its first bytes are none of theirs)", path);
-  const auto size = header_size(path);
+  const auto size = header_size(in);
   if (!size) return;
   check_image_size(path, size->width, size->height);
   if (size->width * size->height * size->bytes_per_pixel > kMaxDecodedBytes)
