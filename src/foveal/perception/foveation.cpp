@@ -68,4 +68,44 @@ FoveationModel::FoveationModel(const Display& display, int w, int h, glm::dvec2 
   vert_f_ = glm::vec3(vert_);
 }
 
+// One definition, compiled with the flags that let its loops vectorise (src/foveal/CMakeLists.txt)
+void FoveationModel::evaluate_directions_fast(const float* px, const float* py, const float* pz, size_t n, float* effective_deg,
+                                              float* quality, uint16_t* rays, float* blend) const {
+  const glm::vec3 g = gaze_dir_f_, h = horiz_f_, v = vert_f_;
+  const float a = static_cast<float>(params_.ellipse_ratio), inv_a2 = 1.0f / (a * a), outside = 1.0f / a;
+  const float deg = static_cast<float>(kDeg), e2 = static_cast<float>(kAcuityE2Deg);
+  // q = min(max_cpd, F·e2 / (e2 + E)) / F₀: one division per pixel
+  const float numerator = static_cast<float>(kAcuityFovealCpd * kAcuityE2Deg / foveal_cpd_);
+  const float q_max = static_cast<float>(max_cpd_ / foveal_cpd_);
+  for (size_t i = 0; i < n; ++i) {
+    const glm::vec3 r(px[i], py[i], pz[i]);
+    const float cx = g.y * r.z - g.z * r.y, cy = g.z * r.x - g.x * r.z, cz = g.x * r.y - g.y * r.x;
+    const float angle = fast_atan2_positive(std::sqrt(cx * cx + cy * cy + cz * cz), g.x * r.x + g.y * r.y + g.z * r.z) * deg;
+    const float ph = h.x * r.x + h.y * r.y + h.z * r.z, pv = v.x * r.x + v.y * r.y + v.z * r.z;
+    const float len2 = ph * ph + pv * pv;
+    // (at the gaze itself, len2 = 0, E = 0 whatever the stretch)
+    const float stretch = len2 > 0 ? std::sqrt((ph * ph * inv_a2 + pv * pv) / std::max(len2, 1e-30f)) : outside;
+    const float e = angle * stretch;
+    effective_deg[i] = e;
+    quality[i] = std::min(q_max, numerator / (e2 + std::max(0.0f, e)));
+  }
+  // n(E) and b(E) from q: the defaults (γ = 2, β = 0) without pow()
+  const float span = static_cast<float>(params_.max_rays - params_.min_rays);
+  const int min_rays = params_.min_rays;
+  if (params_.gamma == 2.0) {
+    for (size_t i = 0; i < n; ++i) {
+      const float q = std::min(std::max(quality[i], 0.0f), 1.0f);
+      rays[i] = static_cast<uint16_t>(min_rays + static_cast<int>(span * q * q + 0.5f));
+    }
+  } else {
+    for (size_t i = 0; i < n; ++i) rays[i] = static_cast<uint16_t>(ao_ray_budget(quality[i], params_));
+  }
+  if (!blend) return;
+  if (params_.beta == 0.0) {
+    for (size_t i = 0; i < n; ++i) blend[i] = rays[i] > 0 ? 1.0f : 0.0f;
+  } else {
+    for (size_t i = 0; i < n; ++i) blend[i] = static_cast<float>(blend_weight(quality[i], rays[i], params_));
+  }
+}
+
 }  // namespace foveal

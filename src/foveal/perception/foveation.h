@@ -14,6 +14,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstddef>
+#include <cstdint>
 #include <numbers>
 
 #include <string>
@@ -82,7 +84,7 @@ FOVEAL_HD inline double blend_weight(double q, int rays, const FoveationParams& 
 // atan t = π/2 − atan(1/t) above 1: no library call, so a loop over pixels vectorises.
 FOVEAL_HD inline float fast_atan2_positive(float y, float x) {
   const bool swap = y > x;
-  const float t = swap ? x / y : y / x;
+  const float t = std::min(x, y) / std::max(x, y);  // one division, no branch: loops over pixels vectorise
   const float t2 = t * t;
   const float a = t * (0.9998660f + t2 * (-0.3302995f + t2 * (0.1801410f + t2 * (-0.0851330f + t2 * 0.0208351f))));
   return swap ? 1.57079633f - a : a;
@@ -134,24 +136,15 @@ class FoveationModel {
     return s;
   }
 
-  // The same model in single precision, for a unit eye ray: the real-time loop's maps, evaluated
-  // whenever the gaze moves (a third of the time of evaluate_direction). E agrees with it within
-  // 2e-3° and q within 1e-4, so n(E) differs by one ray where n_max·q² lies that close to a
-  // half-integer: under one pixel in a hundred (foveation_test.cpp).
-  FoveaSample evaluate_direction_fast(const glm::vec3& p) const {
-    FoveaSample s;
-    const float angle = fast_atan2_positive(glm::length(glm::cross(gaze_dir_f_, p)), glm::dot(gaze_dir_f_, p)) * static_cast<float>(kDeg);
-    const float ph = glm::dot(p, horiz_f_), pv = glm::dot(p, vert_f_);
-    const float len2 = ph * ph + pv * pv;
-    const float a = static_cast<float>(params_.ellipse_ratio);
-    const float stretch = len2 > 0 ? std::sqrt((ph * ph / (a * a) + pv * pv) / len2) : 1.0f / a;
-    s.angle_deg = angle;
-    s.effective_deg = angle * stretch;
-    s.quality = acuity_cutoff_cpd(s.effective_deg, max_cpd_) / foveal_cpd_;
-    s.rays = ao_ray_budget(s.quality, params_);
-    s.blend = blend_weight(s.quality, s.rays, params_);
-    return s;
-  }
+  // The same model in single precision for n unit eye rays at once (the normalised eye_ray()s of
+  // the pixels, as three arrays x, y, z): the real-time loop's maps, evaluated whenever the gaze
+  // moves. Plain loops over arrays with no library call, which the compiler vectorises
+  // (foveation.cpp): 1.8 ms for 840×525 on two cores, against 7.8 ms one pixel at a time (a 2-core
+  // AMD EPYC VM). E agrees with evaluate_direction within 2e-3° and q within 1e-4, so n(E) differs
+  // by one ray where n_max·q^γ lies that close to a half-integer: under one pixel in a hundred
+  // (foveation_test.cpp). `blend` may be null.
+  void evaluate_directions_fast(const float* px, const float* py, const float* pz, size_t n, float* effective_deg, float* quality,
+                                uint16_t* rays, float* blend) const;
 
   double max_cpd() const { return max_cpd_; }
   const FoveationParams& params() const { return params_; }
@@ -162,7 +155,7 @@ class FoveationModel {
   FoveationParams params_;
   double max_cpd_, foveal_cpd_;
   glm::dvec3 gaze_dir_, horiz_, vert_;       // unit gaze ray and its tangent-plane axes
-  glm::vec3 gaze_dir_f_, horiz_f_, vert_f_;  // the same in single precision (evaluate_direction_fast)
+  glm::vec3 gaze_dir_f_, horiz_f_, vert_f_;  // the same in single precision (evaluate_directions_fast)
 };
 
 }  // namespace foveal

@@ -6,6 +6,7 @@
 
 #include <cmath>
 #include <numbers>
+#include <vector>
 
 using namespace foveal;
 
@@ -138,19 +139,52 @@ TEST(Foveation, TheSinglePrecisionModelAgreesWithTheDoubleOne) {
     const float angle = 1.5707f * static_cast<float>(k) / 1000;
     EXPECT_NEAR(fast_atan2_positive(std::sin(angle), std::cos(angle)), angle, 1.2e-5f) << angle;
   }
-  // The model over a 1680×1050 display with the gaze off-centre: E within 2e-3°, q within 1e-4
+  // The model over a 1680×1050 display with the gaze off-centre: E within 2e-3°, q within 1e-4;
+  // the defaults (γ = 2, β = 0: their own loops) and another γ and β (the general ones)
   const Display d;
-  const FoveationModel m(d, 840, 525, {600, 150}, FoveationParams{});
-  size_t budgets_equal = 0, pixels = 0;
-  for (int y = 0; y < 525; y += 3)
-    for (int x = 0; x < 840; x += 3) {
-      const glm::dvec3 p = glm::normalize(m.eye_ray(x + 0.5, y + 0.5));
-      const FoveaSample exact = m.evaluate_direction(p), fast = m.evaluate_direction_fast(glm::vec3(p));
-      EXPECT_NEAR(fast.effective_deg, exact.effective_deg, 2e-3);
-      EXPECT_NEAR(fast.quality, exact.quality, 1e-4);
-      EXPECT_LE(std::abs(fast.rays - exact.rays), 1);
-      budgets_equal += fast.rays == exact.rays ? 1 : 0;
-      ++pixels;
+  FoveationParams other;
+  other.gamma = 1.5;
+  other.beta = 1.0;
+  other.min_rays = 2;
+  for (const FoveationParams& params : {FoveationParams{}, other}) {
+    const FoveationModel m(d, 840, 525, {600, 150}, params);
+    std::vector<float> x, y, z;
+    std::vector<FoveaSample> exact;
+    for (int py = 0; py < 525; py += 3)
+      for (int px = 0; px < 840; px += 3) {
+        const glm::dvec3 p = glm::normalize(m.eye_ray(px + 0.5, py + 0.5));
+        x.push_back(static_cast<float>(p.x));
+        y.push_back(static_cast<float>(p.y));
+        z.push_back(static_cast<float>(p.z));
+        exact.push_back(m.evaluate_direction(p));
+      }
+    // The gaze's own pixel too (no direction away from it: E = 0)
+    const glm::dvec3 at = glm::normalize(m.eye_ray(600, 150));
+    x.push_back(static_cast<float>(at.x));
+    y.push_back(static_cast<float>(at.y));
+    z.push_back(static_cast<float>(at.z));
+    exact.push_back(m.evaluate_direction(at));
+    const size_t n = x.size();
+    std::vector<float> e(n), q(n), b(n);
+    std::vector<uint16_t> r(n);
+    m.evaluate_directions_fast(x.data(), y.data(), z.data(), n, e.data(), q.data(), r.data(), b.data());
+    size_t budgets_equal = 0;
+    for (size_t i = 0; i < n; ++i) {
+      EXPECT_NEAR(e[i], exact[i].effective_deg, 2e-3) << i;
+      EXPECT_NEAR(q[i], exact[i].quality, 1e-4) << i;
+      EXPECT_LE(std::abs(static_cast<int>(r[i]) - exact[i].rays), 1) << i;
+      EXPECT_NEAR(b[i], exact[i].blend, 2e-4) << i;
+      budgets_equal += r[i] == exact[i].rays ? 1 : 0;
     }
-  EXPECT_GT(budgets_equal, pixels * 99 / 100);
+    EXPECT_GT(budgets_equal, n * 99 / 100);
+    EXPECT_NEAR(e.back(), 0.0, 2e-3);
+    EXPECT_EQ(q.back(), 1.0f);
+    EXPECT_EQ(r.back(), params.max_rays);
+    // Without `blend` the rest is the same
+    std::vector<float> e2(n), q2(n);
+    std::vector<uint16_t> r2(n);
+    m.evaluate_directions_fast(x.data(), y.data(), z.data(), n, e2.data(), q2.data(), r2.data(), nullptr);
+    EXPECT_EQ(e2, e);
+    EXPECT_EQ(r2, r);
+  }
 }

@@ -151,11 +151,16 @@ void RealtimeLoop::update_maps(glm::dvec2 gaze_px, bool predicted) {
   // foveation_maps()'s model in single precision, from the pixels' unit eye rays kept per size
   const size_t n = static_cast<size_t>(params_.width) * static_cast<size_t>(params_.height);
   const FoveationModel model(params_.display, params_.width, params_.height, gaze_px, params_.foveation);
-  if (rays_.size() != n) {
-    rays_.resize(n);
+  if (ray_x_.size() != n) {  // the unit eye rays, as three arrays (the maps' loop vectorises over each)
+    ray_x_.resize(n);
+    ray_y_.resize(n);
+    ray_z_.resize(n);
     for_each_pixel(n, [&](size_t i) {
-      rays_[i] = glm::vec3(glm::normalize(model.eye_ray(static_cast<double>(i % static_cast<size_t>(params_.width)) + 0.5,
-                                                        static_cast<double>(i / static_cast<size_t>(params_.width)) + 0.5)));
+      const glm::vec3 r(glm::normalize(model.eye_ray(static_cast<double>(i % static_cast<size_t>(params_.width)) + 0.5,
+                                                     static_cast<double>(i / static_cast<size_t>(params_.width)) + 0.5)));
+      ray_x_[i] = r.x;
+      ray_y_[i] = r.y;
+      ray_z_[i] = r.z;
     });
   }
   maps_.width = params_.width;
@@ -166,12 +171,14 @@ void RealtimeLoop::update_maps(glm::dvec2 gaze_px, bool predicted) {
   maps_.blend.resize(n);
   const bool foveated = params_.mode == RenderMode::foveated;
   const FoveationParams& f = params_.foveation;
-  for_each_pixel(n, [&](size_t i) {
-    const FoveaSample s = model.evaluate_direction_fast(rays_[i]);
-    maps_.eccentricity[i] = static_cast<float>(s.effective_deg);
-    maps_.quality[i] = foveated ? static_cast<float>(s.quality) : 1.0f;
-    maps_.rays[i] = static_cast<uint16_t>(foveated ? s.rays : f.max_rays);
-    maps_.blend[i] = foveated ? static_cast<float>(s.blend) : (f.max_rays > 0 ? 1.0f : 0.0f);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 4096), [&](const tbb::blocked_range<size_t>& r) {
+    const size_t b = r.begin();
+    model.evaluate_directions_fast(ray_x_.data() + b, ray_y_.data() + b, ray_z_.data() + b, r.size(), maps_.eccentricity.data() + b,
+                                   maps_.quality.data() + b, maps_.rays.data() + b, maps_.blend.data() + b);
+    if (foveated) return;
+    std::fill_n(maps_.quality.data() + b, r.size(), 1.0f);
+    std::fill_n(maps_.rays.data() + b, r.size(), static_cast<uint16_t>(f.max_rays));
+    std::fill_n(maps_.blend.data() + b, r.size(), f.max_rays > 0 ? 1.0f : 0.0f);
   });
   maps_gaze_ = gaze_px;
   // The fovea's pixels, in pixel order (centre-out measured slower to converge the whole fovea on
@@ -317,7 +324,9 @@ void RealtimeLoop::rescale(double fixed_ms) {
                       fixed_ms, settings_.budget_ms, requested_.width, requested_.height, params_.width, params_.height, 100 * scale);
   have_view_ = false;
   maps_gaze_.reset();
-  rays_.clear();
+  ray_x_.clear();
+  ray_y_.clear();
+  ray_z_.clear();
 }
 
 LoopFrame RealtimeLoop::frame(const Camera& camera) {

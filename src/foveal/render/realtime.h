@@ -158,7 +158,7 @@ class RealtimeLoop {
   uint64_t gbuffer_version_ = 0;
   std::vector<glm::vec3> lit_, ambient_;  // S and A of the colour S + k_a·A
   FoveationMaps maps_;
-  std::vector<glm::vec3> rays_;  // each pixel's unit eye ray (the maps' input that the gaze leaves alone)
+  std::vector<float> ray_x_, ray_y_, ray_z_;  // each pixel's unit eye ray (the maps' input that the gaze leaves alone)
   std::optional<glm::dvec2> maps_gaze_;
   bool maps_predicted_ = false;  // the maps are at a predicted landing
   std::vector<uint32_t> cast_, open_;
