@@ -138,7 +138,8 @@ class RealtimeLoop {
  private:
   void new_view(const Camera& camera);
   void update_maps(glm::dvec2 gaze_px, bool predicted);  // predicted: the fovea's pixels centre-out
-  size_t plan_round(uint64_t ray_limit, bool periphery);
+  // `swept`: set where the round planned the periphery (a pass over every pixel)
+  size_t plan_round(uint64_t ray_limit, bool periphery, bool& swept);
   void compose(Image& color);
   void rescale(double fixed_ms);
   glm::dvec2 px_to_deg(glm::dvec2 px) const;
