@@ -83,8 +83,7 @@ void FoveationModel::evaluate_directions_fast(const float* px, const float* py, 
     const float angle = fast_atan2_positive(std::sqrt(cx * cx + cy * cy + cz * cz), g.x * r.x + g.y * r.y + g.z * r.z) * deg;
     const float ph = h.x * r.x + h.y * r.y + h.z * r.z, pv = v.x * r.x + v.y * r.y + v.z * r.z;
     const float len2 = ph * ph + pv * pv;
-    // (at the gaze itself, len2 = 0, E = 0 whatever the stretch)
-    const float stretch = len2 > 0 ? std::sqrt((ph * ph * inv_a2 + pv * pv) / std::max(len2, 1e-30f)) : outside;
+    const float stretch = len2 > 0 ? std::sqrt((ph * ph * inv_a2 + pv * pv) / len2) : outside;
     const float e = angle * stretch;
     effective_deg[i] = e;
     quality[i] = std::min(q_max, numerator / (e2 + std::max(0.0f, e)));

@@ -174,8 +174,8 @@ void RealtimeLoop::update_maps(glm::dvec2 gaze_px, bool predicted) {
   tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 4096), [&](const tbb::blocked_range<size_t>& r) {
     const size_t b = r.begin();
     model.evaluate_directions_fast(ray_x_.data() + b, ray_y_.data() + b, ray_z_.data() + b, r.size(), maps_.eccentricity.data() + b,
-                                   maps_.quality.data() + b, maps_.rays.data() + b, maps_.blend.data() + b);
-    if (foveated) return;
+                                   maps_.quality.data() + b, maps_.rays.data() + b, foveated ? maps_.blend.data() + b : nullptr);
+    if (foveated) return;  // (a full-frame loop keeps only E: every pixel at q = 1 with n_max rays)
     std::fill_n(maps_.quality.data() + b, r.size(), 1.0f);
     std::fill_n(maps_.rays.data() + b, r.size(), static_cast<uint16_t>(f.max_rays));
     std::fill_n(maps_.blend.data() + b, r.size(), f.max_rays > 0 ? 1.0f : 0.0f);
@@ -378,7 +378,7 @@ LoopFrame RealtimeLoop::frame(const Camera& camera) {
     // A periphery round plans over every pixel: only when its planning fits
     const bool periphery = !wall || deadline - timer.ms() > periphery_plan_ms_ + plan_ms_;
     const Timer plan_timer;
-    bool swept = false;
+    bool swept;
     const size_t planned = plan_round(limit, periphery, swept);
     const double plan_ms = plan_timer.ms();
     out.plan_ms += plan_ms;
