@@ -14,7 +14,7 @@ using namespace foveal;
 
 namespace {
 
-Image picture() {
+Image blur_picture() {
   Image img(1024, 768, 3);
   for (int y = 0; y < img.height; ++y)
     for (int x = 0; x < img.width; ++x)
@@ -24,7 +24,7 @@ Image picture() {
 
 // Arguments: CoC diameter in pixels, scatter-aware (1) or not (0)
 void BM_VariableBlur(benchmark::State& state) {
-  static const Image img = picture();
+  static const Image img = blur_picture();
   const std::vector<float> coc(size_t(img.width) * img.height, float(state.range(0)));
   BlurParams p;
   p.scatter_aware = state.range(1) != 0;
@@ -33,7 +33,7 @@ void BM_VariableBlur(benchmark::State& state) {
 }
 
 void BM_OpenCvGaussian(benchmark::State& state) {
-  static const Image img = picture();
+  static const Image img = blur_picture();
   const cv::Mat src(img.height, img.width, CV_32FC3, const_cast<float*>(img.pixels.data()));
   cv::Mat dst;
   const double sigma = state.range(0) / 6.0;

@@ -14,7 +14,7 @@ using namespace foveal;
 
 namespace {
 
-Image picture() {
+Image impair_picture() {
   Image img(1280, 720, 3);
   for (int y = 0; y < img.height; ++y)
     for (int x = 0; x < img.width; ++x)
@@ -30,7 +30,7 @@ Retinotopy retinotopy() {
 }
 
 void BM_ImpairBaselineGaussian(benchmark::State& state) {
-  static Image img = picture();
+  static Image img = impair_picture();
   cv::Mat in(img.height, img.width, CV_32FC3, img.pixels.data()), out;
   for (auto _ : state) {
     cv::GaussianBlur(in, out, cv::Size(0, 0), 2.0);
@@ -40,7 +40,7 @@ void BM_ImpairBaselineGaussian(benchmark::State& state) {
 BENCHMARK(BM_ImpairBaselineGaussian)->Unit(benchmark::kMillisecond);
 
 void run(benchmark::State& state, const std::string& spec) {
-  static const Image img = picture();
+  static const Image img = impair_picture();
   static const Retinotopy r = retinotopy();
   const ImpairmentPasses passes(parse_eye_spec(spec).impair);
   for (auto _ : state) {

@@ -65,17 +65,25 @@ if [ "$seconds" != 0 ]; then
   # shellcheck disable=SC2086
   cmake --build build-fuzz --parallel "$jobs" --target $targets
   phase "fuzz build"
-  for target in $targets; do
+  # One target per core at a time: each still fuzzes for its whole time on a core of its own
+  fuzz_one() {
+    local target="$1"
     mkdir -p "build-fuzz/corpus/$target"
     cp fuzz/corpus/"$target"/* "build-fuzz/corpus/$target/" 2>/dev/null || true
-    if ! "build-fuzz/fuzz/$target" -max_total_time="$seconds" -rss_limit_mb=2048 -artifact_prefix=build-fuzz/ \
+    if ! "build-fuzz/fuzz/$target" -max_total_time="$seconds" -rss_limit_mb=2048 -artifact_prefix="build-fuzz/$target-" \
         "build-fuzz/corpus/$target" > "build-fuzz/$target.log" 2>&1; then
-      tail -n 40 "build-fuzz/$target.log"
-      echo "fuzz target $target failed (input saved under build-fuzz/)"
-      exit 1
+      { tail -n 40 "build-fuzz/$target.log"; echo "fuzz target $target failed (input saved as build-fuzz/$target-*)"; } >&2
+      return 1
     fi
-    tail -n 1 "build-fuzz/$target.log"
-  done
+    echo "  $target: $(tail -n 1 "build-fuzz/$target.log")"
+  }
+  export -f fuzz_one
+  export seconds
+  # shellcheck disable=SC2086
+  if ! printf '%s\n' $targets | xargs -P "$jobs" -I{} bash -c 'fuzz_one "$1"' _ {}; then
+    echo "fuzzing failed: a target above found a crash"
+    exit 1
+  fi
   phase "fuzzing"
 fi
 timing_summary "the test command"

@@ -37,7 +37,7 @@ TEST(BenchLatencyCli, ThreeLoopsUnderTheModelClockWriteTheDocumentedJson) {
   const std::string rec = write_saccades("saccades.csv");
   const std::string args = "bench latency --scene builtin:box --size 168x105 --max-rays 64 --recording " + rec +
                            " --duration 1.5 --clock model --model-rays-per-ms 2000 --model-fixed-ms 3 --min-amplitude 5";
-  const CliRun a = foveal(args + " --json a.json --timeline a.png");
+  const CliRun a = foveal_test::foveal(args + " --json a.json --timeline a.png");
   ASSERT_EQ(a.status, 0) << a.err << a.out;
   EXPECT_NE(a.out.find("| deadline+prediction |"), std::string::npos) << a.out;
   const auto j = nlohmann::json::parse(std::ifstream(scratch("a.json")));
@@ -83,7 +83,7 @@ TEST(BenchLatencyCli, ThreeLoopsUnderTheModelClockWriteTheDocumentedJson) {
 #endif
   // A given cost model: the deadline loops' figures are the same on a second run (but the ray
   // bound, whose raw rate is measured, and the whole-frame loop, whose frames' cost is)
-  const CliRun b = foveal(args + " --json b.json --loops deadline,deadline+prediction");
+  const CliRun b = foveal_test::foveal(args + " --json b.json --loops deadline,deadline+prediction");
   ASSERT_EQ(b.status, 0) << b.err;
   const auto k = nlohmann::json::parse(std::ifstream(scratch("b.json")));
   EXPECT_FALSE(k["recordings"][0].contains("whole-frame"));

@@ -22,11 +22,31 @@ struct CliRun {
   std::string out, err;
 };
 
-// Run the executable with arguments in a scratch folder, behind an optional launcher (env,
+// This test process's scratch folder: made the first time it is asked for, removed with what it
+// holds when the process exits (ctest runs each test in a process of its own).
+class ScratchFolder {
+ public:
+  ScratchFolder() : path_(fs::temp_directory_path() / ("foveal_cli_" + std::to_string(::getpid()))) { fs::create_directories(path_); }
+  ~ScratchFolder() {
+    std::error_code ignored;
+    fs::remove_all(path_, ignored);
+  }
+  ScratchFolder(const ScratchFolder&) = delete;
+  ScratchFolder& operator=(const ScratchFolder&) = delete;
+  const fs::path& path() const { return path_; }
+
+ private:
+  fs::path path_;
+};
+inline const fs::path& scratch_folder() {
+  static const ScratchFolder folder;
+  return folder.path();
+}
+
+// Run the executable with arguments in the scratch folder, behind an optional launcher (env,
 // xvfb-run, …); capture exit status and both streams.
 inline CliRun run_foveal(const std::string& launcher, const std::string& args) {
-  static const fs::path dir = fs::temp_directory_path() / ("foveal_cli_" + std::to_string(::getpid()));
-  fs::create_directories(dir);
+  const fs::path& dir = scratch_folder();
   const std::string cmd = "cd '" + dir.string() + "' && " + launcher + " '" FOVEAL_EXE "' " + args + " > out.txt 2> err.txt";
   CliRun r;
   const int raw = std::system(cmd.c_str());
@@ -42,15 +62,8 @@ inline CliRun run_foveal(const std::string& launcher, const std::string& args) {
 }
 inline CliRun foveal(const std::string& args) { return run_foveal("", args); }
 
-// A path in this test process's scratch folder (made the first time it is asked for).
-inline fs::path scratch(const std::string& name) {
-  static const fs::path folder = [] {
-    const fs::path f = fs::temp_directory_path() / ("foveal_cli_" + std::to_string(::getpid()));
-    fs::create_directories(f);
-    return f;
-  }();
-  return folder / name;
-}
+// A path in this test process's scratch folder.
+inline fs::path scratch(const std::string& name) { return scratch_folder() / name; }
 
 inline size_t lines(const std::string& s) {
   size_t n = 0;

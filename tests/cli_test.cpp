@@ -17,7 +17,7 @@ using namespace foveal_test;
 namespace fs = std::filesystem;
 
 TEST(Cli, RenderWritesImageMaskPlotAovsAndContractStats) {
-  const CliRun r = foveal(
+  const CliRun r = foveal_test::foveal(
       "render --size 96x60 --max-rays 8 --gaze 10,10 -o img.png --mask mask.png --acuity-plot fig4.svg "
       "--aov ao=ao.pfm,depth=depth.exr,position=p.pfm,normal=n.exr --stats stats.json");
   ASSERT_EQ(r.status, 0) << r.err;
@@ -43,7 +43,7 @@ TEST(Cli, RenderWritesImageMaskPlotAovsAndContractStats) {
 }
 
 TEST(Cli, FullModeCastsMaxRaysEverywhere) {
-  const CliRun r = foveal("render --scene builtin:plane --size 32x20 --mode full --max-rays 5 -o f.png --stats full.json -q");
+  const CliRun r = foveal_test::foveal("render --scene builtin:plane --size 32x20 --mode full --max-rays 5 -o f.png --stats full.json -q");
   ASSERT_EQ(r.status, 0) << r.err;
   EXPECT_EQ(r.out, "");
   const auto j = nlohmann::json::parse(std::ifstream(scratch("full.json")));
@@ -91,7 +91,7 @@ TEST(Cli, BadInputGivesOneClearLineAndNonZeroExit) {
       {"bench", "subcommand"},
   };
   for (const auto& [args, needle] : cases) {
-    const CliRun r = foveal(args);
+    const CliRun r = foveal_test::foveal(args);
     EXPECT_NE(r.status, 0) << args;
     EXPECT_LT(r.status, 128) << args << " crashed";
     EXPECT_EQ(lines(r.err), 1u) << args << ": " << r.err;
@@ -106,7 +106,7 @@ TEST(Cli, MalformedAndEmptyMeshesAreErrorsNotCrashes) {
   std::ofstream(scratch("junk.ply")) << "ply\nformat binary_little_endian 1.0\nelement vertex 100\nproperty float x\nend_header\n\x01";
   std::ofstream(scratch("bad.json")) << "{\"meshes\": [ {\"file\": 3} ]}";
   for (const char* f : {"empty.obj", "junk.obj", "junk.ply", "bad.json"}) {
-    const CliRun r = foveal(std::string("render --size 8x8 --scene ") + f);
+    const CliRun r = foveal_test::foveal(std::string("render --size 8x8 --scene ") + f);
     EXPECT_NE(r.status, 0) << f;
     EXPECT_LT(r.status, 128) << f << " crashed";
     EXPECT_EQ(lines(r.err), 1u) << f << ": " << r.err;
@@ -115,8 +115,8 @@ TEST(Cli, MalformedAndEmptyMeshesAreErrorsNotCrashes) {
 }
 
 TEST(Cli, SameSeedSameImageWhateverTheThreads) {
-  ASSERT_EQ(foveal("render --size 48x32 --max-rays 6 --threads 1 --aov ao=t1.pfm -o t1.png -q").status, 0);
-  ASSERT_EQ(foveal("render --size 48x32 --max-rays 6 --threads 2 --aov ao=t2.pfm -o t2.png -q").status, 0);
+  ASSERT_EQ(foveal_test::foveal("render --size 48x32 --max-rays 6 --threads 1 --aov ao=t1.pfm -o t1.png -q").status, 0);
+  ASSERT_EQ(foveal_test::foveal("render --size 48x32 --max-rays 6 --threads 2 --aov ao=t2.pfm -o t2.png -q").status, 0);
   auto bytes = [](const char* f) {
     std::stringstream s;
     s << std::ifstream(scratch(f), std::ios::binary).rdbuf();
@@ -155,7 +155,8 @@ TEST(Cli, PeakMemoryPerTriangleOfALargeMesh) {
       }
   }
   auto peak = [](const std::string& scene, const char* stats) {
-    const CliRun r = foveal("render --scene " + scene + " --size 420x262 --max-rays 4 --device cpu -q -o m.png --stats " + stats);
+    const CliRun r =
+        foveal_test::foveal("render --scene " + scene + " --size 420x262 --max-rays 4 --device cpu -q -o m.png --stats " + stats);
     EXPECT_EQ(r.status, 0) << r.err;
     return nlohmann::json::parse(std::ifstream(scratch(stats)))["peak_rss_mib"].get<double>();
   };
@@ -179,7 +180,7 @@ TEST(Cli, LibraryErrorsNameTheOptionsTheUserTyped) {
       {"gaze ../x.csv --pursuit-velocity 40", "--pursuit-velocity: must be below the saccade threshold --ivt-threshold (30 deg/s), got 40"},
   };
   for (const auto& [args, expected] : cases) {
-    const CliRun r = foveal(args);
+    const CliRun r = foveal_test::foveal(args);
     EXPECT_EQ(r.status, 1) << args;
     EXPECT_EQ(lines(r.err), 1u) << args << "\n" << r.err;
     EXPECT_NE(r.err.find("foveal: error: " + expected), std::string::npos) << args << "\n" << r.err;

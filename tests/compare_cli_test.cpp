@@ -16,9 +16,9 @@ namespace {
 // builtin:box as fov.png (seed 1) and the full-frame references ref.png (seed 2) and ref2.png (seed 3).
 void render_foveated_and_references(const std::string& options) {
   const std::string common = "render --scene builtin:box -q " + options;
-  ASSERT_EQ(foveal(common + " -o fov.png").status, 0);
-  ASSERT_EQ(foveal(common + " --mode full --seed 2 -o ref.png").status, 0);
-  ASSERT_EQ(foveal(common + " --mode full --seed 3 -o ref2.png").status, 0);
+  ASSERT_EQ(foveal_test::foveal(common + " -o fov.png").status, 0);
+  ASSERT_EQ(foveal_test::foveal(common + " --mode full --seed 2 -o ref.png").status, 0);
+  ASSERT_EQ(foveal_test::foveal(common + " --mode full --seed 3 -o ref2.png").status, 0);
 }
 
 std::string fmt_ratio(double v) {
@@ -29,8 +29,8 @@ std::string fmt_ratio(double v) {
 
 TEST(CompareCli, BandsJsonErrorMapAndPlot) {
   render_foveated_and_references("--size 200x125 --gaze 60,50 --max-rays 32");
-  const CliRun r =
-      foveal("compare fov.png ref.png --reference2 ref2.png --gaze 60,50 --json cmp.json --error-map err.png --plot err_plot.png");
+  const CliRun r = foveal_test::foveal(
+      "compare fov.png ref.png --reference2 ref2.png --gaze 60,50 --json cmp.json --error-map err.png --plot err_plot.png");
   ASSERT_EQ(r.status, 0) << r.err;
   EXPECT_NE(r.out.find("q(E)=1"), std::string::npos) << r.out;
   const auto j = nlohmann::json::parse(std::ifstream(scratch("cmp.json")));
@@ -46,7 +46,7 @@ TEST(CompareCli, BandsJsonErrorMapAndPlot) {
   const foveal::Image plot = foveal::load_image(scratch("err_plot.png").string());
   EXPECT_GT(plot.width, 100);
   // The same image against itself: infinite PSNR, written as "inf"
-  const CliRun same = foveal("compare ref.png ref.png --json same.json -q");
+  const CliRun same = foveal_test::foveal("compare ref.png ref.png --json same.json -q");
   ASSERT_EQ(same.status, 0) << same.err;
   const auto s = nlohmann::json::parse(std::ifstream(scratch("same.json")));
   EXPECT_EQ(s["whole"]["psnr_db"], "inf");
@@ -54,8 +54,8 @@ TEST(CompareCli, BandsJsonErrorMapAndPlot) {
 }
 
 TEST(CompareCli, BadInputIsOneClearLine) {
-  ASSERT_EQ(foveal("render --scene builtin:plane --size 40x30 -q -o small.png").status, 0);
-  ASSERT_EQ(foveal("render --scene builtin:plane --size 30x40 -q -o tall.png").status, 0);
+  ASSERT_EQ(foveal_test::foveal("render --scene builtin:plane --size 40x30 -q -o small.png").status, 0);
+  ASSERT_EQ(foveal_test::foveal("render --scene builtin:plane --size 30x40 -q -o tall.png").status, 0);
   for (const auto& [args, expected] :
        std::vector<std::pair<std::string, std::string>>{{"compare small.png tall.png", "same size"},
                                                         {"compare small.png missing.png", "missing.png"},
@@ -67,7 +67,7 @@ TEST(CompareCli, BadInputIsOneClearLine) {
 
 TEST(CompareCli, MarkdownTableAndAcuityWeightedError) {
   render_foveated_and_references("--size 160x100 --gaze 40,50 --max-rays 16");
-  const CliRun r = foveal("compare fov.png ref.png --reference2 ref2.png --gaze 40,50 --json w.json --markdown w.md");
+  const CliRun r = foveal_test::foveal("compare fov.png ref.png --reference2 ref2.png --gaze 40,50 --json w.json --markdown w.md");
   ASSERT_EQ(r.status, 0) << r.err;
   const auto j = nlohmann::json::parse(std::ifstream(scratch("w.json")));
   const double w = j["acuity_weighted_rmse"], wn = j["acuity_weighted_noise_rmse"];
@@ -92,7 +92,7 @@ TEST(CompareCli, MarkdownTableAndAcuityWeightedError) {
 }
 
 TEST(BenchQualityCli, SweepTableJsonAndPlot) {
-  const CliRun r = foveal(
+  const CliRun r = foveal_test::foveal(
       "bench quality --scene builtin:box --size 120x75 --reference-rays 16 --gamma 1,3 --max-rays 8,16 "
       "--beta 1 --gaze 30,40 --gaze 90,20 --json q.json --markdown q.md --plot q.png");
   ASSERT_EQ(r.status, 0) << r.err;
@@ -123,7 +123,7 @@ TEST(BenchQualityCli, SweepTableJsonAndPlot) {
 }
 
 TEST(BenchQualityCli, SequenceRunsTheConfigurationsAskedForAndPlotsThem) {
-  const CliRun r = foveal(
+  const CliRun r = foveal_test::foveal(
       "bench quality --sequence --scene builtin:box --size 60x40 --frames 3 --reference-rays 8 "
       "--configs denoise+temporal,paper --json s.json --markdown s.md --plot s.png");
   ASSERT_EQ(r.status, 0) << r.err;

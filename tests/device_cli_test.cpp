@@ -9,13 +9,13 @@ namespace foveal_test {
 namespace {
 
 TEST(DeviceCli, CpuRunsAndTheChoiceIsPrinted) {
-  const CliRun r = foveal("render --scene builtin:box --size 80x50 --max-rays 8 --device cpu --stats dev.json -o dev.png");
+  const CliRun r = foveal_test::foveal("render --scene builtin:box --size 80x50 --max-rays 8 --device cpu --stats dev.json -o dev.png");
   ASSERT_EQ(r.status, 0) << r.err;
   EXPECT_NE(r.out.find("device   cpu"), std::string::npos) << r.out;
   const auto j = nlohmann::json::parse(std::ifstream(scratch("dev.json")));
   EXPECT_EQ(j["device"], "cpu");
   // auto picks what is there and says so
-  const CliRun a = foveal("render --scene builtin:box --size 80x50 --max-rays 8 -o dev_auto.png");
+  const CliRun a = foveal_test::foveal("render --scene builtin:box --size 80x50 --max-rays 8 -o dev_auto.png");
   ASSERT_EQ(a.status, 0) << a.err;
   EXPECT_NE(a.out.find(foveal::availability().usable ? "device   cuda (" : "device   cpu (no GPU: "), std::string::npos) << a.out;
 }
@@ -39,7 +39,7 @@ TEST(DeviceCli, UnknownOrUnavailableDeviceIsOneLine) {
 // only for want of a GPU, and a temporal sequence builds on its history on both.
 TEST(DeviceCli, QualityPerRayRunsOnTheChosenDevice) {
   const std::string options = "render --scene builtin:box --size 80x50 --max-rays 16 --adaptive --denoise --temporal --frames 3 ";
-  const CliRun r = foveal(options + "--stats dev_reuse.json -o dev_reuse.png");
+  const CliRun r = foveal_test::foveal(options + "--stats dev_reuse.json -o dev_reuse.png");
   ASSERT_EQ(r.status, 0) << r.err;
   const bool cuda = foveal::availability().usable;
   EXPECT_NE(r.out.find(cuda ? "device   cuda (" : "device   cpu ("), std::string::npos) << r.out;
@@ -52,12 +52,12 @@ TEST(DeviceCli, QualityPerRayRunsOnTheChosenDevice) {
 // The vision simulation and its benchmark name their device; on a GPU the benchmark runs the CPU
 // beside it and reports the ratio and how far the two agree.
 TEST(DeviceCli, SimulateAndBenchVisionNameTheirDevice) {
-  const CliRun r =
-      foveal("simulate --scene builtin:box --size 64x48 --steps 3 --save-steps '' -o dev_sim --stats dev_sim.json --device cpu");
+  const CliRun r = foveal_test::foveal(
+      "simulate --scene builtin:box --size 64x48 --steps 3 --save-steps '' -o dev_sim --stats dev_sim.json --device cpu");
   ASSERT_EQ(r.status, 0) << r.err;
   EXPECT_NE(r.out.find("device   cpu"), std::string::npos) << r.out;
   EXPECT_EQ(nlohmann::json::parse(std::ifstream(scratch("dev_sim.json")))["device"], "cpu");
-  const CliRun b = foveal("bench vision --scene builtin:box --size 64x48 --steps 2 --json dev_vision.json");
+  const CliRun b = foveal_test::foveal("bench vision --scene builtin:box --size 64x48 --steps 2 --json dev_vision.json");
   ASSERT_EQ(b.status, 0) << b.err;
   const auto j = nlohmann::json::parse(std::ifstream(scratch("dev_vision.json")));
   ASSERT_EQ(j["rows"].size(), 1u);
@@ -76,9 +76,9 @@ TEST(DeviceCli, SimulateAndBenchVisionNameTheirDevice) {
 
 TEST(DeviceCli, ReplayNamesItsDevice) {
   const std::string recording = write_three_fixations("device_replay.csv");
-  const CliRun r = foveal("replay --gaze " + recording +
-                          " --screen 480x300 --scene builtin:box --size 48x30 --max-rays 4 --frames 3 "
-                          "-o dev_replay --stats dev_replay.json --device cpu");
+  const CliRun r = foveal_test::foveal("replay --gaze " + recording +
+                                       " --screen 480x300 --scene builtin:box --size 48x30 --max-rays 4 --frames 3 "
+                                       "-o dev_replay --stats dev_replay.json --device cpu");
   ASSERT_EQ(r.status, 0) << r.err;
   EXPECT_NE(r.out.find("device   cpu"), std::string::npos) << r.out;
   const auto j = nlohmann::json::parse(std::ifstream(scratch("dev_replay.json")));

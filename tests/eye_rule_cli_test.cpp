@@ -27,8 +27,6 @@ std::string patient_profile() {
 
 nlohmann::json read_json(const std::string& name) { return nlohmann::json::parse(std::ifstream(scratch(name))); }
 
-CliRun run(const std::string& args) { return foveal_test::foveal(args); }
-
 bool have_xvfb() { return std::system("command -v xvfb-run > /dev/null 2>&1") == 0; }
 
 }  // namespace
@@ -49,13 +47,13 @@ TEST(EyeRule, AnExplicitValueBeatsTheProfileWhichBeatsTheDefault) {
 TEST(EyeRule, SimulateKeepsAProfilesPupilAndAnExplicitPupilOverridesIt) {
   const std::string profile = patient_profile();
   const std::string common = "simulate --scene builtin:plane --size 64x40 --steps 1 --save-steps 1 -q --eye " + profile;
-  ASSERT_EQ(run(common + " -o s1 --stats s1.json").status, 0);
+  ASSERT_EQ(foveal_test::foveal(common + " -o s1 --stats s1.json").status, 0);
   EXPECT_EQ(read_json("s1.json")["optics"]["pupil_mm"], 5.5);
   EXPECT_EQ(read_json("s1.json")["optics"]["refraction_d"], -1.0);
-  const CliRun r = run(common + " -o s2 --stats s2.json --pupil 3.5");
+  const CliRun r = foveal_test::foveal(common + " -o s2 --stats s2.json --pupil 3.5");
   ASSERT_EQ(r.status, 0) << r.err;
   EXPECT_EQ(read_json("s2.json")["optics"]["pupil_mm"], 3.5);  // 3.5, the default's value, is still an explicit choice
-  ASSERT_EQ(run("simulate --scene builtin:plane --size 64x40 --steps 1 -q -o s3 --stats s3.json").status, 0);
+  ASSERT_EQ(foveal_test::foveal("simulate --scene builtin:plane --size 64x40 --steps 1 -q -o s3 --stats s3.json").status, 0);
   EXPECT_EQ(read_json("s3.json")["optics"]["pupil_mm"], 3.5);  // no profile, no option: the default
 }
 
@@ -64,10 +62,10 @@ TEST(EyeRule, PerceiveKeepsAProfilesPupilAndAnExplicitPupilOverridesIt) {
   foveal::Image im(64, 40, 3);
   for (size_t i = 0; i < im.pixels.size(); ++i) im.pixels[i] = (i % 7) / 7.0f;
   foveal::save_image(im, scratch("stimulus.png").string());
-  const CliRun kept = run("perceive stimulus.png -o seen1.png --eye " + profile);
+  const CliRun kept = foveal_test::foveal("perceive stimulus.png -o seen1.png --eye " + profile);
   ASSERT_EQ(kept.status, 0) << kept.err;
   EXPECT_NE(kept.out.find("pupil 5.5 mm"), std::string::npos) << kept.out;
-  const CliRun overridden = run("perceive stimulus.png -o seen2.png --pupil 3.5 --eye " + profile);
+  const CliRun overridden = foveal_test::foveal("perceive stimulus.png -o seen2.png --pupil 3.5 --eye " + profile);
   ASSERT_EQ(overridden.status, 0) << overridden.err;
   EXPECT_NE(overridden.out.find("pupil 3.5 mm"), std::string::npos) << overridden.out;
 }
@@ -75,9 +73,9 @@ TEST(EyeRule, PerceiveKeepsAProfilesPupilAndAnExplicitPupilOverridesIt) {
 TEST(EyeRule, BenchVisionKeepsAProfilesPupilAndAnExplicitPupilOverridesIt) {
   const std::string profile = patient_profile();
   const std::string common = "bench vision --scene builtin:plane --size 48x32 --steps 2 --impairments none --device cpu --eye " + profile;
-  ASSERT_EQ(run(common + " --json bv1.json").status, 0);
+  ASSERT_EQ(foveal_test::foveal(common + " --json bv1.json").status, 0);
   EXPECT_EQ(read_json("bv1.json")["optics"]["pupil_mm"], 5.5);
-  ASSERT_EQ(run(common + " --pupil 3.5 --json bv2.json").status, 0);
+  ASSERT_EQ(foveal_test::foveal(common + " --pupil 3.5 --json bv2.json").status, 0);
   EXPECT_EQ(read_json("bv2.json")["optics"]["pupil_mm"], 3.5);
 }
 

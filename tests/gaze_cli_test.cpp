@@ -389,8 +389,8 @@ namespace foveal_test {
 TEST(GazeCli, EventsReportEachSaccadesPredictedLanding) {
   const std::string path = std::string(FOVEAL_DATA_DIR) + "/eye-movements/irf/lookAtPoint_EL_S2.csv";
   if (!std::filesystem::exists(path)) GTEST_SKIP() << "skipped: " << path << " is absent";
-  const CliRun r =
-      foveal("gaze " + path + " --display 53.3,30.1,56.5,1920,1080 --events nhp --no-scanpath --json land.json --landings-out land.tsv");
+  const CliRun r = foveal_test::foveal(
+      "gaze " + path + " --display 53.3,30.1,56.5,1920,1080 --events nhp --no-scanpath --json land.json --landings-out land.tsv");
   ASSERT_EQ(r.status, 0) << r.err;
   EXPECT_NE(r.out.find("landings "), std::string::npos) << r.out;
   const auto j = nlohmann::json::parse(std::ifstream(scratch("land.json")))["events"];

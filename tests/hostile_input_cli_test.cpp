@@ -23,8 +23,6 @@ namespace fs = std::filesystem;
 
 namespace {
 
-CliRun run(const std::string& args) { return foveal_test::foveal(args); }
-
 foveal::Image card(int w, int h, int channels = 3) {
   foveal::Image im(w, h, channels);
   for (int y = 0; y < h; ++y)
@@ -75,16 +73,16 @@ TEST(HostileInput, AFailedRunLeavesNoPartialOutput) {
   foveal::save_image(card(32, 20), scratch("h2-frames/a.png").string());
   foveal::save_image(card(32, 20), scratch("h2-frames/b.png").string());
   write(scratch("h2-frames/c.png"), "not a png at all");
-  const CliRun r = run("perceive h2-frames -o h2-out --eye cataract:0.5 --no-optics -q");
+  const CliRun r = foveal_test::foveal("perceive h2-frames -o h2-out --eye cataract:0.5 --no-optics -q");
   EXPECT_EQ(r.status, 1);
   EXPECT_NE(r.err.find("c.png"), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(scratch("h2-out")));
   EXPECT_FALSE(staging_left("h2-out"));
   // replay failing on its first frame (the stimulus rectangle puts the gaze far off the render)
   write(scratch("h2.csv"), "t,x,y\n0,10,10\n0.05,12,10\n0.1,14,10\n0.15,16,10\n");
-  const CliRun replay =
-      run("replay --gaze h2.csv --scene builtin:box --size 32x20 --max-rays 4 --fps 20 --screen 64x40 -o h2-replay "
-          "--stimulus 1000,1000,10,10 -q");
+  const CliRun replay = foveal_test::foveal(
+      "replay --gaze h2.csv --scene builtin:box --size 32x20 --max-rays 4 --fps 20 --screen 64x40 -o h2-replay "
+      "--stimulus 1000,1000,10,10 -q");
   EXPECT_EQ(replay.status, 1);
   EXPECT_NE(replay.err.find("is not near"), std::string::npos) << replay.err;
   EXPECT_FALSE(fs::exists(scratch("h2-replay")));
@@ -95,7 +93,7 @@ TEST(HostileInput, AFailedRunLeavesNoPartialOutput) {
 // refused by the 8-bit writer instead of losing two; RGBA to JPEG says JPEG keeps no alpha.
 TEST(HostileInput, AlphaIsKeptAndOddChannelCountsRefused) {
   foveal::save_image(card(32, 20, 4), scratch("h4.png").string());
-  const CliRun r = run("perceive h4.png -o h4-seen.png --eye cataract:0.6 --no-optics -q");
+  const CliRun r = foveal_test::foveal("perceive h4.png -o h4-seen.png --eye cataract:0.6 --no-optics -q");
   ASSERT_EQ(r.status, 0) << r.err;
   const foveal::Image in = foveal::load_image(scratch("h4.png").string(), true);
   const foveal::Image out = foveal::load_image(scratch("h4-seen.png").string(), true);
@@ -143,7 +141,8 @@ TEST(HostileInput, AnHourLongGapIsLostDataNotAFixation) {
   for (int i = 0; i < 200; ++i) csv += std::to_string(3600 + i * 0.002) + ",500,400\n";
   write(scratch("h10.csv"), csv);
   for (const char* method : {"auto", "nhp", "ivt", "idt", "ek"}) {
-    const CliRun r = run(std::string("gaze h10.csv --screen 1000x800 --no-scanpath --events ") + method + " --events-out h10.tsv");
+    const CliRun r =
+        foveal_test::foveal(std::string("gaze h10.csv --screen 1000x800 --no-scanpath --events ") + method + " --events-out h10.tsv");
     ASSERT_EQ(r.status, 0) << r.err;
     EXPECT_NE(r.out.find("500.0 Hz"), std::string::npos) << r.out;
     std::ifstream tsv(scratch("h10.tsv"));
@@ -187,7 +186,7 @@ TEST(HostileInput, BadDepthsAreRefused) {
   depth.at(3, 1, 0) = INFINITY;  // far away is allowed
   depth.at(5, 2, 0) = depth.at(6, 2, 0) = 2;
   foveal::save_image(depth, scratch("h13-depth.pfm").string());
-  const CliRun ok = run("perceive h13.png -o h13-seen.png --depth h13-depth.pfm -q");
+  const CliRun ok = foveal_test::foveal("perceive h13.png -o h13-seen.png --depth h13-depth.pfm -q");
   EXPECT_EQ(ok.status, 0) << ok.err;
 }
 
@@ -213,7 +212,7 @@ TEST(HostileInput, CompareRefusesNonFinitePixels) {
 // 17. "nan,nan" is a bad point, not a recording's name.
 TEST(HostileInput, ANanGazeIsABadPoint) {
   foveal::save_image(card(8, 4), scratch("h17.png").string());
-  const CliRun r = run("perceive h17.png -o h17-seen.png --gaze nan,nan");
+  const CliRun r = foveal_test::foveal("perceive h17.png -o h17-seen.png --gaze nan,nan");
   EXPECT_EQ(r.status, 1);
   EXPECT_NE(r.err.find("--gaze"), std::string::npos) << r.err;
   EXPECT_EQ(r.err.find("needs a video"), std::string::npos) << r.err;
@@ -263,7 +262,7 @@ TEST(HostileInput, AFolderWhereAFileBelongsIsNamedSo) {
   foveal::save_image(card(8, 4), scratch("h20.png").string());
   fs::create_directories(scratch("h20-dir"));
   write(scratch("h20.json"), R"({"name": "x", "eyes": {"OD": {"field": {"file": "."}}}})");
-  const CliRun r = run("perceive h20.png -o h20-seen.png --eye h20.json");
+  const CliRun r = foveal_test::foveal("perceive h20.png -o h20-seen.png --eye h20.json");
   EXPECT_EQ(r.status, 1);
   EXPECT_NE(r.err.find("is a folder, not a file"), std::string::npos) << r.err;
   expect_one_line_error("gaze h20-dir --no-scanpath", "h20-dir: is a folder");

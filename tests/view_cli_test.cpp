@@ -29,7 +29,7 @@ TEST(ViewCli, ScreenshotIsTheRenderCommandsImage) {
   const std::string common = "--scene builtin:box --size 240x150 --gaze 70,60 --max-rays 48";
   const CliRun v = run_view(common + " --frames 3 --overlays none --screenshot view.png --window-screenshot window.png");
   ASSERT_EQ(v.status, 0) << v.err;
-  const CliRun r = foveal("render " + common + " -o render.png -q");
+  const CliRun r = foveal_test::foveal("render " + common + " -o render.png -q");
   ASSERT_EQ(r.status, 0) << r.err;
   const foveal::Image a = foveal::load_image(scratch("view.png").string()), b = foveal::load_image(scratch("render.png").string());
   ASSERT_EQ(a.width, b.width);

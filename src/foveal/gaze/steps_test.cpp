@@ -12,7 +12,7 @@ using namespace foveal;
 
 namespace {
 
-const Display kDisplay{47.5, 30, 60, 1680, 1050};
+const Display kStepsDisplay{47.5, 30, 60, 1680, 1050};
 
 // 500 Hz gaze: a fixation at each point for `fixation_s`; between fixations either a 40 ms
 // saccade or, where `blink_s[i]` > 0, that long a run of invalid samples (the eye closed) with
@@ -73,7 +73,7 @@ const std::vector<glm::dvec2> kPoints{{300, 300}, {1300, 300}, {800, 800}, {400,
 
 TEST(GazeSteps, OneStepPerFixationOfEachFilter) {
   const Recording r = gaze(kPoints, 0.300, {0, 0.150, 0});
-  const GazeGeometry geometry(kDisplay, r.screen_px);
+  const GazeGeometry geometry(kStepsDisplay, r.screen_px);
   for (StepFixations from : {StepFixations::nhp, StepFixations::ivt, StepFixations::idt, StepFixations::tracker}) {
     const std::vector<GazeStep> steps = recording_steps(r, geometry, from, {});
     ASSERT_EQ(steps.size(), kPoints.size()) << to_string(from);
@@ -98,7 +98,7 @@ TEST(GazeSteps, BlinksFromInvalidRunsWhenTheTrackerReportsNone) {
   EXPECT_NEAR(blinks[0].start_s, r.blinks[1].start_s, 0.003);
   EXPECT_NEAR(blinks[0].end_s, r.blinks[1].end_s, 0.003);
   r.blinks.clear();
-  const std::vector<GazeStep> steps = recording_steps(r, GazeGeometry(kDisplay, r.screen_px), StepFixations::tracker, {});
+  const std::vector<GazeStep> steps = recording_steps(r, GazeGeometry(kStepsDisplay, r.screen_px), StepFixations::tracker, {});
   ASSERT_EQ(steps.size(), 4u);
   EXPECT_FALSE(steps[1].blink_before);
   EXPECT_TRUE(steps[2].blink_before);
@@ -110,7 +110,7 @@ TEST(GazeSteps, NamesWhatIsMissing) {
   r.fixations.clear();
   r.has_tracker_fixations = false;
   r.tracker = "CSV";
-  const GazeGeometry geometry(kDisplay, r.screen_px);
+  const GazeGeometry geometry(kStepsDisplay, r.screen_px);
   try {
     recording_steps(r, geometry, StepFixations::tracker, {});
     FAIL() << "no error";
@@ -126,7 +126,7 @@ TEST(GazeSteps, LiveFixationsAsTheyAreEstablished) {
   const Recording r = gaze(kPoints, 0.300, {0, 0.150, 0});
   for (size_t per_poll : {size_t(1), size_t(7), size_t(1000)}) {  // however the samples arrive
     ScriptedSource source(r.samples, per_poll);
-    LiveSteps live(source, FixationMethod::ivt, {}, GazeGeometry(kDisplay, r.screen_px));
+    LiveSteps live(source, FixationMethod::ivt, {}, GazeGeometry(kStepsDisplay, r.screen_px));
     std::vector<GazeStep> steps;
     while (auto s = live.next(1.0)) steps.push_back(*s);
     ASSERT_EQ(steps.size(), kPoints.size()) << per_poll;
@@ -146,7 +146,7 @@ TEST(GazeSteps, RealEyeLinkFixationsAndBlinks) {
   const std::filesystem::path path = std::filesystem::path(FOVEAL_DATA_DIR) / "gaze/eyelink/monoRemote500.asc";
   if (!std::filesystem::exists(path)) GTEST_SKIP() << "skipped: " << path << " absent";
   const Recording r = read_recording(path.string());
-  const GazeGeometry geometry(kDisplay, r.screen_px);
+  const GazeGeometry geometry(kStepsDisplay, r.screen_px);
   const std::vector<GazeStep> steps = recording_steps(r, geometry, StepFixations::tracker, {});
   // ../shared/data/README.md: 300 EFIX and 3 EBLINK events; each blink lies between two fixations
   EXPECT_EQ(steps.size(), 300u);
@@ -171,7 +171,7 @@ TEST(GazeSteps, NhpStepsFollowAPursuit) {
     s.valid = true;
     r.samples.push_back(s);
   }
-  const GazeGeometry geometry(kDisplay, r.screen_px);
+  const GazeGeometry geometry(kStepsDisplay, r.screen_px);
   const std::vector<GazeStep> steps = recording_steps(r, geometry, StepFixations::nhp, {});
   ASSERT_GE(steps.size(), 2u + 8u);
   EXPECT_NEAR(steps.front().screen_px.x, 300, 1);

@@ -5,6 +5,7 @@
 
 #include "foveal/render/reuse.h"
 #include "foveal/util/error.h"
+#include "test_scenes.h"
 
 #include <gtest/gtest.h>
 
@@ -14,9 +15,7 @@ using namespace foveal;
 
 namespace {
 
-bool same_bits(const std::vector<float>& a, const std::vector<float>& b) {
-  return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(float)) == 0;
-}
+using foveal_test::same_bits;
 
 void expect_same_frame(const Frame& a, const Frame& b, int k) {
   EXPECT_TRUE(same_bits(a.color.pixels, b.color.pixels)) << "frame " << k;

@@ -6,6 +6,7 @@
 
 #include "foveal/util/error.h"
 #include "foveal/util/parallel.h"
+#include "test_scenes.h"
 
 #include <gtest/gtest.h>
 
@@ -17,14 +18,8 @@
 namespace foveal {
 namespace {
 
-const Scene& sphere_plane() {
-  static const Scene scene = make_builtin_scene("sphere-plane");
-  return scene;
-}
-const Scene& box() {
-  static const Scene scene = make_builtin_scene("box");
-  return scene;
-}
+using foveal_test::box;
+using foveal_test::sphere_plane;
 
 RenderParams loop_params(int width, int height, int max_rays) {
   RenderParams p;

@@ -2,6 +2,7 @@
 #include "foveal/render/render.h"
 #include "foveal/util/error.h"
 #include "foveal/util/parallel.h"
+#include "test_scenes.h"
 
 #include <gtest/gtest.h>
 
@@ -12,14 +13,8 @@ using namespace foveal;
 
 namespace {
 
-const Scene& sphere_plane() {
-  static const Scene scene = make_builtin_scene("sphere-plane");
-  return scene;
-}
-const Scene& box() {
-  static const Scene scene = make_builtin_scene("box");
-  return scene;
-}
+using foveal_test::box;
+using foveal_test::sphere_plane;
 
 RenderParams small_params(RenderMode mode) {
   RenderParams p;
@@ -31,9 +26,7 @@ RenderParams small_params(RenderMode mode) {
   return p;
 }
 
-bool same_bits(const std::vector<float>& a, const std::vector<float>& b) {
-  return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(float)) == 0;
-}
+using foveal_test::same_bits;
 
 }  // namespace
 

@@ -2,6 +2,7 @@
 #include "foveal/render/reuse.h"
 #include "foveal/util/error.h"
 #include "foveal/util/parallel.h"
+#include "test_scenes.h"
 
 #include <gtest/gtest.h>
 
@@ -23,9 +24,7 @@ const Scene& scene(const std::string& name) {
   return it->second;
 }
 
-bool same_bits(const std::vector<float>& a, const std::vector<float>& b) {
-  return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(float)) == 0;
-}
+using foveal_test::same_bits;
 
 // RMS of (V − truth) over the pixels that hit the scene.
 double rms_error(const Frame& f, const std::vector<float>& truth) {

@@ -17,17 +17,20 @@
 #include <vector>
 
 namespace foveal {
+
+// Embree reports errors through a callback; keep the first one to throw after the call. (Outside
+// the anonymous namespace: Tracer::Impl, a type with linkage, holds one.)
+struct EmbreeErrorSink {
+  std::mutex mutex;
+  std::string message;
+};
+
 namespace {
 
 constexpr size_t kBatch = 256;  // rays converted and traced per Embree call
 
-// Embree reports errors through a callback; keep the first one to throw after the call.
-struct ErrorSink {
-  std::mutex mutex;
-  std::string message;
-};
 void on_error(void* user, RTCError code, const char* str) {
-  auto* sink = static_cast<ErrorSink*>(user);
+  auto* sink = static_cast<EmbreeErrorSink*>(user);
   std::lock_guard lock(sink->mutex);
   if (sink->message.empty()) sink->message = fmt::format("Embree error {}: {}", static_cast<int>(code), str ? str : "");
 }
@@ -109,7 +112,7 @@ struct Tracer::Impl {
   TraceApi api = TraceApi::stream;
   double build_ms = 0;
   size_t triangles = 0;
-  ErrorSink errors;
+  EmbreeErrorSink errors;
   // Per-thread conversion buffers, so no allocation happens per call
   struct Scratch {
     std::vector<RTCRayHit> hits = std::vector<RTCRayHit>(kBatch);

@@ -7,6 +7,7 @@
 #include "foveal/ui/session.h"
 #include "foveal/io/image_io.h"
 #include "foveal/util/error.h"
+#include "test_scenes.h"
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -19,10 +20,7 @@
 namespace foveal {
 namespace {
 
-const Scene& box() {
-  static const Scene scene = make_builtin_scene("box");
-  return scene;
-}
+using foveal_test::box;
 const Tracer& box_tracer() {
   static const Tracer tracer(box());
   return tracer;
