@@ -22,11 +22,29 @@ SUBJECTS = {"01": ("gaze", "eyelink", "monoRemote500.asc"), "02": ("gaze", "tobi
 SMALL = "{scene: builtin:box, size: 96x60, max_rays: 8, fps: 30, frames: 8}"
 
 
+LOCAL_ENV = dict(os.environ)
+
+
+@pytest.fixture(scope="module", autouse=True)
+def local_runs_do_not_probe_slurm(tmp_path_factory):
+    """The environment of the local (not Slurm) runs. Snakemake's Slurm executor plugin, once
+    installed, runs `scontrol show config` whenever snakemake starts, whatever the executor; where
+    Slurm's client is installed but no controller runs (this machine between the Slurm test's
+    starts), that waits 10 s for its timeout on every call. Here `scontrol` fails at once instead,
+    as on a machine without Slurm; the Slurm test runs with the real one."""
+    shim = tmp_path_factory.mktemp("no-slurm")
+    (shim / "scontrol").write_text("#!/bin/sh\nexit 1\n")
+    (shim / "scontrol").chmod(0o755)
+    LOCAL_ENV["PATH"] = f"{shim}:{os.environ['PATH']}"
+    yield
+    LOCAL_ENV["PATH"] = os.environ["PATH"]
+
+
 def snakemake(cli, cwd, *args, check=True, replay=SMALL, config=()):
     pytest.importorskip("snakemake")
     command = [sys.executable, "-m", "snakemake", "-s", str(SNAKEFILE), "--cores", "2", "--config", f"foveal={cli}",
                f"replay={replay}", *config, "--rerun-incomplete", *args]
-    result = subprocess.run(command, cwd=cwd, capture_output=True, text=True, timeout=900)
+    result = subprocess.run(command, cwd=cwd, env=LOCAL_ENV, capture_output=True, text=True, timeout=900)
     if check and result.returncode != 0:
         raise AssertionError(result.stdout[-3000:] + result.stderr[-3000:])
     return result
@@ -87,7 +105,8 @@ def test_a_run_killed_midway_completes_when_rerun_with_nothing_partial_left(cli,
     slow = "{scene: builtin:box, size: 320x200, max_rays: 64, fps: 30, frames: 90}"
     command = [sys.executable, "-m", "snakemake", "-s", str(SNAKEFILE), "--cores", "1", "--config", f"foveal={cli}",
                f"replay={slow}"]
-    process = subprocess.Popen(command, cwd=study, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
+    process = subprocess.Popen(command, cwd=study, env=LOCAL_ENV, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+                               start_new_session=True)
     frames = study / "derivatives" / "foveal-study"
     deadline = time.time() + 120
     while time.time() < deadline and not any(frames.rglob("frame_*.png")):  # a replay is under way
