@@ -315,6 +315,17 @@ double FixedPartWindow::median_ms() const {
   return median(std::vector<double>(ms_.begin(), ms_.begin() + static_cast<std::ptrdiff_t>(count_)));
 }
 
+void SweepCost::swept(double ms) {
+  estimate_ms_ = std::max(0.7 * estimate_ms_ + 0.3 * ms, ms);
+  ms_[next_] = ms;
+  next_ = (next_ + 1) % kSweeps;
+  count_ = std::min(count_ + 1, kSweeps);
+}
+
+double SweepCost::typical_ms() const {
+  return count_ == 0 ? estimate_ms_ : median(std::vector<double>(ms_.begin(), ms_.begin() + static_cast<std::ptrdiff_t>(count_)));
+}
+
 void RealtimeLoop::rescale(double fixed_ms) {
   const double target = scale_ * std::sqrt(0.5 * settings_.budget_ms / fixed_ms);
   const double scale = std::clamp(target, settings_.min_scale, 1.0);
@@ -376,19 +387,23 @@ LoopFrame RealtimeLoop::frame(const Camera& camera) {
       break;
     }
     // A periphery round plans over every pixel: only when its planning fits
-    const bool periphery = !wall || deadline - timer.ms() > periphery_plan_ms_ + plan_ms_;
+    const bool periphery = !wall || sweep_.fits(deadline - timer.ms() - plan_ms_);
     const Timer plan_timer;
     bool swept;
     const size_t planned = plan_round(limit, periphery, swept);
     const double plan_ms = plan_timer.ms();
     out.plan_ms += plan_ms;
     if (swept) {  // a pass over every pixel
-      periphery_plan_ms_ = std::max(0.7 * periphery_plan_ms_ + 0.3 * plan_ms, plan_ms);
+      sweep_.swept(plan_ms);
       sweep_ms += plan_ms;
     } else {
       plan_ms_ = 0.7 * plan_ms_ + 0.3 * plan_ms;
     }
-    if (planned == 0) break;
+    if (planned == 0) {
+      // (nothing for the fovea, and the periphery's sweep did not fit: try it again a little sooner)
+      if (wall && !periphery) sweep_.skipped();
+      break;
+    }
     blocked_.resize(tasks_.size());
     done_.resize(tasks_.size());
     AoRayBatch batch;

@@ -34,6 +34,7 @@
 
 #include <glm/glm.hpp>
 
+#include <algorithm>
 #include <array>
 #include <optional>
 #include <string>
@@ -98,6 +99,32 @@ class FixedPartWindow {
 
  private:
   std::array<double, kFrames> ms_{};
+  size_t count_ = 0, next_ = 0;
+};
+
+// What a periphery round's planning (a pass over every pixel) costs on the wall clock, for the
+// loop to sweep only where it fits before the deadline. A sweep's time raises the estimate at once
+// (a sweep that does not fit makes the frame late); a frame that skips the sweep lowers it a little,
+// down to the sweeps' typical cost, so that one sweep a pause lengthened does not stop the
+// periphery's refinement for the rest of a run. (Raised and never lowered, a 13 ms sweep on a
+// shared 2-core VM left the periphery unrefined from then on: the frames cost 1.5 ms where
+// 4 ms were spent before, and landings on what had been periphery waited for rays.)
+class SweepCost {
+ public:
+  static constexpr double kSkipDecay = 0.95;  // per frame that skips: from a pause's 30 ms to 12 in ~18 frames
+  static constexpr size_t kSweeps = 5;        // the typical cost: the median of the latest sweeps
+  // Whether a sweep fits in the `left_ms` before the deadline.
+  bool fits(double left_ms) const { return left_ms > estimate_ms_; }
+  // A sweep took `ms`.
+  void swept(double ms);
+  // A frame did not sweep because it did not fit.
+  void skipped() { estimate_ms_ = std::max(typical_ms(), kSkipDecay * estimate_ms_); }
+  double estimate_ms() const { return estimate_ms_; }
+  double typical_ms() const;
+
+ private:
+  double estimate_ms_ = 1;
+  std::array<double, kSweeps> ms_{};
   size_t count_ = 0, next_ = 0;
 };
 
@@ -172,12 +199,12 @@ class RealtimeLoop {
   std::vector<int8_t> key_;      // scratch: each pixel's bucket (−1: converged)
   bool last_new_view_ = false;   // the previous frame traced a new view
   float ao_distance_ = 0, epsilon_ = 0, tau_fovea_ = 0;
-  double rays_per_ms_ = 0;        // wall clock: measured, smoothed
-  double finish_ms_ = 1;          // wall clock: composing and the fovea's state at a frame's end, measured
-  double slip_ms_ = 0;            // wall clock: how much later than planned frames ended, a decaying maximum
-  double plan_ms_ = 0.5;          // wall clock: a round's planning, measured, smoothed
-  double periphery_plan_ms_ = 1;  // wall clock: a periphery round's planning (a pass over every pixel)
-  FixedPartWindow fixed_;         // the latest frames' cost besides their rays, since the last rescale
+  double rays_per_ms_ = 0;  // wall clock: measured, smoothed
+  double finish_ms_ = 1;    // wall clock: composing and the fovea's state at a frame's end, measured
+  double slip_ms_ = 0;      // wall clock: how much later than planned frames ended, a decaying maximum
+  double plan_ms_ = 0.5;    // wall clock: a round's planning, measured, smoothed
+  SweepCost sweep_;         // wall clock: a periphery round's planning (a pass over every pixel)
+  FixedPartWindow fixed_;   // the latest frames' cost besides their rays, since the last rescale
   int index_ = 0;
 };
 

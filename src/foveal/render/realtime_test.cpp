@@ -203,6 +203,33 @@ TEST(RealtimeLoop, OnePausedFrameDoesNotLowerTheResolution) {
   EXPECT_TRUE(FixedPartWindow().add(40.0, budget, 1));  // the model clock: at once
 }
 
+// One sweep of the periphery that a pause lengthened (30 ms where sweeps take 4) stops the sweeps
+// only for a while: frames that skip them bring the estimate back within a 12 ms window in well
+// under a second; sweeps that always take 20 ms never fit it, however long they are skipped
+TEST(RealtimeLoop, OnePausedSweepDoesNotStopThePeripherysRefinement) {
+  SweepCost cost;
+  for (int k = 0; k < 10; ++k) cost.swept(4.0);
+  EXPECT_TRUE(cost.fits(12.0));
+  cost.swept(30.0);
+  EXPECT_FALSE(cost.fits(12.0));
+  int skipped = 0;
+  while (!cost.fits(12.0) && skipped < 1000) {
+    cost.skipped();
+    ++skipped;
+  }
+  EXPECT_GT(skipped, 5);   // not at once: a pause may last
+  EXPECT_LE(skipped, 30);  // half a second at 60 Hz
+  EXPECT_GE(cost.estimate_ms(), 4.0);
+  cost.swept(4.0);
+  EXPECT_TRUE(cost.fits(12.0));
+
+  SweepCost slow;
+  for (int k = 0; k < 10; ++k) slow.swept(20.0);
+  for (int k = 0; k < 1000; ++k) slow.skipped();
+  EXPECT_FALSE(slow.fits(12.0));
+  EXPECT_NEAR(slow.estimate_ms(), 20.0, 1e-9);
+}
+
 // A saccade from `from` to `to` (render pixels) at 1000 Hz, its velocity a symmetric bell over the
 // main sequence's duration, then the fixation; pushed up to each frame's time (60 Hz) less 3 ms.
 struct SaccadeRun {
