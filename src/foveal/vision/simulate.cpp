@@ -38,11 +38,8 @@ SaccadeParams saccade_params_for(const EyeParams& eye, SaccadeParams base) {
   return base;
 }
 
-namespace {}  // namespace
-
 VisionSimulation::VisionSimulation(const Tracer& tracer, const Scene& scene, const SimulateParams& params)
-    : tracer_(tracer),
-      scene_(scene),
+    : scene_(scene),
       params_((validate(params), params)),
       ppd_(0),
       field_(scene.bounds(), params.voxel > 0 ? params.voxel : default_voxel_size(scene.bounds()), params.starvation),

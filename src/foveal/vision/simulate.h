@@ -92,7 +92,6 @@ class VisionSimulation {
   // The per-pixel CoC of this step: the camera's axis, the fixation's ray, the accommodation
   CocModel coc_model(const Camera& camera, glm::vec3 gaze_dir, double focus_vergence) const;
 
-  const Tracer& tracer_;
   const Scene& scene_;
   SimulateParams params_;
   double ppd_;
