@@ -106,9 +106,9 @@ class FixedPartWindow {
 // loop to sweep only where it fits before the deadline. A sweep's time raises the estimate at once
 // (a sweep that does not fit makes the frame late); a frame that skips the sweep lowers it a little,
 // down to the sweeps' typical cost, so that one sweep a pause lengthened does not stop the
-// periphery's refinement for the rest of a run. (Raised and never lowered, a 13 ms sweep on a
-// shared 2-core VM left the periphery unrefined from then on: the frames cost 1.5 ms where
-// 4 ms were spent before, and landings on what had been periphery waited for rays.)
+// periphery's refinement for the rest of a run. (Raised and never lowered, the estimate stopped the
+// sweeps for good on a shared 2-core VM: frames cost 1.5 ms at p50 where other runs spent 4 ms on
+// rays, and landings on what had been periphery waited for rays.)
 class SweepCost {
  public:
   static constexpr double kSkipDecay = 0.95;  // per frame that skips: from a pause's 30 ms to 12 in ~18 frames
