@@ -12,9 +12,10 @@
 #include <cstdlib>
 #include <bit>
 #include <cmath>
+#include <limits>
 #include <memory>
 #include <optional>
-#include <tuple>
+#include <span>
 
 namespace foveal {
 
@@ -106,51 +107,40 @@ std::pair<double, double> adaptive_velocity_thresholds(const std::vector<float>&
 
 namespace {
 
-// Savitzky–Golay derivative weights for a centred window of half-width h (order 2: the first
-// derivative's weights equal the least-squares line's, k/Σk²; the second derivative's are
-// 2(k² − m)/Σ(k² − m)², m = Σk²/(2h+1)).
-struct SavitzkyGolay {
-  std::vector<std::vector<double>> d1, d2;  // [h][k + h]
-  explicit SavitzkyGolay(int h_max) : d1(h_max + 1), d2(h_max + 1) {
-    for (int h = 1; h <= h_max; ++h) {
-      double s2 = 0, m = 0;
-      for (int k = -h; k <= h; ++k) s2 += double(k) * k;
-      m = s2 / (2 * h + 1);
-      double s4 = 0;
-      for (int k = -h; k <= h; ++k) s4 += (k * k - m) * (k * k - m);
-      for (int k = -h; k <= h; ++k) {
-        d1[h].push_back(k / s2);
-        d2[h].push_back(2 * (k * k - m) / s4);
-      }
-    }
-  }
-};
-
 struct Signal {
   size_t n = 0;
   double dt = 0;
+  std::vector<double> t;  // the samples' times, apart from the samples (the passes read them contiguously)
   std::vector<glm::dvec3> dir;
-  std::vector<uint8_t> valid;              // bytes, not std::vector<bool>: read at every sample by every pass
-  std::vector<uint8_t> noise;              // nh: physiologically impossible velocity or acceleration (never free)
-  std::vector<size_t> run_start, run_end;  // per sample: its run of contiguous valid samples [start, end)
+  std::vector<float> valid_pupils;           // the finite pupils of the samples the recording calls valid
+  std::vector<uint8_t> valid;                // bytes, not std::vector<bool>: read at every sample by every pass
+  std::vector<uint8_t> noise;                // nh: physiologically impossible velocity or acceleration (never free)
+  std::vector<uint32_t> run_start, run_end;  // per sample: its run of contiguous valid samples [start, end)
 };
 
 Signal prepare(const Recording& r, const GazeGeometry& g, double max_fill_s = 0) {
   Signal s;
   s.n = r.samples.size();
-  s.dir.assign(s.n, glm::dvec3(0, 0, 1));
-  s.valid.assign(s.n, 0);
+  if (s.n >= std::numeric_limits<uint32_t>::max())
+    fail("a recording of {} samples: at most {} can be labelled", s.n, std::numeric_limits<uint32_t>::max() - 1);
+  s.t.resize(s.n);
+  s.valid_pupils.reserve(s.n);
+  s.dir.resize(s.n);
+  s.valid.resize(s.n);
   s.noise.assign(s.n, 0);
-  for (size_t i = 0; i < s.n; ++i)
-    if (r.samples[i].valid) {
-      s.valid[i] = true;
-      s.dir[i] = g.direction(r.samples[i]);
-    }
+  // One pass over the samples (72 bytes each); the passes below read the compact arrays
+  for (size_t i = 0; i < s.n; ++i) {
+    const GazeSample& sample = r.samples[i];
+    s.t[i] = sample.t_s;
+    s.valid[i] = sample.valid;
+    s.dir[i] = sample.valid ? g.direction(sample) : glm::dvec3(0, 0, 1);
+    if (sample.valid && std::isfinite(sample.pupil)) s.valid_pupils.push_back(sample.pupil);
+  }
   // The sampling interval: the median of (at most 4096, evenly spread) intervals
   std::vector<double> intervals;
   intervals.reserve(4097);
   for (size_t i = 1 + s.n / 4096, stride = 1 + s.n / 4096; i < s.n; i += stride)
-    if (r.samples[i].t_s > r.samples[i - 1].t_s) intervals.push_back(r.samples[i].t_s - r.samples[i - 1].t_s);
+    if (s.t[i] > s.t[i - 1]) intervals.push_back(s.t[i] - s.t[i - 1]);
   if (intervals.empty()) {
     s.dt = 0.001;
   } else {
@@ -165,7 +155,7 @@ Signal prepare(const Recording& r, const GazeGeometry& g, double max_fill_s = 0)
       if (s.valid[i] || !s.valid[i - 1]) continue;
       size_t j = i;
       while (j < s.n && !s.valid[j]) ++j;
-      if (j < s.n && r.samples[j].t_s - r.samples[i - 1].t_s <= max_fill_s + 1.5 * s.dt) {
+      if (j < s.n && s.t[j] - s.t[i - 1] <= max_fill_s + 1.5 * s.dt) {
         const glm::dvec3 a = s.dir[i - 1], b = s.dir[j];
         for (size_t k = i; k < j; ++k) {
           const double u = double(k - i + 1) / double(j - i + 1);
@@ -179,96 +169,160 @@ Signal prepare(const Recording& r, const GazeGeometry& g, double max_fill_s = 0)
   s.run_end.assign(s.n, 0);
   for (size_t i = 0; i < s.n;) {
     if (!s.valid[i]) {
-      s.run_start[i] = s.run_end[i] = i;
+      s.run_start[i] = s.run_end[i] = static_cast<uint32_t>(i);
       ++i;
       continue;
     }
     size_t j = i + 1;
-    while (j < s.n && s.valid[j] && r.samples[j].t_s - r.samples[j - 1].t_s < 1.5 * s.dt) ++j;
+    const double gap = 1.5 * s.dt;
+    while (j < s.n && s.valid[j] && s.t[j] - s.t[j - 1] < gap) ++j;
     for (size_t k = i; k < j; ++k) {
-      s.run_start[k] = i;
-      s.run_end[k] = j;
+      s.run_start[k] = static_cast<uint32_t>(i);
+      s.run_end[k] = static_cast<uint32_t>(j);
     }
     i = j;
   }
   return s;
 }
 
-// Angular velocity (°/s) and acceleration (°/s²) of the directions by Savitzky–Golay over half-width
-// h; the velocity's window shrinks near the edges of a valid run (a run's first and last sample:
-// the one-sided difference; one-sample runs: NaN), the acceleration is NaN there.
-// `running`: the full windows by running sums (O(1) per sample whatever the window; recomputed
-// exactly every 512 samples so that rounding cannot build up) — the same filter to float rounding.
-void savitzky_golay(const Signal& s, int h, std::vector<float>& velocity, std::vector<float>* acceleration, bool running = false) {
-  const SavitzkyGolay sg(h);
-  velocity.assign(s.n, NAN);
-  if (acceleration) acceleration->assign(s.n, NAN);
-  if (running) {
-    // Σk², the mean of k², Σ(k² − m)²: the weights' normalisers
+// Least-squares fits over centred windows, by sums: O(1) per sample whatever the window.
+//   The line's velocity per unit of Σ k·d for each half-width w ≤ h: kDeg / (Σ_{|k|≤w} k² · dt), and
+//   the parabola's acceleration per unit of Σ (k² − m)·d (m = Σk²/(2h+1)), full windows only
+// (made once per filter, not a division per sample).
+struct LineScales {
+  int h;
+  std::vector<double> by_width;  // [1, h]
+  double m = 0, acceleration = 0;
+  LineScales(int h_, double dt) : h(h_), by_width(static_cast<size_t>(h_) + 1, 0.0) {
+    for (int w = 1; w <= h; ++w)  // Σ k² over |k| ≤ w = w(w + 1)(2w + 1)/3, an exact integer
+      by_width[static_cast<size_t>(w)] = kDeg / (double(w) * (w + 1) * (2 * w + 1) / 3 * dt);
     double s2 = 0, s4 = 0;
     for (int k = -h; k <= h; ++k) s2 += double(k) * k;
-    const double m = s2 / (2 * h + 1);
+    m = s2 / (2 * h + 1);
     for (int k = -h; k <= h; ++k) s4 += (k * k - m) * (k * k - m);
-    const size_t hh = static_cast<size_t>(h);
-    const double vscale = kDeg / (s2 * s.dt), ascale = 2 * kDeg / (s4 * s.dt * s.dt);
-    const double h2 = double(h) * h, h1 = double(h + 1), h12 = h1 * h1;
-    for (size_t start = 0; start < s.n;) {
-      if (!s.valid[start]) {
-        ++start;
-        continue;
+    acceleration = 2 * kDeg / (s4 * dt * dt);
+  }
+};
+
+// Prefix sums of one block of a run, per coordinate.
+struct FitScratch {
+  std::vector<double> p[9];  // Σ d, Σ k·d, Σ k²·d for x, y, z; [j]: over the block's first j samples
+};
+
+// One filter's output over the runs: the speed per sample (squared where `squared`: where it is only
+// compared with thresholds, squares compared with squared thresholds decide the same, and a square
+// root is the costliest step of a sample's fit), and, where `acceleration`, the squared
+// acceleration at full windows (for the same reason).
+struct FitOutput {
+  const LineScales* scales = nullptr;
+  float* velocity = nullptr;
+  float* acceleration = nullptr;
+  bool squared = false;
+};
+
+// Velocity (and acceleration) of every sample of the run [start, end), for each output: the
+// least-squares line (parabola) over the largest centred window of half-width at most its h inside
+// the run (a run's first and last sample: the one-sided difference; a run of one sample: left NaN).
+// The sums, shared by the outputs, are taken afresh for each block of 512 centres, with k counted
+// from the block's start, so that neither rounding builds up nor large k cancel: the velocities
+// equal those of the filter's weights to float rounding (Detect.VelocityBySumsEqualsTheFiltersWeights).
+void fit_run(const Signal& s, size_t start, size_t end, std::span<const FitOutput> outputs, FitScratch& f) {
+  if (end - start < 2) return;
+  size_t h_max = 0;
+  bool second = false;
+  for (const FitOutput& o : outputs) {
+    h_max = std::max(h_max, static_cast<size_t>(o.scales->h));
+    second |= o.acceleration != nullptr;
+  }
+  constexpr size_t kBlock = 512;
+  for (size_t b0 = start; b0 < end; b0 += kBlock) {
+    const size_t b1 = std::min(end, b0 + kBlock);
+    const size_t lo = b0 > start + h_max ? b0 - h_max : start, hi = std::min(end, b1 + h_max);  // the block's windows lie in [lo, hi)
+    const size_t len = hi - lo;
+    for (auto& v : f.p) v.resize(len + 1);
+    double* const px0 = f.p[0].data();
+    double* const py0 = f.p[1].data();
+    double* const pz0 = f.p[2].data();
+    double* const px1 = f.p[3].data();
+    double* const py1 = f.p[4].data();
+    double* const pz1 = f.p[5].data();
+    double* const px2 = f.p[6].data();
+    double* const py2 = f.p[7].data();
+    double* const pz2 = f.p[8].data();
+    px0[0] = py0[0] = pz0[0] = px1[0] = py1[0] = pz1[0] = px2[0] = py2[0] = pz2[0] = 0;
+    const glm::dvec3* d = s.dir.data() + lo;
+    const double k0 = double(lo) - double(b0);  // k of the first sample
+    for (size_t j = 0; j < len; ++j) {
+      const double k = k0 + double(j);
+      const double kx = k * d[j].x, ky = k * d[j].y, kz = k * d[j].z;
+      px0[j + 1] = px0[j] + d[j].x;
+      py0[j + 1] = py0[j] + d[j].y;
+      pz0[j + 1] = pz0[j] + d[j].z;
+      px1[j + 1] = px1[j] + kx;
+      py1[j + 1] = py1[j] + ky;
+      pz1[j + 1] = pz1[j] + kz;
+      if (second) {
+        px2[j + 1] = px2[j] + k * kx;
+        py2[j + 1] = py2[j] + k * ky;
+        pz2[j + 1] = pz2[j] + k * kz;
       }
-      const size_t end = s.run_end[start];
-      if (end - start > 2 * hh) {
-        glm::dvec3 a(0), b(0), c(0);  // Σ d, Σ k·d, Σ k²·d over the window
-        size_t since = 512;
-        for (size_t i = start + hh; i + hh < end; ++i) {
-          if (since >= 512) {
-            a = b = c = glm::dvec3(0);
-            for (int k = -h; k <= h; ++k) {
-              a += s.dir[i + k];
-              b += double(k) * s.dir[i + k];
-              c += double(k) * k * s.dir[i + k];
-            }
-            since = 0;
-          }
-          velocity[i] = static_cast<float>(vscale * glm::length(b));
-          if (acceleration) (*acceleration)[i] = static_cast<float>(ascale * glm::length(c - m * a));
-          if (i + hh + 1 < end) {  // slide to i + 1
-            const glm::dvec3 out = s.dir[i - hh], in = s.dir[i + hh + 1];
-            const glm::dvec3 a1 = a - out + in;
-            const glm::dvec3 b1 = b + double(h) * out + h1 * in - a1;
-            c = (c - h2 * out + h12 * in) - 2.0 * (b + double(h) * out + h1 * in) + a1;
-            a = a1;
-            b = b1;
-            ++since;
-          }
+    }
+    for (const FitOutput& o : outputs) {
+      const LineScales& sc = *o.scales;
+      const size_t h = static_cast<size_t>(sc.h);
+      auto speed = [&](double scale, double length_sq) {
+        return static_cast<float>(o.squared ? scale * scale * length_sq : scale * std::sqrt(length_sq));
+      };
+      // The velocity over [i − w, i + w]: Σ_{|k'|≤w} k'·d[i + k'] = ΔP1 − c·ΔP0 (c: i's k); at a
+      // run's first and last sample the one-sided difference
+      auto line = [&](size_t i) {
+        const size_t w = std::min({h, i - start, end - 1 - i});
+        if (w == 0) {
+          const glm::dvec3 step = s.dir[i + (i == start ? 1 : -1)] - s.dir[i];
+          return speed(kDeg / s.dt, glm::dot(step, step));
+        }
+        const size_t l = i - w - lo, r = i + w + 1 - lo;
+        const double c = double(i) - double(b0);
+        const double ax = px0[r] - px0[l], ay = py0[r] - py0[l], az = pz0[r] - pz0[l];
+        const double bx = (px1[r] - px1[l]) - c * ax, by = (py1[r] - py1[l]) - c * ay, bz = (pz1[r] - pz1[l]) - c * az;
+        return speed(sc.by_width[w], bx * bx + by * by + bz * bz);
+      };
+      // Centres with the full window, [full_from, full_to)
+      const size_t full_from = std::max(b0, start + h), full_to = std::max(full_from, std::min(b1, end > h ? end - h : start));
+      for (size_t i = b0; i < std::min(b1, full_from); ++i) o.velocity[i] = line(i);  // near the run's start
+      for (size_t i = std::max(b0, full_to); i < b1; ++i) o.velocity[i] = line(i);    // near its end
+      if (full_to == full_from) continue;
+      const double scale = sc.by_width[h], m = sc.m, a_sq = sc.acceleration * sc.acceleration;
+      for (size_t i = full_from; i < full_to; ++i) {
+        const size_t l = i - h - lo, r = i + h + 1 - lo;
+        const double c = double(i) - double(b0);
+        const double ax = px0[r] - px0[l], ay = py0[r] - py0[l], az = pz0[r] - pz0[l];
+        const double qx = px1[r] - px1[l], qy = py1[r] - py1[l], qz = pz1[r] - pz1[l];
+        const double bx = qx - c * ax, by = qy - c * ay, bz = qz - c * az;
+        const double length_sq = bx * bx + by * by + bz * bz;
+        o.velocity[i] = static_cast<float>(o.squared ? scale * scale * length_sq : scale * std::sqrt(length_sq));
+        if (o.acceleration) {
+          // Σ k'²·d = ΔP2 − 2c·ΔP1 + c²·ΔP0; the parabola's curvature from Σ (k'² − m)·d, squared
+          const double e = c * c - m;
+          const double cx = (px2[r] - px2[l]) - 2 * c * qx + e * ax, cy = (py2[r] - py2[l]) - 2 * c * qy + e * ay,
+                       cz = (pz2[r] - pz2[l]) - 2 * c * qz + e * az;
+          o.acceleration[i] = static_cast<float>(a_sq * (cx * cx + cy * cy + cz * cz));
         }
       }
-      start = end;
     }
   }
-  for (size_t i = 0; i < s.n; ++i) {
-    if (!s.valid[i]) continue;
-    const int hi = static_cast<int>(std::min<size_t>({static_cast<size_t>(h), i - s.run_start[i], s.run_end[i] - 1 - i}));
-    if (running && hi == h) continue;  // done above
-    if (hi < 1) {
-      // A run's first or last sample: the one-sided difference
-      if (s.run_end[i] - s.run_start[i] < 2) continue;
-      const size_t j = i == s.run_start[i] ? i + 1 : i - 1;
-      velocity[i] = static_cast<float>(kDeg * glm::length(s.dir[j] - s.dir[i]) / s.dt);
+}
+
+// The outputs over every run of valid samples.
+void fit_runs(const Signal& s, std::span<const FitOutput> outputs) {
+  FitScratch scratch;
+  for (size_t start = 0; start < s.n;) {
+    if (!s.valid[start]) {
+      ++start;
       continue;
     }
-    const glm::dvec3* d = &s.dir[i - hi];
-    const double* w1 = sg.d1[hi].data();
-    glm::dvec3 v(0);
-    for (int k = 0; k <= 2 * hi; ++k) v += w1[k] * d[k];
-    velocity[i] = static_cast<float>(kDeg * glm::length(v) / s.dt);
-    if (acceleration && hi == h) {  // narrower windows near a run's edge: too noisy to call anything impossible
-      const double* w2 = sg.d2[hi].data();
-      glm::dvec3 a(0);
-      for (int k = 0; k <= 2 * hi; ++k) a += w2[k] * d[k];
-      (*acceleration)[i] = static_cast<float>(kDeg * glm::length(a) / (s.dt * s.dt));
-    }
+    fit_run(s, start, s.run_end[start], outputs, scratch);
+    start = s.run_end[start];
   }
 }
 
@@ -283,7 +337,7 @@ int half_width(double window_s, double dt) {
 // Lost runs → blinks (or undefined, when too long), widened over the lid's artefacts: `artefact(i)`
 // says whether a valid sample next to a loss still belongs to it.
 template <typename Artefact>
-void label_blinks(const Recording& r, const Signal& s, const EventParams& p, Artefact&& artefact, std::vector<EventLabel>& out) {
+void label_blinks(const Signal& s, const EventParams& p, Artefact&& artefact, std::vector<EventLabel>& out) {
   const size_t flank = static_cast<size_t>(std::lround(p.blink_flank_s / s.dt));
   for (size_t i = 0; i < s.n;) {
     if (s.valid[i]) {
@@ -292,7 +346,7 @@ void label_blinks(const Recording& r, const Signal& s, const EventParams& p, Art
     }
     size_t j = i;
     while (j < s.n && !s.valid[j]) ++j;
-    const double from = i > 0 ? r.samples[i - 1].t_s : r.samples[i].t_s, to = j < s.n ? r.samples[j].t_s : r.samples[j - 1].t_s;
+    const double from = i > 0 ? s.t[i - 1] : s.t[i], to = j < s.n ? s.t[j] : s.t[j - 1];
     const bool blink = to - from <= p.max_blink_s + 1e-6;
     const EventLabel label = blink ? EventLabel::blink : EventLabel::undefined;
     for (size_t k = i; k < j; ++k) out[k] = label;
@@ -333,20 +387,30 @@ void absorb_lid_saccades(const Signal& s, const EventParams& p, std::vector<Even
 }
 
 // Whether a pupil is far from the recording's median (the lid covering it); false without pupils.
-struct PupilTest {
-  double median = NAN, deviation = 0;
-  PupilTest(const Recording& r, double deviation_) : deviation(deviation_) {
-    std::vector<float> p;
-    for (const GazeSample& s : r.samples)
-      if (s.valid && std::isfinite(s.pupil)) p.push_back(s.pupil);
-    if (p.empty()) return;
-    auto mid = p.begin() + p.size() / 2;
-    std::nth_element(p.begin(), mid, p.end());
-    median = *mid;
+// (The median is found at the first test: only recordings with losses next to valid samples ask.)
+class PupilTest {
+ public:
+  PupilTest(const Recording& r, const Signal& s, double deviation) : r_(r), s_(s), deviation_(deviation) {}
+  bool operator()(size_t i) {
+    if (!median_) {
+      std::vector<float> p = s_.valid_pupils;
+      median_ = NAN;
+      if (!p.empty()) {
+        auto mid = p.begin() + p.size() / 2;
+        std::nth_element(p.begin(), mid, p.end());
+        median_ = *mid;
+      }
+    }
+    const double m = *median_;
+    const float pupil = r_.samples[i].pupil;
+    return std::isfinite(m) && m > 0 && std::isfinite(pupil) && std::abs(pupil - m) > deviation_ * m;
   }
-  bool operator()(const GazeSample& s) const {
-    return std::isfinite(median) && median > 0 && std::isfinite(s.pupil) && std::abs(s.pupil - median) > deviation * median;
-  }
+
+ private:
+  const Recording& r_;
+  const Signal& s_;
+  double deviation_;
+  std::optional<double> median_;
 };
 
 bool free_sample(const std::vector<EventLabel>& labels, const Signal& s, size_t i) {
@@ -375,11 +439,23 @@ double median_of(std::vector<double> x) {
 class VelocityHistogram {
  public:
   static constexpr double kBin = 0.25;
-  static constexpr size_t kBins = 4096;  // 0 … 1024 °/s; faster in the last bin
-  void add(float v, int sign) {
-    if (!std::isfinite(v)) return;
-    counts_[bin(v)] += sign;
-    total_ += sign;
+  static constexpr uint16_t kBins = 4096;   // 0 … 1024 °/s; faster in the last bin
+  static constexpr uint16_t kNone = kBins;  // not finite: counted in a bin of its own, outside the statistics
+  // Each velocity's bin, once (a sample is added and later removed)
+  static std::vector<uint16_t> bins(const std::vector<float>& v) {
+    std::vector<uint16_t> out(v.size());
+    for (size_t i = 0; i < v.size(); ++i)
+      out[i] = std::isfinite(v[i]) ? static_cast<uint16_t>(std::clamp(v[i] * float(1 / kBin), 0.0f, float(kBins - 1))) : kNone;
+    return out;
+  }
+  // Adds (sign +1) or removes (−1) the samples [from, to), without a branch
+  void add(const uint16_t* bin, size_t from, size_t to, long sign) {
+    long none = 0;
+    for (size_t i = from; i < to; ++i) {
+      counts_[bin[i]] += sign;
+      none += bin[i] == kNone;
+    }
+    total_ += sign * (static_cast<long>(to - from) - none);
   }
   size_t total() const { return static_cast<size_t>(total_); }
   // {median, 1.4826·MAD}, in °/s (bin centres)
@@ -399,8 +475,7 @@ class VelocityHistogram {
   }
 
  private:
-  static size_t bin(float v) { return std::min(kBins - 1, static_cast<size_t>(std::max(0.0f, v) / kBin)); }
-  std::array<long, kBins> counts_{};
+  std::array<long, kBins + 1> counts_{};
   long total_ = 0;
 };
 
@@ -408,9 +483,17 @@ LocalStatistics local_statistics(const std::vector<float>& v, size_t window) {
   const size_t n = v.size();
   LocalStatistics out;
   if (n == 0) return out;
-  VelocityHistogram all;
-  for (float x : v) all.add(x, +1);
-  const auto [all_median, all_mad] = all.total() ? all.median_mad() : std::pair<double, double>{NAN, NAN};
+  const std::vector<uint16_t> bins = VelocityHistogram::bins(v);
+  // The whole recording's, for windows with too few velocities (computed only where one is)
+  std::optional<std::pair<double, double>> all;
+  auto whole = [&] {
+    if (!all) {
+      auto h = std::make_unique<VelocityHistogram>();
+      h->add(bins.data(), 0, n, +1);
+      all = h->total() ? h->median_mad() : std::pair<double, double>{NAN, NAN};
+    }
+    return *all;
+  };
   window = std::min(window, n);
   out.block = std::bit_floor(std::max<size_t>(1, window / 8));  // a power of two: a sample's block is a shift
   auto hist = std::make_unique<VelocityHistogram>();
@@ -418,10 +501,9 @@ LocalStatistics local_statistics(const std::vector<float>& v, size_t window) {
   for (size_t b0 = 0; b0 < n; b0 += out.block) {
     const size_t b1 = std::min(n, b0 + out.block), centre = (b0 + b1) / 2;
     const size_t start = std::min(n - window, centre > window / 2 ? centre - window / 2 : 0), end = start + window;
-    while (hi < end) hist->add(v[hi++], +1);
-    while (lo < start) hist->add(v[lo++], -1);
-    double median = all_median, mad = all_mad;
-    if (hist->total() >= 16) std::tie(median, mad) = hist->median_mad();
+    if (hi < end) hist->add(bins.data(), hi, end, +1), hi = end;
+    if (lo < start) hist->add(bins.data(), lo, start, -1), lo = start;
+    const auto [median, mad] = hist->total() >= 16 ? hist->median_mad() : whole();
     out.median.push_back(median);
     out.mad.push_back(mad);
   }
@@ -517,88 +599,27 @@ void label_saccades_nh(const Signal& s, const EventParams& p, const std::vector<
   }
 }
 
-// The velocity of a least-squares line over half-width h (= the Savitzky–Golay first derivative)
-// by running sums: O(1) per sample whatever the window, recomputed exactly every 512 samples so
-// that rounding cannot build up; near a run's edges, narrower windows as in savitzky_golay.
-// One run [start, end) of samples.
-void line_velocity_run(const Signal& s, int h, size_t start, size_t end, std::vector<float>& velocity) {
-  double s2 = 0;
-  for (int k = -h; k <= h; ++k) s2 += double(k) * k;
-  const double scale = kDeg / (s2 * s.dt);
-  const size_t hh = static_cast<size_t>(h);
-  if (end - start > 2 * hh) {
-    // Centres i in [start + h, end − h): full windows
-    glm::dvec3 a(0), b(0);
-    size_t since = 512;
-    for (size_t i = start + hh; i + hh < end; ++i) {
-      if (since >= 512) {
-        a = b = glm::dvec3(0);
-        for (int k = -h; k <= h; ++k) {
-          a += s.dir[i + k];
-          b += double(k) * s.dir[i + k];
-        }
-        since = 0;
-      }
-      velocity[i] = static_cast<float>(scale * glm::length(b));
-      if (i + hh + 1 < end) {  // slide to i + 1
-        b += -a + double(h + 1) * s.dir[i - hh] + double(h) * s.dir[i + hh + 1];
-        a += s.dir[i + hh + 1] - s.dir[i - hh];
-        ++since;
-      }
-    }
-  }
-  // The edges: the largest centred window that fits, from sums over the edge's stretch (O(1) per
-  // sample: Σ_k k·d[i+k] over |k| ≤ w is Σ m·d[m] − i·Σ d[m] over m in [i − w, i + w])
-  auto edge = [&](size_t from, size_t to) {  // centres in [from, to); their windows lie in [lo, hi)
-    const size_t lo = start, hi = end;
-    const size_t a = from > lo + hh ? from - hh : lo, b = std::min(hi, to + hh);
-    std::vector<glm::dvec3> p0(b - a + 1, glm::dvec3(0)), p1(b - a + 1, glm::dvec3(0));
-    for (size_t m = a; m < b; ++m) {
-      p0[m - a + 1] = p0[m - a] + s.dir[m];
-      p1[m - a + 1] = p1[m - a] + double(m - a) * s.dir[m];
-    }
-    for (size_t i = from; i < to; ++i) {
-      const size_t w = std::min<size_t>({hh, i - start, end - 1 - i});
-      if (w == hh) continue;
-      if (w < 1) {  // a run's first or last sample: the one-sided difference
-        if (end - start >= 2) velocity[i] = static_cast<float>(kDeg * glm::length(s.dir[i == start ? i + 1 : i - 1] - s.dir[i]) / s.dt);
-        continue;
-      }
-      const size_t l = i - w - a, r = i + w + 1 - a;
-      const glm::dvec3 moment = (p1[r] - p1[l]) - double(i - a) * (p0[r] - p0[l]);
-      const double w2 = double(w) * (w + 1) * (2 * w + 1) / 3;  // Σ k² over |k| ≤ w
-      velocity[i] = static_cast<float>(kDeg * glm::length(moment) / (w2 * s.dt));
-    }
-  };
-  const size_t left_end = std::min(end, start + hh), right_start = std::max(left_end, end > hh ? end - hh : start);
-  edge(start, left_end);
-  edge(right_start, end);
-}
-
 void line_velocity(const Signal& s, int h, std::vector<float>& velocity) {
+  const LineScales scales(h, s.dt);
   velocity.assign(s.n, NAN);
-  for (size_t start = 0; start < s.n;) {
-    if (!s.valid[start]) {
-      ++start;
-      continue;
-    }
-    line_velocity_run(s, h, start, s.run_end[start], velocity);
-    start = s.run_end[start];
-  }
+  const FitOutput out{&scales, velocity.data()};
+  fit_runs(s, {&out, 1});
 }
 
 // Pursuit in the intersaccadic runs (nhp): a least-squares line's velocity over a longer window.
 void label_pursuit(const Signal& s, const PursuitParams& pursuit, std::vector<EventLabel>& labels) {
-  std::vector<float> slow;
-  line_velocity(s, half_width(pursuit.window_s, s.dt), slow);
-  const double min_pursuit = pursuit.min_s - 1e-6;
+  const LineScales scales(half_width(pursuit.window_s, s.dt), s.dt);
+  std::vector<float> slow(s.n, NAN);  // squared speeds, compared with the squared threshold
+  const FitOutput squared_speed{&scales, slow.data(), nullptr, true};
+  fit_runs(s, {&squared_speed, 1});
+  const double min_pursuit = pursuit.min_s - 1e-6, threshold = pursuit.velocity_deg_s * pursuit.velocity_deg_s;
   for (size_t i = 0; i < s.n;) {
-    if (!(free_sample(labels, s, i) && slow[i] > pursuit.velocity_deg_s)) {
+    if (!(free_sample(labels, s, i) && slow[i] > threshold)) {
       ++i;
       continue;
     }
     size_t j = i;
-    while (j < s.n && free_sample(labels, s, j) && slow[j] > pursuit.velocity_deg_s) ++j;
+    while (j < s.n && free_sample(labels, s, j) && slow[j] > threshold) ++j;
     const double duration = (j - i) * s.dt;
     const double travelled = angle_between_deg(s.dir[i], s.dir[j - 1]);
     if (duration >= min_pursuit && travelled >= pursuit.travel_fraction * pursuit.velocity_deg_s * duration)
@@ -628,8 +649,10 @@ void for_each_free_interval(const Signal& s, const std::vector<EventLabel>& labe
 // its movement for pursuit).
 void label_pursuit_in_intervals(const Signal& s, const EventParams& p, std::vector<EventLabel>& labels) {
   const PursuitParams& pursuit = p.slow_pursuit;
-  const int h = half_width(pursuit.window_s, s.dt);
-  std::vector<float> slow(s.n, NAN);
+  const LineScales scales(half_width(pursuit.window_s, s.dt), s.dt);
+  FitScratch scratch;
+  std::vector<float> slow(s.n, NAN);  // squared speeds (°/s)², compared with squared thresholds
+  const FitOutput squared_speed{&scales, slow.data(), nullptr, true};
   const double min_pursuit = pursuit.min_s - 1e-6;
   const double keep = p.pursuit_keep, relax = p.context_relax, cos_min = p.context_cos, relax_min = p.context_min_fraction;
   const size_t settle = static_cast<size_t>(std::lround(p.settle_s / s.dt));
@@ -639,13 +662,14 @@ void label_pursuit_in_intervals(const Signal& s, const EventParams& p, std::vect
   auto label_runs_above = [&](size_t start, size_t end, double velocity, double min_s, const glm::dvec3* along) {
     bool labelled = false;
     for (size_t i = start; i < end;) {
-      if (!(slow[i] > velocity)) {
+      if (!(slow[i] > velocity * velocity)) {
         ++i;
         continue;
       }
       size_t j = i;
-      while (j < end && slow[j] > keep * velocity) ++j;
-      while (i > start && slow[i - 1] > keep * velocity) --i;
+      const double kept = keep * keep * velocity * velocity;
+      while (j < end && slow[j] > kept) ++j;
+      while (i > start && slow[i - 1] > kept) --i;
       const bool after_saccade = start > 0 && moving(start - 1);
       const size_t from = after_saccade ? std::max(i, std::min(j, start + settle)) : i;  // the eye settling after a saccade does not count
       const double duration = (j - from) * s.dt;
@@ -663,8 +687,15 @@ void label_pursuit_in_intervals(const Signal& s, const EventParams& p, std::vect
     }
     return labelled;
   };
+  // The speeds of an interval, once, and only of one long enough to hold a pursuit of `min_s` (a
+  // pursuit's duration lies inside its interval; the stretches the context pass sees are whole
+  // intervals where the first pass labelled nothing)
+  auto fit = [&](size_t start, size_t end, double min_s) {
+    if (double(end - start) * s.dt < min_s || std::isfinite(slow[start])) return;
+    fit_run(s, start, end, {&squared_speed, 1}, scratch);
+  };
   for_each_free_interval(s, labels, [&](size_t start, size_t end) {
-    line_velocity_run(s, h, start, end, slow);
+    fit(start, end, min_pursuit);
     label_runs_above(start, end, pursuit.velocity_deg_s, min_pursuit, nullptr);
   });
   if (relax <= 0) return;
@@ -687,7 +718,9 @@ void label_pursuit_in_intervals(const Signal& s, const EventParams& p, std::vect
       if (k > 0 && labels[k - 1] == EventLabel::pursuit) along = pursuit_direction(k - 1);
       for (k = end, steps = 0; !along && k < s.n && steps < context && moving(k); ++k, ++steps) {}
       if (!along && k < s.n && labels[k] == EventLabel::pursuit) along = pursuit_direction(k);
-      if (along) changed |= label_runs_above(start, end, relax * pursuit.velocity_deg_s, relax_min * min_pursuit, &*along);
+      if (!along) return;
+      fit(start, end, relax_min * min_pursuit);
+      changed |= label_runs_above(start, end, relax * pursuit.velocity_deg_s, relax_min * min_pursuit, &*along);
     });
     if (!changed) break;
   }
@@ -706,10 +739,9 @@ void label_fixations(const Signal& s, double min_s, std::vector<EventLabel>& lab
 namespace {
 
 // The runs of labels as events, with amplitudes, peak velocities and positions.
-void list_events(const Recording& r, const Signal& s, EventDetection& out) {
+void list_events(const Signal& s, EventDetection& out) {
   const std::vector<float>& v = out.velocity_deg_s;
-  std::vector<double> t(s.n);
-  for (size_t i = 0; i < s.n; ++i) t[i] = r.samples[i].t_s;
+  const std::vector<double>& t = s.t;
   out.events.clear();
   // The runs of one label, split where the samples' times jump (a gap in the recording)
   std::vector<LabelledEvent> runs;
@@ -762,9 +794,9 @@ EventDetection events_from_labels(const Recording& r, const GazeGeometry& g, std
   EventDetection out;
   const Signal s = prepare(r, g);
   out.sampling_hz = 1 / s.dt;
-  savitzky_golay(s, half_width(EventParams{}.filter_window_s, s.dt), out.velocity_deg_s, nullptr);
+  line_velocity(s, half_width(EventParams{}.filter_window_s, s.dt), out.velocity_deg_s);
   out.labels = std::move(labels);
-  list_events(r, s, out);
+  list_events(s, out);
   return out;
 }
 
@@ -776,15 +808,29 @@ EventDetection detect_events(const Recording& r, const GazeGeometry& g, EventMet
   Signal s = prepare(r, g, method == EventMethod::nhr ? p.max_dropout_s : 0);
   out.sampling_hz = 1 / s.dt;
   const bool adaptive = method == EventMethod::nh || method == EventMethod::nhp || method == EventMethod::nhr;
-  std::vector<float> acceleration;  // nh, nhp: for the noise test
+  // The velocity by Savitzky–Golay (its first derivative is the least-squares line's), and for nh,
+  // nhp, nhr its squared acceleration (the noise test) and the smoother velocity that finds small
+  // saccades in noise (none when off), from one set of sums
+  std::vector<float> acceleration, coarse;
   const double filter_window = method == EventMethod::nhr ? p.robust_filter_window_s : p.filter_window_s;
-  savitzky_golay(s, half_width(filter_window, s.dt), out.velocity_deg_s, adaptive ? &acceleration : nullptr, method == EventMethod::nhr);
+  const LineScales fine(half_width(filter_window, s.dt), s.dt), smooth(half_width(p.detection_window_s, s.dt), s.dt);
+  out.velocity_deg_s.assign(s.n, NAN);
+  std::vector<FitOutput> fits{{&fine, out.velocity_deg_s.data()}};
+  if (adaptive) {
+    acceleration.assign(s.n, NAN);
+    fits[0].acceleration = acceleration.data();
+    if (p.detection_window_s > 0) {
+      coarse.assign(s.n, NAN);
+      fits.push_back({&smooth, coarse.data()});
+    }
+  }
+  fit_runs(s, fits);
   const std::vector<float>& v = out.velocity_deg_s;
   out.labels.assign(s.n, EventLabel::undefined);
   auto& labels = out.labels;
   // The blink rule's pupil test (not for ivt/idt, whose lost samples are their blinks)
   std::optional<PupilTest> pupil;
-  if (method != EventMethod::ivt && method != EventMethod::idt && method != EventMethod::ivvt) pupil.emplace(r, p.pupil_deviation);
+  if (method != EventMethod::ivt && method != EventMethod::idt && method != EventMethod::ivvt) pupil.emplace(r, s, p.pupil_deviation);
 
   switch (method) {
     case EventMethod::ivt:
@@ -812,18 +858,16 @@ EventDetection detect_events(const Recording& r, const GazeGeometry& g, EventMet
     case EventMethod::nhr: {
       // Physiologically impossible samples are noise: out of the threshold's statistics
       std::vector<float> clean = v;
+      const double max_acceleration_sq = p.max_acceleration_deg_s2 * p.max_acceleration_deg_s2;  // (the accelerations are squared)
       for (size_t i = 0; i < s.n; ++i)
-        if (s.valid[i] && (v[i] > p.max_velocity_deg_s || acceleration[i] > p.max_acceleration_deg_s2)) {
+        if (s.valid[i] && (v[i] > p.max_velocity_deg_s || acceleration[i] > max_acceleration_sq)) {
           s.noise[i] = true;
           clean[i] = NAN;
         }
-      // The smoother velocity that finds small saccades in noise (its own thresholds; none when off)
-      std::vector<float> coarse;
-      if (p.detection_window_s > 0) {
-        line_velocity(s, half_width(p.detection_window_s, s.dt), coarse);
+      // (the smoother velocity: not where the velocity is noise)
+      if (!coarse.empty())
         for (size_t i = 0; i < s.n; ++i)
           if (s.noise[i]) coarse[i] = NAN;
-      }
       SampleThresholds th;
       if (method == EventMethod::nhr) {
         // Local, robust thresholds (median and MAD per window)
@@ -863,7 +907,7 @@ EventDetection detect_events(const Recording& r, const GazeGeometry& g, EventMet
       }
       // Noise next to a loss is the lid's (a blink); elsewhere it stays undefined
       label_blinks(
-          r, s, p, [&](size_t i) { return s.noise[i] || !(v[i] < th.onset(i)) || (*pupil)(r.samples[i]); }, labels);
+          s, p, [&](size_t i) { return s.noise[i] || !(v[i] < th.onset(i)) || (*pupil)(i); }, labels);
       label_saccades_nh(s, p, clean, th, coarse, method == EventMethod::nhr ? p.robust_pso_window_s : p.pso_window_s,
                         method == EventMethod::nhr, labels);
       absorb_lid_saccades(s, p, labels);
@@ -915,7 +959,7 @@ EventDetection detect_events(const Recording& r, const GazeGeometry& g, EventMet
         return glm::dot(q, q) > 1;  // NaN: false
       };
       label_blinks(
-          r, s, p, [&](size_t i) { return outside(i) || (*pupil)(r.samples[i]); }, labels);
+          s, p, [&](size_t i) { return outside(i) || (*pupil)(i); }, labels);
       const size_t min_samples = std::max<size_t>(1, static_cast<size_t>(std::lround(p.ek_min_saccade_s / s.dt)));
       for (size_t i = 0; i < s.n;) {
         if (!(free_sample(labels, s, i) && outside(i))) {
@@ -933,7 +977,7 @@ EventDetection detect_events(const Recording& r, const GazeGeometry& g, EventMet
     }
   }
 
-  list_events(r, s, out);
+  list_events(s, out);
   return out;
 }
 

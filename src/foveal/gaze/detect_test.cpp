@@ -4,6 +4,7 @@
 #include "foveal/gaze/detect.h"
 #include "foveal/gaze/synthetic.h"
 #include "foveal/util/error.h"
+#include "foveal/util/units.h"
 
 #include <gtest/gtest.h>
 
@@ -444,4 +445,64 @@ TEST(Detect, RecommendedSaccadeOnsetsAgreeWithTheCodersInTime) {
   if (scored == 0) GTEST_SKIP() << "skipped: no labelled recordings under " << data;
   // (the mean over recordings and coders, as the benchmark's tables average)
   EXPECT_LT(std::abs(sum / scored), 0.75) << "mean saccade onset difference " << sum / scored << " ms over " << scored;
+}
+
+// Every detector's velocity is Savitzky–Golay's first derivative (= the slope of the least-squares
+// line) over the largest centred window inside each run of samples, taken from sums over blocks of
+// 512 samples (O(1) per sample). Against the filter's weights summed sample by sample, here, from the
+// samples' directions: equal to float rounding inside long runs (several blocks), next to losses
+// (the narrower windows at a run's edges, the one-sided difference at its ends), at 250 to 2000 Hz,
+// for nh's 6-ms filter and nhr's 10-ms one.
+TEST(Detect, VelocityBySumsEqualsTheFiltersWeights) {
+  for (double rate : {250.0, 1000.0, 2000.0})
+    for (EventMethod method : {EventMethod::nh, EventMethod::nhr}) {
+      SCOPED_TRACE(fmt::format("{} Hz, {}", rate, to_string(method)));
+      const Recording r = synthetic_viewing(20, rate, true, 3).recording({0.05, 0.01, 0.010, 9});
+      EventParams p;
+      p.max_dropout_s = 0;  // (nhr: no dropouts filled, so that the runs are the recording's)
+      const GazeGeometry g(kDisplay, r.screen_px);
+      const EventDetection d = detect_events(r, g, method, p, FixationParams{});
+      const double dt = 1 / d.sampling_hz;
+      const double window = method == EventMethod::nhr ? p.robust_filter_window_s : p.filter_window_s;
+      const int h = std::clamp(static_cast<int>(std::lround(0.5 * window / dt)), 1, 256);
+      const size_t n = r.samples.size();
+      size_t compared = 0, edges = 0, longest = 0;
+      for (size_t a = 0; a < n;) {  // each run [a, b) of valid samples
+        if (!r.samples[a].valid) {
+          EXPECT_TRUE(std::isnan(d.velocity_deg_s[a])) << a;
+          ++a;
+          continue;
+        }
+        size_t b = a;
+        while (b < n && r.samples[b].valid) ++b;
+        longest = std::max(longest, b - a);
+        for (size_t i = a; i < b; ++i) {
+          const int w = std::min({h, static_cast<int>(i - a), static_cast<int>(b - 1 - i)});
+          double expected = NAN;
+          if (b - a >= 2 && w == 0) {
+            expected = kDeg * glm::length(g.direction(r.samples[i == a ? i + 1 : i - 1]) - g.direction(r.samples[i])) / dt;
+          } else if (w > 0) {
+            glm::dvec3 moment(0);
+            double k2 = 0;
+            for (int k = -w; k <= w; ++k) {
+              moment += double(k) * g.direction(r.samples[static_cast<size_t>(static_cast<std::ptrdiff_t>(i) + k)]);
+              k2 += double(k) * k;
+            }
+            expected = kDeg * glm::length(moment) / (k2 * dt);
+          }
+          if (std::isnan(expected)) {
+            EXPECT_TRUE(std::isnan(d.velocity_deg_s[i])) << i;
+            continue;
+          }
+          ASSERT_NEAR(d.velocity_deg_s[i], expected, 1e-4 * std::max(1.0, expected)) << i;
+          ++compared;
+          edges += w < h;
+        }
+        a = b;
+      }
+      EXPECT_GT(compared, n * 9 / 10);
+      EXPECT_GT(edges, 20u);  // runs begin and end at losses: their edges were compared too
+      if (rate >= 1000)
+        EXPECT_GT(longest, size_t(2 * 512));  // and runs span several blocks of sums (at 250 Hz a blink every 3 s ends them first)
+    }
 }
