@@ -305,25 +305,13 @@ void RealtimeLoop::compose(Image& color) {
 }
 
 bool FixedPartWindow::add(double fixed_ms, double budget_ms, size_t min_frames) {
-  ms_[next_] = fixed_ms;
-  next_ = (next_ + 1) % kFrames;
-  count_ = std::min(count_ + 1, kFrames);
-  return count_ >= std::max<size_t>(1, min_frames) && median_ms() > 0.6 * budget_ms;
-}
-
-double FixedPartWindow::median_ms() const {
-  return median(std::vector<double>(ms_.begin(), ms_.begin() + static_cast<std::ptrdiff_t>(count_)));
+  latest_.add(fixed_ms);
+  return latest_.size() >= std::max<size_t>(1, min_frames) && median_ms() > 0.6 * budget_ms;
 }
 
 void SweepCost::swept(double ms) {
   estimate_ms_ = std::max(0.7 * estimate_ms_ + 0.3 * ms, ms);
-  ms_[next_] = ms;
-  next_ = (next_ + 1) % kSweeps;
-  count_ = std::min(count_ + 1, kSweeps);
-}
-
-double SweepCost::typical_ms() const {
-  return count_ == 0 ? estimate_ms_ : median(std::vector<double>(ms_.begin(), ms_.begin() + static_cast<std::ptrdiff_t>(count_)));
+  latest_.add(ms);
 }
 
 void RealtimeLoop::rescale(double fixed_ms) {

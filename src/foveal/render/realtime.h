@@ -31,11 +31,13 @@
 #include "foveal/gaze/landing.h"
 #include "foveal/render/frame_renderer.h"
 #include "foveal/render/render.h"
+#include "foveal/util/stats.h"
 
 #include <glm/glm.hpp>
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <optional>
 #include <string>
 #include <vector>
@@ -83,6 +85,26 @@ struct LoopFrame {
   bool fovea_done = false;     // all of them: the fovea is at full quality
 };
 
+// The median of the latest N values (fewer before N have come).
+template <size_t N>
+class RecentMedian {
+ public:
+  void add(double value) {
+    values_[next_] = value;
+    next_ = (next_ + 1) % N;
+    count_ = std::min(count_ + 1, N);
+  }
+  size_t size() const { return count_; }
+  double median() const {  // NaN when empty
+    return count_ == 0 ? NAN : foveal::median(std::vector<double>(values_.begin(), values_.begin() + static_cast<std::ptrdiff_t>(count_)));
+  }
+  void clear() { count_ = next_ = 0; }
+
+ private:
+  std::array<double, N> values_{};
+  size_t count_ = 0, next_ = 0;
+};
+
 // The loop's reason to render smaller: the fixed part of its frames (surfaces, maps, planning,
 // composing: all but the rays) over the latest frames, judged by its median against 60 % of the
 // budget — a sustained cost (a moving camera, a display too large), which one frame's pause does
@@ -94,12 +116,11 @@ class FixedPartWindow {
   // This frame's fixed part; true when the median of the latest frames (at least `min_frames` of
   // them) is above 60 % of the budget.
   bool add(double fixed_ms, double budget_ms, size_t min_frames);
-  double median_ms() const;
-  void clear() { count_ = next_ = 0; }
+  double median_ms() const { return latest_.median(); }
+  void clear() { latest_.clear(); }
 
  private:
-  std::array<double, kFrames> ms_{};
-  size_t count_ = 0, next_ = 0;
+  RecentMedian<kFrames> latest_;
 };
 
 // What a periphery round's planning (a pass over every pixel) costs on the wall clock, for the
@@ -120,12 +141,11 @@ class SweepCost {
   // A frame did not sweep because it did not fit.
   void skipped() { estimate_ms_ = std::max(typical_ms(), kSkipDecay * estimate_ms_); }
   double estimate_ms() const { return estimate_ms_; }
-  double typical_ms() const;
+  double typical_ms() const { return latest_.size() == 0 ? estimate_ms_ : latest_.median(); }
 
  private:
   double estimate_ms_ = 1;
-  std::array<double, kSweeps> ms_{};
-  size_t count_ = 0, next_ = 0;
+  RecentMedian<kSweeps> latest_;
 };
 
 class RealtimeLoop {
