@@ -267,46 +267,49 @@ void fit_run(const Signal& s, size_t start, size_t end, std::span<const FitOutpu
         pz2[j + 1] = pz2[j] + k * kz;
       }
     }
+    // The sums over [i − w, i + w]: Σ d, and Σ_{|k'|≤w} k'·d[i + k'] = ΔP1 − c·ΔP0 (c: i's k)
+    struct Window {
+      size_t l, r;
+      double c;
+      glm::dvec3 a, q, b;  // Σ d, ΔP1, Σ k'·d
+    };
+    auto window = [&](size_t i, size_t w) {
+      Window x{i - w - lo, i + w + 1 - lo, double(i) - double(b0), {}, {}, {}};
+      x.a = {px0[x.r] - px0[x.l], py0[x.r] - py0[x.l], pz0[x.r] - pz0[x.l]};
+      x.q = {px1[x.r] - px1[x.l], py1[x.r] - py1[x.l], pz1[x.r] - pz1[x.l]};
+      x.b = x.q - x.c * x.a;
+      return x;
+    };
     for (const FitOutput& o : outputs) {
       const LineScales& sc = *o.scales;
       const size_t h = static_cast<size_t>(sc.h);
       auto speed = [&](double scale, double length_sq) {
         return static_cast<float>(o.squared ? scale * scale * length_sq : scale * std::sqrt(length_sq));
       };
-      // The velocity over [i − w, i + w]: Σ_{|k'|≤w} k'·d[i + k'] = ΔP1 − c·ΔP0 (c: i's k); at a
-      // run's first and last sample the one-sided difference
+      // The velocity over the largest centred window inside the run; at its first and last sample
+      // the one-sided difference
       auto line = [&](size_t i) {
         const size_t w = std::min({h, i - start, end - 1 - i});
         if (w == 0) {
           const glm::dvec3 step = s.dir[i + (i == start ? 1 : -1)] - s.dir[i];
           return speed(kDeg / s.dt, glm::dot(step, step));
         }
-        const size_t l = i - w - lo, r = i + w + 1 - lo;
-        const double c = double(i) - double(b0);
-        const double ax = px0[r] - px0[l], ay = py0[r] - py0[l], az = pz0[r] - pz0[l];
-        const double bx = (px1[r] - px1[l]) - c * ax, by = (py1[r] - py1[l]) - c * ay, bz = (pz1[r] - pz1[l]) - c * az;
-        return speed(sc.by_width[w], bx * bx + by * by + bz * bz);
+        const glm::dvec3 b = window(i, w).b;
+        return speed(sc.by_width[w], glm::dot(b, b));
       };
-      // Centres with the full window, [full_from, full_to)
+      // Centres with the full window, [full_from, full_to); the others near the run's start and end
       const size_t full_from = std::max(b0, start + h), full_to = std::max(full_from, std::min(b1, end > h ? end - h : start));
-      for (size_t i = b0; i < std::min(b1, full_from); ++i) o.velocity[i] = line(i);  // near the run's start
-      for (size_t i = std::max(b0, full_to); i < b1; ++i) o.velocity[i] = line(i);    // near its end
-      if (full_to == full_from) continue;
+      for (size_t i = b0; i < std::min(b1, full_from); ++i) o.velocity[i] = line(i);
+      for (size_t i = std::max(b0, full_to); i < b1; ++i) o.velocity[i] = line(i);
       const double scale = sc.by_width[h], m = sc.m, a_sq = sc.acceleration * sc.acceleration;
       for (size_t i = full_from; i < full_to; ++i) {
-        const size_t l = i - h - lo, r = i + h + 1 - lo;
-        const double c = double(i) - double(b0);
-        const double ax = px0[r] - px0[l], ay = py0[r] - py0[l], az = pz0[r] - pz0[l];
-        const double qx = px1[r] - px1[l], qy = py1[r] - py1[l], qz = pz1[r] - pz1[l];
-        const double bx = qx - c * ax, by = qy - c * ay, bz = qz - c * az;
-        const double length_sq = bx * bx + by * by + bz * bz;
-        o.velocity[i] = static_cast<float>(o.squared ? scale * scale * length_sq : scale * std::sqrt(length_sq));
+        const Window x = window(i, h);
+        o.velocity[i] = speed(scale, glm::dot(x.b, x.b));
         if (o.acceleration) {
           // Σ k'²·d = ΔP2 − 2c·ΔP1 + c²·ΔP0; the parabola's curvature from Σ (k'² − m)·d, squared
-          const double e = c * c - m;
-          const double cx = (px2[r] - px2[l]) - 2 * c * qx + e * ax, cy = (py2[r] - py2[l]) - 2 * c * qy + e * ay,
-                       cz = (pz2[r] - pz2[l]) - 2 * c * qz + e * az;
-          o.acceleration[i] = static_cast<float>(a_sq * (cx * cx + cy * cy + cz * cz));
+          const glm::dvec3 p2(px2[x.r] - px2[x.l], py2[x.r] - py2[x.l], pz2[x.r] - pz2[x.l]);
+          const glm::dvec3 curvature = p2 - 2 * x.c * x.q + (x.c * x.c - m) * x.a;
+          o.acceleration[i] = static_cast<float>(a_sq * glm::dot(curvature, curvature));
         }
       }
     }
