@@ -32,9 +32,9 @@ struct ReplayOptions {
   RenderOptions render;
   GazeOptions gaze;
   std::string source, output, video, stats, stimulus;
-  double fps = 30, start = 0, duration = 0, live_timeout = 5;
+  double fps = 30, start = 0, duration = 0, live_timeout = 5, orbit = 0;
   int frames = 0;
-  bool no_reuse = false, mark = false, quiet = false, realtime = false, no_predict = false;
+  bool no_reuse = false, mark = false, quiet = false, realtime = false, no_predict = false, no_history = false;
   std::string device = "auto";
 };
 
@@ -52,7 +52,10 @@ ReplaySettings replay_settings(const ReplayOptions& o) {
   settings.reuse = !o.no_reuse;
   settings.realtime = o.realtime;
   settings.predict = !o.no_predict;
+  settings.orbit_deg_s = o.orbit;
+  settings.keep_history = !o.no_history;
   if (o.no_predict && !o.realtime) fail("--no-predict needs --realtime");
+  if (o.no_history && !o.realtime) fail("--no-history needs --realtime (without it, --temporal keeps rays across frames)");
   validate(settings);
   return settings;
 }
@@ -66,7 +69,7 @@ class FrameWriter {
     csv_path_ = (dir_ / "frames.csv").string();
     csv_.open(csv_path_);
     if (!csv_) fail("{}: cannot write", csv_path_);
-    csv_ << "frame,t_s,gaze_x,gaze_y,fix_x,fix_y,ao_rays,ms,reused,source_state\n";
+    csv_ << "frame,t_s,gaze_x,gaze_y,fix_x,fix_y,ao_rays,ms,reused,source_state,fovea_converged,kept_pixels\n";
   }
   void operator()(const ReplayFrame& f, const Frame& frame) {
     const std::string path = (dir_ / fmt::format("frame_{:05d}.png", f.index)).string();
@@ -77,8 +80,10 @@ class FrameWriter {
     } else {
       save_image(frame.color, path);
     }
-    csv_ << fmt::format("{},{:.6f},{},{},{},{},{},{:.3f},{},{}\n", f.index, f.t_s, cell(f.gaze, 0), cell(f.gaze, 1), cell(f.fixation, 0),
-                        cell(f.fixation, 1), f.ao_rays, f.ms, f.reused ? 1 : 0, to_string(f.state));
+    csv_ << fmt::format("{},{:.6f},{},{},{},{},{},{:.3f},{},{},{},{}\n", f.index, f.t_s, cell(f.gaze, 0), cell(f.gaze, 1),
+                        cell(f.fixation, 0), cell(f.fixation, 1), f.ao_rays, f.ms, f.reused ? 1 : 0, to_string(f.state),
+                        std::isfinite(f.fovea_converged) ? fmt::format("{:.4f}", f.fovea_converged) : std::string(),
+                        o_.realtime ? std::to_string(f.kept_pixels) : std::string());
     csv_.flush();
   }
   void close() { csv_.close(); }
@@ -231,6 +236,12 @@ std::function<int()> add_replay_command(CLI::App& app) {
                 "each frame is what the real-time loop shows on a display of --fps Hz: made within 1/fps of compute from the raw "
                 "samples up to its time, the fovea refined first (docs/realtime.md); frames.csv's ms is each frame's time");
   cmd->add_flag("--no-predict", o->no_predict, "--realtime: keep the fovea at the measured gaze during saccades (no landing prediction)");
+  cmd->add_option("--orbit", o->orbit,
+                  "the camera orbits its look point about its up axis at this many degrees per second of the sequence (a moving "
+                  "view; with --realtime the loop keeps the AO of the surfaces it still sees, without it use --temporal for that)")
+      ->capture_default_str();
+  cmd->add_flag("--no-history", o->no_history,
+                "--realtime: a moved camera starts its AO afresh instead of keeping the rays of the surfaces it still sees");
   cmd->add_flag("--no-reuse", o->no_reuse, "render every frame, even when the gaze has not moved since the previous one");
   cmd->add_option("--video", o->video, "also encode the frames into a video with ffmpeg (.mp4, .mkv, .webm, …)");
   cmd->add_option("--stats", o->stats, "write a summary of the sequence as JSON");

@@ -131,6 +131,38 @@ TEST(GazeCli, ReplayFoveaFollowsAPursuit) {
   EXPECT_LT(std::stod(frames["ivt"][12][4]), 20.0);
 }
 
+// --orbit moves the camera; the real-time loop's moved views keep the AO rays of the surfaces they
+// still see (frames.csv: kept_pixels), and --no-history starts them afresh.
+TEST(GazeCli, RealtimeReplayOfAnOrbitingCameraKeepsItsRays) {
+  const std::string rec = write_three_fixations("orbit.csv");
+  std::map<std::string, std::vector<std::vector<std::string>>> frames;
+  for (const std::string history : {"", " --no-history"}) {
+    const CliRun r = foveal_test::foveal("replay --gaze " + rec +
+                                         " --screen 480x300 --scene builtin:sphere-plane --size 64x40 --max-rays 16 --fps 30 "
+                                         "--realtime --orbit 20 -q -o orbit" +
+                                         (history.empty() ? std::string("kept") : std::string("afresh")) + history);
+    ASSERT_EQ(r.status, 0) << r.err;
+    frames[history] = read_csv(scratch(std::string("orbit") + (history.empty() ? "kept" : "afresh") + "/frames.csv"));
+    ASSERT_GE(frames[history].size(), 10u);
+    EXPECT_EQ(frames[history][0][10], "fovea_converged");
+    EXPECT_EQ(frames[history][0][11], "kept_pixels");
+  }
+  // Every frame after the first is a moved view: with history each keeps the rays of the one before
+  for (size_t k = 2; k < frames[""].size(); ++k) {
+    EXPECT_GT(std::stoull(frames[""][k][11]), 0u) << "frame " << k - 1;
+    EXPECT_EQ(std::stoull(frames[" --no-history"][k][11]), 0u) << "frame " << k - 1;
+    const double converged = std::stod(frames[""][k][10]);
+    EXPECT_TRUE(converged >= 0 && converged <= 1) << converged;
+  }
+  // Bad values are one clear line naming the option
+  for (const std::string bad : {"--orbit nan --realtime", "--orbit 1e9 --realtime", "--no-history"}) {
+    const CliRun r = foveal_test::foveal("replay --gaze " + rec + " --screen 480x300 --scene builtin:plane --size 16x10 -o bad " + bad);
+    EXPECT_NE(r.status, 0) << bad;
+    EXPECT_NE(r.err.find(bad.find("orbit") != std::string::npos ? "orbit" : "--no-history needs --realtime"), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(scratch("bad")));
+  }
+}
+
 TEST(BenchQualityCli, SequenceFollowsARecordingAsReplayDoes) {
   // The sequence's gaze at each frame is the one `replay` renders for the same recording and fps
   const std::string rec = write_three_fixations("sequence_gaze.csv");

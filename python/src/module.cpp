@@ -175,7 +175,7 @@ struct PyLoop {
 
   PyLoop(const PyScene& s, const std::array<int, 2>& size, const nb::object& camera_arg, std::optional<Display> display, int max_rays,
          double gamma, double refresh_hz, std::optional<double> frame_budget_ms, bool predict, const std::string& device_name, int threads_,
-         uint64_t seed, const std::string& clock, double tolerance, double ellipse)
+         uint64_t seed, const std::string& clock, double tolerance, double ellipse, bool keep_history)
       : scene(s.scene), threads(threads_) {
     if (threads < 0) fail("threads: must be 0 (all cores) or more, got {}", threads);
     if (!(refresh_hz >= 1 && refresh_hz <= 1000)) fail("refresh_hz: must be in [1, 1000] Hz, got {}", refresh_hz);
@@ -190,6 +190,7 @@ struct PyLoop {
     LoopSettings settings;
     settings.budget_ms = frame_budget_ms.value_or(1000.0 / refresh_hz);
     settings.predict = predict;
+    settings.keep_history = keep_history;
     settings.clock = parse_loop_clock(clock);
     if (settings.clock == LoopClock::model) fail("clock: the model clock is bench latency's; a Loop in Python runs on the wall clock");
     camera = resolve_camera(*scene, camera_arg);
@@ -209,8 +210,13 @@ struct PyLoop {
     loop->push_gaze(t, gaze ? std::optional<glm::dvec2>(glm::dvec2((*gaze)[0], (*gaze)[1])) : std::nullopt);
   }
 
-  std::unique_ptr<PyLoopFrame> frame(std::optional<std::array<double, 2>> gaze, std::optional<double> t) {
+  std::unique_ptr<PyLoopFrame> frame(std::optional<std::array<double, 2>> gaze, std::optional<double> t, const nb::object& camera_arg) {
     if (gaze || t) push(t.value_or(last_t.value_or(0.0) + 1e-6), gaze);
+    if (!camera_arg.is_none()) {
+      const Camera moved = resolve_camera(*scene, camera_arg);
+      const std::lock_guard<std::mutex> lock(mutex);
+      camera = moved;  // the view from now on
+    }
     auto out = std::make_unique<PyLoopFrame>();
     out->budget_ms = loop->settings().budget_ms;
     nb::gil_scoped_release release;
@@ -377,6 +383,9 @@ NB_MODULE(_core, m) {
       .def_prop_ro("look", [](const Camera& c) { return tuple(c.look); })
       .def_prop_ro("up", [](const Camera& c) { return tuple(c.up); })
       .def_prop_ro("fov", [](const Camera& c) { return c.fov_deg; })
+      .def(
+          "orbit", [](const Camera& c, double degrees) { return orbit_camera(c, degrees); }, "degrees"_a,
+          "This camera moved `degrees` around its look point about its up axis (as replay --orbit).")
       .def("__repr__", [](const Camera& c) {
         return fmt::format("Camera(eye=({}, {}, {}), look=({}, {}, {}), fov={}, name='{}')", c.eye.x, c.eye.y, c.eye.z, c.look.x, c.look.y,
                            c.look.z, c.fov_deg, c.name);
@@ -515,27 +524,35 @@ NB_MODULE(_core, m) {
           "late", [](const PyLoopFrame& f) { return f.frame.late; }, "The frame took longer than its budget.")
       .def_prop_ro(
           "budget_ms", [](const PyLoopFrame& f) { return f.budget_ms; }, "The frame budget, ms.")
+      .def_prop_ro(
+          "new_view", [](const PyLoopFrame& f) { return f.frame.new_view; }, "The camera had moved: the view's surfaces were traced.")
+      .def_prop_ro(
+          "kept_pixels", [](const PyLoopFrame& f) { return f.frame.kept_pixels; },
+          "A new view: the pixels that kept AO rays from the view before (0 with keep_history=False).")
       .def_prop_ro("index", [](const PyLoopFrame& f) { return f.frame.index; });
 
   nb::class_<PyLoop>(m, "Loop",
                      "Gaze-contingent rendering in real time: frame() returns within the frame budget an image whose fovea "
                      "is refined first (docs/realtime.md).")
       .def(nb::init<const PyScene&, const std::array<int, 2>&, const nb::object&, std::optional<Display>, int, double, double,
-                    std::optional<double>, bool, const std::string&, int, uint64_t, const std::string&, double, double>(),
+                    std::optional<double>, bool, const std::string&, int, uint64_t, const std::string&, double, double, bool>(),
            "scene"_a, "size"_a = std::array<int, 2>{840, 525}, "camera"_a = nb::none(), "display"_a = nb::none(), "max_rays"_a = 400,
            "gamma"_a = 2.0, "refresh_hz"_a = 60.0, "frame_budget_ms"_a = nb::none(), "predict"_a = true, "device"_a = "auto",
            "threads"_a = 0, "seed"_a = 1, "clock"_a = "wall", "tolerance"_a = foveal::AoReuseParams{}.tolerance, "ellipse"_a = 1.538,
-           "A loop for one view (traced here, once). `frame_budget_ms` (default: one refresh at `refresh_hz`) is what each "
-           "frame() may take; `predict` places the fovea at a saccade's predicted landing while it flies; `display` the "
-           "screen the image fills (default: the papers' 47.5×30 cm, 1680×1050 at 60 cm); `tolerance` the periphery's τ(E) "
-           "scale (as render --tolerance).")
+           "keep_history"_a = true,
+           "A loop for a view (traced here, once; frame(camera=…) moves it). `frame_budget_ms` (default: one refresh at "
+           "`refresh_hz`) is what each frame() may take; `predict` places the fovea at a saccade's predicted landing while it "
+           "flies; `display` the screen the image fills (default: the papers' 47.5×30 cm, 1680×1050 at 60 cm); `tolerance` the "
+           "periphery's τ(E) scale (as render --tolerance); `keep_history` lets a moved camera keep the AO of the surfaces it "
+           "still sees (else it starts afresh).")
       .def("push", &PyLoop::push, "t"_a, "gaze"_a,
            "A tracker sample: its time in seconds (any clock, increasing) and the gaze (x, y) in render pixels, or None "
            "when the tracker lost the eye. Push every sample a fast tracker delivers between frames: the saccade predictor "
            "needs them.")
-      .def("frame", &PyLoop::frame, "gaze"_a = nb::none(), "t"_a = nb::none(),
-           "The next frame, within the budget: `gaze` (x, y) and `t` (seconds), when given, are pushed first. The GIL is "
-           "released while it renders on the worker threads.")
+      .def("frame", &PyLoop::frame, "gaze"_a = nb::none(), "t"_a = nb::none(), "camera"_a = nb::none(),
+           "The next frame, within the budget: `gaze` (x, y) and `t` (seconds), when given, are pushed first; `camera` (a "
+           "Camera or a camera name of the scene), when given, is the view from this frame on. The GIL is released while it "
+           "renders on the worker threads.")
       .def_prop_ro(
           "scale", [](const PyLoop& l) { return l.loop->scale(); },
           "Render size / the size asked for (1 unless the base shading did not fit).")

@@ -51,6 +51,28 @@ def test_a_saccade_pushed_sample_by_sample_is_predicted(box):
     assert not f.predicted and tuple(f.gaze) == pytest.approx(tuple(end))  # landed: the measured gaze again
 
 
+def test_a_moving_camera_keeps_the_ao_it_still_sees(box):
+    def orbit(keep_history):
+        loop = foveal.Loop(box, size=(160, 100), max_rays=64, device="cpu", frame_budget_ms=40, keep_history=keep_history)
+        first = loop.frame(gaze=(80, 50), t=0)
+        for k in range(30):
+            f = loop.frame(gaze=(80, 50), t=(k + 1) / 60)
+            if f.fovea == "converged":
+                break
+        assert f.fovea == "converged"
+        camera = box.cameras[0]  # the loop's view: the scene's first camera
+        moved = [loop.frame(gaze=(80, 50), t=1 + k / 60, camera=camera.orbit(0.5 * k)) for k in range(1, 4)]
+        return first, moved
+
+    _, kept = orbit(True)
+    assert all(f.new_view for f in kept)
+    assert all(f.kept_pixels > 0 for f in kept) and kept[-1].fovea_converged > 0.9
+    _, fresh = orbit(False)
+    assert all(f.kept_pixels == 0 for f in fresh)  # (how soon a fresh fovea converges depends on the machine)
+    with pytest.raises(ValueError, match="camera"):
+        foveal.Loop(box, size=(16, 10), max_rays=4, device="cpu").frame(camera="no such camera")
+
+
 def test_frames_release_the_gil(box):
     loop = foveal.Loop(box, size=(320, 200), max_rays=400, device="cpu", frame_budget_ms=40)
     ticks = []

@@ -17,7 +17,13 @@ void validate(const ReplaySettings& s) {
   if (!(s.duration_s >= 0) || !std::isfinite(s.duration_s))
     fail("duration_s: must be zero (all) or positive seconds, got {}", s.duration_s);
   if (!(s.live_timeout_s > 0)) fail("live_timeout_s: must be positive seconds, got {}", s.live_timeout_s);
+  if (!std::isfinite(s.orbit_deg_s) || std::abs(s.orbit_deg_s) > 3600)
+    fail("orbit: must be within ±3600 degrees per second, got {}", s.orbit_deg_s);
   validate(s.fixation);
+}
+
+Camera replay_camera(const Camera& camera, const ReplaySettings& s, double t_s) {
+  return s.orbit_deg_s == 0 ? camera : orbit_camera(camera, s.orbit_deg_s * t_s);
 }
 
 namespace {
@@ -28,18 +34,21 @@ class FrameMaker {
   FrameMaker(FrameRenderer& renderer, const Camera& camera, const RenderParams& params, bool reuse)
       : renderer_(renderer), camera_(camera), params_(params), reuse_(reuse) {}
 
-  const Frame& make(glm::dvec2 gaze, ReplayFrame& info) {
+  // `camera`: the frame's (a moving view's), the still one where unset
+  const Frame& make(glm::dvec2 gaze, ReplayFrame& info, const Camera* camera = nullptr) {
     const Timer clock;
     info.render_gaze = gaze;
-    // With temporal reuse every frame adds rays, so none is a copy of the last
-    info.reused = reuse_ && !params_.reuse.temporal && last_gaze_ && *last_gaze_ == gaze;
+    const Camera& view = camera ? *camera : camera_;
+    // With temporal reuse every frame adds rays, so none is a copy of the last; nor is a moved view
+    info.reused = reuse_ && !params_.reuse.temporal && last_gaze_ && *last_gaze_ == gaze && same_camera(view, last_camera_);
     if (!info.reused) {
       RenderParams p = params_;
       p.gaze_px = gaze;
       FrameOptions options;
       options.outputs = FrameOutputs::colour_only();  // the sink needs nothing else
-      frame_ = renderer_.render(camera_, p, options);
+      frame_ = renderer_.render(view, p, options);
       last_gaze_ = gaze;
+      last_camera_ = view;
     }
     info.ao_rays = frame_.stats.ao_rays;
     info.ms = clock.ms();
@@ -52,6 +61,7 @@ class FrameMaker {
   const RenderParams& params_;
   bool reuse_;
   std::optional<glm::dvec2> last_gaze_;
+  Camera last_camera_;
   Frame frame_;
 };
 
@@ -63,12 +73,15 @@ class LoopMaker {
     loop_.frame(camera_);  // the view's surfaces, before the first frame is due
   }
   void push(const GazeSample& g, std::optional<glm::dvec2> render_px) { loop_.push_gaze(g.t_s, g.valid ? render_px : std::nullopt); }
-  const Frame& make(ReplayFrame& info) {
+  // `camera`: the frame's (a moving view's), the still one where unset
+  const Frame& make(ReplayFrame& info, const Camera* camera = nullptr) {
     loop_.recycle(std::move(frame_.color));  // the last frame is written: composed into again
-    LoopFrame f = loop_.frame(camera_);
+    LoopFrame f = loop_.frame(camera ? *camera : camera_);
     info.render_gaze = f.gaze_px / loop_.scale();
     info.ao_rays = f.rays;
     info.ms = f.ms;
+    info.fovea_converged = f.fovea_converged;
+    info.kept_pixels = f.kept_pixels;
     frame_.color = std::move(f.color);
     frame_.gaze_px = info.render_gaze;
     frame_.stats.ao_rays = f.rays;
@@ -81,6 +94,7 @@ class LoopMaker {
     LoopSettings l;
     l.budget_ms = 1000.0 / s.fps;
     l.predict = s.predict;
+    l.keep_history = s.keep_history;
     return l;
   }
   const Camera& camera_;
@@ -151,7 +165,8 @@ ReplaySummary replay_recording(const Recording& r, const Display& display, Frame
   FrameMaker maker(renderer, camera, params, s.reuse);
   ReplaySummary summary;
   walk_recording(r, display, params, s, [&](ReplayFrame& info, int k, int count) {
-    const Frame& frame = maker.make(info.render_gaze, info);
+    const Camera view = replay_camera(camera, s, k / s.fps);
+    const Frame& frame = maker.make(info.render_gaze, info, &view);
     account(summary, info);
     sink(info, frame);
     if (progress) progress(k + 1, count);
@@ -170,7 +185,8 @@ ReplaySummary replay_recording_realtime(const Recording& r, const Display& displ
   walk_recording(
       r, display, params, s,
       [&](ReplayFrame& info, int k, int count) {
-        const Frame& frame = maker.make(info);
+        const Camera view = replay_camera(camera, s, k / s.fps);
+        const Frame& frame = maker.make(info, &view);
         account(summary, info);
         sink(info, frame);
         if (progress) progress(k + 1, count);
@@ -241,7 +257,8 @@ ReplaySummary replay_live(GazeSource& source, const Display& display, FrameRende
       },
       [&](ReplayFrame& info) -> const Frame& {
         if (const auto f = tracker.frame_gaze()) info.fixation = mapping.to_render(*f);
-        return maker.make(info.fixation.value_or(centre), info);
+        const Camera view = replay_camera(camera, s, info.t_s);
+        return maker.make(info.fixation.value_or(centre), info, &view);
       });
 }
 
@@ -257,7 +274,10 @@ ReplaySummary replay_live_realtime(GazeSource& source, const Display& display, F
       [&](const std::vector<GazeSample>& samples) {
         for (const GazeSample& g : samples) maker.push(g, mapping.to_render(g.px));
       },
-      [&](ReplayFrame& info) -> const Frame& { return maker.make(info); });
+      [&](ReplayFrame& info) -> const Frame& {
+        const Camera view = replay_camera(camera, s, info.t_s);
+        return maker.make(info, &view);
+      });
 }
 
 }  // namespace foveal

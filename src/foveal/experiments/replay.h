@@ -34,7 +34,14 @@ struct ReplaySettings {
   // saccade predictor, not the fixation filter, places the fovea)
   bool realtime = false;
   bool predict = true;  // realtime: place the fovea at a saccade's predicted landing while it flies
+  // The camera orbits its look point about its up axis at this speed, degrees per second of the
+  // sequence (0: still): a moving view, on the renderer's temporal history (params.reuse.temporal)
+  // or the real-time loop's kept rays
+  double orbit_deg_s = 0;
+  bool keep_history = true;  // realtime: a moving camera keeps the AO of the surfaces it still sees
 };
+// The sequence's camera at `t_s` seconds after its first frame (the orbit of orbit_deg_s).
+Camera replay_camera(const Camera& camera, const ReplaySettings& settings, double t_s);
 void validate(const ReplaySettings& settings);
 
 struct ReplayFrame {
@@ -47,6 +54,10 @@ struct ReplayFrame {
   double ms = 0;                       // time to produce the frame (render or reuse)
   bool reused = false;
   SourceState state = SourceState::live;  // the source's state at t_k
+  // realtime: the fraction of the fovea's pixels at full quality, and (a new view) the pixels
+  // that kept AO rays from the view before
+  double fovea_converged = NAN;
+  uint64_t kept_pixels = 0;
 };
 
 struct ReplaySummary {

@@ -4,6 +4,7 @@
 
 #include "foveal/util/error.h"
 #include "foveal/util/gaze_point.h"
+#include "foveal/util/sampling.h"
 #include "foveal/util/stats.h"
 #include "foveal/util/timer.h"
 #include "foveal/util/units.h"
@@ -25,6 +26,7 @@ constexpr uint32_t kFirstRound = 16;  // a pixel's first round of rays (adaptive
 constexpr int kBuckets = 64;          // priority buckets of the periphery (half powers of two)
 constexpr double kSlipDecay = 0.995;  // per frame: the margin's memory of a late end
 constexpr double kSlipPad = 0.5;      // ms kept beyond the latest slip
+constexpr double kRestMs = 500;       // a camera still this long is at rest: a size lowered for its motion comes back
 
 // body(i) for every pixel, in parallel blocks of 4096
 template <class Body>
@@ -100,10 +102,35 @@ void RealtimeLoop::set_budget_ms(double budget_ms) {
 
 void RealtimeLoop::reset() {
   have_view_ = false;
+  forget_ = true;
   maps_gaze_.reset();
 }
 
-void RealtimeLoop::new_view(const Camera& camera) {
+void RealtimeLoop::keep_rays() {
+  const size_t n = cast_.size();
+  AoCounts kept;
+  kept.open.resize(n);
+  kept.cast.resize(n);
+  kept.origin_sum.resize(n);
+  for_each_pixel(n, [&](size_t i) {
+    const float own = static_cast<float>(cast_[i]);
+    kept.open[i] = static_cast<float>(open_[i]) + (any_kept_ ? kept_open_[i] : 0.0f);
+    kept.cast[i] = own + (any_kept_ ? kept_cast_[i] : 0.0f);
+    kept.origin_sum[i] = own * gbuffer_.position[i] + (any_kept_ ? kept_origin_[i] : glm::vec3(0.0f));
+  });
+  history_.store(gbuffer_, camera_, maps_, params_.reuse, kept);
+}
+
+void RealtimeLoop::new_view(const Camera& camera, uint64_t& kept_pixels) {
+  // The rays so far, for the new view to take over where it sees the same surfaces (not after
+  // reset(), nor where there was no view yet)
+  const size_t before = gbuffer_.prim.size();
+  const bool carry = settings_.keep_history && !forget_ && before > 0 && cast_.size() == before && maps_.quality.size() == before;
+  if (carry)
+    keep_rays();
+  else
+    history_.clear();
+  forget_ = false;
   RenderParams p = params_;
   p.foveation.max_rays = p.foveation.min_rays = 0;
   p.reuse = {};
@@ -131,9 +158,31 @@ void RealtimeLoop::new_view(const Camera& camera) {
   });
   cast_.assign(n, 0);
   open_.assign(n, 0);
-  // What composing this view takes, before the first frame's deadline relies on it
+  // The maps at the latest gaze (the frame moves them where a prediction says), then what the
+  // view keeps of the rays before: the renderer's temporal reprojection (reuse.h)
   maps_gaze_.reset();
-  update_maps(glm::dvec2(params_.width * 0.5, params_.height * 0.5), false);
+  update_maps(measured_px_.value_or(glm::dvec2(requested_.width * 0.5, requested_.height * 0.5)) * scale_, false);
+  kept_pixels = 0;
+  any_kept_ = false;
+  if (carry) {
+    AoCounts kept;
+    kept_pixels = history_.reproject(gbuffer_, maps_, params_.reuse, kept);
+    kept_open_.swap(kept.open);
+    kept_cast_.swap(kept.cast);
+    kept_origin_.swap(kept.origin_sum);
+    any_kept_ = kept_pixels > 0;
+  }
+  if (!any_kept_) {
+    kept_open_.clear();
+    kept_cast_.clear();
+    kept_origin_.clear();
+  }
+  // A fresh view casts each pixel's sequence from its start, the paper's rays; one that carries rays
+  // on casts a sequence scrambled for the view (a later stretch of one sequence is less evenly
+  // spread than any sequence's start: the renderer's temporal rule, reuse_pixel.h)
+  ++views_;
+  view_seed_ = any_kept_ ? params_.seed ^ (static_cast<uint64_t>(hash32(0x7e4b0000U + views_)) << 32) : params_.seed;
+  // What composing this view takes, before the first frame's deadline relies on it
   Image scratch;
   const Timer compose_timer;
   compose(scratch);
@@ -212,19 +261,24 @@ void RealtimeLoop::update_maps(glm::dvec2 gaze_px, bool predicted) {
 bool RealtimeLoop::converged(size_t i) const {
   const uint32_t n = maps_.rays[i];
   if (!gbuffer_.hit(i) || n == 0) return true;
-  const uint32_t c = cast_[i];
-  if (c >= n) return true;
+  const float c = total_cast(i);
+  if (c >= static_cast<float>(n)) return true;
   // The fovea takes its n_max rays: stopped early at τ it measured 1.02× the reference's noise on
   // the dragon (bench latency; two standard errors above it over 20,000 pixels)
   const float q = maps_.quality[i];
-  return q < 1.0f && c >= kFirstRound && q > 0 &&
-         visibility_standard_error(static_cast<float>(open_[i]), static_cast<float>(c)) <= tau_fovea_ / q;
+  return q < 1.0f && c >= static_cast<float>(kFirstRound) && q > 0 && visibility_standard_error(total_open(i), c) <= tau_fovea_ / q;
 }
 
 size_t RealtimeLoop::plan_round(uint64_t ray_limit, bool periphery, bool& swept) {
   tasks_.clear();
   swept = false;
-  auto rays_for = [&](size_t i) { return std::min<uint32_t>(maps_.rays[i] - cast_[i], std::max(kFirstRound, cast_[i])); };
+  // What n(E) still lacks, in rounds that double the pixel's rays (kept ones included)
+  auto rays_for = [&](size_t i) {
+    if (!any_kept_) return std::min<uint32_t>(maps_.rays[i] - cast_[i], std::max(kFirstRound, cast_[i]));
+    const float c = total_cast(i);
+    const auto lack = static_cast<uint32_t>(std::max(1.0f, std::ceil(static_cast<float>(maps_.rays[i]) - c)));
+    return std::min<uint32_t>({lack, maps_.rays[i] - cast_[i], std::max(kFirstRound, static_cast<uint32_t>(std::ceil(c)))});
+  };
   uint64_t rays = 0;
   auto add = [&](uint32_t i) {
     const uint32_t r = static_cast<uint32_t>(std::min<uint64_t>(rays_for(i), ray_limit - rays));
@@ -248,8 +302,8 @@ size_t RealtimeLoop::plan_round(uint64_t ray_limit, bool periphery, bool& swept)
     int b = -1;
     if (!converged(i)) {
       const float q = maps_.quality[i];
-      const float c = static_cast<float>(cast_[i]), k = static_cast<float>(rays_for(i));
-      const float p = (static_cast<float>(open_[i]) + 0.5f) / (c + 1.0f);
+      const float c = total_cast(i), k = static_cast<float>(rays_for(i));
+      const float p = (total_open(i) + 0.5f) / (c + 1.0f);
       const float gain = q * q * p * (1 - p) * k / (c + k);
       b = gain > 0 ? std::clamp(static_cast<int>(-2.0f * std::log2(gain)), 0, kBuckets - 1) : kBuckets;
     }
@@ -288,15 +342,16 @@ void RealtimeLoop::compose(Image& color) {
     double sum = 0;  // in the fovea's order: pixel order once it is measured, as the renderer sums
     size_t count = 0;
     for (const uint32_t i : fovea_)
-      if (cast_[i] > 0) {
-        sum += static_cast<float>(open_[i]) / static_cast<float>(cast_[i]);
+      if (const float c = total_cast(i); c > 0) {
+        sum += total_open(i) / c;
         ++count;
       }
     if (count > 0) k_const = static_cast<float>(sum / static_cast<double>(count));
   }
   const size_t n = cast_.size();
   for_each_pixel(n, [&](size_t i) {
-    const float v = cast_[i] > 0 ? static_cast<float>(open_[i]) / static_cast<float>(cast_[i]) : k_const;
+    const float rays = total_cast(i);
+    const float v = rays > 0 ? total_open(i) / rays : k_const;
     const float b = maps_.blend[i];
     const float ka = b * v + (1 - b) * k_const;
     const glm::vec3 c = lit_[i] + ka * ambient_[i];
@@ -314,15 +369,20 @@ void SweepCost::swept(double ms) {
   latest_.add(ms);
 }
 
-void RealtimeLoop::rescale(double fixed_ms) {
+bool RealtimeLoop::rescale(double fixed_ms) {
   const double target = scale_ * std::sqrt(0.5 * settings_.budget_ms / fixed_ms);
   const double scale = std::clamp(target, settings_.min_scale, 1.0);
-  if (scale > 0.95 * scale_) return;
+  if (scale > 0.95 * scale_) return false;
+  set_scale(scale);
+  note_ = fmt::format("the base shading took {:.1f} ms of the {:.1f} ms frame budget at {}x{}: rendering at {}x{} ({:.0f} %) instead",
+                      fixed_ms, settings_.budget_ms, requested_.width, requested_.height, params_.width, params_.height, 100 * scale);
+  return true;
+}
+
+void RealtimeLoop::set_scale(double scale) {
   scale_ = scale;
   params_.width = std::max(1, static_cast<int>(std::lround(requested_.width * scale)));
   params_.height = std::max(1, static_cast<int>(std::lround(requested_.height * scale)));
-  note_ = fmt::format("the base shading took {:.1f} ms of the {:.1f} ms frame budget at {}x{}: rendering at {}x{} ({:.0f} %) instead",
-                      fixed_ms, settings_.budget_ms, requested_.width, requested_.height, params_.width, params_.height, 100 * scale);
   have_view_ = false;
   maps_gaze_.reset();
   ray_x_.clear();
@@ -337,7 +397,7 @@ LoopFrame RealtimeLoop::frame(const Camera& camera) {
   double view_ms = 0;
   if (!have_view_ || !same_camera(camera, camera_)) {
     const Timer view_timer;
-    new_view(camera);
+    new_view(camera, out.kept_pixels);
     view_ms = view_timer.ms();
     out.new_view = true;
   }
@@ -399,7 +459,7 @@ LoopFrame RealtimeLoop::frame(const Camera& camera) {
     batch.gbuffer_version = gbuffer_version_;
     batch.ao_distance = ao_distance_;
     batch.epsilon = epsilon_;
-    batch.seed = params_.seed;
+    batch.seed = view_seed_;
     batch.tasks = tasks_;
     batch.blocked = blocked_;
     batch.done = done_;
@@ -454,9 +514,29 @@ LoopFrame RealtimeLoop::frame(const Camera& camera) {
   // lowered the resolution while the fovea was converged)
   const double fixed = wall ? out.ms - trace_ms - sweep_ms - (moving ? 0.0 : view_ms) : model_fixed;
   // (on the wall clock over five frames at least: a first frame's page faults, one frame's pause,
-  // are no reason)
-  if (fixed_.add(fixed, settings_.budget_ms, wall ? 5 : 1)) {
-    rescale(fixed_.median_ms());
+  // are no reason; but a moving camera whose surfaces alone took more than the whole budget is,
+  // at once: the view is traced again every frame, and waiting for five frames made four more
+  // late by 80–115 ms each, orbiting the dragon at 840×525 on a 2-core VM)
+  const double scale_before = scale_;
+  bool lowered = false;
+  if (wall && moving && view_ms > settings_.budget_ms) {
+    lowered = rescale(fixed);
+    fixed_.clear();
+  } else if (fixed_.add(fixed, settings_.budget_ms, wall ? 5 : 1)) {
+    lowered = rescale(fixed_.median_ms());
+    fixed_.clear();
+  }
+  if (lowered && moving && !motion_scale_) motion_scale_ = scale_before;  // the size to return to once the camera rests
+  // A camera come to rest gets back the size it had before it moved: its surfaces are traced once
+  // more (that frame is late: ~100 ms at 840×525 on two cores) and the rays kept at the smaller
+  // size carry over (a view stayed small for good once a camera had moved)
+  still_frames_ = out.new_view ? 0 : still_frames_ + 1;
+  if (motion_scale_ && static_cast<double>(still_frames_) * settings_.budget_ms >= kRestMs) {
+    set_scale(*motion_scale_);
+    note_ = scale_ < 1 ? fmt::format("rendering at {}x{} ({:.0f} %), the size before the camera moved", params_.width, params_.height,
+                                     100 * scale_)
+                       : "";
+    motion_scale_.reset();
     fixed_.clear();
   }
   return out;

@@ -20,6 +20,12 @@
 //   (gaze/landing.h): the eye sees little during the flight (saccadic suppression), and the rays
 //   are ready where it lands. Once the eye has landed the measured gaze is used again, so a wrong
 //   prediction costs only the rays of the flight.
+// - A moving camera keeps the AO of the surfaces it still sees: at a new view each pixel's rays
+//   so far (open and cast counts, with the mean of their origins) are reprojected into the new
+//   view as the renderer's temporal history does (reuse.h: the same surface, bilinear, weighed down
+//   where the rays' mean origin drifts beyond what the eye resolves; a disocclusion starts afresh),
+//   and the pixel goes on from there with a sequence scrambled for the view. A still camera keeps
+//   every ray as is (the view is traced once).
 // - The clock: `wall` casts rays until the deadline (the frame's remaining time minus what
 //   composing takes) and checks it between chunks of about a thousand rays; `model` casts as many
 //   rays as a fixed cost model allows, so that a run is the same whatever the machine's load (the
@@ -31,6 +37,7 @@
 #include "foveal/gaze/landing.h"
 #include "foveal/render/frame_renderer.h"
 #include "foveal/render/render.h"
+#include "foveal/render/reuse.h"
 #include "foveal/util/stats.h"
 
 #include <glm/glm.hpp>
@@ -58,6 +65,7 @@ struct LoopSettings {
   double margin_ms = 2.0;        // wall clock: kept free at the end of each frame (the machine's pauses)
   double min_scale = 0.25;       // the smallest resolution scale the loop may choose
   double slowdown = 1;           // tests only: the tracer this many times slower
+  bool keep_history = true;      // a new view (the camera moved) keeps the AO of the surfaces it still sees
 };
 // Check the settings; throws Error naming the option.
 void validate(const LoopSettings& settings);
@@ -80,7 +88,8 @@ struct LoopFrame {
   double deadline_ms = 0, rays_end_ms = 0, compose_planned_ms = 0;
   double cost_ms = 0;          // the frame's cost on the loop's clock (wall: ms; model: the model's)
   bool late = false;           // cost_ms > the budget
-  bool new_view = false;       // the camera changed: surfaces traced and AO started afresh
+  bool new_view = false;       // the camera changed: surfaces traced (and AO kept where the view still sees them)
+  uint64_t kept_pixels = 0;    // a new view: the pixels that kept AO rays from the view before
   double fovea_converged = 0;  // fraction of the fovea's (q = 1, hit) pixels whose AO is converged
   bool fovea_done = false;     // all of them: the fovea is at full quality
 };
@@ -174,21 +183,31 @@ class RealtimeLoop {
   double scale() const { return scale_; }            // render size / requested size
   const std::string& note() const { return note_; }  // why the resolution was lowered ("" if not)
   const LandingPredictor& predictor() const { return predictor_; }
-  // Per pixel: AO rays cast so far and found open (the loop's state, for tests and pictures).
+  // Per pixel: AO rays cast so far in this view and found open (the loop's state, for tests and
+  // pictures), and the rays kept from the views before (reprojected: fractional; zero where none).
   const std::vector<uint32_t>& cast() const { return cast_; }
   const std::vector<uint32_t>& open() const { return open_; }
+  const std::vector<float>& kept_cast() const { return kept_cast_; }
+  const std::vector<float>& kept_open() const { return kept_open_; }
   const FoveationMaps& maps() const { return maps_; }
   const GBuffer& gbuffer() const { return gbuffer_; }
   // Whether pixel i's AO is converged (τ(E) or n(E) reached).
   bool converged(size_t i) const;
+  // Pixel i's rays: this view's and those kept from the views before
+  float total_cast(size_t i) const { return static_cast<float>(cast_[i]) + (any_kept_ ? kept_cast_[i] : 0.0f); }
+  float total_open(size_t i) const { return static_cast<float>(open_[i]) + (any_kept_ ? kept_open_[i] : 0.0f); }
 
  private:
-  void new_view(const Camera& camera);
+  // (kept_pixels: the pixels that kept rays from the view before)
+  void new_view(const Camera& camera, uint64_t& kept_pixels);
+  // Every pixel's rays so far, as counts the view's successor can take over (reuse.h)
+  void keep_rays();
   void update_maps(glm::dvec2 gaze_px, bool predicted);  // predicted: the fovea's pixels centre-out
   // `swept`: set where the round planned the periphery (a pass over every pixel)
   size_t plan_round(uint64_t ray_limit, bool periphery, bool& swept);
   void compose(Image& color);
-  void rescale(double fixed_ms);
+  bool rescale(double fixed_ms);  // whether it lowered the size
+  void set_scale(double scale);
   glm::dvec2 px_to_deg(glm::dvec2 px) const;
   glm::dvec2 deg_to_px(glm::dvec2 deg) const;
 
@@ -208,9 +227,16 @@ class RealtimeLoop {
   FoveationMaps maps_;
   std::vector<float> ray_x_, ray_y_, ray_z_;  // each pixel's unit eye ray (the maps' input that the gaze leaves alone)
   std::optional<glm::dvec2> maps_gaze_;
-  bool maps_predicted_ = false;  // the maps are at a predicted landing
-  std::vector<uint32_t> cast_, open_;
-  Image spare_;  // a shown frame's image handed back (recycle)
+  bool maps_predicted_ = false;               // the maps are at a predicted landing
+  std::vector<uint32_t> cast_, open_;         // rays of this view: pixel i's sequence [0, cast_[i]) under view_seed_
+  std::vector<float> kept_cast_, kept_open_;  // rays kept from the views before (reprojected)
+  std::vector<glm::vec3> kept_origin_;        // Σ of the kept rays' origins
+  bool any_kept_ = false;                     // some pixel kept rays
+  AoHistory history_;                         // the view before, at a new view
+  bool forget_ = false;                       // reset(): the next view starts afresh
+  uint64_t view_seed_ = 0;                    // the AO seed of this view's rays
+  uint32_t views_ = 0;                        // views traced so far
+  Image spare_;                               // a shown frame's image handed back (recycle)
   std::vector<AoRayTask> tasks_;
   std::vector<uint32_t> blocked_;
   std::vector<uint8_t> done_;
@@ -219,12 +245,14 @@ class RealtimeLoop {
   std::vector<int8_t> key_;      // scratch: each pixel's bucket (−1: converged)
   bool last_new_view_ = false;   // the previous frame traced a new view
   float ao_distance_ = 0, epsilon_ = 0, tau_fovea_ = 0;
-  double rays_per_ms_ = 0;  // wall clock: measured, smoothed
-  double finish_ms_ = 1;    // wall clock: composing and the fovea's state at a frame's end, measured
-  double slip_ms_ = 0;      // wall clock: how much later than planned frames ended, a decaying maximum
-  double plan_ms_ = 0.5;    // wall clock: a round's planning, measured, smoothed
-  SweepCost sweep_;         // wall clock: a periphery round's planning (a pass over every pixel)
-  FixedPartWindow fixed_;   // the latest frames' cost besides their rays, since the last rescale
+  double rays_per_ms_ = 0;              // wall clock: measured, smoothed
+  double finish_ms_ = 1;                // wall clock: composing and the fovea's state at a frame's end, measured
+  double slip_ms_ = 0;                  // wall clock: how much later than planned frames ended, a decaying maximum
+  double plan_ms_ = 0.5;                // wall clock: a round's planning, measured, smoothed
+  SweepCost sweep_;                     // wall clock: a periphery round's planning (a pass over every pixel)
+  FixedPartWindow fixed_;               // the latest frames' cost besides their rays, since the last rescale
+  std::optional<double> motion_scale_;  // the size lowered for a moving camera: the scale before
+  int still_frames_ = 0;                // frames since the camera last moved
   int index_ = 0;
 };
 

@@ -10,6 +10,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -45,6 +46,28 @@ double plane_visibility(glm::vec3 p) {
 }
 
 bool on_plane(const GBuffer& g, size_t i) { return g.hit(i) && std::abs(g.position[i].y) < 1e-3f; }
+
+// The fovea's plane pixels (rays of this view and those kept from views before): each within its
+// own error of V = 1 − R²H/D³, and their mean too.
+void expect_fovea_at_analytic_ao(const RealtimeLoop& loop) {
+  const FoveationMaps& maps = loop.maps();
+  const GBuffer& g = loop.gbuffer();
+  const bool kept = !loop.kept_cast().empty();
+  size_t n = 0;
+  double error_sum = 0, variance_sum = 0;
+  for (size_t i = 0; i < maps.quality.size(); ++i) {
+    if (maps.quality[i] < 1.0f || !on_plane(g, i)) continue;
+    const double c = loop.cast()[i] + (kept ? loop.kept_cast()[i] : 0.0), v = (loop.open()[i] + (kept ? loop.kept_open()[i] : 0.0)) / c;
+    const double expected = plane_visibility(g.position[i]);
+    const double se = std::sqrt(expected * (1 - expected) / c) + 0.5 / c;
+    EXPECT_NEAR(v, expected, 5 * se) << "pixel " << i;
+    error_sum += v - expected;
+    variance_sum += se * se;
+    ++n;
+  }
+  ASSERT_GT(n, 50u);
+  EXPECT_LT(std::abs(error_sum / n), 4 * std::sqrt(variance_sum) / n);
+}
 
 // The slowest frame of 40 under a tracer four times slower (wall clock, 60 Hz budget).
 double slowest_frame_under_slowed_tracer(double budget_ms, uint64_t& rays) {
@@ -101,26 +124,108 @@ TEST(RealtimeLoop, AfterAGazeJumpTheFoveaReachesItsAnalyticAoBeforeThePeripheryG
     if (!f.fovea_done) EXPECT_FALSE(periphery_touched) << "frame " << frames;
   }
   ASSERT_TRUE(f.fovea_done) << frames << " frames";
-  // The fovea's plane pixels: each within its own error of V = 1 − R²H/D³, and their mean too
-  size_t n = 0;
-  double error_sum = 0, variance_sum = 0;
-  for (size_t i = 0; i < maps.quality.size(); ++i) {
-    if (maps.quality[i] < 1.0f || !on_plane(g, i)) continue;
-    const double c = loop.cast()[i], v = loop.open()[i] / c, expected = plane_visibility(g.position[i]);
-    const double se = std::sqrt(expected * (1 - expected) / c) + 0.5 / c;
-    EXPECT_NEAR(v, expected, 5 * se) << "pixel " << i;
-    error_sum += v - expected;
-    variance_sum += se * se;
-    ++n;
-  }
-  ASSERT_GT(n, 50u);
-  EXPECT_LT(std::abs(error_sum / n), 4 * std::sqrt(variance_sum) / n);
+  expect_fovea_at_analytic_ao(loop);
   // Then the periphery fills in
   for (int k = 0; k < 5; ++k) loop.frame(camera);
   uint64_t added = 0;
   for (size_t i = 0; i < maps.quality.size(); ++i)
     if (maps.quality[i] < 1.0f) added += loop.cast()[i] - periphery_at_jump[i];
   EXPECT_GT(added, 0u);
+}
+
+// A loop on the sphere over the plane, the gaze on the plane below the sphere, its fovea converged
+// for a still camera, then `moves` frames each orbiting the camera 0.5° further. Returns the
+// frames after the moves began; `with_rays`: the pixels that had rays before the first move.
+std::vector<LoopFrame> orbit_after_convergence(RealtimeLoop& loop, int moves, size_t* with_rays = nullptr) {
+  const Camera& camera = sphere_plane().cameras.front();
+  loop.push_gaze(0, glm::dvec2(100, 112));
+  LoopFrame f = loop.frame(camera);
+  for (int k = 0; k < 200 && !f.fovea_done; ++k) f = loop.frame(camera);
+  EXPECT_TRUE(f.fovea_done);
+  if (with_rays) *with_rays = static_cast<size_t>(std::count_if(loop.cast().begin(), loop.cast().end(), [](uint32_t c) { return c > 0; }));
+  std::vector<LoopFrame> out;
+  for (int k = 1; k <= moves; ++k) out.push_back(loop.frame(orbit_camera(camera, 0.5 * k)));
+  return out;
+}
+
+TEST(RealtimeLoop, AMovingCameraKeepsTheAoOfTheSurfacesItStillSees) {
+  const std::unique_ptr<FrameRenderer> renderer = make_frame_renderer(sphere_plane(), ComputeDevice::cpu);
+  const RenderParams params = loop_params(200, 125, 400);
+  RealtimeLoop loop(*renderer, sphere_plane(), params, model_clock(3000));
+  size_t with_rays = 0;
+  const std::vector<LoopFrame> moved = orbit_after_convergence(loop, 1, &with_rays);
+  const LoopFrame& f = moved.front();
+  ASSERT_TRUE(f.new_view);
+  // Nearly every pixel that had rays kept them, and the fovea is still converged with what it kept
+  ASSERT_GT(with_rays, 1000u);
+  EXPECT_GT(f.kept_pixels, with_rays * 9 / 10);
+  EXPECT_LE(f.kept_pixels, with_rays * 11 / 10);
+  EXPECT_GT(f.fovea_converged, 0.95);
+  const GBuffer& g = loop.gbuffer();
+  // Kept rays are unbiased: the fovea's plane pixels within their error of V = 1 − R²H/D³ at the
+  // points the new view sees, and their mean too
+  expect_fovea_at_analytic_ao(loop);
+  // Without history the moved view starts afresh: its fovea is far from converged
+  LoopSettings fresh = model_clock(3000);
+  fresh.keep_history = false;
+  RealtimeLoop afresh(*renderer, sphere_plane(), params, fresh);
+  const LoopFrame a = orbit_after_convergence(afresh, 1).front();
+  EXPECT_EQ(a.kept_pixels, 0u);
+  EXPECT_LT(a.fovea_converged, 0.3);
+  // reset() forgets: the next view starts afresh too
+  loop.reset();
+  const LoopFrame r = loop.frame(orbit_camera(sphere_plane().cameras.front(), 0.5));
+  EXPECT_EQ(r.kept_pixels, 0u);
+}
+
+// Wall clock: a camera that keeps moving, its surfaces costlier than the budget, lowers the size
+// at its second moved frame (not after five more late ones), and gets the size back once it rests.
+TEST(RealtimeLoop, AMovingCameraLowersTheSizeAtOnceAndARestingOneGetsItBack) {
+  const std::unique_ptr<FrameRenderer> renderer = make_frame_renderer(sphere_plane(), ComputeDevice::cpu);
+  LoopSettings settings;
+  settings.budget_ms = 10;
+  RealtimeLoop loop(*renderer, sphere_plane(), loop_params(1280, 800, 16), settings);
+  const Camera& camera = sphere_plane().cameras.front();
+  loop.push_gaze(0, glm::dvec2(640, 400));
+  loop.frame(camera);
+  double first_moved_ms = 0;
+  for (int k = 1; k <= 8; ++k) {
+    const LoopFrame f = loop.frame(orbit_camera(camera, 0.5 * k));
+    if (k == 1) first_moved_ms = f.ms;
+    if (k == 2 && first_moved_ms > 2 * settings.budget_ms) {
+      EXPECT_LT(loop.scale(), 1.0) << "the surfaces took " << first_moved_ms << " ms: the size should be lowered at once";
+      EXPECT_FALSE(loop.note().empty());
+    }
+  }
+  if (loop.scale() == 1.0) GTEST_SKIP() << "this machine traces 1280x800 surfaces within the 10 ms budget: nothing to lower";
+  const double lowered = loop.scale();
+  const Camera rest = orbit_camera(camera, 4);
+  LoopFrame f;
+  int frames = 0;
+  for (; frames < 200 && loop.scale() == lowered; ++frames) f = loop.frame(rest);
+  EXPECT_EQ(loop.scale(), 1.0);
+  EXPECT_TRUE(loop.note().empty());
+  EXPECT_GE(frames * settings.budget_ms, 500.0);  // after half a second at rest, not before
+  f = loop.frame(rest);
+  EXPECT_EQ(f.color.width, 1280);
+  EXPECT_GT(f.kept_pixels, 0u);  // the rays of the smaller view carried over
+}
+
+TEST(RealtimeLoop, AnOrbitingCameraGivesTheSameFramesWhateverTheThreadCount) {
+  std::vector<std::vector<float>> images[2];
+  uint64_t kept = 0;
+  for (int threads : {1, 2}) {
+    const ThreadScope scope(threads);
+    const std::unique_ptr<FrameRenderer> renderer = make_frame_renderer(sphere_plane(), ComputeDevice::cpu);
+    RealtimeLoop loop(*renderer, sphere_plane(), loop_params(160, 100, 64), model_clock(1500));
+    for (const LoopFrame& f : orbit_after_convergence(loop, 6)) {
+      images[threads - 1].push_back(f.color.pixels);
+      kept += f.kept_pixels;
+    }
+  }
+  EXPECT_GT(kept, 0u);
+  ASSERT_EQ(images[0].size(), images[1].size());
+  for (size_t k = 0; k < images[0].size(); ++k) EXPECT_TRUE(foveal_test::same_bits(images[0][k], images[1][k])) << "frame " << k;
 }
 
 // With `recycle`, each frame's image is handed back once the next is made; `reused` counts the

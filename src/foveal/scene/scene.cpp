@@ -171,6 +171,17 @@ const CameraPath& find_camera_path(const Scene& scene, const std::string& name) 
   fail("scene '{}' has no camera path named '{}' (known: {})", scene.source, name, known.empty() ? "none" : known);
 }
 
+Camera orbit_camera(const Camera& camera, double degrees) {
+  Camera c = camera;
+  const glm::dvec3 axis = glm::normalize(glm::dvec3(camera.up));
+  const glm::dvec3 r = glm::dvec3(camera.eye - camera.look);
+  const double a = glm::radians(degrees), ca = std::cos(a), sa = std::sin(a);
+  // Rodrigues' rotation of the look point → eye offset about the axis
+  const glm::dvec3 rotated = r * ca + glm::cross(axis, r) * sa + axis * glm::dot(axis, r) * (1 - ca);
+  c.eye = camera.look + glm::vec3(rotated);
+  return c;
+}
+
 Camera CameraPath::at(int step) const {
   if (keys.empty()) return Camera{};
   if (keys.size() == 1 || step <= 1) return keys.front();

@@ -78,6 +78,10 @@ inline bool same_camera(const Camera& a, const Camera& b) {
 
 // A camera that moves: linear interpolation through key cameras (eye, look, up, fov), from the
 // first key at step 1 to the last at step `steps`, held there afterwards.
+// The camera moved `degrees` around its look point, about its up axis (right-handed: from +z
+// towards +x about +y): an orbit that keeps the view on the look point at the same distance.
+Camera orbit_camera(const Camera& camera, double degrees);
+
 struct CameraPath {
   std::string name;
   std::vector<Camera> keys;  // at least two

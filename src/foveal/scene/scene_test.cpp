@@ -271,6 +271,26 @@ TEST(Scene, RealScenesLoadWhenPresent) {
   EXPECT_EQ(box.cameras.size(), 3u);
 }
 
+TEST(Scene, AnOrbitTurnsTheEyeAboutTheUpAxisThroughTheLookPoint) {
+  Camera c;
+  c.eye = {1, 2, 5};
+  c.look = {1, 2, 0};
+  const Camera quarter = orbit_camera(c, 90);
+  EXPECT_NEAR(quarter.eye.x, 6, 1e-5);  // from +z towards +x about +y
+  EXPECT_NEAR(quarter.eye.y, 2, 1e-5);
+  EXPECT_NEAR(quarter.eye.z, 0, 1e-5);
+  EXPECT_EQ(quarter.look, c.look);
+  EXPECT_EQ(quarter.fov_deg, c.fov_deg);
+  // About a tilted up axis: the distance to the look point and the angle to the axis are kept
+  c.up = glm::normalize(glm::vec3(0, 1, 1));
+  const Camera turned = orbit_camera(c, 37);
+  EXPECT_NEAR(glm::length(turned.eye - turned.look), 5, 1e-5);
+  EXPECT_NEAR(glm::dot(turned.eye - turned.look, c.up), glm::dot(c.eye - c.look, c.up), 1e-5);
+  const Camera back = orbit_camera(turned, -37);
+  EXPECT_NEAR(glm::length(back.eye - c.eye), 0, 1e-5);
+  EXPECT_EQ(orbit_camera(c, 0).eye, c.eye);
+}
+
 TEST(Scene, CameraPathsInterpolateThroughNamedCameras) {
   const std::string text = R"({"meshes": [{"shape": "sphere", "radius": 1, "centre": [0, 0, 0]}],
     "cameras": [{"name": "a", "eye": [0, 0, 10], "look": [0, 0, 0], "fov": 40},
