@@ -19,6 +19,7 @@ class CpuFrameRenderer final : public FrameRenderer {
   void reset_history() override { history_.clear(); }
   uint32_t history_frames() const override { return history_.frames(); }
   uint64_t trace_ao_batch(const AoRayBatch& batch) override { return trace_ao_tasks(tracer_, batch); }
+  GBuffer surfaces(const Camera& camera, int width, int height) override { return trace_primary(tracer_, scene_, camera, width, height); }
   ComputeDevice device() const override { return ComputeDevice::cpu; }
   size_t triangles() const override { return tracer_.triangles(); }
   double build_ms() const override { return tracer_.build_ms(); }
@@ -32,6 +33,17 @@ class CpuFrameRenderer final : public FrameRenderer {
 };
 
 }  // namespace
+
+GBuffer FrameRenderer::surfaces(const Camera& camera, int width, int height) {
+  RenderParams p;
+  p.width = width;
+  p.height = height;
+  p.foveation.max_rays = p.foveation.min_rays = 0;
+  FrameOptions options;
+  options.outputs = {false, false, true};
+  options.use_history = false;
+  return render(camera, p, options).gbuffer;
+}
 
 std::unique_ptr<FrameRenderer> make_frame_renderer(const Scene& scene, ComputeDevice device, TraceApi api) {
   if (device == ComputeDevice::cuda) return make_cuda_frame_renderer(scene);

@@ -101,6 +101,29 @@ TEST(FrameRenderer, AFrameApartLeavesTheHistoryAlone) {
 
 // Without a usable GPU the CUDA backend is refused with the reason, through the same factory; with
 // one, it reports its device.
+// The view's surfaces alone (the real-time loop's base) are a frame's G-buffer, bit for bit.
+TEST(FrameRenderer, SurfacesAreAFramesGBuffer) {
+  const Scene& scene = foveal_test::box();
+  const std::unique_ptr<FrameRenderer> renderer = make_frame_renderer(scene, ComputeDevice::cpu);
+  RenderParams p;
+  p.width = 96;
+  p.height = 60;
+  p.foveation.max_rays = 4;
+  const Camera camera = moved(scene.cameras.front(), 3);
+  const Frame f = renderer->render(camera, p, {});
+  const GBuffer g = renderer->surfaces(camera, p.width, p.height);
+  EXPECT_EQ(g.width, 96);
+  EXPECT_EQ(g.height, 60);
+  EXPECT_EQ(g.prim, f.gbuffer.prim);
+  EXPECT_TRUE(same_bits(g.depth, f.gbuffer.depth));
+  auto flat = [](const std::vector<glm::vec3>& v) { return std::vector<float>(&v.front().x, &v.front().x + 3 * v.size()); };
+  for (auto member : {&GBuffer::position, &GBuffer::normal, &GBuffer::geo_normal, &GBuffer::albedo, &GBuffer::view})
+    EXPECT_TRUE(same_bits(flat(g.*member), flat(f.gbuffer.*member)));
+  size_t hits = 0;
+  for (size_t i = 0; i < g.prim.size(); ++i) hits += g.hit(i) ? 1 : 0;
+  EXPECT_GT(hits, g.prim.size() / 2);
+}
+
 TEST(FrameRenderer, CudaIsRefusedWithTheReasonWhereThereIsNone) {
   const Scene box = make_builtin_scene("box");
   if (availability().usable) {

@@ -131,14 +131,7 @@ void RealtimeLoop::new_view(const Camera& camera, uint64_t& kept_pixels) {
   else
     history_.clear();
   forget_ = false;
-  RenderParams p = params_;
-  p.foveation.max_rays = p.foveation.min_rays = 0;
-  p.reuse = {};
-  p.gaze_px.reset();
-  FrameOptions options;
-  options.outputs = {false, false, true};
-  options.use_history = false;
-  gbuffer_ = renderer_.render(camera, p, options).gbuffer;
+  gbuffer_ = renderer_.surfaces(camera, params_.width, params_.height);
   ++gbuffer_version_;
   camera_ = camera;
   have_view_ = true;
@@ -528,7 +521,7 @@ LoopFrame RealtimeLoop::frame(const Camera& camera) {
   }
   if (lowered && moving && !motion_scale_) motion_scale_ = scale_before;  // the size to return to once the camera rests
   // A camera come to rest gets back the size it had before it moved: its surfaces are traced once
-  // more (that frame is late: ~100 ms at 840×525 on two cores) and the rays kept at the smaller
+  // more (that frame is late: 50–90 ms at 840×525 on two cores) and the rays kept at the smaller
   // size carry over (a view stayed small for good once a camera had moved)
   still_frames_ = out.new_view ? 0 : still_frames_ + 1;
   if (motion_scale_ && static_cast<double>(still_frames_) * settings_.budget_ms >= kRestMs) {
