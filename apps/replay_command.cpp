@@ -69,7 +69,7 @@ class FrameWriter {
     csv_path_ = (dir_ / "frames.csv").string();
     csv_.open(csv_path_);
     if (!csv_) fail("{}: cannot write", csv_path_);
-    csv_ << "frame,t_s,gaze_x,gaze_y,fix_x,fix_y,ao_rays,ms,reused,source_state,fovea_converged,kept_pixels\n";
+    csv_ << "frame,t_s,gaze_x,gaze_y,fix_x,fix_y,ao_rays,ms,reused,source_state,fovea_converged,kept_pixels,scale\n";
   }
   void operator()(const ReplayFrame& f, const Frame& frame) {
     const std::string path = (dir_ / fmt::format("frame_{:05d}.png", f.index)).string();
@@ -80,10 +80,11 @@ class FrameWriter {
     } else {
       save_image(frame.color, path);
     }
-    csv_ << fmt::format("{},{:.6f},{},{},{},{},{},{:.3f},{},{},{},{}\n", f.index, f.t_s, cell(f.gaze, 0), cell(f.gaze, 1),
+    csv_ << fmt::format("{},{:.6f},{},{},{},{},{},{:.3f},{},{},{},{},{}\n", f.index, f.t_s, cell(f.gaze, 0), cell(f.gaze, 1),
                         cell(f.fixation, 0), cell(f.fixation, 1), f.ao_rays, f.ms, f.reused ? 1 : 0, to_string(f.state),
                         std::isfinite(f.fovea_converged) ? fmt::format("{:.4f}", f.fovea_converged) : std::string(),
-                        o_.realtime ? std::to_string(f.kept_pixels) : std::string());
+                        o_.realtime ? std::to_string(f.kept_pixels) : std::string(),
+                        o_.realtime ? fmt::format("{:.4f}", f.scale) : std::string());
     csv_.flush();
   }
   void close() { csv_.close(); }

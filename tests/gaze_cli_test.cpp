@@ -4,6 +4,7 @@
 #include "fake_pupil.h"
 #include "foveal/io/image_io.h"
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
@@ -146,6 +147,7 @@ TEST(GazeCli, RealtimeReplayOfAnOrbitingCameraKeepsItsRays) {
     ASSERT_GE(frames[history].size(), 10u);
     EXPECT_EQ(frames[history][0][10], "fovea_converged");
     EXPECT_EQ(frames[history][0][11], "kept_pixels");
+    EXPECT_EQ(frames[history][0][12], "scale");
   }
   // Every frame after the first is a moved view: with history each keeps the rays of the one before
   for (size_t k = 2; k < frames[""].size(); ++k) {
@@ -161,6 +163,28 @@ TEST(GazeCli, RealtimeReplayOfAnOrbitingCameraKeepsItsRays) {
     EXPECT_NE(r.err.find(bad.find("orbit") != std::string::npos ? "orbit" : "--no-history needs --realtime"), std::string::npos) << r.err;
     EXPECT_FALSE(fs::exists(scratch("bad")));
   }
+}
+
+// A moving camera at 960x600 and 120 Hz: the loop renders smaller while it moves (its surfaces do
+// not fit 8 ms on a few cores), and every frame is written at the size asked for, scaled up.
+TEST(GazeCli, RealtimeReplayWritesEveryFrameAtTheSizeAskedFor) {
+  const std::string rec = write_three_fixations("orbit_size.csv");
+  const CliRun r = foveal_test::foveal("replay --gaze " + rec +
+                                       " --screen 480x300 --scene builtin:sphere-plane --size 960x600 --max-rays 4 --fps 120 "
+                                       "--duration 0.2 --realtime --orbit 30 -q -o orbit_size");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const auto rows = read_csv(scratch("orbit_size/frames.csv"));
+  ASSERT_GE(rows.size(), 10u);
+  bool smaller = false;
+  for (size_t k = 1; k < rows.size(); ++k) {
+    const double scale = std::stod(rows[k][12]);
+    EXPECT_TRUE(scale > 0 && scale <= 1) << scale;
+    smaller |= scale < 1;
+    const foveal::Image frame = foveal::load_image(scratch("orbit_size/frame_" + fmt::format("{:05d}", k - 1) + ".png").string());
+    EXPECT_EQ(frame.width, 960);
+    EXPECT_EQ(frame.height, 600);
+  }
+  if (!smaller) GTEST_SKIP() << "this machine traced every moved 960x600 view within 8 ms: nothing was scaled";
 }
 
 TEST(BenchQualityCli, SequenceFollowsARecordingAsReplayDoes) {

@@ -1,6 +1,7 @@
 // foveal/experiments/replay.cpp — gaze-following frame sequences.
 #include "foveal/experiments/replay.h"
 
+#include "foveal/render/outputs.h"
 #include "foveal/util/error.h"
 #include "foveal/util/timer.h"
 
@@ -69,7 +70,7 @@ class FrameMaker {
 class LoopMaker {
  public:
   LoopMaker(FrameRenderer& renderer, const Scene& scene, const Camera& camera, const RenderParams& params, const ReplaySettings& s)
-      : camera_(camera), loop_(renderer, scene, params, loop_settings(s)) {
+      : camera_(camera), loop_(renderer, scene, params, loop_settings(s)), width_(params.width), height_(params.height) {
     loop_.frame(camera_);  // the view's surfaces, before the first frame is due
   }
   void push(const GazeSample& g, std::optional<glm::dvec2> render_px) { loop_.push_gaze(g.t_s, g.valid ? render_px : std::nullopt); }
@@ -82,6 +83,10 @@ class LoopMaker {
     info.ms = f.ms;
     info.fovea_converged = f.fovea_converged;
     info.kept_pixels = f.kept_pixels;
+    // Every frame at the size asked for (a video needs one size; the gaze columns are in its
+    // pixels): where the loop rendered smaller, scaled up as a display would show it
+    info.scale = loop_.scale();
+    if (f.color.width != width_ || f.color.height != height_) f.color = scaled_nearest(f.color, width_, height_);
     frame_.color = std::move(f.color);
     frame_.gaze_px = info.render_gaze;
     frame_.stats.ao_rays = f.rays;
@@ -99,6 +104,7 @@ class LoopMaker {
   }
   const Camera& camera_;
   RealtimeLoop loop_;
+  int width_, height_;  // the size asked for
   Frame frame_;
 };
 

@@ -58,6 +58,7 @@ struct ReplayFrame {
   // that kept AO rays from the view before
   double fovea_converged = NAN;
   uint64_t kept_pixels = 0;
+  double scale = 1;  // realtime: the loop's render size / the size asked for (the frame is scaled up where < 1)
 };
 
 struct ReplaySummary {

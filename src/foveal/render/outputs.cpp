@@ -202,6 +202,16 @@ nlohmann::json frame_stats_json(const Frame& f, const RenderParams& p, const Sce
   return j;
 }
 
+Image scaled_nearest(const Image& image, int width, int height) {
+  if (image.width == width && image.height == height) return image;
+  if (image.empty() || width <= 0 || height <= 0) fail("scaled_nearest: {}x{} to {}x{}", image.width, image.height, width, height);
+  Image out(width, height, image.channels);
+  const cv::Mat from(image.height, image.width, CV_32FC(image.channels), const_cast<float*>(image.pixels.data()));
+  cv::Mat to(height, width, CV_32FC(image.channels), out.pixels.data());
+  cv::resize(from, to, to.size(), 0, 0, cv::INTER_NEAREST);
+  return out;
+}
+
 void mark_gaze(Image& image, glm::dvec2 gaze_px) {
   const int w = image.width, h = image.height;
   const int gx = static_cast<int>(std::floor(gaze_px.x)), gy = static_cast<int>(std::floor(gaze_px.y));

@@ -24,6 +24,10 @@ void write_aovs(const Frame& frame, const std::string& spec);
 // gaze marked by a red cross when it is on the image.
 Image budget_mask(const Frame& frame, int max_rays);
 
+// `image` at width × height, nearest pixel (a real-time frame rendered smaller than asked, shown at
+// the size asked; the image itself where it already has that size).
+Image scaled_nearest(const Image& image, int width, int height);
+
 // Draw a red diagonal cross at a render position (nothing where it falls off the image).
 void mark_gaze(Image& image, glm::dvec2 gaze_px);
 

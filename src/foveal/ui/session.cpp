@@ -448,16 +448,10 @@ void ViewSession::realtime_frame() {
   r.stats.ao_ms = f.trace_ms;
   r.stats.total_ms = f.ms;
   const int w = settings_.render.width, h = settings_.render.height;
-  if (f.color.width == w && f.color.height == h) {
+  if (f.color.width == w && f.color.height == h)
     r.fov = std::move(f.color);
-  } else {  // the loop lowered its resolution: shown scaled up (nearest)
-    r.fov = Image(w, h, 3);
-    for (int y = 0; y < h; ++y)
-      for (int x = 0; x < w; ++x)
-        for (int c = 0; c < 3; ++c)
-          r.fov.at(x, y, c) =
-              f.color.at(std::min(f.color.width - 1, x * f.color.width / w), std::min(f.color.height - 1, y * f.color.height / h), c);
-  }
+  else  // the loop lowered its resolution: shown scaled up
+    r.fov = scaled_nearest(f.color, w, h);
   sh.any = true;
   sh.converged = f.fovea_done;
   base_dirty_ = true;
