@@ -14,6 +14,10 @@ and gaze (a whole frame, no deadline).
 
     .venv/bin/python bench/loop_orbit.py [--shared ../shared] [--orbit 10 30] [--duration 4]
                                          [--max-angle 40] [--out build/bench-orbit] [--markdown F]
+                                         [--picture PNG]
+
+--picture draws the last frames of the first speed side by side: rays kept, afresh, the paper's
+frame (each scaled to half the size asked for, nearest pixel, as a display shows a smaller frame).
 """
 import argparse
 import json
@@ -63,7 +67,8 @@ def run(scene, rec, speed, keep, a):
         fovea = next(b for b in d["bands"] if b["name"].startswith("q"))
         scores[label] = (d["acuity_weighted_ratio"], fovea["noise_ratio"])
     ms = sorted(m for m, *_ in frames)
-    return {
+    pictures = {"loop": image, "paper": paper}
+    return pictures, {
         "orbit": speed, "history": "kept" if keep else "afresh", "frames": len(frames), "seconds": len(frames) / a.fps,
         "late": sum(m > b for m, b, *_ in frames), "converged": sum(c >= 1 for _, _, c, *_ in frames),
         "mean_converged": statistics.mean(c for _, _, c, *_ in frames), "ms_p50": statistics.median(ms),
@@ -88,6 +93,7 @@ def main():
     ap.add_argument("--device", default="cpu")
     ap.add_argument("--out", default="build/bench-orbit")
     ap.add_argument("--markdown", help="also write the table here")
+    ap.add_argument("--picture", help="the first speed's last frames side by side (PNG): rays kept, afresh, the paper's frame")
     a = ap.parse_args()
     recording = Path(a.recording) if a.recording else Path(a.shared) / "data/gaze/eyelink/monoRemote500.asc"
     if not recording.exists():
@@ -95,11 +101,24 @@ def main():
         return 0
     scene = foveal.Scene(a.scene)
     rec = foveal.gaze.read(str(recording))
-    rows = []
+    rows, shown = [], []
     for speed in a.orbit:
         for keep in (True, False):
-            rows.append(run(scene, rec, speed, keep, a))
+            pictures, row = run(scene, rec, speed, keep, a)
+            rows.append(row)
+            if speed == a.orbit[0]:
+                shown.append(pictures["loop"])
+                if not keep:
+                    shown.append(pictures["paper"])
             print(f"orbit {speed:g} °/s, {rows[-1]['history']}: done", file=sys.stderr)
+    if a.picture:
+        width, height = (int(v) // 2 for v in a.size.split("x"))
+        panels = []
+        for img in shown:  # nearest pixel to half the size asked for, a white gap between
+            ys = (np.arange(height) * img.shape[0] // height).clip(0, img.shape[0] - 1)
+            xs = (np.arange(width) * img.shape[1] // width).clip(0, img.shape[1] - 1)
+            panels += [img[ys][:, xs], np.ones((height, 6, 3), np.float32)]
+        foveal.save_image(np.ascontiguousarray(np.concatenate(panels[:-1], axis=1)), a.picture)
     lines = ["| orbit °/s | rays of a moved view | frames (s) | late | fovea converged (frames) | mean converged fraction | "
              "frame ms p50 / p99 | size at the end | last frame: acuity-weighted error × noise | its fovea | the paper's frame |",
              "|---:|---|---:|---:|---:|---:|---:|---|---:|---:|---:|"]
