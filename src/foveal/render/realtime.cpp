@@ -388,6 +388,14 @@ LoopFrame RealtimeLoop::frame(const Camera& camera) {
   LoopFrame out;
   out.index = index_++;
   double view_ms = 0;
+  const bool moved = have_view_ && !same_camera(camera, camera_);
+  // The camera moves again right after a view whose part of the frame took more than the budget:
+  // render smaller before tracing this one (else this frame is late as well)
+  if (settings_.clock == LoopClock::wall && moved && last_new_view_ && last_view_cost_ms_ > settings_.budget_ms) {
+    const double scale_before = scale_;
+    if (rescale(last_view_cost_ms_) && !motion_scale_) motion_scale_ = scale_before;
+    fixed_.clear();
+  }
   if (!have_view_ || !same_camera(camera, camera_)) {
     const Timer view_timer;
     new_view(camera, out.kept_pixels);
@@ -506,6 +514,7 @@ LoopFrame RealtimeLoop::frame(const Camera& camera) {
   // on a 2-core AMD EPYC VM its 3–5 ms with maps and composing passed 60 % of the budget and
   // lowered the resolution while the fovea was converged)
   const double fixed = wall ? out.ms - trace_ms - sweep_ms - (moving ? 0.0 : view_ms) : model_fixed;
+  last_view_cost_ms_ = out.new_view ? out.ms - trace_ms - sweep_ms : 0;  // a new view's fixed part, its surfaces included
   // (on the wall clock over five frames at least: a first frame's page faults, one frame's pause,
   // are no reason; but a moving camera whose surfaces alone took more than the whole budget is,
   // at once: the view is traced again every frame, and waiting for five frames made four more

@@ -253,6 +253,7 @@ class RealtimeLoop {
   FixedPartWindow fixed_;               // the latest frames' cost besides their rays, since the last rescale
   std::optional<double> motion_scale_;  // the size lowered for a moving camera: the scale before
   int still_frames_ = 0;                // frames since the camera last moved
+  double last_view_cost_ms_ = 0;        // the latest frame's fixed part where it traced a new view (0 where not)
   int index_ = 0;
 };
 
