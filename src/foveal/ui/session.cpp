@@ -441,8 +441,10 @@ void ViewSession::realtime_frame() {
   r = Result{};
   r.generation = generation_;
   r.last = f.fovea_done;
-  r.stage = fmt::format("realtime: fovea {} ({:.0f} %){}{}", f.fovea_done ? "converged" : "refining", 100 * f.fovea_converged,
-                        f.predicted ? ", at the predicted landing" : "", loop_->scale() < 1 ? ", " + loop_->note() : "");
+  r.stage = fmt::format("realtime: fovea {} ({:.0f} %){}{}{}", f.fovea_done ? "converged" : "refining", 100 * f.fovea_converged,
+                        f.predicted ? ", at the predicted landing" : "",
+                        f.new_view && f.kept_pixels > 0 ? fmt::format(", the camera moved: {} px kept their rays", f.kept_pixels) : "",
+                        loop_->scale() < 1 ? ", " + loop_->note() : "");
   r.gaze = f.gaze_px / loop_->scale();
   r.stats.ao_rays = f.rays;
   r.stats.ao_ms = f.trace_ms;
