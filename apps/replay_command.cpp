@@ -82,7 +82,7 @@ class FrameWriter {
     }
     csv_ << fmt::format("{},{:.6f},{},{},{},{},{},{:.3f},{},{},{},{},{}\n", f.index, f.t_s, cell(f.gaze, 0), cell(f.gaze, 1),
                         cell(f.fixation, 0), cell(f.fixation, 1), f.ao_rays, f.ms, f.reused ? 1 : 0, to_string(f.state),
-                        std::isfinite(f.fovea_converged) ? fmt::format("{:.4f}", f.fovea_converged) : std::string(),
+                        o_.realtime ? fmt::format("{:.4f}", f.fovea_converged) : std::string(),
                         o_.realtime ? std::to_string(f.kept_pixels) : std::string(),
                         o_.realtime ? fmt::format("{:.4f}", f.scale) : std::string());
     csv_.flush();

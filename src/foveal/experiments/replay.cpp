@@ -32,14 +32,12 @@ namespace {
 // Renders frames, reusing the last one when the gaze has not moved.
 class FrameMaker {
  public:
-  FrameMaker(FrameRenderer& renderer, const Camera& camera, const RenderParams& params, bool reuse)
-      : renderer_(renderer), camera_(camera), params_(params), reuse_(reuse) {}
+  FrameMaker(FrameRenderer& renderer, const RenderParams& params, bool reuse) : renderer_(renderer), params_(params), reuse_(reuse) {}
 
-  // `camera`: the frame's (a moving view's), the still one where unset
-  const Frame& make(glm::dvec2 gaze, ReplayFrame& info, const Camera* camera = nullptr) {
+  // The frame for `gaze` seen from `view` (the sequence's camera at its time, replay_camera)
+  const Frame& make(glm::dvec2 gaze, const Camera& view, ReplayFrame& info) {
     const Timer clock;
     info.render_gaze = gaze;
-    const Camera& view = camera ? *camera : camera_;
     // With temporal reuse every frame adds rays, so none is a copy of the last; nor is a moved view
     info.reused = reuse_ && !params_.reuse.temporal && last_gaze_ && *last_gaze_ == gaze && same_camera(view, last_camera_);
     if (!info.reused) {
@@ -58,7 +56,6 @@ class FrameMaker {
 
  private:
   FrameRenderer& renderer_;
-  const Camera& camera_;
   const RenderParams& params_;
   bool reuse_;
   std::optional<glm::dvec2> last_gaze_;
@@ -70,14 +67,14 @@ class FrameMaker {
 class LoopMaker {
  public:
   LoopMaker(FrameRenderer& renderer, const Scene& scene, const Camera& camera, const RenderParams& params, const ReplaySettings& s)
-      : camera_(camera), loop_(renderer, scene, params, loop_settings(s)), width_(params.width), height_(params.height) {
-    loop_.frame(camera_);  // the view's surfaces, before the first frame is due
+      : loop_(renderer, scene, params, loop_settings(s)), width_(params.width), height_(params.height) {
+    loop_.frame(camera);  // the view's surfaces, before the first frame is due
   }
   void push(const GazeSample& g, std::optional<glm::dvec2> render_px) { loop_.push_gaze(g.t_s, g.valid ? render_px : std::nullopt); }
-  // `camera`: the frame's (a moving view's), the still one where unset
-  const Frame& make(ReplayFrame& info, const Camera* camera = nullptr) {
+  // The loop's next frame, seen from `view` (the sequence's camera at its time, replay_camera)
+  const Frame& make(const Camera& view, ReplayFrame& info) {
     loop_.recycle(std::move(frame_.color));  // the last frame is written: composed into again
-    LoopFrame f = loop_.frame(camera ? *camera : camera_);
+    LoopFrame f = loop_.frame(view);
     info.render_gaze = f.gaze_px / loop_.scale();
     info.ao_rays = f.rays;
     info.ms = f.ms;
@@ -102,7 +99,6 @@ class LoopMaker {
     l.keep_history = s.keep_history;
     return l;
   }
-  const Camera& camera_;
   RealtimeLoop loop_;
   int width_, height_;  // the size asked for
   Frame frame_;
@@ -168,11 +164,10 @@ ReplaySummary replay_recording(const Recording& r, const Display& display, Frame
                                const RenderParams& params, const ReplaySettings& s, const ReplaySink& sink,
                                const ReplayProgress& progress) {
   const Timer wall;
-  FrameMaker maker(renderer, camera, params, s.reuse);
+  FrameMaker maker(renderer, params, s.reuse);
   ReplaySummary summary;
   walk_recording(r, display, params, s, [&](ReplayFrame& info, int k, int count) {
-    const Camera view = replay_camera(camera, s, k / s.fps);
-    const Frame& frame = maker.make(info.render_gaze, info, &view);
+    const Frame& frame = maker.make(info.render_gaze, replay_camera(camera, s, k / s.fps), info);
     account(summary, info);
     sink(info, frame);
     if (progress) progress(k + 1, count);
@@ -191,8 +186,7 @@ ReplaySummary replay_recording_realtime(const Recording& r, const Display& displ
   walk_recording(
       r, display, params, s,
       [&](ReplayFrame& info, int k, int count) {
-        const Camera view = replay_camera(camera, s, k / s.fps);
-        const Frame& frame = maker.make(info, &view);
+        const Frame& frame = maker.make(replay_camera(camera, s, k / s.fps), info);
         account(summary, info);
         sink(info, frame);
         if (progress) progress(k + 1, count);
@@ -254,7 +248,7 @@ ReplaySummary replay_live(GazeSource& source, const Display& display, FrameRende
   const GazeGeometry geometry(display, screen);
   const ScreenMapping mapping = make_screen_mapping(screen, {params.width, params.height}, s.stimulus);
   FixationTracker tracker(s.method, s.fixation, geometry);
-  FrameMaker maker(renderer, camera, params, s.reuse);
+  FrameMaker maker(renderer, params, s.reuse);
   const glm::dvec2 centre(0.5 * params.width, 0.5 * params.height);
   return follow_live(
       source, mapping, s, sink, progress,
@@ -263,8 +257,7 @@ ReplaySummary replay_live(GazeSource& source, const Display& display, FrameRende
       },
       [&](ReplayFrame& info) -> const Frame& {
         if (const auto f = tracker.frame_gaze()) info.fixation = mapping.to_render(*f);
-        const Camera view = replay_camera(camera, s, info.t_s);
-        return maker.make(info.fixation.value_or(centre), info, &view);
+        return maker.make(info.fixation.value_or(centre), replay_camera(camera, s, info.t_s), info);
       });
 }
 
@@ -280,10 +273,7 @@ ReplaySummary replay_live_realtime(GazeSource& source, const Display& display, F
       [&](const std::vector<GazeSample>& samples) {
         for (const GazeSample& g : samples) maker.push(g, mapping.to_render(g.px));
       },
-      [&](ReplayFrame& info) -> const Frame& {
-        const Camera view = replay_camera(camera, s, info.t_s);
-        return maker.make(info, &view);
-      });
+      [&](ReplayFrame& info) -> const Frame& { return maker.make(replay_camera(camera, s, info.t_s), info); });
 }
 
 }  // namespace foveal

@@ -122,6 +122,11 @@ TEST(FrameRenderer, SurfacesAreAFramesGBuffer) {
   size_t hits = 0;
   for (size_t i = 0; i < g.prim.size(); ++i) hits += g.hit(i) ? 1 : 0;
   EXPECT_GT(hits, g.prim.size() / 2);
+  // The default, which other devices use (a frame without AO rays), gives the same surfaces
+  const GBuffer base = renderer->FrameRenderer::surfaces(camera, p.width, p.height);
+  EXPECT_EQ(base.prim, g.prim);
+  EXPECT_TRUE(same_bits(base.depth, g.depth));
+  EXPECT_TRUE(same_bits(flat(base.position), flat(g.position)));
 }
 
 TEST(FrameRenderer, CudaIsRefusedWithTheReasonWhereThereIsNone) {

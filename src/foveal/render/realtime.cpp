@@ -2,9 +2,9 @@
 // error within each frame's budget, the fovea at a saccade's predicted landing.
 #include "foveal/render/realtime.h"
 
+#include "foveal/render/reuse_pixel.h"
 #include "foveal/util/error.h"
 #include "foveal/util/gaze_point.h"
-#include "foveal/util/sampling.h"
 #include "foveal/util/stats.h"
 #include "foveal/util/timer.h"
 #include "foveal/util/units.h"
@@ -108,15 +108,16 @@ void RealtimeLoop::reset() {
 
 void RealtimeLoop::keep_rays() {
   const size_t n = cast_.size();
-  AoCounts kept;
+  AoCounts& kept = counts_;  // (its memory reused from view to view)
   kept.open.resize(n);
   kept.cast.resize(n);
   kept.origin_sum.resize(n);
+  const bool earlier = any_kept();
   for_each_pixel(n, [&](size_t i) {
     const float own = static_cast<float>(cast_[i]);
-    kept.open[i] = static_cast<float>(open_[i]) + (any_kept_ ? kept_open_[i] : 0.0f);
-    kept.cast[i] = own + (any_kept_ ? kept_cast_[i] : 0.0f);
-    kept.origin_sum[i] = own * gbuffer_.position[i] + (any_kept_ ? kept_origin_[i] : glm::vec3(0.0f));
+    kept.open[i] = static_cast<float>(open_[i]) + (earlier ? kept_open_[i] : 0.0f);
+    kept.cast[i] = own + (earlier ? kept_cast_[i] : 0.0f);
+    kept.origin_sum[i] = own * gbuffer_.position[i] + (earlier ? kept_origin_[i] : glm::vec3(0.0f));
   });
   history_.store(gbuffer_, camera_, maps_, params_.reuse, kept);
 }
@@ -155,17 +156,12 @@ void RealtimeLoop::new_view(const Camera& camera, uint64_t& kept_pixels) {
   // view keeps of the rays before: the renderer's temporal reprojection (reuse.h)
   maps_gaze_.reset();
   update_maps(measured_px_.value_or(glm::dvec2(requested_.width * 0.5, requested_.height * 0.5)) * scale_, false);
-  kept_pixels = 0;
-  any_kept_ = false;
-  if (carry) {
-    AoCounts kept;
-    kept_pixels = history_.reproject(gbuffer_, maps_, params_.reuse, kept);
-    kept_open_.swap(kept.open);
-    kept_cast_.swap(kept.cast);
-    kept_origin_.swap(kept.origin_sum);
-    any_kept_ = kept_pixels > 0;
-  }
-  if (!any_kept_) {
+  kept_pixels = carry ? history_.reproject(gbuffer_, maps_, params_.reuse, counts_) : 0;
+  if (kept_pixels > 0) {
+    kept_open_.swap(counts_.open);
+    kept_cast_.swap(counts_.cast);
+    kept_origin_.swap(counts_.origin_sum);
+  } else {  // nothing kept: no pixel reads them (any_kept())
     kept_open_.clear();
     kept_cast_.clear();
     kept_origin_.clear();
@@ -174,7 +170,7 @@ void RealtimeLoop::new_view(const Camera& camera, uint64_t& kept_pixels) {
   // on casts a sequence scrambled for the view (a later stretch of one sequence is less evenly
   // spread than any sequence's start: the renderer's temporal rule, reuse_pixel.h)
   ++views_;
-  view_seed_ = any_kept_ ? params_.seed ^ (static_cast<uint64_t>(hash32(0x7e4b0000U + views_)) << 32) : params_.seed;
+  view_seed_ = any_kept() ? scrambled_seed(params_.seed, views_) : params_.seed;
   // What composing this view takes, before the first frame's deadline relies on it
   Image scratch;
   const Timer compose_timer;
@@ -267,7 +263,7 @@ size_t RealtimeLoop::plan_round(uint64_t ray_limit, bool periphery, bool& swept)
   swept = false;
   // What n(E) still lacks, in rounds that double the pixel's rays (kept ones included)
   auto rays_for = [&](size_t i) {
-    if (!any_kept_) return std::min<uint32_t>(maps_.rays[i] - cast_[i], std::max(kFirstRound, cast_[i]));
+    if (!any_kept()) return std::min<uint32_t>(maps_.rays[i] - cast_[i], std::max(kFirstRound, cast_[i]));
     const float c = total_cast(i);
     const auto lack = static_cast<uint32_t>(std::max(1.0f, std::ceil(static_cast<float>(maps_.rays[i]) - c)));
     return std::min<uint32_t>({lack, maps_.rays[i] - cast_[i], std::max(kFirstRound, static_cast<uint32_t>(std::ceil(c)))});
@@ -396,7 +392,7 @@ LoopFrame RealtimeLoop::frame(const Camera& camera) {
     if (rescale(last_view_cost_ms_) && !motion_scale_) motion_scale_ = scale_before;
     fixed_.clear();
   }
-  if (!have_view_ || !same_camera(camera, camera_)) {
+  if (!have_view_ || moved) {
     const Timer view_timer;
     new_view(camera, out.kept_pixels);
     view_ms = view_timer.ms();
@@ -516,19 +512,14 @@ LoopFrame RealtimeLoop::frame(const Camera& camera) {
   const double fixed = wall ? out.ms - trace_ms - sweep_ms - (moving ? 0.0 : view_ms) : model_fixed;
   last_view_cost_ms_ = out.new_view ? out.ms - trace_ms - sweep_ms : 0;  // a new view's fixed part, its surfaces included
   // (on the wall clock over five frames at least: a first frame's page faults, one frame's pause,
-  // are no reason; but a moving camera whose surfaces alone took more than the whole budget is,
-  // at once: the view is traced again every frame, and waiting for five frames made four more
-  // late by 80–115 ms each, orbiting the dragon at 840×525 on a 2-core VM)
+  // are no reason. A camera that moves on after a view costlier than the whole budget is, at once:
+  // the next frame's start lowers the size before it traces its view; waiting for five frames made
+  // four more late by 80–115 ms each, orbiting the dragon at 840×525 on a 2-core VM)
   const double scale_before = scale_;
-  bool lowered = false;
-  if (wall && moving && view_ms > settings_.budget_ms) {
-    lowered = rescale(fixed);
-    fixed_.clear();
-  } else if (fixed_.add(fixed, settings_.budget_ms, wall ? 5 : 1)) {
-    lowered = rescale(fixed_.median_ms());
+  if (fixed_.add(fixed, settings_.budget_ms, wall ? 5 : 1)) {
+    if (rescale(fixed_.median_ms()) && moving && !motion_scale_) motion_scale_ = scale_before;  // the size to return to at rest
     fixed_.clear();
   }
-  if (lowered && moving && !motion_scale_) motion_scale_ = scale_before;  // the size to return to once the camera rests
   // A camera come to rest gets back the size it had before it moved: its surfaces are traced once
   // more (that frame is late: 50–90 ms at 840×525 on two cores) and the rays kept at the smaller
   // size carry over (a view stayed small for good once a camera had moved)

@@ -193,11 +193,12 @@ class RealtimeLoop {
   const GBuffer& gbuffer() const { return gbuffer_; }
   // Whether pixel i's AO is converged (τ(E) or n(E) reached).
   bool converged(size_t i) const;
-  // Pixel i's rays: this view's and those kept from the views before
-  float total_cast(size_t i) const { return static_cast<float>(cast_[i]) + (any_kept_ ? kept_cast_[i] : 0.0f); }
-  float total_open(size_t i) const { return static_cast<float>(open_[i]) + (any_kept_ ? kept_open_[i] : 0.0f); }
 
  private:
+  // Pixel i's rays: this view's and those kept from the views before
+  bool any_kept() const { return !kept_cast_.empty(); }
+  float total_cast(size_t i) const { return static_cast<float>(cast_[i]) + (any_kept() ? kept_cast_[i] : 0.0f); }
+  float total_open(size_t i) const { return static_cast<float>(open_[i]) + (any_kept() ? kept_open_[i] : 0.0f); }
   // (kept_pixels: the pixels that kept rays from the view before)
   void new_view(const Camera& camera, uint64_t& kept_pixels);
   // Every pixel's rays so far, as counts the view's successor can take over (reuse.h)
@@ -229,10 +230,10 @@ class RealtimeLoop {
   std::optional<glm::dvec2> maps_gaze_;
   bool maps_predicted_ = false;               // the maps are at a predicted landing
   std::vector<uint32_t> cast_, open_;         // rays of this view: pixel i's sequence [0, cast_[i]) under view_seed_
-  std::vector<float> kept_cast_, kept_open_;  // rays kept from the views before (reprojected)
+  std::vector<float> kept_cast_, kept_open_;  // rays kept from the views before (reprojected; empty: none)
   std::vector<glm::vec3> kept_origin_;        // Σ of the kept rays' origins
-  bool any_kept_ = false;                     // some pixel kept rays
   AoHistory history_;                         // the view before, at a new view
+  AoCounts counts_;                           // scratch: the counts handed to and from the history
   bool forget_ = false;                       // reset(): the next view starts afresh
   uint64_t view_seed_ = 0;                    // the AO seed of this view's rays
   uint32_t views_ = 0;                        // views traced so far

@@ -90,6 +90,12 @@ struct AoPixelPlan {
   uint64_t seed = 0;    // the sequence's scramble
 };
 
+// The AO seed of a sequence scrambled for frame (or view) `index` ≥ 1: a pixel that carries rays on
+// from earlier frames casts the start of this sequence instead of a later stretch of its own.
+FOVEAL_HD inline uint64_t scrambled_seed(uint64_t seed, uint32_t index) {
+  return seed ^ (static_cast<uint64_t>(hash32(0x7e4b0000U + index)) << 32);
+}
+
 // A pixel with n(E) = n rays and `history_cast` rays of history.
 FOVEAL_HD inline AoPixelPlan plan_ao_pixel(int n, float history_cast, const AoSampling& s, uint64_t seed) {
   int limit = n;
@@ -109,7 +115,7 @@ FOVEAL_HD inline AoPixelPlan plan_ao_pixel(int n, float history_cast, const AoSa
     // reference's noise in the fovea of a moving camera).
     if (s.frame_index > 0 && history_cast > 0) {
       if (limit > refresh)
-        plan.seed = seed ^ (static_cast<uint64_t>(hash32(0x7e4b0000U + s.frame_index)) << 32);
+        plan.seed = scrambled_seed(seed, s.frame_index);
       else
         plan.offset = (static_cast<uint32_t>(s.temporal_frames) + s.frame_index - 1) * static_cast<uint32_t>(refresh);
     }
