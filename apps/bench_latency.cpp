@@ -3,7 +3,6 @@
 #include "commands.h"
 #include "foveal/experiments/latency.h"
 #include "foveal/render/outputs.h"
-#include "foveal/trace/tracer.h"
 #include "foveal/util/cpu_share.h"
 #include "foveal/util/error.h"
 #include "foveal/util/parallel.h"
@@ -73,18 +72,15 @@ int run_bench_latency(const BenchLatencyOptions& o) {
   std::vector<Recording> recordings;
   for (const std::string& path : paths) recordings.push_back(read_recording_warned(path, read));
   const ComputeDevice device = choose_device(o.device);
-  const Tracer tracer(scene);
-  const std::unique_ptr<FrameRenderer> renderer = make_frame_renderer(scene, device, tracer);
+  const std::unique_ptr<FrameRenderer> renderer = make_frame_renderer(scene, device);
   LatencyRun run;
   run.renderer = renderer.get();
   run.scene = &scene;
   run.camera = camera;
   run.scene_name = spec;
   run.device = fmt::format("{} ({} threads)", renderer->describe(), threads.threads());
-  // The raw rate: Embree's on the CPU (the GPU reports its own rays through the same loop)
-  run.raw_rays_per_ms = [&](std::span<const Ray> rays) {
-    return measure_raw_occlusion(tracer, rays, TraceApi::stream).rays_per_second / 1000;
-  };
+  // The raw rate of the device the loops render on: Embree's on the CPU, the GPU's own kernel
+  run.raw_rays_per_ms = [&](std::span<const Ray> rays) { return renderer->raw_occlusion_rays_per_ms(rays); };
   run.say = [](const std::string& line) {
     fmt::print("{}\n", line);
     std::fflush(stdout);

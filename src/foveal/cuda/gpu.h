@@ -68,8 +68,10 @@ class Renderer {
   AoSchedule ao_schedule() const;
   const Bvh& bvh() const;
 
-  // AO rays continuing pixels' sequences (FrameRenderer::trace_ao_batch): one thread per task over
-  // the G-buffer's surfaces, uploaded when batch.gbuffer_version changes. The batch runs whole.
+  // AO rays continuing pixels' sequences (FrameRenderer::trace_ao_batch) from the G-buffer's
+  // surfaces, uploaded when batch.gbuffer_version changes: the tasks' rays laid end to end and
+  // spread evenly over the GPU's threads, in launches of about two million rays; with
+  // batch.expired, the deadline is asked before each launch.
   uint64_t trace_ao_tasks(const AoRayBatch& batch);
 
   // Raw tracing of given rays on the GPU (tests, and the GPU's own throughput baseline).

@@ -176,11 +176,12 @@ struct Renderer::Impl {
 
   // AO tasks (the real-time loop): the surfaces of the last G-buffer version, the tasks, results
   struct Tasks {
-    DeviceArray<uint32_t> prim;
     DeviceArray<glm::vec3> position, geo_normal;
     uint64_t version = 0;
     bool uploaded = false;
     DeviceArray<AoRayTask> list;
+    std::vector<unsigned long long> host_offset;  // the tasks' prefix sum of rays, made on the host
+    DeviceArray<unsigned long long> offset;
     DeviceArray<uint32_t> blocked;
   } tasks;
 

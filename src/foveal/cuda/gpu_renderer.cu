@@ -75,10 +75,26 @@ __device__ AoPixelRays pixel_rays(const AoArgs& a, size_t i) {
                      static_cast<uint32_t>(i / a.width), a.sobol);
 }
 
+// The last of the entries [lo, hi) whose offset (an exclusive prefix sum of rays) is ≤ r: the one
+// whose rays hold ray r. Entries without rays share their successor's offset and come before it.
+__device__ size_t holder_of(const unsigned long long* offset, size_t lo, size_t hi, unsigned long long r) {
+  while (hi - lo > 1) {
+    const size_t mid = (lo + hi) / 2;
+    if (offset[mid] <= r)
+      lo = mid;
+    else
+      hi = mid;
+  }
+  return lo;
+}
+
 // Balanced: the frame's rays in pixel order, kAoChunk consecutive rays per thread, a grid-stride
 // loop over chunks. A thread finds its first pixel by binary search in the prefix sum, then
 // walks on; blocked counts are integers added atomically, so the result is exact in any order.
 constexpr int kAoChunk = 8;
+// The real-time loop's AO tasks go in launches of about this many rays (0.2–0.5 ms on an H100), each
+// a point where a batch stops at its deadline
+constexpr unsigned long long kTaskLaunchRays = 1ULL << 21;
 
 __global__ void ao_balanced_kernel(AoArgs a) {
   const unsigned long long total = a.counters->total_rays;
@@ -87,16 +103,7 @@ __global__ void ao_balanced_kernel(AoArgs a) {
        c += static_cast<unsigned long long>(gridDim.x) * blockDim.x) {
     unsigned long long r = c * kAoChunk;
     const unsigned long long end = min(r + kAoChunk, total);
-    // Last pixel whose offset is ≤ r: the one whose range holds ray r
-    size_t lo = 0, hi = a.pixels;  // answer in [lo, hi)
-    while (hi - lo > 1) {
-      const size_t mid = (lo + hi) / 2;
-      if (a.offset[mid] <= r)
-        lo = mid;
-      else
-        hi = mid;
-    }
-    size_t pixel = lo;
+    size_t pixel = holder_of(a.offset, 0, a.pixels, r);
     unsigned long long pixel_end = a.offset[pixel] + a.ray_count[pixel];
     AoPixelRays rays = pixel_rays(a, pixel);
     uint32_t blocked = 0;
@@ -128,33 +135,53 @@ __global__ void ao_per_pixel_kernel(AoArgs a) {
   a.blocked[i] = blocked;
 }
 
-// AO tasks: one thread per task casts rays [first, first + count) of its pixel's sequence.
+// AO tasks (the real-time loop's rays), balanced as a frame's: one launch's rays laid end to end
+// by the tasks' prefix sum (made on the host; a task off the surfaces has none), kAoChunk
+// consecutive rays per thread, so a fovea's few thousand tasks of hundreds of rays each spread
+// over the whole GPU instead of a few thousand threads. Blocked counts are integers added
+// atomically: exact in any order.
 struct AoTaskArgs {
   BvhView bvh;
-  const uint32_t* prim;
   const glm::vec3* position;
   const glm::vec3* geo_normal;
   const AoRayTask* tasks;
-  uint32_t* blocked;
+  const unsigned long long* offset;  // per task, the first of its rays; offset[count] = all rays
+  uint32_t* blocked;                 // per task, zeroed before the launch
   const uint32_t* sobol;
-  size_t count, pixels;
+  size_t first_task, end_task;  // this launch's tasks, and their rays [offset[first], offset[end])
   int width;
   float ao_distance, epsilon;
   uint64_t seed;
 };
 
+__device__ AoPixelRays task_rays(const AoTaskArgs& a, uint32_t pixel) {
+  return AoPixelRays(a.position[pixel], a.geo_normal[pixel], a.epsilon, a.ao_distance, a.seed, pixel % static_cast<uint32_t>(a.width),
+                     pixel / static_cast<uint32_t>(a.width), a.sobol);
+}
+
 __global__ void ao_tasks_kernel(AoTaskArgs a) {
-  const size_t t = blockIdx.x * static_cast<size_t>(blockDim.x) + threadIdx.x;
-  if (t >= a.count) return;
-  const AoRayTask task = a.tasks[t];
-  uint32_t blocked = 0;
-  if (task.pixel < a.pixels && a.prim[task.pixel] != Hit::kNoHit) {
-    const size_t i = task.pixel;
-    const AoPixelRays rays(a.position[i], a.geo_normal[i], a.epsilon, a.ao_distance, a.seed, static_cast<uint32_t>(i % a.width),
-                           static_cast<uint32_t>(i / a.width), a.sobol);
-    for (uint32_t k = 0; k < task.count; ++k) blocked += bvh_trace<true>(a.bvh, rays(task.first + k), nullptr) ? 1U : 0U;
+  const unsigned long long begin = a.offset[a.first_task], total = a.offset[a.end_task];
+  const unsigned long long chunks = (total - begin + kAoChunk - 1) / kAoChunk;
+  for (unsigned long long c = blockIdx.x * static_cast<unsigned long long>(blockDim.x) + threadIdx.x; c < chunks;
+       c += static_cast<unsigned long long>(gridDim.x) * blockDim.x) {
+    unsigned long long r = begin + c * kAoChunk;
+    const unsigned long long end = min(r + kAoChunk, total);
+    size_t t = holder_of(a.offset, a.first_task, a.end_task, r);
+    AoPixelRays rays = task_rays(a, a.tasks[t].pixel);
+    uint32_t blocked = 0;
+    for (; r < end; ++r) {
+      if (r >= a.offset[t + 1]) {
+        if (blocked) atomicAdd(&a.blocked[t], blocked);
+        blocked = 0;
+        do ++t;
+        while (a.offset[t + 1] == a.offset[t]);
+        rays = task_rays(a, a.tasks[t].pixel);
+      }
+      const Ray ray = rays(a.tasks[t].first + static_cast<uint32_t>(r - a.offset[t]));
+      blocked += bvh_trace<true>(a.bvh, ray, nullptr) ? 1U : 0U;
+    }
+    if (blocked) atomicAdd(&a.blocked[t], blocked);
   }
-  a.blocked[t] = blocked;
 }
 
 // Per-pixel AO visibility V = open / n, and the fovea's sums for the `auto` ambient constant.
@@ -553,37 +580,63 @@ uint64_t Renderer::trace_ao_tasks(const AoRayBatch& batch) {
   if (batch.blocked.size() < count || batch.done.size() < count)
     throw Error("gpu::Renderer::trace_ao_tasks: output spans shorter than the tasks");
   if (!m.tasks.uploaded || m.tasks.version != batch.gbuffer_version) {
-    m.tasks.prim.upload(g.prim);
     m.tasks.position.upload(g.position);
     m.tasks.geo_normal.upload(g.geo_normal);
     m.tasks.version = batch.gbuffer_version;
     m.tasks.uploaded = true;
   }
-  uint64_t rays = 0;
-  for (const AoRayTask& t : batch.tasks)
-    if (t.pixel < g.prim.size() && g.hit(t.pixel)) rays += t.count;
-  if (count > 0) {
-    m.tasks.list.upload(batch.tasks.data(), count);
-    m.tasks.blocked.reserve(count);
-    AoTaskArgs a{m.bvh_view(),
-                 m.tasks.prim.get(),
-                 m.tasks.position.get(),
-                 m.tasks.geo_normal.get(),
-                 m.tasks.list.get(),
-                 m.tasks.blocked.get(),
-                 m.sobol.get(),
-                 count,
-                 g.prim.size(),
-                 g.width,
-                 batch.ao_distance,
-                 batch.epsilon,
-                 batch.seed};
-    ao_tasks_kernel<<<blocks_for(count, 128), 128>>>(a);
-    FOVEAL_CUDA_LAUNCHED("ao tasks");
-    m.tasks.blocked.download(batch.blocked.data(), count);
+  // The tasks' rays end to end; a task whose pixel missed the scene casts none
+  std::vector<unsigned long long>& offset = m.tasks.host_offset;
+  offset.resize(count + 1);
+  unsigned long long rays = 0;
+  for (size_t t = 0; t < count; ++t) {
+    offset[t] = rays;
+    const AoRayTask& task = batch.tasks[t];
+    if (task.pixel < g.prim.size() && g.hit(task.pixel)) rays += task.count;
   }
-  std::fill(batch.done.begin(), batch.done.begin() + static_cast<std::ptrdiff_t>(count), uint8_t{1});
-  return rays;
+  offset[count] = rays;
+  std::fill(batch.done.begin(), batch.done.begin() + static_cast<std::ptrdiff_t>(count), uint8_t{0});
+  if (count == 0) return 0;
+  m.tasks.list.upload(batch.tasks.data(), count);
+  m.tasks.offset.upload(offset);
+  m.tasks.blocked.reserve(count);
+  FOVEAL_CUDA_CHECK(cudaMemset(m.tasks.blocked.get(), 0, count * sizeof(uint32_t)));
+  // Launches of about kTaskLaunchRays rays, in the tasks' (priority) order; where the caller has a
+  // deadline each launch is waited for and the deadline asked before the next, so that a batch
+  // planned past it stops at a launch's end, as the CPU's stops at a chunk's
+  size_t launched = 0;
+  while (launched < count) {
+    if (batch.expired && batch.expired()) break;
+    const auto end = static_cast<size_t>(
+        std::lower_bound(offset.begin() + static_cast<std::ptrdiff_t>(launched) + 1, offset.end() - 1, offset[launched] + kTaskLaunchRays) -
+        offset.begin());
+    const size_t last = std::max(end, launched + 1);
+    const unsigned long long launch_rays = offset[last] - offset[launched];
+    if (launch_rays > 0) {
+      const AoTaskArgs a{m.bvh_view(),
+                         m.tasks.position.get(),
+                         m.tasks.geo_normal.get(),
+                         m.tasks.list.get(),
+                         m.tasks.offset.get(),
+                         m.tasks.blocked.get(),
+                         m.sobol.get(),
+                         launched,
+                         last,
+                         g.width,
+                         batch.ao_distance,
+                         batch.epsilon,
+                         batch.seed};
+      const unsigned blocks =
+          std::min<unsigned>(static_cast<unsigned>(m.ao_grid), blocks_for((launch_rays + kAoChunk - 1) / kAoChunk, 128));
+      ao_tasks_kernel<<<blocks, 128>>>(a);
+      FOVEAL_CUDA_LAUNCHED("ao tasks");
+      if (batch.expired) FOVEAL_CUDA_CHECK(cudaDeviceSynchronize());
+    }
+    launched = last;
+  }
+  m.tasks.blocked.download(batch.blocked.data(), launched);
+  std::fill(batch.done.begin(), batch.done.begin() + static_cast<std::ptrdiff_t>(launched), uint8_t{1});
+  return offset[launched];
 }
 
 void Renderer::occluded(std::span<const Ray> rays, std::span<uint8_t> occluded) {

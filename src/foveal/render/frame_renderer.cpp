@@ -20,6 +20,9 @@ class CpuFrameRenderer final : public FrameRenderer {
   uint32_t history_frames() const override { return history_.frames(); }
   uint64_t trace_ao_batch(const AoRayBatch& batch) override { return trace_ao_tasks(tracer_, batch); }
   GBuffer surfaces(const Camera& camera, int width, int height) override { return trace_primary(tracer_, scene_, camera, width, height); }
+  double raw_occlusion_rays_per_ms(std::span<const Ray> rays) override {
+    return measure_raw_occlusion(tracer_, rays, TraceApi::stream).rays_per_second / 1000;
+  }
   ComputeDevice device() const override { return ComputeDevice::cpu; }
   size_t triangles() const override { return tracer_.triangles(); }
   double build_ms() const override { return tracer_.build_ms(); }

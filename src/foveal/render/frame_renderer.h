@@ -54,7 +54,8 @@ struct AoRayBatch {
   std::span<const AoRayTask> tasks;  // in priority order: a deadline leaves the tail undone
   std::span<uint32_t> blocked;       // out, per task: rays found blocked
   std::span<uint8_t> done;           // out, per task: 1 once its rays were traced
-  // Asked before each chunk of tasks (the CPU's): true stops the batch there. A GPU batch runs whole.
+  // Asked before each chunk of tasks (the CPU's, about a thousand rays) or launch (the GPU's, about
+  // two million rays; each launch is then waited for): true stops the batch there.
   std::function<bool()> expired;
   double slowdown = 1;  // tests only: each chunk takes this many times as long (a slower tracer)
 };
@@ -74,6 +75,10 @@ class FrameRenderer {
   // traces when its camera moves. By default a frame without AO rays; the CPU traces the primary
   // rays only (a frame's foveation maps, AO pass and shading were 40 of its 82 ms at 840×525).
   virtual GBuffer surfaces(const Camera& camera, int width, int height);
+  // The device's raw occlusion rate on `rays` (rays per millisecond): Embree's stream API on the
+  // CPU, the GPU's any-hit kernel over rays already on the device. The bound a ray budget is
+  // judged against (`bench latency`'s ray bound).
+  virtual double raw_occlusion_rays_per_ms(std::span<const Ray> rays) = 0;
 
   virtual ComputeDevice device() const = 0;
   // One line for the user: "cpu", or "cuda (NVIDIA H100 …)".

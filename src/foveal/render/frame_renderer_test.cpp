@@ -9,6 +9,9 @@
 
 #include <gtest/gtest.h>
 
+#include <atomic>
+#include <span>
+
 using namespace foveal;
 
 namespace {
@@ -34,6 +37,23 @@ Camera moved(const Camera& c, int k) {
   return m;
 }
 
+// A batch of `tasks` from the surfaces `g` of `scene`, its results into `blocked` and `done`.
+AoRayBatch task_batch(const Scene& scene, const GBuffer& g, std::span<const AoRayTask> tasks, std::vector<uint32_t>& blocked,
+                      std::vector<uint8_t>& done, uint64_t seed = 1) {
+  blocked.assign(tasks.size(), 0);
+  done.assign(tasks.size(), 0);
+  const Bounds bounds = scene.bounds();
+  AoRayBatch batch;
+  batch.gbuffer = &g;
+  batch.gbuffer_version = 1;
+  batch.ao_distance = resolve_ao_distance(scene, bounds, std::nullopt);
+  batch.epsilon = surface_epsilon(bounds);
+  batch.seed = seed;
+  batch.tasks = tasks;
+  batch.blocked = blocked;
+  batch.done = done;
+  return batch;
+}
 }  // namespace
 
 // A temporal sequence with every option on, the gaze moving, through the renderer equals the same
@@ -143,5 +163,103 @@ TEST(FrameRenderer, CudaIsRefusedWithTheReasonWhereThereIsNone) {
     FAIL() << "a CUDA renderer was made without a usable GPU";
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find(availability().reason), std::string::npos) << e.what();
+  }
+}
+
+// The GPU's AO tasks (the real-time loop's rays) are the CPU's: on the same surfaces, each pixel's
+// rays from the same place in its sequence are blocked alike, but for a ray that grazes an edge,
+// where Embree's traversal and the GPU's BVH2 can part. Skipped without a GPU.
+TEST(FrameRenderer, GpuAoTasksAreTheCpus) {
+  if (!availability().usable) GTEST_SKIP() << "skipped: " << availability().reason;
+  const Scene& scene = foveal_test::sphere_plane();
+  const std::unique_ptr<FrameRenderer> cpu = make_frame_renderer(scene, ComputeDevice::cpu);
+  const std::unique_ptr<FrameRenderer> gpu = make_frame_renderer(scene, ComputeDevice::cuda);
+  const GBuffer g = cpu->surfaces(scene.cameras.front(), 200, 125);
+  std::vector<AoRayTask> tasks;
+  for (uint32_t i = 0; i < g.prim.size(); ++i)
+    if (g.hit(i)) tasks.push_back({i, 5 + i % 7, 24});
+  ASSERT_GT(tasks.size(), 10000u);
+  std::vector<uint32_t> blocked[2];
+  uint64_t traced[2] = {};
+  for (int d = 0; d < 2; ++d) {
+    std::vector<uint8_t> done;
+    traced[d] = (d == 0 ? *cpu : *gpu).trace_ao_batch(task_batch(scene, g, tasks, blocked[d], done, 7));
+    EXPECT_EQ(std::count(done.begin(), done.end(), uint8_t{1}), static_cast<std::ptrdiff_t>(tasks.size()));
+  }
+  EXPECT_EQ(traced[0], traced[1]);
+  EXPECT_EQ(traced[0], tasks.size() * 24);
+  size_t same = 0;
+  uint64_t total[2] = {};
+  for (size_t t = 0; t < tasks.size(); ++t) {
+    same += blocked[0][t] == blocked[1][t] ? 1 : 0;
+    total[0] += blocked[0][t];
+    total[1] += blocked[1][t];
+  }
+  EXPECT_GT(total[0], traced[0] / 20);  // the sphere does block rays
+  EXPECT_GE(same, tasks.size() * 99 / 100);
+  EXPECT_NEAR(static_cast<double>(total[1]), static_cast<double>(total[0]), 1e-3 * static_cast<double>(total[0]));
+  // A batch on the same surfaces again reuses what the GPU kept of them, with the same result
+  std::vector<uint32_t> again;
+  std::vector<uint8_t> done;
+  gpu->trace_ao_batch(task_batch(scene, g, tasks, again, done, 7));
+  EXPECT_EQ(again, blocked[1]);
+}
+
+// The raw occlusion rate each device reports for the ray bound is a rate: positive and finite.
+TEST(FrameRenderer, RawOcclusionRateIsMeasuredOnItsDevice) {
+  const Scene& scene = foveal_test::sphere_plane();
+  std::vector<Ray> rays;
+  for (int i = 0; i < 4096; ++i) {
+    Ray r;
+    r.org = glm::vec3(-4.0f + 8.0f * (i % 64) / 64.0f, 0.01f, -4.0f + 8.0f * (i / 64) / 64.0f);
+    r.dir = glm::normalize(glm::vec3(0.1f, 1.0f, 0.05f));
+    r.tfar = 100.0f;
+    rays.push_back(r);
+  }
+  for (const ComputeDevice device : {ComputeDevice::cpu, ComputeDevice::cuda}) {
+    if (device == ComputeDevice::cuda && !availability().usable) continue;
+    const double rate = make_frame_renderer(scene, device)->raw_occlusion_rays_per_ms(rays);
+    EXPECT_GT(rate, 0.0) << to_string(device);
+    EXPECT_TRUE(std::isfinite(rate)) << to_string(device);
+  }
+}
+
+// A batch asked to stop (its deadline passed after the first chunk or launch) traces part of its
+// tasks, with the results a whole batch gives them, and says which and how many rays: on the CPU
+// whole chunks of about a thousand rays (taken by the threads in turn), on the GPU a prefix of its
+// tasks, launches of about two million rays in the tasks' order.
+TEST(FrameRenderer, ABatchStopsAtItsDeadlineWithAPrefixOfItsTasks) {
+  const Scene& scene = foveal_test::sphere_plane();
+  const std::unique_ptr<FrameRenderer> cpu = make_frame_renderer(scene, ComputeDevice::cpu);
+  const GBuffer g = cpu->surfaces(scene.cameras.front(), 200, 125);
+  std::vector<AoRayTask> tasks;
+  for (uint32_t i = 0; i < g.prim.size(); ++i) tasks.push_back({i, 0, 400});  // misses among them: no rays
+  for (const ComputeDevice device : {ComputeDevice::cpu, ComputeDevice::cuda}) {
+    if (device == ComputeDevice::cuda && !availability().usable) continue;
+    const std::unique_ptr<FrameRenderer> renderer = make_frame_renderer(scene, device);
+    auto run = [&](bool stop, std::vector<uint32_t>& blocked, std::vector<uint8_t>& done) {
+      AoRayBatch batch = task_batch(scene, g, tasks, blocked, done);
+      std::atomic<int> asked{0};
+      if (stop) batch.expired = [&] { return ++asked > 1; };
+      return renderer->trace_ao_batch(batch);
+    };
+    std::vector<uint32_t> whole_blocked, part_blocked;
+    std::vector<uint8_t> whole_done, part_done;
+    const uint64_t whole = run(false, whole_blocked, whole_done);
+    const uint64_t part = run(true, part_blocked, part_done);
+    const auto n_done = static_cast<size_t>(std::count(part_done.begin(), part_done.end(), uint8_t{1}));
+    EXPECT_EQ(std::count(whole_done.begin(), whole_done.end(), uint8_t{1}), static_cast<std::ptrdiff_t>(tasks.size())) << to_string(device);
+    EXPECT_GT(n_done, 0u) << to_string(device);
+    EXPECT_LT(n_done, tasks.size()) << to_string(device);
+    EXPECT_LT(part, whole) << to_string(device);
+    uint64_t rays = 0;
+    for (size_t t = 0; t < tasks.size(); ++t) {
+      if (device == ComputeDevice::cuda) EXPECT_EQ(part_done[t], t < n_done ? 1 : 0) << "task " << t;  // a prefix
+      if (part_done[t]) {
+        EXPECT_EQ(part_blocked[t], whole_blocked[t]) << to_string(device) << " task " << t;
+        rays += g.hit(tasks[t].pixel) ? tasks[t].count : 0;
+      }
+    }
+    EXPECT_EQ(part, rays) << to_string(device);
   }
 }

@@ -4,6 +4,7 @@
 // prediction that never leaves the landed fovea worse.
 #include "foveal/render/realtime.h"
 
+#include "foveal/util/device.h"
 #include "foveal/util/error.h"
 #include "foveal/util/parallel.h"
 #include "test_scenes.h"
@@ -101,8 +102,12 @@ TEST(RealtimeLoop, DISABLED_EveryFrameIsDeliveredWithinBudgetUnderASlowedTracer)
   EXPECT_GT(rays, 0u);
 }
 
-TEST(RealtimeLoop, AfterAGazeJumpTheFoveaReachesItsAnalyticAoBeforeThePeripheryGetsARay) {
-  const std::unique_ptr<FrameRenderer> renderer = make_frame_renderer(sphere_plane(), ComputeDevice::cpu);
+// The CUDA backend runs the same loop: its variants of these tests skip where there is no GPU.
+#define FOVEAL_NEED_GPU() \
+  if (!availability().usable) GTEST_SKIP() << "skipped: " << availability().reason
+
+void fovea_reaches_its_analytic_ao_before_the_periphery_gets_a_ray(ComputeDevice device) {
+  const std::unique_ptr<FrameRenderer> renderer = make_frame_renderer(sphere_plane(), device);
   RenderParams params = loop_params(200, 125, 400);
   RealtimeLoop loop(*renderer, sphere_plane(), params, model_clock(3000));
   const Camera& camera = sphere_plane().cameras.front();
@@ -131,6 +136,15 @@ TEST(RealtimeLoop, AfterAGazeJumpTheFoveaReachesItsAnalyticAoBeforeThePeripheryG
   for (size_t i = 0; i < maps.quality.size(); ++i)
     if (maps.quality[i] < 1.0f) added += loop.cast()[i] - periphery_at_jump[i];
   EXPECT_GT(added, 0u);
+}
+
+TEST(RealtimeLoop, AfterAGazeJumpTheFoveaReachesItsAnalyticAoBeforeThePeripheryGetsARay) {
+  fovea_reaches_its_analytic_ao_before_the_periphery_gets_a_ray(ComputeDevice::cpu);
+}
+
+TEST(RealtimeLoop, OnTheGpuAfterAGazeJumpTheFoveaReachesItsAnalyticAoBeforeThePeripheryGetsARay) {
+  FOVEAL_NEED_GPU();
+  fovea_reaches_its_analytic_ao_before_the_periphery_gets_a_ray(ComputeDevice::cuda);
 }
 
 // A loop on the sphere over the plane, the gaze on the plane below the sphere, its fovea converged
@@ -230,9 +244,10 @@ TEST(RealtimeLoop, AnOrbitingCameraGivesTheSameFramesWhateverTheThreadCount) {
 
 // With `recycle`, each frame's image is handed back once the next is made; `reused` counts the
 // frames composed into the image handed back.
-std::vector<std::vector<float>> run_frames(int threads, bool predict, bool recycle = false, int* reused = nullptr) {
+std::vector<std::vector<float>> run_frames(int threads, bool predict, bool recycle = false, int* reused = nullptr,
+                                           ComputeDevice device = ComputeDevice::cpu) {
   const ThreadScope scope(threads);
-  const std::unique_ptr<FrameRenderer> renderer = make_frame_renderer(box(), ComputeDevice::cpu);
+  const std::unique_ptr<FrameRenderer> renderer = make_frame_renderer(box(), device);
   LoopSettings settings = model_clock(1500);
   settings.predict = predict;
   RealtimeLoop loop(*renderer, box(), loop_params(160, 100, 64), settings);
@@ -260,6 +275,31 @@ TEST(RealtimeLoop, TheModelClockGivesTheSameFramesWhateverTheThreadCount) {
     EXPECT_TRUE(foveal_test::same_bits(a[k], c[k])) << "frame " << k << " on one thread";
   }
   EXPECT_NE(a[0], a[11]);  // the frames do change: rays arrive
+}
+
+// On the GPU the same inputs give the same frames run after run, and the CPU's frames within the
+// Monte-Carlo noise: the rays are the same pixels' same sequences, and only a ray grazing an edge
+// can land on the other side of it (the G-buffers differ in their last bits, docs/gpu.md).
+TEST(RealtimeLoop, OnTheGpuTheModelClockGivesTheSameFramesAndTheCpus) {
+  FOVEAL_NEED_GPU();
+  const auto gpu = run_frames(0, true, false, nullptr, ComputeDevice::cuda);
+  const auto again = run_frames(1, true, false, nullptr, ComputeDevice::cuda);
+  const auto cpu = run_frames(0, true);
+  ASSERT_EQ(gpu.size(), cpu.size());
+  for (size_t k = 0; k < gpu.size(); ++k) {
+    EXPECT_TRUE(foveal_test::same_bits(gpu[k], again[k])) << "frame " << k;
+    ASSERT_EQ(gpu[k].size(), cpu[k].size());
+    double signed_sum = 0, abs_sum = 0;
+    for (size_t i = 0; i < gpu[k].size(); ++i) {
+      signed_sum += gpu[k][i] - cpu[k][i];
+      abs_sum += std::abs(gpu[k][i] - cpu[k][i]);
+    }
+    const double n = static_cast<double>(gpu[k].size());
+    std::printf("frame %zu: GPU - CPU mean %.2e, mean |GPU - CPU| %.2e\n", k, signed_sum / n, abs_sum / n);
+    EXPECT_LT(std::abs(signed_sum / n), 2e-3) << "frame " << k;  // no bias
+    EXPECT_LT(abs_sum / n, 0.02) << "frame " << k;               // a few pixels a ray or two apart
+  }
+  EXPECT_NE(gpu[0], gpu[11]);
 }
 
 TEST(RealtimeLoop, AHandedBackImageIsComposedIntoWithTheSameResult) {
