@@ -125,6 +125,7 @@ void RealtimeLoop::keep_rays() {
 void RealtimeLoop::new_view(const Camera& camera, uint64_t& kept_pixels) {
   // The rays so far, for the new view to take over where it sees the same surfaces (not after
   // reset(), nor where there was no view yet)
+  all_converged_ = false;
   const size_t before = gbuffer_.prim.size();
   const bool carry = settings_.keep_history && !forget_ && before > 0 && cast_.size() == before && maps_.quality.size() == before;
   if (carry)
@@ -186,6 +187,7 @@ void RealtimeLoop::update_maps(glm::dvec2 gaze_px, bool predicted) {
   if (maps_gaze_ && glm::length(*maps_gaze_ - gaze_px) < threshold_px && maps_.width == params_.width && maps_.height == params_.height &&
       predicted == maps_predicted_)
     return;
+  all_converged_ = false;
   // foveation_maps()'s model in single precision, from the pixels' unit eye rays kept per size
   const size_t n = static_cast<size_t>(params_.width) * static_cast<size_t>(params_.height);
   const FoveationModel model(params_.display, params_.width, params_.height, gaze_px, params_.foveation);
@@ -280,7 +282,7 @@ size_t RealtimeLoop::plan_round(uint64_t ray_limit, bool periphery, bool& swept)
     if (rays >= ray_limit) break;
     if (!converged(i)) add(i);
   }
-  if (!tasks_.empty() || !periphery) return tasks_.size();
+  if (!tasks_.empty() || !periphery || all_converged_) return tasks_.size();
   swept = true;
   // Then the periphery by q²·σ̂²·k/(c + k), in buckets of half powers of two from the highest
   const size_t n = cast_.size();
@@ -305,6 +307,7 @@ size_t RealtimeLoop::plan_round(uint64_t ray_limit, bool periphery, bool& swept)
   for (size_t i = 0; i < n; ++i)
     if (key_[i] >= 0) order_[count[static_cast<size_t>(key_[i])]++] = static_cast<uint32_t>(i);
   for (size_t k = 0; k < active && rays < ray_limit; ++k) add(order_[k]);
+  all_converged_ = active == 0;
   return tasks_.size();
 }
 
@@ -467,6 +470,7 @@ LoopFrame RealtimeLoop::frame(const Camera& camera) {
     const double ms = trace_timer.ms();
     trace_ms += ms;
     out.rays += traced;
+    if (traced > 0) all_converged_ = false;
     for (size_t t = 0; t < tasks_.size(); ++t)
       if (done_[t]) {
         cast_[tasks_[t].pixel] += tasks_[t].count;

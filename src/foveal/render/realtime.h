@@ -246,11 +246,14 @@ class RealtimeLoop {
   std::vector<int8_t> key_;      // scratch: each pixel's bucket (−1: converged)
   bool last_new_view_ = false;   // the previous frame traced a new view
   float ao_distance_ = 0, epsilon_ = 0, tau_fovea_ = 0;
-  double rays_per_ms_ = 0;              // wall clock: measured, smoothed
-  double finish_ms_ = 1;                // wall clock: composing and the fovea's state at a frame's end, measured
-  double slip_ms_ = 0;                  // wall clock: how much later than planned frames ended, a decaying maximum
-  double plan_ms_ = 0.5;                // wall clock: a round's planning, measured, smoothed
-  SweepCost sweep_;                     // wall clock: a periphery round's planning (a pass over every pixel)
+  double rays_per_ms_ = 0;  // wall clock: measured, smoothed
+  double finish_ms_ = 1;    // wall clock: composing and the fovea's state at a frame's end, measured
+  double slip_ms_ = 0;      // wall clock: how much later than planned frames ended, a decaying maximum
+  double plan_ms_ = 0.5;    // wall clock: a round's planning, measured, smoothed
+  SweepCost sweep_;         // wall clock: a periphery round's planning (a pass over every pixel)
+  // The last periphery sweep found every pixel converged, and no ray, map or view has changed since:
+  // the next would find the same (a sweep is a pass over every pixel, each frame once the image is done)
+  bool all_converged_ = false;
   FixedPartWindow fixed_;               // the latest frames' cost besides their rays, since the last rescale
   std::optional<double> motion_scale_;  // the size lowered for a moving camera: the scale before
   int still_frames_ = 0;                // frames since the camera last moved
