@@ -73,6 +73,9 @@ class Renderer {
   // spread evenly over the GPU's threads, in launches of about two million rays; with
   // batch.expired, the deadline is asked before each launch.
   uint64_t trace_ao_tasks(const AoRayBatch& batch);
+  // Uploads the surfaces (when `version` is new), sizes the buffers for one task per pixel and loads
+  // the kernel, so that the next trace_ao_tasks() pays none of it.
+  void prepare_ao_tasks(const GBuffer& surfaces, uint64_t version);
 
   // Raw tracing of given rays on the GPU (tests, and the GPU's own throughput baseline).
   void intersect(std::span<const Ray> rays, std::span<Hit> hits);

@@ -179,6 +179,7 @@ struct Renderer::Impl {
     DeviceArray<glm::vec3> position, geo_normal;
     uint64_t version = 0;
     bool uploaded = false;
+    bool loaded = false;  // the kernel has been launched once
     DeviceArray<AoRayTask> list;
     std::vector<unsigned long long> host_offset;  // the tasks' prefix sum of rays, made on the host
     DeviceArray<unsigned long long> offset;

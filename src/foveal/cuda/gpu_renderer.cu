@@ -573,18 +573,44 @@ void Renderer::intersect(std::span<const Ray> rays, std::span<Hit> hits) {
   m.raw_hits.download(hits.data(), rays.size());
 }
 
+namespace {
+
+void upload_task_surfaces(Renderer::Impl& m, const GBuffer& g, uint64_t version) {
+  if (m.tasks.uploaded && m.tasks.version == version) return;
+  m.tasks.position.upload(g.position);
+  m.tasks.geo_normal.upload(g.geo_normal);
+  m.tasks.version = version;
+  m.tasks.uploaded = true;
+}
+
+}  // namespace
+
+void Renderer::prepare_ao_tasks(const GBuffer& surfaces, uint64_t version) {
+  Impl& m = *impl_;
+  upload_task_surfaces(m, surfaces, version);
+  const size_t pixels = surfaces.prim.size();
+  m.tasks.list.reserve(pixels);
+  m.tasks.offset.reserve(pixels + 1);
+  m.tasks.blocked.reserve(pixels);
+  m.tasks.host_offset.reserve(pixels + 1);
+  if (!m.tasks.loaded) {  // a launch without rays loads the kernel (CUDA loads modules lazily)
+    const unsigned long long zero = 0;
+    m.tasks.offset.upload(&zero, 1);
+    const AoTaskArgs a{m.bvh_view(), nullptr, nullptr, nullptr, m.tasks.offset.get(), nullptr, m.sobol.get(), 0, 0, 1, 1.0f, 0.0f, 1};
+    ao_tasks_kernel<<<1, 32>>>(a);
+    FOVEAL_CUDA_LAUNCHED("ao tasks (loading)");
+    FOVEAL_CUDA_CHECK(cudaDeviceSynchronize());
+    m.tasks.loaded = true;
+  }
+}
+
 uint64_t Renderer::trace_ao_tasks(const AoRayBatch& batch) {
   Impl& m = *impl_;
   const GBuffer& g = *batch.gbuffer;
   const size_t count = batch.tasks.size();
   if (batch.blocked.size() < count || batch.done.size() < count)
     throw Error("gpu::Renderer::trace_ao_tasks: output spans shorter than the tasks");
-  if (!m.tasks.uploaded || m.tasks.version != batch.gbuffer_version) {
-    m.tasks.position.upload(g.position);
-    m.tasks.geo_normal.upload(g.geo_normal);
-    m.tasks.version = batch.gbuffer_version;
-    m.tasks.uploaded = true;
-  }
+  upload_task_surfaces(m, g, batch.gbuffer_version);
   // The tasks' rays end to end; a task whose pixel missed the scene casts none
   std::vector<unsigned long long>& offset = m.tasks.host_offset;
   offset.resize(count + 1);

@@ -32,6 +32,7 @@ void Renderer::set_ao_schedule(AoSchedule) {}
 void Renderer::reset_history() {}
 uint32_t Renderer::history_frames() const { return 0; }
 uint64_t Renderer::trace_ao_tasks(const AoRayBatch&) { fail("no CUDA backend"); }
+void Renderer::prepare_ao_tasks(const GBuffer&, uint64_t) { fail("no CUDA backend"); }
 AoSchedule Renderer::ao_schedule() const { return AoSchedule::balanced; }
 const Bvh& Renderer::bvh() const { fail("no CUDA backend"); }
 void Renderer::intersect(std::span<const Ray>, std::span<Hit>) { fail("no CUDA backend"); }

@@ -206,7 +206,7 @@ LatencyLoop run_deadline(const LatencyRun& run, const Segment& s, const LatencyP
   size_t next = 0;
   while (next < s.t.size() && s.t[next] + s.latency_s <= s.begin - 1.0) ++next;
   for (; next < s.t.size() && s.t[next] + s.latency_s <= s.begin; ++next) rt.push_gaze(s.t[next], s.px[next]);
-  rt.frame(run.camera);  // the view's surfaces, before the segment starts (as before a trial)
+  rt.recycle(rt.frame(run.camera).color);  // the view's surfaces, before the segment starts (as before a trial)
   const double period = 1.0 / p.refresh_hz;
   std::vector<double> frame_ms;
   std::vector<std::pair<double, glm::dvec2>> predictions;  // frame start, predicted landing

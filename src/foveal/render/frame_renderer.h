@@ -71,6 +71,10 @@ class FrameRenderer {
   virtual uint32_t history_frames() const = 0;
   // Trace a batch of AO rays; returns the rays traced (those of the tasks marked done).
   virtual uint64_t trace_ao_batch(const AoRayBatch& batch) = 0;
+  // Make ready to trace batches from these surfaces (the same `version` as the batches'), so that
+  // the first batch pays none of it: the GPU uploads them, sizes its buffers for a task per pixel
+  // and loads its kernel. Nothing to do on the CPU.
+  virtual void prepare_ao_batches(const GBuffer& /*surfaces*/, uint64_t /*version*/) {}
   // The view's surfaces alone (the G-buffer of a frame at width × height): what the real-time loop
   // traces when its camera moves. By default a frame without AO rays; the CPU traces the primary
   // rays only (a frame's foveation maps, AO pass and shading were 40 of its 82 ms at 840×525).

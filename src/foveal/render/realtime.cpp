@@ -135,6 +135,9 @@ void RealtimeLoop::new_view(const Camera& camera, uint64_t& kept_pixels) {
   forget_ = false;
   gbuffer_ = renderer_.surfaces(camera, params_.width, params_.height);
   ++gbuffer_version_;
+  // What the view's first rays would otherwise pay in the frame after it: the device's copy of the
+  // surfaces, and room for a task per pixel
+  renderer_.prepare_ao_batches(gbuffer_, gbuffer_version_);
   camera_ = camera;
   have_view_ = true;
   // S and A of the colour S + k_a·A: eq. 2 with k_a = 0, and the ambient light times the albedo
@@ -153,6 +156,9 @@ void RealtimeLoop::new_view(const Camera& camera, uint64_t& kept_pixels) {
   });
   cast_.assign(n, 0);
   open_.assign(n, 0);
+  tasks_.reserve(n);
+  order_.resize(n);
+  key_.resize(n);
   // The maps at the latest gaze (the frame moves them where a prediction says), then what the
   // view keeps of the rays before: the renderer's temporal reprojection (reuse.h)
   maps_gaze_.reset();
