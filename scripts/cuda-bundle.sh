@@ -12,8 +12,8 @@
 #   tar xJf foveal-cuda.tar.xz -C /tmp && /tmp/foveal-cuda/run foveal bench latency --device cuda …
 #   /tmp/foveal-cuda/run foveal_tests --gtest_filter='Gpu*:*Gpu*:FrameRenderer.*:RealtimeLoop.*'
 #
-# nvcc: CUDA 13.0 from NVIDIA's wheels on PyPI (nvidia-cuda-nvcc, -nvvm, -crt, -runtime, -cccl),
-# unpacked into build-cuda/toolkit; the runtime is linked statically. OpenCV's image codecs link
+# nvcc: an installed CUDA 13, or CUDA 13.0 from NVIDIA's wheels on PyPI (nvidia-cuda-nvcc, -nvvm,
+# -crt, -runtime, -cccl) unpacked into build-cuda/toolkit; the runtime is linked statically. OpenCV's image codecs link
 # GDAL, whose own dependencies are about 130 MB of libraries; foveal never opens a GDAL raster, so
 # the bundle carries a small libgdal.so.32 in its place whose functions stop the program with a
 # message (GDALAllRegister, called when the codecs load, does nothing).
@@ -22,7 +22,18 @@ cd "$(dirname "$0")/.."
 root=$PWD
 build=${FOVEAL_CUDA_BUILD:-$root/build-cuda}       # the build folder
 bundle=${1:-$build/foveal-cuda.tar.xz}
-toolkit=${FOVEAL_CUDA_TOOLKIT:-$build/toolkit}  # a CUDA 13 toolkit (fetched there when absent)
+# FOVEAL_CUDA_TOOLKIT: a CUDA 13 toolkit; default the one on PATH or in /usr/local/cuda when it is
+# CUDA 13, else NVIDIA's wheels fetched into the build folder
+toolkit=${FOVEAL_CUDA_TOOLKIT:-}
+if [ -z "$toolkit" ]; then
+  toolkit=$build/toolkit
+  for nvcc in "$(command -v nvcc || true)" /usr/local/cuda/bin/nvcc; do
+    if [ -n "$nvcc" ] && [ -x "$nvcc" ] && "$nvcc" --version | grep -q 'release 13\.'; then
+      toolkit=$(dirname "$(dirname "$(readlink -f "$nvcc")")")
+      break
+    fi
+  done
+fi
 # FOVEAL_CUDA_ARCHITECTURES: the GPUs compiled for (CMake's list; default the project's own)
 mkdir -p "$build"
 
