@@ -125,7 +125,6 @@ void RealtimeLoop::keep_rays() {
 void RealtimeLoop::new_view(const Camera& camera, uint64_t& kept_pixels) {
   // The rays so far, for the new view to take over where it sees the same surfaces (not after
   // reset(), nor where there was no view yet)
-  all_converged_ = false;
   const size_t before = gbuffer_.prim.size();
   const bool carry = settings_.keep_history && !forget_ && before > 0 && cast_.size() == before && maps_.quality.size() == before;
   if (carry)
@@ -156,9 +155,7 @@ void RealtimeLoop::new_view(const Camera& camera, uint64_t& kept_pixels) {
   });
   cast_.assign(n, 0);
   open_.assign(n, 0);
-  tasks_.reserve(n);
-  order_.resize(n);
-  key_.resize(n);
+  tasks_.reserve(n);  // a task per pixel at most: the first frame's rounds do not grow it
   // The maps at the latest gaze (the frame moves them where a prediction says), then what the
   // view keeps of the rays before: the renderer's temporal reprojection (reuse.h)
   maps_gaze_.reset();
@@ -448,6 +445,7 @@ LoopFrame RealtimeLoop::frame(const Camera& camera) {
     const double plan_ms = plan_timer.ms();
     out.plan_ms += plan_ms;
     if (swept) {  // a pass over every pixel
+      ++out.sweeps;
       sweep_.swept(plan_ms);
       sweep_ms += plan_ms;
     } else {
@@ -476,7 +474,6 @@ LoopFrame RealtimeLoop::frame(const Camera& camera) {
     const double ms = trace_timer.ms();
     trace_ms += ms;
     out.rays += traced;
-    if (traced > 0) all_converged_ = false;
     for (size_t t = 0; t < tasks_.size(); ++t)
       if (done_[t]) {
         cast_[tasks_[t].pixel] += tasks_[t].count;

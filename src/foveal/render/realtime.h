@@ -81,6 +81,7 @@ struct LoopFrame {
   double ms = 0;                                    // wall time of frame()
   double trace_ms = 0;                              // of which tracing AO rays
   double maps_ms = 0, plan_ms = 0, compose_ms = 0;  // … the foveation maps, choosing rays, composing the image
+  uint32_t sweeps = 0;                              // rounds that planned the periphery (each a pass over every pixel)
   // Wall clock, from the frame's start: when rays had to stop (the budget less the margin and the
   // frame's end planned), when they did, and the end planned (composing, the fovea's state): a late
   // frame's pause fell before rays stopped (rays_end_ms > deadline_ms) or into its end
@@ -251,8 +252,9 @@ class RealtimeLoop {
   double slip_ms_ = 0;      // wall clock: how much later than planned frames ended, a decaying maximum
   double plan_ms_ = 0.5;    // wall clock: a round's planning, measured, smoothed
   SweepCost sweep_;         // wall clock: a periphery round's planning (a pass over every pixel)
-  // The last periphery sweep found every pixel converged, and no ray, map or view has changed since:
-  // the next would find the same (a sweep is a pass over every pixel, each frame once the image is done)
+  // The last periphery sweep found every pixel converged and the maps have not been recomputed
+  // since (every view, size and gaze change recomputes them; no ray is traced while all have
+  // converged): the next sweep would find the same, so none is made
   bool all_converged_ = false;
   FixedPartWindow fixed_;               // the latest frames' cost besides their rays, since the last rescale
   std::optional<double> motion_scale_;  // the size lowered for a moving camera: the scale before

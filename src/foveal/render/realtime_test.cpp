@@ -572,6 +572,27 @@ TEST(RealtimeLoop, AFinishedLoopShowsThePapersFrame) {
   EXPECT_LT(differ, paper.visibility.size() / 100);
 }
 
+// A finished image is not swept again (a pass over every pixel that would find nothing to trace)
+// until the gaze moves the maps; its frames stay the same meanwhile.
+TEST(RealtimeLoop, AConvergedImageIsNotSweptAgainUntilTheGazeMoves) {
+  const std::unique_ptr<FrameRenderer> renderer = make_frame_renderer(box(), ComputeDevice::cpu);
+  RealtimeLoop loop(*renderer, box(), loop_params(160, 100, 64), model_clock(1e6));
+  loop.push_gaze(0, glm::dvec2(70, 40));
+  LoopFrame f;
+  for (int k = 0; k < 8; ++k) f = loop.frame(box().cameras.front());
+  ASSERT_EQ(f.rays, 0u);  // finished: nothing left to trace
+  const std::vector<float> finished = f.color.pixels;
+  for (int k = 0; k < 3; ++k) {
+    f = loop.frame(box().cameras.front());
+    EXPECT_EQ(f.sweeps, 0u) << "frame " << k;
+    EXPECT_TRUE(foveal_test::same_bits(f.color.pixels, finished)) << "frame " << k;
+  }
+  loop.push_gaze(0.5, glm::dvec2(130, 70));  // the maps follow: a new fovea to refine, then the periphery
+  f = loop.frame(box().cameras.front());
+  EXPECT_GT(f.rays, 0u);
+  EXPECT_GE(f.sweeps, 1u);
+}
+
 }  // namespace
 }  // namespace foveal
 
