@@ -12,9 +12,13 @@ frame, at the loop's size, against two full references at its camera (n_max rays
 two seeds: `foveal.compare(reference2=...)`), next to the paper's foveated frame at the same camera
 and gaze (a whole frame, no deadline).
 
-    .venv/bin/python bench/loop_orbit.py [--shared ../shared] [--orbit 10 30] [--duration 4]
+    .venv/bin/python bench/loop_orbit.py [--shared ../shared] [--orbit 10 30] [--duration 4] [--rest 1.5]
                                          [--max-angle 40] [--out build/bench-orbit] [--markdown F]
                                          [--picture PNG]
+
+After the orbit the camera rests --rest seconds: the size the loop had before the camera moved
+comes back half a second on, built a few rows at a time while the smaller view is shown; the
+second table gives the late frames at rest and when the full size was shown.
 
 --picture draws the last frames of the first speed side by side: rays kept, afresh, the paper's
 frame (each scaled to half the size asked for, nearest pixel, as a display shows a smaller frame).
@@ -55,6 +59,19 @@ def run(scene, rec, speed, keep, a):
         frames.append((f.ms, f.budget_ms, f.fovea_converged, f.kept_pixels, f.image.shape[1], f.image.shape[0]))
         last = (f, view)
     f, view = last
+    # Then the camera rests: the size it had before it moved comes back (half a second on), built a
+    # few rows at a time while the smaller view is shown
+    rest = []
+    for k in range(int(a.rest * a.fps)):
+        now = a.start + (count + k) / a.fps
+        end = np.searchsorted(t, now, side="right")
+        for i in range(first, end):
+            s = samples[i]
+            loop.push(float(t[i]), (float(s["x"]) * sx, float(s["y"]) * sy) if s["valid"] else None)
+        first = end
+        r = loop.frame(camera=view)
+        rest.append((r.ms, r.budget_ms, r.rebuilding, r.image.shape[1]))
+    back = next((k for k, (_, _, _, w) in enumerate(rest) if w == width), None)
     image = np.array(f.image)
     h, w = image.shape[:2]
     gaze = tuple(f.gaze)
@@ -74,6 +91,9 @@ def run(scene, rec, speed, keep, a):
         "mean_converged": statistics.mean(c for _, _, c, *_ in frames), "ms_p50": statistics.median(ms),
         "ms_p99": ms[max(0, int(0.99 * len(ms)) - 1)], "size": f"{w}x{h}",
         "error": scores["loop"][0], "fovea_error": scores["loop"][1], "paper_error": scores["paper"][0],
+        "rest_frames": len(rest), "rest_late": sum(m > b for m, b, *_ in rest), "rest_ms_max": max((m for m, *_ in rest), default=0.0),
+        "rebuilding_frames": sum(1 for _, _, r, _ in rest if r),
+        "full_size_after_ms": None if back is None else 1000 * (back + 1) / a.fps,
     }
 
 
@@ -87,6 +107,7 @@ def main():
     ap.add_argument("--duration", type=float, default=4.0, help="seconds of gaze, at most --max-angle of orbit")
     ap.add_argument("--max-angle", type=float, default=40.0,
                     help="the orbit's extent, degrees (the dragon's box is open towards its first camera only)")
+    ap.add_argument("--rest", type=float, default=1.5, help="seconds the camera then rests (the size it had comes back)")
     ap.add_argument("--fps", type=float, default=60.0, help="the display's refresh rate, Hz (one frame each)")
     ap.add_argument("--size", default="840x525")
     ap.add_argument("--max-rays", type=int, default=400)
@@ -126,6 +147,13 @@ def main():
         lines.append(f"| {r['orbit']:g} | {r['history']} | {r['frames']} ({r['seconds']:.1f}) | {r['late']} | {r['converged']} | "
                      f"{r['mean_converged']:.3f} | {r['ms_p50']:.1f} / {r['ms_p99']:.1f} | {r['size']} | {r['error']:.2f} | "
                      f"{r['fovea_error']:.2f} | {r['paper_error']:.2f} |")
+    lines += ["", "Then at rest:", "",
+              "| orbit °/s | rays of a moved view | frames at rest (s) | late | longest frame ms | frames building the full size | "
+              "full size shown after (ms at rest) |", "|---:|---|---:|---:|---:|---:|---:|"]
+    for r in rows:
+        back = "—" if r["full_size_after_ms"] is None else f"{r['full_size_after_ms']:.0f}"
+        lines.append(f"| {r['orbit']:g} | {r['history']} | {r['rest_frames']} ({r['rest_frames'] / a.fps:.1f}) | {r['rest_late']} | "
+                     f"{r['rest_ms_max']:.1f} | {r['rebuilding_frames']} | {back} |")
     table = "\n".join(lines)
     print(table)
     out = Path(a.out)

@@ -525,7 +525,12 @@ NB_MODULE(_core, m) {
       .def_prop_ro(
           "budget_ms", [](const PyLoopFrame& f) { return f.budget_ms; }, "The frame budget, ms.")
       .def_prop_ro(
-          "new_view", [](const PyLoopFrame& f) { return f.frame.new_view; }, "The camera had moved: the view's surfaces were traced.")
+          "new_view", [](const PyLoopFrame& f) { return f.frame.new_view; },
+          "The camera had moved, or the size it had before moving came back: the view's surfaces were traced.")
+      .def_prop_ro(
+          "rebuilding", [](const PyLoopFrame& f) { return f.frame.rebuilding; },
+          "Part of this frame built, a few rows at a time, the full-size view a camera at rest gets back (the smaller one is shown "
+          "meanwhile).")
       .def_prop_ro(
           "kept_pixels", [](const PyLoopFrame& f) { return f.frame.kept_pixels; },
           "A new view: the pixels that kept AO rays from the view before (0 with keep_history=False).")

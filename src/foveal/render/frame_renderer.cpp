@@ -3,6 +3,7 @@
 #include "foveal/render/frame_renderer.h"
 
 #include "foveal/render/reuse.h"
+#include "foveal/util/error.h"
 
 namespace foveal {
 
@@ -20,6 +21,9 @@ class CpuFrameRenderer final : public FrameRenderer {
   uint32_t history_frames() const override { return history_.frames(); }
   uint64_t trace_ao_batch(const AoRayBatch& batch) override { return trace_ao_tasks(tracer_, batch); }
   GBuffer surfaces(const Camera& camera, int width, int height) override { return trace_primary(tracer_, scene_, camera, width, height); }
+  GBuffer surfaces_rows(const Camera& camera, int width, int height, int y0, int y1) override {
+    return trace_primary_rows(tracer_, scene_, camera, width, height, y0, y1);
+  }
   double raw_occlusion_rays_per_ms(std::span<const Ray> rays) override {
     return measure_raw_occlusion(tracer_, rays, TraceApi::stream).rays_per_second / 1000;
   }
@@ -46,6 +50,25 @@ GBuffer FrameRenderer::surfaces(const Camera& camera, int width, int height) {
   options.outputs = {false, false, true};
   options.use_history = false;
   return render(camera, p, options).gbuffer;
+}
+
+GBuffer FrameRenderer::surfaces_rows(const Camera& camera, int width, int height, int y0, int y1) {
+  if (y0 < 0 || y1 > height || y0 >= y1) fail("surfaces_rows: rows [{}, {}) are not inside 0..{}", y0, y1, height);
+  GBuffer all = surfaces(camera, width, height);
+  if (y0 == 0) return all;
+  const size_t from = static_cast<size_t>(y0) * static_cast<size_t>(width);
+  GBuffer g;
+  g.width = width;
+  g.height = height - y0;
+  auto tail = [&](auto& v) { return std::vector(v.begin() + static_cast<std::ptrdiff_t>(from), v.end()); };
+  g.prim = tail(all.prim);
+  g.position = tail(all.position);
+  g.normal = tail(all.normal);
+  g.geo_normal = tail(all.geo_normal);
+  g.albedo = tail(all.albedo);
+  g.depth = tail(all.depth);
+  g.view = tail(all.view);
+  return g;
 }
 
 std::unique_ptr<FrameRenderer> make_frame_renderer(const Scene& scene, ComputeDevice device, TraceApi api) {

@@ -79,6 +79,12 @@ class FrameRenderer {
   // traces when its camera moves. By default a frame without AO rays; the CPU traces the primary
   // rays only (a frame's foveation maps, AO pass and shading were 40 of its 82 ms at 840×525).
   virtual GBuffer surfaces(const Camera& camera, int width, int height);
+  // Rows from y0 of those surfaces, at least one and at most up to y1 (0 <= y0 < y1 <= height), as
+  // a G-buffer of width × (rows returned): what the real-time loop traces a few rows at a time in
+  // what its frames leave, when a camera at rest gets back its size. The CPU traces the rows asked
+  // for; by default every row from y0 comes at once, from surfaces() (a device that traces a view's
+  // surfaces within a frame). Throws Error for rows outside the view.
+  virtual GBuffer surfaces_rows(const Camera& camera, int width, int height, int y0, int y1);
   // The device's raw occlusion rate on `rays` (rays per millisecond): Embree's stream API on the
   // CPU, the GPU's any-hit kernel over rays already on the device. The bound a ray budget is
   // judged against (`bench latency`'s ray bound).

@@ -149,6 +149,42 @@ TEST(FrameRenderer, SurfacesAreAFramesGBuffer) {
   EXPECT_TRUE(same_bits(flat(base.position), flat(g.position)));
 }
 
+TEST(FrameRenderer, SurfacesInRowsAreTheViewsSurfaces) {
+  const Scene& scene = foveal_test::box();
+  const std::unique_ptr<FrameRenderer> renderer = make_frame_renderer(scene, ComputeDevice::cpu);
+  const Camera camera = moved(scene.cameras.front(), 2);
+  const GBuffer whole = renderer->surfaces(camera, 96, 61);
+  auto flat = [](const std::vector<glm::vec3>& v) { return std::vector<float>(&v.front().x, &v.front().x + 3 * v.size()); };
+  // Rows in uneven steps, appended, are the view's surfaces to the bit: on the CPU (the rows
+  // asked for) and by the default other devices use (every row from the first asked for)
+  for (const bool base : {false, true}) {
+    GBuffer g;
+    for (int y = 0; y < 61;) {
+      const int y1 = std::min(61, y + 1 + y % 7);
+      const GBuffer part =
+          base ? renderer->FrameRenderer::surfaces_rows(camera, 96, 61, y, y1) : renderer->surfaces_rows(camera, 96, 61, y, y1);
+      ASSERT_EQ(part.width, 96);
+      ASSERT_GE(part.height, 1);
+      ASSERT_LE(y + part.height, 61);
+      if (!base) EXPECT_EQ(part.height, y1 - y);
+      ASSERT_EQ(part.prim.size(), static_cast<size_t>(96 * part.height));
+      g.prim.insert(g.prim.end(), part.prim.begin(), part.prim.end());
+      g.depth.insert(g.depth.end(), part.depth.begin(), part.depth.end());
+      for (auto member : {&GBuffer::position, &GBuffer::normal, &GBuffer::geo_normal, &GBuffer::albedo, &GBuffer::view})
+        (g.*member).insert((g.*member).end(), (part.*member).begin(), (part.*member).end());
+      y += part.height;
+    }
+    EXPECT_EQ(g.prim, whole.prim) << (base ? "default" : "cpu");
+    EXPECT_TRUE(same_bits(g.depth, whole.depth));
+    for (auto member : {&GBuffer::position, &GBuffer::normal, &GBuffer::geo_normal, &GBuffer::albedo, &GBuffer::view})
+      EXPECT_TRUE(same_bits(flat(g.*member), flat(whole.*member)));
+  }
+  for (const auto& [y0, y1] : {std::pair{-1, 3}, std::pair{5, 5}, std::pair{60, 62}}) {
+    EXPECT_THROW(renderer->surfaces_rows(camera, 96, 61, y0, y1), Error);
+    EXPECT_THROW(renderer->FrameRenderer::surfaces_rows(camera, 96, 61, y0, y1), Error);
+  }
+}
+
 TEST(FrameRenderer, CudaIsRefusedWithTheReasonWhereThereIsNone) {
   const Scene box = make_builtin_scene("box");
   if (availability().usable) {

@@ -27,6 +27,7 @@ constexpr int kBuckets = 64;          // priority buckets of the periphery (half
 constexpr double kSlipDecay = 0.995;  // per frame: the margin's memory of a late end
 constexpr double kSlipPad = 0.5;      // ms kept beyond the latest slip
 constexpr double kRestMs = 500;       // a camera still this long is at rest: a size lowered for its motion comes back
+constexpr double kCarryCost = 1.6;    // a moved view's cost over a fresh one's (the rays kept: measured 1.4–1.6 on the dragon)
 
 // body(i) for every pixel, in parallel blocks of 4096
 template <class Body>
@@ -34,6 +35,40 @@ void for_each_pixel(size_t n, const Body& body) {
   tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 4096), [&](const tbb::blocked_range<size_t>& r) {
     for (size_t i = r.begin(); i != r.end(); ++i) body(i);
   });
+}
+
+// Pixels [b, e)'s unit eye rays in single precision (the maps' input that the gaze leaves alone)
+void eye_rays(const FoveationModel& model, size_t width, size_t b, size_t e, float* x, float* y, float* z) {
+  for (size_t i = b; i < e; ++i) {
+    const glm::vec3 r(glm::normalize(model.eye_ray(static_cast<double>(i % width) + 0.5, static_cast<double>(i / width) + 0.5)));
+    x[i] = r.x;
+    y[i] = r.y;
+    z[i] = r.z;
+  }
+}
+
+// Entries [b, e) of the maps from the unit eye rays: foveation_maps()'s model in single precision
+// (a full-frame loop keeps only E: every pixel at q = 1 with n_max rays)
+void evaluate_maps(const FoveationModel& model, const FoveationParams& f, bool foveated, const float* x, const float* y, const float* z,
+                   size_t b, size_t e, FoveationMaps& maps) {
+  model.evaluate_directions_fast(x + b, y + b, z + b, e - b, maps.eccentricity.data() + b, maps.quality.data() + b, maps.rays.data() + b,
+                                 foveated ? maps.blend.data() + b : nullptr);
+  if (foveated) return;
+  std::fill_n(maps.quality.data() + b, e - b, 1.0f);
+  std::fill_n(maps.rays.data() + b, e - b, static_cast<uint16_t>(f.max_rays));
+  std::fill_n(maps.blend.data() + b, e - b, f.max_rays > 0 ? 1.0f : 0.0f);
+}
+
+// Every vector of `rows` appended to `g`'s (rows that follow those `g` holds)
+void append_rows(GBuffer& g, const GBuffer& rows) {
+  auto append = [](auto& to, const auto& from) { to.insert(to.end(), from.begin(), from.end()); };
+  append(g.prim, rows.prim);
+  append(g.position, rows.position);
+  append(g.normal, rows.normal);
+  append(g.geo_normal, rows.geo_normal);
+  append(g.albedo, rows.albedo);
+  append(g.depth, rows.depth);
+  append(g.view, rows.view);
 }
 
 }  // namespace
@@ -101,18 +136,29 @@ void RealtimeLoop::set_budget_ms(double budget_ms) {
 }
 
 void RealtimeLoop::reset() {
+  rebuild_.reset();
   have_view_ = false;
   forget_ = true;
   maps_gaze_.reset();
 }
 
-void RealtimeLoop::keep_rays() {
+void RealtimeLoop::keep_rays(bool leaving) {
+  const bool earlier = any_kept();
+  if (leaving) {  // the view is replaced next: its surfaces move into the history, its counts are read where they are
+    history_.store(std::move(gbuffer_), camera_, maps_, params_.reuse,
+                   [&](size_t i, glm::vec3 position, float& open, float& cast, glm::vec3& origin_sum) {
+                     const float own = static_cast<float>(cast_[i]);
+                     open = static_cast<float>(open_[i]) + (earlier ? kept_open_[i] : 0.0f);
+                     cast = own + (earlier ? kept_cast_[i] : 0.0f);
+                     origin_sum = own * position + (earlier ? kept_origin_[i] : glm::vec3(0.0f));
+                   });
+    return;
+  }
   const size_t n = cast_.size();
   AoCounts& kept = counts_;  // (its memory reused from view to view)
   kept.open.resize(n);
   kept.cast.resize(n);
   kept.origin_sum.resize(n);
-  const bool earlier = any_kept();
   for_each_pixel(n, [&](size_t i) {
     const float own = static_cast<float>(cast_[i]);
     kept.open[i] = static_cast<float>(open_[i]) + (earlier ? kept_open_[i] : 0.0f);
@@ -122,13 +168,32 @@ void RealtimeLoop::keep_rays() {
   history_.store(gbuffer_, camera_, maps_, params_.reuse, kept);
 }
 
-void RealtimeLoop::new_view(const Camera& camera, uint64_t& kept_pixels) {
+void RealtimeLoop::shade(const GBuffer& g, const Camera& camera, size_t b, size_t e, std::vector<glm::vec3>& lit,
+                         std::vector<glm::vec3>& ambient) const {
+  // S and A of the colour S + k_a·A: eq. 2 with k_a = 0, and the ambient light times the albedo
+  const std::vector<Light> lights = frame_lights(scene_.lights, camera);
+  const std::vector<MaterialView> materials = material_views(scene_);
+  for_each_pixel(e - b, [&](size_t k) {
+    const size_t i = b + k;
+    if (!g.hit(i)) {
+      lit[i] = background_colour();
+      ambient[i] = glm::vec3(0.0f);
+      return;
+    }
+    const MaterialView& m = materials[scene_.material_ids[g.prim[i]]];
+    lit[i] = shade_point(m, g.albedo[i], g.position[i], g.normal[i], g.geo_normal[i], g.view[i], 0.0f, scene_.ambient, lights.data(),
+                         static_cast<int>(lights.size()), false, epsilon_, [](const Ray&) { return false; });
+    ambient[i] = scene_.ambient * g.albedo[i];
+  });
+}
+
+bool RealtimeLoop::new_view(const Camera& camera, uint64_t& kept_pixels) {
   // The rays so far, for the new view to take over where it sees the same surfaces (not after
   // reset(), nor where there was no view yet)
   const size_t before = gbuffer_.prim.size();
   const bool carry = settings_.keep_history && !forget_ && before > 0 && cast_.size() == before && maps_.quality.size() == before;
   if (carry)
-    keep_rays();
+    keep_rays(true);
   else
     history_.clear();
   forget_ = false;
@@ -139,20 +204,10 @@ void RealtimeLoop::new_view(const Camera& camera, uint64_t& kept_pixels) {
   renderer_.prepare_ao_batches(gbuffer_, gbuffer_version_);
   camera_ = camera;
   have_view_ = true;
-  // S and A of the colour S + k_a·A: eq. 2 with k_a = 0, and the ambient light times the albedo
   const size_t n = gbuffer_.prim.size();
-  lit_.assign(n, background_colour());
-  ambient_.assign(n, glm::vec3(0.0f));
-  const std::vector<Light> lights = frame_lights(scene_.lights, camera);
-  const std::vector<MaterialView> materials = material_views(scene_);
-  for_each_pixel(n, [&](size_t i) {
-    if (!gbuffer_.hit(i)) return;
-    const GBuffer& g = gbuffer_;
-    const MaterialView& m = materials[scene_.material_ids[g.prim[i]]];
-    lit_[i] = shade_point(m, g.albedo[i], g.position[i], g.normal[i], g.geo_normal[i], g.view[i], 0.0f, scene_.ambient, lights.data(),
-                          static_cast<int>(lights.size()), false, epsilon_, [](const Ray&) { return false; });
-    ambient_[i] = scene_.ambient * g.albedo[i];
-  });
+  lit_.resize(n);
+  ambient_.resize(n);
+  shade(gbuffer_, camera, 0, n, lit_, ambient_);
   cast_.assign(n, 0);
   open_.assign(n, 0);
   tasks_.reserve(n);  // a task per pixel at most: the first frame's rounds do not grow it
@@ -180,6 +235,7 @@ void RealtimeLoop::new_view(const Camera& camera, uint64_t& kept_pixels) {
   const Timer compose_timer;
   compose(scratch);
   finish_ms_ = compose_timer.ms();
+  return carry;
 }
 
 void RealtimeLoop::update_maps(glm::dvec2 gaze_px, bool predicted) {
@@ -194,16 +250,13 @@ void RealtimeLoop::update_maps(glm::dvec2 gaze_px, bool predicted) {
   // foveation_maps()'s model in single precision, from the pixels' unit eye rays kept per size
   const size_t n = static_cast<size_t>(params_.width) * static_cast<size_t>(params_.height);
   const FoveationModel model(params_.display, params_.width, params_.height, gaze_px, params_.foveation);
+  const size_t w = static_cast<size_t>(params_.width);
   if (ray_x_.size() != n) {  // the unit eye rays, as three arrays (the maps' loop vectorises over each)
     ray_x_.resize(n);
     ray_y_.resize(n);
     ray_z_.resize(n);
-    for_each_pixel(n, [&](size_t i) {
-      const glm::vec3 r(glm::normalize(model.eye_ray(static_cast<double>(i % static_cast<size_t>(params_.width)) + 0.5,
-                                                     static_cast<double>(i / static_cast<size_t>(params_.width)) + 0.5)));
-      ray_x_[i] = r.x;
-      ray_y_[i] = r.y;
-      ray_z_[i] = r.z;
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 4096), [&](const tbb::blocked_range<size_t>& r) {
+      eye_rays(model, w, r.begin(), r.end(), ray_x_.data(), ray_y_.data(), ray_z_.data());
     });
   }
   maps_.width = params_.width;
@@ -213,19 +266,17 @@ void RealtimeLoop::update_maps(glm::dvec2 gaze_px, bool predicted) {
   maps_.rays.resize(n);
   maps_.blend.resize(n);
   const bool foveated = params_.mode == RenderMode::foveated;
-  const FoveationParams& f = params_.foveation;
   tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 4096), [&](const tbb::blocked_range<size_t>& r) {
-    const size_t b = r.begin();
-    model.evaluate_directions_fast(ray_x_.data() + b, ray_y_.data() + b, ray_z_.data() + b, r.size(), maps_.eccentricity.data() + b,
-                                   maps_.quality.data() + b, maps_.rays.data() + b, foveated ? maps_.blend.data() + b : nullptr);
-    if (foveated) return;  // (a full-frame loop keeps only E: every pixel at q = 1 with n_max rays)
-    std::fill_n(maps_.quality.data() + b, r.size(), 1.0f);
-    std::fill_n(maps_.rays.data() + b, r.size(), static_cast<uint16_t>(f.max_rays));
-    std::fill_n(maps_.blend.data() + b, r.size(), f.max_rays > 0 ? 1.0f : 0.0f);
+    evaluate_maps(model, params_.foveation, foveated, ray_x_.data(), ray_y_.data(), ray_z_.data(), r.begin(), r.end(), maps_);
   });
   maps_gaze_ = gaze_px;
+  collect_fovea(gaze_px, predicted);
+}
+
+void RealtimeLoop::collect_fovea(glm::dvec2 gaze_px, bool predicted) {
   // The fovea's pixels, in pixel order (centre-out measured slower to converge the whole fovea on
   // IRF S1, 151–170 ms against 101–117 ms: the rim waited while the centre followed the drift)
+  const size_t n = maps_.quality.size();
   fovea_.clear();
   for (size_t i = 0; i < n; ++i)
     if (maps_.quality[i] >= 1.0f && gbuffer_.hit(i) && maps_.rays[i] > 0) fovea_.push_back(static_cast<uint32_t>(i));
@@ -375,6 +426,7 @@ bool RealtimeLoop::rescale(double fixed_ms) {
 }
 
 void RealtimeLoop::set_scale(double scale) {
+  rebuild_.reset();
   scale_ = scale;
   params_.width = std::max(1, static_cast<int>(std::lround(requested_.width * scale)));
   params_.height = std::max(1, static_cast<int>(std::lround(requested_.height * scale)));
@@ -385,23 +437,160 @@ void RealtimeLoop::set_scale(double scale) {
   ray_z_.clear();
 }
 
+void RealtimeLoop::start_rebuild(double scale) {
+  Rebuild r;
+  r.scale = scale;
+  r.width = std::max(1, static_cast<int>(std::lround(requested_.width * scale)));
+  r.height = std::max(1, static_cast<int>(std::lround(requested_.height * scale)));
+  // The view's memory reserved, not touched: each step touches only its own rows' pages (a whole
+  // view's 70 bytes a pixel at once is tens of milliseconds of page faults)
+  const size_t n = static_cast<size_t>(r.width) * static_cast<size_t>(r.height);
+  r.gbuffer.width = r.width;
+  r.gbuffer.height = r.height;
+  for (auto* v : {&r.gbuffer.position, &r.gbuffer.normal, &r.gbuffer.geo_normal, &r.gbuffer.albedo, &r.gbuffer.view, &r.lit, &r.ambient})
+    v->reserve(n);
+  r.gbuffer.prim.reserve(n);
+  r.gbuffer.depth.reserve(n);
+  for (auto* v : {&r.ray_x, &r.ray_y, &r.ray_z, &r.maps.quality, &r.maps.eccentricity, &r.maps.blend}) v->reserve(n);
+  r.maps.rays.reserve(n);
+  r.maps.width = r.width;
+  r.maps.height = r.height;
+  r.gaze = measured_px_.value_or(glm::dvec2(requested_.width * 0.5, requested_.height * 0.5)) * scale;
+  rebuild_ = std::move(r);
+}
+
+void RealtimeLoop::advance_rebuild(const Timer& frame_timer, double until_ms) {
+  Rebuild& r = *rebuild_;
+  const size_t w = static_cast<size_t>(r.width);
+  const bool keep = settings_.keep_history;
+  for (bool first = true; r.stage != Rebuild::done; first = false) {
+    const double left = until_ms - frame_timer.ms();
+    if (left <= 0 && !first) return;  // (a step a frame at least)
+    if (r.stage == Rebuild::keep) {
+      // Steps that cannot be split, each where a frame's time allows: the smaller view's rays kept
+      // for the view to take over, then the memory of its first frame
+      if (left < 2 && !first) return;
+      if (r.row == 0) {
+        if (keep) keep_rays(false);
+        r.row = 1;
+      } else {
+        r.image = Image(r.width, r.height, 3);
+        r.stage = keep ? Rebuild::reproject : Rebuild::done;
+        r.row = 0;
+        r.rows_per_ms = 0;
+      }
+      continue;
+    }
+    // Rows for about a millisecond, or what is left of the time (one row at a stage's start)
+    const int rows_left = r.height - r.row;
+    const int rows = std::clamp(r.rows_per_ms > 0 ? static_cast<int>(r.rows_per_ms * std::clamp(left, 0.0, 1.0)) : 1, 1, rows_left);
+    const Timer step;
+    const size_t b = static_cast<size_t>(r.row) * w;
+    int got = rows;
+    if (r.stage == Rebuild::surfaces) {
+      const GBuffer part = renderer_.surfaces_rows(camera_, r.width, r.height, r.row, r.row + rows);
+      got = part.height;
+      append_rows(r.gbuffer, part);
+    } else if (r.stage == Rebuild::shading) {  // the shading, the eye rays and the maps at the gaze
+      const size_t e = b + static_cast<size_t>(rows) * w;
+      for (auto* v : {&r.lit, &r.ambient}) v->resize(e);
+      for (auto* v : {&r.ray_x, &r.ray_y, &r.ray_z, &r.maps.quality, &r.maps.eccentricity, &r.maps.blend}) v->resize(e);
+      r.maps.rays.resize(e);
+      shade(r.gbuffer, camera_, b, e, r.lit, r.ambient);
+      const FoveationModel model(params_.display, r.width, r.height, r.gaze, params_.foveation);
+      tbb::parallel_for(tbb::blocked_range<size_t>(b, e, 4096), [&](const tbb::blocked_range<size_t>& range) {
+        eye_rays(model, w, range.begin(), range.end(), r.ray_x.data(), r.ray_y.data(), r.ray_z.data());
+        evaluate_maps(model, params_.foveation, params_.mode == RenderMode::foveated, r.ray_x.data(), r.ray_y.data(), r.ray_z.data(),
+                      range.begin(), range.end(), r.maps);
+      });
+    } else {  // reproject: the rays kept, row by row
+      const size_t e = b + static_cast<size_t>(rows) * w;
+      r.kept.open.resize(e);
+      r.kept.cast.resize(e);
+      r.kept.origin_sum.resize(e);
+      r.kept_pixels += history_.reproject_rows(r.gbuffer, r.maps, params_.reuse, r.kept, r.row, r.row + rows);
+    }
+    const double ms = step.ms();
+    if (ms > 0.05) r.rows_per_ms = r.rows_per_ms > 0 ? 0.5 * r.rows_per_ms + 0.5 * got / ms : got / ms;
+    r.row += got;
+    if (r.row < r.height) continue;
+    r.row = 0;
+    r.rows_per_ms = 0;
+    r.stage = r.stage == Rebuild::surfaces ? Rebuild::shading : r.stage == Rebuild::shading ? Rebuild::keep : Rebuild::done;
+  }
+}
+
+void RealtimeLoop::adopt_rebuild(uint64_t& kept_pixels) {
+  Rebuild& r = *rebuild_;
+  const double pixels_before = static_cast<double>(std::max<size_t>(1, cast_.size()));
+  scale_ = r.scale;
+  params_.width = r.width;
+  params_.height = r.height;
+  gbuffer_ = std::move(r.gbuffer);
+  ++gbuffer_version_;
+  renderer_.prepare_ao_batches(gbuffer_, gbuffer_version_);
+  lit_ = std::move(r.lit);
+  ambient_ = std::move(r.ambient);
+  ray_x_ = std::move(r.ray_x);
+  ray_y_ = std::move(r.ray_y);
+  ray_z_ = std::move(r.ray_z);
+  maps_ = std::move(r.maps);
+  maps_gaze_ = r.gaze;
+  all_converged_ = false;
+  collect_fovea(r.gaze, false);
+  const size_t n = gbuffer_.prim.size();
+  cast_.assign(n, 0);
+  open_.assign(n, 0);
+  tasks_.reserve(n);
+  kept_pixels = r.kept_pixels;
+  if (kept_pixels > 0) {
+    kept_open_ = std::move(r.kept.open);
+    kept_cast_ = std::move(r.kept.cast);
+    kept_origin_ = std::move(r.kept.origin_sum);
+  } else {
+    kept_open_.clear();
+    kept_cast_.clear();
+    kept_origin_.clear();
+  }
+  ++views_;
+  view_seed_ = any_kept() ? scrambled_seed(params_.seed, views_) : params_.seed;
+  spare_ = std::move(r.image);
+  finish_ms_ *= static_cast<double>(n) / pixels_before;  // composing goes with the pixels
+  note_ = scale_ < 1
+              ? fmt::format("rendering at {}x{} ({:.0f} %), the size before the camera moved", params_.width, params_.height, 100 * scale_)
+              : "";
+  motion_scale_.reset();
+  fixed_.clear();
+  rebuild_.reset();
+}
+
 LoopFrame RealtimeLoop::frame(const Camera& camera) {
   const Timer timer;
   LoopFrame out;
   out.index = index_++;
   double view_ms = 0;
   const bool moved = have_view_ && !same_camera(camera, camera_);
-  // The camera moves again right after a view whose part of the frame took more than the budget:
-  // render smaller before tracing this one (else this frame is late as well)
-  if (settings_.clock == LoopClock::wall && moved && last_new_view_ && last_view_cost_ms_ > settings_.budget_ms) {
-    const double scale_before = scale_;
-    if (rescale(last_view_cost_ms_) && !motion_scale_) motion_scale_ = scale_before;
-    fixed_.clear();
+  if (moved) rebuild_.reset();  // (a size coming back for the view before)
+  if (settings_.clock == LoopClock::wall && moved) {
+    // The camera moves: where its view at this size would take more than the frame leaves (the
+    // view before's cost where views follow one another, else the cost per pixel measured), render
+    // smaller before tracing it, else this frame is late
+    const double per_px = moved_view_ms_per_px_ > 0 ? moved_view_ms_per_px_ : kCarryCost * fresh_view_ms_per_px_;
+    const double predicted = last_new_view_ ? last_view_cost_ms_ : per_px * static_cast<double>(params_.width) * params_.height;
+    if (predicted > settings_.budget_ms - settings_.margin_ms - finish_ms_) {
+      const double scale_before = scale_;
+      if (rescale(predicted) && !motion_scale_) motion_scale_ = scale_before;
+      fixed_.clear();
+    }
   }
   if (!have_view_ || moved) {
     const Timer view_timer;
-    new_view(camera, out.kept_pixels);
+    const bool carried = new_view(camera, out.kept_pixels);
     view_ms = view_timer.ms();
+    out.new_view = true;
+    (carried ? moved_view_ms_per_px_ : fresh_view_ms_per_px_) = view_ms / (static_cast<double>(params_.width) * params_.height);
+  } else if (rebuild_ && rebuild_->stage == Rebuild::done) {
+    adopt_rebuild(out.kept_pixels);
     out.new_view = true;
   }
   // Where the fovea goes: the predicted landing while a saccade flies, else the measured gaze
@@ -424,6 +613,16 @@ LoopFrame RealtimeLoop::frame(const Camera& camera) {
   // The margin: at least the settings', more where frames have lately ended later than planned
   const double margin = std::max(settings_.margin_ms, slip_ms_);  // (slip_ms_ at most a quarter of the budget)
   const double deadline = settings_.budget_ms - margin - finish_ms_;
+  // A size coming back: half of what is left before the deadline builds it (the rest after the
+  // rays, if they leave any)
+  auto rebuild = [&](double until_ms) {
+    if (!rebuild_ || rebuild_->stage == Rebuild::done) return;
+    const Timer rebuild_timer;
+    advance_rebuild(timer, until_ms);
+    out.rebuilding = true;
+    out.rebuild_ms += rebuild_timer.ms();
+  };
+  if (wall) rebuild(timer.ms() + 0.5 * (deadline - timer.ms()));
   out.deadline_ms = deadline;
   out.compose_planned_ms = finish_ms_;
   const double model_fixed = settings_.model_fixed_ms * scale_ * scale_;  // the model's fixed cost scales with the pixels
@@ -486,6 +685,7 @@ LoopFrame RealtimeLoop::frame(const Camera& camera) {
     if (!wall) allowance -= std::min(allowance, traced);
     if (traced == 0) break;
   }
+  if (wall && rebuild_ && timer.ms() < deadline - 1) rebuild(deadline);
   // The image, and the fovea's state
   out.rays_end_ms = timer.ms();
   const Timer finish_timer;
@@ -516,8 +716,8 @@ LoopFrame RealtimeLoop::frame(const Camera& camera) {
   // (planning the periphery is no fixed part either: the loop sweeps it only when the sweep fits, and
   // on a 2-core AMD EPYC VM its 3–5 ms with maps and composing passed 60 % of the budget and
   // lowered the resolution while the fovea was converged)
-  const double fixed = wall ? out.ms - trace_ms - sweep_ms - (moving ? 0.0 : view_ms) : model_fixed;
-  last_view_cost_ms_ = out.new_view ? out.ms - trace_ms - sweep_ms : 0;  // a new view's fixed part, its surfaces included
+  const double fixed = wall ? out.ms - trace_ms - sweep_ms - out.rebuild_ms - (moving ? 0.0 : view_ms) : model_fixed;
+  last_view_cost_ms_ = out.new_view ? out.ms - trace_ms - sweep_ms - out.rebuild_ms : 0;  // a new view's fixed part, its surfaces included
   // (on the wall clock over five frames at least: a first frame's page faults, one frame's pause,
   // are no reason. A camera that moves on after a view costlier than the whole budget is, at once:
   // the next frame's start lowers the size before it traces its view; waiting for five frames made
@@ -527,11 +727,14 @@ LoopFrame RealtimeLoop::frame(const Camera& camera) {
     if (rescale(fixed_.median_ms()) && moving && !motion_scale_) motion_scale_ = scale_before;  // the size to return to at rest
     fixed_.clear();
   }
-  // A camera come to rest gets back the size it had before it moved: its surfaces are traced once
-  // more (that frame is late: 50–90 ms at 840×525 on two cores) and the rays kept at the smaller
-  // size carry over (a view stayed small for good once a camera had moved)
+  // A camera come to rest gets back the size it had before it moved, and the rays kept at the
+  // smaller size carry over (a view stayed small for good once a camera had moved). On the wall
+  // clock that view is built over the next frames (start_rebuild; traced at once, its surfaces
+  // made the frame late by 50–90 ms at 840×525 on two cores); the model clock takes it at once.
   still_frames_ = out.new_view ? 0 : still_frames_ + 1;
-  if (motion_scale_ && static_cast<double>(still_frames_) * settings_.budget_ms >= kRestMs) {
+  if (motion_scale_ && static_cast<double>(still_frames_) * settings_.budget_ms >= kRestMs && wall) {
+    if (!rebuild_) start_rebuild(*motion_scale_);
+  } else if (motion_scale_ && static_cast<double>(still_frames_) * settings_.budget_ms >= kRestMs) {
     set_scale(*motion_scale_);
     note_ = scale_ < 1 ? fmt::format("rendering at {}x{} ({:.0f} %), the size before the camera moved", params_.width, params_.height,
                                      100 * scale_)

@@ -39,6 +39,7 @@
 #include "foveal/render/render.h"
 #include "foveal/render/reuse.h"
 #include "foveal/util/stats.h"
+#include "foveal/util/timer.h"
 
 #include <glm/glm.hpp>
 
@@ -89,8 +90,10 @@ struct LoopFrame {
   double deadline_ms = 0, rays_end_ms = 0, compose_planned_ms = 0;
   double cost_ms = 0;          // the frame's cost on the loop's clock (wall: ms; model: the model's)
   bool late = false;           // cost_ms > the budget
-  bool new_view = false;       // the camera changed: surfaces traced (and AO kept where the view still sees them)
+  bool new_view = false;       // the camera changed, or a size came back: surfaces traced (and AO kept where the view still sees them)
   uint64_t kept_pixels = 0;    // a new view: the pixels that kept AO rays from the view before
+  bool rebuilding = false;     // part of the frame built the view at the size a camera at rest gets back
+  double rebuild_ms = 0;       // … in this much of the frame
   double fovea_converged = 0;  // fraction of the fovea's (q = 1, hit) pixels whose AO is converged
   bool fovea_done = false;     // all of them: the fovea is at full quality
 };
@@ -200,16 +203,29 @@ class RealtimeLoop {
   bool any_kept() const { return !kept_cast_.empty(); }
   float total_cast(size_t i) const { return static_cast<float>(cast_[i]) + (any_kept() ? kept_cast_[i] : 0.0f); }
   float total_open(size_t i) const { return static_cast<float>(open_[i]) + (any_kept() ? kept_open_[i] : 0.0f); }
-  // (kept_pixels: the pixels that kept rays from the view before)
-  void new_view(const Camera& camera, uint64_t& kept_pixels);
-  // Every pixel's rays so far, as counts the view's successor can take over (reuse.h)
-  void keep_rays();
+  // (kept_pixels: the pixels that kept rays from the view before); whether it carried rays over
+  bool new_view(const Camera& camera, uint64_t& kept_pixels);
+  // S and A of the colour S + k_a·A for pixels [b, e) of surfaces `g` seen from `camera`
+  void shade(const GBuffer& g, const Camera& camera, size_t b, size_t e, std::vector<glm::vec3>& lit,
+             std::vector<glm::vec3>& ambient) const;
+  // Every pixel's rays so far, as counts the view's successor can take over (reuse.h); `leaving`:
+  // the view is replaced next, and its surfaces move into the history instead of being copied
+  void keep_rays(bool leaving);
   void update_maps(glm::dvec2 gaze_px, bool predicted);  // predicted: the fovea's pixels centre-out
   // `swept`: set where the round planned the periphery (a pass over every pixel)
   size_t plan_round(uint64_t ray_limit, bool periphery, bool& swept);
+  // The fovea's pixels (q = 1, hit, rays) of the current maps at `gaze_px`; centre-out where predicted
+  void collect_fovea(glm::dvec2 gaze_px, bool predicted);
   void compose(Image& color);
   bool rescale(double fixed_ms);  // whether it lowered the size
   void set_scale(double scale);
+  // A camera at rest gets back the size it had before it moved. On the wall clock that view is
+  // built a few rows at a time in what frames leave (its surfaces, their shading, its eye rays and
+  // maps, the rays it keeps) while the smaller one is still shown, and taken over once complete: the
+  // full-size surfaces at once made that frame late by 50–90 ms at 840×525 on two cores.
+  void start_rebuild(double scale);
+  void advance_rebuild(const Timer& frame_timer, double until_ms);  // steps of ~1 ms until then (frame's clock)
+  void adopt_rebuild(uint64_t& kept_pixels);
   glm::dvec2 px_to_deg(glm::dvec2 px) const;
   glm::dvec2 deg_to_px(glm::dvec2 deg) const;
 
@@ -260,6 +276,26 @@ class RealtimeLoop {
   std::optional<double> motion_scale_;  // the size lowered for a moving camera: the scale before
   int still_frames_ = 0;                // frames since the camera last moved
   double last_view_cost_ms_ = 0;        // the latest frame's fixed part where it traced a new view (0 where not)
+  // What a moved view costs per pixel (wall clock: surfaces, shading, the rays kept), the latest
+  // measured; 0 before one. A view without rays to keep (the first) is measured apart: a moved one
+  // is estimated from it until one is measured
+  double moved_view_ms_per_px_ = 0, fresh_view_ms_per_px_ = 0;
+  struct Rebuild {
+    double scale = 1;
+    int width = 0, height = 0;
+    enum Stage { surfaces, shading, keep, reproject, done } stage = surfaces;
+    int row = 0;             // the stage's next row
+    double rows_per_ms = 0;  // the stage's pace, measured (0: not yet)
+    GBuffer gbuffer;         // rows traced so far (memory reserved for the whole view, touched row by row)
+    std::vector<glm::vec3> lit, ambient;
+    std::vector<float> ray_x, ray_y, ray_z;  // unit eye rays
+    FoveationMaps maps;
+    glm::dvec2 gaze{0};  // where the maps are
+    AoCounts kept;       // the rays the view takes over from the smaller one
+    uint64_t kept_pixels = 0;
+    Image image;  // the memory its first frame is composed into
+  };
+  std::optional<Rebuild> rebuild_;
   int index_ = 0;
 };
 

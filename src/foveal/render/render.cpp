@@ -190,6 +190,16 @@ GBuffer trace_primary(const Tracer& tracer, const Scene& scene, const Camera& ca
   return g;
 }
 
+GBuffer trace_primary_rows(const Tracer& tracer, const Scene& scene, const Camera& camera, int width, int height, int y0, int y1) {
+  if (y0 < 0 || y1 > height || y0 >= y1) fail("trace_primary_rows: rows [{}, {}) are not inside 0..{}", y0, y1, height);
+  GBuffer g;
+  const CameraRays camera_ray(camera, width, height);
+  const double row0 = y0;
+  trace_into_gbuffer(
+      tracer, scene, width, y1 - y0, [&](int x, int y) { return camera_ray(x + 0.5, row0 + y + 0.5); }, g, kNothingAfter);
+  return g;
+}
+
 GBuffer trace_gbuffer(const Tracer& tracer, const Scene& scene, int width, int height, const std::function<Ray(int, int)>& ray_for) {
   GBuffer g;
   trace_into_gbuffer(tracer, scene, width, height, ray_for, g, kNothingAfter);

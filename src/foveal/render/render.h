@@ -128,6 +128,9 @@ std::vector<Light> frame_lights(const std::vector<Light>& scene_lights, const Ca
 
 // Primary rays through every pixel centre.
 GBuffer trace_primary(const Tracer& tracer, const Scene& scene, const Camera& camera, int width, int height);
+// Rows [y0, y1) of trace_primary's G-buffer (width × height), as a G-buffer of width × (y1 − y0),
+// the same to the bit: a view's surfaces traced a few rows at a time. Throws Error for rows outside.
+GBuffer trace_primary_rows(const Tracer& tracer, const Scene& scene, const Camera& camera, int width, int height, int y0, int y1);
 // One ray per pixel from `ray_for(x, y)` (unit direction) into a G-buffer (depth = distance along that ray).
 GBuffer trace_gbuffer(const Tracer& tracer, const Scene& scene, int width, int height, const std::function<Ray(int, int)>& ray_for);
 // The foveation model evaluated at every pixel (full mode: q = 1, n = n_max, b = 1).

@@ -2,7 +2,9 @@
 #include "foveal/render/reuse.h"
 
 #include "foveal/render/pixel.h"
+#include "foveal/util/error.h"
 
+#include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
@@ -15,12 +17,21 @@ uint64_t AoHistory::reproject(const GBuffer& g, const FoveationMaps& maps, const
   counts.open.assign(pixels, 0.0f);
   counts.cast.assign(pixels, 0.0f);
   counts.origin_sum.assign(pixels, glm::vec3(0.0f));
+  return reproject_rows(g, maps, reuse, counts, 0, g.height);
+}
+
+uint64_t AoHistory::reproject_rows(const GBuffer& g, const FoveationMaps& maps, const AoReuseParams& reuse, AoCounts& counts, int y0,
+                                   int y1) const {
+  const size_t end = static_cast<size_t>(y1) * static_cast<size_t>(g.width);
+  if (y0 < 0 || y1 > g.height || y0 > y1 || counts.open.size() < end || counts.cast.size() < end || counts.origin_sum.size() < end ||
+      maps.quality.size() < end || maps.rays.size() < end)
+    fail("AoHistory::reproject_rows: rows [{}, {}) of a {}x{} view are not all held by the counts and maps", y0, y1, g.width, g.height);
   if (empty()) return 0;
   const HistoryView h = view();
   const SurfaceView surfaces = surface_view(g);
   const CountsView out = counts_view(counts);
   std::atomic<uint64_t> kept{0};
-  tbb::parallel_for(0, g.height, [&](int y) {
+  tbb::parallel_for(y0, y1, [&](int y) {
     uint64_t row_kept = 0;
     for (int x = 0; x < g.width; ++x) {
       const size_t i = static_cast<size_t>(y) * g.width + x;
@@ -59,6 +70,30 @@ void AoHistory::store(const GBuffer& g, const Camera& camera, const FoveationMap
     history_of_pixel(history_cap_rays(maps.rays[i], maps.quality[i], reuse), counts.open[i], counts.cast[i],
                      counts.origin_sum.size() == pixels ? counts.origin_sum.data() : nullptr, i, g.position[i], open_[i], cast_[i],
                      origin_[i]);
+  });
+  ++frames_;
+}
+
+void AoHistory::store(GBuffer&& g, const Camera& camera, const FoveationMaps& maps, const AoReuseParams& reuse, const PixelCounts& counts) {
+  width_ = g.width;
+  height_ = g.height;
+  camera_ = camera;
+  position_ = std::move(g.position);
+  normal_ = std::move(g.geo_normal);
+  const size_t pixels = static_cast<size_t>(g.width) * g.height;
+  hit_.resize(pixels);
+  open_.resize(pixels);
+  cast_.resize(pixels);
+  origin_.resize(pixels);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, pixels, 4096), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t i = r.begin(); i != r.end(); ++i) {
+      hit_[i] = g.hit(i) ? 1 : 0;
+      float open = 0, cast = 0;
+      glm::vec3 origin_sum(0.0f);
+      counts(i, position_[i], open, cast, origin_sum);
+      history_of_pixel(history_cap_rays(maps.rays[i], maps.quality[i], reuse), open, cast, &origin_sum, 0, position_[i], open_[i], cast_[i],
+                       origin_[i]);
+    }
   });
   ++frames_;
 }

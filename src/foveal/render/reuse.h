@@ -28,6 +28,7 @@
 #include "foveal/render/render.h"
 
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 namespace foveal {
@@ -46,9 +47,20 @@ class AoHistory {
   // history_reach_px(q(E)) the history is weighed down so that, with this frame's n(E)/F rays, it
   // comes back within reach. Returns the number of pixels that kept history.
   uint64_t reproject(const GBuffer& gbuffer, const FoveationMaps& maps, const AoReuseParams& reuse, AoCounts& counts) const;
+  // The same for rows [y0, y1) alone, the rest of `counts` untouched: a view's counts taken over a
+  // few rows at a time (the real-time loop). `counts` (and the maps) must hold those rows already;
+  // the G-buffer every row the history is looked up from.
+  uint64_t reproject_rows(const GBuffer& gbuffer, const FoveationMaps& maps, const AoReuseParams& reuse, AoCounts& counts, int y0,
+                          int y1) const;
   // Keep a frame's counts for the next, each pixel's capped at H(E) frames of its refresh rays
   // (scaled down, V unchanged).
   void store(const GBuffer& gbuffer, const Camera& camera, const FoveationMaps& maps, const AoReuseParams& reuse, const AoCounts& counts);
+  // The same for a view being left: its surfaces' positions and normals moved out of `gbuffer`
+  // (not copied), and each pixel's counts asked of `counts(i, position, open, cast, origin_sum)`
+  // (no arrays of them made). At a new view of the real-time loop copying them cost 17 ms of 840×525 on two
+  // cores (page faults included), more than the frame.
+  using PixelCounts = std::function<void(size_t, glm::vec3, float&, float&, glm::vec3&)>;
+  void store(GBuffer&& gbuffer, const Camera& camera, const FoveationMaps& maps, const AoReuseParams& reuse, const PixelCounts& counts);
 
  private:
   int width_ = 0, height_ = 0;

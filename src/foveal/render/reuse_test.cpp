@@ -351,6 +351,51 @@ TEST(Reuse, SameFramesForAnyThreadCount) {
   }
 }
 
+TEST(Reuse, ReprojectingInRowsIsReprojectingTheView) {
+  // A history of one view, reprojected into a view a little to the side: row by row in uneven
+  // steps (what the real-time loop does while a size comes back) or at once, the same counts
+  const Scene& s = scene("box");
+  const Tracer tracer(s);
+  RenderParams p;
+  p.width = 80;
+  p.height = 50;
+  p.foveation.max_rays = 64;
+  Camera a = s.cameras.front(), b = a;
+  b.eye += 0.02f * glm::cross(b.look - b.eye, b.up);
+  const GBuffer ga = trace_primary(tracer, s, a, p.width, p.height), gb = trace_primary(tracer, s, b, p.width, p.height);
+  const FoveationMaps ma = foveation_maps(p, {40, 25}), mb = foveation_maps(p, {44, 25});
+  const size_t n = ga.prim.size();
+  AoCounts counts;
+  for (size_t i = 0; i < n; ++i) {
+    counts.cast.push_back(16.0f + static_cast<float>(i % 5));
+    counts.open.push_back(static_cast<float>(i % 13));
+    counts.origin_sum.push_back(counts.cast.back() * ga.position[i]);
+  }
+  AoHistory history;
+  history.store(ga, a, ma, p.reuse, counts);
+  AoCounts whole, rows;
+  const uint64_t kept = history.reproject(gb, mb, p.reuse, whole);
+  EXPECT_GT(kept, n / 2);
+  rows.open.assign(n, 0.0f);
+  rows.cast.assign(n, 0.0f);
+  rows.origin_sum.assign(n, glm::vec3(0.0f));
+  uint64_t kept_rows = 0;
+  for (int y = 0; y < p.height; y += 1 + y % 4)
+    kept_rows += history.reproject_rows(gb, mb, p.reuse, rows, y, std::min(p.height, y + 1 + y % 4));
+  EXPECT_EQ(kept_rows, kept);
+  EXPECT_TRUE(same_bits(rows.open, whole.open));
+  EXPECT_TRUE(same_bits(rows.cast, whole.cast));
+  for (size_t i = 0; i < n; ++i) ASSERT_EQ(rows.origin_sum[i], whole.origin_sum[i]) << i;
+  // Rows the counts do not hold yet are refused, with the rows named
+  AoCounts short_counts;
+  short_counts.open.assign(n / 2, 0.0f);
+  short_counts.cast.assign(n / 2, 0.0f);
+  short_counts.origin_sum.assign(n / 2, glm::vec3(0.0f));
+  EXPECT_NO_THROW(history.reproject_rows(gb, mb, p.reuse, short_counts, 0, p.height / 2));
+  EXPECT_THROW(history.reproject_rows(gb, mb, p.reuse, short_counts, 0, p.height), Error);
+  EXPECT_THROW(history.reproject_rows(gb, mb, p.reuse, rows, 3, 2), Error);
+}
+
 TEST(Reuse, RejectsBadParameters) {
   RenderParams p;
   p.reuse.adaptive_min_rays = 0;

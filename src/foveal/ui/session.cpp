@@ -441,10 +441,10 @@ void ViewSession::realtime_frame() {
   r = Result{};
   r.generation = generation_;
   r.last = f.fovea_done;
-  r.stage = fmt::format("realtime: fovea {} ({:.0f} %){}{}{}", f.fovea_done ? "converged" : "refining", 100 * f.fovea_converged,
+  r.stage = fmt::format("realtime: fovea {} ({:.0f} %){}{}{}{}", f.fovea_done ? "converged" : "refining", 100 * f.fovea_converged,
                         f.predicted ? ", at the predicted landing" : "",
-                        f.new_view && f.kept_pixels > 0 ? fmt::format(", the camera moved: {} px kept their rays", f.kept_pixels) : "",
-                        loop_->scale() < 1 ? ", " + loop_->note() : "");
+                        f.new_view && f.kept_pixels > 0 ? fmt::format(", a new view: {} px kept their rays", f.kept_pixels) : "",
+                        loop_->scale() < 1 ? ", " + loop_->note() : "", f.rebuilding ? ", the camera rests: building the full size" : "");
   r.gaze = f.gaze_px / loop_->scale();
   r.stats.ao_rays = f.rays;
   r.stats.ao_ms = f.trace_ms;
