@@ -427,9 +427,13 @@ bool RealtimeLoop::rescale(double fixed_ms) {
 
 void RealtimeLoop::set_scale(double scale) {
   rebuild_.reset();
+  const double pixels_before = static_cast<double>(params_.width) * params_.height;
   scale_ = scale;
   params_.width = std::max(1, static_cast<int>(std::lround(requested_.width * scale)));
   params_.height = std::max(1, static_cast<int>(std::lround(requested_.height * scale)));
+  const double ratio = static_cast<double>(params_.width) * params_.height / pixels_before;  // (as adopt_rebuild)
+  plan_ms_ *= ratio;
+  sweep_.scale(ratio);
   have_view_ = false;
   maps_gaze_.reset();
   ray_x_.clear();
@@ -455,6 +459,10 @@ void RealtimeLoop::start_rebuild(double scale) {
   r.maps.rays.reserve(n);
   r.maps.width = r.width;
   r.maps.height = r.height;
+  r.image.width = r.width;
+  r.image.height = r.height;
+  r.image.channels = 3;
+  r.image.pixels.reserve(3 * n);
   r.gaze = measured_px_.value_or(glm::dvec2(requested_.width * 0.5, requested_.height * 0.5)) * scale;
   rebuild_ = std::move(r);
 }
@@ -467,23 +475,20 @@ void RealtimeLoop::advance_rebuild(const Timer& frame_timer, double until_ms) {
     const double left = until_ms - frame_timer.ms();
     if (left <= 0 && !first) return;  // (a step a frame at least)
     if (r.stage == Rebuild::keep) {
-      // Steps that cannot be split, each where a frame's time allows: the smaller view's rays kept
-      // for the view to take over, then the memory of its first frame
+      // A step that cannot be split, where a frame's time allows: the smaller view's rays kept for
+      // the view to take over (0.4–0.5 ms at 210×131 on two cores)
       if (left < 2 && !first) return;
-      if (r.row == 0) {
-        if (keep) keep_rays(false);
-        r.row = 1;
-      } else {
-        r.image = Image(r.width, r.height, 3);
-        r.stage = keep ? Rebuild::reproject : Rebuild::done;
-        r.row = 0;
-        r.rows_per_ms = 0;
-      }
+      if (keep) keep_rays(false);
+      r.stage = keep ? Rebuild::reproject : Rebuild::done;
+      r.row = 0;
+      r.rows_per_ms = 0;
       continue;
     }
-    // Rows for about a millisecond, or what is left of the time (one row at a stage's start)
+    // Rows for half a millisecond, or half of what is left of the time (one row at a stage's
+    // start): a step's pace varies with what its rows hold (a reprojection step measured up to
+    // 2.5× its estimate), and a step started near the deadline would end past it
     const int rows_left = r.height - r.row;
-    const int rows = std::clamp(r.rows_per_ms > 0 ? static_cast<int>(r.rows_per_ms * std::clamp(left, 0.0, 1.0)) : 1, 1, rows_left);
+    const int rows = std::clamp(r.rows_per_ms > 0 ? static_cast<int>(r.rows_per_ms * std::clamp(0.5 * left, 0.0, 0.5)) : 1, 1, rows_left);
     const Timer step;
     const size_t b = static_cast<size_t>(r.row) * w;
     int got = rows;
@@ -494,6 +499,7 @@ void RealtimeLoop::advance_rebuild(const Timer& frame_timer, double until_ms) {
     } else if (r.stage == Rebuild::shading) {  // the shading, the eye rays and the maps at the gaze
       const size_t e = b + static_cast<size_t>(rows) * w;
       for (auto* v : {&r.lit, &r.ambient}) v->resize(e);
+      r.image.pixels.resize(3 * e);  // (its pages touched here, a few at a time: 5 MB at once took 2.5 ms)
       for (auto* v : {&r.ray_x, &r.ray_y, &r.ray_z, &r.maps.quality, &r.maps.eccentricity, &r.maps.blend}) v->resize(e);
       r.maps.rays.resize(e);
       shade(r.gbuffer, camera_, b, e, r.lit, r.ambient);
@@ -555,7 +561,12 @@ void RealtimeLoop::adopt_rebuild(uint64_t& kept_pixels) {
   ++views_;
   view_seed_ = any_kept() ? scrambled_seed(params_.seed, views_) : params_.seed;
   spare_ = std::move(r.image);
-  finish_ms_ *= static_cast<double>(n) / pixels_before;  // composing goes with the pixels
+  // What composing, planning the fovea and sweeping the periphery take goes with the pixels (the
+  // smaller view's sweep estimate let the first full-size sweep run 4 ms past the deadline)
+  const double ratio = static_cast<double>(n) / pixels_before;
+  finish_ms_ *= ratio;
+  plan_ms_ *= ratio;
+  sweep_.scale(ratio);
   note_ = scale_ < 1
               ? fmt::format("rendering at {}x{} ({:.0f} %), the size before the camera moved", params_.width, params_.height, 100 * scale_)
               : "";

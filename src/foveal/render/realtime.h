@@ -153,6 +153,11 @@ class SweepCost {
   void swept(double ms);
   // A frame did not sweep because it did not fit.
   void skipped() { estimate_ms_ = std::max(typical_ms(), kSkipDecay * estimate_ms_); }
+  // The pixels changed by this factor (a new size): so does a sweep's cost
+  void scale(double factor) {
+    estimate_ms_ *= factor;
+    latest_.clear();
+  }
   double estimate_ms() const { return estimate_ms_; }
   double typical_ms() const { return latest_.size() == 0 ? estimate_ms_ : latest_.median(); }
 
@@ -293,7 +298,7 @@ class RealtimeLoop {
     glm::dvec2 gaze{0};  // where the maps are
     AoCounts kept;       // the rays the view takes over from the smaller one
     uint64_t kept_pixels = 0;
-    Image image;  // the memory its first frame is composed into
+    Image image;  // the memory its first frame is composed into (touched row by row with the shading)
   };
   std::optional<Rebuild> rebuild_;
   int index_ = 0;
