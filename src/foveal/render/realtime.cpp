@@ -27,7 +27,9 @@ constexpr int kBuckets = 64;          // priority buckets of the periphery (half
 constexpr double kSlipDecay = 0.995;  // per frame: the margin's memory of a late end
 constexpr double kSlipPad = 0.5;      // ms kept beyond the latest slip
 constexpr double kRestMs = 500;       // a camera still this long is at rest: a size lowered for its motion comes back
-constexpr double kCarryCost = 1.6;    // a moved view's cost over a fresh one's (the rays kept: measured 1.4–1.6 on the dragon)
+// A moved view's cost over a fresh one's until one is measured: the rays kept, 1.4–1.6 on the
+// dragon at 840×525 while the surfaces were copied into the history (less now that they move)
+constexpr double kCarryCost = 1.6;
 
 // body(i) for every pixel, in parallel blocks of 4096
 template <class Body>
@@ -586,7 +588,9 @@ LoopFrame RealtimeLoop::frame(const Camera& camera) {
     // The camera moves: where its view at this size would take more than the frame leaves (the
     // view before's cost where views follow one another, else the cost per pixel measured), render
     // smaller before tracing it, else this frame is late
-    const double per_px = moved_view_ms_per_px_ > 0 ? moved_view_ms_per_px_ : kCarryCost * fresh_view_ms_per_px_;
+    const double per_px = !settings_.keep_history     ? fresh_view_ms_per_px_  // (no rays to keep)
+                          : moved_view_ms_per_px_ > 0 ? moved_view_ms_per_px_
+                                                      : kCarryCost * fresh_view_ms_per_px_;
     const double predicted = last_new_view_ ? last_view_cost_ms_ : per_px * static_cast<double>(params_.width) * params_.height;
     if (predicted > settings_.budget_ms - settings_.margin_ms - finish_ms_) {
       const double scale_before = scale_;
