@@ -31,7 +31,10 @@
 //   rays as a fixed cost model allows, so that a run is the same whatever the machine's load (the
 //   simulated clock of `bench latency` and the tests).
 // - Where even the base shading does not fit the budget, the loop renders at a lower resolution
-//   (scale() < 1, note() says so); the caller shows the image scaled up.
+//   (scale() < 1, note() says so); the caller shows the image scaled up. A camera that starts to
+//   move is rendered smaller at once where its view would not fit (each view's cost per pixel is
+//   measured), and one at rest gets its size back through a view built a few rows at a time in
+//   what the frames leave, shown once complete: neither makes a frame late.
 #pragma once
 
 #include "foveal/gaze/landing.h"
