@@ -45,15 +45,19 @@ def run(scene, rec, speed, keep, a):
     duration = min(a.duration, a.max_angle / abs(speed))
     count = int(duration * a.fps) + 1
     first = np.searchsorted(t, a.start)
-    frames = []
-    last = None
-    for k in range(count):
-        now = a.start + k / a.fps
+
+    def push_until(now):  # the samples the tracker has delivered by `now`
+        nonlocal first
         end = np.searchsorted(t, now, side="right")
         for i in range(first, end):
             s = samples[i]
             loop.push(float(t[i]), (float(s["x"]) * sx, float(s["y"]) * sy) if s["valid"] else None)
         first = end
+
+    frames = []
+    last = None
+    for k in range(count):
+        push_until(a.start + k / a.fps)
         view = camera.orbit(speed * k / a.fps)
         f = loop.frame(camera=view)
         frames.append((f.ms, f.budget_ms, f.fovea_converged, f.kept_pixels, f.image.shape[1], f.image.shape[0]))
@@ -63,12 +67,7 @@ def run(scene, rec, speed, keep, a):
     # few rows at a time while the smaller view is shown
     rest = []
     for k in range(int(a.rest * a.fps)):
-        now = a.start + (count + k) / a.fps
-        end = np.searchsorted(t, now, side="right")
-        for i in range(first, end):
-            s = samples[i]
-            loop.push(float(t[i]), (float(s["x"]) * sx, float(s["y"]) * sy) if s["valid"] else None)
-        first = end
+        push_until(a.start + (count + k) / a.fps)
         r = loop.frame(camera=view)
         rest.append((r.ms, r.budget_ms, r.rebuilding, r.image.shape[1]))
     back = next((k for k, (_, _, _, w) in enumerate(rest) if w == width), None)

@@ -67,11 +67,34 @@ def test_a_moving_camera_keeps_the_ao_it_still_sees(box):
     _, kept = orbit(True)
     assert all(f.new_view for f in kept)
     assert all(f.kept_pixels > 0 for f in kept) and kept[-1].fovea_converged > 0.9
-    assert not any(f.rebuilding for f in kept)  # (a full size is built only while the camera rests)
     _, fresh = orbit(False)
     assert all(f.kept_pixels == 0 for f in fresh)  # (how soon a fresh fovea converges depends on the machine)
     with pytest.raises(ValueError, match="camera"):
         foveal.Loop(box, size=(16, 10), max_rays=4, device="cpu").frame(camera="no such camera")
+
+
+def test_a_resting_camera_gets_its_size_back_over_several_frames():
+    # The sphere over the plane at 1280x800 with a 10 ms budget: an orbiting camera renders smaller,
+    # and at rest the full size is built over several frames, the smaller image shown meanwhile
+    scene = foveal.Scene("builtin:sphere-plane")
+    loop = foveal.Loop(scene, size=(1280, 800), max_rays=16, device="cpu", frame_budget_ms=10)
+    camera = scene.cameras[0]
+    frames = [loop.frame(gaze=(640, 400), t=k / 100, camera=camera.orbit(0.5 * k)) for k in range(9)]
+    if frames[-1].image.shape[1] == 1280:
+        pytest.skip("this machine traces 1280x800 surfaces within the 10 ms budget: nothing to lower")
+    assert not any(f.rebuilding for f in frames)  # a moving camera builds no full size
+    loop.budget_ms = 40  # (a budget the smaller view leaves time in, as in the C++ test)
+    rest = camera.orbit(4)
+    shown = []
+    for k in range(400):
+        f = loop.frame(gaze=(640, 400), t=1 + k / 25, camera=rest)
+        shown.append((f.rebuilding, f.image.shape[1], f.new_view))
+        if f.image.shape[1] == 1280:
+            break
+    building = [w for r, w, _ in shown if r]
+    assert len(building) > 1 and all(w < 1280 for w in building)  # several frames, the smaller image shown
+    assert shown[-1][1] == 1280 and shown[-1][2]  # then the full size, as a new view
+    assert 500 <= 40 * shown.index(next(s for s in shown if s[0]))  # after half a second at rest
 
 
 def test_frames_release_the_gil(box):
