@@ -75,6 +75,9 @@ void validate(const EventParams& p) {
   require_positive(p.min_peak_deg_s, "min_peak_deg_s");
   validate(p.slow_pursuit);
   require_positive(p.pursuit_keep, "pursuit_keep");
+  require_non_negative(p.pursuit_edge_s, "pursuit_edge_s");
+  require_non_negative(p.saccade_trough, "saccade_trough");
+  if (p.saccade_trough > 1) fail("saccade_trough: {} is above 1", p.saccade_trough);
   if (p.pursuit_keep > 1) fail("pursuit_keep: {} is above 1", p.pursuit_keep);
   require_non_negative(p.settle_s, "settle_s");
   require_non_negative(p.context_s, "context_s");
@@ -574,10 +577,16 @@ void label_saccades_nh(const Signal& s, const EventParams& p, const std::vector<
       offset = 0.7 * onset + 0.3 * (mean + 3 * sd);
     }
     // Offset: forward to the first sample below the offset threshold, or to the first velocity
-    // trough below the peak threshold, whichever comes first: the oscillation after the trough
-    // is the PSO, not the saccade
+    // trough below the peak threshold (nhr: below `saccade_trough` of the saccade's own peak
+    // velocity), whichever comes first: the oscillation after the trough is the PSO, not the saccade
+    double trough = peak;
+    if (onset_above && p.saccade_trough > 0) {
+      float top = 0;
+      for (size_t k = a; k <= p1; ++k) top = std::max(top, v[k]);
+      trough = p.saccade_trough * top;
+    }
     size_t b = p1;
-    while (b + 1 < n && usable(b + 1) && v[b] >= offset && !(v[b] < peak && v[b + 1] > v[b])) ++b;
+    while (b + 1 < n && usable(b + 1) && v[b] >= offset && !(v[b] < trough && v[b + 1] > v[b])) ++b;
     const double duration = (b - a + 1) * s.dt;
     if (duration < min_saccade) {
       i = b;
@@ -656,6 +665,11 @@ void label_pursuit_in_intervals(const Signal& s, const EventParams& p, std::vect
   FitScratch scratch;
   std::vector<float> slow(s.n, NAN);  // squared speeds (°/s)², compared with squared thresholds
   const FitOutput squared_speed{&scales, slow.data(), nullptr, true};
+  // The wide window's speed rises before a pursuit begins and falls after it ends: a run's edges
+  // are set by a shorter window's speed (computed only for the intervals that hold a run)
+  const LineScales edge_scales(half_width(p.pursuit_edge_s, s.dt), s.dt);
+  std::vector<float> edge(s.n, NAN);
+  const FitOutput edge_speed{&edge_scales, edge.data(), nullptr, true};
   const double min_pursuit = pursuit.min_s - 1e-6;
   const double keep = p.pursuit_keep, relax = p.context_relax, cos_min = p.context_cos, relax_min = p.context_min_fraction;
   const size_t settle = static_cast<size_t>(std::lround(p.settle_s / s.dt));
@@ -673,17 +687,22 @@ void label_pursuit_in_intervals(const Signal& s, const EventParams& p, std::vect
       const double kept = keep * keep * velocity * velocity;
       while (j < end && slow[j] > kept) ++j;
       while (i > start && slow[i - 1] > kept) --i;
+      size_t a = i, b = j;  // the run, its edges where the shorter window's speed passes keep·velocity
+      if (p.pursuit_edge_s > 0) {
+        if (!std::isfinite(edge[start])) fit_run(s, start, end, {&edge_speed, 1}, scratch);
+        while (a < b && !(edge[a] > kept)) ++a;
+        while (b > a && !(edge[b - 1] > kept)) --b;
+      }
       const bool after_saccade = start > 0 && moving(start - 1);
-      const size_t from = after_saccade ? std::max(i, std::min(j, start + settle)) : i;  // the eye settling after a saccade does not count
-      const double duration = (j - from) * s.dt;
-      const double travelled = angle_between_deg(s.dir[i], s.dir[j - 1]);
-      bool ok = duration >= min_s && travelled >= pursuit.travel_fraction * velocity * (j - i) * s.dt;
+      const size_t from = after_saccade ? std::max(a, std::min(b, start + settle)) : a;  // the eye settling after a saccade does not count
+      const double duration = b > from ? (b - from) * s.dt : 0.0;
+      bool ok = duration >= min_s && angle_between_deg(s.dir[a], s.dir[b - 1]) >= pursuit.travel_fraction * velocity * (b - a) * s.dt;
       if (ok && along) {
-        const glm::dvec3 d = s.dir[j - 1] - s.dir[i];
+        const glm::dvec3 d = s.dir[b - 1] - s.dir[a];
         ok = glm::dot(d, *along) >= cos_min * glm::length(d) * glm::length(*along);
       }
       if (ok) {
-        for (size_t k = i; k < j; ++k) labels[k] = EventLabel::pursuit;
+        for (size_t k = a; k < b; ++k) labels[k] = EventLabel::pursuit;
         labelled = true;
       }
       i = j;

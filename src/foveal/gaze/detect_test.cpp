@@ -370,9 +370,12 @@ TEST(Detect, RecommendedDetectorOnTheStandardSignal) {
   EXPECT_EQ(of(d, EventLabel::blink).size(), 1u);
   const auto pursuits = of(d, EventLabel::pursuit);
   ASSERT_EQ(pursuits.size(), 1u);
-  // The 250 ms line's velocity rises before the ramp does: its edges come up to 60 ms early/late
-  EXPECT_NEAR(pursuits[0]->onset_s - 100, s.truth[3].onset_s, 0.06);
-  EXPECT_NEAR(pursuits[0]->duration_s, 0.5, 0.12);
+  // The 400 ms line's velocity rises 200 ms before the ramp does (its edges alone came 93 ms early);
+  // the edges are the 100 ms line's, up to 30 ms early/late
+  fmt::print("pursuit from {:.3f} s for {:.3f} s (the ramp: {:.3f} s, 0.5 s)\n", pursuits[0]->onset_s - 100, pursuits[0]->duration_s,
+             s.truth[3].onset_s);
+  EXPECT_NEAR(pursuits[0]->onset_s - 100, s.truth[3].onset_s, 0.03);
+  EXPECT_NEAR(pursuits[0]->duration_s, 0.5, 0.06);
 }
 
 // ivvt as a labelling: the causal filter's view of the standard signal — pursuit once the ramp has
@@ -394,11 +397,17 @@ TEST(Detect, TheCausalFilterAsALabelling) {
   EXPECT_TRUE(std::equal(p.labels.begin(), p.labels.end(), d.labels.begin()));
 }
 
-// nhr's saccades begin at the first sample above the onset threshold, not at the crossing's sample
-// below it (nh's rule): with its 10 ms velocity filter the saccade's rise reaches that sample early,
-// and against the coders of the IRF and Lund 2013 training recordings its onsets came 1.7 ms early
-// on average (every recording and coder between −0.3 and −4 ms). Now the mean is within 0.75 ms.
-TEST(Detect, RecommendedSaccadeOnsetsAgreeWithTheCodersInTime) {
+namespace {
+
+// nhr against the coders of the IRF and Lund 2013 training recordings: the mean over recordings and
+// coders (as the benchmark's tables average) of the saccades' onset differences (test − coder, ms)
+// and of the saccade and PSO sample κ (PSO: where the coder marks PSO), with `params`; `scored` = 0
+// where no labelled recording is present.
+struct CoderTiming {
+  double onset_ms = 0, saccade_kappa = 0, pso_kappa = 0;
+  int scored = 0, pso_scored = 0;
+};
+CoderTiming timing_against_the_coders(const EventParams& params) {
   const std::string data = std::string(FOVEAL_DATA_DIR) + "/eye-movements";
   struct Case {
     std::string samples;
@@ -419,8 +428,7 @@ TEST(Detect, RecommendedSaccadeOnsetsAgreeWithTheCodersInTime) {
       cases.push_back({name, {name, name.substr(0, name.size() - 7) + "_RA.csv"}, {38, 30, 67, 1024, 768}});
     }
   }
-  double sum = 0;
-  int scored = 0;
+  CoderTiming out;
   for (const Case& c : cases) {
     if (!std::filesystem::exists(c.samples)) continue;
     ReadOptions read;
@@ -430,21 +438,50 @@ TEST(Detect, RecommendedSaccadeOnsetsAgreeWithTheCodersInTime) {
     read.display_height_cm = c.display.height_cm;
     read.display_distance_cm = c.display.distance_cm;
     const Recording r = read_recording(c.samples, read);
-    const EventDetection d =
-        detect_events(r, GazeGeometry(c.display, r.screen_px), kRecommendedEventMethod, EventParams{}, FixationParams{});
+    const EventDetection d = detect_events(r, GazeGeometry(c.display, r.screen_px), kRecommendedEventMethod, params, FixationParams{});
     std::vector<double> t(r.samples.size());
     for (size_t i = 0; i < t.size(); ++i) t[i] = r.samples[i].t_s;
     for (const std::string& coder : c.coders) {
       const CoderEvaluation scored_against = evaluate_against_coders(d.labels, t, read_label_file(coder));
       const ClassScore& saccades = scored_against.evaluation.of(EventLabel::saccade);
-      ASSERT_GE(saccades.hits, 1u) << coder;
-      sum += saccades.rto_ms;
-      ++scored;
+      EXPECT_GE(saccades.hits, 1u) << coder;
+      out.onset_ms += saccades.rto_ms;
+      out.saccade_kappa += saccades.kappa;
+      ++out.scored;
+      const ClassScore& psos = scored_against.evaluation.of(EventLabel::pso);
+      if (psos.reference_samples > 0) out.pso_kappa += psos.kappa, ++out.pso_scored;
     }
   }
-  if (scored == 0) GTEST_SKIP() << "skipped: no labelled recordings under " << data;
-  // (the mean over recordings and coders, as the benchmark's tables average)
-  EXPECT_LT(std::abs(sum / scored), 0.75) << "mean saccade onset difference " << sum / scored << " ms over " << scored;
+  if (out.scored > 0) out.onset_ms /= out.scored, out.saccade_kappa /= out.scored;
+  if (out.pso_scored > 0) out.pso_kappa /= out.pso_scored;
+  return out;
+}
+
+}  // namespace
+
+// nhr's saccades begin at the first sample above the onset threshold, not at the crossing's sample
+// below it (nh's rule): with its 10 ms velocity filter the saccade's rise reaches that sample early,
+// and against the coders of the IRF and Lund 2013 training recordings its onsets came 1.7 ms early
+// on average (every recording and coder between −0.3 and −4 ms). Now the mean is within 0.75 ms.
+TEST(Detect, RecommendedSaccadeOnsetsAgreeWithTheCodersInTime) {
+  const CoderTiming timing = timing_against_the_coders(EventParams{});
+  if (timing.scored == 0) GTEST_SKIP() << "skipped: no labelled recordings under " << FOVEAL_DATA_DIR;
+  EXPECT_LT(std::abs(timing.onset_ms), 0.75) << "mean saccade onset difference " << timing.onset_ms << " ms over " << timing.scored;
+}
+
+// nhr's saccades end at their first velocity trough below a quarter of their own peak velocity
+// (nh: below the recording's peak threshold, which a large saccade's first dip can lie above, and
+// the saccade then ran on into its PSO). Against the same coders, where the saccade ends and the PSO
+// begins agrees better: PSO κ higher, saccade κ no lower.
+TEST(Detect, RecommendedSaccadesEndWhereTheCodersPsoBegins) {
+  EventParams nh_rule;
+  nh_rule.saccade_trough = 0;
+  const CoderTiming timing = timing_against_the_coders(EventParams{}), before = timing_against_the_coders(nh_rule);
+  if (timing.scored == 0) GTEST_SKIP() << "skipped: no labelled recordings under " << FOVEAL_DATA_DIR;
+  fmt::print("PSO kappa {:.3f} (nh's rule {:.3f}) over {}; saccade kappa {:.3f} ({:.3f}) over {}\n", timing.pso_kappa, before.pso_kappa,
+             timing.pso_scored, timing.saccade_kappa, before.saccade_kappa, timing.scored);
+  EXPECT_GT(timing.pso_kappa, before.pso_kappa + 0.01);
+  EXPECT_GE(timing.saccade_kappa, before.saccade_kappa);
 }
 
 // Every detector's velocity is Savitzky–Golay's first derivative (= the slope of the least-squares
