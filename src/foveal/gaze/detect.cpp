@@ -696,7 +696,8 @@ void label_pursuit_in_intervals(const Signal& s, const EventParams& p, std::vect
       const bool after_saccade = start > 0 && moving(start - 1);
       const size_t from = after_saccade ? std::max(a, std::min(b, start + settle)) : a;  // the eye settling after a saccade does not count
       const double duration = b > from ? (b - from) * s.dt : 0.0;
-      bool ok = duration >= min_s && angle_between_deg(s.dir[a], s.dir[b - 1]) >= pursuit.travel_fraction * velocity * (b - a) * s.dt;
+      bool ok =
+          b > a && duration >= min_s && angle_between_deg(s.dir[a], s.dir[b - 1]) >= pursuit.travel_fraction * velocity * (b - a) * s.dt;
       if (ok && along) {
         const glm::dvec3 d = s.dir[b - 1] - s.dir[a];
         ok = glm::dot(d, *along) >= cos_min * glm::length(d) * glm::length(*along);

@@ -177,6 +177,29 @@ TEST(Detect, MethodNamesAndBadParameters) {
   EventParams p;
   p.pursuit.velocity_deg_s = 0;
   EXPECT_THROW(validate(p), Error);
+  for (auto bad : {+[](EventParams& q) { q.saccade_trough = 1.5; }, +[](EventParams& q) { q.saccade_trough = -0.1; },
+                   +[](EventParams& q) { q.pursuit_edge_s = -0.1; }, +[](EventParams& q) { q.pursuit_edge_s = NAN; }}) {
+    EventParams q;
+    bad(q);
+    EXPECT_THROW(validate(q), Error);
+  }
+}
+
+// nhr with no minimum pursuit duration, on noise up to 0.3° RMS: a candidate run whose edges (the
+// shorter line's speed) leave nothing of it is not a pursuit, and every sample keeps a label (the
+// sanitizer build runs this for reads outside the samples).
+TEST(Detect, PursuitEdgesThatLeaveNothingOfARun) {
+  const Synthetic s = standard_signal();
+  EventParams p;
+  p.slow_pursuit.min_s = 0;
+  p.context_min_fraction = 0;
+  for (double noise : {0.0, 0.05, 0.3}) {
+    const Recording r = s.recording({noise});
+    const EventDetection d = detect_events(r, GazeGeometry(kDisplay, r.screen_px), EventMethod::nhr, p, FixationParams{});
+    ASSERT_EQ(d.labels.size(), r.samples.size());
+    for (const DetectedEvent& e : d.events) EXPECT_LE(e.first, e.last);
+    EXPECT_FALSE(std::ranges::none_of(d.labels, [](EventLabel l) { return l == EventLabel::pursuit; })) << noise;
+  }
 }
 
 TEST(Detect, SameLabelsWhateverTheClockOffset) {
