@@ -88,8 +88,9 @@ struct EventParams {
   double robust_onset_k = 4.5;            // … onset threshold median + k·1.4826·MAD
   double robust_pso_window_s = 0.020;     // a PSO begins within this time of the saccade's offset (nh: pso_window_s, 40 ms)
   double min_peak_deg_s = 10;             // floors (a noise-free recording's MAD is 0; nh, nhp too): the peak's, half of it the onset's
-  double saccade_trough =
-      0.25;  // a saccade ends at its first velocity trough below this fraction of its peak velocity (0, and nh: below the peak threshold)
+  // A saccade ends at its first velocity trough below this fraction of its peak velocity (0, and nh:
+  // below the peak threshold)
+  double saccade_trough = 0.25;
   PursuitParams slow_pursuit{2.5, 0.400, 0.200, 0.5};  // speed of a line over the window, inside one intersaccadic interval
   double pursuit_keep = 0.7;                           // a pursuit goes on while its speed stays above this fraction of the threshold
   double pursuit_edge_s = 0.100;       // … and a pursuit's edges are where a line over this window passes it (0: the window's)
