@@ -4,6 +4,7 @@
 #include "foveal/gaze/detect.h"
 #include "foveal/gaze/fixation.h"
 #include "foveal/io/plot.h"
+#include "foveal/util/cpu_share.h"
 #include "foveal/util/error.h"
 #include "foveal/util/stats.h"
 #include "foveal/util/timer.h"
@@ -214,12 +215,24 @@ LatencyLoop run_deadline(const LatencyRun& run, const Segment& s, const LatencyP
   std::vector<LatencyFramePart> parts;
   for (double t = s.begin; t < s.end;) {
     for (; next < s.t.size() && s.t[next] + s.latency_s <= t; ++next) rt.push_gaze(s.t[next], s.px[next]);
+    // Wall clock: the threads' times and the page faults around the frame (read outside its timing)
+    const bool wall = p.clock == LoopClock::wall;
+    const Timer window;
+    const ThreadTimes threads_before = wall ? read_thread_times() : ThreadTimes{};
+    const CpuTimes cpu_before = wall ? read_cpu_times() : CpuTimes{};
     LoopFrame f = rt.frame(run.camera);
     frame_ms.push_back(f.cost_ms);
     loop.frames_late += f.late ? 1 : 0;
-    if (p.clock == LoopClock::wall)
+    if (wall) {
+      const CpuTimes cpu_after = read_cpu_times();
+      const ThreadTimes threads_after = read_thread_times();
+      const double window_ms = window.ms();
       parts.push_back({static_cast<int>(parts.size()), t, f.ms, f.maps_ms, f.plan_ms, f.trace_ms, f.compose_ms,
-                       std::max(0.0, f.rays_end_ms - f.deadline_ms), std::max(0.0, (f.ms - f.rays_end_ms) - f.compose_planned_ms), ""});
+                       std::max(0.0, f.rays_end_ms - f.deadline_ms), std::max(0.0, (f.ms - f.rays_end_ms) - f.compose_planned_ms), "",
+                       longest_wait_ms(threads_before, threads_after),
+                       cpu_ms(threads_before, threads_after, current_thread_id()) / window_ms,
+                       cpu_before.known && cpu_after.known ? cpu_after.faults - cpu_before.faults : NAN});
+    }
     LatencyFrame lf;
     lf.start_s = t;
     lf.cost_ms = f.cost_ms;
@@ -311,6 +324,8 @@ std::string late_summary(const std::vector<LatencyFramePart>& late) {
   return out;
 }
 
+nlohmann::json number_or_null(double v) { return std::isnan(v) ? nlohmann::json(nullptr) : nlohmann::json(v); }
+
 std::string ms_or_dash(std::optional<double> v) { return v ? fmt::format("{:.0f}", *v) : "—"; }
 
 nlohmann::json loop_json(const LatencyLoop& l) {
@@ -357,7 +372,10 @@ nlohmann::json loop_json(const LatencyLoop& l) {
                                   {"trace_ms", f.trace_ms},
                                   {"compose_ms", f.compose_ms},
                                   {"rays_over_ms", f.rays_over_ms},
-                                  {"compose_over_ms", f.compose_over_ms}});
+                                  {"compose_over_ms", f.compose_over_ms},
+                                  {"cpu_wait_ms", number_or_null(f.cpu_wait_ms)},
+                                  {"cpu_share", number_or_null(f.cpu_share)},
+                                  {"page_faults", number_or_null(f.faults)}});
   }
   return j;
 }
@@ -388,6 +406,27 @@ std::vector<LatencyFramePart> late_frame_parts(const std::vector<LatencyFramePar
     late.push_back(f);
   }
   return late;
+}
+
+std::string late_threads_summary(const std::vector<LatencyFramePart>& late, double budget_ms) {
+  double wait = 0, faults_lo = INFINITY, faults_hi = 0, share_lo = INFINITY, share_hi = 0;
+  int known = 0, explained = 0;
+  for (const LatencyFramePart& f : late) {
+    if (std::isnan(f.cpu_wait_ms) || std::isnan(f.cpu_share) || std::isnan(f.faults)) continue;
+    ++known;
+    wait = std::max(wait, f.cpu_wait_ms);
+    explained += f.ms - f.cpu_wait_ms <= budget_ms ? 1 : 0;
+    faults_lo = std::min(faults_lo, f.faults);
+    faults_hi = std::max(faults_hi, f.faults);
+    share_lo = std::min(share_lo, f.cpu_share);
+    share_hi = std::max(share_hi, f.cpu_share);
+  }
+  if (!known) return "";
+  const auto range = [](double lo, double hi, const char* spec) {
+    return fmt::format(fmt::runtime(spec), lo) + (hi - lo > 0.05 ? fmt::format(fmt::runtime(std::string("–") + spec), hi) : "");
+  };
+  return fmt::format("run delay ≤ {:.1f} ms ({} of {} on time without it), page faults {}, the calling thread on a CPU {} of the time",
+                     wait, explained, known, range(faults_lo, faults_hi, "{:.0f}"), range(share_lo, share_hi, "{:.1f}"));
 }
 
 std::optional<double> LatencyLoop::median_converged_ms() const {
@@ -561,10 +600,15 @@ LatencyReport run_latency_bench(const LatencyRun& run, const std::vector<Recordi
       jr[l.name] = loop_json(l);
     }
     md += "\n";
-    std::string late;
-    for (const LatencyLoop& l : r.loops)
-      if (!l.late.empty()) late += fmt::format("{}{}: {}", late.empty() ? "" : "; ", l.name, late_summary(l.late));
+    std::string late, waits;
+    for (const LatencyLoop& l : r.loops) {
+      if (l.late.empty()) continue;
+      late += fmt::format("{}{}: {}", late.empty() ? "" : "; ", l.name, late_summary(l.late));
+      const std::string w = late_threads_summary(l.late, l.budget_ms);
+      if (!w.empty()) waits += fmt::format("{}{}: {}", waits.empty() ? "" : "; ", l.name, w);
+    }
     if (!late.empty()) md += fmt::format("Late frames, where the pause fell (docs/realtime.md): {}.\n\n", late);
+    if (!waits.empty()) md += fmt::format("The late frames' threads (docs/realtime.md): {}.\n\n", waits);
     j["recordings"].push_back(jr);
   }
   report.markdown = md;

@@ -82,9 +82,20 @@ struct LatencyFramePart {
   double rays_over_ms = 0;     // rays stopped this long after their deadline (0: on time)
   double compose_over_ms = 0;  // composing took this much longer than planned (0: not)
   std::string part;            // late frames: maps, planning, tracing or composing
+  // Wall clock, the process's threads during the frame (NaN where they cannot be read): the longest
+  // any waited, runnable, for a CPU (the kernel's run delay: a late frame with ms − cpu_wait_ms ≤
+  // the budget would have been on time had this machine's kernel not kept that thread off its
+  // core), the share of the wall time between the two readings around the frame that the thread
+  // calling frame() was on a CPU (its maps, planning and composing run there), and the process's
+  // page faults
+  double cpu_wait_ms = NAN, cpu_share = NAN, faults = NAN;
 };
 // The late frames (ms > budget_ms) of a loop's frames, each with its part (pure; tests).
 std::vector<LatencyFramePart> late_frame_parts(const std::vector<LatencyFramePart>& frames, double budget_ms);
+// The late frames' threads, for the bench's account: "run delay ≤ 7.9 ms (1 of 2 on time without
+// it), page faults 0–3, the calling thread on a CPU 0.9–1.0 of the time" ("" where none was
+// read; pure; tests).
+std::string late_threads_summary(const std::vector<LatencyFramePart>& late, double budget_ms);
 
 struct LatencyLoop {
   std::string name;

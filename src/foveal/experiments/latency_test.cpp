@@ -6,6 +6,8 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 namespace foveal {
 namespace {
 
@@ -33,6 +35,38 @@ TEST(LatencyLateFrames, EachLateFrameNamesThePartItsPauseFellInto) {
   EXPECT_EQ(late[3].part, "planning");
   EXPECT_EQ(late[4].part, "tracing");
   EXPECT_TRUE(late_frame_parts({}, 16.7).empty());
+}
+
+// The late frames' threads: a frame that a wait for a CPU explains would have been on time without
+// it (19.7 − 7.9 ≤ 16.7; 19.6 − 1.2 > 16.7); a frame whose threads were not read is left out
+TEST(LatencyLateFrames, TheThreadsSayWhetherTheKernelKeptThemWaiting) {
+  std::vector<LatencyFramePart> late{frame(20, 19.7, 0, 0.1, 12.5, 7.0, 0, 6.1), frame(21, 19.6, 0, 0.1, 15.8, 1.0, 3.0, 0.2),
+                                     frame(22, 17.3, 7.2, 0.1, 8.0, 1.0, 1.1, 0.1)};
+  const auto threads = [](LatencyFramePart& f, double wait, double share, double faults) {
+    f.cpu_wait_ms = wait;
+    f.cpu_share = share;
+    f.faults = faults;
+  };
+  threads(late[0], 7.94, 0.6, 0);
+  threads(late[1], 1.2, 1.0, 3);
+  EXPECT_EQ(late_threads_summary(late, 1000.0 / 60),
+            "run delay ≤ 7.9 ms (1 of 2 on time without it), page faults 0–3, the calling thread on a CPU 0.6–1.0 of the time");
+  threads(late[0], 0.0, 0.96, 0);
+  threads(late[1], NAN, NAN, NAN);
+  threads(late[2], 0.7, 1.0, 0);  // 17.3 − 0.7 ≤ 16.7
+  EXPECT_EQ(late_threads_summary(late, 1000.0 / 60),
+            "run delay ≤ 0.7 ms (1 of 2 on time without it), page faults 0, the calling thread on a CPU 1.0 of the time");
+  threads(late[0], NAN, NAN, NAN);
+  threads(late[2], NAN, NAN, NAN);
+  EXPECT_EQ(late_threads_summary(late, 1000.0 / 60), "");
+  // late_frame_parts keeps each frame's threads
+  std::vector<LatencyFramePart> frames{frame(0, 15, 0, 0.1, 13, 0.8, 0, 0), frame(1, 18, 0, 0.1, 13, 4.5, 0, 3.6)};
+  threads(frames[1], 3.7, 0.8, 2);
+  const std::vector<LatencyFramePart> kept = late_frame_parts(frames, 1000.0 / 60);
+  ASSERT_EQ(kept.size(), 1u);
+  EXPECT_DOUBLE_EQ(kept[0].cpu_wait_ms, 3.7);
+  EXPECT_DOUBLE_EQ(kept[0].cpu_share, 0.8);
+  EXPECT_DOUBLE_EQ(kept[0].faults, 2);
 }
 
 // The loop's own plan of a wall-clock frame, which the account reads: the deadline inside the

@@ -5,9 +5,16 @@
 #include "foveal/util/text.h"
 
 #include <algorithm>
+#include <cmath>
+#include <filesystem>
 #include <optional>
 #include <string>
 #include <vector>
+
+#ifdef __linux__
+#include <sys/syscall.h>
+#include <unistd.h>
+#endif
 
 namespace foveal {
 
@@ -53,7 +60,9 @@ CpuTimes parse_cpu_times(std::string_view proc_stat, std::string_view self_stat)
   const std::vector<std::string_view> fields = first_line_fields(self_stat.substr(close + 1));
   if (fields.size() < 13) return t;
   const std::optional<double> utime = counter(fields[11]), stime = counter(fields[12]);
-  if (!utime || !stime) return t;
+  const std::optional<double> minflt = counter(fields[7]), majflt = counter(fields[9]);
+  if (!utime || !stime || !minflt || !majflt) return t;
+  t.faults = *minflt + *majflt;
   t.total = user + nice + system + idle + iowait + irq + softirq + steal;
   t.busy = user + nice + system + irq + softirq;
   t.steal = steal;
@@ -72,6 +81,61 @@ CpuShare cpu_share(const CpuTimes& before, const CpuTimes& after) {
   s.others = std::clamp(others / total, 0.0, 1.0);
   s.steal = std::clamp((after.steal - before.steal) / total, 0.0, 1.0);
   return s;
+}
+
+std::optional<ThreadTime> parse_schedstat(std::string_view schedstat) {
+  const std::vector<std::string_view> f = first_line_fields(schedstat);
+  if (f.size() < 2) return std::nullopt;
+  const std::optional<double> run = counter(f[0]), wait = counter(f[1]);
+  if (!run || !wait) return std::nullopt;
+  return ThreadTime{*run, *wait};
+}
+
+ThreadTimes read_thread_times() {
+  ThreadTimes times;
+  std::error_code ec;
+  for (const auto& entry : std::filesystem::directory_iterator("/proc/self/task", ec)) {
+    const std::optional<double> tid = text::to_number(entry.path().filename().string());
+    if (!tid) continue;
+    // A thread that ended since the listing has no file: left out
+    if (const std::optional<ThreadTime> t = parse_schedstat(read_or_empty((entry.path() / "schedstat").c_str())))
+      times[static_cast<long>(*tid)] = *t;
+  }
+  return times;
+}
+
+namespace {
+
+// Over the threads in both readings: combine(so far, the thread's change in `field`, ms)
+template <typename Combine>
+double over_threads(const ThreadTimes& before, const ThreadTimes& after, double ThreadTime::*field, Combine combine, long only = -1) {
+  double out = NAN;
+  for (const auto& [tid, t] : after) {
+    const auto b = before.find(tid);
+    if (b == before.end() || (only >= 0 && tid != only)) continue;
+    const double ms = std::max(0.0, t.*field - b->second.*field) / 1e6;
+    out = std::isnan(out) ? ms : combine(out, ms);
+  }
+  return out;
+}
+
+}  // namespace
+
+double longest_wait_ms(const ThreadTimes& before, const ThreadTimes& after) {
+  return over_threads(before, after, &ThreadTime::wait_ns, [](double a, double b) { return std::max(a, b); });
+}
+
+double cpu_ms(const ThreadTimes& before, const ThreadTimes& after, long only) {
+  return over_threads(
+      before, after, &ThreadTime::run_ns, [](double a, double b) { return a + b; }, only);
+}
+
+long current_thread_id() {
+#ifdef __linux__
+  return static_cast<long>(::syscall(SYS_gettid));
+#else
+  return -1;
+#endif
 }
 
 }  // namespace foveal

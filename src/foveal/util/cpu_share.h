@@ -9,16 +9,19 @@
 #pragma once
 
 #include <cmath>
+#include <optional>
 #include <string_view>
+#include <unordered_map>
 
 namespace foveal {
 
 // The counters at one moment, in clock ticks (known = false where they could not be read).
 struct CpuTimes {
-  double total = 0;  // all CPUs: user, nice, system, idle, iowait, irq, softirq, steal
-  double busy = 0;   // of which not idle, waiting for I/O or stolen
-  double steal = 0;  // taken by the hypervisor for other machines
-  double self = 0;   // this process (all its threads): user and system
+  double total = 0;   // all CPUs: user, nice, system, idle, iowait, irq, softirq, steal
+  double busy = 0;    // of which not idle, waiting for I/O or stolen
+  double steal = 0;   // taken by the hypervisor for other machines
+  double self = 0;    // this process (all its threads): user and system
+  double faults = 0;  // this process's page faults, minor and major (a count, not ticks)
   bool known = false;
 };
 
@@ -34,5 +37,26 @@ struct CpuShare {
   double steal = NAN;   // stolen by the hypervisor
 };
 CpuShare cpu_share(const CpuTimes& before, const CpuTimes& after);
+
+// Each thread of this process: how long it has run, and how long it has waited, runnable, for a
+// CPU — the kernel's run delay (Linux: /proc/self/task/TID/schedstat, "run_ns wait_ns timeslices").
+// A thread that the kernel takes off its core for something else (another process, a kernel
+// thread) waits there; one that sleeps or blocks does not. Around a frame they tell whether a late
+// frame's threads were kept off their cores by this machine's kernel, or ran the whole time and
+// the work itself took longer.
+struct ThreadTime {
+  double run_ns = 0, wait_ns = 0;
+};
+using ThreadTimes = std::unordered_map<long, ThreadTime>;  // thread id → its times
+// One schedstat file's times (nullopt where malformed).
+std::optional<ThreadTime> parse_schedstat(std::string_view schedstat);
+// Every thread's times now (empty where /proc is not there).
+ThreadTimes read_thread_times();
+// Between two readings, over the threads in both (NaN where none is): the longest any thread
+// waited for a CPU, and the time on a CPU of all threads together or of thread `only`, ms.
+double longest_wait_ms(const ThreadTimes& before, const ThreadTimes& after);
+double cpu_ms(const ThreadTimes& before, const ThreadTimes& after, long only = -1);
+// The calling thread's id in those readings (−1 where there is none).
+long current_thread_id();
 
 }  // namespace foveal

@@ -6,6 +6,10 @@
 #include <cmath>
 #include <chrono>
 #include <ctime>
+#include <thread>
+
+#include <sys/syscall.h>
+#include <unistd.h>
 
 namespace foveal {
 namespace {
@@ -21,6 +25,7 @@ TEST(CpuShare, OthersAndStealFromTwoReadings) {
   EXPECT_DOUBLE_EQ(b.total - a.total, 1000);
   EXPECT_DOUBLE_EQ(b.busy - a.busy, 580);
   EXPECT_DOUBLE_EQ(b.self - a.self, 250);
+  EXPECT_DOUBLE_EQ(a.faults, 7 + 9);  // minor and major page faults, the 10th and 12th fields
   const CpuShare s = cpu_share(a, b);
   EXPECT_DOUBLE_EQ(s.others, 0.33);
   EXPECT_DOUBLE_EQ(s.steal, 0.05);
@@ -54,6 +59,59 @@ TEST(CpuShare, OwnWorkIsNotCountedAsOthers) {
   const CpuShare s = cpu_share(a, b);
   EXPECT_GE(s.others, 0);
   EXPECT_LE(s.others, 1);
+}
+
+// A thread's times are schedstat's first two fields ("run_ns wait_ns timeslices"), in nanoseconds
+TEST(CpuShare, ThreadTimesFromSchedstat) {
+  const std::optional<ThreadTime> t = parse_schedstat("571401700 358793 70\n");
+  ASSERT_TRUE(t);
+  EXPECT_DOUBLE_EQ(t->run_ns, 571401700);
+  EXPECT_DOUBLE_EQ(t->wait_ns, 358793);
+  EXPECT_FALSE(parse_schedstat(""));
+  EXPECT_FALSE(parse_schedstat("571401700\n"));
+  EXPECT_FALSE(parse_schedstat("571401700 -3 70\n"));
+  EXPECT_FALSE(parse_schedstat("x 358793 70\n"));
+  // Between two readings, over the threads in both (thread 8 was not there before): the longest
+  // wait 2.5 ms, 4 + 1 ms on a CPU
+  const ThreadTimes a{{7, {10e6, 1e6}}, {9, {20e6, 3e6}}}, b{{7, {14e6, 3.5e6}}, {9, {21e6, 3.2e6}}, {8, {50e6, 9e6}}};
+  EXPECT_DOUBLE_EQ(longest_wait_ms(a, b), 2.5);
+  EXPECT_DOUBLE_EQ(cpu_ms(a, b), 5);
+  EXPECT_DOUBLE_EQ(cpu_ms(a, b, 9), 1);
+  EXPECT_TRUE(std::isnan(cpu_ms(a, b, 8)));
+  EXPECT_TRUE(std::isnan(longest_wait_ms({}, b)) && std::isnan(cpu_ms({}, b)));
+}
+
+// This machine's threads (Linux): the calling thread and a second one are both read, no thread's
+// times go down, and a thread that spins for 0.1 s of its CPU time shows it
+TEST(CpuShare, EveryThreadsTimesAreRead) {
+  const ThreadTimes a = read_thread_times();
+  if (a.empty()) GTEST_SKIP() << "no /proc/self/task/*/schedstat here";
+  const long self = current_thread_id();
+  EXPECT_EQ(self, static_cast<long>(::syscall(SYS_gettid)));
+  EXPECT_TRUE(a.count(self));
+  long other = 0;
+  ThreadTimes start, during;
+  std::thread t([&] {
+    other = current_thread_id();
+    start = read_thread_times();
+    volatile double sink = 0;
+    const std::clock_t begin = std::clock();
+    const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(10);
+    while (std::clock() - begin < CLOCKS_PER_SEC / 10 && std::chrono::steady_clock::now() < give_up) sink = sink + std::sqrt(sink + 1);
+    during = read_thread_times();
+  });
+  t.join();
+  ASSERT_TRUE(start.count(other) && during.count(self) && during.count(other));
+  EXPECT_GE(during.at(other).run_ns - start.at(other).run_ns, 0.05e9);
+  EXPECT_GE(cpu_ms(start, during, other), 50);
+  const ThreadTimes b = read_thread_times();
+  EXPECT_FALSE(b.count(other));  // ended
+  for (const auto& [tid, times] : b)
+    if (a.count(tid)) {
+      EXPECT_GE(times.run_ns, a.at(tid).run_ns) << "thread " << tid;
+      EXPECT_GE(times.wait_ns, a.at(tid).wait_ns) << "thread " << tid;
+    }
+  EXPECT_GE(longest_wait_ms(a, b), 0);
 }
 
 }  // namespace
