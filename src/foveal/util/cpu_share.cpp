@@ -93,12 +93,14 @@ std::optional<ThreadTime> parse_schedstat(std::string_view schedstat) {
 
 ThreadTimes read_thread_times() {
   ThreadTimes times;
+  // Stepped with an error code, never throwing: a listing that fails part-way gives the threads read
   std::error_code ec;
-  for (const auto& entry : std::filesystem::directory_iterator("/proc/self/task", ec)) {
-    const std::optional<double> tid = text::to_number(entry.path().filename().string());
+  for (std::filesystem::directory_iterator it("/proc/self/task", ec), end; !ec && it != end; it.increment(ec)) {
+    const std::filesystem::path& dir = it->path();
+    const std::optional<double> tid = text::to_number(dir.filename().string());
     if (!tid) continue;
     // A thread that ended since the listing has no file: left out
-    if (const std::optional<ThreadTime> t = parse_schedstat(read_or_empty((entry.path() / "schedstat").c_str())))
+    if (const std::optional<ThreadTime> t = parse_schedstat(read_or_empty((dir / "schedstat").c_str())))
       times[static_cast<long>(*tid)] = *t;
   }
   return times;
