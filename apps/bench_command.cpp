@@ -110,13 +110,16 @@ std::function<int()> add_bench_command(CLI::App& app) {
   auto quality = add_bench_quality_command(*bench);
   auto latency = add_bench_latency_command(*bench);
   auto events = add_bench_events_command(*bench);
+  auto stalls = add_bench_stalls_command(*bench);
   auto* events_cmd = bench->get_subcommand("events");
+  auto* stalls_cmd = bench->get_subcommand("stalls");
   auto* blur_cmd = bench->get_subcommand("blur");
   auto* quality_cmd = bench->get_subcommand("quality");
   auto* latency_cmd = bench->get_subcommand("latency");
   auto run_ao = [o] { return run_bench_ao_command(*o); };
-  return [run_ao, vision, blur, quality, latency, events, ao, blur_cmd, quality_cmd, latency_cmd, events_cmd] {
+  return [run_ao, vision, blur, quality, latency, events, stalls, ao, blur_cmd, quality_cmd, latency_cmd, events_cmd, stalls_cmd] {
     if (latency_cmd->parsed()) return latency();
+    if (stalls_cmd->parsed()) return stalls();
     if (events_cmd->parsed()) return events();
     return ao->parsed() ? run_ao() : blur_cmd->parsed() ? blur() : quality_cmd->parsed() ? quality() : vision();
   };

@@ -28,6 +28,7 @@ std::function<int()> add_bench_blur_command(CLI::App& bench);
 std::function<int()> add_bench_quality_command(CLI::App& bench);
 std::function<int()> add_bench_latency_command(CLI::App& bench);
 std::function<int()> add_bench_events_command(CLI::App& bench);
+std::function<int()> add_bench_stalls_command(CLI::App& bench);
 
 // A library error (util/error.h: it names parameters) in the command line's words: its options.
 std::string cli_words(const std::string& message);

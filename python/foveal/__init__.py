@@ -34,13 +34,14 @@ from ._core import (  # noqa: F401  (re-exported)
     device_available,
     device_description,
     load_image,
+    stalls,
 )
 from . import gaze  # noqa: F401
 from . import gaze as _gaze
 
 __all__ = [
     "Camera", "Display", "Frame", "Loop", "LoopFrame", "Renderer", "Scene", "VisionSimulation", "VisionStep",
-    "compare", "gaze", "load_image", "perceive", "save_image", "device_available", "device_description",
+    "compare", "gaze", "load_image", "perceive", "save_image", "stalls", "device_available", "device_description",
 ]
 __version__ = "0.1.0"
 

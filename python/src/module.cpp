@@ -6,6 +6,7 @@
 // library works, so that other Python threads (a tracker's, a window's) run meanwhile.
 #include "bindings.h"
 
+#include "foveal/experiments/stalls_report.h"
 #include "foveal/impair/profile.h"
 #include "foveal/io/image_io.h"
 #include "foveal/render/outputs.h"
@@ -667,6 +668,26 @@ NB_MODULE(_core, m) {
         save_image(image_from(a), path.string());
       },
       "image"_a, "path"_a, "Write a linear float32 H×W×3 image as the CLI does (.png sRGB; .pfm/.exr exact).");
+  m.def(
+      "stalls",
+      [](double duration_s, int threads, double threshold_ms, double chunk_us, double margin_ms) {
+        validate_stall_margin(margin_ms);
+        StallProbeParams p;
+        p.duration_s = duration_s;
+        p.threads = threads;
+        p.threshold_ms = threshold_ms;
+        p.chunk_us = chunk_us;
+        validate(p);
+        nlohmann::json j;
+        {
+          nb::gil_scoped_release release;
+          j = stalls_json(probe_stalls(p), threshold_ms, margin_ms);
+        }
+        return to_python(j);
+      },
+      "duration_s"_a = 10.0, "threads"_a = 0, "threshold_ms"_a = 1.0, "chunk_us"_a = 100.0, "margin_ms"_a = LoopSettings{}.margin_ms,
+      "How often this machine pauses a working thread, off its CPU or on it (`foveal bench stalls`; docs/realtime.md): the dict "
+      "of its --json.");
   m.def(
       "device_available", [] { return availability().usable; }, "Whether a usable NVIDIA GPU answered.");
   m.def(

@@ -144,3 +144,18 @@ def test_a_gaze_or_fixation_far_from_the_image_is_refused(box):
         with pytest.raises(ValueError, match="fixation"):
             sim.step(fixation=fixation)
     assert sim.step(fixation=(30, 20)).fixation == pytest.approx((30, 20))
+
+
+def test_stalls_probe_the_machine_as_bench_stalls_does():
+    r = foveal.stalls(duration_s=0.3, threads=2)
+    assert r["threads"] == 2 and r["duration_s"] >= 0.25 and r["chunks"] > 100
+    assert r["margin_ms"] == 2.0 and r["threshold_ms"] == 1.0
+    for kind in ("off_cpu", "on_cpu"):
+        assert set(r[kind]) == {"count", "per_minute", "worst_ms", "beyond_margin"}
+    assert len(r["stalls"]) == r["off_cpu"]["count"] + r["on_cpu"]["count"]
+    for s in r["stalls"]:
+        assert s["wall_ms"] >= 1.0 and s["on_cpu"] == (s["cpu_ms"] >= 0.5 * s["wall_ms"])
+    with pytest.raises(ValueError, match="duration_s"):
+        foveal.stalls(duration_s=0)
+    with pytest.raises(ValueError, match="margin_ms"):
+        foveal.stalls(duration_s=0.1, margin_ms=-1)
