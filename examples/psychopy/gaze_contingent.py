@@ -49,6 +49,9 @@ def parse_args(argv=None):
     p.add_argument("--log", default="gaze_contingent_frames.csv", help="per-frame log (CSV)")
     p.add_argument("--summary", default=None, help="write the latency summary as JSON")
     p.add_argument("--fullscreen", action="store_true", help="full screen (ioHub's mouse wants it for exact positions)")
+    p.add_argument("--probe-stalls", type=float, default=0, metavar="SECONDS",
+                   help="first measure for this long how often the machine itself pauses a working thread (foveal.stalls, "
+                        "`foveal bench stalls`): the late frames to expect from it, not from the rendering (default 0: not)")
     return p.parse_args(argv)
 
 
@@ -100,6 +103,14 @@ def main(argv=None) -> int:
     from psychopy import core, event, visual
     from psychopy.iohub import launchHubServer
 
+    machine = None
+    if args.probe_stalls > 0:
+        machine = foveal.stalls(duration_s=args.probe_stalls)
+        machine.pop("stalls")
+        print(f"gaze_contingent: the machine paused a working thread {machine['off_cpu']['count']} times off its CPU and "
+              f"{machine['on_cpu']['count']} times on it in {machine['duration_s']:.1f} s (worst "
+              f"{max(machine['off_cpu']['worst_ms'], machine['on_cpu']['worst_ms']):.1f} ms): up to "
+              f"{machine['late_frames_per_minute_at_most']:.0f} late frames a minute from the machine itself")
     w, h = (int(v) for v in args.size.lower().split("x"))
     wcm, hcm, dcm = (float(v) for v in args.display.split(","))
     display = foveal.Display(wcm, hcm, dcm, w, h)
@@ -188,7 +199,8 @@ def main(argv=None) -> int:
                "gaze_to_flip_ms_median": float(np.median(latencies)) if len(latencies) else None,
                "gaze_to_flip_ms_p95": float(np.percentile(latencies, 95)) if len(latencies) else None,
                "gaze_to_flip_refreshes_median": float(np.median(latencies)) * refresh_hz / 1000 if len(latencies) else None,
-               "render_ms_median": float(np.median([r["render_ms"] for r in rows])) if rows else None}
+               "render_ms_median": float(np.median([r["render_ms"] for r in rows])) if rows else None,
+               "machine_stalls": machine}
     print(f"gaze_contingent: {summary['flips']} flips at {w}x{h} on {summary['device']} ({refresh_hz:.0f} Hz, budget "
           f"{loop.budget_ms:.1f} ms), {summary['gaze_positions']} gaze positions, gaze-to-flip median "
           f"{summary['gaze_to_flip_ms_median']:.1f} ms ({summary['gaze_to_flip_refreshes_median']:.2f} refreshes), 95th percentile "

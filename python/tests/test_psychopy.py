@@ -29,7 +29,8 @@ def run_example(script, args, cwd, screen="1024x768"):
 def test_gaze_contingent_follows_the_mouse_gaze_and_logs_latency(tmp_path):
     flips = 60
     run_example("gaze_contingent.py", ["--size", "320x200", "--frames", flips, "--device", "cpu", "--fullscreen", "--refresh-hz", 60,
-                                       "--move-mouse", "--log", "frames.csv", "--summary", "summary.json"], tmp_path, screen="320x200")
+                                       "--move-mouse", "--log", "frames.csv", "--summary", "summary.json", "--probe-stalls", 0.3], tmp_path,
+                screen="320x200")
     rows = list(csv.DictReader(open(tmp_path / "frames.csv")))
     summary = json.loads((tmp_path / "summary.json").read_text())
     assert len(rows) == summary["flips"] == flips
@@ -44,6 +45,10 @@ def test_gaze_contingent_follows_the_mouse_gaze_and_logs_latency(tmp_path):
     assert summary["refresh_hz"] == 60 and 0 < summary["budget_ms"] <= 1000 / 60
     assert 0 < summary["gaze_to_flip_ms_median"] <= summary["gaze_to_flip_ms_p95"]
     assert summary["gaze_to_flip_refreshes_median"] <= 2.0
+    # The machine's own pauses, probed first (foveal.stalls)
+    stalls = summary["machine_stalls"]
+    assert stalls["duration_s"] >= 0.25 and stalls["chunks"] > 0 and "stalls" not in stalls
+    assert set(stalls["on_cpu"]) == {"count", "per_minute", "worst_ms", "beyond_margin"}
 
 
 def test_foveation_threshold_quest_converges_to_the_model_observers_threshold(tmp_path):
