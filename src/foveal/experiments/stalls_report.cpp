@@ -13,8 +13,9 @@ namespace {
 // that works through every frame up to its deadline
 double late_per_minute(const StallReport& r, double margin_ms) {
   const double minutes = r.duration_s / 60;
-  return minutes > 0 ? (count_stalls(r, false, margin_ms).longer_than_margin + count_stalls(r, true, margin_ms).longer_than_margin) / minutes
-                     : 0;
+  return minutes > 0
+             ? (count_stalls(r, false, margin_ms).longer_than_margin + count_stalls(r, true, margin_ms).longer_than_margin) / minutes
+             : 0;
 }
 
 }  // namespace
@@ -32,7 +33,8 @@ nlohmann::json stalls_json(const StallReport& r, double threshold_ms, double mar
   j["threshold_ms"] = threshold_ms;
   j["margin_ms"] = margin_ms;
   const auto counts = [](const StallCounts& c) {
-    return nlohmann::json{{"count", c.count}, {"per_minute", c.per_minute}, {"worst_ms", c.worst_ms}, {"beyond_margin", c.longer_than_margin}};
+    return nlohmann::json{
+        {"count", c.count}, {"per_minute", c.per_minute}, {"worst_ms", c.worst_ms}, {"beyond_margin", c.longer_than_margin}};
   };
   j["off_cpu"] = counts(count_stalls(r, false, margin_ms));
   j["on_cpu"] = counts(count_stalls(r, true, margin_ms));

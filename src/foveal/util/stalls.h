@@ -20,10 +20,10 @@
 namespace foveal {
 
 struct StallProbeParams {
-  double duration_s = 10;       // how long each thread works
-  int threads = 0;              // 0: one per hardware thread
-  double chunk_us = 100;        // the chunk's target duration (calibrated before the probe)
-  double threshold_ms = 1;      // a chunk at least this long is a stall
+  double duration_s = 10;   // how long each thread works
+  int threads = 0;          // 0: one per hardware thread
+  double chunk_us = 100;    // the chunk's target duration (calibrated before the probe)
+  double threshold_ms = 1;  // a chunk at least this long is a stall
   // Tests only: called after each chunk's work, before it is timed (to make a stall of either kind)
   std::function<void(int thread, long chunk)> inject;
 };
@@ -32,9 +32,9 @@ void validate(const StallProbeParams& p);
 
 struct Stall {
   int thread = 0;
-  double at_s = 0;     // from the probe's start
-  double wall_ms = 0;  // the chunk's wall time
-  double cpu_ms = 0;   // … and its thread's CPU time
+  double at_s = 0;      // from the probe's start
+  double wall_ms = 0;   // the chunk's wall time
+  double cpu_ms = 0;    // … and its thread's CPU time
   bool on_cpu = false;  // the CPU clock ran for at least half the wall time
 };
 // The kind of a chunk's stall from its two clocks (pure; tests).
@@ -42,9 +42,9 @@ bool stalled_on_cpu(double wall_ms, double cpu_ms);
 
 struct StallReport {
   int threads = 0;
-  double duration_s = 0;     // measured, from the first chunk to the last
-  double chunk_us = 0;       // the median chunk's wall time
-  long chunks = 0;           // over all threads
+  double duration_s = 0;      // measured, from the first chunk to the last
+  double chunk_us = 0;        // the median chunk's wall time
+  long chunks = 0;            // over all threads
   std::vector<Stall> stalls;  // in the order of their start
 };
 // Run the probe (the calling thread waits; each worker is a std::thread of its own).

@@ -13,7 +13,7 @@ namespace foveal {
 namespace {
 
 TEST(Stalls, TheKindFollowsTheThreadsCpuClock) {
-  EXPECT_TRUE(stalled_on_cpu(5.0, 4.9));   // the clock ran: the core did not run the work
+  EXPECT_TRUE(stalled_on_cpu(5.0, 4.9));  // the clock ran: the core did not run the work
   EXPECT_TRUE(stalled_on_cpu(5.0, 2.5));
   EXPECT_FALSE(stalled_on_cpu(5.0, 2.4));  // the clock stood still: the thread was off its core
   EXPECT_FALSE(stalled_on_cpu(7.3, 0.17));
@@ -28,7 +28,7 @@ TEST(Stalls, CountsPerKindAndAgainstTheMargin) {
   EXPECT_EQ(on.count, 2);
   EXPECT_DOUBLE_EQ(on.per_minute, 4);
   EXPECT_DOUBLE_EQ(on.worst_ms, 14.7);
-  EXPECT_EQ(on.longer_than_margin, 1);   // 14.6 ms beyond a chunk; 1.4 ms is within 2
+  EXPECT_EQ(on.longer_than_margin, 1);  // 14.6 ms beyond a chunk; 1.4 ms is within 2
   EXPECT_EQ(off.count, 2);
   EXPECT_EQ(off.longer_than_margin, 1);  // 7.2 ms; 2.05 − 0.1 = 1.95 ms is within 2
   EXPECT_EQ(count_stalls(StallReport{}, true, 2.0).count, 0);
