@@ -4,13 +4,12 @@
 #include "foveal/render/outputs.h"
 #include "foveal/render/realtime.h"
 #include "foveal/experiments/stalls_report.h"
+#include "foveal/util/parallel.h"
 
 #include <fmt/core.h>
 
 #include <cstdio>
-#include <algorithm>
 #include <memory>
-#include <thread>
 
 namespace foveal::app {
 
@@ -30,8 +29,7 @@ int run_bench_stalls(const BenchStallsOptions& o) {
   p.threshold_ms = o.threshold_ms;
   p.chunk_us = o.chunk_us;
   validate(p);
-  fmt::print("foveal bench stalls: {} s of fixed arithmetic on each of {} threads…\n", o.duration,
-             p.threads > 0 ? p.threads : static_cast<int>(std::max(1u, std::thread::hardware_concurrency())));
+  fmt::print("foveal bench stalls: {} s of fixed arithmetic on each of {} threads…\n", o.duration, thread_count(p.threads));
   std::fflush(stdout);
   const StallReport r = probe_stalls(p);
   const std::string md = stalls_markdown(r, o.threshold_ms, o.margin_ms);
@@ -49,7 +47,7 @@ std::function<int()> add_bench_stalls_command(CLI::App& bench) {
                                    "loop can expect from the machine itself");
   auto o = std::make_shared<BenchStallsOptions>();
   cmd->add_option("--duration", o->duration, "seconds each thread works")->capture_default_str();
-  cmd->add_option("--threads", o->threads, "threads (0 = one per hardware thread)")->capture_default_str()->check(CLI::Range(0, 4096));
+  cmd->add_option("--threads", o->threads, "threads (0 = all cores)")->capture_default_str()->check(CLI::Range(0, 4096));
   cmd->add_option("--threshold-ms", o->threshold_ms, "a chunk at least this long is a stall, ms")->capture_default_str();
   cmd->add_option("--chunk-us", o->chunk_us, "each chunk of arithmetic's usual duration, µs")->capture_default_str();
   cmd->add_option("--margin-ms", o->margin_ms, "the frame loop's margin the stalls are counted against, ms (the loop's default)")

@@ -219,19 +219,18 @@ LatencyLoop run_deadline(const LatencyRun& run, const Segment& s, const LatencyP
     const bool wall = p.clock == LoopClock::wall;
     const Timer window;
     const ThreadTimes threads_before = wall ? read_thread_times() : ThreadTimes{};
-    const CpuTimes cpu_before = wall ? read_cpu_times() : CpuTimes{};
+    const double faults_before = wall ? page_faults() : NAN;
     LoopFrame f = rt.frame(run.camera);
     frame_ms.push_back(f.cost_ms);
     loop.frames_late += f.late ? 1 : 0;
     if (wall) {
-      const CpuTimes cpu_after = read_cpu_times();
+      const double faults_after = page_faults();
       const ThreadTimes threads_after = read_thread_times();
       const double window_ms = window.ms();
       parts.push_back({static_cast<int>(parts.size()), t, f.ms, f.maps_ms, f.plan_ms, f.trace_ms, f.compose_ms,
                        std::max(0.0, f.rays_end_ms - f.deadline_ms), std::max(0.0, (f.ms - f.rays_end_ms) - f.compose_planned_ms), "",
                        longest_wait_ms(threads_before, threads_after),
-                       cpu_ms(threads_before, threads_after, current_thread_id()) / window_ms,
-                       cpu_before.known && cpu_after.known ? cpu_after.faults - cpu_before.faults : NAN});
+                       cpu_ms(threads_before, threads_after, current_thread_id()) / window_ms, faults_after - faults_before});
     }
     LatencyFrame lf;
     lf.start_s = t;

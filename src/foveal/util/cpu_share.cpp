@@ -11,6 +11,8 @@
 #include <string>
 #include <vector>
 
+#include <sys/resource.h>
+
 #ifdef __linux__
 #include <sys/syscall.h>
 #include <unistd.h>
@@ -60,9 +62,7 @@ CpuTimes parse_cpu_times(std::string_view proc_stat, std::string_view self_stat)
   const std::vector<std::string_view> fields = first_line_fields(self_stat.substr(close + 1));
   if (fields.size() < 13) return t;
   const std::optional<double> utime = counter(fields[11]), stime = counter(fields[12]);
-  const std::optional<double> minflt = counter(fields[7]), majflt = counter(fields[9]);
-  if (!utime || !stime || !minflt || !majflt) return t;
-  t.faults = *minflt + *majflt;
+  if (!utime || !stime) return t;
   t.total = user + nice + system + idle + iowait + irq + softirq + steal;
   t.busy = user + nice + system + irq + softirq;
   t.steal = steal;
@@ -130,6 +130,12 @@ double longest_wait_ms(const ThreadTimes& before, const ThreadTimes& after) {
 double cpu_ms(const ThreadTimes& before, const ThreadTimes& after, long only) {
   return over_threads(
       before, after, &ThreadTime::run_ns, [](double a, double b) { return a + b; }, only);
+}
+
+double page_faults() {
+  rusage u{};
+  if (getrusage(RUSAGE_SELF, &u) != 0) return NAN;
+  return static_cast<double>(u.ru_minflt) + static_cast<double>(u.ru_majflt);
 }
 
 long current_thread_id() {

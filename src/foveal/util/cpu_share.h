@@ -17,11 +17,10 @@ namespace foveal {
 
 // The counters at one moment, in clock ticks (known = false where they could not be read).
 struct CpuTimes {
-  double total = 0;   // all CPUs: user, nice, system, idle, iowait, irq, softirq, steal
-  double busy = 0;    // of which not idle, waiting for I/O or stolen
-  double steal = 0;   // taken by the hypervisor for other machines
-  double self = 0;    // this process (all its threads): user and system
-  double faults = 0;  // this process's page faults, minor and major (a count, not ticks)
+  double total = 0;  // all CPUs: user, nice, system, idle, iowait, irq, softirq, steal
+  double busy = 0;   // of which not idle, waiting for I/O or stolen
+  double steal = 0;  // taken by the hypervisor for other machines
+  double self = 0;   // this process (all its threads): user and system
   bool known = false;
 };
 
@@ -58,5 +57,7 @@ double longest_wait_ms(const ThreadTimes& before, const ThreadTimes& after);
 double cpu_ms(const ThreadTimes& before, const ThreadTimes& after, long only = -1);
 // The calling thread's id in those readings (−1 where there is none).
 long current_thread_id();
+// This process's page faults so far, minor and major (getrusage; NaN where it fails).
+double page_faults();
 
 }  // namespace foveal

@@ -2,6 +2,7 @@
 #include "foveal/util/stalls.h"
 
 #include "foveal/util/error.h"
+#include "foveal/util/parallel.h"
 #include "foveal/util/stats.h"
 
 #include <algorithm>
@@ -35,7 +36,7 @@ double cpu_ms_now() {
 
 void validate(const StallProbeParams& p) {
   if (!(p.duration_s > 0 && p.duration_s <= 3600)) fail("duration_s: must be in (0, 3600] seconds, got {}", p.duration_s);
-  if (p.threads < 0 || p.threads > 4096) fail("threads: must be in [0, 4096] (0 = one per hardware thread), got {}", p.threads);
+  if (p.threads < 0 || p.threads > 4096) fail("threads: must be in [0, 4096] (0 = all cores), got {}", p.threads);
   if (!(p.chunk_us >= 10 && p.chunk_us <= 10000)) fail("chunk_us: must be in [10, 10000] µs, got {}", p.chunk_us);
   if (!(p.threshold_ms * 1000 >= 2 * p.chunk_us && p.threshold_ms <= 1000))
     fail("threshold_ms: must be at least twice the chunk ({} µs) and at most 1000 ms, got {}", p.chunk_us, p.threshold_ms);
@@ -46,7 +47,7 @@ bool stalled_on_cpu(double wall_ms, double cpu_ms) { return cpu_ms >= 0.5 * wall
 StallReport probe_stalls(const StallProbeParams& p) {
   validate(p);
   StallReport r;
-  r.threads = p.threads > 0 ? p.threads : std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
+  r.threads = thread_count(p.threads);
   // Calibrate the chunk on this thread: the least time of a few tries, so that a pause during
   // calibration does not shorten every chunk
   long n = 1000;

@@ -21,7 +21,7 @@ namespace foveal {
 
 struct StallProbeParams {
   double duration_s = 10;   // how long each thread works
-  int threads = 0;          // 0: one per hardware thread
+  int threads = 0;          // 0: all the cores this process may use (util/parallel.h)
   double chunk_us = 100;    // the chunk's target duration (calibrated before the probe)
   double threshold_ms = 1;  // a chunk at least this long is a stall
   // Tests only: called after each chunk's work, before it is timed (to make a stall of either kind)
