@@ -212,7 +212,7 @@ bool RealtimeLoop::new_view(const Camera& camera, uint64_t& kept_pixels) {
   shade(gbuffer_, camera, 0, n, lit_, ambient_);
   cast_.assign(n, 0);
   open_.assign(n, 0);
-  tasks_.reserve(n);  // a task per pixel at most: the first frame's rounds do not grow it
+  prepare_rounds(n);
   // The maps at the latest gaze (the frame moves them where a prediction says), then what the
   // view keeps of the rays before: the renderer's temporal reprojection (reuse.h)
   maps_gaze_.reset();
@@ -299,9 +299,9 @@ void RealtimeLoop::collect_fovea(glm::dvec2 gaze_px, bool predicted) {
     std::vector<uint32_t> count(rings + 1, 0);  // a counting sort by whole pixels of distance: stable, O(n)
     for (const uint32_t i : fovea_) ++count[ring(i) + 1];
     for (size_t r = 1; r < count.size(); ++r) count[r] += count[r - 1];
-    order_.resize(fovea_.size());
-    for (const uint32_t i : fovea_) order_[count[ring(i)]++] = i;
-    fovea_.swap(order_);
+    fovea_scratch_.resize(fovea_.size());  // (not the sweep's order_: swapped, it lost the room of every pixel)
+    for (const uint32_t i : fovea_) fovea_scratch_[count[ring(i)]++] = i;
+    fovea_.swap(fovea_scratch_);
   }
 }
 
@@ -314,6 +314,24 @@ bool RealtimeLoop::converged(size_t i) const {
   // the dragon (bench latency; two standard errors above it over 20,000 pixels)
   const float q = maps_.quality[i];
   return q < 1.0f && c >= static_cast<float>(kFirstRound) && q > 0 && visibility_standard_error(total_open(i), c) <= tau_fovea_ / q;
+}
+
+void RealtimeLoop::prepare_rounds(size_t n) {
+  // A task per pixel at most, and a sweep's order and keys over every pixel, written here where they
+  // must grow so that their pages are touched: growing them in the view's first frames cost each of
+  // those frames up to 540 page faults at 840×525 (bench latency: a late frame's planning), and
+  // reserving alone maps no page. A view no larger than one before (a moving camera's) costs nothing
+  if (tasks_.capacity() < n) {
+    tasks_.resize(n);
+    tasks_.clear();
+  }
+  const auto grow = [n](auto& v) {
+    if (v.capacity() < n) v.assign(n, {});
+  };
+  grow(blocked_);
+  grow(done_);
+  grow(order_);
+  grow(key_);
 }
 
 size_t RealtimeLoop::plan_round(uint64_t ray_limit, bool periphery, bool& swept) {
@@ -549,7 +567,7 @@ void RealtimeLoop::adopt_rebuild(uint64_t& kept_pixels) {
   const size_t n = gbuffer_.prim.size();
   cast_.assign(n, 0);
   open_.assign(n, 0);
-  tasks_.reserve(n);
+  prepare_rounds(n);
   kept_pixels = r.kept_pixels;
   if (kept_pixels > 0) {
     kept_open_ = std::move(r.kept.open);

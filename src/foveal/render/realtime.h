@@ -224,6 +224,8 @@ class RealtimeLoop {
   size_t plan_round(uint64_t ray_limit, bool periphery, bool& swept);
   // The fovea's pixels (q = 1, hit, rays) of the current maps at `gaze_px`; centre-out where predicted
   void collect_fovea(glm::dvec2 gaze_px, bool predicted);
+  // Room for a round over all n pixels, its pages touched (where a new view needs more)
+  void prepare_rounds(size_t n);
   void compose(Image& color);
   bool rescale(double fixed_ms);  // whether it lowered the size
   void set_scale(double scale);
@@ -266,10 +268,11 @@ class RealtimeLoop {
   std::vector<AoRayTask> tasks_;
   std::vector<uint32_t> blocked_;
   std::vector<uint8_t> done_;
-  std::vector<uint32_t> order_;  // scratch: pixels by priority bucket
-  std::vector<uint32_t> fovea_;  // the fovea's pixels (q = 1, hit, rays) for the current maps
-  std::vector<int8_t> key_;      // scratch: each pixel's bucket (−1: converged)
-  bool last_new_view_ = false;   // the previous frame traced a new view
+  std::vector<uint32_t> order_;          // scratch: pixels by priority bucket
+  std::vector<uint32_t> fovea_;          // the fovea's pixels (q = 1, hit, rays) for the current maps
+  std::vector<uint32_t> fovea_scratch_;  // scratch: a predicted fovea's centre-out order
+  std::vector<int8_t> key_;              // scratch: each pixel's bucket (−1: converged)
+  bool last_new_view_ = false;           // the previous frame traced a new view
   float ao_distance_ = 0, epsilon_ = 0, tau_fovea_ = 0;
   double rays_per_ms_ = 0;  // wall clock: measured, smoothed
   double finish_ms_ = 1;    // wall clock: composing and the fovea's state at a frame's end, measured

@@ -4,6 +4,7 @@
 // prediction that never leaves the landed fovea worse.
 #include "foveal/render/realtime.h"
 
+#include "foveal/util/cpu_share.h"
 #include "foveal/util/device.h"
 #include "foveal/util/error.h"
 #include "foveal/util/parallel.h"
@@ -527,6 +528,43 @@ TEST(RealtimeLoop, APredictedFoveaGetsItsRaysFromTheCentreOut) {
     ++checked;
   }
   EXPECT_GE(checked, 1);
+}
+
+// A frame touches no fresh memory: the rounds' buffers (a sweep's order over every pixel, the
+// tasks) are in place once the view is built, and a predicted fovea's centre-out order has its own.
+// Before, the view's first sweep grew them in its frame (bench latency: 440 page faults in a late
+// frame at 840×525), and each predicted fovea swapped the sweep's order for its own small one.
+TEST(RealtimeLoop, FramesAfterTheViewTakeNoFreshMemory) {
+  const std::unique_ptr<FrameRenderer> renderer = make_frame_renderer(sphere_plane(), ComputeDevice::cpu);
+  LoopSettings settings = model_clock(20000);  // the fovea's rays in a frame or two, then sweeps
+  settings.predict = true;
+  RealtimeLoop loop(*renderer, sphere_plane(), loop_params(840, 525, 16), settings);
+  const Camera& camera = sphere_plane().cameras.front();
+  const glm::dvec2 from(80, 460), to(420, 470);
+  const double onset = 0.1, duration = 0.021 + 0.0022 * 20;
+  auto position = [&](double t) {
+    const double tau = std::clamp((t - onset) / duration, 0.0, 1.0);
+    return from + (to - from) * (tau - std::sin(2 * M_PI * tau) / (2 * M_PI));
+  };
+  loop.push_gaze(0, from);
+  loop.recycle(loop.frame(camera).color);  // the view
+  // One sweep's order over every pixel: 840 × 525 × 4 bytes, about 430 pages of 4 kB
+  const double sweep_pages = 840.0 * 525 * 4 / 4096;
+  double t_sample = 0.001;
+  int predicted = 0, sweeps = 0;
+  for (int k = 1; k < 30; ++k) {
+    const double t_frame = k / 60.0;
+    for (; t_sample <= t_frame - 0.003; t_sample += 0.001) loop.push_gaze(t_sample, position(t_sample));
+    const double before = page_faults();
+    LoopFrame f = loop.frame(camera);
+    const double faults = page_faults() - before;
+    predicted += f.predicted ? 1 : 0;
+    sweeps += f.sweeps > 0 ? 1 : 0;
+    EXPECT_LT(faults, 0.25 * sweep_pages) << "frame " << k << (f.predicted ? " (predicted)" : "") << ", " << f.sweeps << " sweeps";
+    loop.recycle(std::move(f.color));
+  }
+  EXPECT_GE(predicted, 1);
+  EXPECT_GE(sweeps, 2);
 }
 
 // A right prediction leaves the landed fovea better at every frame; a wrong one is abandoned at
