@@ -421,8 +421,9 @@ std::string late_threads_summary(const std::vector<LatencyFramePart>& late, doub
     share_hi = std::max(share_hi, f.cpu_share);
   }
   if (!known) return "";
-  const auto range = [](double lo, double hi, const char* spec) {
-    return fmt::format(fmt::runtime(spec), lo) + (hi - lo > 0.05 ? fmt::format(fmt::runtime(std::string("–") + spec), hi) : "");
+  const auto range = [](double lo, double hi, const char* spec) {  // "0.9–1.0", or "1.0" where both read so
+    const std::string a = fmt::format(fmt::runtime(spec), lo), b = fmt::format(fmt::runtime(spec), hi);
+    return a == b ? a : a + "–" + b;
   };
   return fmt::format("run delay ≤ {:.1f} ms ({} of {} on time without it), page faults {}, the calling thread on a CPU {} of the time",
                      wait, explained, known, range(faults_lo, faults_hi, "{:.0f}"), range(share_lo, share_hi, "{:.1f}"));

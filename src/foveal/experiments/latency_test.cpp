@@ -56,6 +56,11 @@ TEST(LatencyLateFrames, TheThreadsSayWhetherTheKernelKeptThemWaiting) {
   threads(late[2], 0.7, 1.0, 0);  // 17.3 − 0.7 ≤ 16.7
   EXPECT_EQ(late_threads_summary(late, 1000.0 / 60),
             "run delay ≤ 0.7 ms (1 of 2 on time without it), page faults 0, the calling thread on a CPU 1.0 of the time");
+  // A range whose ends read alike is one figure (0.96 and 1.01: not "1.0–1.0")
+  threads(late[0], 0.0, 0.96, 0);
+  threads(late[2], 0.0, 1.01, 0);
+  EXPECT_EQ(late_threads_summary(late, 1000.0 / 60),
+            "run delay ≤ 0.0 ms (0 of 2 on time without it), page faults 0, the calling thread on a CPU 1.0 of the time");
   threads(late[0], NAN, NAN, NAN);
   threads(late[2], NAN, NAN, NAN);
   EXPECT_EQ(late_threads_summary(late, 1000.0 / 60), "");
