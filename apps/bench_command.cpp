@@ -102,8 +102,8 @@ std::function<int()> add_bench_command(CLI::App& app) {
   ao->add_option("--threads", o->threads, "worker threads (0 = all cores)")->capture_default_str()->check(CLI::Range(0, 4096));
   ao->add_option("--trace-api", o->trace_api, "occlusion API of the renderer: stream, packet8 or single")->capture_default_str();
   add_device_option(*ao, o->device);
-  ao->add_option("--json", o->json, "write the table as JSON");
-  ao->add_option("--markdown", o->markdown, "write the table as Markdown");
+  ao->add_option("--json", o->json, "write the table as JSON")->check(output_file());
+  ao->add_option("--markdown", o->markdown, "write the table as Markdown")->check(output_file());
 
   auto vision = add_bench_vision_command(*bench);
   auto blur = add_bench_blur_command(*bench);

@@ -86,8 +86,8 @@ std::function<int()> add_bench_events_command(CLI::App& bench) {
   cmd->add_option("--burst-ms", o->burst_ms, "mean length of a lost burst (each 0.5-1.5x this), ms")->capture_default_str();
   cmd->add_option("--methods", o->methods, "detectors, comma-separated (auto, nhr, nhp, nh, ek, ivt, idt, ivvt)")->capture_default_str();
   cmd->add_option("--seed", o->seed, "seed of the synthetic signal and its degradation")->capture_default_str();
-  cmd->add_option("--json", o->json, "write every row as JSON");
-  cmd->add_option("--markdown", o->markdown, "write the tables as Markdown");
+  cmd->add_option("--json", o->json, "write every row as JSON")->check(output_file());
+  cmd->add_option("--markdown", o->markdown, "write the tables as Markdown")->check(output_file());
   return [o] { return run_bench_events(*o); };
 }
 

@@ -155,9 +155,10 @@ std::function<int()> add_bench_latency_command(CLI::App& bench) {
   cmd->add_option("--min-amplitude", o->min_amplitude, "saccades smaller than this are not judged, degrees")->capture_default_str();
   cmd->add_option("--threads", o->threads, "worker threads (0 = all cores)")->capture_default_str()->check(CLI::Range(0, 4096));
   add_device_option(*cmd, o->device);
-  cmd->add_option("--json", o->json, "write every figure as JSON");
-  cmd->add_option("--markdown", o->markdown, "write the tables as Markdown");
-  cmd->add_option("--timeline", o->timeline, "draw one saccade's timeline (gaze, fovea placement, fovea error per frame): .png or .svg");
+  cmd->add_option("--json", o->json, "write every figure as JSON")->check(output_file());
+  cmd->add_option("--markdown", o->markdown, "write the tables as Markdown")->check(output_file());
+  cmd->add_option("--timeline", o->timeline, "draw one saccade's timeline (gaze, fovea placement, fovea error per frame): .png or .svg")
+      ->check(output_file(plot_files()));
   cmd->add_option("--timeline-saccade", o->timeline_saccade, "which saccade of the first recording --timeline draws (0 = the first)")
       ->capture_default_str();
   return [o] { return run_bench_latency(*o); };

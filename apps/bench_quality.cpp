@@ -280,8 +280,8 @@ std::function<int()> add_bench_quality_command(CLI::App& bench) {
                 "full run: γ 1,1.5,2,2.5,3,4 × n_max 50,100,200,300,400 × β 0,0.25,0.5,1,2,4 × four methods at all six gaze "
                 "points, 3 frames each (default: a quick grid at two gaze points)");
   cmd->add_option("--threads", o->threads, "worker threads (0 = all cores)")->capture_default_str()->check(CLI::Range(0, 4096));
-  cmd->add_option("--json", o->json, "write every configuration, gaze point and band as JSON");
-  cmd->add_option("--markdown", o->markdown, "write the table as Markdown");
+  cmd->add_option("--json", o->json, "write every configuration, gaze point and band as JSON")->check(output_file());
+  cmd->add_option("--markdown", o->markdown, "write the table as Markdown")->check(output_file());
   cmd->add_option(
       "--plot", o->plot,
       "the Pareto plot: speed-up against the acuity-weighted error and the flicker (.png or .svg; with --sequence, its configurations)");

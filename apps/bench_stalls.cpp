@@ -52,8 +52,8 @@ std::function<int()> add_bench_stalls_command(CLI::App& bench) {
   cmd->add_option("--chunk-us", o->chunk_us, "each chunk of arithmetic's usual duration, µs")->capture_default_str();
   cmd->add_option("--margin-ms", o->margin_ms, "the frame loop's margin the stalls are counted against, ms (the loop's default)")
       ->capture_default_str();
-  cmd->add_option("--json", o->json, "write the figures and every stall as JSON");
-  cmd->add_option("--markdown", o->markdown, "write the table as Markdown");
+  cmd->add_option("--json", o->json, "write the figures and every stall as JSON")->check(output_file());
+  cmd->add_option("--markdown", o->markdown, "write the table as Markdown")->check(output_file());
   return [o] { return run_bench_stalls(*o); };
 }
 

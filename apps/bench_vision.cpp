@@ -70,7 +70,7 @@ std::function<int()> add_bench_blur_command(CLI::App& bench) {
   cmd->add_option("--lens-samples", o->samples, "lens samples per pixel of the reference")->capture_default_str();
   cmd->add_option("--pupil", o->pupil, "pupil diameter, mm")->capture_default_str();
   cmd->add_option("--threads", o->threads, "worker threads (0 = all cores)")->capture_default_str()->check(CLI::Range(0, 4096));
-  cmd->add_option("--json", o->json, "write the results as JSON");
+  cmd->add_option("--json", o->json, "write the results as JSON")->check(output_file());
   cmd->add_option("--images", o->images, "folder for the reference and approximation images (created)");
   return [o] {
     const ThreadScope threads(o->threads);
@@ -474,7 +474,7 @@ std::function<int()> add_bench_vision_command(CLI::App& bench) {
       ->capture_default_str();
   cmd->add_option("--seed", o->seed, "seed of the saccades")->capture_default_str();
   cmd->add_option("--threads", o->threads, "worker threads (0 = all cores)")->capture_default_str()->check(CLI::Range(0, 4096));
-  cmd->add_option("--json", o->json, "write the table as JSON");
+  cmd->add_option("--json", o->json, "write the table as JSON")->check(output_file());
   cmd->add_option("--markdown", o->markdown, "write the table as Markdown");
   cmd->add_option("--device", o->device,
                   "where the steps run: cpu, cuda (then the CPU runs the same cases in the same run, for the ratio and "

@@ -40,11 +40,11 @@ std::function<int()> add_compare_command(CLI::App& app) {
                   "SSIM near the edges: reflect (the image mirrored, every pixel counts) or valid (only 11x11 windows wholly inside "
                   "the image count, as Wang et al.'s code and scikit-image)")
       ->capture_default_str();
-  cmd->add_option("--json", o->json, "write every figure as JSON");
-  cmd->add_option("--markdown", o->markdown, "write the per-band table as Markdown");
-  cmd->add_option("--error-map", o->error_map, "per-pixel |image − reference| as a heat map (PNG)");
+  cmd->add_option("--json", o->json, "write every figure as JSON")->check(output_file());
+  cmd->add_option("--markdown", o->markdown, "write the per-band table as Markdown")->check(output_file());
+  cmd->add_option("--error-map", o->error_map, "per-pixel |image − reference| as a heat map (PNG)")->check(output_file(image_files()));
   cmd->add_option("--error-scale", o->error_scale, "the error the heat map's hottest colour stands for")->capture_default_str();
-  cmd->add_option("--plot", o->plot, "RMSE against eccentricity in 1° bins (.png or .svg)");
+  cmd->add_option("--plot", o->plot, "RMSE against eccentricity in 1° bins (.png or .svg)")->check(output_file(plot_files()));
   cmd->add_flag("-q,--quiet", o->quiet, "print nothing on success");
 
   return [o] {

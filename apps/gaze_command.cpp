@@ -407,7 +407,7 @@ std::function<int()> add_gaze_command(CLI::App& app) {
   cmd->add_option("--task", o->bids.task, "--to-bids: the task's label");
   cmd->add_option("--session", o->bids.session, "--to-bids: the session's label (optional)");
   cmd->add_option("--run", o->bids.run, "--to-bids: the run number (optional)");
-  cmd->add_option("--json", o->json, "write the summary as JSON");
+  cmd->add_option("--json", o->json, "write the summary as JSON")->check(output_file());
   cmd->add_option("--events", o->events,
                   "label every sample and list the events: nhr (saccades on local robust thresholds + PSO + pursuit in context + "
                   "blinks; the recommended, = auto), nhp (nh + pursuit, tuned on fixation tasks), "
@@ -415,13 +415,15 @@ std::function<int()> add_gaze_command(CLI::App& app) {
                   "ivt or idt (fixation filters: other valid samples saccades, lost ones blinks), ivvt (the causal filter replay and "
                   "view follow the eye with: its fixations, pursuits and saccades), "
                   "or file:LABELS.csv (another tool's labels of these samples, listed and scored the same way)");
-  cmd->add_option("--samples-out", o->samples_out, "--events: write t_s,x,y,label per sample (CSV)");
+  cmd->add_option("--samples-out", o->samples_out, "--events: write t_s,x,y,label per sample (CSV)")->check(output_file());
   cmd->add_option("--landings-out", o->landings_out,
                   "--events: write each saccade's landing as the live predictor saw it (TSV: the true and predicted landing, the "
-                  "error in degrees at the first prediction and two thirds in, the time gained; docs/realtime.md)");
+                  "error in degrees at the first prediction and two thirds in, the time gained; docs/realtime.md)")
+      ->check(output_file());
   cmd->add_option("--events-out", o->events_out,
                   "--events: write the events as a BIDS-style events.tsv (onset, duration, trial_type, amplitude, peak velocity, "
-                  "start and end positions in degrees)");
+                  "start and end positions in degrees)")
+      ->check(output_file());
   cmd->add_option("--evaluate", o->evaluate,
                   "--events: score the labels against an expert's (CSV with t/t_s and label columns, e.g. the IRF recordings): "
                   "sample-level Cohen's kappa per class and overall, event F1 (Hooge et al. 2018 matching), RTO/RTD");
@@ -442,7 +444,9 @@ std::function<int()> add_gaze_command(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--samples", o->samples,
                   "write the samples as read (t_s,x,y,confidence,valid: seconds, screen pixels, NaN where the eye was lost) as CSV");
-  cmd->add_option("--scanpath", o->scanpath, "scan-path picture (PNG) of the --fixation filter's fixations")->capture_default_str();
+  cmd->add_option("--scanpath", o->scanpath, "scan-path picture (PNG) of the --fixation filter's fixations")
+      ->capture_default_str()
+      ->check(output_file(std::vector<std::string>{".png"}));
   cmd->add_flag("--no-scanpath", o->no_scanpath, "do not draw the scan path");
   cmd->add_flag("-q,--quiet", o->quiet, "print nothing on success");
 

@@ -6,6 +6,7 @@
 #include "foveal/render/frame_renderer.h"
 #include "foveal/render/render.h"
 #include "foveal/util/error.h"
+#include "foveal/util/files.h"
 #include "foveal/util/parallel.h"
 #include "foveal/util/parse.h"
 #include "foveal/util/timer.h"
@@ -13,6 +14,7 @@
 #include <fmt/core.h>
 
 #include <cstdio>
+#include <filesystem>
 #include <unistd.h>
 #include <memory>
 
@@ -50,6 +52,37 @@ void add_view_options(CLI::App& cmd, ViewOptions& o) {
         ->capture_default_str();
   cmd.add_option("--threads", o.threads, "worker threads (0 = all cores)")->capture_default_str()->check(CLI::Range(0, 4096));
 }
+
+CLI::Validator output_file(std::vector<std::string> extensions) {
+  return CLI::Validator(
+      [extensions](std::string& path) {
+        try {
+          check_output_file(path, extensions);
+        } catch (const Error& e) {
+          return std::string(e.what());
+        }
+        return std::string();
+      },
+      "FILE");
+}
+
+void check_video_output(const std::string& video, const std::string& output) {
+  if (video.empty()) return;
+  namespace fs = std::filesystem;
+  const fs::path folder = fs::path(video).has_parent_path() ? fs::path(video).parent_path() : fs::path(".");
+  const auto same = [](const fs::path& a, const fs::path& b) {
+    return (fs::absolute(a) / "").lexically_normal() == (fs::absolute(b) / "").lexically_normal();
+  };
+  if (!output.empty() && same(folder, output)) return;
+  try {
+    check_output_file(video);
+  } catch (const Error& e) {
+    fail("--video: {}", e.what());
+  }
+}
+
+std::vector<std::string> image_files() { return {".png", ".jpg", ".jpeg", ".bmp", ".ppm", ".pfm", ".exr"}; }
+std::vector<std::string> plot_files() { return {".png", ".svg"}; }
 
 void add_device_option(CLI::App& cmd, std::string& device) {
   cmd.add_option("--device", device, "where the passes run: auto (cuda when a usable NVIDIA GPU is present, else cpu), cpu or cuda")
@@ -226,13 +259,17 @@ std::function<int()> add_render_command(CLI::App& app) {
   cmd->add_option("--gaze", o->gaze, "gaze point X,Y in render pixels, origin top-left (default: image centre; may lie off the image)");
   add_render_options(*cmd, o->render);
   add_device_option(*cmd, o->device);
-  cmd->add_option("-o,--output", o->output, "shaded image (.png; .pfm/.exr keep linear floats)")->capture_default_str();
+  cmd->add_option("-o,--output", o->output, "shaded image (.png; .pfm/.exr keep linear floats)")
+      ->capture_default_str()
+      ->check(output_file(image_files()));
   cmd->add_option("--aov", o->aov,
                   "float buffers NAME=FILE[,…] as .pfm/.exr; names: ao, depth, position, normal, albedo, budget, quality, blend, "
                   "eccentricity, traced (AO rays traced this frame)");
-  cmd->add_option("--mask", o->mask, "ROI/budget mask of the paper's Figure 5 (PNG): grey = n(E)/n_max, red cross at the gaze");
-  cmd->add_option("--acuity-plot", o->plot, "plot of the acuity model (paper's Figure 4) for the display, .svg or .png");
-  cmd->add_option("--stats", o->stats, "write timings and ray counts as JSON");
+  cmd->add_option("--mask", o->mask, "ROI/budget mask of the paper's Figure 5 (PNG): grey = n(E)/n_max, red cross at the gaze")
+      ->check(output_file(image_files()));
+  cmd->add_option("--acuity-plot", o->plot, "plot of the acuity model (paper's Figure 4) for the display, .svg or .png")
+      ->check(output_file(plot_files()));
+  cmd->add_option("--stats", o->stats, "write timings and ray counts as JSON")->check(output_file());
   cmd->add_option(
          "--frames", o->frames,
          "with --temporal: render this many frames of the still camera and gaze, each from the last one's history; the last is written")

@@ -54,6 +54,7 @@ ReplaySettings replay_settings(const ReplayOptions& o) {
   settings.predict = !o.no_predict;
   settings.orbit_deg_s = o.orbit;
   settings.keep_history = !o.no_history;
+  check_video_output(o.video, o.output);
   if (o.no_predict && !o.realtime) fail("--no-predict needs --realtime");
   if (o.no_history && !o.realtime) fail("--no-history needs --realtime (without it, --temporal keeps rays across frames)");
   validate(settings);
@@ -245,7 +246,7 @@ std::function<int()> add_replay_command(CLI::App& app) {
                 "--realtime: a moved camera starts its AO afresh instead of keeping the rays of the surfaces it still sees");
   cmd->add_flag("--no-reuse", o->no_reuse, "render every frame, even when the gaze has not moved since the previous one");
   cmd->add_option("--video", o->video, "also encode the frames into a video with ffmpeg (.mp4, .mkv, .webm, …)");
-  cmd->add_option("--stats", o->stats, "write a summary of the sequence as JSON");
+  cmd->add_option("--stats", o->stats, "write a summary of the sequence as JSON")->check(output_file());
   cmd->add_flag("-q,--quiet", o->quiet, "print nothing on success");
 
   return [o] { return run_replay(*o); };

@@ -267,6 +267,7 @@ void print_summary(const SimulateOptions& o, const SimulateParams& p, const Scen
 
 int run_simulate(const SimulateOptions& o) {
   const ThreadScope threads(o.view.threads);
+  check_video_output(o.video, o.output);
   const ComputeDevice device = choose_device(o.device);
   const SimulateParams p = simulate_params(o, device);
   const SavedSteps save = saved_steps(o.save_steps);
@@ -358,7 +359,7 @@ std::function<int()> add_simulate_command(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("-o,--output", o->output, "output folder (created)")->required();
   cmd->add_option("--video", o->video, "also a video of every step's perceived image (ffmpeg)");
-  cmd->add_option("--stats", o->stats, "per-stage timings and per-step records as JSON");
+  cmd->add_option("--stats", o->stats, "per-stage timings and per-step records as JSON")->check(output_file());
   cmd->add_flag("-q,--quiet", o->quiet, "print nothing on success");
   add_device_option(*cmd, o->device);
 

@@ -165,8 +165,10 @@ std::function<int()> add_view_command(CLI::App& app) {
                   "show this many frames, wait for the finished image, write --screenshot, and exit (scripts, tests)")
       ->check(CLI::Range(0, 1000000));
   cmd->add_option("--screenshot", o->screenshot,
-                  "screenshot path (.png; its stats go beside it as .json); key P writes it (numbered when it exists)");
-  cmd->add_option("--window-screenshot", o->window_screenshot, "with --frames: also a PNG of the whole window, panel included");
+                  "screenshot path (.png; its stats go beside it as .json); key P writes it (numbered when it exists)")
+      ->check(output_file());
+  cmd->add_option("--window-screenshot", o->window_screenshot, "with --frames: also a PNG of the whole window, panel included")
+      ->check(output_file());
   cmd->add_option("--timeout", o->timeout, "--frames: longest wait for the finished image, seconds")->capture_default_str();
   cmd->add_flag("--no-panel", o->no_panel, "start with the parameter panel hidden (Tab toggles it)");
 

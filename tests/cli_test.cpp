@@ -100,6 +100,39 @@ TEST(Cli, BadInputGivesOneClearLineAndNonZeroExit) {
   }
 }
 
+// Every option that names an output file is checked when the command line is read: a bench's
+// --json in a missing folder used to fail only after its minutes of work.
+TEST(Cli, OutputFilesAreCheckedBeforeTheWork) {
+  const std::string missing = (fs::temp_directory_path() / "foveal-no-such-folder" / "out").string();
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"bench latency --json " + missing + ".json", "--json"},
+      {"bench latency --markdown " + missing + ".md", "--markdown"},
+      {"bench latency --timeline timeline.gif", "--timeline"},
+      {"bench ao --json " + missing + ".json", "--json"},
+      {"bench quality --markdown " + missing + ".md", "--markdown"},
+      {"bench events --json " + missing + ".json", "--json"},
+      {"bench stalls --json " + missing + ".json", "--json"},
+      {"bench vision --json " + missing + ".json", "--json"},
+      {"render --stats " + missing + ".json", "--stats"},
+      {"render -o render.tif", "--output"},
+      {"render --acuity-plot plot.pdf", "--acuity-plot"},
+      {"gaze recording.csv --events nhr --events-out " + missing + ".tsv", "--events-out"},
+      {"replay --gaze recording.csv -o frames --stats " + missing + ".json", "--stats"},
+      {"replay --gaze recording.csv -o frames --video " + missing + ".mp4", "--video"},
+      {"simulate -o steps --video " + missing + ".mp4", "--video"},
+      {"compare a.png --reference b.png --plot plot.pdf", "--plot"},
+      {"perceive a.png -o b.png --amsler " + missing + ".png", "--amsler"},
+      {"view --frames 1 --screenshot " + missing + ".png", "--screenshot"},
+  };
+  for (const auto& [args, needle] : cases) {
+    const CliRun r = foveal_test::foveal(args);
+    EXPECT_NE(r.status, 0) << args;
+    EXPECT_EQ(lines(r.err), 1u) << args << ": " << r.err;
+    EXPECT_EQ(r.err.rfind("foveal: error: " + needle + ": ", 0), 0u) << args << ": " << r.err;
+    EXPECT_EQ(r.out, "") << args << ": the work started";
+  }
+}
+
 TEST(Cli, MalformedAndEmptyMeshesAreErrorsNotCrashes) {
   std::ofstream(scratch("empty.obj"));
   std::ofstream(scratch("junk.obj")) << "v 1 2\nf 1 2 3 4 5\nthis is not obj\n";

@@ -3,9 +3,11 @@
 
 #include "foveal/util/error.h"
 
+#include <algorithm>
 #include <atomic>
 #include <cctype>
 #include <cerrno>
+#include <cstring>
 #include <csignal>
 #include <filesystem>
 #include <mutex>
@@ -54,6 +56,23 @@ Guard& guard() {
 }
 
 }  // namespace
+
+void check_output_file(const std::string& path, const std::vector<std::string>& extensions) {
+  if (path.empty()) fail("an output file needs a name");
+  std::error_code ec;
+  const fs::path p(path);
+  if (fs::is_directory(p, ec)) fail("{}: is a folder; give a file name", path);
+  if (!extensions.empty() && std::find(extensions.begin(), extensions.end(), lower_extension(path)) == extensions.end()) {
+    std::string known;
+    for (size_t k = 0; k < extensions.size(); ++k) known += (k == 0 ? "" : k + 1 == extensions.size() ? " or " : ", ") + extensions[k];
+    fail("{}: the file name must end in {}", path, known);
+  }
+  const fs::path parent = p.has_parent_path() ? p.parent_path() : fs::path(".");
+  if (!fs::exists(parent, ec)) fail("{}: the folder {} does not exist", path, parent.string());
+  if (!fs::is_directory(parent, ec)) fail("{}: {} is not a folder", path, parent.string());
+  if (fs::exists(p, ec) ? ::access(path.c_str(), W_OK) != 0 : ::access(parent.c_str(), W_OK | X_OK) != 0)
+    fail("{}: cannot be written here ({})", path, std::strerror(errno));
+}
 
 std::string lower_extension(const std::string& path) {
   std::string ext = fs::path(path).extension().string();

@@ -20,6 +20,13 @@ namespace foveal {
 // `output` names the same file or folder as `input` (after resolving links, . and ..).
 void check_output_is_not_input(const std::string& output, const std::string& input, const char* option);
 
+// Whether a file can be written at `path`, checked before a run does the work: throws Error naming
+// the path and the reason (its folder is missing or is no folder, the path is a folder, nothing
+// may be written there, or its extension is none of `extensions`, where given: lower case, with
+// the dot). A bench's --json named a missing folder and failed only once its minutes of work were
+// done. Creates nothing.
+void check_output_file(const std::string& path, const std::vector<std::string>& extensions = {});
+
 // The file name's extension in lower case, with its dot (".PLY" → ".ply"; "" for none): what
 // every reader that picks a format by the name compares.
 std::string lower_extension(const std::string& path);

@@ -50,3 +50,34 @@ TEST(Files, AKilledRunsPartialsAreRemovedByTheNextRunAndALiveOnesKept) {
   EXPECT_EQ(foveal::read_gzip_file((dir / "t.tsv.gz").string()), "1\t2\n");
   fs::remove_all(dir);
 }
+
+TEST(Files, AnOutputFileIsCheckedBeforeAnyWork) {
+  const fs::path dir = fs::temp_directory_path() / ("foveal-output-test-" + std::to_string(getpid()));
+  fs::create_directories(dir);
+  const auto message = [](const std::string& path, const std::vector<std::string>& extensions = {}) {
+    try {
+      foveal::check_output_file(path, extensions);
+    } catch (const std::exception& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  EXPECT_EQ(message((dir / "a.json").string()), "");           // a new file in a folder that exists
+  EXPECT_EQ(message("relative.json"), "");                     // in the working folder
+  EXPECT_EQ(message((dir / "a.PNG").string(), {".png"}), "");  // the extension in any case
+  EXPECT_NE(message((dir / "missing" / "a.json").string()).find("the folder " + (dir / "missing").string() + " does not exist"),
+            std::string::npos);
+  EXPECT_NE(message(dir.string()).find("is a folder"), std::string::npos);
+  std::ofstream(dir / "file") << "x";
+  EXPECT_NE(message((dir / "file" / "a.json").string()).find("is not a folder"), std::string::npos);
+  EXPECT_NE(message((dir / "a.gif").string(), {".png", ".svg"}).find("must end in .png or .svg"), std::string::npos);
+  EXPECT_NE(message("").find("needs a name"), std::string::npos);
+  EXPECT_FALSE(fs::exists(dir / "a.json"));  // nothing created
+  if (geteuid() != 0) {                      // (root may write anywhere)
+    fs::create_directories(dir / "locked");
+    fs::permissions(dir / "locked", fs::perms::owner_read | fs::perms::owner_exec);
+    EXPECT_NE(message((dir / "locked" / "a.json").string()).find("cannot be written here"), std::string::npos);
+    fs::permissions(dir / "locked", fs::perms::owner_all);
+  }
+  fs::remove_all(dir);
+}
