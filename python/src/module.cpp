@@ -76,7 +76,12 @@ struct PyScene {
 Camera resolve_camera(const Scene& scene, const nb::object& camera) {
   if (camera.is_none()) return first_camera(scene);
   if (nb::isinstance<nb::str>(camera)) return find_camera(scene, nb::cast<std::string>(camera));
-  return nb::cast<Camera>(camera);
+  Camera out;
+  if (!nb::try_cast<Camera>(camera, out))
+    throw nb::type_error(fmt::format("camera: a camera name (str), a foveal.Camera or None, got {}",
+                                     nb::cast<std::string>(nb::str(camera.type().attr("__name__"))))
+                             .c_str());
+  return out;
 }
 
 std::pair<int, int> size_of(const std::array<int, 2>& size, const char* what) {

@@ -128,8 +128,18 @@ def test_bad_arguments_are_clear_errors(box):
     loop = foveal.Loop(box, size=(64, 40), max_rays=8, device="cpu")
     with pytest.raises(ValueError, match="t: must be a finite"):
         loop.push(float("nan"), (1, 2))
-    loop.push(1.0, None)  # a lost sample is fine
+    loop.push(1.0, None)  # a lost sample is fine, and so is NaN
+    loop.push(1.5, (float("nan"), float("nan")))
+    with pytest.raises(ValueError, match="gaze: .*NaN marks a lost sample"):  # an infinity is no lost sample
+        loop.push(2.0, (float("inf"), 3))
     assert loop.frame().image.shape == (40, 64, 3)
+    for camera in (3, [1, 2], object()):  # a camera of the wrong type: named, not a bare std::bad_cast
+        with pytest.raises(TypeError, match="camera: a camera name"):
+            foveal.Loop(box, size=(64, 40), camera=camera)
+        with pytest.raises(TypeError, match="camera: a camera name"):
+            loop.frame(camera=camera)
+    with pytest.raises(TypeError, match="camera: a camera name"):
+        foveal.Renderer(box, device="cpu").render(size=(16, 10), camera=3)
 
 
 def test_a_gaze_or_fixation_far_from_the_image_is_refused(box):

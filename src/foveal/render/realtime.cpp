@@ -122,6 +122,8 @@ glm::dvec2 RealtimeLoop::deg_to_px(glm::dvec2 deg) const {
 }
 
 void RealtimeLoop::push_gaze(double t_s, std::optional<glm::dvec2> gaze_px) {
+  if (gaze_px && (std::isinf(gaze_px->x) || std::isinf(gaze_px->y)))  // (an infinity is no lost sample: a unit or scale gone wrong)
+    fail("gaze_px: ({}, {}) is no point; NaN marks a lost sample", gaze_px->x, gaze_px->y);
   if (gaze_px && std::isfinite(gaze_px->x) && std::isfinite(gaze_px->y))  // NaN: a lost sample; a finite point must be near the image
     check_gaze_point("gaze_px", gaze_px->x, gaze_px->y, requested_.width, requested_.height);
   const bool valid = gaze_px && std::isfinite(gaze_px->x) && std::isfinite(gaze_px->y);
