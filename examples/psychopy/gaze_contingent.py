@@ -25,6 +25,7 @@ import argparse
 import csv
 import json
 import math
+import os
 import sys
 import threading
 import time
@@ -52,7 +53,38 @@ def parse_args(argv=None):
     p.add_argument("--probe-stalls", type=float, default=0, metavar="SECONDS",
                    help="first measure for this long how often the machine itself pauses a working thread (foveal.stalls, "
                         "`foveal bench stalls`): the late frames to expect from it, not from the rendering (default 0: not)")
-    return p.parse_args(argv)
+    args = p.parse_args(argv)
+    check_args(p, args)
+    return args
+
+
+def check_args(parser, args):
+    """Refuse bad values before the window opens: a session's log must not be lost at its end."""
+    try:
+        w, h = (int(v) for v in args.size.lower().split("x"))
+        assert 1 <= w <= 16384 and 1 <= h <= 16384
+    except (ValueError, AssertionError):
+        parser.error(f"--size: expected WxH in pixels (1–16384 each), got {args.size!r}")
+    try:
+        display = [float(v) for v in args.display.split(",")]
+        assert len(display) == 3 and all(math.isfinite(v) and v > 0 for v in display)
+    except (ValueError, AssertionError):
+        parser.error(f"--display: expected three positive numbers W_CM,H_CM,DIST_CM, got {args.display!r}")
+    if args.refresh_hz is not None and not 1 <= args.refresh_hz <= 1000:
+        parser.error(f"--refresh-hz: must be in [1, 1000] Hz, got {args.refresh_hz}")
+    for name, value in (("--frames", args.frames), ("--max-rays", args.max_rays), ("--probe-stalls", args.probe_stalls)):
+        if not value >= 0:
+            parser.error(f"{name}: must be 0 or more, got {value}")
+    for name, path in (("--log", args.log), ("--summary", args.summary)):
+        if path is None:
+            continue
+        folder = os.path.dirname(os.path.abspath(path))
+        if os.path.isdir(path):
+            parser.error(f"{name}: {path} is a folder; give a file name")
+        if not os.path.isdir(folder):
+            parser.error(f"{name}: {path}: the folder {folder} does not exist")
+        if not os.access(folder, os.W_OK):
+            parser.error(f"{name}: {path}: the folder {folder} cannot be written")
 
 
 # Linear [0, 1] → sRGB → PsychoPy's float range [−1, 1], tabulated at 4096 steps (finer than the

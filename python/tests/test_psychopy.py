@@ -51,6 +51,19 @@ def test_gaze_contingent_follows_the_mouse_gaze_and_logs_latency(tmp_path):
     assert set(stalls["on_cpu"]) == {"count", "per_minute", "worst_ms", "beyond_margin"}
 
 
+def test_gaze_contingent_refuses_bad_options_before_the_session(tmp_path):
+    """A log in a missing folder was lost at the session's end; now it fails at once, as argparse does."""
+    cases = [(["--log", str(tmp_path / "missing" / "frames.csv")], "--log"), (["--summary", str(tmp_path)], "--summary"),
+             (["--size", "320"], "--size"), (["--display", "47.5,0,60"], "--display"), (["--frames", "-1"], "--frames"),
+             (["--refresh-hz", "0"], "--refresh-hz")]
+    for args, name in cases:
+        result = subprocess.run([sys.executable, str(EXAMPLES / "gaze_contingent.py"), *args], cwd=tmp_path, capture_output=True,
+                                text=True, timeout=60)
+        assert result.returncode == 2, (args, result.stderr)
+        assert f"error: {name}" in result.stderr.splitlines()[-1], (args, result.stderr)
+    assert not (tmp_path / "missing").exists()
+
+
 def test_foveation_threshold_quest_converges_to_the_model_observers_threshold(tmp_path):
     # The model observer detects the rendered difference (acuity-weighted RMSE against the
     # reference); its threshold is the difference the frame at γ = 3 (then 6) makes
