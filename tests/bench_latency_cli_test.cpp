@@ -40,6 +40,7 @@ TEST(BenchLatencyCli, ThreeLoopsUnderTheModelClockWriteTheDocumentedJson) {
   const CliRun a = foveal_test::foveal(args + " --json a.json --timeline a.png");
   ASSERT_EQ(a.status, 0) << a.err << a.out;
   EXPECT_NE(a.out.find("| deadline+prediction |"), std::string::npos) << a.out;
+  EXPECT_NE(a.out.find("× ray bound (model's rate)"), std::string::npos) << a.out;
   const auto j = nlohmann::json::parse(std::ifstream(scratch("a.json")));
   ASSERT_EQ(j["recordings"].size(), 1u);
   const auto& r = j["recordings"][0];
@@ -54,6 +55,8 @@ TEST(BenchLatencyCli, ThreeLoopsUnderTheModelClockWriteTheDocumentedJson) {
       EXPECT_NEAR(s["amplitude_deg"].get<double>(), 20, 4);
       for (const char* key : {"landing_s", "landing_to_converged_ms", "ray_bound_ms", "fixation_ms"}) EXPECT_TRUE(s.contains(key)) << key;
       EXPECT_GT(s["ray_bound_ms"].get<double>(), 0);
+      // The model clock's bound: the same rays at the model's 2000 rays/ms
+      EXPECT_NEAR(s["model_ray_bound_ms"].get<double>(), s["ray_bound_ms"].get<double>() * r["raw_rays_per_ms"].get<double>() / 2000, 1e-6);
       // the eye stays ~0.53 s: until the saccade back, and after it until the recording ends
       EXPECT_NEAR(s["fixation_ms"].get<double>(), 534, 40);
     }

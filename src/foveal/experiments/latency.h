@@ -57,6 +57,7 @@ struct LatencySaccade {
   glm::dvec2 landing_px{0};                   // render pixels
   std::optional<double> converged_ms;         // landing → a frame on screen with the fovea within noise (unset: not in the segment)
   double ray_bound_ms = 0;                    // the fovea's pixels × n_max / the raw rate
+  double model_ray_bound_ms = NAN;            // model clock: … / the model's rate (the rays it allows)
   double fixation_ms = 0;                     // landing → the eye's next saccade or blink (any size), or the recording's end
   std::optional<double> predicted_error_deg;  // deadline+prediction: the last prediction shown before the landing, from it
 };
