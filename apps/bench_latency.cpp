@@ -160,7 +160,8 @@ std::function<int()> add_bench_latency_command(CLI::App& bench) {
   cmd->add_option("--timeline", o->timeline, "draw one saccade's timeline (gaze, fovea placement, fovea error per frame): .png or .svg")
       ->check(output_file(plot_files()));
   cmd->add_option("--timeline-saccade", o->timeline_saccade, "which saccade of the first recording --timeline draws (0 = the first)")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
   return [o] { return run_bench_latency(*o); };
 }
 

@@ -160,10 +160,6 @@ std::pair<double, double> median_p90(const std::vector<double>& v) { return {qua
 EventsRun detect_and_score(const GazeCommandOptions& o, const Recording& recording, const Display& display, const FixationParams& params) {
   EventsRun run;
   if (o.events.empty()) return run;
-  if (o.filter_window_ms) require_positive(*o.filter_window_ms, "--filter-window-ms");
-  require_non_negative(o.detection_window_ms, "--detection-window-ms");
-  require_non_negative(o.blink_flank_ms, "--blink-flank-ms");
-  require_positive(o.max_blink_ms, "--max-blink-ms");
   EventParams ep;
   ep.pursuit = params.pursuit;  // the options --fixation ivvt reads too
   if (o.filter_window_ms) ep.filter_window_s = ep.robust_filter_window_s = *o.filter_window_ms / 1000;
@@ -334,6 +330,13 @@ void print_gaze(const GazeCommandOptions& o, const Recording& recording, const G
 }
 
 int run_gaze(const GazeCommandOptions& o) {
+  // The detectors' options, checked whether or not --events uses them (a value out of range is a
+  // mistake either way)
+  if (o.filter_window_ms) require_positive(*o.filter_window_ms, "--filter-window-ms");
+  require_non_negative(o.detection_window_ms, "--detection-window-ms");
+  require_positive(o.ek_lambda, "--ek-lambda");
+  require_non_negative(o.blink_flank_ms, "--blink-flank-ms");
+  require_positive(o.max_blink_ms, "--max-blink-ms");
   // The options that go together, checked before the recording is read
   if (o.events.empty() && (!o.samples_out.empty() || !o.evaluate.empty() || !o.events_out.empty() || !o.landings_out.empty()))
     fail("--samples-out, --events-out, --landings-out and --evaluate need --events");

@@ -7,8 +7,34 @@
 
 #include <fmt/core.h>
 
+#include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <exception>
+
+namespace {
+
+// Every number an option takes is finite, and an unsigned one not negative. CLI11's ranges let NaN through (each comparison with it
+// is false), and an option the chosen mode leaves unused (perceive's fixation filter without
+// --gaze) was never checked at all: `--ivt-threshold nan` ran as if it had not been given.
+// (--ao-distance's documented inf is text, parsed by its command.)
+void refuse_non_finite(const CLI::App& app) {
+  for (const CLI::Option* option : app.get_options()) {
+    const std::string type = option->get_type_name();
+    if (type.rfind("UINT", 0) == 0)  // (CLI11 reads "-1" as 2^64 − 1)
+      for (const std::string& value : option->results())
+        if (value.find('-') != std::string::npos) foveal::fail("{}: must be 0 or more, got {}", option->get_name(), value);
+    if (type.rfind("FLOAT", 0) != 0) continue;
+    for (const std::string& value : option->results()) {
+      char* end = nullptr;
+      const double x = std::strtod(value.c_str(), &end);
+      if (end != value.c_str() && !std::isfinite(x)) foveal::fail("{}: must be a finite number, got {}", option->get_name(), value);
+    }
+  }
+  for (const CLI::App* sub : app.get_subcommands()) refuse_non_finite(*sub);
+}
+
+}  // namespace
 
 int main(int argc, char** argv) {
   foveal::keep_freed_memory();
@@ -39,6 +65,7 @@ int main(int argc, char** argv) {
     return e.get_exit_code() != 0 ? e.get_exit_code() : 2;
   }
   try {
+    refuse_non_finite(app);
     if (app.got_subcommand("render")) return render();
     if (app.got_subcommand("bench")) return bench();
     if (app.got_subcommand("gaze")) return gaze();

@@ -89,6 +89,7 @@ void print_perceive(const PerceiveOptions& o, const Perceiver& p, const Perceive
 }
 
 int run_perceive(const PerceiveOptions& o) {
+  resolve_fixation_params(o.gaze_options);  // the fixation filter's options are checked without --gaze too
   const ThreadScope threads(o.threads);
   for (const std::string* extra : {&o.amsler, &o.field_map})
     if (!extra->empty()) check_output_is_not_input(*extra, o.input, extra == &o.amsler ? "--amsler" : "--field-map");

@@ -268,6 +268,7 @@ void print_summary(const SimulateOptions& o, const SimulateParams& p, const Scen
 int run_simulate(const SimulateOptions& o) {
   const ThreadScope threads(o.view.threads);
   check_video_output(o.video, o.output);
+  resolve_fixation_params(o.gaze);  // the fixation filter's options are checked without --gaze too
   const ComputeDevice device = choose_device(o.device);
   const SimulateParams p = simulate_params(o, device);
   const SavedSteps save = saved_steps(o.save_steps);
@@ -327,7 +328,9 @@ std::function<int()> add_simulate_command(CLI::App& app) {
   cmd->add_option("--saccade-max", o->saccade_max, "largest saccade, degrees (glaucoma shortens it)")->capture_default_str();
   cmd->add_option("--saccade-min", o->saccade_min, "smallest distance to the recent fixations, degrees")->capture_default_str();
   cmd->add_option("--blur-taps", o->taps, "most taps of the variable blur per pixel (large CoCs)")->capture_default_str();
-  cmd->add_option("--ambient", o->ambient, "constant Phong ambient factor of the ray-cast colour")->capture_default_str();
+  cmd->add_option("--ambient", o->ambient, "constant Phong ambient factor of the ray-cast colour")
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
   cmd->add_option("--seed", o->seed, "seed of the saccades")->capture_default_str();
   auto* gaze_option = cmd->add_option(
       "--gaze", o->gaze_source,

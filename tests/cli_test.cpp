@@ -16,6 +16,22 @@
 using namespace foveal_test;
 namespace fs = std::filesystem;
 
+namespace {
+
+// Each command line fails with one line, "foveal: error: …" holding `needle`, and no crash.
+void expect_clear_errors(const std::vector<std::pair<std::string, std::string>>& cases) {
+  for (const auto& [args, needle] : cases) {
+    const CliRun r = foveal_test::foveal(args);
+    EXPECT_NE(r.status, 0) << args;
+    EXPECT_LT(r.status, 128) << args << " crashed";
+    EXPECT_EQ(lines(r.err), 1u) << args << ": " << r.err;
+    EXPECT_NE(r.err.find(needle), std::string::npos) << args << ": " << r.err;
+    EXPECT_EQ(r.err.rfind("foveal: error: ", 0), 0u) << args << ": " << r.err;
+  }
+}
+
+}  // namespace
+
 TEST(Cli, RenderWritesImageMaskPlotAovsAndContractStats) {
   const CliRun r = foveal_test::foveal(
       "render --size 96x60 --max-rays 8 --gaze 10,10 -o img.png --mask mask.png --acuity-plot fig4.svg "
@@ -90,14 +106,7 @@ TEST(Cli, BadInputGivesOneClearLineAndNonZeroExit) {
       {"bench nothing", "subcommand"},
       {"bench", "subcommand"},
   };
-  for (const auto& [args, needle] : cases) {
-    const CliRun r = foveal_test::foveal(args);
-    EXPECT_NE(r.status, 0) << args;
-    EXPECT_LT(r.status, 128) << args << " crashed";
-    EXPECT_EQ(lines(r.err), 1u) << args << ": " << r.err;
-    EXPECT_NE(r.err.find(needle), std::string::npos) << args << ": " << r.err;
-    EXPECT_EQ(r.err.rfind("foveal: error: ", 0), 0u) << args << ": " << r.err;
-  }
+  expect_clear_errors(cases);
 }
 
 // Every option that names an output file is checked when the command line is read: a bench's
@@ -131,6 +140,31 @@ TEST(Cli, OutputFilesAreCheckedBeforeTheWork) {
     EXPECT_EQ(r.err.rfind("foveal: error: " + needle + ": ", 0), 0u) << args << ": " << r.err;
     EXPECT_EQ(r.out, "") << args << ": the work started";
   }
+}
+
+// One rule for every number an option takes: finite, and an unsigned one not negative — also
+// where the chosen mode leaves the option unused (perceive's fixation filter without --gaze ran
+// with --ivt-threshold nan as if it had not been given; CLI11 read --seed -1 as 2^64 − 1).
+TEST(Cli, EveryNumberIsFiniteAndNoUnsignedOneNegative) {
+  const std::string rec = scratch("finite.csv");
+  std::ofstream(rec) << "t,x,y\n0,100,100\n0.002,101,100\n0.004,102,100\n";
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"render --gamma nan", "--gamma: must be a finite number, got nan"},
+      {"render --beta inf", "--beta: must be a finite number, got inf"},
+      {"render --seed -1", "--seed: must be 0 or more, got -1"},
+      {"perceive a.png -o b.png --ivt-threshold nan", "--ivt-threshold: must be a finite number"},
+      {"perceive " + rec + " -o b.png --ivt-threshold -1", "--ivt-threshold"},
+      {"simulate -o s --velocity-window-ms -1", "--velocity-window-ms"},
+      {"simulate -o s --ambient -1", "--ambient"},
+      {"gaze " + rec + " --ek-lambda -2", "--ek-lambda"},
+      {"gaze " + rec + " --max-blink-ms nan", "--max-blink-ms: must be a finite number"},
+      {"bench latency --min-amplitude -inf", "--min-amplitude: must be a finite number, got -inf"},
+      {"bench latency --timeline-saccade -1", "--timeline-saccade"},
+  };
+  expect_clear_errors(cases);
+  // inf where a text option documents it: the AO rays' length
+  const CliRun inf = foveal_test::foveal("render --size 16x10 --max-rays 2 --ao-distance inf -o inf.png -q");
+  EXPECT_EQ(inf.status, 0) << inf.err;
 }
 
 TEST(Cli, MalformedAndEmptyMeshesAreErrorsNotCrashes) {

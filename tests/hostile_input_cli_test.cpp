@@ -126,9 +126,11 @@ TEST(HostileInput, PerceiveStartIsChecked) {
   fs::create_directories(scratch("h9-frames"));
   foveal::save_image(card(32, 20), scratch("h9-frames/a.png").string());
   write(scratch("h9.csv"), "t,x,y\n0,10,10\n0.1,10,10\n0.2,10,10\n0.3,10,10\n");
-  for (const char* start : {"nan", "inf", "-1"})
+  for (const char* start : {"nan", "inf"})  // (every option's number: apps/main.cpp)
     expect_one_line_error(std::string("perceive h9-frames -o h9-out --gaze h9.csv --screen 64x40 --no-optics --start ") + start,
-                          "--start: must be a finite number of seconds >= 0");
+                          std::string("--start: must be a finite number, got ") + start);
+  expect_one_line_error("perceive h9-frames -o h9-out --gaze h9.csv --screen 64x40 --no-optics --start -1",
+                        "--start: must be a finite number of seconds >= 0");
   expect_one_line_error("perceive h9-frames -o h9-out --gaze h9.csv --screen 64x40 --no-optics --start 1e9",
                         "the recording h9.csv lasts 0.300 s");
 }
