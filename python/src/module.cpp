@@ -643,7 +643,7 @@ NB_MODULE(_core, m) {
         std::optional<Image> ib2;
         if (b2) ib2 = image_from(*b2);
         const Display d = display ? *display : Display{};  // the command line's default, 47.5,30,60,1680,1050
-        if (!(ellipse > 0)) fail("ellipse: must be > 0, got {}", ellipse);
+        if (!(ellipse > 0) || !std::isfinite(ellipse)) fail("ellipse: must be a finite number > 0, got {}", ellipse);
         FoveationParams params;
         params.ellipse_ratio = ellipse;
         const glm::dvec2 g = gaze ? glm::dvec2((*gaze)[0], (*gaze)[1]) : glm::dvec2(ia.width * 0.5, ia.height * 0.5);

@@ -76,6 +76,7 @@ def test_every_error_speaks_pythons_words(box, tmp_path):
         ("pupil_mm", lambda: foveal.VisionSimulation(box, size=(16, 10), pupil_mm=-1)),
         ("refresh_hz", lambda: foveal.Loop(box, size=(16, 10), refresh_hz=0)),
         ("ellipse", lambda: foveal.compare(IMAGE, IMAGE, ellipse=0)),
+        ("ellipse", lambda: foveal.compare(IMAGE, IMAGE, ellipse=float("inf"))),
         ("ssim_border", lambda: foveal.compare(IMAGE, IMAGE, ssim_border="wrap")),
         ("time_unit", lambda: foveal.gaze.read(tmp_path / "x.csv", time_unit="h")),
         ("coords", lambda: foveal.gaze.read(tmp_path / "x.csv", coords="cm")),
