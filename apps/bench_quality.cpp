@@ -270,9 +270,11 @@ std::function<int()> add_bench_quality_command(CLI::App& bench) {
   cmd->add_option("--max-error", o->max_error,
                   "the recommendation: the fastest configuration whose fovea is within the reference's noise and whose "
                   "acuity-weighted error is at most this many times the reference's noise")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
   cmd->add_option("--max-flicker", o->max_flicker, "… and whose flicker after a saccade is at most this many times the reference's noise")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
   cmd->add_option("--saccade", o->saccade, "flicker: the saccade between the two frames compared, degrees (horizontal)")
       ->capture_default_str()
       ->check(CLI::Range(0.0, 90.0));

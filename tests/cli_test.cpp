@@ -160,6 +160,8 @@ TEST(Cli, EveryNumberIsFiniteAndNoUnsignedOneNegative) {
       {"gaze " + rec + " --max-blink-ms nan", "--max-blink-ms: must be a finite number"},
       {"bench latency --min-amplitude -inf", "--min-amplitude: must be a finite number, got -inf"},
       {"bench latency --timeline-saccade -1", "--timeline-saccade"},
+      {"bench quality --max-error -1", "--max-error"},
+      {"bench quality --max-flicker 0", "--max-flicker"},
   };
   expect_clear_errors(cases);
   // inf where a text option documents it: the AO rays' length
