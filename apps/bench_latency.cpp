@@ -151,7 +151,10 @@ std::function<int()> add_bench_latency_command(CLI::App& bench) {
   cmd->add_option("--model-rays-per-ms", o->model_rays_per_ms,
                   "--clock model: the cost model's AO rays per ms (with --model-fixed-ms; default: measured on the view first)");
   cmd->add_option("--model-fixed-ms", o->model_fixed_ms, "--clock model: each frame's cost besides its AO rays, ms");
-  cmd->add_option("--loops", o->loops, "loops to run, comma-separated: whole-frame, deadline, deadline+prediction")->capture_default_str();
+  cmd->add_option("--loops", o->loops,
+                  "loops to run, comma-separated: whole-frame, deadline, deadline+prediction; also deadline+oracle (a perfect predictor: "
+                  "each saccade's true landing from its detected onset, the most prediction could gain)")
+      ->capture_default_str();
   cmd->add_option("--min-amplitude", o->min_amplitude, "saccades smaller than this are not judged, degrees")->capture_default_str();
   cmd->add_option("--threads", o->threads, "worker threads (0 = all cores)")->capture_default_str()->check(CLI::Range(0, 4096));
   add_device_option(*cmd, o->device);

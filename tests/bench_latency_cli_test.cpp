@@ -100,6 +100,27 @@ TEST(BenchLatencyCli, ThreeLoopsUnderTheModelClockWriteTheDocumentedJson) {
   }
 }
 
+// The perfect predictor the bench offers as a yardstick: from each detected flight on, the fovea at
+// the saccade's true landing (prediction error 0 where the prediction loop's is not)
+TEST(BenchLatencyCli, TheOracleLoopPlacesTheFoveaAtTheTrueLanding) {
+  const std::string rec = write_saccades("saccades-oracle.csv");
+  const CliRun r = foveal_test::foveal("bench latency --scene builtin:box --size 168x105 --max-rays 64 --recording " + rec +
+                                       " --duration 1.5 --clock model --model-rays-per-ms 2000 --model-fixed-ms 3 --min-amplitude 5"
+                                       " --loops deadline+prediction,deadline+oracle --json oracle.json");
+  ASSERT_EQ(r.status, 0) << r.err << r.out;
+  EXPECT_NE(r.out.find("| deadline+oracle |"), std::string::npos) << r.out;
+  const auto j = nlohmann::json::parse(std::ifstream(scratch("oracle.json")));
+  const auto& rec_json = j["recordings"][0];
+  ASSERT_EQ(rec_json["deadline+oracle"]["saccades"].size(), 2u);
+  for (const auto& s : rec_json["deadline+oracle"]["saccades"]) {
+    ASSERT_TRUE(s.contains("predicted_error_deg"));
+    EXPECT_LT(s["predicted_error_deg"].get<double>(), 1e-6);
+  }
+  double predicted = 0;  // the mirror's last prediction before each landing is not exact
+  for (const auto& s : rec_json["deadline+prediction"]["saccades"]) predicted += s["predicted_error_deg"].get<double>();
+  EXPECT_GT(predicted, 1e-3);
+}
+
 TEST(BenchLatencyCli, BadOptionsAreOneClearLine) {
   const std::string rec = write_saccades("saccades2.csv");
   const std::string base = "bench latency --scene builtin:box --size 64x40 --recording " + rec;

@@ -189,10 +189,12 @@ LatencyLoop run_whole_frame(const LatencyRun& run, const Segment& s, const Laten
   return loop;
 }
 
-LatencyLoop run_deadline(const LatencyRun& run, const Segment& s, const LatencyParams& p, double budget_ms, bool predict, double model_rate,
-                         double model_fixed) {
+// `name`: deadline, deadline+prediction or deadline+oracle
+LatencyLoop run_deadline(const LatencyRun& run, const Segment& s, const LatencyParams& p, double budget_ms, const std::string& name,
+                         double model_rate, double model_fixed) {
   LatencyLoop loop;
-  loop.name = predict ? "deadline+prediction" : "deadline";
+  loop.name = name;
+  const bool oracle = name == "deadline+oracle", predict = oracle || name == "deadline+prediction";
   loop.budget_ms = budget_ms;
   loop.saccades = s.saccades;
   LoopSettings settings;
@@ -215,6 +217,14 @@ LatencyLoop run_deadline(const LatencyRun& run, const Segment& s, const LatencyP
   std::vector<LatencyFramePart> parts;
   for (double t = s.begin; t < s.end;) {
     for (; next < s.t.size() && s.t[next] + s.latency_s <= t; ++next) rt.push_gaze(s.t[next], s.px[next]);
+    if (oracle) {  // a flight the predictor has detected goes to its saccade's true landing (one of at least --min-amplitude)
+      std::optional<glm::dvec2> known;
+      const LandingState& flight = rt.predictor().state();
+      if (flight.in_flight)
+        for (const LatencySaccade& sac : s.saccades)
+          if (flight.onset_s >= sac.landing_s - sac.duration_ms / 1000 - 0.02 && flight.onset_s < sac.landing_s) known = sac.landing_px;
+      rt.set_known_landing(known);
+    }
     // Wall clock: the threads' times and the page faults around the frame (read outside its timing)
     const bool wall = p.clock == LoopClock::wall;
     const Timer window;
@@ -467,8 +477,8 @@ void validate(const LatencyParams& p) {
     validate(loop);
   }
   for (const std::string& l : p.loops)
-    if (l != "whole-frame" && l != "deadline" && l != "deadline+prediction")
-      fail("loops: unknown loop '{}' (known: whole-frame, deadline, deadline+prediction)", l);
+    if (l != "whole-frame" && l != "deadline" && l != "deadline+prediction" && l != "deadline+oracle")
+      fail("loops: unknown loop '{}' (known: whole-frame, deadline, deadline+prediction, deadline+oracle)", l);
 }
 
 LatencyReport run_latency_bench(const LatencyRun& run, const std::vector<Recording>& recordings, const LatencyParams& p) {
@@ -552,7 +562,7 @@ LatencyReport run_latency_bench(const LatencyRun& run, const std::vector<Recordi
     for (const std::string& name : p.loops) {
       const Timer timer;
       LatencyLoop loop = name == "whole-frame" ? run_whole_frame(run, s, p, budget, model_rate, model_fixed)
-                                               : run_deadline(run, s, p, budget, name == "deadline+prediction", model_rate, model_fixed);
+                                               : run_deadline(run, s, p, budget, name, model_rate, model_fixed);
       say(fmt::format("  {}: {} frames ({} late), median landing → converged fovea {} ms ({:.1f} s)", name, loop.frames, loop.frames_late,
                       ms_or_dash(loop.median_converged_ms()), timer.ms() / 1000));
       out.loops.push_back(std::move(loop));

@@ -9,7 +9,9 @@
 // loops run on the same samples:
 //   whole-frame          today's: render a whole foveated frame for the latest gaze, then show it;
 //   deadline             RealtimeLoop (render/realtime.h) without prediction;
-//   deadline+prediction  RealtimeLoop placing the fovea at each saccade's predicted landing.
+//   deadline+prediction  RealtimeLoop placing the fovea at each saccade's predicted landing;
+//   deadline+oracle      (on request) the same with each saccade's true landing from its detected
+//                        onset on: a perfect predictor, the most prediction could gain.
 // For every saccade (detected in the recording, nhr) landing in the segment: the time from its
 // landing to the first frame on screen from then on (the one shown when the eye lands included:
 // 0 ms if it was ready) whose fovea — the q = 1 region around the true landing — is

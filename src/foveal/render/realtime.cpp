@@ -635,7 +635,8 @@ LoopFrame RealtimeLoop::frame(const Camera& camera) {
   const LandingState& flight = predictor_.state();
   out.in_flight = flight.in_flight;
   if (settings_.predict && flight.in_flight) {
-    gaze = glm::clamp(deg_to_px(flight.landing_deg), glm::dvec2(0.0), glm::dvec2(requested_.width, requested_.height));
+    gaze = glm::clamp(known_landing_px_.value_or(deg_to_px(flight.landing_deg)), glm::dvec2(0.0),
+                      glm::dvec2(requested_.width, requested_.height));
     out.predicted = true;
   }
   out.gaze_px = gaze * scale_;

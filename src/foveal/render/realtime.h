@@ -184,6 +184,10 @@ class RealtimeLoop {
   // Hand back a frame's image once it is no longer shown: the next frame is composed into it
   // instead of a new one (fewer page faults, steadier frame times). Optional.
   void recycle(Image&& image);
+  // A landing known in advance, render pixels (bench latency's "deadline+oracle": each saccade's
+  // true landing, for the most any predictor could gain): while a saccade is in flight and
+  // prediction is on, the fovea goes there instead of the predicted landing. Unset: the prediction.
+  void set_known_landing(std::optional<glm::dvec2> landing_px) { known_landing_px_ = landing_px; }
   // Forget the accumulated AO (the next frame starts afresh).
   void reset();
   // A new frame budget (an application that measures its own per-frame work leaves the loop the
@@ -247,6 +251,7 @@ class RealtimeLoop {
   std::string note_;
   LandingPredictor predictor_;
   std::optional<glm::dvec2> measured_px_;
+  std::optional<glm::dvec2> known_landing_px_;  // set_known_landing
   bool have_view_ = false;
   Camera camera_;
   GBuffer gbuffer_;
