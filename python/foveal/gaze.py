@@ -35,8 +35,18 @@ EVENTS_DTYPE = np.dtype([("label", "U9"), ("first", "i8"), ("last", "i8"), ("ons
                          ("amplitude_deg", "f8"), ("peak_velocity_deg_s", "f8"), ("start_x_deg", "f8"),
                          ("start_y_deg", "f8"), ("end_x_deg", "f8"), ("end_y_deg", "f8")])
 
+#: Each detected saccade's landing as the live predictor saw it (``foveal gaze --events
+#: --landings-out``, docs/realtime.md): the event's index in ``Events.table``, its onset, landing
+#: and amplitude, where it ended (degrees), whether the predictor saw the flight, its first
+#: prediction past the peak and the error of it, the prediction two thirds in and its error, and
+#: for how long before the landing every prediction was within 1° (NaN where none was)
+LANDINGS_DTYPE = np.dtype([("event", "i8"), ("onset_s", "f8"), ("landing_s", "f8"), ("amplitude_deg", "f8"), ("end_x_deg", "f8"),
+                           ("end_y_deg", "f8"), ("predicted", "?"), ("predicted_x_deg", "f8"), ("predicted_y_deg", "f8"),
+                           ("error_deg", "f8"), ("two_thirds_x_deg", "f8"), ("two_thirds_y_deg", "f8"),
+                           ("two_thirds_error_deg", "f8"), ("gained_ms", "f8")])
+
 __all__ = ["Recording", "Events", "read", "fixations", "events", "evaluate", "PupilSource", "LslSource", "SAMPLE_DTYPE",
-           "EVENT_DTYPE", "FIXATION_DTYPE", "EVENTS_DTYPE", "LABELS"]
+           "EVENT_DTYPE", "FIXATION_DTYPE", "EVENTS_DTYPE", "LANDINGS_DTYPE", "LABELS"]
 
 
 def _samples(columns: Dict[str, np.ndarray]) -> np.ndarray:
@@ -217,6 +227,8 @@ class Events:
     peak_threshold_deg_s: float = float("nan")   #: the adaptive thresholds (nh, nhp; ek: mean η)
     onset_threshold_deg_s: float = float("nan")
     tsv: str = ""               #: the BIDS-style events table, as ``foveal gaze --events-out`` writes it
+    landings: np.ndarray = field(default_factory=lambda: np.empty(0, LANDINGS_DTYPE))  #: LANDINGS_DTYPE, one row per saccade
+    landings_tsv: str = ""      #: the same table as ``foveal gaze --landings-out`` writes it
 
     def __len__(self) -> int:
         return len(self.table)
@@ -243,19 +255,30 @@ class Events:
         """Write the events as a BIDS-style events.tsv (onset, duration, trial_type, amplitude_deg,
         peak_velocity_deg_s, start/end x/y in degrees; onsets from the first sample) — the file of
         ``foveal gaze --events-out``. An existing file is replaced only once the new one is whole."""
-        import os
-        import tempfile
-        path = os.fspath(path)
-        folder = os.path.dirname(os.path.abspath(path))
-        handle, temporary = tempfile.mkstemp(prefix=".events-", suffix=".tsv", dir=folder)
-        try:
-            with os.fdopen(handle, "w", encoding="utf-8", newline="") as out:
-                out.write(self.tsv)
-            os.replace(temporary, path)
-        except BaseException:
-            if os.path.exists(temporary):
-                os.unlink(temporary)
-            raise
+        _write_whole(path, self.tsv, ".events-")
+
+    def write_landings(self, path) -> None:
+        """Write each saccade's landing as the live predictor saw it — the file of ``foveal gaze
+        --landings-out`` (tab-separated, n/a where not predicted). Replaced only once whole."""
+        _write_whole(path, self.landings_tsv, ".landings-")
+
+
+def _write_whole(path, text: str, prefix: str) -> None:
+    """Write ``text`` to ``path`` through a temporary file beside it: an existing file is replaced
+    only once the new one is whole."""
+    import os
+    import tempfile
+    path = os.fspath(path)
+    folder = os.path.dirname(os.path.abspath(path))
+    handle, temporary = tempfile.mkstemp(prefix=prefix, suffix=".tsv", dir=folder)
+    try:
+        with os.fdopen(handle, "w", encoding="utf-8", newline="") as out:
+            out.write(text)
+        os.replace(temporary, path)
+    except BaseException:
+        if os.path.exists(temporary):
+            os.unlink(temporary)
+        raise
 
 
 def events(recording, method: str = "auto", display: Optional[_core.Display] = None,
@@ -270,7 +293,9 @@ def events(recording, method: str = "auto", display: Optional[_core.Display] = N
     seconds and degrees: the fixation filters' (see ``fixations``), pursuit_velocity_deg_s (6),
     pursuit_window_s (0.04), min_pursuit_s (0.08), filter_window_s (the Savitzky–Golay window;
     default the detector's: 0.006 nh/nhp, 0.010 nhr), detection_window_s (0.02), ek_lambda (6),
-    blink_flank_s (0.1), max_blink_s (2). Returns an ``Events``; the GIL is released while it runs.
+    blink_flank_s (0.1), max_blink_s (2). Returns an ``Events`` — with ``landings``, each
+    saccade's landing as the live predictor of the real-time loop saw it (``--landings-out``); the
+    GIL is released while it runs.
     """
     if not isinstance(method, str):
         raise TypeError(f"method: expected a detector's name, got {type(method).__name__}")
@@ -282,10 +307,14 @@ def events(recording, method: str = "auto", display: Optional[_core.Display] = N
     table["label"] = np.asarray(LABELS, dtype="U9")[np.asarray(t["label"], dtype=np.intp)]
     for name in EVENTS_DTYPE.names[1:]:
         table[name] = t[name]
+    lt = d["landings"]
+    landings = np.empty(len(lt["event"]), LANDINGS_DTYPE)
+    for name in LANDINGS_DTYPE.names:
+        landings[name] = lt[name]
     return Events(labels=np.asarray(d["labels"]), table=table, t_s=columns["t_s"],
                   velocity_deg_s=np.asarray(d["velocity_deg_s"]), method=d["method"], sampling_hz=d["sampling_hz"],
                   peak_threshold_deg_s=d["peak_threshold_deg_s"], onset_threshold_deg_s=d["onset_threshold_deg_s"],
-                  tsv=d["tsv"])
+                  tsv=d["tsv"], landings=landings, landings_tsv=d["landings_tsv"])
 
 
 def _label_codes(labels, argument: str) -> np.ndarray:

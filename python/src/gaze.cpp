@@ -5,6 +5,7 @@
 
 #include "foveal/gaze/detect.h"
 #include "foveal/gaze/fixation.h"
+#include "foveal/gaze/landing.h"
 #include "foveal/gaze/recording.h"
 #include "foveal/gaze/source.h"
 #include "foveal/util/error.h"
@@ -296,12 +297,15 @@ void bind_gaze(nb::module_& m) {
         const EventMethod em = parse_event_method(method);
         const Recording r = recording_from(columns);
         EventDetection d;
-        std::string tsv;
+        std::string tsv, landings_text;
+        std::vector<LandingReport> landings;
         {
           nb::gil_scoped_release release;
           const GazeGeometry geometry(display, r.screen_px);
           d = detect_events(r, geometry, em, ep, fp);
           tsv = events_tsv(d, r);
+          landings = evaluate_landings(r, geometry, d);  // as gaze --events does (--landings-out)
+          landings_text = landings_tsv(landings);
         }
         std::vector<uint8_t> labels(d.labels.size());
         for (size_t i = 0; i < labels.size(); ++i) labels[i] = static_cast<uint8_t>(d.labels[i]);
@@ -332,6 +336,29 @@ void bind_gaze(nb::module_& m) {
         out["peak_threshold_deg_s"] = d.peak_threshold_deg_s;
         out["onset_threshold_deg_s"] = d.onset_threshold_deg_s;
         out["tsv"] = tsv;
+        // Each saccade's landing as the live predictor saw it (gaze/landing.h), one column per field
+        nb::dict landing_table;
+        auto add_landing = [&](const char* name, auto field) {
+          std::vector<decltype(field(LandingReport{}))> values;
+          for (const LandingReport& l : landings) values.push_back(field(l));
+          landing_table[name] = column(std::move(values));
+        };
+        add_landing("event", [](const LandingReport& l) { return static_cast<int64_t>(l.event); });
+        add_landing("onset_s", [](const LandingReport& l) { return l.onset_s; });
+        add_landing("landing_s", [](const LandingReport& l) { return l.landing_s; });
+        add_landing("amplitude_deg", [](const LandingReport& l) { return l.amplitude_deg; });
+        add_landing("end_x_deg", [](const LandingReport& l) { return l.landing_deg.x; });
+        add_landing("end_y_deg", [](const LandingReport& l) { return l.landing_deg.y; });
+        add_landing("predicted", [](const LandingReport& l) { return static_cast<uint8_t>(l.predicted); });
+        add_landing("predicted_x_deg", [](const LandingReport& l) { return l.first_deg.x; });
+        add_landing("predicted_y_deg", [](const LandingReport& l) { return l.first_deg.y; });
+        add_landing("error_deg", [](const LandingReport& l) { return l.first_error_deg; });
+        add_landing("two_thirds_x_deg", [](const LandingReport& l) { return l.two_thirds_deg.x; });
+        add_landing("two_thirds_y_deg", [](const LandingReport& l) { return l.two_thirds_deg.y; });
+        add_landing("two_thirds_error_deg", [](const LandingReport& l) { return l.two_thirds_error_deg; });
+        add_landing("gained_ms", [](const LandingReport& l) { return l.gained_ms; });
+        out["landings"] = landing_table;
+        out["landings_tsv"] = landings_text;
         return out;
       },
       "columns"_a, "display"_a, "method"_a, "params"_a);

@@ -59,6 +59,34 @@ def test_events_equal_the_command_lines_on_an_irf_recording(cli, tmp_path, metho
     assert path.read_text() == tsv
 
 
+def test_landings_equal_the_command_lines_on_an_irf_recording(cli, tmp_path):
+    """Each saccade's landing as the live predictor saw it: gaze --events --landings-out, from Python."""
+    recording = shared("eye-movements", "irf", "lookAtPoint_EL_S2.csv")
+    landings_out = tmp_path / "landings.tsv"
+    run_cli(cli, "gaze", recording, "--display", IRF_DISPLAY[0], "--coords", "deg", "--events", "auto", "--landings-out",
+            landings_out, "--no-scanpath", "-q")
+    rec = foveal.gaze.read(recording, coords="deg", display=IRF_DISPLAY[1])
+    found = foveal.gaze.events(rec, display=IRF_DISPLAY[1])
+    assert found.landings_tsv == landings_out.read_text()
+    landings = found.landings
+    assert landings.dtype == foveal.gaze.LANDINGS_DTYPE
+    # One row per detected saccade, in order, pointing at its event
+    assert list(found.table["label"][landings["event"]]) == ["saccade"] * len(landings)
+    assert len(landings) == found.counts()["saccade"] and np.all(np.diff(landings["onset_s"]) > 0)
+    # A predicted row's error is the distance from its first prediction to where the saccade ended
+    seen = landings[landings["predicted"]]
+    assert len(seen) > 0.5 * len(landings)
+    error = np.hypot(seen["predicted_x_deg"] - seen["end_x_deg"], seen["predicted_y_deg"] - seen["end_y_deg"])
+    assert np.allclose(error, seen["error_deg"])
+    assert np.all(np.isnan(landings[~landings["predicted"]]["error_deg"]))
+    # The large saccades are predicted, and two thirds in the prediction is closer than at first (median)
+    large = seen[seen["amplitude_deg"] >= 5]
+    assert len(large) > 10 and np.median(large["two_thirds_error_deg"]) < np.median(large["error_deg"])
+    path = tmp_path / "landings-again.tsv"
+    found.write_landings(path)
+    assert path.read_text() == landings_out.read_text()
+
+
 def test_evaluate_gives_the_command_lines_scores_and_ceiling_on_lund(cli, tmp_path):
     folder = shared("eye-movements", "lund2013-train", "video")
     mn = folder / "TH34_video_BergoDalbana_labelled_MN.csv"
