@@ -3,7 +3,6 @@
 #include "commands.h"
 #include "foveal/experiments/latency.h"
 #include "foveal/render/outputs.h"
-#include "foveal/util/cpu_share.h"
 #include "foveal/util/error.h"
 #include "foveal/util/parallel.h"
 #include "foveal/util/parse.h"
@@ -72,42 +71,15 @@ int run_bench_latency(const BenchLatencyOptions& o) {
   std::vector<Recording> recordings;
   for (const std::string& path : paths) recordings.push_back(read_recording_warned(path, read));
   const ComputeDevice device = choose_device(o.device);
-  const std::unique_ptr<FrameRenderer> renderer = make_frame_renderer(scene, device);
-  LatencyRun run;
-  run.renderer = renderer.get();
-  run.scene = &scene;
-  run.camera = camera;
-  run.scene_name = spec;
-  run.device = fmt::format("{} ({} threads)", renderer->describe(), threads.threads());
-  // The raw rate of the device the loops render on: Embree's on the CPU, the GPU's own kernel
-  run.raw_rays_per_ms = [&](std::span<const Ray> rays) { return renderer->raw_occlusion_rays_per_ms(rays); };
-  run.say = [](const std::string& line) {
+  const LatencyReport report = bench_latency(scene, spec, camera, device, threads.threads(), recordings, p, [](const std::string& line) {
     fmt::print("{}\n", line);
     std::fflush(stdout);
-  };
-  fmt::print("foveal bench latency: {} on {}\n", spec, run.device);
-  const CpuTimes before = read_cpu_times();
-  LatencyReport report = run_latency_bench(run, recordings, p);
-  // What else ran: a frame comes late when another process or the hypervisor takes its core
-  const CpuShare share = cpu_share(before, read_cpu_times());
-  if (std::isfinite(share.others)) {
-    report.json["machine"] = {{"others_cpu_fraction", share.others}, {"steal_fraction", share.steal}};
-    if (!report.markdown.ends_with("\n\n")) report.markdown += "\n";
-    report.markdown += fmt::format(
-        "The machine during the run: other processes kept {:.0f} % of all CPUs' time busy, the hypervisor took {:.0f} % "
-        "(steal){}.\n",
-        100 * share.others, 100 * share.steal,
-        share.others > 0.05 || share.steal > 0.01 ? ": wall-clock late frames may be theirs, not the loop's" : "");
-  }
+  });
   fmt::print("\n{}", report.markdown);
   if (!o.json.empty()) write_json_file(o.json, report.json);
   if (!o.markdown.empty()) write_text_file(o.markdown, report.markdown);
   if (!o.timeline.empty()) {
-    const LatencyRecording& r = report.recordings.front();
-    if (r.loops.empty() || r.loops.front().saccades.empty())
-      fail("--timeline: no saccade of at least {}° lands in {}'s segment", o.min_amplitude, r.recording);
-    const size_t k = std::min<size_t>(static_cast<size_t>(o.timeline_saccade), r.loops.front().saccades.size() - 1);
-    write_latency_timeline(r, k, o.timeline);
+    const size_t k = write_first_timeline(report, static_cast<size_t>(o.timeline_saccade), o.min_amplitude, o.timeline);
     fmt::print("timeline of saccade {} written to {}\n", k, o.timeline);
   }
   return 0;

@@ -51,6 +51,7 @@ constexpr std::array kOptions = std::to_array<ParameterName>({
     {"min_amplitude_deg", "--min-amplitude"},
     {"clock", "--clock"},
     {"loops", "--loops"},
+    {"timeline", "--timeline"},
     {"model_rays_per_ms", "--model-rays-per-ms"},
     {"model_fixed_ms", "--model-fixed-ms"},
     {"margin_ms", "--margin-ms"},

@@ -41,7 +41,8 @@ from . import gaze as _gaze
 
 __all__ = [
     "Camera", "Display", "Frame", "Loop", "LoopFrame", "Renderer", "Scene", "VisionSimulation", "VisionStep",
-    "compare", "gaze", "load_image", "perceive", "save_image", "stalls", "device_available", "device_description",
+    "bench_latency", "compare", "gaze", "load_image", "perceive", "save_image", "stalls", "device_available",
+    "device_description",
 ]
 __version__ = "0.1.0"
 
@@ -302,3 +303,52 @@ def compare(a: ImageLike, b: ImageLike, gaze: Optional[Tuple[float, float]] = No
     ia, ib = _image(a, "a"), _image(b, "b")
     ib2 = None if reference2 is None else _image(reference2, "reference2")
     return _numbers(_core._compare(ia, ib, ib2, gaze, display, ellipse, ssim_border))
+
+
+def bench_latency(recordings: Any, scene: Scene, camera: Any = None, size: Tuple[int, int] = (840, 525),
+                  display: Optional[Display] = None, start_s: float = 0.0, duration_s: float = 3.0, refresh_hz: float = 60.0,
+                  frame_budget_ms: Optional[float] = None, latency_ms: Optional[float] = None, margin_ms: Optional[float] = None,
+                  clock: str = "wall", model_rays_per_ms: Optional[float] = None, model_fixed_ms: Optional[float] = None,
+                  loops: Sequence[str] = ("whole-frame", "deadline", "deadline+prediction"), min_amplitude_deg: float = 2.0,
+                  max_rays: int = 400, tolerance: float = 0.35, seed: int = 1, device: str = "cpu", threads: int = 0,
+                  progress: bool = False, timeline: Optional[Union[str, "os.PathLike[str]"]] = None,
+                  timeline_saccade: int = 0) -> dict:
+    """``foveal bench latency`` from Python: gaze-to-photon latency of the display loops on recorded gaze.
+
+    ``recordings``: one or a list of recordings — paths (read as the command line reads them, the
+    recording's screen filling ``display``) or ``foveal.gaze.Recording`` objects. ``scene`` a
+    ``foveal.Scene`` (the command line's default is the dragon box, ``scenes/dragon-box.json``),
+    ``camera`` a camera name or ``Camera`` (its first). The other arguments are the command line's
+    options (docs/realtime.md): the segment (``start_s``, ``duration_s``), the display
+    (``refresh_hz``, ``frame_budget_ms``), the tracker's ``latency_ms``, the deadline loops'
+    ``margin_ms``, the ``clock`` (wall or model, with ``model_rays_per_ms`` and
+    ``model_fixed_ms``), the ``loops`` (whole-frame, deadline, deadline+prediction,
+    deadline+oracle), the judged saccades' ``min_amplitude_deg``. ``progress`` prints the
+    command line's progress lines; ``timeline`` draws a saccade's timeline (.png or .svg). Returns
+    the dict of ``--json`` with its tables under ``"markdown"``; the GIL is released while it runs.
+    """
+    if isinstance(recordings, (str, os.PathLike, _gaze.Recording)):
+        recordings = [recordings]
+    d = display if display is not None else Display()
+    columns = []
+    for k, r in enumerate(recordings):
+        if isinstance(r, (str, os.PathLike)):
+            r = _gaze.read(r, display=d)
+        elif not isinstance(r, _gaze.Recording):
+            raise TypeError(f"recordings[{k}]: a path or a foveal.gaze.Recording, got {type(r).__name__}")
+        columns.append((r.source or f"recordings[{k}]", _gaze._columns(r, None, f"recordings[{k}]")))
+    if isinstance(loops, str):
+        loops = loops.split(",")
+    def number(value, name):  # ints are numbers too (the core takes floats)
+        if value is None:
+            return None
+        if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
+            raise TypeError(f"{name}: expected a number, got {type(value).__name__}")
+        return float(value)
+    return _numbers(_core._bench_latency(
+        scene, getattr(scene, "source", ""), columns, camera, size, display, number(start_s, "start_s"),
+        number(duration_s, "duration_s"), number(refresh_hz, "refresh_hz"), number(frame_budget_ms, "frame_budget_ms"),
+        number(latency_ms, "latency_ms"), number(margin_ms, "margin_ms"), clock, number(model_rays_per_ms, "model_rays_per_ms"),
+        number(model_fixed_ms, "model_fixed_ms"), list(loops), number(min_amplitude_deg, "min_amplitude_deg"), max_rays,
+        number(tolerance, "tolerance"), seed, device, threads, progress, "" if timeline is None else os.fspath(timeline),
+        timeline_saccade))

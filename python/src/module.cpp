@@ -6,6 +6,7 @@
 // library works, so that other Python threads (a tracker's, a window's) run meanwhile.
 #include "bindings.h"
 
+#include "foveal/experiments/latency.h"
 #include "foveal/experiments/stalls_report.h"
 #include "foveal/impair/profile.h"
 #include "foveal/io/image_io.h"
@@ -15,6 +16,7 @@
 #include "foveal/render/frame_renderer.h"
 #include "foveal/render/realtime.h"
 #include "foveal/util/error.h"
+#include "foveal/util/files.h"
 #include "foveal/util/parallel.h"
 #include "foveal/util/text.h"
 #include "foveal/util/timer.h"
@@ -693,6 +695,70 @@ NB_MODULE(_core, m) {
       "duration_s"_a = 10.0, "threads"_a = 0, "threshold_ms"_a = 1.0, "chunk_us"_a = 100.0, "margin_ms"_a = LoopSettings{}.margin_ms,
       "How often this machine pauses a working thread, off its CPU or on it (`foveal bench stalls`; docs/realtime.md): the dict "
       "of its --json.");
+  m.def(
+      "_bench_latency",
+      [](const PyScene& s, const std::string& scene_name, const nb::list& recordings, const nb::object& camera_arg,
+         const std::array<int, 2>& size, std::optional<Display> display, double start_s, double duration_s, double refresh_hz,
+         std::optional<double> frame_budget_ms, std::optional<double> latency_ms, std::optional<double> margin_ms, const std::string& clock,
+         std::optional<double> model_rays_per_ms, std::optional<double> model_fixed_ms, const std::vector<std::string>& loops,
+         double min_amplitude_deg, int max_rays, double tolerance, uint64_t seed, const std::string& device_name, int threads,
+         bool progress, const std::string& timeline, int timeline_saccade) {
+        // `bench latency` (apps/bench_latency.cpp) on recordings foveal.gaze hands over as columns
+        LatencyParams p;
+        std::tie(p.render.width, p.render.height) = size_of(size, "size");
+        p.render.display = display ? *display : Display{};
+        p.render.foveation.max_rays = max_rays;
+        p.render.seed = seed;
+        p.render.reuse.tolerance = tolerance;
+        p.refresh_hz = refresh_hz;
+        p.budget_ms = frame_budget_ms;
+        p.tracker_latency_ms = latency_ms;
+        p.margin_ms = margin_ms;
+        p.clock = parse_loop_clock(clock);
+        p.model_rays_per_ms = model_rays_per_ms;
+        p.model_fixed_ms = model_fixed_ms;
+        p.start_s = start_s;
+        p.duration_s = duration_s;
+        p.min_amplitude_deg = min_amplitude_deg;
+        p.loops = loops;
+        if (threads < 0) fail("threads: must be 0 (all cores) or more, got {}", threads);
+        if (timeline_saccade < 0) fail("timeline_saccade: must be 0 or more, got {}", timeline_saccade);
+        if (!timeline.empty()) try {
+            check_output_file(timeline, {".png", ".svg"});
+          } catch (const Error& e) {
+            fail("timeline: {}", e.what());
+          }
+        validate(p);
+        if (recordings.size() == 0) fail("recordings: give at least one");
+        std::vector<Recording> recs;
+        for (const nb::handle item : recordings) {
+          const nb::tuple pair = nb::cast<nb::tuple>(item);
+          Recording r = recording_from(nb::cast<nb::dict>(pair[1]));
+          r.source = nb::cast<std::string>(pair[0]);
+          recs.push_back(std::move(r));
+        }
+        const Camera camera = resolve_camera(*s.scene, camera_arg);
+        const ComputeDevice device = choose_device(device_name);
+        nlohmann::json j;
+        {
+          nb::gil_scoped_release release;
+          const ThreadScope scope(threads);
+          LatencyReport report =
+              bench_latency(*s.scene, scene_name, camera, device, scope.threads(), recs, p, [progress](const std::string& line) {
+                if (!progress) return;
+                fmt::print("{}\n", line);
+                std::fflush(stdout);
+              });
+          report.json["markdown"] = report.markdown;
+          if (!timeline.empty()) write_first_timeline(report, static_cast<size_t>(timeline_saccade), min_amplitude_deg, timeline);
+          j = std::move(report.json);
+        }
+        return to_python(j);
+      },
+      "scene"_a, "scene_name"_a, "recordings"_a, "camera"_a.none(), "size"_a, "display"_a.none(), "start_s"_a, "duration_s"_a,
+      "refresh_hz"_a, "frame_budget_ms"_a.none(), "latency_ms"_a.none(), "margin_ms"_a.none(), "clock"_a, "model_rays_per_ms"_a.none(),
+      "model_fixed_ms"_a.none(), "loops"_a, "min_amplitude_deg"_a, "max_rays"_a, "tolerance"_a, "seed"_a, "device"_a, "threads"_a,
+      "progress"_a, "timeline"_a, "timeline_saccade"_a);
   m.def(
       "device_available", [] { return availability().usable; }, "Whether a usable NVIDIA GPU answered.");
   m.def(

@@ -169,3 +169,53 @@ def test_stalls_probe_the_machine_as_bench_stalls_does():
         foveal.stalls(duration_s=0)
     with pytest.raises(ValueError, match="margin_ms"):
         foveal.stalls(duration_s=0.1, margin_ms=-1)
+
+
+def _two_saccades(path):
+    """500 Hz t,x,y: the eye jumps 800 px right at 0.4 s and back at 1.0 s (65 ms saccades)."""
+    t = np.arange(800) / 500.0
+
+    def bell(tau):
+        tau = np.clip(tau, 0, 1)
+        return tau - np.sin(2 * np.pi * tau) / (2 * np.pi)
+    x = 400 + 800 * bell((t - 0.4) / 0.065) - 800 * bell((t - 1.0) / 0.065) + 0.3 * (np.arange(800) % 3)
+    y = 520 + 0.2 * (np.arange(800) % 2)
+    with open(path, "w") as f:
+        f.write("t,x,y\n")
+        for row in zip(t, x, y):
+            f.write("%.6f,%.6f,%.6f\n" % row)
+
+
+def test_bench_latency_from_python_equals_the_command_lines(cli, box, tmp_path):
+    """foveal.bench_latency: bench latency's figures, under a given cost model the same as the command line's."""
+    from conftest import run_cli
+    recording = tmp_path / "saccades.csv"
+    _two_saccades(recording)
+    model = ["--clock", "model", "--model-rays-per-ms", "2000", "--model-fixed-ms", "3"]
+    run_cli(cli, "bench", "latency", "--scene", "builtin:box", "--size", "168x105", "--max-rays", "64", "--recording", recording,
+            "--duration", "1.5", *model, "--min-amplitude", "5", "--loops", "deadline,deadline+prediction", "--json",
+            tmp_path / "cli.json")
+    import json
+    expected = json.loads((tmp_path / "cli.json").read_text())
+    got = foveal.bench_latency(str(recording), box, size=(168, 105), max_rays=64, duration_s=1.5, clock="model",
+                               model_rays_per_ms=2000, model_fixed_ms=3, min_amplitude_deg=5,
+                               loops=("deadline", "deadline+prediction"), timeline=tmp_path / "timeline.svg")
+    assert "| deadline+prediction |" in got["markdown"] and (tmp_path / "timeline.svg").exists()
+    assert got["clock"] == "model" and got["size"] == [168, 105]
+    a, b = got["recordings"][0], expected["recordings"][0]
+    assert a["recording"] == b["recording"] and a["tracker_latency_ms"] == b["tracker_latency_ms"]
+    for loop in ("deadline", "deadline+prediction"):
+        strip = lambda saccades: [{k: v for k, v in s.items() if k != "ray_bound_ms"} for s in saccades]  # noqa: E731 (measured)
+        assert strip(a[loop]["saccades"]) == strip(b[loop]["saccades"]), loop
+        assert a[loop]["timeline"] == b[loop]["timeline"], loop
+        assert len(a[loop]["saccades"]) == 2 and a[loop]["frames_late"] == 0
+    # A Recording object does as well as its path; bad arguments are named
+    again = foveal.bench_latency(foveal.gaze.read(str(recording)), box, size=(168, 105), max_rays=64, duration_s=1.5,
+                                 clock="model", model_rays_per_ms=2000, model_fixed_ms=3, min_amplitude_deg=5, loops="deadline")
+    assert again["recordings"][0]["deadline"]["timeline"] == a["deadline"]["timeline"]
+    with pytest.raises(ValueError, match="loops"):
+        foveal.bench_latency(str(recording), box, size=(168, 105), loops=("sometimes",))
+    with pytest.raises(TypeError, match=r"recordings\[0\]"):
+        foveal.bench_latency([3], box)
+    with pytest.raises(ValueError, match="timeline"):
+        foveal.bench_latency(str(recording), box, size=(168, 105), loops="deadline", timeline=tmp_path / "t.gif")

@@ -15,6 +15,7 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <memory>
 
 namespace foveal {
 
@@ -633,6 +634,46 @@ LatencyReport run_latency_bench(const LatencyRun& run, const std::vector<Recordi
   report.markdown = md;
   report.json = j;
   return report;
+}
+
+LatencyReport bench_latency(const Scene& scene, const std::string& scene_name, const Camera& camera, ComputeDevice device, int threads,
+                            const std::vector<Recording>& recordings, const LatencyParams& params,
+                            const std::function<void(const std::string&)>& say) {
+  const std::unique_ptr<FrameRenderer> renderer = make_frame_renderer(scene, device);
+  LatencyRun run;
+  run.renderer = renderer.get();
+  run.scene = &scene;
+  run.camera = camera;
+  run.scene_name = scene_name;
+  run.device = fmt::format("{} ({} threads)", renderer->describe(), threads);
+  // The raw rate of the device the loops render on: Embree's on the CPU, the GPU's own kernel
+  run.raw_rays_per_ms = [&](std::span<const Ray> rays) { return renderer->raw_occlusion_rays_per_ms(rays); };
+  run.say = say;
+  say(fmt::format("foveal bench latency: {} on {}", scene_name, run.device));
+  const CpuTimes before = read_cpu_times();
+  LatencyReport report = run_latency_bench(run, recordings, params);
+  // What else ran: a frame comes late when another process or the hypervisor takes its core
+  const CpuShare share = cpu_share(before, read_cpu_times());
+  if (std::isfinite(share.others)) {
+    report.json["machine"] = {{"others_cpu_fraction", share.others}, {"steal_fraction", share.steal}};
+    if (!report.markdown.ends_with("\n\n")) report.markdown += "\n";
+    report.markdown += fmt::format(
+        "The machine during the run: other processes kept {:.0f} % of all CPUs' time busy, the hypervisor took {:.0f} % "
+        "(steal){}.\n",
+        100 * share.others, 100 * share.steal,
+        share.others > 0.05 || share.steal > 0.01 ? ": wall-clock late frames may be theirs, not the loop's" : "");
+  }
+  return report;
+}
+
+size_t write_first_timeline(const LatencyReport& report, size_t saccade, double min_amplitude_deg, const std::string& path) {
+  if (report.recordings.empty()) fail("timeline: no recording");
+  const LatencyRecording& r = report.recordings.front();
+  if (r.loops.empty() || r.loops.front().saccades.empty())
+    fail("timeline: no saccade of at least {}° lands in {}'s segment", min_amplitude_deg, r.recording);
+  const size_t k = std::min(saccade, r.loops.front().saccades.size() - 1);
+  write_latency_timeline(r, k, path);
+  return k;
 }
 
 void write_latency_timeline(const LatencyRecording& r, size_t saccade, const std::string& path) {

@@ -141,8 +141,18 @@ struct LatencyRun {
 
 LatencyReport run_latency_bench(const LatencyRun& run, const std::vector<Recording>& recordings, const LatencyParams& params);
 
+// The whole bench on one device, as `bench latency` and foveal.bench_latency run it: the renderer
+// (on `threads` worker threads, the caller's ThreadScope, as the report says), its raw rate, the loops on every recording, and what
+// else the machine ran meanwhile (json "machine", a line under the tables). `say`: progress lines.
+LatencyReport bench_latency(const Scene& scene, const std::string& scene_name, const Camera& camera, ComputeDevice device, int threads,
+                            const std::vector<Recording>& recordings, const LatencyParams& params,
+                            const std::function<void(const std::string&)>& say);
+
 // A saccade's timeline as a picture: gaze x and y, the fovea's placement per frame of each loop,
 // and the fovea's error per shown frame; written by extension (.png or .svg).
 void write_latency_timeline(const LatencyRecording& recording, size_t saccade, const std::string& path);
+// The first recording's judged saccade `saccade` (the last where there are fewer) as such a
+// picture; returns its index. Throws Error where the segment has none.
+size_t write_first_timeline(const LatencyReport& report, size_t saccade, double min_amplitude_deg, const std::string& path);
 
 }  // namespace foveal
