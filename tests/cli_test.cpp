@@ -161,6 +161,8 @@ TEST(Cli, EveryNumberIsFiniteAndNoUnsignedOneNegative) {
       {"bench latency --min-amplitude -inf", "--min-amplitude: must be a finite number, got -inf"},
       {"bench latency --timeline-saccade -1", "--timeline-saccade"},
       {"bench quality --max-error -1", "--max-error"},
+      {"view --frame-budget-ms -1", "--frame-budget-ms"},  // (without --realtime: before any window opens)
+      {"view --starvation -1", "--starvation"},
       {"bench quality --max-flicker 0", "--max-flicker"},
   };
   expect_clear_errors(cases);
