@@ -111,6 +111,9 @@ void judge_frame(const Segment& s, const Image& image, double shown_s, double un
     if (fovea_error(s.masks[j], image, s.ref).second) sac.converged_ms = std::max(0.0, shown_s - sac.landing_s) * 1000;
   }
   if (!s.saccades.empty()) frame.fovea_error = fovea_error(s.masks[followed_saccade(s, shown_s)], image, s.ref).first;
+  for (size_t j = 0; j < s.saccades.size(); ++j)
+    if (std::abs(s.saccades[j].landing_s - shown_s) <= LatencyFrame::kNearS)
+      frame.near_errors.emplace_back(static_cast<uint32_t>(j), static_cast<float>(fovea_error(s.masks[j], image, s.ref).first));
 }
 
 // The display: the frame on screen, judged once the next frame's refresh is known.
@@ -697,20 +700,22 @@ void write_latency_timeline(const LatencyRecording& r, size_t saccade, const std
   for (size_t i = 0; i < r.gaze_t.size(); ++i)
     if (r.gaze_t[i] >= t0 && r.gaze_t[i] <= t1) gaze.points.emplace_back(x_of(r.gaze_t[i]), y_top(r.gaze_px[i].x));
   plot.strokes.push_back(gaze);
-  const glm::vec3 colours[3] = {{0.6f, 0.6f, 0.6f}, {0.15f, 0.45f, 0.85f}, {0.85f, 0.35f, 0.1f}};
-  // Bottom: the landed fovea's error per shown frame (× the reference's noise, log scale 0.5–64)
+  const glm::vec3 colours[4] = {{0.6f, 0.6f, 0.6f}, {0.15f, 0.45f, 0.85f}, {0.85f, 0.35f, 0.1f}, {0.55f, 0.2f, 0.65f}};
+  // Bottom: this saccade's landed fovea's error per shown frame, before the landing too (× the
+  // reference's noise, log scale 0.5–64)
   const auto y_bottom = [&](double e) {
     const double l = std::clamp(std::log2(std::max(e, 0.5)), -1.0, 6.0);
     return bottom - static_cast<float>((l + 1) / 7) * (bottom - mid - 30);
   };
-  for (size_t k = 0; k < r.loops.size() && k < 3; ++k) {
+  for (size_t k = 0; k < r.loops.size() && k < std::size(colours); ++k) {
     Stroke place{{}, colours[k], 1.5f, false}, err{{}, colours[k], 2};
     for (const LatencyFrame& f : r.loops[k].timeline) {
       if (f.shown_s < t0 || f.start_s > t1) continue;
       const double a = std::max(f.start_s, t0), b = std::min(f.shown_s, t1);
       place.points.emplace_back(x_of(a), y_top(f.gaze_px.x));
       place.points.emplace_back(x_of(b), y_top(f.gaze_px.x));
-      if (std::isfinite(f.fovea_error) && f.shown_s <= t1) err.points.emplace_back(x_of(f.shown_s), y_bottom(f.fovea_error));
+      for (const auto& [j, e] : f.near_errors)
+        if (j == saccade && std::isfinite(e) && f.shown_s <= t1) err.points.emplace_back(x_of(f.shown_s), y_bottom(e));
     }
     plot.strokes.push_back(place);
     plot.strokes.push_back(err);
@@ -725,7 +730,7 @@ void write_latency_timeline(const LatencyRecording& r, size_t saccade, const std
   plot.labels.push_back(
       {{left, top - 28},
        fmt::format("{}: a {:.1f} deg saccade. Gaze x (black, render px) and where each loop put the fovea", name, sac.amplitude_deg)});
-  plot.labels.push_back({{left, mid + 4}, "The landed fovea's error per shown frame, x the reference's noise (log, 0.5 to 64; green: 1)"});
+  plot.labels.push_back({{left, mid + 4}, "Its landed fovea's error per shown frame, x the reference's noise (log, 0.5 to 64; green: 1)"});
   plot.labels.push_back({{left, bottom + 22}, fmt::format("time {:.2f} to {:.2f} s; each loop's frames as shown", t0, t1)});
   save_plot(plot, path);
 }

@@ -70,6 +70,11 @@ struct LatencyFrame {  // one shown frame, for the timeline picture
   glm::dvec2 gaze_px{0};  // where the fovea was placed
   bool predicted = false;
   double fovea_error = NAN;  // RMSE in the fovea of the saccade being followed, over the reference noise (NaN: none)
+  // The same for each saccade landing within kNearS of the frame's showing (saccade index, error):
+  // what the timeline picture draws for its saccade, before its landing too (the followed one is
+  // then the saccade before, another place)
+  static constexpr double kNearS = 0.6;
+  std::vector<std::pair<uint32_t, float>> near_errors;
 };
 
 // One frame of a deadline loop (wall clock): its parts, and, when it came late, where the machine's
