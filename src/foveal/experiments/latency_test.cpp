@@ -2,11 +2,14 @@
 // of each frame against its plan).
 #include "foveal/experiments/latency.h"
 
+#include "foveal/gaze/recording.h"
 #include "foveal/scene/scene.h"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
+
+#include <fmt/format.h>
 
 namespace foveal {
 namespace {
@@ -95,6 +98,64 @@ TEST(LatencyLateFrames, TheLoopReportsItsPlanForEachFrame) {
     EXPECT_LE(f.rays_end_ms, f.ms);
     EXPECT_GE(f.ms - f.rays_end_ms, f.compose_ms);
   }
+}
+
+// The timeline picture draws its saccade's own fovea in every frame near it: before the landing
+// the followed fovea is the saccade before's, another place. With a perfect predictor that fovea's
+// error already falls before the eye lands.
+TEST(LatencyTimeline, EachFrameNearALandingJudgesThatSaccadesFovea) {
+  std::string csv = "t,x,y\n";  // 500 Hz: 800 px right at 0.4 s, back at 1.0 s (65 ms saccades)
+  auto bell = [](double tau) { return tau <= 0 ? 0.0 : tau >= 1 ? 1.0 : tau - std::sin(2 * M_PI * tau) / (2 * M_PI); };
+  for (int i = 0; i < 800; ++i) {
+    const double t = i / 500.0;
+    csv += fmt::format("{},{},{}\n", t, 400 + 800 * bell((t - 0.4) / 0.065) - 800 * bell((t - 1.0) / 0.065) + 0.3 * (i % 3), 520);
+  }
+  const Scene scene = make_builtin_scene("box");
+  LatencyParams p;
+  p.render.width = 168;
+  p.render.height = 105;
+  p.render.foveation.max_rays = 64;
+  p.clock = LoopClock::model;
+  p.model_rays_per_ms = 2000;
+  p.model_fixed_ms = 3;
+  p.duration_s = 1.5;
+  p.min_amplitude_deg = 5;
+  p.loops = {"deadline", "deadline+oracle"};
+  const LatencyReport report = bench_latency(scene, "builtin:box", scene.cameras.front(), ComputeDevice::cpu, 1,
+                                             {parse_recording(csv, "saccades.csv")}, p, [](const std::string&) {});
+  const LatencyRecording& r = report.recordings.front();
+  ASSERT_EQ(r.loops.size(), 2u);
+  ASSERT_EQ(r.loops[0].saccades.size(), 2u);
+  const double first = r.loops[0].saccades[0].landing_s, second = r.loops[0].saccades[1].landing_s;
+  auto near = [](const LatencyFrame& f, uint32_t j) -> double {
+    for (const auto& [k, e] : f.near_errors)
+      if (k == j) return static_cast<double>(e);
+    return NAN;
+  };
+  for (const LatencyLoop& loop : r.loops) {
+    SCOPED_TRACE(loop.name);
+    size_t between = 0;
+    for (const LatencyFrame& f : loop.timeline) {
+      // Near a landing, that saccade's fovea is judged
+      if (std::abs(f.shown_s - first) <= LatencyFrame::kNearS) EXPECT_TRUE(std::isfinite(near(f, 0))) << f.shown_s;
+      if (std::abs(f.shown_s - second) <= LatencyFrame::kNearS) EXPECT_TRUE(std::isfinite(near(f, 1))) << f.shown_s;
+      // Between the landings the followed fovea is the first saccade's: the same figure
+      if (f.shown_s > first && f.shown_s < second && std::abs(f.shown_s - first) <= LatencyFrame::kNearS) {
+        EXPECT_FLOAT_EQ(static_cast<float>(f.fovea_error), static_cast<float>(near(f, 0)));
+        ++between;
+      }
+    }
+    EXPECT_GT(between, 10u);
+  }
+  // The oracle's frames shown before the first landing already lower its fovea's error; without
+  // prediction the last frame before the landing shows none of it
+  auto last_before = [&](const LatencyLoop& loop) -> double {
+    double e = NAN;
+    for (const LatencyFrame& f : loop.timeline)
+      if (f.shown_s < first) e = near(f, 0);
+    return e;
+  };
+  EXPECT_LT(last_before(r.loops[1]), last_before(r.loops[0]));
 }
 
 }  // namespace
