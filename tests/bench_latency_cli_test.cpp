@@ -94,6 +94,12 @@ TEST(BenchLatencyCli, ThreeLoopsUnderTheModelClockWriteTheDocumentedJson) {
     for (auto& s : saccades) s.erase("ray_bound_ms");
     return saccades;
   };
+  // What prediction gains in the median over the loop without it, beside a third of the median saccade
+  ASSERT_TRUE(r.contains("prediction_gain_ms"));
+  EXPECT_DOUBLE_EQ(r["prediction_gain_ms"].get<double>(), r["deadline"]["median_landing_to_converged_ms"].get<double>() -
+                                                              r["deadline+prediction"]["median_landing_to_converged_ms"].get<double>());
+  EXPECT_NEAR(r["third_of_median_saccade_ms"].get<double>(), r["deadline"]["saccades"][0]["duration_ms"].get<double>() / 3, 10);
+  EXPECT_NE(a.out.find("Gained over the deadline loop's median: deadline+prediction"), std::string::npos) << a.out;
   for (const char* loop : {"deadline", "deadline+prediction"}) {
     EXPECT_EQ(without_bound(k["recordings"][0][loop]["saccades"]), without_bound(r[loop]["saccades"])) << loop;
     EXPECT_EQ(k["recordings"][0][loop]["timeline"], r[loop]["timeline"]) << loop;
@@ -116,7 +122,9 @@ TEST(BenchLatencyCli, TheOracleLoopPlacesTheFoveaAtTheTrueLanding) {
     ASSERT_TRUE(s.contains("predicted_error_deg"));
     EXPECT_LT(s["predicted_error_deg"].get<double>(), 1e-6);
   }
-  double predicted = 0;  // the mirror's last prediction before each landing is not exact
+  // What each gains over the loop without prediction, beside a third of the median saccade (65 ms here)
+  EXPECT_FALSE(rec_json.contains("prediction_gain_ms"));  // (no deadline loop ran)
+  double predicted = 0;                                   // the mirror's last prediction before each landing is not exact
   for (const auto& s : rec_json["deadline+prediction"]["saccades"]) predicted += s["predicted_error_deg"].get<double>();
   EXPECT_GT(predicted, 1e-3);
 }
