@@ -49,10 +49,7 @@ int run_view(const ViewCommandOptions& o) {
   s.frame_budget_ms = o.frame_budget_ms;
   s.predict = !o.no_predict;
   if (o.realtime && s.mode != ViewMode::foveated) fail("--realtime: the real-time loop shows the foveated mode (--mode foveated)");
-  // (checked whatever the mode: a value out of range is a mistake either way)
-  if (!(o.frame_budget_ms > 0 && o.frame_budget_ms <= 1000)) fail("--frame-budget-ms: must be in (0, 1000] ms, got {}", o.frame_budget_ms);
-  if (!(o.starvation >= 0 && o.starvation < 10)) fail("--starvation: must be in [0, 10), got {}", o.starvation);
-  resolve(s);
+  resolve(s);  // (every setting, whatever the mode: a value out of range is a mistake either way)
   WindowOptions w;
   w.overlays = parse_overlays(o.overlays);
   w.frames = o.frames;

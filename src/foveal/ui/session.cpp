@@ -53,6 +53,7 @@ void resolve(ViewSettings& s) {
   s.vision.height = s.render.height;
   validate(s.vision);
   if (!(s.diff_gain > 0)) fail("diff_gain: must be positive, got {}", s.diff_gain);
+  if (!(s.frame_budget_ms > 0 && s.frame_budget_ms <= 1000)) fail("frame_budget_ms: must be in (0, 1000] ms, got {}", s.frame_budget_ms);
 }
 
 namespace {

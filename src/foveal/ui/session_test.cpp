@@ -296,6 +296,13 @@ TEST(ViewSession, BadSettingsAreRefusedWithTheReason) {
   s = small_settings(ViewMode::foveated);
   s.render.foveation.gamma = 0;
   EXPECT_THROW(resolve(s), Error);
+  // Settings of another mode are checked too: a bad value is a mistake whatever the mode
+  s = small_settings(ViewMode::foveated);
+  s.vision.starvation = -1;
+  EXPECT_THROW(resolve(s), Error);
+  s = small_settings(ViewMode::vision);
+  s.frame_budget_ms = 0;
+  EXPECT_THROW(resolve(s), Error);
   EXPECT_THROW(parse_view_mode("fullscreen"), Error);
   try {
     parse_overlays("gaze,heat");
