@@ -1,6 +1,7 @@
 // apps/bench_quality.cpp — `foveal bench quality`: the speed–quality trade-off of the foveation
 // model's parameters (γ, n_max, β), with the Pareto front and the configuration it recommends.
 #include "commands.h"
+#include "foveal/io/plot.h"
 #include "foveal/render/frame_renderer.h"
 #include "foveal/render/outputs.h"
 #include "foveal/experiments/sequence.h"
@@ -285,8 +286,9 @@ std::function<int()> add_bench_quality_command(CLI::App& bench) {
   cmd->add_option("--json", o->json, "write every configuration, gaze point and band as JSON")->check(output_file());
   cmd->add_option("--markdown", o->markdown, "write the table as Markdown")->check(output_file());
   cmd->add_option(
-      "--plot", o->plot,
-      "the Pareto plot: speed-up against the acuity-weighted error and the flicker (.png or .svg; with --sequence, its configurations)");
+         "--plot", o->plot,
+         "the Pareto plot: speed-up against the acuity-weighted error and the flicker (.png or .svg; with --sequence, its configurations)")
+      ->check(output_file(plot_extensions()));
   cmd->add_flag("--sequence", o->sequence,
                 "sequence mode: the paper's method, adaptive+denoise and temporal reuse (alone, +adaptive, +denoise) along a camera "
                 "orbit with the gaze fixating around the first gaze point (--gazes object), each frame judged against the reference "

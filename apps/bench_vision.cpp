@@ -475,7 +475,7 @@ std::function<int()> add_bench_vision_command(CLI::App& bench) {
   cmd->add_option("--seed", o->seed, "seed of the saccades")->capture_default_str();
   cmd->add_option("--threads", o->threads, "worker threads (0 = all cores)")->capture_default_str()->check(CLI::Range(0, 4096));
   cmd->add_option("--json", o->json, "write the table as JSON")->check(output_file());
-  cmd->add_option("--markdown", o->markdown, "write the table as Markdown");
+  cmd->add_option("--markdown", o->markdown, "write the table as Markdown")->check(output_file());
   cmd->add_option("--device", o->device,
                   "where the steps run: cpu, cuda (then the CPU runs the same cases in the same run, for the ratio and "
                   "the agreement), or auto (cuda when a usable NVIDIA GPU is present)")

@@ -69,9 +69,6 @@ CLI::Validator output_file(std::vector<std::string> extensions = {});
 // --video of a command that writes a folder of outputs (`output`, created by the run): a file in
 // that folder, or one output_file accepts — checked before the run (throws Error naming --video).
 void check_video_output(const std::string& video, const std::string& output);
-// The extensions save_image writes, and those of the plots (.png, .svg)
-std::vector<std::string> image_files();
-std::vector<std::string> plot_files();
 // --device auto|cpu|cuda (see choose_device).
 void add_device_option(CLI::App& command, std::string& device);
 // Size, display and renderer options → validated params (gaze unset).

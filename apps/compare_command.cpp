@@ -1,6 +1,7 @@
 // apps/compare_command.cpp — `foveal compare`: PSNR, SSIM and RMSE of an image against a
 // reference, over the whole image and per eccentricity band around the gaze.
 #include "commands.h"
+#include "foveal/io/plot.h"
 #include "foveal/io/image_io.h"
 #include "foveal/render/outputs.h"
 #include "foveal/quality/compare.h"
@@ -42,9 +43,9 @@ std::function<int()> add_compare_command(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--json", o->json, "write every figure as JSON")->check(output_file());
   cmd->add_option("--markdown", o->markdown, "write the per-band table as Markdown")->check(output_file());
-  cmd->add_option("--error-map", o->error_map, "per-pixel |image − reference| as a heat map (PNG)")->check(output_file(image_files()));
+  cmd->add_option("--error-map", o->error_map, "per-pixel |image − reference| as a heat map (PNG)")->check(output_file(image_extensions()));
   cmd->add_option("--error-scale", o->error_scale, "the error the heat map's hottest colour stands for")->capture_default_str();
-  cmd->add_option("--plot", o->plot, "RMSE against eccentricity in 1° bins (.png or .svg)")->check(output_file(plot_files()));
+  cmd->add_option("--plot", o->plot, "RMSE against eccentricity in 1° bins (.png or .svg)")->check(output_file(plot_extensions()));
   cmd->add_flag("-q,--quiet", o->quiet, "print nothing on success");
 
   return [o] {

@@ -446,7 +446,8 @@ std::function<int()> add_gaze_command(CLI::App& app) {
   cmd->add_option("--max-blink-ms", o->max_blink_ms, "ek, nh, nhp, nhr: longer losses are undefined, not blinks, ms")
       ->capture_default_str();
   cmd->add_option("--samples", o->samples,
-                  "write the samples as read (t_s,x,y,confidence,valid: seconds, screen pixels, NaN where the eye was lost) as CSV");
+                  "write the samples as read (t_s,x,y,confidence,valid: seconds, screen pixels, NaN where the eye was lost) as CSV")
+      ->check(output_file());
   cmd->add_option("--scanpath", o->scanpath, "scan-path picture (PNG) of the --fixation filter's fixations")
       ->capture_default_str()
       ->check(output_file(std::vector<std::string>{".png"}));

@@ -143,7 +143,7 @@ std::function<int()> add_perceive_command(CLI::App& app) {
   cmd->add_option("--pupil", o->pupil, "pupil diameter, mm (overrides a profile's pupil_mm; default: the profile's, else 3.5)");
   cmd->add_option("--blur-taps", o->taps, "most blur taps per pixel")->capture_default_str()->check(CLI::Range(1, 1024));
   cmd->add_flag("--no-optics", o->no_optics, "skip the defocus blur (the media, field and colour only)");
-  cmd->add_option("--amsler", o->amsler, "also write the Amsler grid as this eye sees it (PNG)")->check(output_file(image_files()));
+  cmd->add_option("--amsler", o->amsler, "also write the Amsler grid as this eye sees it (PNG)")->check(output_file(image_extensions()));
   cmd->add_option("--field-map", o->field_map, "also write the visual field's loss map, ±30°, with the test locations (PNG)")
       ->check(output_file());
   cmd->add_option("--threads", o->threads, "worker threads (0 = all cores)")->capture_default_str()->check(CLI::Range(0, 4096));

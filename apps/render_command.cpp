@@ -1,6 +1,7 @@
 // apps/render_command.cpp — `foveal render`: one frame of foveated (or full-frame) AO.
 #include "commands.h"
 
+#include "foveal/io/plot.h"
 #include "foveal/io/image_io.h"
 #include "foveal/render/outputs.h"
 #include "foveal/render/frame_renderer.h"
@@ -80,9 +81,6 @@ void check_video_output(const std::string& video, const std::string& output) {
     fail("--video: {}", e.what());
   }
 }
-
-std::vector<std::string> image_files() { return {".png", ".jpg", ".jpeg", ".bmp", ".ppm", ".pfm", ".exr"}; }
-std::vector<std::string> plot_files() { return {".png", ".svg"}; }
 
 void add_device_option(CLI::App& cmd, std::string& device) {
   cmd.add_option("--device", device, "where the passes run: auto (cuda when a usable NVIDIA GPU is present, else cpu), cpu or cuda")
@@ -261,14 +259,14 @@ std::function<int()> add_render_command(CLI::App& app) {
   add_device_option(*cmd, o->device);
   cmd->add_option("-o,--output", o->output, "shaded image (.png; .pfm/.exr keep linear floats)")
       ->capture_default_str()
-      ->check(output_file(image_files()));
+      ->check(output_file(image_extensions()));
   cmd->add_option("--aov", o->aov,
                   "float buffers NAME=FILE[,…] as .pfm/.exr; names: ao, depth, position, normal, albedo, budget, quality, blend, "
                   "eccentricity, traced (AO rays traced this frame)");
   cmd->add_option("--mask", o->mask, "ROI/budget mask of the paper's Figure 5 (PNG): grey = n(E)/n_max, red cross at the gaze")
-      ->check(output_file(image_files()));
+      ->check(output_file(image_extensions()));
   cmd->add_option("--acuity-plot", o->plot, "plot of the acuity model (paper's Figure 4) for the display, .svg or .png")
-      ->check(output_file(plot_files()));
+      ->check(output_file(plot_extensions()));
   cmd->add_option("--stats", o->stats, "write timings and ray counts as JSON")->check(output_file());
   cmd->add_option(
          "--frames", o->frames,

@@ -63,10 +63,12 @@ const std::array<float, 255>& srgb_steps() {
   return steps;
 }
 
+constexpr std::array kEightBit = {".png", ".jpg", ".jpeg", ".bmp", ".ppm"};
+
 // An 8-bit BGR(A) or grey matrix to PNG/JPEG/BMP/PPM.
 void write_8bit(const cv::Mat& mat, const std::string& path) {
   const std::string ext = lower_extension(path);
-  if (ext != ".png" && ext != ".jpg" && ext != ".jpeg" && ext != ".bmp" && ext != ".ppm")
+  if (std::find(kEightBit.begin(), kEightBit.end(), ext) == kEightBit.end())
     fail("{}: unknown image format '{}' (use .png, .jpg, .pfm or .exr)", path, ext);
   bool ok = false;
   try {
@@ -123,6 +125,15 @@ void save_rgba8(const Rgba8& image, const std::string& path) {
   cv::Mat bgr;
   cv::cvtColor(rgba, bgr, cv::COLOR_RGBA2BGR);
   write_8bit(bgr, path);
+}
+
+const std::vector<std::string>& image_extensions() {
+  static const std::vector<std::string> all = [] {
+    std::vector<std::string> e(kEightBit.begin(), kEightBit.end());
+    e.insert(e.end(), {".pfm", ".exr"});
+    return e;
+  }();
+  return all;
 }
 
 void save_image(const Image& image, const std::string& path, bool srgb) {

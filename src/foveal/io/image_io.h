@@ -6,6 +6,7 @@
 
 #include <cstdint>
 #include <string>
+#include <vector>
 
 namespace foveal {
 
@@ -26,6 +27,9 @@ void save_rgba8(const Rgba8& image, const std::string& path);
 // (8-bit, no alpha), .pfm or .exr (float, as is). 1, 3 or 4 (RGBA, PNG only) channels.
 // Throws Error naming the file on failure.
 void save_image(const Image& image, const std::string& path, bool srgb = true);
+// The extensions save_image writes (lower case, with the dot): 8-bit .png, .jpg, .jpeg, .bmp,
+// .ppm, and the float .pfm and .exr — what a command checks an image output against up front.
+const std::vector<std::string>& image_extensions();
 // Read by extension: .pfm, .exr (float, as stored), or any format OpenCV reads (values in [0,1],
 // as stored: no sRGB decoding). RGBA files give 3 channels, or 4 with `keep_alpha` (alpha in
 // [0,1]). Throws Error naming the file and the reason.

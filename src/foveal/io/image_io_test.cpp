@@ -42,6 +42,20 @@ TEST(ImageIO, FloatFormatsRoundTripExactly) {
     }
 }
 
+// The extensions a command checks an image output against up front are those save_image writes,
+// and no other (render -o x.tif is refused when the command line is read)
+TEST(ImageIO, EveryListedExtensionIsWrittenAndNoOther) {
+  for (const std::string& ext : image_extensions()) {
+    const std::string path = temp("listed" + ext);
+    save_image(ramp(6, 4, 3), path);
+    EXPECT_GT(fs::file_size(path), 0u) << ext;
+    const Image back = load_image(path);
+    EXPECT_EQ(back.width, 6) << ext;
+    fs::remove(path);
+  }
+  for (const char* ext : {".tif", ".gif", ".webp", ""}) EXPECT_THROW(save_image(ramp(6, 4, 3), temp(std::string("unlisted") + ext)), Error);
+}
+
 TEST(ImageIO, PngIsEightBitSrgb) {
   Image im(4, 2, 3, 0.0f);
   im.at(0, 0, 0) = 1.0f;

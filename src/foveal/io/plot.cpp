@@ -30,6 +30,11 @@ glm::u8vec3 heat_colour(float t) {
   return glm::u8vec3(glm::round(c * 255.0f));
 }
 
+const std::vector<std::string>& plot_extensions() {
+  static const std::vector<std::string> all = {".png", ".svg"};
+  return all;
+}
+
 void save_plot(const Plot& plot, const std::string& path) {
   check_not_an_input(path);
   const std::string ext = std::filesystem::path(path).extension().string();

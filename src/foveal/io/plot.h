@@ -35,5 +35,7 @@ glm::u8vec3 heat_colour(float t);
 
 // Write by extension: .svg or .png; throws Error naming the file.
 void save_plot(const Plot& plot, const std::string& path);
+// The extensions save_plot writes: .png and .svg.
+const std::vector<std::string>& plot_extensions();
 
 }  // namespace foveal
