@@ -1,6 +1,7 @@
 // apps/bench_latency.cpp — `foveal bench latency`: gaze-to-photon latency of the whole-frame loop,
 // the deadline loop and the deadline loop with saccade landing prediction, on recorded gaze.
 #include "commands.h"
+#include "foveal/io/plot.h"
 #include "foveal/experiments/latency.h"
 #include "foveal/render/outputs.h"
 #include "foveal/util/error.h"
@@ -54,6 +55,7 @@ int run_bench_latency(const BenchLatencyOptions& o) {
   p.start_s = o.start;
   p.duration_s = o.duration;
   p.min_amplitude_deg = o.min_amplitude;
+  if (!o.timeline.empty()) p.timeline_saccade = static_cast<size_t>(o.timeline_saccade);
   p.loops.clear();
   for (const std::string_view name : text::split(o.loops, ',')) p.loops.emplace_back(name);
   validate(p);
@@ -79,7 +81,7 @@ int run_bench_latency(const BenchLatencyOptions& o) {
   if (!o.json.empty()) write_json_file(o.json, report.json);
   if (!o.markdown.empty()) write_text_file(o.markdown, report.markdown);
   if (!o.timeline.empty()) {
-    const size_t k = write_first_timeline(report, static_cast<size_t>(o.timeline_saccade), o.min_amplitude, o.timeline);
+    const size_t k = write_latency_timeline(report, o.min_amplitude, o.timeline);
     fmt::print("timeline of saccade {} written to {}\n", k, o.timeline);
   }
   return 0;
@@ -133,7 +135,7 @@ std::function<int()> add_bench_latency_command(CLI::App& bench) {
   cmd->add_option("--json", o->json, "write every figure as JSON")->check(output_file());
   cmd->add_option("--markdown", o->markdown, "write the tables as Markdown")->check(output_file());
   cmd->add_option("--timeline", o->timeline, "draw one saccade's timeline (gaze, fovea placement, fovea error per frame): .png or .svg")
-      ->check(output_file(plot_files()));
+      ->check(output_file(plot_extensions()));
   cmd->add_option("--timeline-saccade", o->timeline_saccade, "which saccade of the first recording --timeline draws (0 = the first)")
       ->capture_default_str()
       ->check(CLI::NonNegativeNumber);

@@ -7,6 +7,7 @@
 #include "bindings.h"
 
 #include "foveal/experiments/latency.h"
+#include "foveal/io/plot.h"
 #include "foveal/experiments/stalls_report.h"
 #include "foveal/impair/profile.h"
 #include "foveal/io/image_io.h"
@@ -723,8 +724,9 @@ NB_MODULE(_core, m) {
         p.loops = loops;
         if (threads < 0) fail("threads: must be 0 (all cores) or more, got {}", threads);
         if (timeline_saccade < 0) fail("timeline_saccade: must be 0 or more, got {}", timeline_saccade);
+        if (!timeline.empty()) p.timeline_saccade = static_cast<size_t>(timeline_saccade);
         if (!timeline.empty()) try {
-            check_output_file(timeline, {".png", ".svg"});
+            check_output_file(timeline, plot_extensions());
           } catch (const Error& e) {
             fail("timeline: {}", e.what());
           }
@@ -750,7 +752,7 @@ NB_MODULE(_core, m) {
                 std::fflush(stdout);
               });
           report.json["markdown"] = report.markdown;
-          if (!timeline.empty()) write_first_timeline(report, static_cast<size_t>(timeline_saccade), min_amplitude_deg, timeline);
+          if (!timeline.empty()) write_latency_timeline(report, min_amplitude_deg, timeline);
           j = std::move(report.json);
         }
         return to_python(j);

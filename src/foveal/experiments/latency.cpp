@@ -89,6 +89,7 @@ struct Segment {
   std::vector<LatencySaccade> saccades;
   std::vector<FoveaMask> masks;
   Image ref, ref2;
+  std::optional<size_t> drawn;  // the timeline picture's saccade
 };
 
 // Which saccade's fovea a frame shown at `t` is judged against: the latest landed one (or, before
@@ -111,9 +112,7 @@ void judge_frame(const Segment& s, const Image& image, double shown_s, double un
     if (fovea_error(s.masks[j], image, s.ref).second) sac.converged_ms = std::max(0.0, shown_s - sac.landing_s) * 1000;
   }
   if (!s.saccades.empty()) frame.fovea_error = fovea_error(s.masks[followed_saccade(s, shown_s)], image, s.ref).first;
-  for (size_t j = 0; j < s.saccades.size(); ++j)
-    if (std::abs(s.saccades[j].landing_s - shown_s) <= LatencyFrame::kNearS)
-      frame.near_errors.emplace_back(static_cast<uint32_t>(j), static_cast<float>(fovea_error(s.masks[j], image, s.ref).first));
+  if (s.drawn) frame.drawn_error = fovea_error(s.masks[*s.drawn], image, s.ref).first;
 }
 
 // The display: the frame on screen, judged once the next frame's refresh is known.
@@ -541,6 +540,8 @@ LatencyReport run_latency_bench(const LatencyRun& run, const std::vector<Recordi
   }
   for (const Recording& rec : recordings) {
     Segment s = make_segment(rec, p);
+    if (p.timeline_saccade && &rec == &recordings.front() && !s.saccades.empty())
+      s.drawn = std::min(*p.timeline_saccade, s.saccades.size() - 1);
     s.ref = reference.color;
     s.ref2 = ref2;
     for (LatencySaccade& sac : s.saccades) {
@@ -556,6 +557,7 @@ LatencyReport run_latency_bench(const LatencyRun& run, const std::vector<Recordi
     out.raw_rays_per_ms = raw;
     out.model_rays_per_ms = model_rate;
     out.model_fixed_ms = model_fixed;
+    out.drawn = s.drawn;
     for (size_t i = 0; i < s.t.size(); ++i)
       if (s.t[i] >= s.begin - 0.1 && s.t[i] < s.end && s.px[i]) {
         out.gaze_t.push_back(s.t[i]);
@@ -690,18 +692,13 @@ LatencyReport bench_latency(const Scene& scene, const std::string& scene_name, c
   return report;
 }
 
-size_t write_first_timeline(const LatencyReport& report, size_t saccade, double min_amplitude_deg, const std::string& path) {
+size_t write_latency_timeline(const LatencyReport& report, double min_amplitude_deg, const std::string& path) {
   if (report.recordings.empty()) fail("timeline: no recording");
   const LatencyRecording& r = report.recordings.front();
   if (r.loops.empty() || r.loops.front().saccades.empty())
     fail("timeline: no saccade of at least {}° lands in {}'s segment", min_amplitude_deg, r.recording);
-  const size_t k = std::min(saccade, r.loops.front().saccades.size() - 1);
-  write_latency_timeline(r, k, path);
-  return k;
-}
-
-void write_latency_timeline(const LatencyRecording& r, size_t saccade, const std::string& path) {
-  if (r.loops.empty() || saccade >= r.loops.front().saccades.size()) fail("timeline: no saccade {} in {}", saccade, r.recording);
+  if (!r.drawn) fail("timeline: the run did not judge a saccade for the picture (LatencyParams::timeline_saccade)");
+  const size_t saccade = *r.drawn;
   const LatencySaccade& sac = r.loops.front().saccades[saccade];
   const double t0 = sac.landing_s - sac.duration_ms / 1000 - 0.1, t1 = sac.landing_s + 0.35;
   Plot plot;
@@ -735,8 +732,7 @@ void write_latency_timeline(const LatencyRecording& r, size_t saccade, const std
       const double a = std::max(f.start_s, t0), b = std::min(f.shown_s, t1);
       place.points.emplace_back(x_of(a), y_top(f.gaze_px.x));
       place.points.emplace_back(x_of(b), y_top(f.gaze_px.x));
-      for (const auto& [j, e] : f.near_errors)
-        if (j == saccade && std::isfinite(e) && f.shown_s <= t1) err.points.emplace_back(x_of(f.shown_s), y_bottom(e));
+      if (std::isfinite(f.drawn_error) && f.shown_s <= t1) err.points.emplace_back(x_of(f.shown_s), y_bottom(f.drawn_error));
     }
     plot.strokes.push_back(place);
     plot.strokes.push_back(err);
@@ -754,6 +750,7 @@ void write_latency_timeline(const LatencyRecording& r, size_t saccade, const std
   plot.labels.push_back({{left, mid + 4}, "Its landed fovea's error per shown frame, x the reference's noise (log, 0.5 to 64; green: 1)"});
   plot.labels.push_back({{left, bottom + 22}, fmt::format("time {:.2f} to {:.2f} s; each loop's frames as shown", t0, t1)});
   save_plot(plot, path);
+  return saccade;
 }
 
 }  // namespace foveal

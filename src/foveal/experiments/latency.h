@@ -48,6 +48,9 @@ struct LatencyParams {
   double min_amplitude_deg = 2;        // smaller saccades are not judged
   std::vector<std::string> loops = {"whole-frame", "deadline", "deadline+prediction"};
   std::optional<double> margin_ms;  // the deadline loops' least margin (unset: LoopSettings' 2 ms)
+  // The first recording's judged saccade a timeline picture will draw (the last where there are
+  // fewer): each frame also judges its fovea (LatencyFrame::drawn_error). Unset: no picture
+  std::optional<size_t> timeline_saccade;
 };
 // Check the parameters; throws Error naming the option.
 void validate(const LatencyParams& params);
@@ -70,11 +73,9 @@ struct LatencyFrame {  // one shown frame, for the timeline picture
   glm::dvec2 gaze_px{0};  // where the fovea was placed
   bool predicted = false;
   double fovea_error = NAN;  // RMSE in the fovea of the saccade being followed, over the reference noise (NaN: none)
-  // The same for each saccade landing within kNearS of the frame's showing (saccade index, error):
-  // what the timeline picture draws for its saccade, before its landing too (the followed one is
-  // then the saccade before, another place)
-  static constexpr double kNearS = 0.6;
-  std::vector<std::pair<uint32_t, float>> near_errors;
+  // The same for the timeline picture's saccade (LatencyParams::timeline_saccade; NaN without one),
+  // in every frame: before its landing the followed fovea is the saccade before's, another place
+  double drawn_error = NAN;
 };
 
 // One frame of a deadline loop (wall clock): its parts, and, when it came late, where the machine's
@@ -125,6 +126,7 @@ struct LatencyRecording {
   std::vector<LatencyLoop> loops;
   std::vector<double> gaze_t;  // the segment's samples (timeline picture): time, render pixels
   std::vector<glm::dvec2> gaze_px;
+  std::optional<size_t> drawn;  // the judged saccade the timeline picture draws (see LatencyParams::timeline_saccade)
 };
 
 struct LatencyReport {
@@ -153,11 +155,10 @@ LatencyReport bench_latency(const Scene& scene, const std::string& scene_name, c
                             const std::vector<Recording>& recordings, const LatencyParams& params,
                             const std::function<void(const std::string&)>& say);
 
-// A saccade's timeline as a picture: gaze x and y, the fovea's placement per frame of each loop,
-// and the fovea's error per shown frame; written by extension (.png or .svg).
-void write_latency_timeline(const LatencyRecording& recording, size_t saccade, const std::string& path);
-// The first recording's judged saccade `saccade` (the last where there are fewer) as such a
-// picture; returns its index. Throws Error where the segment has none.
-size_t write_first_timeline(const LatencyReport& report, size_t saccade, double min_amplitude_deg, const std::string& path);
+// The first recording's timeline picture (a run with LatencyParams::timeline_saccade): gaze x,
+// the fovea's placement per frame of each loop, and the drawn saccade's fovea error per shown
+// frame; written by extension (.png or .svg). Returns the saccade's index; throws Error where the
+// segment has no judged saccade.
+size_t write_latency_timeline(const LatencyReport& report, double min_amplitude_deg, const std::string& path);
 
 }  // namespace foveal

@@ -4,10 +4,13 @@
 
 #include "foveal/gaze/recording.h"
 #include "foveal/scene/scene.h"
+#include "foveal/util/error.h"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <unistd.h>
+#include <filesystem>
 
 #include <fmt/format.h>
 
@@ -100,10 +103,10 @@ TEST(LatencyLateFrames, TheLoopReportsItsPlanForEachFrame) {
   }
 }
 
-// The timeline picture draws its saccade's own fovea in every frame near it: before the landing
-// the followed fovea is the saccade before's, another place. With a perfect predictor that fovea's
-// error already falls before the eye lands.
-TEST(LatencyTimeline, EachFrameNearALandingJudgesThatSaccadesFovea) {
+// The timeline picture draws its saccade's own fovea in every frame: before the landing the
+// followed fovea is the saccade before's, another place. With a perfect predictor that fovea's
+// error already falls before the eye lands. Without a picture asked for, no frame judges it.
+TEST(LatencyTimeline, EveryFrameJudgesTheDrawnSaccadesFovea) {
   std::string csv = "t,x,y\n";  // 500 Hz: 800 px right at 0.4 s, back at 1.0 s (65 ms saccades)
   auto bell = [](double tau) { return tau <= 0 ? 0.0 : tau >= 1 ? 1.0 : tau - std::sin(2 * M_PI * tau) / (2 * M_PI); };
   for (int i = 0; i < 800; ++i) {
@@ -121,41 +124,54 @@ TEST(LatencyTimeline, EachFrameNearALandingJudgesThatSaccadesFovea) {
   p.duration_s = 1.5;
   p.min_amplitude_deg = 5;
   p.loops = {"deadline", "deadline+oracle"};
-  const LatencyReport report = bench_latency(scene, "builtin:box", scene.cameras.front(), ComputeDevice::cpu, 1,
-                                             {parse_recording(csv, "saccades.csv")}, p, [](const std::string&) {});
+  const std::vector<Recording> recordings = {parse_recording(csv, "saccades.csv")};
+  const auto run = [&](std::optional<size_t> drawn) {
+    p.timeline_saccade = drawn;
+    return bench_latency(scene, "builtin:box", scene.cameras.front(), ComputeDevice::cpu, 1, recordings, p, [](const std::string&) {});
+  };
+  const LatencyReport report = run(5);  // beyond the last: the last, the second saccade
   const LatencyRecording& r = report.recordings.front();
   ASSERT_EQ(r.loops.size(), 2u);
   ASSERT_EQ(r.loops[0].saccades.size(), 2u);
+  ASSERT_EQ(r.drawn, std::optional<size_t>(1));
   const double first = r.loops[0].saccades[0].landing_s, second = r.loops[0].saccades[1].landing_s;
-  auto near = [](const LatencyFrame& f, uint32_t j) -> double {
-    for (const auto& [k, e] : f.near_errors)
-      if (k == j) return static_cast<double>(e);
-    return NAN;
-  };
   for (const LatencyLoop& loop : r.loops) {
     SCOPED_TRACE(loop.name);
-    size_t between = 0;
+    size_t after = 0;
     for (const LatencyFrame& f : loop.timeline) {
-      // Near a landing, that saccade's fovea is judged
-      if (std::abs(f.shown_s - first) <= LatencyFrame::kNearS) EXPECT_TRUE(std::isfinite(near(f, 0))) << f.shown_s;
-      if (std::abs(f.shown_s - second) <= LatencyFrame::kNearS) EXPECT_TRUE(std::isfinite(near(f, 1))) << f.shown_s;
-      // Between the landings the followed fovea is the first saccade's: the same figure
-      if (f.shown_s > first && f.shown_s < second && std::abs(f.shown_s - first) <= LatencyFrame::kNearS) {
-        EXPECT_FLOAT_EQ(static_cast<float>(f.fovea_error), static_cast<float>(near(f, 0)));
-        ++between;
+      EXPECT_TRUE(std::isfinite(f.drawn_error)) << f.shown_s;
+      // After the second landing the followed fovea is the drawn one: the same figure
+      if (f.shown_s >= second) {
+        EXPECT_DOUBLE_EQ(f.fovea_error, f.drawn_error);
+        ++after;
       }
     }
-    EXPECT_GT(between, 10u);
+    EXPECT_GT(after, 10u);
   }
-  // The oracle's frames shown before the first landing already lower its fovea's error; without
-  // prediction the last frame before the landing shows none of it
-  auto last_before = [&](const LatencyLoop& loop) -> double {
-    double e = NAN;
+  // Before the second landing the drawn fovea is not the followed one (the first saccade's,
+  // elsewhere)
+  auto last_before = [](const LatencyLoop& loop, double t) -> const LatencyFrame& {
+    const LatencyFrame* last = &loop.timeline.front();
     for (const LatencyFrame& f : loop.timeline)
-      if (f.shown_s < first) e = near(f, 0);
-    return e;
+      if (f.shown_s < t) last = &f;
+    return *last;
   };
-  EXPECT_LT(last_before(r.loops[1]), last_before(r.loops[0]));
+  EXPECT_GT(last_before(r.loops[0], second).shown_s, first);
+  EXPECT_NE(last_before(r.loops[0], second).drawn_error, last_before(r.loops[0], second).fovea_error);
+  // Drawing the first saccade: the oracle's frames shown before its landing already lower its
+  // fovea's error; the loop without prediction's last one does not
+  const LatencyReport at_first = run(0);
+  const LatencyRecording& f0 = at_first.recordings.front();
+  EXPECT_LT(last_before(f0.loops[1], first).drawn_error, last_before(f0.loops[0], first).drawn_error);
+  // The picture: drawn from the run, refused for a run that judged no saccade for it
+  const std::string path = (std::filesystem::temp_directory_path() / ("foveal_timeline_" + std::to_string(getpid()) + ".svg")).string();
+  EXPECT_EQ(write_latency_timeline(report, 5, path), 1u);
+  EXPECT_GT(std::filesystem::file_size(path), 1000u);
+  std::filesystem::remove(path);
+  const LatencyReport plain = run(std::nullopt);
+  EXPECT_FALSE(plain.recordings.front().drawn);
+  for (const LatencyFrame& f : plain.recordings.front().loops[0].timeline) EXPECT_TRUE(std::isnan(f.drawn_error));
+  EXPECT_THROW(write_latency_timeline(plain, 5, path), Error);
 }
 
 }  // namespace
