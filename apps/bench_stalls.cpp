@@ -16,7 +16,7 @@ namespace foveal::app {
 namespace {
 
 struct BenchStallsOptions {
-  double duration = 10, threshold_ms = 1, chunk_us = 100, margin_ms = LoopSettings{}.margin_ms;
+  double duration = 10, threshold_ms = 1, chunk_us = 100, margin_ms = kDefaultMarginMs;
   int threads = 0;
   std::string json, markdown;
 };

@@ -38,6 +38,7 @@ constexpr std::array kOptions = std::to_array<ParameterName>({
     {"session", "--session"},
     {"run", "--run"},
     {"fps", "--fps"},
+    {"orbit_deg_s", "--orbit"},
     {"depth", "--depth"},
     {"frames", "--frames"},
     {"start_s", "--start"},

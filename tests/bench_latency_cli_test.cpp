@@ -134,10 +134,21 @@ TEST(BenchLatencyCli, BadOptionsAreOneClearLine) {
   const std::string base = "bench latency --scene builtin:box --size 64x40 --recording " + rec;
   expect_one_line_error(base + " --loops bogus", "--loops");
   expect_one_line_error(base + " --start 99", "--start");
+  EXPECT_EQ(foveal_test::foveal(base + " --start 99").out.find("references"), std::string::npos);  // refused before any tracing
   expect_one_line_error(base + " --clock sundial", "--clock");
   expect_one_line_error(base + " --frame-budget-ms -3", "--frame-budget-ms");
   expect_one_line_error(base + " --latency-ms -1", "--latency-ms");
   expect_one_line_error(base + " --margin-ms 20", "--margin-ms");
   expect_one_line_error(base + " --model-rays-per-ms 100 --model-fixed-ms 1", "--model-rays-per-ms");
   expect_one_line_error("bench latency --scene builtin:box --recording /no/such/recording.asc", "/no/such/recording.asc");
+}
+
+// A budget shorter than the default margin (2 ms) runs, keeping a quarter of it free instead; a
+// margin given outright must fit in the budget.
+TEST(BenchLatencyCli, AShortBudgetKeepsAQuarterOfItByDefault) {
+  const std::string rec = write_saccades("saccades3.csv");
+  const std::string base = "bench latency --scene builtin:box --size 64x40 --duration 0.2 --loops deadline --recording " + rec;
+  const CliRun r = foveal_test::foveal(base + " --frame-budget-ms 1");
+  EXPECT_EQ(r.status, 0) << r.err;
+  expect_one_line_error(base + " --frame-budget-ms 1 --margin-ms 1", "--margin-ms");
 }

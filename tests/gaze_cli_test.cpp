@@ -160,7 +160,7 @@ TEST(GazeCli, RealtimeReplayOfAnOrbitingCameraKeepsItsRays) {
   for (const std::string bad : {"--orbit nan --realtime", "--orbit 1e9 --realtime", "--no-history"}) {
     const CliRun r = foveal_test::foveal("replay --gaze " + rec + " --screen 480x300 --scene builtin:plane --size 16x10 -o bad " + bad);
     EXPECT_NE(r.status, 0) << bad;
-    EXPECT_NE(r.err.find(bad.find("orbit") != std::string::npos ? "orbit" : "--no-history needs --realtime"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find(bad.find("orbit") != std::string::npos ? "--orbit" : "--no-history needs --realtime"), std::string::npos) << r.err;
     EXPECT_FALSE(fs::exists(scratch("bad")));
   }
 }

@@ -693,7 +693,7 @@ NB_MODULE(_core, m) {
         }
         return to_python(j);
       },
-      "duration_s"_a = 10.0, "threads"_a = 0, "threshold_ms"_a = 1.0, "chunk_us"_a = 100.0, "margin_ms"_a = LoopSettings{}.margin_ms,
+      "duration_s"_a = 10.0, "threads"_a = 0, "threshold_ms"_a = 1.0, "chunk_us"_a = 100.0, "margin_ms"_a = kDefaultMarginMs,
       "How often this machine pauses a working thread, off its CPU or on it (`foveal bench stalls`; docs/realtime.md): the dict "
       "of its --json.");
   m.def(

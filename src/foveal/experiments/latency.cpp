@@ -206,7 +206,7 @@ LatencyLoop run_deadline(const LatencyRun& run, const Segment& s, const LatencyP
   settings.clock = p.clock;
   settings.model_rays_per_ms = model_rate;
   settings.model_fixed_ms = model_fixed;
-  if (p.margin_ms) settings.margin_ms = *p.margin_ms;
+  settings.margin_ms = p.margin_ms;
   RealtimeLoop rt(*run.renderer, *run.scene, p.render, settings);
   // Samples from a second before the segment: the predictor and the fovea start where the eye is
   size_t next = 0;
@@ -487,6 +487,9 @@ void validate(const LatencyParams& p) {
 LatencyReport run_latency_bench(const LatencyRun& run, const std::vector<Recording>& recordings, const LatencyParams& p) {
   validate(p);
   if (!run.renderer || !run.scene) fail("run_latency_bench: no renderer or scene");
+  for (const Recording& rec : recordings)  // before the references are traced
+    if (!rec.samples.empty() && p.start_s >= rec.duration_s())
+      fail("start_s: {} s is past the end of {} ({:.1f} s)", p.start_s, rec.source, rec.duration_s());
   const auto say = [&](const std::string& line) {
     if (run.say) run.say(line);
   };

@@ -19,7 +19,7 @@ void validate(const ReplaySettings& s) {
     fail("duration_s: must be zero (all) or positive seconds, got {}", s.duration_s);
   if (!(s.live_timeout_s > 0)) fail("live_timeout_s: must be positive seconds, got {}", s.live_timeout_s);
   if (!std::isfinite(s.orbit_deg_s) || std::abs(s.orbit_deg_s) > 3600)
-    fail("orbit: must be within ±3600 degrees per second, got {}", s.orbit_deg_s);
+    fail("orbit_deg_s: must be within ±3600 degrees per second, got {}", s.orbit_deg_s);
   validate(s.fixation);
 }
 

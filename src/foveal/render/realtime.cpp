@@ -83,6 +83,8 @@ LoopClock parse_loop_clock(const std::string& name) {
   fail("clock: unknown clock '{}' (known: wall, model)", name);
 }
 
+double loop_margin_ms(const LoopSettings& s) { return s.margin_ms.value_or(std::min(kDefaultMarginMs, 0.25 * s.budget_ms)); }
+
 void validate(const LoopSettings& s) {
   if (!(s.budget_ms > 0) || !std::isfinite(s.budget_ms) || s.budget_ms > 10000)
     fail("frame_budget_ms: must be in (0, 10000] ms, got {}", s.budget_ms);
@@ -91,7 +93,8 @@ void validate(const LoopSettings& s) {
       fail("model_rays_per_ms: the model clock needs a ray rate > 0, got {}", s.model_rays_per_ms);
     if (!(s.model_fixed_ms >= 0) || !std::isfinite(s.model_fixed_ms)) fail("model_fixed_ms: must be >= 0, got {}", s.model_fixed_ms);
   }
-  if (!(s.margin_ms >= 0) || s.margin_ms >= s.budget_ms) fail("margin_ms: must be in [0, budget), got {}", s.margin_ms);
+  if (s.margin_ms && (!(*s.margin_ms >= 0) || *s.margin_ms >= s.budget_ms))
+    fail("margin_ms: must be in [0, the frame budget {} ms), got {}", s.budget_ms, *s.margin_ms);
   if (!(s.min_scale > 0 && s.min_scale <= 1)) fail("min_scale: must be in (0, 1], got {}", s.min_scale);
   if (!(s.slowdown >= 1) || !std::isfinite(s.slowdown)) fail("slowdown: must be >= 1, got {}", s.slowdown);
   validate(s.landing);
@@ -134,7 +137,7 @@ void RealtimeLoop::push_gaze(double t_s, std::optional<glm::dvec2> gaze_px) {
 void RealtimeLoop::set_budget_ms(double budget_ms) {
   LoopSettings s = settings_;
   s.budget_ms = budget_ms;
-  s.margin_ms = std::min(s.margin_ms, 0.25 * budget_ms);
+  if (s.margin_ms) s.margin_ms = std::min(*s.margin_ms, 0.25 * budget_ms);
   validate(s);
   settings_ = s;
 }
@@ -612,7 +615,7 @@ LoopFrame RealtimeLoop::frame(const Camera& camera) {
                           : moved_view_ms_per_px_ > 0 ? moved_view_ms_per_px_
                                                       : kCarryCost * fresh_view_ms_per_px_;
     const double predicted = last_new_view_ ? last_view_cost_ms_ : per_px * static_cast<double>(params_.width) * params_.height;
-    if (predicted > settings_.budget_ms - settings_.margin_ms - finish_ms_) {
+    if (predicted > settings_.budget_ms - loop_margin_ms(settings_) - finish_ms_) {
       const double scale_before = scale_;
       if (rescale(predicted) && !motion_scale_) motion_scale_ = scale_before;
       fixed_.clear();
@@ -647,7 +650,7 @@ LoopFrame RealtimeLoop::frame(const Camera& camera) {
   double trace_ms = 0, sweep_ms = 0;
   const bool wall = settings_.clock == LoopClock::wall;
   // The margin: at least the settings', more where frames have lately ended later than planned
-  const double margin = std::max(settings_.margin_ms, slip_ms_);  // (slip_ms_ at most a quarter of the budget)
+  const double margin = std::max(loop_margin_ms(settings_), slip_ms_);  // (slip_ms_ at most a quarter of the budget)
   const double deadline = settings_.budget_ms - margin - finish_ms_;
   // A size coming back: half of what is left before the deadline builds it (the rest after the
   // rays, if they leave any)

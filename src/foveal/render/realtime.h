@@ -66,11 +66,16 @@ struct LoopSettings {
   LoopClock clock = LoopClock::wall;
   double model_rays_per_ms = 0;  // model clock: AO rays per millisecond
   double model_fixed_ms = 0;     // model clock: a frame's cost besides its AO rays
-  double margin_ms = 2.0;        // wall clock: kept free at the end of each frame (the machine's pauses)
-  double min_scale = 0.25;       // the smallest resolution scale the loop may choose
-  double slowdown = 1;           // tests only: the tracer this many times slower
-  bool keep_history = true;      // a new view (the camera moved) keeps the AO of the surfaces it still sees
+  // Wall clock: kept free at the end of each frame for the machine's pauses. Unset: kDefaultMarginMs,
+  // at most a quarter of the budget (so a short budget is not refused for a margin nobody asked for)
+  std::optional<double> margin_ms;
+  double min_scale = 0.25;   // the smallest resolution scale the loop may choose
+  double slowdown = 1;       // tests only: the tracer this many times slower
+  bool keep_history = true;  // a new view (the camera moved) keeps the AO of the surfaces it still sees
 };
+inline constexpr double kDefaultMarginMs = 2.0;
+// The margin the settings keep: the given one, else the default within a quarter of the budget
+double loop_margin_ms(const LoopSettings& settings);
 // Check the settings; throws Error naming the option.
 void validate(const LoopSettings& settings);
 

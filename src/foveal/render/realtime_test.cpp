@@ -611,6 +611,20 @@ TEST(RealtimeLoop, SettingsAreChecked) {
   shadows.shadows = true;
   EXPECT_THROW(RealtimeLoop(*renderer, box(), shadows, {}), Error);
   EXPECT_THROW(parse_loop_clock("sundial"), Error);
+  // The margin: unset, the default within a quarter of the budget; given, it must fit in it
+  s = {};
+  s.budget_ms = 1;
+  EXPECT_DOUBLE_EQ(loop_margin_ms(s), 0.25);
+  EXPECT_NO_THROW(RealtimeLoop(*renderer, box(), loop_params(32, 20, 8), s));
+  s.budget_ms = 1000.0 / 60;
+  EXPECT_DOUBLE_EQ(loop_margin_ms(s), kDefaultMarginMs);
+  s.margin_ms = 20;
+  try {
+    RealtimeLoop(*renderer, box(), loop_params(32, 20, 8), s);
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("margin_ms"), std::string::npos);
+  }
 }
 
 }  // namespace
