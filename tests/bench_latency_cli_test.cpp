@@ -80,6 +80,15 @@ TEST(BenchLatencyCli, ThreeLoopsUnderTheModelClockWriteTheDocumentedJson) {
       EXPECT_LE(j["machine"][key].get<double>(), 1.0) << key;
     }
     EXPECT_NE(a.out.find("The machine during the run: other processes kept"), std::string::npos) << a.out;
+    // … and by name, the busiest first (this process not among them)
+    ASSERT_TRUE(j["machine"]["others"].is_array());
+    double before = INFINITY;
+    for (const auto& o : j["machine"]["others"]) {
+      EXPECT_LE(o["cpu_ms"].get<double>(), before);
+      before = o["cpu_ms"].get<double>();
+      EXPECT_TRUE(o["name"].is_string() && o["kernel"].is_boolean() && o["slices"].is_number() && o["pid"].is_number());
+    }
+    if (!j["machine"]["others"].empty()) EXPECT_NE(a.out.find("What else ran, the busiest first: "), std::string::npos) << a.out;
   }
 #if defined(__linux__)
   EXPECT_TRUE(j.contains("machine"));

@@ -31,6 +31,12 @@ TEST(BenchStallsCli, AShortProbeWritesTheDocumentedFigures) {
     EXPECT_GE(s["wall_ms"].get<double>(), 1.0);
     EXPECT_EQ(s["on_cpu"].get<bool>(), s["cpu_ms"].get<double>() >= 0.5 * s["wall_ms"].get<double>());
   }
+  // What else ran meanwhile, by name, the busiest first
+  ASSERT_TRUE(j["others"].is_array());
+  EXPECT_LE(j["others"].size(), 5u);
+  for (size_t k = 1; k < j["others"].size(); ++k)
+    EXPECT_LE(j["others"][k]["cpu_ms"].get<double>(), j["others"][k - 1]["cpu_ms"].get<double>());
+  if (!j["others"].empty()) EXPECT_NE(a.out.find("What else ran on this machine meanwhile"), std::string::npos) << a.out;
   std::ifstream md(scratch("s.md"));
   EXPECT_TRUE(md.good());
 }

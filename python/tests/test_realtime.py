@@ -1,5 +1,6 @@
 """foveal.Loop: frames within the budget, the fovea refined and converged, the saccade predictor fed
 sample by sample, the GIL released while rendering, and clear errors."""
+import os
 import threading
 import time
 
@@ -165,6 +166,11 @@ def test_stalls_probe_the_machine_as_bench_stalls_does():
     assert len(r["stalls"]) == r["off_cpu"]["count"] + r["on_cpu"]["count"]
     for s in r["stalls"]:
         assert s["wall_ms"] >= 1.0 and s["on_cpu"] == (s["cpu_ms"] >= 0.5 * s["wall_ms"])
+    # what else ran meanwhile: other processes, the busiest first
+    assert len(r["others"]) <= 5
+    assert all(set(o) == {"pid", "name", "kernel", "cpu_ms", "slices"} and o["cpu_ms"] > 0 for o in r["others"])
+    assert all(o["pid"] != os.getpid() for o in r["others"])
+    assert [o["cpu_ms"] for o in r["others"]] == sorted((o["cpu_ms"] for o in r["others"]), reverse=True)
     with pytest.raises(ValueError, match="duration_s"):
         foveal.stalls(duration_s=0)
     with pytest.raises(ValueError, match="margin_ms"):

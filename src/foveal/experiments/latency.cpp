@@ -1,6 +1,9 @@
 // foveal/experiments/latency.cpp — three display loops on recorded gaze under a simulated clock.
 #include "foveal/experiments/latency.h"
 
+#include "foveal/experiments/stalls_report.h"
+#include "foveal/util/stalls.h"
+
 #include "foveal/gaze/detect.h"
 #include "foveal/gaze/fixation.h"
 #include "foveal/io/plot.h"
@@ -680,17 +683,20 @@ LatencyReport bench_latency(const Scene& scene, const std::string& scene_name, c
   run.say = say;
   say(fmt::format("foveal bench latency: {} on {}", scene_name, run.device));
   const CpuTimes before = read_cpu_times();
+  const MachineThreads census = read_machine_threads();
   LatencyReport report = run_latency_bench(run, recordings, params);
   // What else ran: a frame comes late when another process or the hypervisor takes its core
   const CpuShare share = cpu_share(before, read_cpu_times());
+  const std::vector<BusyProcess> others = busiest_others(census, read_machine_threads(), current_process_id(), kBusiestOthers);
   if (std::isfinite(share.others)) {
-    report.json["machine"] = {{"others_cpu_fraction", share.others}, {"steal_fraction", share.steal}};
+    report.json["machine"] = {{"others_cpu_fraction", share.others}, {"steal_fraction", share.steal}, {"others", others_json(others)}};
     if (!report.markdown.ends_with("\n\n")) report.markdown += "\n";
     report.markdown += fmt::format(
         "The machine during the run: other processes kept {:.0f} % of all CPUs' time busy, the hypervisor took {:.0f} % "
         "(steal){}.\n",
         100 * share.others, 100 * share.steal,
         share.others > 0.05 || share.steal > 0.01 ? ": wall-clock late frames may be theirs, not the loop's" : "");
+    if (!others.empty()) report.markdown += fmt::format("What else ran, the busiest first: {}.\n", others_sentence(others));
   }
   return report;
 }

@@ -24,6 +24,21 @@ void validate_stall_margin(double margin_ms) {
   if (!(margin_ms >= 0 && margin_ms < 1000)) fail("margin_ms: must be in [0, 1000) ms, got {}", margin_ms);
 }
 
+nlohmann::json others_json(const std::vector<BusyProcess>& others) {
+  nlohmann::json j = nlohmann::json::array();
+  for (const BusyProcess& b : others)
+    j.push_back({{"pid", b.pid}, {"name", b.name}, {"kernel", b.kernel}, {"cpu_ms", b.cpu_ms}, {"slices", b.slices}});
+  return j;
+}
+
+std::string others_sentence(const std::vector<BusyProcess>& others) {
+  std::string s;
+  for (const BusyProcess& b : others)
+    s += fmt::format("{}{} ({}, pid {}) {:.1f} ms in {:.0f} turns", s.empty() ? "" : "; ", b.name.empty() ? "?" : b.name,
+                     b.kernel ? "a kernel thread" : "a process", b.pid, b.cpu_ms, b.slices);
+  return s;
+}
+
 nlohmann::json stalls_json(const StallReport& r, double threshold_ms, double margin_ms) {
   nlohmann::json j;
   j["threads"] = r.threads;
@@ -39,6 +54,7 @@ nlohmann::json stalls_json(const StallReport& r, double threshold_ms, double mar
   j["off_cpu"] = counts(count_stalls(r, false, margin_ms));
   j["on_cpu"] = counts(count_stalls(r, true, margin_ms));
   j["late_frames_per_minute_at_most"] = late_per_minute(r, margin_ms);
+  j["others"] = others_json(r.others);
   j["stalls"] = nlohmann::json::array();
   for (const Stall& s : r.stalls)
     j["stalls"].push_back({{"thread", s.thread}, {"at_s", s.at_s}, {"wall_ms", s.wall_ms}, {"cpu_ms", s.cpu_ms}, {"on_cpu", s.on_cpu}});
@@ -64,6 +80,11 @@ std::string stalls_markdown(const StallReport& r, double threshold_ms, double ma
       "late frames a minute for a loop that works through every frame, fewer where frames end early (a converged image costs "
       "little){}.\n",
       margin_ms, late, late > 0 ? " — late because of the machine, not the rendering" : "");
+  if (!r.others.empty())
+    md += fmt::format(
+        "\nWhat else ran on this machine meanwhile, the busiest first, with its time on a CPU and in how many turns (what "
+        "takes the working threads' cores: what to switch off or move before a session): {}.\n",
+        others_sentence(r.others));
   return md;
 }
 

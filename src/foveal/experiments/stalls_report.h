@@ -15,6 +15,10 @@ namespace foveal {
 // margin_ms), late_frames_per_minute_at_most and every stall.
 nlohmann::json stalls_json(const StallReport& r, double threshold_ms, double margin_ms);
 // The table and what it means for a frame loop.
+// The other processes that ran during a run, as JSON (pid, name, kernel, cpu_ms, slices) and as a
+// sentence ("kdamond.0 (a kernel thread, pid 77) 59.8 ms in 44 turns; …"; empty where none ran)
+nlohmann::json others_json(const std::vector<BusyProcess>& others);
+std::string others_sentence(const std::vector<BusyProcess>& others);
 std::string stalls_markdown(const StallReport& r, double threshold_ms, double margin_ms);
 // Check a margin; throws Error naming margin_ms.
 void validate_stall_margin(double margin_ms);

@@ -88,7 +88,9 @@ std::optional<ThreadTime> parse_schedstat(std::string_view schedstat) {
   if (f.size() < 2) return std::nullopt;
   const std::optional<double> run = counter(f[0]), wait = counter(f[1]);
   if (!run || !wait) return std::nullopt;
-  return ThreadTime{*run, *wait};
+  const std::optional<double> slices = f.size() >= 3 ? counter(f[2]) : std::optional<double>(0.0);
+  if (!slices) return std::nullopt;
+  return ThreadTime{*run, *wait, *slices};
 }
 
 ThreadTimes read_thread_times() {
@@ -130,6 +132,71 @@ double longest_wait_ms(const ThreadTimes& before, const ThreadTimes& after) {
 double cpu_ms(const ThreadTimes& before, const ThreadTimes& after, long only) {
   return over_threads(
       before, after, &ThreadTime::run_ns, [](double a, double b) { return a + b; }, only);
+}
+
+std::optional<bool> parse_kernel_thread(std::string_view stat) {
+  // "pid (comm) state ppid pgrp session tty_nr tpgid flags …": the flags are the seventh field
+  // after the command's last ')'
+  const size_t close = stat.rfind(')');
+  if (close == std::string_view::npos) return std::nullopt;
+  const std::vector<std::string_view> fields = first_line_fields(stat.substr(close + 1));
+  if (fields.size() < 7) return std::nullopt;
+  const std::optional<double> flags = counter(fields[6]);
+  if (!flags || *flags >= 1.8e19) return std::nullopt;
+  constexpr unsigned long long kPfKthread = 0x00200000;
+  return (static_cast<unsigned long long>(*flags) & kPfKthread) != 0;
+}
+
+MachineThreads read_machine_threads() {
+  MachineThreads all;
+  std::error_code ec;
+  for (std::filesystem::directory_iterator p("/proc", ec), end; !ec && p != end; p.increment(ec)) {
+    const std::optional<double> pid = text::to_number(p->path().filename().string());
+    if (!pid) continue;
+    ProcessThreads proc;
+    std::string name = read_or_empty((p->path() / "comm").c_str());
+    while (!name.empty() && (name.back() == '\n' || name.back() == ' ')) name.pop_back();
+    proc.name = name;
+    proc.kernel = parse_kernel_thread(read_or_empty((p->path() / "stat").c_str())).value_or(false);
+    std::error_code tec;
+    for (std::filesystem::directory_iterator t(p->path() / "task", tec); !tec && t != end; t.increment(tec)) {
+      const std::optional<double> tid = text::to_number(t->path().filename().string());
+      if (!tid) continue;
+      if (const std::optional<ThreadTime> times = parse_schedstat(read_or_empty((t->path() / "schedstat").c_str())))
+        proc.threads[static_cast<long>(*tid)] = *times;
+    }
+    if (!proc.threads.empty()) all[static_cast<long>(*pid)] = std::move(proc);  // (a process that ended since the listing: left out)
+  }
+  return all;
+}
+
+std::vector<BusyProcess> busiest_others(const MachineThreads& before, const MachineThreads& after, long self_pid, size_t most) {
+  std::vector<BusyProcess> out;
+  for (const auto& [pid, proc] : after) {
+    if (pid == self_pid) continue;
+    const auto was = before.find(pid);
+    BusyProcess b{pid, proc.name, proc.kernel, 0, 0};
+    for (const auto& [tid, t] : proc.threads) {
+      ThreadTime from;  // a thread born between the readings counts from zero
+      if (was != before.end())
+        if (const auto it = was->second.threads.find(tid); it != was->second.threads.end()) from = it->second;
+      b.cpu_ms += std::max(0.0, t.run_ns - from.run_ns) / 1e6;
+      b.slices += std::max(0.0, t.slices - from.slices);
+    }
+    if (b.cpu_ms > 0) out.push_back(std::move(b));
+  }
+  std::sort(out.begin(), out.end(),
+            [](const BusyProcess& a, const BusyProcess& b) { return a.cpu_ms != b.cpu_ms ? a.cpu_ms > b.cpu_ms : a.pid < b.pid; });
+  if (out.size() > most) out.resize(most);
+  return out;
+}
+
+long current_process_id() {
+#ifdef __linux__
+  return static_cast<long>(::getpid());
+#else
+  return -1;
+#endif
 }
 
 double page_faults() {

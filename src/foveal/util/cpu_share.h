@@ -10,8 +10,10 @@
 
 #include <cmath>
 #include <optional>
+#include <string>
 #include <string_view>
 #include <unordered_map>
+#include <vector>
 
 namespace foveal {
 
@@ -45,6 +47,7 @@ CpuShare cpu_share(const CpuTimes& before, const CpuTimes& after);
 // the work itself took longer.
 struct ThreadTime {
   double run_ns = 0, wait_ns = 0;
+  double slices = 0;  // times it was put on a CPU
 };
 using ThreadTimes = std::unordered_map<long, ThreadTime>;  // thread id → its times
 // One schedstat file's times (nullopt where malformed).
@@ -57,6 +60,34 @@ double longest_wait_ms(const ThreadTimes& before, const ThreadTimes& after);
 double cpu_ms(const ThreadTimes& before, const ThreadTimes& after, long only = -1);
 // The calling thread's id in those readings (−1 where there is none).
 long current_thread_id();
+// What else ran on this machine while a run was timed, by process: every thread of every process
+// (Linux: /proc/PID/task/TID/schedstat, with the process's name from /proc/PID/comm and whether it
+// is the kernel's own from the PF_KTHREAD flag of /proc/PID/stat). Around a run, the processes
+// that took the most CPU time name what a lab would switch off or move before a gaze-contingent
+// session (a memory monitor of the kernel, an agent of the host, a desktop indexer, …). Threads
+// that ended before the second reading are not counted; one born between the two counts from zero.
+struct ProcessThreads {
+  std::string name;                              // the process's command name
+  bool kernel = false;                           // a kernel thread
+  std::unordered_map<long, ThreadTime> threads;  // thread id → its times
+};
+using MachineThreads = std::unordered_map<long, ProcessThreads>;  // process id →
+// Whether a /proc/PID/stat text is a kernel thread's (its flags hold PF_KTHREAD; nullopt where malformed).
+std::optional<bool> parse_kernel_thread(std::string_view stat);
+// Every process's threads now (empty where /proc is not there).
+MachineThreads read_machine_threads();
+struct BusyProcess {
+  long pid = 0;
+  std::string name;
+  bool kernel = false;
+  double cpu_ms = 0;  // its threads' time on a CPU between the readings
+  double slices = 0;  // … in this many turns
+};
+// The processes other than `self_pid` that ran between two readings, the busiest first, at most `most`.
+std::vector<BusyProcess> busiest_others(const MachineThreads& before, const MachineThreads& after, long self_pid, size_t most);
+// This process's id (−1 where there is none).
+long current_process_id();
+
 // This process's page faults so far, minor and major (getrusage; NaN where it fails).
 double page_faults();
 

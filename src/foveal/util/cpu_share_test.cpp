@@ -9,7 +9,12 @@
 #include <ctime>
 #include <thread>
 
+#include <algorithm>
+#include <csignal>
+
+#include <sys/prctl.h>
 #include <sys/syscall.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 namespace foveal {
@@ -67,6 +72,9 @@ TEST(CpuShare, ThreadTimesFromSchedstat) {
   ASSERT_TRUE(t);
   EXPECT_DOUBLE_EQ(t->run_ns, 571401700);
   EXPECT_DOUBLE_EQ(t->wait_ns, 358793);
+  EXPECT_DOUBLE_EQ(t->slices, 70);
+  EXPECT_DOUBLE_EQ(parse_schedstat("5 6\n")->slices, 0);  // (an older kernel's two fields)
+  EXPECT_FALSE(parse_schedstat("5 6 x\n"));
   EXPECT_FALSE(parse_schedstat(""));
   EXPECT_FALSE(parse_schedstat("571401700\n"));
   EXPECT_FALSE(parse_schedstat("571401700 -3 70\n"));
@@ -112,6 +120,89 @@ TEST(CpuShare, EveryThreadsTimesAreRead) {
       EXPECT_GE(times.wait_ns, a.at(tid).wait_ns) << "thread " << tid;
     }
   EXPECT_GE(longest_wait_ms(a, b), 0);
+}
+
+// A process's stat flags hold PF_KTHREAD (0x00200000) for the kernel's own threads; a command may
+// hold spaces and parentheses
+TEST(CpuShare, KernelThreadsAreToldFromTheirFlags) {
+  EXPECT_EQ(parse_kernel_thread("77 (kdamond.0) I 2 0 0 0 -1 2129984 0 0 0 0 0 3390\n"), true);
+  EXPECT_EQ(parse_kernel_thread("1 (process_api) S 0 1 1 0 -1 4194560 6000 0 0 0 12 7\n"), false);
+  EXPECT_EQ(parse_kernel_thread("42 (a (b) c) R 1 42 42 0 -1 4194304 0 0\n"), false);
+  EXPECT_EQ(parse_kernel_thread("42 (x) R 1 42 42 0 -1 2097152\n"), true);
+  EXPECT_FALSE(parse_kernel_thread(""));
+  EXPECT_FALSE(parse_kernel_thread("42 (x) R 1 42\n"));
+  EXPECT_FALSE(parse_kernel_thread("42 (x) R 1 42 42 0 -1 flags\n"));
+}
+
+// Between two readings, the other processes by their threads' time on a CPU: this process left
+// out, a thread born between them counted from zero, one process's threads summed, the busiest
+// first, at most `most`
+TEST(CpuShare, TheBusiestOtherProcessesBetweenTwoReadings) {
+  MachineThreads a, b;
+  a[1] = {"init", false, {{1, {100e6, 0, 10}}, {2, {50e6, 0, 5}}}};
+  a[77] = {"kdamond.0", true, {{77, {900e6, 0, 100}}}};
+  a[500] = {"foveal", false, {{500, {10e9, 0, 1000}}}};
+  b = a;
+  b[1].threads[1] = {104e6, 0, 14};
+  b[1].threads[3] = {2e6, 0, 2};  // born between
+  b[77].threads[77] = {960e6, 0, 144};
+  b[500].threads[500] = {20e9, 0, 2000};              // this process
+  b[600] = {"indexer", false, {{600, {1e6, 0, 1}}}};  // a process started between
+  const std::vector<BusyProcess> top = busiest_others(a, b, 500, 10);
+  ASSERT_EQ(top.size(), 3u);  // (init's thread 2 did not run: no time, and nothing of 500)
+  EXPECT_EQ(top[0].name, "kdamond.0");
+  EXPECT_TRUE(top[0].kernel);
+  EXPECT_DOUBLE_EQ(top[0].cpu_ms, 60);
+  EXPECT_DOUBLE_EQ(top[0].slices, 44);
+  EXPECT_EQ(top[1].pid, 1);
+  EXPECT_DOUBLE_EQ(top[1].cpu_ms, 6);
+  EXPECT_DOUBLE_EQ(top[1].slices, 6);
+  EXPECT_EQ(top[2].name, "indexer");
+  EXPECT_DOUBLE_EQ(top[2].cpu_ms, 1);
+  EXPECT_EQ(busiest_others(a, b, 500, 1).size(), 1u);
+  EXPECT_TRUE(busiest_others(a, a, 500, 10).empty());
+}
+
+// On this machine (Linux): a child process that spins for 0.1 s of CPU time under a name of its own
+// is found, with that time, and this process is not
+TEST(CpuShare, AnotherProcessThatRanIsFoundByName) {
+  const MachineThreads before = read_machine_threads();
+  if (before.empty()) GTEST_SKIP() << "no /proc here";
+  EXPECT_TRUE(before.count(current_process_id()));
+  int go[2];
+  ASSERT_EQ(::pipe(go), 0);
+  const pid_t child = ::fork();
+  ASSERT_GE(child, 0);
+  if (child == 0) {  // only async-signal-safe calls and arithmetic here
+    ::prctl(PR_SET_NAME, "census-spin");
+    volatile double sink = 0;
+    timespec t0{}, t{};
+    ::clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t0);
+    do {
+      for (int k = 0; k < 10000; ++k) sink = sink + 1.0;
+      ::clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
+    } while ((t.tv_sec - t0.tv_sec) * 1e9 + (t.tv_nsec - t0.tv_nsec) < 0.1e9);
+    char c = 1;
+    (void)!::write(go[1], &c, 1);  // spun: the parent may read the machine again
+    ::pause();
+    ::_exit(0);
+  }
+  char c = 0;
+  const bool spun = ::read(go[0], &c, 1) == 1;
+  const MachineThreads after = read_machine_threads();
+  ::kill(child, SIGKILL);
+  ::waitpid(child, nullptr, 0);
+  ::close(go[0]);
+  ::close(go[1]);
+  ASSERT_TRUE(spun);
+  const std::vector<BusyProcess> top = busiest_others(before, after, current_process_id(), after.size());
+  const auto it = std::find_if(top.begin(), top.end(), [&](const BusyProcess& b) { return b.pid == child; });
+  ASSERT_NE(it, top.end());
+  EXPECT_EQ(it->name, "census-spin");
+  EXPECT_FALSE(it->kernel);
+  EXPECT_GE(it->cpu_ms, 90);
+  EXPECT_GE(it->slices, 1);
+  for (const BusyProcess& b : top) EXPECT_NE(b.pid, current_process_id());
 }
 
 // Touching 8 MB of fresh memory faults its pages in: at least one fault per 2 MB, the largest page

@@ -1,6 +1,7 @@
 // foveal/util/stalls.cpp — a probe of the machine's pauses of working threads.
 #include "foveal/util/stalls.h"
 
+#include "foveal/util/cpu_share.h"
 #include "foveal/util/error.h"
 #include "foveal/util/parallel.h"
 #include "foveal/util/stats.h"
@@ -93,9 +94,11 @@ StallReport probe_stalls(const StallProbeParams& p) {
     last = std::max(last, w0);
     kept = kept + x;
   };
+  const MachineThreads census = read_machine_threads();  // what else runs meanwhile (read before and after)
   std::vector<std::thread> workers;
   for (int t = 0; t < r.threads; ++t) workers.emplace_back(body, t);
   for (std::thread& w : workers) w.join();
+  r.others = busiest_others(census, read_machine_threads(), current_process_id(), kBusiestOthers);
   std::sort(r.stalls.begin(), r.stalls.end(), [](const Stall& a, const Stall& b) { return a.at_s < b.at_s; });
   r.duration_s = (last - first) / 1000;
   r.chunk_us = chunk_ms.empty() ? 0 : 1000 * median(chunk_ms);

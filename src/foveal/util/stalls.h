@@ -14,6 +14,9 @@
 // such a clock comparison.
 #pragma once
 
+#include "foveal/util/cpu_share.h"
+
+#include <cstddef>
 #include <functional>
 #include <vector>
 
@@ -42,11 +45,13 @@ bool stalled_on_cpu(double wall_ms, double cpu_ms);
 
 struct StallReport {
   int threads = 0;
-  double duration_s = 0;      // measured, from the first chunk to the last
-  double chunk_us = 0;        // the median chunk's wall time
-  long chunks = 0;            // over all threads
-  std::vector<Stall> stalls;  // in the order of their start
+  double duration_s = 0;            // measured, from the first chunk to the last
+  double chunk_us = 0;              // the median chunk's wall time
+  long chunks = 0;                  // over all threads
+  std::vector<Stall> stalls;        // in the order of their start
+  std::vector<BusyProcess> others;  // the other processes that ran meanwhile, the busiest first (util/cpu_share.h)
 };
+inline constexpr size_t kBusiestOthers = 5;  // how many of them a report names
 // Run the probe (the calling thread waits; each worker is a std::thread of its own).
 StallReport probe_stalls(const StallProbeParams& p);
 

@@ -88,6 +88,13 @@ TEST(Stalls, AStallOfEachKindIsFoundAndToldApart) {
     if (s.thread == 1 && s.wall_ms >= 20 && s.cpu_ms >= 19.5) spun = true;
   }
   EXPECT_TRUE(slept) << "thread 0's sleep not found off the CPU";
+  // What else ran meanwhile: other processes only, the busiest first, at most kBusiestOthers
+  EXPECT_LE(r.others.size(), kBusiestOthers);
+  for (size_t k = 0; k < r.others.size(); ++k) {
+    EXPECT_NE(r.others[k].pid, current_process_id());
+    EXPECT_GT(r.others[k].cpu_ms, 0);
+    if (k > 0) EXPECT_LE(r.others[k].cpu_ms, r.others[k - 1].cpu_ms);
+  }
   EXPECT_TRUE(spun) << "thread 1's spin not found on the CPU";
 }
 
