@@ -23,6 +23,10 @@
 namespace foveal {
 
 namespace {
+constexpr size_t kWatchedThreads = 8;  // other processes' threads read around each wall-clock frame
+}  // namespace
+
+namespace {
 
 // The q = 1 pixels (that hit the scene) around a landing, and the reference's noise over them.
 struct FoveaMask {
@@ -197,7 +201,7 @@ LatencyLoop run_whole_frame(const LatencyRun& run, const Segment& s, const Laten
 
 // `name`: deadline, deadline+prediction or deadline+oracle
 LatencyLoop run_deadline(const LatencyRun& run, const Segment& s, const LatencyParams& p, double budget_ms, const std::string& name,
-                         double model_rate, double model_fixed) {
+                         double model_rate, double model_fixed, const std::vector<WatchedThread>& watch) {
   LatencyLoop loop;
   loop.name = name;
   const bool oracle = name == "deadline+oracle", predict = oracle || name == "deadline+prediction";
@@ -235,6 +239,7 @@ LatencyLoop run_deadline(const LatencyRun& run, const Segment& s, const LatencyP
     const bool wall = p.clock == LoopClock::wall;
     const Timer window;
     const ThreadTimes threads_before = wall ? read_thread_times() : ThreadTimes{};
+    const ThreadTimes others_before = wall ? read_watched(watch) : ThreadTimes{};
     const double faults_before = wall ? page_faults() : NAN;
     LoopFrame f = rt.frame(run.camera);
     frame_ms.push_back(f.cost_ms);
@@ -242,11 +247,14 @@ LatencyLoop run_deadline(const LatencyRun& run, const Segment& s, const LatencyP
     if (wall) {
       const double faults_after = page_faults();
       const ThreadTimes threads_after = read_thread_times();
+      const ThreadTimes others_after = read_watched(watch);
       const double window_ms = window.ms();
+      const auto [other, other_ms] = busiest_watched(watch, others_before, others_after);
       parts.push_back({static_cast<int>(parts.size()), t, f.ms, f.maps_ms, f.plan_ms, f.trace_ms, f.compose_ms,
                        std::max(0.0, f.rays_end_ms - f.deadline_ms), std::max(0.0, (f.ms - f.rays_end_ms) - f.compose_planned_ms), "",
                        longest_wait_ms(threads_before, threads_after),
-                       cpu_ms(threads_before, threads_after, current_thread_id()) / window_ms, faults_after - faults_before});
+                       cpu_ms(threads_before, threads_after, current_thread_id()) / window_ms, faults_after - faults_before, other,
+                       watch.empty() ? NAN : other_ms});
     }
     LatencyFrame lf;
     lf.start_s = t;
@@ -391,7 +399,9 @@ nlohmann::json loop_json(const LatencyLoop& l) {
                                   {"compose_over_ms", f.compose_over_ms},
                                   {"cpu_wait_ms", number_or_null(f.cpu_wait_ms)},
                                   {"cpu_share", number_or_null(f.cpu_share)},
-                                  {"page_faults", number_or_null(f.faults)}});
+                                  {"page_faults", number_or_null(f.faults)},
+                                  {"other_process", f.other},
+                                  {"other_ms", number_or_null(f.other_ms)}});
   }
   return j;
 }
@@ -442,8 +452,19 @@ std::string late_threads_summary(const std::vector<LatencyFramePart>& late, doub
     const std::string a = fmt::format(fmt::runtime(spec), lo), b = fmt::format(fmt::runtime(spec), hi);
     return a == b ? a : a + "–" + b;
   };
-  return fmt::format("run delay ≤ {:.1f} ms ({} of {} on time without it), page faults {}, the calling thread on a CPU {} of the time",
-                     wait, explained, known, range(faults_lo, faults_hi, "{:.0f}"), range(share_lo, share_hi, "{:.1f}"));
+  std::string others;  // the busiest watched process of each late frame
+  int listed = 0;
+  for (const LatencyFramePart& f : late) {
+    if (std::isnan(f.other_ms)) continue;
+    if (++listed > 8) {
+      others += ", …";
+      break;
+    }
+    others += (others.empty() ? "" : ", ") + (f.other.empty() ? std::string("none") : fmt::format("{} {:.1f} ms", f.other, f.other_ms));
+  }
+  return fmt::format("run delay ≤ {:.1f} ms ({} of {} on time without it), page faults {}, the calling thread on a CPU {} of the time{}",
+                     wait, explained, known, range(faults_lo, faults_hi, "{:.0f}"), range(share_lo, share_hi, "{:.1f}"),
+                     others.empty() ? "" : "; the other process busiest in each: " + others);
 }
 
 std::optional<double> LatencyLoop::median_converged_ms() const {
@@ -498,6 +519,10 @@ LatencyReport run_latency_bench(const LatencyRun& run, const std::vector<Recordi
   };
   const double budget = p.budget_ms.value_or(1000.0 / p.refresh_hz);
   LatencyReport report;
+  // Wall clock: the other processes that run while the references are traced are watched around
+  // each frame (the likely takers of a late frame's cores)
+  const bool wall = p.clock == LoopClock::wall;
+  const MachineThreads census = wall ? read_machine_threads() : MachineThreads{};
   // The view: references (n_max everywhere, two seeds other than the loops'), surfaces, the raw rate
   RenderParams full = p.render;
   full.mode = RenderMode::full;
@@ -520,6 +545,8 @@ LatencyReport run_latency_bench(const LatencyRun& run, const std::vector<Recordi
                   sample);
   const double raw = run.raw_rays_per_ms ? run.raw_rays_per_ms(sample) : 0.0;
   say(fmt::format("raw tracing rate: {:.0f} rays/ms on {} AO rays of the view", raw, sample.size()));
+  const std::vector<WatchedThread> watch =
+      wall ? threads_to_watch(census, read_machine_threads(), current_process_id(), kWatchedThreads) : std::vector<WatchedThread>{};
   // The model clock: the deadline loop's own rate and fixed cost, measured on this view first
   double model_rate = 0, model_fixed = 0;
   if (p.clock == LoopClock::model && p.model_rays_per_ms && p.model_fixed_ms) {
@@ -574,7 +601,7 @@ LatencyReport run_latency_bench(const LatencyRun& run, const std::vector<Recordi
     for (const std::string& name : p.loops) {
       const Timer timer;
       LatencyLoop loop = name == "whole-frame" ? run_whole_frame(run, s, p, budget, model_rate, model_fixed)
-                                               : run_deadline(run, s, p, budget, name, model_rate, model_fixed);
+                                               : run_deadline(run, s, p, budget, name, model_rate, model_fixed, watch);
       say(fmt::format("  {}: {} frames ({} late), median landing → converged fovea {} ms ({:.1f} s)", name, loop.frames, loop.frames_late,
                       ms_or_dash(loop.median_converged_ms()), timer.ms() / 1000));
       out.loops.push_back(std::move(loop));

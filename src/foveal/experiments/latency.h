@@ -98,12 +98,17 @@ struct LatencyFramePart {
   // calling frame() was on a CPU (its maps, planning and composing run there), and the process's
   // page faults
   double cpu_wait_ms = NAN, cpu_share = NAN, faults = NAN;
+  // Wall clock: the other process that ran longest during the frame, of those busiest while the
+  // bench traced its references (util/cpu_share.h, threads_to_watch), and its time on a CPU ("" and 0
+  // where none of them ran; NaN where not read)
+  std::string other;
+  double other_ms = NAN;
 };
 // The late frames (ms > budget_ms) of a loop's frames, each with its part (pure; tests).
 std::vector<LatencyFramePart> late_frame_parts(const std::vector<LatencyFramePart>& frames, double budget_ms);
 // The late frames' threads, for the bench's account: "run delay ≤ 7.9 ms (1 of 2 on time without
-// it), page faults 0–3, the calling thread on a CPU 0.9–1.0 of the time" ("" where none was
-// read; pure; tests).
+// it), page faults 0–3, the calling thread on a CPU 0.9–1.0 of the time; the other process busiest
+// in each: kdamond.0 4.1 ms, none" ("" where none was read; pure; tests).
 std::string late_threads_summary(const std::vector<LatencyFramePart>& late, double budget_ms);
 
 struct LatencyLoop {

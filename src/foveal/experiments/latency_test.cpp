@@ -78,6 +78,15 @@ TEST(LatencyLateFrames, TheThreadsSayWhetherTheKernelKeptThemWaiting) {
   EXPECT_DOUBLE_EQ(kept[0].cpu_wait_ms, 3.7);
   EXPECT_DOUBLE_EQ(kept[0].cpu_share, 0.8);
   EXPECT_DOUBLE_EQ(kept[0].faults, 2);
+  // … and the other process busiest in each late frame, where the bench watched any
+  threads(late[0], 4.0, 0.9, 0);
+  threads(late[2], 0.1, 1.0, 0);
+  late[0].other = "kdamond.0";
+  late[0].other_ms = 4.14;
+  late[2].other_ms = 0;  // watched, none ran
+  EXPECT_EQ(late_threads_summary(late, 1000.0 / 60),
+            "run delay ≤ 4.0 ms (1 of 2 on time without it), page faults 0, the calling thread on a CPU 0.9–1.0 of the time; the "
+            "other process busiest in each: kdamond.0 4.1 ms, none");
 }
 
 // The loop's own plan of a wall-clock frame, which the account reads: the deadline inside the

@@ -191,6 +191,53 @@ std::vector<BusyProcess> busiest_others(const MachineThreads& before, const Mach
   return out;
 }
 
+std::vector<WatchedThread> threads_to_watch(const MachineThreads& before, const MachineThreads& after, long self_pid, size_t most) {
+  std::vector<std::pair<double, WatchedThread>> ran;
+  for (const auto& [pid, proc] : after) {
+    if (pid == self_pid) continue;
+    const auto was = before.find(pid);
+    for (const auto& [tid, t] : proc.threads) {
+      ThreadTime from;
+      if (was != before.end())
+        if (const auto it = was->second.threads.find(tid); it != was->second.threads.end()) from = it->second;
+      const double ns = t.run_ns - from.run_ns;
+      if (ns > 0)
+        ran.push_back(
+            {ns, {pid, tid, proc.name, proc.kernel, "/proc/" + std::to_string(pid) + "/task/" + std::to_string(tid) + "/schedstat"}});
+    }
+  }
+  std::sort(ran.begin(), ran.end(),
+            [](const auto& a, const auto& b) { return a.first != b.first ? a.first > b.first : a.second.tid < b.second.tid; });
+  std::vector<WatchedThread> out;
+  for (size_t k = 0; k < ran.size() && k < most; ++k) out.push_back(ran[k].second);
+  return out;
+}
+
+ThreadTimes read_watched(const std::vector<WatchedThread>& watch) {
+  ThreadTimes times;
+  for (const WatchedThread& w : watch)
+    if (const std::optional<ThreadTime> t = parse_schedstat(read_or_empty(w.schedstat.c_str()))) times[w.tid] = *t;
+  return times;
+}
+
+std::pair<std::string, double> busiest_watched(const std::vector<WatchedThread>& watch, const ThreadTimes& before,
+                                               const ThreadTimes& after) {
+  std::unordered_map<long, double> by_pid;
+  for (const WatchedThread& w : watch) {
+    const auto a = before.find(w.tid), b = after.find(w.tid);
+    if (a != before.end() && b != after.end()) by_pid[w.pid] += std::max(0.0, b->second.run_ns - a->second.run_ns) / 1e6;
+  }
+  std::pair<std::string, double> best{"", 0.0};
+  long best_pid = -1;
+  for (const auto& [pid, ms] : by_pid)
+    if (ms > best.second || (ms == best.second && ms > 0 && pid < best_pid)) {
+      best_pid = pid;
+      for (const WatchedThread& w : watch)
+        if (w.pid == pid) best = {w.name, ms};
+    }
+  return best;
+}
+
 long current_process_id() {
 #ifdef __linux__
   return static_cast<long>(::getpid());

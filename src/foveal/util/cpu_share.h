@@ -13,6 +13,7 @@
 #include <string>
 #include <string_view>
 #include <unordered_map>
+#include <utility>
 #include <vector>
 
 namespace foveal {
@@ -85,6 +86,23 @@ struct BusyProcess {
 };
 // The processes other than `self_pid` that ran between two readings, the busiest first, at most `most`.
 std::vector<BusyProcess> busiest_others(const MachineThreads& before, const MachineThreads& after, long self_pid, size_t most);
+// A few other processes' threads read cheaply around each frame (one schedstat file each): those
+// that ran between two readings of the machine, the `most` busiest of them — the likely takers of a
+// frame's cores.
+struct WatchedThread {
+  long pid = 0, tid = 0;
+  std::string name;  // the process's
+  bool kernel = false;
+  std::string schedstat;  // its file
+};
+std::vector<WatchedThread> threads_to_watch(const MachineThreads& before, const MachineThreads& after, long self_pid, size_t most);
+// The watched threads' times now (thread id → times; a thread that ended is left out).
+ThreadTimes read_watched(const std::vector<WatchedThread>& watch);
+// The watched process that ran longest between two readings, and its time on a CPU, ms ("" and 0
+// where none ran).
+std::pair<std::string, double> busiest_watched(const std::vector<WatchedThread>& watch, const ThreadTimes& before,
+                                               const ThreadTimes& after);
+
 // This process's id (−1 where there is none).
 long current_process_id();
 

@@ -205,6 +205,36 @@ TEST(CpuShare, AnotherProcessThatRanIsFoundByName) {
   for (const BusyProcess& b : top) EXPECT_NE(b.pid, current_process_id());
 }
 
+// Around a frame, the watched threads of other processes: the process whose threads ran longest
+// between two readings, by name, with its time (two threads of one process summed)
+TEST(CpuShare, TheOtherProcessBusiestInAFrame) {
+  const std::vector<WatchedThread> watch{{1, 10, "agent", false, ""}, {1, 11, "agent", false, ""}, {77, 77, "kdamond.0", true, ""}};
+  const ThreadTimes a{{10, {1e6, 0, 1}}, {11, {1e6, 0, 1}}, {77, {5e6, 0, 1}}};
+  ThreadTimes b{{10, {2.5e6, 0, 2}}, {11, {3e6, 0, 2}}, {77, {8e6, 0, 2}}};
+  EXPECT_EQ(busiest_watched(watch, a, b), std::make_pair(std::string("agent"), 3.5));
+  b[77].run_ns = 9e6;
+  EXPECT_EQ(busiest_watched(watch, a, b), std::make_pair(std::string("kdamond.0"), 4.0));
+  EXPECT_EQ(busiest_watched(watch, a, a), std::make_pair(std::string(), 0.0));
+  EXPECT_EQ(busiest_watched({}, a, b), std::make_pair(std::string(), 0.0));
+  // What is watched: the threads of other processes that ran between two readings of the machine,
+  // the busiest first, at most `most` (this process's, and a thread that did not run, left out)
+  MachineThreads before, after;
+  before[1] = {"agent", false, {{10, {1e6, 0, 1}}, {11, {1e6, 0, 1}}}};
+  before[500] = {"foveal", false, {{500, {1e9, 0, 1}}}};
+  after = before;
+  after[1].threads[10].run_ns = 3e6;
+  after[500].threads[500].run_ns = 2e9;
+  after[77] = {"kdamond.0", true, {{77, {5e6, 0, 3}}}};
+  const std::vector<WatchedThread> w = threads_to_watch(before, after, 500, 8);
+  ASSERT_EQ(w.size(), 2u);
+  EXPECT_EQ(w[0].tid, 77);
+  EXPECT_TRUE(w[0].kernel);
+  EXPECT_EQ(w[0].schedstat, "/proc/77/task/77/schedstat");
+  EXPECT_EQ(w[1].tid, 10);
+  EXPECT_EQ(w[1].name, "agent");
+  EXPECT_EQ(threads_to_watch(before, after, 500, 1).size(), 1u);
+}
+
 // Touching 8 MB of fresh memory faults its pages in: at least one fault per 2 MB, the largest page
 // the kernel may give it (with 4 kB pages about 2,000)
 TEST(CpuShare, PageFaultsCountFreshMemoryTouched) {
