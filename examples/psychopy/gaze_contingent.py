@@ -170,6 +170,7 @@ def main(argv=None) -> int:
         return (x + w / 2.0, h / 2.0 - y)
 
     rows = []
+    session = foveal.machine_snapshot()  # what else runs on the machine during the session (named at its end)
     own_ms = 0.0
     flip_index = 0
     gaze_px = (w / 2.0, h / 2.0)
@@ -213,6 +214,7 @@ def main(argv=None) -> int:
                          "late": int(frame.late), "flip_time_s": flip, "gaze_to_flip_ms": 1000 * (flip - sample_time)})
             flip_index += 1
     finally:
+        others = foveal.busiest_others(session)
         stop.set()
         tracker.setRecordingState(False)
         io.quit()
@@ -232,11 +234,14 @@ def main(argv=None) -> int:
                "gaze_to_flip_ms_p95": float(np.percentile(latencies, 95)) if len(latencies) else None,
                "gaze_to_flip_refreshes_median": float(np.median(latencies)) * refresh_hz / 1000 if len(latencies) else None,
                "render_ms_median": float(np.median([r["render_ms"] for r in rows])) if rows else None,
-               "machine_stalls": machine}
+               "machine_stalls": machine, "other_processes": others}
     print(f"gaze_contingent: {summary['flips']} flips at {w}x{h} on {summary['device']} ({refresh_hz:.0f} Hz, budget "
           f"{loop.budget_ms:.1f} ms), {summary['gaze_positions']} gaze positions, gaze-to-flip median "
           f"{summary['gaze_to_flip_ms_median']:.1f} ms ({summary['gaze_to_flip_refreshes_median']:.2f} refreshes), 95th percentile "
           f"{summary['gaze_to_flip_ms_p95']:.1f} ms; {summary['frames_late']} late frames; log {args.log}")
+    if others:  # what took the loop's cores: what to stop before the next session
+        print("gaze_contingent: what else ran during the session: " + "; ".join(
+            f"{o['name']} ({'a kernel thread' if o['kernel'] else 'pid ' + str(o['pid'])}) {o['cpu_ms']:.1f} ms" for o in others))
     if args.summary:
         with open(args.summary, "w") as f:
             json.dump(summary, f, indent=2)

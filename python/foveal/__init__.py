@@ -27,22 +27,25 @@ from ._core import (  # noqa: F401  (re-exported)
     Frame,
     Loop,
     LoopFrame,
+    MachineSnapshot,
     Renderer,
     Scene,
     VisionSimulation,
     VisionStep,
     device_available,
     device_description,
+    busiest_others,
     load_image,
+    machine_snapshot,
     stalls,
 )
 from . import gaze  # noqa: F401
 from . import gaze as _gaze
 
 __all__ = [
-    "Camera", "Display", "Frame", "Loop", "LoopFrame", "Renderer", "Scene", "VisionSimulation", "VisionStep",
-    "bench_latency", "compare", "gaze", "load_image", "perceive", "save_image", "stalls", "device_available",
-    "device_description",
+    "Camera", "Display", "Frame", "Loop", "LoopFrame", "MachineSnapshot", "Renderer", "Scene", "VisionSimulation", "VisionStep",
+    "bench_latency", "busiest_others", "compare", "gaze", "load_image", "machine_snapshot", "perceive", "save_image", "stalls",
+    "device_available", "device_description",
 ]
 __version__ = "0.1.0"
 

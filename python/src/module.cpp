@@ -16,6 +16,7 @@
 #include "foveal/render/render.h"
 #include "foveal/render/frame_renderer.h"
 #include "foveal/render/realtime.h"
+#include "foveal/util/cpu_share.h"
 #include "foveal/util/error.h"
 #include "foveal/util/files.h"
 #include "foveal/util/parallel.h"
@@ -696,6 +697,32 @@ NB_MODULE(_core, m) {
       "duration_s"_a = 10.0, "threads"_a = 0, "threshold_ms"_a = 1.0, "chunk_us"_a = 100.0, "margin_ms"_a = kDefaultMarginMs,
       "How often this machine pauses a working thread, off its CPU or on it (`foveal bench stalls`; docs/realtime.md): the dict "
       "of its --json.");
+  nb::class_<MachineThreads>(m, "MachineSnapshot",
+                             "Every thread's time on a CPU on this machine at one moment (Linux /proc; empty elsewhere): "
+                             "foveal.busiest_others(snapshot) names what else ran since.")
+      .def(
+          "__len__", [](const MachineThreads& t) { return t.size(); }, "How many processes were read.");
+  m.def(
+      "machine_snapshot",
+      []() {
+        nb::gil_scoped_release release;
+        return read_machine_threads();
+      },
+      "Every thread's time on a CPU now, to name with busiest_others() what else ran during a session (docs/realtime.md).");
+  m.def(
+      "busiest_others",
+      [](const MachineThreads& since, int most) {
+        if (most < 1) fail("most: must be 1 or more, got {}", most);
+        std::vector<BusyProcess> others;
+        {
+          nb::gil_scoped_release release;
+          others = busiest_others(since, read_machine_threads(), current_process_id(), static_cast<size_t>(most));
+        }
+        return to_python(others_json(others));
+      },
+      "since"_a, "most"_a = 5,
+      "The other processes that ran on this machine since a machine_snapshot(), the busiest first: a list of dicts with pid, "
+      "name, kernel (a kernel thread), cpu_ms and slices (turns on a CPU) — what takes a real-time loop's cores.");
   m.def(
       "_bench_latency",
       [](const PyScene& s, const std::string& scene_name, const nb::list& recordings, const nb::object& camera_arg,

@@ -49,6 +49,12 @@ def test_gaze_contingent_follows_the_mouse_gaze_and_logs_latency(tmp_path):
     stalls = summary["machine_stalls"]
     assert stalls["duration_s"] >= 0.25 and stalls["chunks"] > 0 and "stalls" not in stalls
     assert set(stalls["on_cpu"]) == {"count", "per_minute", "worst_ms", "beyond_margin"}
+    # … and what else ran during the session (foveal.machine_snapshot, foveal.busiest_others): other
+    # processes only (Xvfb and ioHub's server among them, as a rule), the busiest first
+    others = summary["other_processes"]
+    assert isinstance(others, list) and len(others) <= 5
+    assert all(set(o) == {"pid", "name", "kernel", "cpu_ms", "slices"} and o["cpu_ms"] > 0 for o in others)
+    assert [o["cpu_ms"] for o in others] == sorted((o["cpu_ms"] for o in others), reverse=True)
 
 
 def test_gaze_contingent_refuses_bad_options_before_the_session(tmp_path):

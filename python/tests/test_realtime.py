@@ -225,3 +225,27 @@ def test_bench_latency_from_python_equals_the_command_lines(cli, box, tmp_path):
         foveal.bench_latency([3], box)
     with pytest.raises(ValueError, match="timeline"):
         foveal.bench_latency(str(recording), box, size=(168, 105), loops="deadline", timeline=tmp_path / "t.gif")
+
+
+def test_what_else_ran_on_the_machine_is_named():
+    """A child process that spins for 0.2 s of CPU time is found since the snapshot, with that time; this one is not."""
+    import subprocess
+    import sys
+    snapshot = foveal.machine_snapshot()
+    if len(snapshot) == 0:
+        pytest.skip("no /proc here")
+    child = subprocess.Popen([sys.executable, "-c",
+                              "import time, sys\nt = time.process_time()\nwhile time.process_time() - t < 0.2: pass\n"
+                              "sys.stdout.write('spun\\n'); sys.stdout.flush(); time.sleep(30)"], stdout=subprocess.PIPE, text=True)
+    try:
+        assert child.stdout.readline().strip() == "spun"
+        others = foveal.busiest_others(snapshot, most=1000)
+    finally:
+        child.kill()
+        child.wait()
+    found = [o for o in others if o["pid"] == child.pid]
+    assert len(found) == 1 and found[0]["cpu_ms"] >= 150 and not found[0]["kernel"]
+    assert all(o["pid"] != os.getpid() for o in others)
+    assert len(foveal.busiest_others(snapshot, most=2)) <= 2
+    with pytest.raises(ValueError, match="most"):
+        foveal.busiest_others(snapshot, most=0)
