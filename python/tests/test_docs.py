@@ -30,7 +30,7 @@ def _parameters(function):
 
 
 # Results the package makes (their fields are documented with them); no one constructs them
-RESULTS = {"Frame", "LoopFrame", "VisionStep", "Recording", "Events"}
+RESULTS = {"Frame", "LoopFrame", "VisionStep", "Recording", "Events", "MachineSnapshot"}
 
 
 def _public():
