@@ -23,10 +23,8 @@
 namespace foveal {
 
 namespace {
-constexpr size_t kWatchedThreads = 8;  // other processes' threads read around each wall-clock frame
-}  // namespace
 
-namespace {
+constexpr size_t kWatchedThreads = 8;  // other processes' threads read around each wall-clock frame
 
 // The q = 1 pixels (that hit the scene) around a landing, and the reference's noise over them.
 struct FoveaMask {

@@ -170,16 +170,25 @@ MachineThreads read_machine_threads() {
   return all;
 }
 
+namespace {
+
+// A thread's times at an earlier reading (zero where it was not there: born between the two)
+ThreadTime earlier(const MachineThreads& before, long pid, long tid) {
+  const auto proc = before.find(pid);
+  if (proc == before.end()) return {};
+  const auto it = proc->second.threads.find(tid);
+  return it == proc->second.threads.end() ? ThreadTime{} : it->second;
+}
+
+}  // namespace
+
 std::vector<BusyProcess> busiest_others(const MachineThreads& before, const MachineThreads& after, long self_pid, size_t most) {
   std::vector<BusyProcess> out;
   for (const auto& [pid, proc] : after) {
     if (pid == self_pid) continue;
-    const auto was = before.find(pid);
     BusyProcess b{pid, proc.name, proc.kernel, 0, 0};
     for (const auto& [tid, t] : proc.threads) {
-      ThreadTime from;  // a thread born between the readings counts from zero
-      if (was != before.end())
-        if (const auto it = was->second.threads.find(tid); it != was->second.threads.end()) from = it->second;
+      const ThreadTime from = earlier(before, pid, tid);
       b.cpu_ms += std::max(0.0, t.run_ns - from.run_ns) / 1e6;
       b.slices += std::max(0.0, t.slices - from.slices);
     }
@@ -195,12 +204,8 @@ std::vector<WatchedThread> threads_to_watch(const MachineThreads& before, const 
   std::vector<std::pair<double, WatchedThread>> ran;
   for (const auto& [pid, proc] : after) {
     if (pid == self_pid) continue;
-    const auto was = before.find(pid);
     for (const auto& [tid, t] : proc.threads) {
-      ThreadTime from;
-      if (was != before.end())
-        if (const auto it = was->second.threads.find(tid); it != was->second.threads.end()) from = it->second;
-      const double ns = t.run_ns - from.run_ns;
+      const double ns = t.run_ns - earlier(before, pid, tid).run_ns;
       if (ns > 0)
         ran.push_back(
             {ns, {pid, tid, proc.name, proc.kernel, "/proc/" + std::to_string(pid) + "/task/" + std::to_string(tid) + "/schedstat"}});
