@@ -114,8 +114,8 @@ std::function<int()> add_bench_latency_command(CLI::App& bench) {
   cmd->add_option("--refresh-hz", o->refresh_hz, "display refresh rate, Hz")->capture_default_str()->check(CLI::Range(1.0, 1000.0));
   cmd->add_option("--frame-budget-ms", o->budget_ms, "each frame's budget, ms (default: one refresh)");
   cmd->add_option("--margin-ms", o->margin_ms,
-                  "wall clock: the least time each deadline frame keeps free for the machine's pauses, ms (default 2, at most a "
-                  "quarter of the budget; more after frames that ended late, at most a quarter of the budget)");
+                  "wall clock: the least time each deadline frame keeps free for the machine's pauses, ms (default 2, or a "
+                  "quarter of a shorter budget; more after frames that ended late, up to a quarter of the budget)");
   cmd->add_option("--latency-ms", o->latency_ms,
                   "tracker latency: a sample reaches the renderer this long after it was taken (default: "
                   "the sample period + 2 ms)");

@@ -751,12 +751,14 @@ NB_MODULE(_core, m) {
         p.loops = loops;
         if (threads < 0) fail("threads: must be 0 (all cores) or more, got {}", threads);
         if (timeline_saccade < 0) fail("timeline_saccade: must be 0 or more, got {}", timeline_saccade);
-        if (!timeline.empty()) p.timeline_saccade = static_cast<size_t>(timeline_saccade);
-        if (!timeline.empty()) try {
+        if (!timeline.empty()) {
+          p.timeline_saccade = static_cast<size_t>(timeline_saccade);
+          try {
             check_output_file(timeline, plot_extensions());
           } catch (const Error& e) {
             fail("timeline: {}", e.what());
           }
+        }
         validate(p);
         if (recordings.size() == 0) fail("recordings: give at least one");
         std::vector<Recording> recs;

@@ -517,10 +517,11 @@ LatencyReport run_latency_bench(const LatencyRun& run, const std::vector<Recordi
   };
   const double budget = p.budget_ms.value_or(1000.0 / p.refresh_hz);
   LatencyReport report;
-  // Wall clock: the other processes that run while the references are traced are watched around
-  // each frame (the likely takers of a late frame's cores)
+  // The machine's threads now: what else runs while the references are traced is watched around
+  // each wall-clock frame (the likely takers of a late frame's cores), and what ran during the
+  // whole run is named at its end
   const bool wall = p.clock == LoopClock::wall;
-  const MachineThreads census = wall ? read_machine_threads() : MachineThreads{};
+  const MachineThreads census = read_machine_threads();
   // The view: references (n_max everywhere, two seeds other than the loops'), surfaces, the raw rate
   RenderParams full = p.render;
   full.mode = RenderMode::full;
@@ -690,6 +691,7 @@ LatencyReport run_latency_bench(const LatencyRun& run, const std::vector<Recordi
   }
   report.markdown = md;
   report.json = j;
+  report.others = busiest_others(census, read_machine_threads(), current_process_id(), kBusiestOthers);
   return report;
 }
 
@@ -708,20 +710,19 @@ LatencyReport bench_latency(const Scene& scene, const std::string& scene_name, c
   run.say = say;
   say(fmt::format("foveal bench latency: {} on {}", scene_name, run.device));
   const CpuTimes before = read_cpu_times();
-  const MachineThreads census = read_machine_threads();
   LatencyReport report = run_latency_bench(run, recordings, params);
   // What else ran: a frame comes late when another process or the hypervisor takes its core
   const CpuShare share = cpu_share(before, read_cpu_times());
-  const std::vector<BusyProcess> others = busiest_others(census, read_machine_threads(), current_process_id(), kBusiestOthers);
   if (std::isfinite(share.others)) {
-    report.json["machine"] = {{"others_cpu_fraction", share.others}, {"steal_fraction", share.steal}, {"others", others_json(others)}};
+    report.json["machine"] = {
+        {"others_cpu_fraction", share.others}, {"steal_fraction", share.steal}, {"others", others_json(report.others)}};
     if (!report.markdown.ends_with("\n\n")) report.markdown += "\n";
     report.markdown += fmt::format(
         "The machine during the run: other processes kept {:.0f} % of all CPUs' time busy, the hypervisor took {:.0f} % "
         "(steal){}.\n",
         100 * share.others, 100 * share.steal,
         share.others > 0.05 || share.steal > 0.01 ? ": wall-clock late frames may be theirs, not the loop's" : "");
-    if (!others.empty()) report.markdown += fmt::format("What else ran, the busiest first: {}.\n", others_sentence(others));
+    if (!report.others.empty()) report.markdown += fmt::format("What else ran, the busiest first: {}.\n", others_sentence(report.others));
   }
   return report;
 }

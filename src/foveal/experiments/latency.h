@@ -24,6 +24,7 @@
 #include "foveal/gaze/recording.h"
 #include "foveal/render/frame_renderer.h"
 #include "foveal/render/realtime.h"
+#include "foveal/util/cpu_share.h"
 
 #include <nlohmann/json.hpp>
 
@@ -136,6 +137,7 @@ struct LatencyRecording {
 
 struct LatencyReport {
   std::vector<LatencyRecording> recordings;
+  std::vector<BusyProcess> others;  // the other processes that ran during the run, the busiest first (util/cpu_share.h)
   std::string markdown;
   nlohmann::json json;
 };

@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <map>
 #include <optional>
 #include <string>
 #include <vector>
@@ -227,19 +228,17 @@ ThreadTimes read_watched(const std::vector<WatchedThread>& watch) {
 
 std::pair<std::string, double> busiest_watched(const std::vector<WatchedThread>& watch, const ThreadTimes& before,
                                                const ThreadTimes& after) {
-  std::unordered_map<long, double> by_pid;
+  std::map<long, std::pair<std::string, double>> by_pid;  // (in pid order: a tie goes to the lower)
   for (const WatchedThread& w : watch) {
     const auto a = before.find(w.tid), b = after.find(w.tid);
-    if (a != before.end() && b != after.end()) by_pid[w.pid] += std::max(0.0, b->second.run_ns - a->second.run_ns) / 1e6;
+    if (a == before.end() || b == after.end()) continue;
+    auto& [name, ms] = by_pid[w.pid];
+    name = w.name;
+    ms += std::max(0.0, b->second.run_ns - a->second.run_ns) / 1e6;
   }
   std::pair<std::string, double> best{"", 0.0};
-  long best_pid = -1;
-  for (const auto& [pid, ms] : by_pid)
-    if (ms > best.second || (ms == best.second && ms > 0 && pid < best_pid)) {
-      best_pid = pid;
-      for (const WatchedThread& w : watch)
-        if (w.pid == pid) best = {w.name, ms};
-    }
+  for (const auto& [pid, process] : by_pid)
+    if (process.second > best.second) best = process;
   return best;
 }
 

@@ -7,9 +7,13 @@
 
 namespace foveal {
 
+void validate_starvation(double starvation) {
+  if (!(starvation >= 0 && starvation < 10)) fail("starvation: must be in [0, 10), got {}", starvation);
+}
+
 SharpnessField::SharpnessField(const Bounds& bounds, float voxel, double starvation) : starvation_(starvation) {
   if (!(voxel > 0) || !std::isfinite(voxel)) fail("voxel: must be a positive size, got {}", voxel);
-  if (!(starvation >= 0 && starvation < 10)) fail("starvation: must be in [0, 10), got {}", starvation);
+  validate_starvation(starvation);
   const glm::vec3 size = bounds.hi - bounds.lo;
   if (!(size.x >= 0 && size.y >= 0 && size.z >= 0)) fail("sharpness field: empty scene bounds");
   const glm::dvec3 cells = glm::ceil(glm::dvec3(size) / double(voxel)) + 1.0;

@@ -101,6 +101,10 @@ struct ConcurrentFieldUpdate {
   }
 };
 
+// The starvation rate's rule (throws Error naming `starvation`): the field's, checked also where a
+// simulation's settings are, before any field is built.
+void validate_starvation(double starvation);
+
 class SharpnessField {
  public:
   // `voxel` is the cell edge in scene units; the grid covers `bounds` (slightly padded).

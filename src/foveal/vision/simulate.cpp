@@ -29,8 +29,7 @@ void validate(const SimulateParams& p) {
   if (!(p.sharp_px > 0)) fail("sharp_px: must be positive, got {}", p.sharp_px);
   if (!(p.saccades.max_amplitude_deg > 0)) fail("saccade_max_deg: must be positive degrees, got {}", p.saccades.max_amplitude_deg);
   if (!(p.saccades.min_distance_deg >= 0)) fail("saccade_min_deg: must be zero or positive degrees, got {}", p.saccades.min_distance_deg);
-  // (the sharpness field's own rule, checked with the rest: a viewer outside vision mode builds no field)
-  if (!(p.starvation >= 0 && p.starvation < 10)) fail("starvation: must be in [0, 10), got {}", p.starvation);
+  validate_starvation(p.starvation);  // (checked with the rest: a viewer outside vision mode builds no field)
 }
 
 SaccadeParams saccade_params_for(const EyeParams& eye, SaccadeParams base) {
