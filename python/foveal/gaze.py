@@ -255,30 +255,19 @@ class Events:
         """Write the events as a BIDS-style events.tsv (onset, duration, trial_type, amplitude_deg,
         peak_velocity_deg_s, start/end x/y in degrees; onsets from the first sample) — the file of
         ``foveal gaze --events-out``. An existing file is replaced only once the new one is whole."""
-        _write_whole(path, self.tsv, ".events-")
+        _write_whole(path, self.tsv)
 
     def write_landings(self, path) -> None:
         """Write each saccade's landing as the live predictor saw it — the file of ``foveal gaze
         --landings-out`` (tab-separated, n/a where not predicted). Replaced only once whole."""
-        _write_whole(path, self.landings_tsv, ".landings-")
+        _write_whole(path, self.landings_tsv)
 
 
-def _write_whole(path, text: str, prefix: str) -> None:
-    """Write ``text`` to ``path`` through a temporary file beside it: an existing file is replaced
-    only once the new one is whole."""
+def _write_whole(path, text: str) -> None:
+    """Write ``text`` to ``path`` as every foveal writer does: through a partial copy beside it, an
+    existing file replaced only once the new one is whole, never over a read-only file."""
     import os
-    import tempfile
-    path = os.fspath(path)
-    folder = os.path.dirname(os.path.abspath(path))
-    handle, temporary = tempfile.mkstemp(prefix=prefix, suffix=".tsv", dir=folder)
-    try:
-        with os.fdopen(handle, "w", encoding="utf-8", newline="") as out:
-            out.write(text)
-        os.replace(temporary, path)
-    except BaseException:
-        if os.path.exists(temporary):
-            os.unlink(temporary)
-        raise
+    _core._write_text(os.fspath(path), text)
 
 
 def events(recording, method: str = "auto", display: Optional[_core.Display] = None,

@@ -9,6 +9,7 @@
 #include "foveal/gaze/recording.h"
 #include "foveal/gaze/source.h"
 #include "foveal/util/error.h"
+#include "foveal/util/gzip.h"
 
 #include <nanobind/stl/array.h>
 #include <nanobind/stl/optional.h>
@@ -362,6 +363,12 @@ void bind_gaze(nb::module_& m) {
         return out;
       },
       "columns"_a, "display"_a, "method"_a, "params"_a);
+
+  // The Python writers' one path: every writer's rules (never over an input or a read-only file;
+  // an existing file replaced only once the new one is whole)
+  m.def(
+      "_write_text", [](const std::string& path, const std::string& text) { write_file_atomically(path, text, false); }, "path"_a,
+      "text"_a);
 
   m.def(
       "_evaluate",

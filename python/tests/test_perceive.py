@@ -148,3 +148,24 @@ def test_the_output_is_never_written_over_the_input(image_png):
     with pytest.raises(ValueError, match="is the input"):
         foveal.perceive(image_png, eye="cataract:0.5", output=image_png)
     assert image_png.read_bytes() == before
+
+
+def test_a_read_only_file_or_folder_is_never_written(image_png, tmp_path):
+    # Root may replace a read-only file; foveal refuses it for every user
+    before = image_png.read_bytes()
+    image_png.chmod(0o444)
+    with pytest.raises(ValueError, match="is read-only"):
+        foveal.save_image(_grating(16, 10), image_png)
+    other = tmp_path / "other.png"
+    foveal.save_image(_grating(64, 40), other)
+    with pytest.raises(ValueError, match="is read-only"):
+        foveal.perceive(other, eye="cataract:0.5", output=image_png)
+    assert image_png.read_bytes() == before
+    locked = tmp_path / "locked"
+    locked.mkdir()
+    locked.chmod(0o555)
+    with pytest.raises(ValueError, match="read-only folder"):
+        foveal.save_image(_grating(16, 10), locked / "a.png")
+    assert not any(locked.iterdir())
+    locked.chmod(0o755)
+    image_png.chmod(0o644)

@@ -55,6 +55,24 @@ Guard& guard() {
   return g;
 }
 
+// Refuses a target that no one may write, or a folder no one may write into: read-only by intent.
+// The system lets root (a container's user, often) replace such a file or add to such a folder; a
+// run as root wrote its --json over a read-only recording of the shared data, so foveal refuses it
+// for every user.
+bool read_only_folder(const fs::path& folder) {
+  struct stat st {};
+  return ::stat(folder.c_str(), &st) == 0 && S_ISDIR(st.st_mode) && (st.st_mode & 0222) == 0;
+}
+void check_not_read_only(const std::string& path) {
+  struct stat st {};
+  if (::stat(path.c_str(), &st) == 0 && !S_ISDIR(st.st_mode) && (st.st_mode & 0222) == 0)
+    fail("{}: is read-only; foveal does not replace a read-only file (give another name, or make it writable)", path);
+  const fs::path p = fs::absolute(path).lexically_normal();
+  const fs::path parent = p.has_filename() ? p.parent_path() : p.parent_path().parent_path();
+  if (read_only_folder(parent))
+    fail("{}: its folder {} is read-only; foveal does not write into a read-only folder", path, parent.string());
+}
+
 }  // namespace
 
 void check_output_file(const std::string& path, const std::vector<std::string>& extensions) {
@@ -70,6 +88,7 @@ void check_output_file(const std::string& path, const std::vector<std::string>& 
   const fs::path parent = p.has_parent_path() ? p.parent_path() : fs::path(".");
   if (!fs::exists(parent, ec)) fail("{}: the folder {} does not exist", path, parent.string());
   if (!fs::is_directory(parent, ec)) fail("{}: {} is not a folder", path, parent.string());
+  check_not_read_only(path);
   if (fs::exists(p, ec) ? ::access(path.c_str(), W_OK) != 0 : ::access(parent.c_str(), W_OK | X_OK) != 0)
     fail("{}: cannot be written here ({})", path, std::strerror(errno));
 }
@@ -99,6 +118,7 @@ void note_input(const std::string& path) {
 
 // Two lookups per write, whatever the number of inputs (a folder of a thousand frames).
 void check_not_an_input(const std::string& output) {
+  check_not_read_only(output);
   Guard& g = guard();
   if (!g.on) return;
   const std::string r = resolved(output);
@@ -144,8 +164,11 @@ std::string partial_path(const std::string& target) {
   return (parent / fmt::format("{}{}-{}", prefix, getpid(), counter++)).string();
 }
 
-StagedFolder::StagedFolder(std::string target) : target_(std::move(target)), staging_(partial_path(target_)) {
+StagedFolder::StagedFolder(std::string target) : target_(std::move(target)) {
   std::error_code ec;
+  if (read_only_folder(target_)) fail("{}: is a read-only folder; foveal does not write into a read-only folder", target_);
+  check_not_read_only(target_);
+  staging_ = partial_path(target_);
   fs::create_directories(staging_, ec);
   if (ec) fail("{}: cannot create a folder beside it for the output ({}): {}", target_, staging_, ec.message());
 }
@@ -160,6 +183,7 @@ void StagedFolder::commit() {
   std::error_code ec;
   fs::create_directories(target_, ec);
   if (ec) fail("{}: cannot create the output folder: {}", target_, ec.message());
+  for (const auto& e : fs::directory_iterator(staging_)) check_not_read_only((fs::path(target_) / e.path().filename()).string());
   for (const auto& e : fs::directory_iterator(staging_)) {
     fs::rename(e.path(), fs::path(target_) / e.path().filename(), ec);
     if (ec) fail("{}: cannot move {} into it: {}", target_, e.path().filename().string(), ec.message());

@@ -7,6 +7,9 @@
 // remembered and every writer refuses to write over one — one rule for every writer. A Python
 // session may rewrite its own files, so the guard is off unless turned on.
 //
+// Never over a read-only file, nor into a read-only folder, whoever runs it: the system lets root
+// (a container's user, often) replace them, and a --json once went over a read-only recording so.
+//
 // All or nothing: a folder of outputs is written into a staging folder beside it and moved into
 // place when the run succeeds, so a failed run leaves no partial output (finding 2).
 #pragma once
@@ -24,7 +27,7 @@ void check_output_is_not_input(const std::string& output, const std::string& inp
 // the path and the reason (its folder is missing or is no folder, the path is a folder, nothing
 // may be written there, or its extension is none of `extensions`, where given: lower case, with
 // the dot). A bench's --json named a missing folder and failed only once its minutes of work were
-// done. Creates nothing.
+// done. A read-only file or folder is refused, as by the writers. Creates nothing.
 void check_output_file(const std::string& path, const std::vector<std::string>& extensions = {});
 
 // The file name's extension in lower case, with its dot (".PLY" → ".ply"; "" for none): what
@@ -32,8 +35,9 @@ void check_output_file(const std::string& path, const std::vector<std::string>& 
 std::string lower_extension(const std::string& path);
 
 void set_input_guard(bool on);
-void note_input(const std::string& path);            // a reader's input (no effect with the guard off)
-void check_not_an_input(const std::string& output);  // a writer's target; throws Error naming it
+void note_input(const std::string& path);  // a reader's input (no effect with the guard off)
+// A writer's target: throws Error naming it where it is an input or read-only (or in a read-only folder)
+void check_not_an_input(const std::string& output);
 
 // Remove what a killed run left beside `target` (".NAME.partial-PID-N" of a process that no longer
 // runs).

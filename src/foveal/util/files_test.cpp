@@ -6,6 +6,8 @@
 
 #include <filesystem>
 #include <fstream>
+#include <iterator>
+#include <string>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -72,12 +74,59 @@ TEST(Files, AnOutputFileIsCheckedBeforeAnyWork) {
   EXPECT_NE(message((dir / "file" / "a.json").string()).find("is not a folder"), std::string::npos);
   EXPECT_NE(message((dir / "a.gif").string(), {".png", ".svg"}).find("must end in .png or .svg"), std::string::npos);
   EXPECT_NE(message("").find("needs a name"), std::string::npos);
-  EXPECT_FALSE(fs::exists(dir / "a.json"));  // nothing created
-  if (geteuid() != 0) {                      // (root may write anywhere)
-    fs::create_directories(dir / "locked");
-    fs::permissions(dir / "locked", fs::perms::owner_read | fs::perms::owner_exec);
-    EXPECT_NE(message((dir / "locked" / "a.json").string()).find("cannot be written here"), std::string::npos);
-    fs::permissions(dir / "locked", fs::perms::owner_all);
+  EXPECT_FALSE(fs::exists(dir / "a.json"));  // nothing created (read-only places: below)
+  fs::remove_all(dir);
+}
+
+// A read-only file or folder is left alone by every user, root too (the system would let root
+// replace it): the check before the work, the writers and a folder of outputs all refuse it.
+TEST(Files, ReadOnlyFilesAndFoldersAreNeverReplaced) {
+  const fs::path dir = fs::temp_directory_path() / ("foveal-read-only-test-" + std::to_string(getpid()));
+  fs::create_directories(dir);
+  const auto message = [](const auto& write) {
+    try {
+      write();
+    } catch (const std::exception& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  const fs::path data = dir / "recording.asc";
+  std::ofstream(data) << "the data";
+  fs::permissions(data, fs::perms::owner_read | fs::perms::group_read | fs::perms::others_read);
+  EXPECT_NE(message([&] { foveal::check_output_file(data.string()); }).find("is read-only"), std::string::npos);
+  EXPECT_NE(message([&] { foveal::write_file_atomically(data.string(), "{}", false); }).find(data.string() + ": is read-only"),
+            std::string::npos);
+  std::ifstream in(data);
+  std::string kept((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_EQ(kept, "the data");
+  // A new file in a read-only folder
+  const fs::path locked = dir / "locked";
+  fs::create_directories(locked);
+  fs::permissions(locked, fs::perms::owner_read | fs::perms::owner_exec);
+  EXPECT_NE(message([&] { foveal::check_output_file((locked / "a.json").string()); }).find("is read-only"), std::string::npos);
+  EXPECT_NE(message([&] { foveal::write_file_atomically((locked / "a.json").string(), "{}", false); }).find("read-only folder"),
+            std::string::npos);
+  EXPECT_NE(message([&] { foveal::StagedFolder staged((locked / "frames").string()); }).find("read-only folder"), std::string::npos);
+  EXPECT_NE(message([&] { foveal::StagedFolder staged(locked.string()); }).find("read-only folder"), std::string::npos);
+  EXPECT_FALSE(fs::exists(locked / "a.json"));
+  fs::permissions(locked, fs::perms::owner_all);
+  // A folder of outputs whose target holds a read-only file of the same name: nothing is moved
+  const fs::path out = dir / "out";
+  fs::create_directories(out);
+  std::ofstream(out / "b.png") << "kept";
+  fs::permissions(out / "b.png", fs::perms::owner_read);
+  {
+    foveal::StagedFolder staged(out.string());
+    std::ofstream(fs::path(staged.path()) / "a.png") << "a";
+    std::ofstream(fs::path(staged.path()) / "b.png") << "b";
+    EXPECT_NE(message([&] { staged.commit(); }).find("b.png: is read-only"), std::string::npos);
   }
+  EXPECT_FALSE(fs::exists(out / "a.png"));
+  std::ifstream b(out / "b.png");
+  std::string b_kept((std::istreambuf_iterator<char>(b)), std::istreambuf_iterator<char>());
+  EXPECT_EQ(b_kept, "kept");
+  fs::permissions(out / "b.png", fs::perms::owner_all);
+  fs::permissions(data, fs::perms::owner_all);
   fs::remove_all(dir);
 }

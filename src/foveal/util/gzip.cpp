@@ -42,6 +42,7 @@ std::string read_gzip_file(const std::string& path, size_t max_bytes) {
 }
 
 void write_file_atomically(const std::string& path, const std::string& bytes, bool compress) {
+  check_output_file(path);  // its folder exists, it is no folder, it may be written
   check_not_an_input(path);
   const std::filesystem::path target(path);
   const std::string temporary = partial_path(path);
