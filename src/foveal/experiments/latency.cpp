@@ -481,6 +481,9 @@ std::optional<double> LatencyLoop::median_converged_ms() const {
 void validate(const LatencyParams& p) {
   validate(p.render);
   if (p.render.mode != RenderMode::foveated) fail("mode: bench latency renders foveated frames");
+  // With no AO rays every fovea would be 'converged' at once: no figure would mean anything
+  if (p.render.foveation.max_rays < 1)
+    fail("max_rays: bench latency judges the fovea's AO; must be >= 1, got {}", p.render.foveation.max_rays);
   if (!(p.refresh_hz >= 1 && p.refresh_hz <= 1000)) fail("refresh_hz: must be in [1, 1000] Hz, got {}", p.refresh_hz);
   if (p.budget_ms && !(*p.budget_ms > 0 && *p.budget_ms <= 10000)) fail("frame_budget_ms: must be in (0, 10000] ms, got {}", *p.budget_ms);
   if (p.tracker_latency_ms && !(*p.tracker_latency_ms >= 0 && *p.tracker_latency_ms < 1000))
