@@ -1,6 +1,9 @@
 """foveal.Loop: frames within the budget, the fovea refined and converged, the saccade predictor fed
 sample by sample, the GIL released while rendering, and clear errors."""
+import json
 import os
+import subprocess
+import sys
 import threading
 import time
 
@@ -8,6 +11,7 @@ import numpy as np
 import pytest
 
 import foveal
+from conftest import shared
 
 
 @pytest.fixture(scope="module")
@@ -249,3 +253,19 @@ def test_what_else_ran_on_the_machine_is_named():
     assert len(foveal.busiest_others(snapshot, most=2)) <= 2
     with pytest.raises(ValueError, match="most"):
         foveal.busiest_others(snapshot, most=0)
+
+
+def test_the_paced_loop_script_reports_every_frame(tmp_path):
+    # bench/paced_loop.py: a frame at each refresh of the wall clock, then a wait (BENCHMARKS.md)
+    recording = shared("gaze", "eyelink", "monoRemote500.asc")
+    script = os.path.join(os.path.dirname(__file__), "..", "..", "bench", "paced_loop.py")
+    out = tmp_path / "paced.json"
+    run = subprocess.run([sys.executable, script, "--recording", str(recording), "--scene", "builtin:box", "--size", "64x40",
+                          "--duration", "0.5", "--max-rays", "16", "--json", str(out)], capture_output=True, text=True, timeout=120)
+    assert run.returncode == 0, run.stderr
+    figures = json.loads(out.read_text())
+    assert figures["frames"] == 30 and figures["budget_ms"] == pytest.approx(1000 / 60)
+    assert 0 <= figures["frames_late"] <= 30 and figures["frame_ms_p50"] > 0
+    assert "30 frames at 60 Hz" in run.stdout
+    bad = subprocess.run([sys.executable, script, "--recording", str(recording), "--start", "1e6"], capture_output=True, text=True)
+    assert bad.returncode != 0 and "--start" in bad.stderr and "past the recording's end" in bad.stderr
