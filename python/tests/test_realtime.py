@@ -269,3 +269,30 @@ def test_the_paced_loop_script_reports_every_frame(tmp_path):
     assert "30 frames at 60 Hz" in run.stdout
     bad = subprocess.run([sys.executable, script, "--recording", str(recording), "--start", "1e6"], capture_output=True, text=True)
     assert bad.returncode != 0 and "--start" in bad.stderr and "past the recording's end" in bad.stderr
+
+
+def test_the_segments_script_pools_every_judged_saccade(tmp_path):
+    # bench/latency_segments.py: bench latency on consecutive segments, each a fresh loop, pooled
+    recording = shared("eye-movements", "irf", "lookAtPoint_EL_S1.csv")
+    script = os.path.join(os.path.dirname(__file__), "..", "..", "bench", "latency_segments.py")
+    out = tmp_path / "segments.json"
+    args = [sys.executable, script, "--recording", str(recording), "--scene", "builtin:box", "--size", "64x40", "--segment", "3",
+            "--count", "2", "--model-rays-per-ms", "2000", "--model-fixed-ms", "3", "--json", str(out)]
+    run = subprocess.run(args, capture_output=True, text=True, timeout=300)
+    assert run.returncode == 0, run.stderr
+    pooled = json.loads(out.read_text())["recordings"][0]
+    assert pooled["segments"] == 2
+    # Every judged saccade of both segments, the same ones in each loop
+    per_segment = [foveal.bench_latency([str(recording)], foveal.Scene("builtin:box"), size=(64, 40), start_s=start, duration_s=3,
+                                        clock="model", model_rays_per_ms=2000, model_fixed_ms=3,
+                                        loops=("deadline", "deadline+prediction"))["recordings"][0] for start in (2, 5)]
+    judged = [s["landing_to_converged_ms"] for seg in per_segment for s in seg["deadline"]["saccades"]]
+    assert [s["landing_to_converged_ms"] for s in pooled["saccade_list"]["deadline"]] == judged
+    assert pooled["saccades"] == len(judged) > 0
+    gain = pooled["gain_ms"]["deadline+prediction"]
+    medians = pooled["median_landing_to_converged_ms"]
+    assert gain == pytest.approx(medians["deadline"] - medians["deadline+prediction"])
+    assert "lookAtPoint_EL_S1.csv (2, " in run.stdout
+    bad = subprocess.run([sys.executable, script, "--recording", str(recording), "--loops", "deadline+prediction"],
+                         capture_output=True, text=True)
+    assert bad.returncode != 0 and "--loops" in bad.stderr

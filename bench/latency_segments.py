@@ -1,0 +1,136 @@
+#!/usr/bin/env python3
+"""Prediction's gain over whole recordings, a fresh loop every segment: `bench latency` pooled.
+
+`foveal bench latency` judges each saccade's landing → converged fovea on one segment of each
+recording. A loop that has run for a while has converged most places the eye returns to, so most
+landings find their fovea converged and the median is 0 ms with or without prediction; on a single
+10-s segment, where landings still wait, the median rests on six to eight saccades. This script
+runs the bench on consecutive segments of each recording (each segment a fresh loop: the first
+seconds of a session, a fresh view), pools every judged saccade per recording and loop, and gives
+the pooled median landing → converged fovea per loop, what prediction (and a perfect predictor,
+with `deadline+oracle`) gains over the loop without it, beside a third of the pooled median
+saccade, and how many saccades each made better or worse. A saccade whose fovea did not converge
+within its segment counts as the longest, as in the bench.
+
+    .venv/bin/python bench/latency_segments.py [--recording REC ...] [--segment 10] [--first 2]
+        [--count N] [--loops deadline,deadline+prediction] [--clock model] [--model-rays-per-ms 25000]
+        [--model-fixed-ms 4] [--size 840x525] [--scene scenes/dragon-box.json] [--json F] [--markdown F]
+
+The defaults are BENCHMARKS.md's: the EyeLink recording and IRF S1 and S2, the model clock (the
+same figures on any machine), 10-s segments from 2 s on, as many as each recording holds.
+"""
+import argparse
+import json
+import math
+import statistics
+import sys
+import time
+from pathlib import Path
+
+import foveal
+
+
+def pooled_median(values):
+    """The median with a saccade never converged (None) counted as the longest, as the bench counts it."""
+    keyed = sorted(math.inf if v is None else v for v in values)
+    if not keyed:
+        return None
+    m = statistics.median(keyed)
+    return None if math.isinf(m) else m
+
+
+def main():
+    here = Path(__file__).resolve().parent.parent
+    data = here.parent / "shared" / "data"
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    p.add_argument("--recording", action="append", help="a recording (repeatable; default: the EyeLink recording, IRF S1 and S2)")
+    p.add_argument("--segment", type=float, default=10.0, help="seconds per segment (10)")
+    p.add_argument("--first", type=float, default=2.0, help="the first segment's start, seconds (2)")
+    p.add_argument("--count", type=int, default=0, help="at most this many segments per recording (0: as many as it holds)")
+    p.add_argument("--loops", default="deadline,deadline+prediction", help="the loops, as bench latency's --loops; deadline among them")
+    p.add_argument("--clock", default="model", choices=["model", "wall"], help="the bench's clock (model)")
+    p.add_argument("--model-rays-per-ms", type=float, default=25000.0, help="the model clock's tracing rate (25000)")
+    p.add_argument("--model-fixed-ms", type=float, default=4.0, help="the model clock's fixed part of each frame (4)")
+    p.add_argument("--size", default="840x525", help="render size WxH (840x525)")
+    p.add_argument("--scene", default=str(here / "scenes" / "dragon-box.json"), help="the scene (the dragon box)")
+    p.add_argument("--json", help="write the pooled figures and every saccade as JSON")
+    p.add_argument("--markdown", help="write the table as Markdown")
+    a = p.parse_args()
+    recordings = a.recording or [str(data / "gaze/eyelink/monoRemote500.asc"),
+                                 str(data / "eye-movements/irf/lookAtPoint_EL_S1.csv"),
+                                 str(data / "eye-movements/irf/lookAtPoint_EL_S2.csv")]
+    for r in recordings:
+        if not Path(r).is_file():
+            p.error(f"--recording: {r} does not exist")
+    loops = [l.strip() for l in a.loops.split(",") if l.strip()]
+    if "deadline" not in loops or len(loops) < 2:
+        p.error("--loops: give deadline and at least one loop to compare with it")
+    if not (a.segment > 0 and a.first >= 0):
+        p.error("--segment must be > 0 and --first >= 0")
+    try:
+        width, height = (int(v) for v in a.size.lower().split("x"))
+    except ValueError:
+        p.error(f"--size: {a.size} is not WxH")
+    scene = foveal.Scene(a.scene)
+    read = {r: foveal.gaze.read(r) for r in recordings}
+    length = {r: float(rec.samples["t_s"][-1] - rec.samples["t_s"][0]) for r, rec in read.items()}
+    model = dict(model_rays_per_ms=a.model_rays_per_ms, model_fixed_ms=a.model_fixed_ms) if a.clock == "model" else {}
+    pooled = {r: {l: [] for l in loops} for r in recordings}
+    durations = {r: [] for r in recordings}
+    segments = {r: 0 for r in recordings}
+    start = a.first
+    began = time.perf_counter()
+    while True:
+        these = [r for r in recordings if start + a.segment <= length[r] and (a.count <= 0 or segments[r] < a.count)]
+        if not these:
+            break
+        print(f"segment {start:g}–{start + a.segment:g} s: {len(these)} recording(s) ({time.perf_counter() - began:.0f} s so far)",
+              file=sys.stderr, flush=True)
+        report = foveal.bench_latency(these, scene, size=(width, height), start_s=start, duration_s=a.segment, clock=a.clock,
+                                      loops=loops, **model)
+        for r, rec in zip(these, report["recordings"]):
+            segments[r] += 1
+            for l in loops:
+                for s in rec[l]["saccades"]:
+                    pooled[r][l].append({"segment_start_s": start, **{k: s[k] for k in (
+                        "amplitude_deg", "duration_ms", "landing_s", "landing_to_converged_ms", "fixation_ms")}})
+            durations[r] += [s["duration_ms"] for s in rec["deadline"]["saccades"]]
+        start += a.segment
+    out = {"clock": a.clock, "segment_s": a.segment, "first_s": a.first, "size": [width, height], "scene": a.scene,
+           "loops": loops, "recordings": []}
+    if a.clock == "model":
+        out["model"] = {"rays_per_ms": a.model_rays_per_ms, "fixed_ms": a.model_fixed_ms}
+    header = "| recording (segments, saccades) | " + " | ".join(f"`{l}` median ms" for l in loops) + \
+             " | gained in the median | a third of the median saccade | saccades better / worse |"
+    rows = [header, "|---|" + "---:|" * (len(loops) + 3)]
+    for r in recordings:
+        base = [s["landing_to_converged_ms"] for s in pooled[r]["deadline"]]
+        medians = {l: pooled_median([s["landing_to_converged_ms"] for s in pooled[r][l]]) for l in loops}
+        third = statistics.median(durations[r]) / 3 if durations[r] else None
+        entry = {"recording": r, "segments": segments[r], "saccades": len(base), "median_landing_to_converged_ms": medians,
+                 "third_of_median_saccade_ms": third, "gain_ms": {}, "better": {}, "worse": {}, "saccade_list": pooled[r]}
+        gains, counts = [], []
+        for l in loops[1:] if loops[0] == "deadline" else [x for x in loops if x != "deadline"]:
+            gain = None if medians["deadline"] is None or medians[l] is None else medians["deadline"] - medians[l]
+            other = [s["landing_to_converged_ms"] for s in pooled[r][l]]
+            key = lambda v: math.inf if v is None else v
+            better = sum(key(o) < key(b) - 0.5 for b, o in zip(base, other))
+            worse = sum(key(o) > key(b) + 0.5 for b, o in zip(base, other))
+            entry["gain_ms"][l], entry["better"][l], entry["worse"][l] = gain, better, worse
+            gains.append(f"{l}: {'—' if gain is None else f'{gain:.0f} ms'}")
+            counts.append(f"{l}: {better} / {worse}")
+        out["recordings"].append(entry)
+        cells = " | ".join("—" if medians[l] is None else f"{medians[l]:.0f}" for l in loops)
+        rows.append(f"| {Path(r).name} ({segments[r]}, {len(base)}) | {cells} | {'; '.join(gains)} | "
+                    f"{'—' if third is None else f'{third:.0f} ms'} | {'; '.join(counts)} |")
+    table = "\n".join(rows) + "\n"
+    print(table)
+    if a.markdown:
+        Path(a.markdown).write_text(table)
+    if a.json:
+        Path(a.json).write_text(json.dumps(out, indent=1) + "\n")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
