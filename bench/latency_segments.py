@@ -22,12 +22,15 @@ same figures on any machine), 10-s segments from 2 s on, as many as each recordi
 import argparse
 import json
 import math
+import os
 import statistics
 import sys
 import time
 from pathlib import Path
 
 import foveal
+from outputs import check_outputs, write_output
+
 
 
 def pooled_median(values):
@@ -71,6 +74,7 @@ def main():
         width, height = (int(v) for v in a.size.lower().split("x"))
     except ValueError:
         p.error(f"--size: {a.size} is not WxH")
+    check_outputs(p, [("--json", a.json), ("--markdown", a.markdown)], recordings + [a.scene])
     scene = foveal.Scene(a.scene)
     read = {r: foveal.gaze.read(r) for r in recordings}
     length = {r: float(rec.samples["t_s"][-1] - rec.samples["t_s"][0]) for r, rec in read.items()}
@@ -126,9 +130,9 @@ def main():
     table = "\n".join(rows) + "\n"
     print(table)
     if a.markdown:
-        Path(a.markdown).write_text(table)
+        write_output(a.markdown, table)
     if a.json:
-        Path(a.json).write_text(json.dumps(out, indent=1) + "\n")
+        write_output(a.json, json.dumps(out, indent=1) + "\n")
     return 0
 
 

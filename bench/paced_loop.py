@@ -26,6 +26,8 @@ from pathlib import Path
 import numpy as np
 
 import foveal
+from outputs import check_outputs, write_output
+
 
 
 def main():
@@ -50,6 +52,7 @@ def main():
         width, height = (int(v) for v in a.size.lower().split("x"))
     except ValueError:
         p.error(f"--size: {a.size} is not WxH")
+    check_outputs(p, [("--json", a.json)], [a.recording, a.scene])
     scene = foveal.Scene(a.scene)
     rec = foveal.gaze.read(a.recording)
     samples = rec.samples
@@ -99,7 +102,7 @@ def main():
     if others:
         print("what else ran: " + "; ".join(f"{o['name']} {o['cpu_ms']:.1f} ms in {int(o['slices'])} turns" for o in others))
     if a.json:
-        Path(a.json).write_text(json.dumps(out, indent=1) + "\n")
+        write_output(a.json, json.dumps(out, indent=1) + "\n")
     return 0
 
 

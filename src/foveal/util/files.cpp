@@ -56,9 +56,9 @@ Guard& guard() {
 }
 
 // Refuses a target that no one may write, or a folder no one may write into: read-only by intent.
-// The system lets root (a container's user, often) replace such a file or add to such a folder; a
-// run as root wrote its --json over a read-only recording of the shared data, so foveal refuses it
-// for every user.
+// The system lets root (a container's user, often) replace such a file or add to such a folder (a
+// bench's --json, run as root, replaced a read-only recording so), so foveal refuses it for every
+// user.
 bool read_only_folder(const fs::path& folder) {
   struct stat st {};
   return ::stat(folder.c_str(), &st) == 0 && S_ISDIR(st.st_mode) && (st.st_mode & 0222) == 0;

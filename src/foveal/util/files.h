@@ -8,7 +8,7 @@
 // session may rewrite its own files, so the guard is off unless turned on.
 //
 // Never over a read-only file, nor into a read-only folder, whoever runs it: the system lets root
-// (a container's user, often) replace them, and a --json once went over a read-only recording so.
+// (a container's user, often) replace them, and a bench's --json once replaced a read-only recording so.
 //
 // All or nothing: a folder of outputs is written into a staging folder beside it and moved into
 // place when the run succeeds, so a failed run leaves no partial output (finding 2).
