@@ -79,6 +79,12 @@ def main():
     read = {r: foveal.gaze.read(r) for r in recordings}
     length = {r: float(rec.samples["t_s"][-1] - rec.samples["t_s"][0]) for r, rec in read.items()}
     model = dict(model_rays_per_ms=a.model_rays_per_ms, model_fixed_ms=a.model_fixed_ms) if a.clock == "model" else {}
+    short = [r for r in recordings if a.first + a.segment > length[r]]
+    if len(short) == len(recordings):
+        p.error(f"--segment: no {a.segment:g}-s segment from {a.first:g} s fits in any recording (the longest is {max(length.values()):.1f} s)")
+    for r in short:
+        print(f"{r}: {length[r]:.1f} s, shorter than one segment from {a.first:g} s; left out", file=sys.stderr)
+    recordings = [r for r in recordings if r not in short]
     pooled = {r: {l: [] for l in loops} for r in recordings}
     durations = {r: [] for r in recordings}
     segments = {r: 0 for r in recordings}
