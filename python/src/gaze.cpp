@@ -9,6 +9,7 @@
 #include "foveal/gaze/recording.h"
 #include "foveal/gaze/source.h"
 #include "foveal/util/error.h"
+#include "foveal/util/files.h"
 #include "foveal/util/gzip.h"
 
 #include <nanobind/stl/array.h>
@@ -369,6 +370,10 @@ void bind_gaze(nb::module_& m) {
   m.def(
       "_write_text", [](const std::string& path, const std::string& text) { write_file_atomically(path, text, false); }, "path"_a,
       "text"_a);
+  // … and the check every command makes before its work (util/files.h: the folder exists, the path
+  // is no folder and may be written, read-only refused)
+  m.def(
+      "_check_output_file", [](const std::string& path) { check_output_file(path); }, "path"_a);
 
   m.def(
       "_evaluate",

@@ -720,7 +720,7 @@ NB_MODULE(_core, m) {
         }
         return to_python(others_json(others));
       },
-      "since"_a, "most"_a = 5,
+      "since"_a, "most"_a = static_cast<int>(kBusiestOthers),
       "The other processes that ran on this machine since a machine_snapshot(), the busiest first: a list of dicts with pid, "
       "name, kernel (a kernel thread), cpu_ms and slices (turns on a CPU) — what takes a real-time loop's cores.");
   m.def(

@@ -269,6 +269,15 @@ def test_the_paced_loop_script_reports_every_frame(tmp_path):
     assert "30 frames at 60 Hz" in run.stdout
     bad = subprocess.run([sys.executable, script, "--recording", str(recording), "--start", "1e6"], capture_output=True, text=True)
     assert bad.returncode != 0 and "--start" in bad.stderr and "past the recording's end" in bad.stderr
+    # Its output is checked before any frame, as foveal's commands check theirs
+    locked = tmp_path / "locked.json"
+    locked.write_text("kept")
+    locked.chmod(0o444)
+    refused = subprocess.run([sys.executable, script, "--recording", str(recording), "--json", str(locked)], capture_output=True,
+                             text=True)
+    assert refused.returncode != 0 and "--json" in refused.stderr and "is read-only" in refused.stderr
+    assert locked.read_text() == "kept"
+    locked.chmod(0o644)
 
 
 def test_the_segments_script_pools_every_judged_saccade(tmp_path):

@@ -2,8 +2,6 @@
 #include "foveal/experiments/latency.h"
 
 #include "foveal/experiments/stalls_report.h"
-#include "foveal/util/stalls.h"
-
 #include "foveal/gaze/detect.h"
 #include "foveal/gaze/fixation.h"
 #include "foveal/io/plot.h"

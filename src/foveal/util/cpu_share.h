@@ -9,6 +9,7 @@
 #pragma once
 
 #include <cmath>
+#include <cstddef>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -86,6 +87,7 @@ struct BusyProcess {
 };
 // The processes other than `self_pid` that ran between two readings, the busiest first, at most `most`.
 std::vector<BusyProcess> busiest_others(const MachineThreads& before, const MachineThreads& after, long self_pid, size_t most);
+inline constexpr size_t kBusiestOthers = 5;  // how many of them a report names (bench stalls, bench latency)
 // A few other processes' threads read cheaply around each frame (one schedstat file each): those
 // that ran between two readings of the machine, the `most` busiest of them — the likely takers of a
 // frame's cores.

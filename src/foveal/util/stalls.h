@@ -16,7 +16,6 @@
 
 #include "foveal/util/cpu_share.h"
 
-#include <cstddef>
 #include <functional>
 #include <vector>
 
@@ -51,7 +50,6 @@ struct StallReport {
   std::vector<Stall> stalls;        // in the order of their start
   std::vector<BusyProcess> others;  // the other processes that ran meanwhile, the busiest first (util/cpu_share.h)
 };
-inline constexpr size_t kBusiestOthers = 5;  // how many of them a report names
 // Run the probe (the calling thread waits; each worker is a std::thread of its own).
 StallReport probe_stalls(const StallProbeParams& p);
 
