@@ -45,7 +45,7 @@ LANDINGS_DTYPE = np.dtype([("event", "i8"), ("onset_s", "f8"), ("landing_s", "f8
                            ("error_deg", "f8"), ("two_thirds_x_deg", "f8"), ("two_thirds_y_deg", "f8"),
                            ("two_thirds_error_deg", "f8"), ("gained_ms", "f8")])
 
-__all__ = ["Recording", "Events", "read", "fixations", "events", "evaluate", "PupilSource", "LslSource", "SAMPLE_DTYPE",
+__all__ = ["Recording", "Events", "read", "fixations", "events", "evaluate", "predict_landings", "PupilSource", "LslSource", "SAMPLE_DTYPE",
            "EVENT_DTYPE", "FIXATION_DTYPE", "EVENTS_DTYPE", "LANDINGS_DTYPE", "LABELS"]
 
 
@@ -304,6 +304,40 @@ def events(recording, method: str = "auto", display: Optional[_core.Display] = N
                   velocity_deg_s=np.asarray(d["velocity_deg_s"]), method=d["method"], sampling_hz=d["sampling_hz"],
                   peak_threshold_deg_s=d["peak_threshold_deg_s"], onset_threshold_deg_s=d["onset_threshold_deg_s"],
                   tsv=d["tsv"], landings=landings, landings_tsv=d["landings_tsv"])
+
+
+_LANDING_PARAMETERS = ("onset_deg_s", "offset_deg_s", "min_amplitude_deg", "skew", "skew_per_deg", "max_skew", "peak_drop",
+                       "max_velocity_deg_s", "main_sequence_ms", "main_sequence_ms_per_deg", "main_sequence_vmax_deg_s",
+                       "main_sequence_c_deg", "duration_slack")
+
+
+def predict_landings(t_s, deg, **params) -> list:
+    """Run the real-time loop's live saccade landing predictor over a whole sample stream.
+
+    ``t_s``: rising sample times in seconds; ``deg``: an (N, 2) array of gaze positions in degrees
+    in any fixed planar frame (NaN marks a lost sample, which ends a flight). ``params``: the
+    predictor's (gaze/landing.h; docs/realtime.md): onset_deg_s (40), offset_deg_s (30),
+    min_amplitude_deg (0.5), skew (1), skew_per_deg (0.03), max_skew (4), peak_drop (0.8),
+    max_velocity_deg_s (1000), main_sequence_ms (21), main_sequence_ms_per_deg (2.2),
+    main_sequence_vmax_deg_s (500), main_sequence_c_deg (14), duration_slack (3).
+
+    Returns one dict per saccade the predictor saw land: ``onset_s``, ``detected_s`` (the sample
+    that revealed the onset), ``first_prediction_s`` and ``first_landing_deg`` (the first
+    prediction past the velocity peak), ``settled_s`` (from then on every prediction was within 1°
+    of the landing; NaN if never), ``landing_s``, ``landing_deg`` and ``amplitude_deg`` (measured),
+    and every prediction of the flight: ``prediction_s``, ``prediction_x_deg``,
+    ``prediction_y_deg``. The GIL is released while it runs.
+    """
+    t = np.ascontiguousarray(t_s, dtype=np.float64)
+    d = np.asarray(deg, dtype=np.float64)
+    if t.ndim != 1:
+        raise ValueError(f"t_s: expected a 1-D array of times, got shape {t.shape}")
+    if d.ndim != 2 or d.shape[1] != 2:
+        raise ValueError(f"deg: expected an (N, 2) array of positions in degrees, got shape {d.shape}")
+    if len(d) != len(t):
+        raise ValueError(f"deg: {len(d)} positions for {len(t)} times")
+    return _core._predict_landings(t, np.ascontiguousarray(d[:, 0]), np.ascontiguousarray(d[:, 1]),
+                                   _parameters(params, _LANDING_PARAMETERS))
 
 
 def _label_codes(labels, argument: str) -> np.ndarray:

@@ -21,7 +21,9 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <iterator>
 #include <memory>
+#include <utility>
 
 namespace foveal::python {
 
@@ -187,6 +189,23 @@ struct PyPupilSource {
     if (!source) fail("PupilSource: the source is closed");
     return *source;
   }
+};
+
+// The landing predictor's parameters by keyword (foveal.gaze.predict_landings)
+constexpr std::pair<const char*, double LandingParams::*> kLandingFields[] = {
+    {"onset_deg_s", &LandingParams::onset_deg_s},
+    {"offset_deg_s", &LandingParams::offset_deg_s},
+    {"min_amplitude_deg", &LandingParams::min_amplitude_deg},
+    {"skew", &LandingParams::skew},
+    {"skew_per_deg", &LandingParams::skew_per_deg},
+    {"max_skew", &LandingParams::max_skew},
+    {"peak_drop", &LandingParams::peak_drop},
+    {"max_velocity_deg_s", &LandingParams::max_velocity_deg_s},
+    {"main_sequence_ms", &LandingParams::main_sequence_ms},
+    {"main_sequence_ms_per_deg", &LandingParams::main_sequence_ms_per_deg},
+    {"main_sequence_vmax_deg_s", &LandingParams::main_sequence_vmax_deg_s},
+    {"main_sequence_c_deg", &LandingParams::main_sequence_c_deg},
+    {"duration_slack", &LandingParams::duration_slack},
 };
 
 }  // namespace
@@ -364,6 +383,60 @@ void bind_gaze(nb::module_& m) {
         return out;
       },
       "columns"_a, "display"_a, "method"_a, "params"_a);
+
+  // The live landing predictor (gaze/landing.h) over a whole stream: every saccade it saw land, with
+  // each prediction of its flight
+  m.def(
+      "_predict_landings",
+      [](const Column& t, const Column& x, const Column& y, const nb::dict& params) {
+        const size_t n = t.shape(0);
+        if (x.shape(0) != n || y.shape(0) != n) fail("deg: {} and {} positions for {} times", x.shape(0), y.shape(0), n);
+        LandingParams p;
+        for (auto [key, value] : params) {
+          const std::string k = nb::cast<std::string>(key);
+          const double v = nb::cast<double>(value);
+          const auto* field =
+              std::find_if(std::begin(kLandingFields), std::end(kLandingFields), [&](const auto& f) { return k == f.first; });
+          if (field == std::end(kLandingFields)) fail("{}: no parameter of the landing predictor", k);
+          p.*(field->second) = v;
+        }
+        validate(p);
+        std::vector<double> times(t.data(), t.data() + n);
+        std::vector<glm::dvec2> deg(n);
+        for (size_t i = 0; i < n; ++i) {
+          if (!std::isfinite(times[i])) fail("t_s: t_s[{}] = {} is no time", i, times[i]);
+          if (i > 0 && !(times[i] > times[i - 1])) fail("t_s: must rise, but t_s[{}] = {} follows {}", i, times[i], times[i - 1]);
+          deg[i] = {x.data()[i], y.data()[i]};
+        }
+        std::vector<PredictedSaccade> flights;
+        {
+          nb::gil_scoped_release release;
+          flights = predict_landings(times, deg, p);
+        }
+        nb::list out;
+        for (PredictedSaccade& f : flights) {
+          nb::dict d;
+          d["onset_s"] = f.onset_s;
+          d["detected_s"] = f.detected_s;
+          d["first_prediction_s"] = f.first_prediction_s;
+          d["first_landing_deg"] = nb::make_tuple(f.first_landing_deg.x, f.first_landing_deg.y);
+          d["settled_s"] = f.settled_s;
+          d["landing_s"] = f.landing_s;
+          d["landing_deg"] = nb::make_tuple(f.landing_deg.x, f.landing_deg.y);
+          d["amplitude_deg"] = f.amplitude_deg;
+          std::vector<double> px, py;
+          for (const glm::dvec2& q : f.prediction_deg) {
+            px.push_back(q.x);
+            py.push_back(q.y);
+          }
+          d["prediction_s"] = column(std::move(f.prediction_s));
+          d["prediction_x_deg"] = column(std::move(px));
+          d["prediction_y_deg"] = column(std::move(py));
+          out.append(d);
+        }
+        return out;
+      },
+      "t_s"_a, "x_deg"_a, "y_deg"_a, "params"_a);
 
   // The Python writers' one path: every writer's rules (never over an input or a read-only file;
   // an existing file replaced only once the new one is whole)
