@@ -305,3 +305,70 @@ def test_the_segments_script_pools_every_judged_saccade(tmp_path):
     bad = subprocess.run([sys.executable, script, "--recording", str(recording), "--loops", "deadline+prediction"],
                          capture_output=True, text=True)
     assert bad.returncode != 0 and "--loops" in bad.stderr
+
+
+def _min_jerk(t, t0, duration, amplitude):
+    """Position along a minimum-jerk saccade of `amplitude` degrees from t0 (a smooth main-sequence-like profile)."""
+    tau = np.clip((np.asarray(t) - t0) / duration, 0, 1)
+    return amplitude * (10 * tau ** 3 - 15 * tau ** 4 + 6 * tau ** 5)
+
+
+def test_predict_landings_gives_every_prediction_of_each_flight():
+    # foveal.gaze.predict_landings: the loop's live predictor over a stream (gaze/landing.h)
+    t = np.arange(0, 0.6, 0.001)
+    x = _min_jerk(t, 0.1, 0.06, 15.0) + _min_jerk(t, 0.4, 0.05, -10.0)
+    flights = foveal.gaze.predict_landings(t, np.stack([x, np.zeros_like(x)], 1))
+    assert len(flights) == 2
+    first, second = flights
+    assert first["landing_deg"][0] == pytest.approx(15, abs=0.2) and second["landing_deg"][0] == pytest.approx(5, abs=0.2)
+    for f, onset, landed in ((first, 0.1, 0.16), (second, 0.4, 0.45)):
+        assert onset <= f["onset_s"] < f["detected_s"] < f["first_prediction_s"] < f["landing_s"] <= landed + 0.01
+        assert len(f["prediction_s"]) == len(f["prediction_x_deg"]) == len(f["prediction_y_deg"]) > 0
+        assert np.all(np.diff(f["prediction_s"]) > 0) and f["prediction_s"][0] >= f["detected_s"]
+        # the predictions close in on the landing: the last within 1°, and within 1° for good before it
+        assert abs(f["prediction_x_deg"][-1] - f["landing_deg"][0]) < 1 and f["settled_s"] < f["landing_s"]
+    # a parameter moves the detection: a threshold above the saccades' velocity finds none
+    assert foveal.gaze.predict_landings(t, np.stack([x, np.zeros_like(x)], 1), onset_deg_s=999) == []
+    with pytest.raises(ValueError, match="t_s: must rise"):
+        foveal.gaze.predict_landings(t[::-1], np.stack([x, x], 1))
+    with pytest.raises(ValueError, match="deg: 5 positions for 600 times"):
+        foveal.gaze.predict_landings(t, np.zeros((5, 2)))
+    with pytest.raises(ValueError, match="deg: expected an"):
+        foveal.gaze.predict_landings(t, x)
+    with pytest.raises(ValueError, match="speed: unknown parameter"):
+        foveal.gaze.predict_landings(t, np.stack([x, x], 1), speed=3)
+    with pytest.raises(ValueError, match="skew: must be in"):
+        foveal.gaze.predict_landings(t, np.stack([x, x], 1), skew=9)
+
+
+def test_the_landing_rays_script_bounds_each_strategy_by_the_oracle(tmp_path):
+    # bench/landing_rays.py on a made-up Lund-format recording (t, x, y px, label): two labelled saccades
+    t = np.arange(0, 2.0, 0.002)
+    deg = _min_jerk(t, 0.5, 0.05, 12.0) + _min_jerk(t, 1.2, 0.045, -9.0)
+    x_px = (np.tan(np.radians(deg)) * 67 / 38 + 0.5) * 1024
+    y_px = np.full_like(x_px, 384.0)
+    label = np.where(((t >= 0.5) & (t <= 0.55)) | ((t >= 1.2) & (t <= 1.245)), 2, 1)
+    rec = tmp_path / "made_up_labelled_MN.csv"
+    rec.write_text("t,x,y,label\n" + "".join(f"{a:.3f},{b:.2f},{c:.2f},{d}\n" for a, b, c, d in zip(t, x_px, y_px, label)))
+    script = os.path.join(os.path.dirname(__file__), "..", "..", "bench", "landing_rays.py")
+    out = tmp_path / "rays.json"
+    run = subprocess.run([sys.executable, script, "--recording", str(rec), "--strategies", "eye,prediction,region:2,oracle",
+                          "--json", str(out)], capture_output=True, text=True, timeout=120)
+    assert run.returncode == 0, run.stderr
+    rows = json.loads(out.read_text())["saccades"]
+    assert len(rows) == 2 and [round(r["amplitude_deg"]) for r in rows] == [12, 9]
+    for r in rows:
+        share = r["share"]
+        # the oracle casts every ray of the flight's frames into the landed fovea: no strategy casts more
+        assert share["oracle"] > share["eye"] >= 0
+        assert share["oracle"] >= max(share["prediction"], share["region:2"])
+        assert share["prediction"] >= share["eye"]  # a clean saccade's prediction lands its rays
+    assert "| oracle |" in run.stdout
+    # a file that is no Lund recording is named, with its line
+    bad = tmp_path / "bad.csv"
+    bad.write_text("time,x,y\n0,1,2\n")
+    wrong = subprocess.run([sys.executable, script, "--recording", str(bad)], capture_output=True, text=True, timeout=60)
+    assert wrong.returncode != 0 and "bad.csv: line 1" in wrong.stderr
+    nope = subprocess.run([sys.executable, script, "--recording", str(rec), "--strategies", "region:0.5"], capture_output=True,
+                          text=True, timeout=60)
+    assert nope.returncode != 0 and "--strategies: region:0.5" in nope.stderr

@@ -1,0 +1,293 @@
+#!/usr/bin/env python3
+"""How much of a landed fovea's rays a saccade's flight puts there: landing predictors, compared cheaply.
+
+While a saccade flies, the real-time loop places the fovea at the predicted landing
+(docs/realtime.md); whatever rays it casts there that fall inside the fovea where the eye then
+lands are rays that fovea no longer waits for. `bench latency` judges the result (landing →
+converged fovea), but a landing's gain is whole frames, most landings gain none, and a run takes
+minutes. This script measures the quantity underneath, on expert-labelled saccades: for each
+labelled saccade it replays the predictor over the recording (`foveal.gaze.predict_landings`, the
+loop's own), lays frames at the display's refresh from the flight's onset (at several phases),
+gives each frame the rays of the loop's model clock, cast as the loop casts a fovea's (rounds of
+16, 16, 32, … a pixel, n_max = 400, out from the centre), into the fovea each strategy places with
+what it knows a tracker latency (one sample period + 2 ms) before the frame, and reports the share
+of the landed fovea's rays (its pixels × n_max) cast before the landing.
+
+Strategies: `eye` (the fovea where the eye is: the loop without prediction), `prediction` (at the
+predicted landing), `region:R` (before the peak, the fovea stretched along the flight from the
+prediction out to R times its amplitude; the tried idea of docs/realtime.md), `oracle` (at the
+labelled landing: the most any predictor could put there). Before the onset is detected every
+strategy's fovea is where the eye is.
+
+The default recordings are Lund 2013's training part (Andersson et al. 2017; 500 Hz, 1024×768 px on
+38×30 cm at 67 cm), where any constant of a predictor is chosen; the IRF recordings are test data.
+
+    .venv/bin/python bench/landing_rays.py [--recording CSV ...] [--min-amplitude 5] [--refresh-hz 60]
+        [--rays-per-frame 316667] [--fovea-deg 5.7,3.7] [--px-per-deg 19.4] [--phases 3] [--seed 1]
+        [--strategies eye,prediction,region:2,oracle] [--json F] [--markdown F]
+"""
+import argparse
+import json
+import math
+import os
+import sys
+from pathlib import Path
+
+import numpy as np
+
+import foveal
+from outputs import check_outputs, write_output
+
+N_MAX = 400
+FIRST_ROUND = 16
+LUND_SCREEN_PX = (1024, 768)
+LUND_SCREEN_CM = (38.0, 30.0)
+LUND_DISTANCE_CM = 67.0
+SACCADE = 2  # Lund's label of a saccade
+
+
+def read_lund(path):
+    """A Lund 2013 labelled recording (t, x, y px, label): times, positions in degrees (NaN where lost), labels."""
+    with open(path, encoding="utf-8") as f:
+        header = f.readline().strip().split(",")
+    if header[:3] != ["t", "x", "y"] or header[-1] != "label":
+        raise ValueError(f"{path}: line 1: expected the header t,x,y,…,label of a Lund 2013 recording, got {','.join(header)}")
+    data = np.genfromtxt(path, delimiter=",", skip_header=1, ndmin=2)  # an empty x or y: a lost sample (NaN)
+    if data.shape[0] < 2 or data.shape[1] != len(header):
+        raise ValueError(f"{path}: expected samples of {len(header)} columns after the header, got an array of {data.shape}")
+    bad = ~np.isfinite(data[:, 0]) | ~np.isfinite(data[:, -1])
+    if bad.any():
+        raise ValueError(f"{path}: line {int(np.argmax(bad)) + 2}: no time or no label")
+    t, x, y, label = data[:, 0], data[:, 1], data[:, 2], data[:, -1].astype(int)
+    if not np.all(np.diff(t) > 0):
+        k = int(np.argmax(np.diff(t) <= 0)) + 1
+        raise ValueError(f"{path}: line {k + 2}: the time {t[k]} does not rise")
+    lost = ((x == 0) & (y == 0)) | ~np.isfinite(x) | ~np.isfinite(y)
+    deg = np.stack([np.degrees(np.arctan((x / LUND_SCREEN_PX[0] - 0.5) * LUND_SCREEN_CM[0] / LUND_DISTANCE_CM)),
+                    np.degrees(np.arctan((y / LUND_SCREEN_PX[1] - 0.5) * LUND_SCREEN_CM[1] / LUND_DISTANCE_CM))], 1)
+    deg[lost] = np.nan
+    return t, deg, label
+
+
+def labelled_saccades(t, deg, label, min_amplitude):
+    """(first, last) sample of each labelled saccade at least min_amplitude degrees long (from the sample before it)."""
+    out = []
+    i = 0
+    while i < len(label):
+        if label[i] != SACCADE:
+            i += 1
+            continue
+        j = i
+        while j + 1 < len(label) and label[j + 1] == SACCADE:
+            j += 1
+        start = deg[max(i - 1, 0)]
+        amplitude = float(np.hypot(*(deg[j] - start)))
+        if math.isfinite(amplitude) and amplitude >= min_amplitude:
+            out.append((i, j))
+        i = j + 1
+    return out
+
+
+def segment_distance(px, py, a, b):
+    """Distance of points (px, py) from the segment a → b (degrees)."""
+    d = b - a
+    length2 = float(d @ d)
+    if length2 == 0:
+        return np.hypot(px - a[0], py - a[1])
+    s = np.clip(((px - a[0]) * d[0] + (py - a[1]) * d[1]) / length2, 0, 1)
+    return np.hypot(px - a[0] - s * d[0], py - a[1] - s * d[1])
+
+
+def inside(px, py, a, b, axes):
+    """Points within the fovea's ellipse (semi-axes `axes`, degrees) of some point of the segment a → b."""
+    sx, sy = axes
+    return segment_distance(px / sx, py / sy, a / np.array([sx, sy]), b / np.array([sx, sy])) < 1
+
+
+def cast_frame(cast, order, budget):
+    """Cast `budget` rays into the pixels `order` (flat indices) in the loop's rounds: each pass gives every
+    pixel short of n_max min(n_max − c, max(16, c)) more, in order, until the budget is spent."""
+    c = cast.reshape(-1)
+    while budget > 0 and len(order):
+        need = np.minimum(N_MAX - c[order], np.maximum(FIRST_ROUND, c[order]))
+        open_ = need > 0
+        order, need = order[open_], need[open_]
+        if not len(order):
+            break
+        total = np.cumsum(need)
+        k = int(np.searchsorted(total, budget, side="right"))
+        c[order[:k]] += need[:k]
+        budget -= int(total[k - 1]) if k else 0
+        if k < len(order):
+            c[order[k]] += budget
+            budget = 0
+
+
+def simulate(flight, t, deg, first, last, strategy, phase, a):
+    """The share of the landed fovea's rays that frames at `phase` after the flight's onset cast before the landing."""
+    end = deg[last]
+    onset = flight["onset_s"]
+    start = deg[int(np.searchsorted(t, onset))]
+    pred_t = np.asarray(flight["prediction_s"])
+    pred = np.stack([np.asarray(flight["prediction_x_deg"]), np.asarray(flight["prediction_y_deg"])], 1)
+    points = np.vstack([pred, start, end, deg[first:last + 1]])
+    points = points[np.all(np.isfinite(points), axis=1)]
+    reach = 1.0
+    if strategy.startswith("region:"):
+        reach = float(strategy.split(":")[1])
+        points = np.vstack([points, start + reach * (pred - start)])
+    margin = np.array(a.fovea) + 1.0
+    lo, hi = points.min(0) - margin, points.max(0) + margin
+    step = 1.0 / a.px_per_deg
+    xs = np.arange(lo[0], hi[0], step) + step / 2
+    ys = np.arange(lo[1], hi[1], step) + step / 2
+    X, Y = np.meshgrid(xs, ys)
+    cast = np.zeros(X.shape, np.int64)
+    sample_period = float(np.median(np.diff(t)))
+    latency = sample_period + 0.002
+    landed = t[last]
+    frame = onset + phase
+    while frame < landed:
+        known = frame - latency
+        k = int(np.searchsorted(pred_t, known, side="right")) - 1  # the latest prediction by then
+        s = int(np.searchsorted(t, known, side="right")) - 1       # … and the latest sample
+        centre_out = True
+        if k < 0 or strategy == "eye":
+            a_pt = deg[max(s, 0)]
+            if not np.all(np.isfinite(a_pt)):
+                frame += 1.0 / a.refresh_hz
+                continue
+            b_pt = a_pt
+            centre_out = False  # the loop's fovea at a measured gaze goes in pixel order
+        elif strategy == "oracle":
+            a_pt = b_pt = end
+        else:
+            a_pt = b_pt = pred[k]
+            if reach != 1.0 and pred_t[k] < flight["first_prediction_s"]:
+                b_pt = start + reach * (pred[k] - start)
+        mask = inside(X, Y, a_pt, b_pt, a.fovea)
+        flat = np.flatnonzero(mask.reshape(-1))
+        if centre_out:
+            distance = segment_distance(X.reshape(-1)[flat], Y.reshape(-1)[flat], a_pt, b_pt)
+            flat = flat[np.argsort(distance, kind="stable")]
+        cast_frame(cast, flat, a.rays_per_frame)
+        frame += 1.0 / a.refresh_hz
+    landed_fovea = inside(X, Y, end, end, a.fovea)
+    return float(np.minimum(cast, N_MAX)[landed_fovea].sum()) / (landed_fovea.sum() * N_MAX)
+
+
+def prediction_errors(flight, t, deg, last):
+    """Each prediction's distance from the labelled landing along the flight (onset → prediction) and across it,
+    with whether it was made before the peak was passed."""
+    start = deg[int(np.searchsorted(t, flight["onset_s"]))]
+    end = deg[last]
+    out = []
+    for ts, x, y in zip(flight["prediction_s"], flight["prediction_x_deg"], flight["prediction_y_deg"]):
+        pred = np.array([x, y])
+        d = pred - start
+        length = float(np.hypot(*d))
+        if not length >= 0.5:
+            continue
+        u = d / length
+        e = end - pred
+        out.append((bool(ts < flight["first_prediction_s"]), abs(float(e @ u)), abs(float(e @ np.array([-u[1], u[0]])))))
+    return out
+
+
+def main():
+    here = Path(__file__).resolve().parent.parent
+    lund = here.parent / "shared" / "data" / "eye-movements" / "lund2013-train"
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    p.add_argument("--recording", action="append",
+                   help="a Lund 2013 labelled recording (repeatable; default: the eleven *_MN.csv of the training part)")
+    p.add_argument("--min-amplitude", type=float, default=5.0, help="labelled saccades at least this long, degrees (5)")
+    p.add_argument("--refresh-hz", type=float, default=60.0, help="the display's refresh rate (60)")
+    p.add_argument("--rays-per-frame", type=int, default=316667,
+                   help="AO rays a frame (316667: the model clock's 25,000 rays/ms over a 16.7-ms frame less 4 ms)")
+    p.add_argument("--fovea-deg", default="5.7,3.7",
+                   help="the fovea's semi-axes, degrees (5.7,3.7: the q = 1 region of the default display and foveation)")
+    p.add_argument("--px-per-deg", type=float, default=19.4, help="render pixels a degree (19.4: 840 px on the default display)")
+    p.add_argument("--phases", type=int, default=3, help="frame phases per saccade, drawn at random (3)")
+    p.add_argument("--seed", type=int, default=1, help="the phases' seed (1)")
+    p.add_argument("--strategies", default="eye,prediction,region:2,oracle", help="eye, prediction, region:R, oracle (comma-separated)")
+    p.add_argument("--json", help="write every saccade's share per strategy as JSON")
+    p.add_argument("--markdown", help="write the table as Markdown")
+    a = p.parse_args()
+    recordings = a.recording or [str(f) for f in sorted(lund.glob("*/*_MN.csv"))]
+    if not recordings:
+        p.error(f"no recordings: give --recording, or place Lund 2013's training part at {lund}")
+    for name, value, low in (("--refresh-hz", a.refresh_hz, 0), ("--px-per-deg", a.px_per_deg, 0), ("--min-amplitude", a.min_amplitude, -1)):
+        if not (math.isfinite(value) and value > low):
+            p.error(f"{name}: must be a finite number > {max(low, 0)}, got {value}")
+    if a.rays_per_frame <= 0:
+        p.error(f"--rays-per-frame: must be > 0, got {a.rays_per_frame}")
+    if a.phases <= 0:
+        p.error(f"--phases: must be > 0, got {a.phases}")
+    try:
+        a.fovea = tuple(float(v) for v in a.fovea_deg.split(","))
+        assert len(a.fovea) == 2 and all(math.isfinite(v) and v > 0 for v in a.fovea)
+    except (ValueError, AssertionError):
+        p.error(f"--fovea-deg: expected two semi-axes in degrees, X,Y > 0, got {a.fovea_deg}")
+    strategies = [s.strip() for s in a.strategies.split(",") if s.strip()]
+    for s in strategies:
+        if s in ("eye", "prediction", "oracle"):
+            continue
+        if s.startswith("region:"):
+            try:
+                if float(s.split(":")[1]) >= 1:
+                    continue
+            except ValueError:
+                pass
+        p.error(f"--strategies: {s}: expected eye, prediction, region:R (R >= 1) or oracle")
+    check_outputs(p, [("--json", a.json), ("--markdown", a.markdown)], recordings)
+
+    rng = np.random.default_rng(a.seed)
+    rows = []
+    errors = []
+    for path in recordings:
+        try:
+            t, deg, label = read_lund(path)
+        except (OSError, ValueError) as error:
+            sys.exit(f"landing_rays.py: error: {error}")
+        flights = foveal.gaze.predict_landings(t, deg)
+        found = 0
+        saccades = labelled_saccades(t, deg, label, a.min_amplitude)
+        for first, last in saccades:
+            flight = next((f for f in flights if t[first] - 0.02 <= f["onset_s"] <= t[last]), None)
+            if flight is None or not len(flight["prediction_s"]):
+                continue
+            found += 1
+            errors += prediction_errors(flight, t, deg, last)
+            phases = rng.uniform(0, 1.0 / a.refresh_hz, a.phases)
+            share = {s: float(np.mean([simulate(flight, t, deg, first, last, s, ph, a) for ph in phases])) for s in strategies}
+            rows.append({"recording": os.path.basename(path), "onset_s": float(t[first]), "landing_s": float(t[last]),
+                         "amplitude_deg": float(np.hypot(*(deg[last] - deg[max(first - 1, 0)]))), "share": share})
+        print(f"{os.path.basename(path)}: {len(saccades)} labelled saccades >= {a.min_amplitude:g} deg, {found} seen by the predictor",
+              file=sys.stderr)
+    if not rows:
+        sys.exit("landing_rays.py: error: no labelled saccade the predictor saw")
+    lines = [f"{len(rows)} labelled saccades >= {a.min_amplitude:g} deg, {a.refresh_hz:g} Hz, {a.rays_per_frame} rays a frame, "
+             f"fovea {a.fovea[0]:g} x {a.fovea[1]:g} deg, {a.phases} phases each", "",
+             "| strategy | share of the landed fovea's rays cast before the landing, mean | median |", "|---|---:|---:|"]
+    for before, when in ((True, "before the peak was passed"), (False, "after")):
+        e = np.array([(along, across) for b, along, across in errors if b == before]).reshape(-1, 2)
+        if len(e):
+            lines.insert(1, f"predictions made {when}: {len(e)}, the labelled landing a median {np.median(e[:, 0]):.2f} deg "
+                            f"from them along the flight and {np.median(e[:, 1]):.2f} deg across it")
+    summary = {}
+    for s in strategies:
+        v = np.array([r["share"][s] for r in rows])
+        summary[s] = {"mean": float(v.mean()), "median": float(np.median(v))}
+        lines.append(f"| {s} | {100 * v.mean():.2f} % | {100 * np.median(v):.2f} % |")
+    text = "\n".join(lines) + "\n"
+    print(text)
+    if a.markdown:
+        write_output(a.markdown, text)
+    if a.json:
+        write_output(a.json, json.dumps({"recordings": [os.path.basename(r) for r in recordings], "refresh_hz": a.refresh_hz,
+                                         "rays_per_frame": a.rays_per_frame, "fovea_deg": list(a.fovea), "px_per_deg": a.px_per_deg,
+                                         "phases": a.phases, "seed": a.seed, "summary": summary, "saccades": rows}, indent=1) + "\n")
+
+
+if __name__ == "__main__":
+    main()
