@@ -48,20 +48,29 @@ SACCADE = 2  # Lund's label of a saccade
 
 def read_lund(path):
     """A Lund 2013 labelled recording (t, x, y px, label): times, positions in degrees (NaN where lost), labels."""
+    rows = []
     with open(path, encoding="utf-8") as f:
         header = f.readline().strip().split(",")
-    if header[:3] != ["t", "x", "y"] or header[-1] != "label":
-        raise ValueError(f"{path}: line 1: expected the header t,x,y,…,label of a Lund 2013 recording, got {','.join(header)}")
-    data = np.genfromtxt(path, delimiter=",", skip_header=1, ndmin=2)  # an empty x or y: a lost sample (NaN)
-    if data.shape[0] < 2 or data.shape[1] != len(header):
-        raise ValueError(f"{path}: expected samples of {len(header)} columns after the header, got an array of {data.shape}")
-    bad = ~np.isfinite(data[:, 0]) | ~np.isfinite(data[:, -1])
-    if bad.any():
-        raise ValueError(f"{path}: line {int(np.argmax(bad)) + 2}: no time or no label")
-    t, x, y, label = data[:, 0], data[:, 1], data[:, 2], data[:, -1].astype(int)
-    if not np.all(np.diff(t) > 0):
-        k = int(np.argmax(np.diff(t) <= 0)) + 1
-        raise ValueError(f"{path}: line {k + 2}: the time {t[k]} does not rise")
+        if header[:3] != ["t", "x", "y"] or header[-1] != "label":
+            raise ValueError(f"{path}: line 1: expected the header t,x,y,…,label of a Lund 2013 recording, got {','.join(header)}")
+        for number, line in enumerate(f, start=2):
+            cells = line.strip().split(",")
+            if cells == [""]:
+                continue
+            if len(cells) != len(header):
+                raise ValueError(f"{path}: line {number}: {len(cells)} cells where the header has {len(header)}")
+            try:
+                t, label = float(cells[0]), int(cells[-1])
+                x, y = (float(c) if c else math.nan for c in cells[1:3])  # an empty cell: a lost sample
+            except ValueError:
+                raise ValueError(f"{path}: line {number}: expected numbers t, x, y and a whole label, got {line.strip()}") from None
+            if not math.isfinite(t) or (rows and t <= rows[-1][0]):
+                raise ValueError(f"{path}: line {number}: the time {cells[0]} does not rise")
+            rows.append((t, x, y, label))
+    if len(rows) < 2:
+        raise ValueError(f"{path}: fewer than two samples")
+    data = np.array(rows)
+    t, x, y, label = data[:, 0], data[:, 1], data[:, 2], data[:, 3].astype(int)
     lost = ((x == 0) & (y == 0)) | ~np.isfinite(x) | ~np.isfinite(y)
     deg = np.stack([np.degrees(np.arctan((x / LUND_SCREEN_PX[0] - 0.5) * LUND_SCREEN_CM[0] / LUND_DISTANCE_CM)),
                     np.degrees(np.arctan((y / LUND_SCREEN_PX[1] - 0.5) * LUND_SCREEN_CM[1] / LUND_DISTANCE_CM))], 1)

@@ -369,6 +369,9 @@ def test_the_landing_rays_script_bounds_each_strategy_by_the_oracle(tmp_path):
     bad.write_text("time,x,y\n0,1,2\n")
     wrong = subprocess.run([sys.executable, script, "--recording", str(bad)], capture_output=True, text=True, timeout=60)
     assert wrong.returncode != 0 and "bad.csv: line 1" in wrong.stderr
+    bad.write_text("t,x,y,label\n0,1,2,1\n0.002,abc,3,1\n")  # an empty x or y is a lost sample; anything else no number
+    wrong = subprocess.run([sys.executable, script, "--recording", str(bad)], capture_output=True, text=True, timeout=60)
+    assert wrong.returncode != 0 and "bad.csv: line 3: expected numbers" in wrong.stderr
     nope = subprocess.run([sys.executable, script, "--recording", str(rec), "--strategies", "region:0.5"], capture_output=True,
                           text=True, timeout=60)
     assert nope.returncode != 0 and "--strategies: region:0.5" in nope.stderr
