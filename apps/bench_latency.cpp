@@ -21,7 +21,7 @@ namespace {
 
 struct BenchLatencyOptions {
   std::string scene, camera, size = "840x525", display = "47.5,30,60,1680,1050", clock = "wall", device = "cpu";
-  std::string json, markdown, timeline, loops = "whole-frame,deadline,deadline+prediction";
+  std::string json, markdown, timeline, loops = "whole-frame,deadline,deadline+prediction", landing;
   std::vector<std::string> recordings;
   double start = 0, duration = 3, refresh_hz = 60, min_amplitude = 2;
   std::optional<double> budget_ms, latency_ms, model_rays_per_ms, model_fixed_ms, margin_ms;
@@ -55,6 +55,7 @@ int run_bench_latency(const BenchLatencyOptions& o) {
   p.start_s = o.start;
   p.duration_s = o.duration;
   p.min_amplitude_deg = o.min_amplitude;
+  p.landing = resolve_landing(o.landing);
   if (!o.timeline.empty()) p.timeline_saccade = static_cast<size_t>(o.timeline_saccade);
   p.loops.clear();
   for (const std::string_view name : text::split(o.loops, ',')) p.loops.emplace_back(name);
@@ -129,6 +130,7 @@ std::function<int()> add_bench_latency_command(CLI::App& bench) {
                   "loops to run, comma-separated: whole-frame, deadline, deadline+prediction; also deadline+oracle (a perfect predictor: "
                   "each saccade's true landing from its detected onset, the most prediction could gain)")
       ->capture_default_str();
+  add_landing_option(*cmd, o->landing, "the prediction loops: ");
   cmd->add_option("--min-amplitude", o->min_amplitude, "saccades smaller than this are not judged, degrees")->capture_default_str();
   cmd->add_option("--threads", o->threads, "worker threads (0 = all cores)")->capture_default_str()->check(CLI::Range(0, 4096));
   add_device_option(*cmd, o->device);

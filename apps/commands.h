@@ -3,6 +3,7 @@
 
 #include "foveal/util/device.h"
 #include "foveal/gaze/fixation.h"
+#include "foveal/gaze/landing.h"
 #include "foveal/perception/foveation.h"
 #include "foveal/render/render.h"
 #include "foveal/scene/scene.h"
@@ -71,6 +72,11 @@ CLI::Validator output_file(std::vector<std::string> extensions = {});
 void check_video_output(const std::string& video, const std::string& output);
 // --device auto|cpu|cuda (see choose_device).
 void add_device_option(CLI::App& command, std::string& device);
+// --landing NAME=VALUE[,…]: the real-time loop's saccade landing predictor (gaze/landing.h);
+// `needs`: what the option goes with, for its help ("" for none).
+void add_landing_option(CLI::App& command, std::string& landing, const std::string& needs = "");
+// The predictor's parameters from --landing's text (the defaults where empty); throws Error naming --landing.
+LandingParams resolve_landing(const std::string& text);
 // Size, display and renderer options → validated params (gaze unset).
 RenderParams resolve_render_params(const ViewOptions& view, const RenderOptions& options);
 

@@ -87,6 +87,24 @@ void add_device_option(CLI::App& cmd, std::string& device) {
       ->capture_default_str();
 }
 
+void add_landing_option(CLI::App& cmd, std::string& landing, const std::string& needs) {
+  cmd.add_option("--landing", landing,
+                 needs +
+                     "the saccade landing predictor's parameters, NAME=VALUE[,…]: onset_deg_s (40), offset_deg_s (30), "
+                     "min_flight_deg (0.5), skew (1), skew_per_deg (0.03), max_skew (4), peak_drop (0.8), "
+                     "max_velocity_deg_s (1000), main_sequence_ms (21), main_sequence_ms_per_deg (2.2), "
+                     "main_sequence_vmax_deg_s (500), main_sequence_c_deg (14), duration_slack (3) (docs/realtime.md)");
+}
+
+LandingParams resolve_landing(const std::string& text) {
+  if (text.empty()) return {};
+  try {
+    return parse_landing_params(text);
+  } catch (const Error& e) {
+    fail("--landing: {}", e.what());
+  }
+}
+
 void add_render_options(CLI::App& cmd, RenderOptions& o) {
   if (o.mode_option)
     cmd.add_option("--mode", o.mode, "foveated (budget follows the gaze) or full (n_max rays everywhere: the reference)")

@@ -31,7 +31,7 @@ struct ReplayOptions {
   ViewOptions view;
   RenderOptions render;
   GazeOptions gaze;
-  std::string source, output, video, stats, stimulus;
+  std::string source, output, video, stats, stimulus, landing;
   double fps = 30, start = 0, duration = 0, live_timeout = 5, orbit = 0;
   int frames = 0;
   bool no_reuse = false, mark = false, quiet = false, realtime = false, no_predict = false, no_history = false;
@@ -52,6 +52,8 @@ ReplaySettings replay_settings(const ReplayOptions& o) {
   settings.reuse = !o.no_reuse;
   settings.realtime = o.realtime;
   settings.predict = !o.no_predict;
+  settings.landing = resolve_landing(o.landing);
+  if (!o.landing.empty() && (!o.realtime || o.no_predict)) fail("--landing: needs --realtime with its prediction (no --no-predict)");
   settings.orbit_deg_s = o.orbit;
   settings.keep_history = !o.no_history;
   check_video_output(o.video, o.output);
@@ -238,6 +240,7 @@ std::function<int()> add_replay_command(CLI::App& app) {
                 "each frame is what the real-time loop shows on a display of --fps Hz: made within 1/fps of compute from the raw "
                 "samples up to its time, the fovea refined first (docs/realtime.md); frames.csv's ms is each frame's time");
   cmd->add_flag("--no-predict", o->no_predict, "--realtime: keep the fovea at the measured gaze during saccades (no landing prediction)");
+  add_landing_option(*cmd, o->landing, "--realtime: ");
   cmd->add_option("--orbit", o->orbit,
                   "the camera orbits its look point about its up axis at this many degrees per second of the sequence (a moving "
                   "view; with --realtime the loop keeps the AO of the surfaces it still sees, without it use --temporal for that)")

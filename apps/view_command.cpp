@@ -27,6 +27,7 @@ struct ViewCommandOptions {
   float diff_gain = 8;
   int frames = 0, blink_every = 0;
   bool no_panel = false, no_progressive = false, realtime = false, no_predict = false;
+  std::string landing;
   double frame_budget_ms = 10;
   std::string device = "auto";
 };
@@ -48,6 +49,8 @@ int run_view(const ViewCommandOptions& o) {
   s.realtime = o.realtime;
   s.frame_budget_ms = o.frame_budget_ms;
   s.predict = !o.no_predict;
+  s.landing = resolve_landing(o.landing);
+  if (!o.landing.empty() && (!o.realtime || o.no_predict)) fail("--landing: needs --realtime with its prediction (no --no-predict)");
   if (o.realtime && s.mode != ViewMode::foveated) fail("--realtime: the real-time loop shows the foveated mode (--mode foveated)");
   resolve(s);  // (every setting, whatever the mode: a value out of range is a mistake either way)
   WindowOptions w;
@@ -159,6 +162,7 @@ std::function<int()> add_view_command(CLI::App& app) {
   cmd->add_option("--frame-budget-ms", o->frame_budget_ms, "--realtime: what each frame may take of the window's refresh, ms")
       ->capture_default_str();
   cmd->add_flag("--no-predict", o->no_predict, "--realtime: keep the fovea at the measured gaze during saccades");
+  add_landing_option(*cmd, o->landing, "--realtime: ");
   cmd->add_option("--frames", o->frames,
                   "show this many frames, wait for the finished image, write --screenshot, and exit (scripts, tests)")
       ->check(CLI::Range(0, 1000000));

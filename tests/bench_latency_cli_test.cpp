@@ -151,6 +151,13 @@ TEST(BenchLatencyCli, BadOptionsAreOneClearLine) {
   expect_one_line_error(base + " --max-rays 0", "--max-rays: bench latency judges the fovea's AO");
   expect_one_line_error(base + " --model-rays-per-ms 100 --model-fixed-ms 1", "--model-rays-per-ms");
   expect_one_line_error("bench latency --scene builtin:box --recording /no/such/recording.asc", "/no/such/recording.asc");
+  // The landing predictor's parameters, each named (not renamed into another option's words)
+  expect_one_line_error(base + " --landing speed=3", "--landing: speed: no parameter of the landing predictor");
+  expect_one_line_error(base + " --landing skew=9", "--landing: skew: must be in [0.25, 4]");
+  expect_one_line_error(base + " --landing onset_deg_s", "--landing: 'onset_deg_s': expected NAME=VALUE");
+  expect_one_line_error(base + " --landing min_flight_deg=-1", "--landing: min_flight_deg: must be >= 0");
+  expect_one_line_error("replay --scene builtin:box --size 64x40 -o out --gaze " + rec + " --landing skew=2",
+                        "--landing: needs --realtime");
 }
 
 // A budget shorter than the default margin (2 ms) runs, keeping a quarter of it free instead; a

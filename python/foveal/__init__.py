@@ -315,7 +315,7 @@ def bench_latency(recordings: Any, scene: Scene, camera: Any = None, size: Tuple
                   loops: Sequence[str] = ("whole-frame", "deadline", "deadline+prediction"), min_amplitude_deg: float = 2.0,
                   max_rays: int = 400, tolerance: float = 0.35, seed: int = 1, device: str = "cpu", threads: int = 0,
                   progress: bool = False, timeline: Optional[Union[str, "os.PathLike[str]"]] = None,
-                  timeline_saccade: int = 0) -> dict:
+                  timeline_saccade: int = 0, landing: Optional[dict] = None) -> dict:
     """``foveal bench latency`` from Python: gaze-to-photon latency of the display loops on recorded gaze.
 
     ``recordings``: one or a list of recordings — paths (read as the command line reads them, the
@@ -327,7 +327,9 @@ def bench_latency(recordings: Any, scene: Scene, camera: Any = None, size: Tuple
     ``margin_ms``, the ``clock`` (wall or model, with ``model_rays_per_ms`` and
     ``model_fixed_ms``), the ``loops`` (whole-frame, deadline, deadline+prediction,
     deadline+oracle), the judged saccades' ``min_amplitude_deg``. ``progress`` prints the
-    command line's progress lines; ``timeline`` draws a saccade's timeline (.png or .svg). Returns
+    command line's progress lines; ``timeline`` draws a saccade's timeline (.png or .svg);
+    ``landing`` the prediction loops' landing predictor parameters by name (``--landing``; those of
+    ``foveal.gaze.predict_landings``). Returns
     the dict of ``--json`` with its tables under ``"markdown"``; the GIL is released while it runs.
     """
     if isinstance(recordings, (str, os.PathLike, _gaze.Recording)):
@@ -354,4 +356,4 @@ def bench_latency(recordings: Any, scene: Scene, camera: Any = None, size: Tuple
         number(latency_ms, "latency_ms"), number(margin_ms, "margin_ms"), clock, number(model_rays_per_ms, "model_rays_per_ms"),
         number(model_fixed_ms, "model_fixed_ms"), list(loops), number(min_amplitude_deg, "min_amplitude_deg"), max_rays,
         number(tolerance, "tolerance"), seed, device, threads, progress, "" if timeline is None else os.fspath(timeline),
-        timeline_saccade))
+        timeline_saccade, _gaze._parameters(landing or {}, _gaze._LANDING_PARAMETERS)))

@@ -306,7 +306,7 @@ def events(recording, method: str = "auto", display: Optional[_core.Display] = N
                   tsv=d["tsv"], landings=landings, landings_tsv=d["landings_tsv"])
 
 
-_LANDING_PARAMETERS = ("onset_deg_s", "offset_deg_s", "min_amplitude_deg", "skew", "skew_per_deg", "max_skew", "peak_drop",
+_LANDING_PARAMETERS = ("onset_deg_s", "offset_deg_s", "min_flight_deg", "skew", "skew_per_deg", "max_skew", "peak_drop",
                        "max_velocity_deg_s", "main_sequence_ms", "main_sequence_ms_per_deg", "main_sequence_vmax_deg_s",
                        "main_sequence_c_deg", "duration_slack")
 
@@ -317,7 +317,7 @@ def predict_landings(t_s, deg, **params) -> list:
     ``t_s``: rising sample times in seconds; ``deg``: an (N, 2) array of gaze positions in degrees
     in any fixed planar frame (NaN marks a lost sample, which ends a flight). ``params``: the
     predictor's (gaze/landing.h; docs/realtime.md): onset_deg_s (40), offset_deg_s (30),
-    min_amplitude_deg (0.5), skew (1), skew_per_deg (0.03), max_skew (4), peak_drop (0.8),
+    min_flight_deg (0.5), skew (1), skew_per_deg (0.03), max_skew (4), peak_drop (0.8),
     max_velocity_deg_s (1000), main_sequence_ms (21), main_sequence_ms_per_deg (2.2),
     main_sequence_vmax_deg_s (500), main_sequence_c_deg (14), duration_slack (3).
 

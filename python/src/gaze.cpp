@@ -133,6 +133,18 @@ Recording recording_from(const nb::dict& columns) {
 }
 
 // The filters' and detectors' parameters by keyword (seconds and degrees, as the library's fields).
+LandingParams landing_params(const nb::dict& params) {
+  LandingParams p;
+  for (auto [key, value] : params) {
+    const std::string k = nb::cast<std::string>(key);
+    if (nb::isinstance<nb::bool_>(value) || !(nb::isinstance<nb::float_>(value) || nb::isinstance<nb::int_>(value)))
+      fail("{}: expected a number, got {}", k, nb::cast<std::string>(nb::str(value.type().attr("__name__"))));
+    set_landing_parameter(p, k, nb::cast<double>(value));
+  }
+  validate(p);
+  return p;
+}
+
 void set_parameters(const nb::dict& params, FixationParams& f, EventParams* e) {
   for (auto [key, value] : params) {
     const std::string k = nb::cast<std::string>(key);
@@ -189,23 +201,6 @@ struct PyPupilSource {
     if (!source) fail("PupilSource: the source is closed");
     return *source;
   }
-};
-
-// The landing predictor's parameters by keyword (foveal.gaze.predict_landings)
-constexpr std::pair<const char*, double LandingParams::*> kLandingFields[] = {
-    {"onset_deg_s", &LandingParams::onset_deg_s},
-    {"offset_deg_s", &LandingParams::offset_deg_s},
-    {"min_amplitude_deg", &LandingParams::min_amplitude_deg},
-    {"skew", &LandingParams::skew},
-    {"skew_per_deg", &LandingParams::skew_per_deg},
-    {"max_skew", &LandingParams::max_skew},
-    {"peak_drop", &LandingParams::peak_drop},
-    {"max_velocity_deg_s", &LandingParams::max_velocity_deg_s},
-    {"main_sequence_ms", &LandingParams::main_sequence_ms},
-    {"main_sequence_ms_per_deg", &LandingParams::main_sequence_ms_per_deg},
-    {"main_sequence_vmax_deg_s", &LandingParams::main_sequence_vmax_deg_s},
-    {"main_sequence_c_deg", &LandingParams::main_sequence_c_deg},
-    {"duration_slack", &LandingParams::duration_slack},
 };
 
 }  // namespace
@@ -391,16 +386,7 @@ void bind_gaze(nb::module_& m) {
       [](const Column& t, const Column& x, const Column& y, const nb::dict& params) {
         const size_t n = t.shape(0);
         if (x.shape(0) != n || y.shape(0) != n) fail("deg: {} and {} positions for {} times", x.shape(0), y.shape(0), n);
-        LandingParams p;
-        for (auto [key, value] : params) {
-          const std::string k = nb::cast<std::string>(key);
-          const double v = nb::cast<double>(value);
-          const auto* field =
-              std::find_if(std::begin(kLandingFields), std::end(kLandingFields), [&](const auto& f) { return k == f.first; });
-          if (field == std::end(kLandingFields)) fail("{}: no parameter of the landing predictor", k);
-          p.*(field->second) = v;
-        }
-        validate(p);
+        const LandingParams p = landing_params(params);
         std::vector<double> times(t.data(), t.data() + n);
         std::vector<glm::dvec2> deg(n);
         for (size_t i = 0; i < n; ++i) {

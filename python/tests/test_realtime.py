@@ -313,6 +313,33 @@ def _min_jerk(t, t0, duration, amplitude):
     return amplitude * (10 * tau ** 3 - 15 * tau ** 4 + 6 * tau ** 5)
 
 
+def test_the_loop_takes_the_landing_predictors_parameters(box):
+    # Loop(landing=…): the same predictor's parameters; an onset threshold above the saccade's velocity predicts nothing
+    def predicted_frames(**kw):
+        loop = foveal.Loop(box, size=(320, 200), max_rays=16, refresh_hz=60, device="cpu", **kw)
+        count = 0
+        for k in range(400):  # 1000 Hz: a fixation, a 120-px saccade (a smooth bell of velocity), a fixation
+            t = k / 1000
+            tau = min(max((t - 0.1) / 0.06, 0), 1)
+            loop.push(t, (60 + 120 * (tau - np.sin(2 * np.pi * tau) / (2 * np.pi)), 100))
+            if k % 8 == 0:
+                count += loop.frame().predicted
+        return count
+    assert predicted_frames() > 0
+    assert predicted_frames(landing={"onset_deg_s": 999, "offset_deg_s": 30}) == 0
+    # bench_latency takes them too, and its report says which it used
+    report = foveal.bench_latency(shared("gaze", "eyelink", "monoRemote500.asc"), box, size=(64, 40), duration_s=0.5,
+                                  loops=("deadline+prediction",), clock="model", model_rays_per_ms=2000, model_fixed_ms=3,
+                                  landing={"onset_deg_s": 55})
+    assert report["landing"]["onset_deg_s"] == 55 and report["landing"]["skew_per_deg"] == pytest.approx(0.03)
+    with pytest.raises(ValueError, match="speed: no parameter of the landing predictor"):
+        foveal.Loop(box, size=(64, 40), landing={"speed": 1})
+    with pytest.raises(ValueError, match="onset_deg_s: expected a number, got str"):
+        foveal.Loop(box, size=(64, 40), landing={"onset_deg_s": "fast"})
+    with pytest.raises(ValueError, match="speed: unknown parameter"):
+        foveal.bench_latency(shared("gaze", "eyelink", "monoRemote500.asc"), box, landing={"speed": 1})
+
+
 def test_predict_landings_gives_every_prediction_of_each_flight():
     # foveal.gaze.predict_landings: the loop's live predictor over a stream (gaze/landing.h)
     t = np.arange(0, 0.6, 0.001)

@@ -206,6 +206,7 @@ LatencyLoop run_deadline(const LatencyRun& run, const Segment& s, const LatencyP
   LoopSettings settings;
   settings.budget_ms = budget_ms;
   settings.predict = predict;
+  settings.landing = p.landing;
   settings.clock = p.clock;
   settings.model_rays_per_ms = model_rate;
   settings.model_fixed_ms = model_fixed;
@@ -479,6 +480,7 @@ std::optional<double> LatencyLoop::median_converged_ms() const {
 void validate(const LatencyParams& p) {
   validate(p.render);
   if (p.render.mode != RenderMode::foveated) fail("mode: bench latency renders foveated frames");
+  validate(p.landing);
   // With no AO rays every fovea would be 'converged' at once: no figure would mean anything
   if (p.render.foveation.max_rays < 1)
     fail("max_rays: bench latency judges the fovea's AO; must be >= 1, got {}", p.render.foveation.max_rays);
@@ -619,6 +621,8 @@ LatencyReport run_latency_bench(const LatencyRun& run, const std::vector<Recordi
   j["max_rays"] = p.render.foveation.max_rays;
   j["refresh_hz"] = p.refresh_hz;
   j["clock"] = to_string(p.clock);
+  j["landing"] = nlohmann::json::object();  // the prediction loops' landing predictor (--landing)
+  for (const auto& [name, value] : landing_parameters(p.landing)) j["landing"][name] = value;
   j["recordings"] = nlohmann::json::array();
   for (const LatencyRecording& r : report.recordings) {
     std::vector<double> bounds_ms, model_bounds_ms, durations;

@@ -49,6 +49,7 @@ struct LatencyParams {
   double min_amplitude_deg = 2;        // smaller saccades are not judged
   std::vector<std::string> loops = {"whole-frame", "deadline", "deadline+prediction"};
   std::optional<double> margin_ms;  // the deadline loops' least margin (unset: the loop's default, loop_margin_ms)
+  LandingParams landing;            // the prediction loops' landing predictor (gaze/landing.h; the oracle's detects flights with it)
   // The first recording's judged saccade a timeline picture will draw (the last where there are
   // fewer): each frame also judges its fovea (LatencyFrame::drawn_error). Unset: no picture
   std::optional<size_t> timeline_saccade;

@@ -96,6 +96,7 @@ class LoopMaker {
     LoopSettings l;
     l.budget_ms = 1000.0 / s.fps;
     l.predict = s.predict;
+    l.landing = s.landing;
     l.keep_history = s.keep_history;
     return l;
   }

@@ -9,6 +9,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
+#include <string>
+#include <utility>
 
 namespace foveal {
 
@@ -31,13 +34,75 @@ void validate(const LandingParams& p) {
   positive(p.main_sequence_ms_per_deg, "main_sequence_ms_per_deg");
   positive(p.main_sequence_vmax_deg_s, "main_sequence_vmax_deg_s");
   positive(p.main_sequence_c_deg, "main_sequence_c_deg");
-  if (!(p.min_amplitude_deg >= 0)) fail("min_amplitude_deg: must be >= 0, got {}", p.min_amplitude_deg);
+  if (!(p.min_flight_deg >= 0)) fail("min_flight_deg: must be >= 0, got {}", p.min_flight_deg);
   if (!(p.skew >= 0.25 && p.skew <= 4)) fail("skew: must be in [0.25, 4], got {}", p.skew);
   if (!(p.skew_per_deg >= 0 && p.skew_per_deg <= 1)) fail("skew_per_deg: must be in [0, 1], got {}", p.skew_per_deg);
   if (!(p.max_skew >= p.skew && p.max_skew <= 8)) fail("max_skew: must be in [skew, 8], got {}", p.max_skew);
   if (!(p.peak_drop > 0 && p.peak_drop < 1)) fail("peak_drop: must be in (0, 1), got {}", p.peak_drop);
   if (!(p.main_sequence_ms >= 0)) fail("main_sequence_ms: must be >= 0, got {}", p.main_sequence_ms);
   if (p.offset_deg_s > p.onset_deg_s) fail("offset_deg_s: must be <= onset_deg_s = {}, got {}", p.onset_deg_s, p.offset_deg_s);
+}
+
+namespace {
+
+constexpr std::pair<const char*, double LandingParams::*> kLandingFields[] = {
+    {"onset_deg_s", &LandingParams::onset_deg_s},
+    {"offset_deg_s", &LandingParams::offset_deg_s},
+    {"min_flight_deg", &LandingParams::min_flight_deg},
+    {"skew", &LandingParams::skew},
+    {"skew_per_deg", &LandingParams::skew_per_deg},
+    {"max_skew", &LandingParams::max_skew},
+    {"peak_drop", &LandingParams::peak_drop},
+    {"max_velocity_deg_s", &LandingParams::max_velocity_deg_s},
+    {"main_sequence_ms", &LandingParams::main_sequence_ms},
+    {"main_sequence_ms_per_deg", &LandingParams::main_sequence_ms_per_deg},
+    {"main_sequence_vmax_deg_s", &LandingParams::main_sequence_vmax_deg_s},
+    {"main_sequence_c_deg", &LandingParams::main_sequence_c_deg},
+    {"duration_slack", &LandingParams::duration_slack},
+};
+
+}  // namespace
+
+void set_landing_parameter(LandingParams& params, const std::string& name, double value) {
+  for (const auto& [field, member] : kLandingFields)
+    if (name == field) {
+      params.*member = value;
+      return;
+    }
+  std::string known;
+  for (const auto& [field, member] : kLandingFields) known += (known.empty() ? "" : ", ") + std::string(field);
+  fail("{}: no parameter of the landing predictor (known: {})", name, known);
+}
+
+std::vector<std::pair<std::string, double>> landing_parameters(const LandingParams& params) {
+  std::vector<std::pair<std::string, double>> out;
+  for (const auto& [field, member] : kLandingFields) out.emplace_back(field, params.*member);
+  return out;
+}
+
+LandingParams parse_landing_params(const std::string& text, LandingParams base) {
+  size_t begin = 0;
+  while (begin <= text.size()) {
+    const size_t end = std::min(text.find(',', begin), text.size());
+    std::string part = text.substr(begin, end - begin);  // (spaces around a part are allowed)
+    part.erase(0, part.find_first_not_of(" \t"));
+    part.erase(part.find_last_not_of(" \t") + 1);
+    const size_t eq = part.find('=');
+    if (eq == std::string::npos || eq == 0 || eq + 1 == part.size()) fail("'{}': expected NAME=VALUE (as onset_deg_s=60)", part);
+    const std::string name = part.substr(0, eq), number = part.substr(eq + 1);
+    double value = 0;
+    try {
+      size_t used = 0;
+      value = std::stod(number, &used);
+      if (used != number.size()) throw std::invalid_argument(number);
+    } catch (const std::exception&) {
+      fail("{}: '{}' is no number", name, number);
+    }
+    set_landing_parameter(base, name, value);
+    begin = end + 1;
+  }
+  validate(base);
+  return base;
 }
 
 LandingPredictor::LandingPredictor(const LandingParams& params) : params_(params) { validate(params); }
@@ -126,7 +191,7 @@ void LandingPredictor::land(double t_s, glm::dvec2 deg) {
   s.landing_deg = deg;
   s.landing_s = t_s;
   s.amplitude_deg = amplitude;
-  if (amplitude >= params_.min_amplitude_deg && s.past_peak) {
+  if (amplitude >= params_.min_flight_deg && s.past_peak) {
     current_.landing_s = t_s;
     current_.landing_deg = deg;
     current_.amplitude_deg = amplitude;

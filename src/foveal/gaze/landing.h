@@ -24,14 +24,15 @@
 
 #include <cmath>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace foveal {
 
 struct LandingParams {
-  double onset_deg_s = 40;         // a velocity above this (two samples in a row) starts a saccade
-  double offset_deg_s = 30;        // the saccade ends when the velocity falls below this
-  double min_amplitude_deg = 0.5;  // smaller predicted flights are not reported as saccades
+  double onset_deg_s = 40;      // a velocity above this (two samples in a row) starts a saccade
+  double offset_deg_s = 30;     // the saccade ends when the velocity falls below this
+  double min_flight_deg = 0.5;  // shorter flights (onset to measured landing) are not reported as saccades
   // The profile's skew (deceleration / acceleration; 1 = symmetric) grows with the amplitude (Van
   // Opstal & Van Gisbergen 1987): skew + skew_per_deg · A, A the symmetric mirror's amplitude, at
   // most max_skew. Chosen on Lund 2013's training recordings (landing_test.cpp's grid: the error
@@ -50,6 +51,14 @@ struct LandingParams {
 };
 // Check the parameters; throws Error naming the field.
 void validate(const LandingParams& params);
+// Set one parameter by its field's name (onset_deg_s, …, duration_slack); throws Error naming an
+// unknown one and the known.
+void set_landing_parameter(LandingParams& params, const std::string& name, double value);
+// Every parameter by name, in the order of LandingParams (what a run used, for its report).
+std::vector<std::pair<std::string, double>> landing_parameters(const LandingParams& params);
+// "NAME=VALUE[,NAME=VALUE…]" over `base`, checked (the command line's --landing); throws Error
+// naming the part that is wrong.
+LandingParams parse_landing_params(const std::string& text, LandingParams base = {});
 
 // What the predictor knows at the latest sample.
 struct LandingState {

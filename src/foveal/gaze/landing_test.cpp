@@ -139,6 +139,38 @@ TEST(Landing, PursuitAndDriftAreNotSaccadesAndALostSampleAbandonsAFlight) {
   for (const PredictedSaccade& s : predict_landings(trial.t, trial.deg)) EXPECT_GT(s.onset_s, gap);
 }
 
+TEST(Landing, ParametersAreSetByNameAndChecked) {
+  const LandingParams p = parse_landing_params("onset_deg_s=60,skew=1.5, max_skew=3");
+  EXPECT_EQ(p.onset_deg_s, 60);
+  EXPECT_EQ(p.skew, 1.5);
+  EXPECT_EQ(p.max_skew, 3);
+  EXPECT_EQ(p.offset_deg_s, LandingParams{}.offset_deg_s);  // the rest keep their defaults
+  auto error = [](const std::string& text) {
+    try {
+      parse_landing_params(text);
+    } catch (const Error& e) {
+      return std::string(e.what());
+    }
+    return std::string("accepted");
+  };
+  EXPECT_NE(error("speed=3").find("speed: no parameter of the landing predictor (known: onset_deg_s"), std::string::npos);
+  EXPECT_NE(error("skew=").find("'skew=': expected NAME=VALUE"), std::string::npos);
+  EXPECT_NE(error("=2").find("expected NAME=VALUE"), std::string::npos);
+  EXPECT_NE(error("skew=1x").find("skew: '1x' is no number"), std::string::npos);
+  EXPECT_NE(error("skew=9").find("skew: must be in [0.25, 4]"), std::string::npos);
+  EXPECT_NE(error("onset_deg_s=60,").find("expected NAME=VALUE"), std::string::npos);
+  // A parameter changes what the predictor does: an onset above every velocity of a saccade finds none
+  std::vector<double> t;
+  std::vector<glm::dvec2> deg;
+  for (int i = 0; i < 400; ++i) {
+    t.push_back(i * 0.001);
+    const double tau = std::clamp((t.back() - 0.1) / 0.05, 0.0, 1.0);
+    deg.emplace_back(12 * tau * tau * tau * (10 - 15 * tau + 6 * tau * tau), 0);
+  }
+  EXPECT_EQ(predict_landings(t, deg).size(), 1u);
+  EXPECT_TRUE(predict_landings(t, deg, parse_landing_params("onset_deg_s=900,offset_deg_s=30")).empty());
+}
+
 TEST(Landing, ParametersAreChecked) {
   LandingParams p;
   p.skew = 0;

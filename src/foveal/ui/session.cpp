@@ -431,6 +431,7 @@ void ViewSession::realtime_frame() {
     LoopSettings ls;
     ls.budget_ms = settings_.frame_budget_ms;
     ls.predict = settings_.predict;
+    ls.landing = settings_.landing;
     loop_ = std::make_unique<RealtimeLoop>(*loop_renderer_, scene_, settings_.render, ls);
     loop_key_ = key;
     if (raw_gaze_) loop_->push_gaze(loop_t_ += 1e-3, raw_gaze_);

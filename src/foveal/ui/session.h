@@ -48,6 +48,7 @@ struct ViewSettings {
   bool realtime = false;
   double frame_budget_ms = 10;
   bool predict = true;
+  LandingParams landing;  // the saccade landing predictor's parameters (gaze/landing.h)
 };
 // Resolve `eye` with `eye_overrides` into vision.eye and vision.impair (resolve_eye, the one rule for
 // an eye) and check everything; throws Error.
