@@ -44,6 +44,8 @@ def parse_args(argv=None):
     p.add_argument("--device", default="auto", help="auto, cpu or cuda")
     p.add_argument("--refresh-hz", type=float, default=None, help="the display's refresh rate (default: measured by PsychoPy, else 60)")
     p.add_argument("--no-predict", action="store_true", help="no saccade landing prediction: the fovea stays at the measured gaze")
+    p.add_argument("--landing", default="", metavar="NAME=VALUE,…",
+                   help="the saccade landing predictor's parameters (docs/realtime.md), e.g. onset_deg_s=60 for a noisy tracker")
     p.add_argument("--frames", type=int, default=0, help="stop after this many frames (0: until Escape)")
     p.add_argument("--tracker", default=None, help="ioHub eye-tracker configuration (YAML); default MouseGaze")
     p.add_argument("--move-mouse", action="store_true", help="move the pointer along a path (XTest), for runs without a person")
@@ -70,6 +72,21 @@ def check_args(parser, args):
         assert len(display) == 3 and all(math.isfinite(v) and v > 0 for v in display)
     except (ValueError, AssertionError):
         parser.error(f"--display: expected three positive numbers W_CM,H_CM,DIST_CM, got {args.display!r}")
+    args.landing_params = {}
+    for part in filter(None, (s.strip() for s in args.landing.split(","))):
+        name, _, value = part.partition("=")
+        try:
+            args.landing_params[name.strip()] = float(value)
+        except ValueError:
+            parser.error(f"--landing: expected NAME=VALUE, got {part!r}")
+    if args.landing_params:
+        if args.no_predict:
+            parser.error("--landing: the predictor's parameters, but --no-predict turns it off")
+        import foveal
+        try:  # checked by the predictor itself, on two samples
+            foveal.gaze.predict_landings([0.0, 0.001], [[0.0, 0.0], [0.0, 0.0]], **args.landing_params)
+        except ValueError as error:
+            parser.error(f"--landing: {error}")
     if args.refresh_hz is not None and not 1 <= args.refresh_hz <= 1000:
         parser.error(f"--refresh-hz: must be in [1, 1000] Hz, got {args.refresh_hz}")
     for name, value in (("--frames", args.frames), ("--max-rays", args.max_rays), ("--probe-stalls", args.probe_stalls)):
@@ -151,7 +168,7 @@ def main(argv=None) -> int:
     win = visual.Window((w, h), units="pix", fullscr=args.fullscreen, allowGUI=False, color=(-1, -1, -1), pos=(0, 0))
     refresh_hz = args.refresh_hz or win.getActualFrameRate(nIdentical=10, nMaxFrames=60) or 60.0
     loop = foveal.Loop(scene, size=(w, h), camera=args.camera, display=display, max_rays=args.max_rays, gamma=args.gamma,
-                       refresh_hz=refresh_hz, predict=not args.no_predict, device=args.device)
+                       refresh_hz=refresh_hz, predict=not args.no_predict, device=args.device, landing=args.landing_params)
     if loop.note:
         print(f"gaze_contingent: {loop.note}")
     io = launchHubServer(window=win, **tracker_config(args.tracker))

@@ -61,7 +61,8 @@ def test_gaze_contingent_refuses_bad_options_before_the_session(tmp_path):
     """A log in a missing folder was lost at the session's end; now it fails at once, as argparse does."""
     cases = [(["--log", str(tmp_path / "missing" / "frames.csv")], "--log"), (["--summary", str(tmp_path)], "--summary"),
              (["--size", "320"], "--size"), (["--display", "47.5,0,60"], "--display"), (["--frames", "-1"], "--frames"),
-             (["--refresh-hz", "0"], "--refresh-hz")]
+             (["--refresh-hz", "0"], "--refresh-hz"), (["--landing", "speed=3"], "--landing"),
+             (["--landing", "onset_deg_s=fast"], "--landing"), (["--landing", "skew=9"], "--landing")]
     for args, name in cases:
         result = subprocess.run([sys.executable, str(EXAMPLES / "gaze_contingent.py"), *args], cwd=tmp_path, capture_output=True,
                                 text=True, timeout=60)
