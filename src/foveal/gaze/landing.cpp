@@ -66,6 +66,7 @@ constexpr std::pair<const char*, double LandingParams::*> kLandingFields[] = {
 void set_landing_parameter(LandingParams& params, const std::string& name, double value) {
   for (const auto& [field, member] : kLandingFields)
     if (name == field) {
+      if (!std::isfinite(value)) fail("{}: must be a finite number, got {}", name, value);
       params.*member = value;
       return;
     }
@@ -84,12 +85,15 @@ LandingParams parse_landing_params(const std::string& text, LandingParams base) 
   size_t begin = 0;
   while (begin <= text.size()) {
     const size_t end = std::min(text.find(',', begin), text.size());
-    std::string part = text.substr(begin, end - begin);  // (spaces around a part are allowed)
-    part.erase(0, part.find_first_not_of(" \t"));
-    part.erase(part.find_last_not_of(" \t") + 1);
+    auto trimmed = [](std::string s) {  // (spaces around names and values are allowed)
+      s.erase(0, s.find_first_not_of(" \t"));
+      s.erase(s.find_last_not_of(" \t") + 1);
+      return s;
+    };
+    const std::string part = trimmed(text.substr(begin, end - begin));
     const size_t eq = part.find('=');
-    if (eq == std::string::npos || eq == 0 || eq + 1 == part.size()) fail("'{}': expected NAME=VALUE (as onset_deg_s=60)", part);
-    const std::string name = part.substr(0, eq), number = part.substr(eq + 1);
+    const std::string name = trimmed(part.substr(0, eq)), number = eq == std::string::npos ? "" : trimmed(part.substr(eq + 1));
+    if (name.empty() || number.empty()) fail("'{}': expected NAME=VALUE (as onset_deg_s=60)", part);
     double value = 0;
     try {
       size_t used = 0;

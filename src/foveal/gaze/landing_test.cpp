@@ -140,7 +140,7 @@ TEST(Landing, PursuitAndDriftAreNotSaccadesAndALostSampleAbandonsAFlight) {
 }
 
 TEST(Landing, ParametersAreSetByNameAndChecked) {
-  const LandingParams p = parse_landing_params("onset_deg_s=60,skew=1.5, max_skew=3");
+  const LandingParams p = parse_landing_params("onset_deg_s=60,skew=1.5, max_skew = 3");
   EXPECT_EQ(p.onset_deg_s, 60);
   EXPECT_EQ(p.skew, 1.5);
   EXPECT_EQ(p.max_skew, 3);
@@ -159,6 +159,7 @@ TEST(Landing, ParametersAreSetByNameAndChecked) {
   EXPECT_NE(error("skew=1x").find("skew: '1x' is no number"), std::string::npos);
   EXPECT_NE(error("skew=9").find("skew: must be in [0.25, 4]"), std::string::npos);
   EXPECT_NE(error("onset_deg_s=60,").find("expected NAME=VALUE"), std::string::npos);
+  EXPECT_NE(error("min_flight_deg=inf").find("min_flight_deg: must be a finite number"), std::string::npos);
   // A parameter changes what the predictor does: an onset above every velocity of a saccade finds none
   std::vector<double> t;
   std::vector<glm::dvec2> deg;
