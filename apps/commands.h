@@ -75,8 +75,10 @@ void add_device_option(CLI::App& command, std::string& device);
 // --landing NAME=VALUE[,…]: the real-time loop's saccade landing predictor (gaze/landing.h);
 // `needs`: what the option goes with, for its help ("" for none).
 void add_landing_option(CLI::App& command, std::string& landing, const std::string& needs = "");
-// The predictor's parameters from --landing's text (the defaults where empty); throws Error naming --landing.
-LandingParams resolve_landing(const std::string& text);
+// The predictor's parameters from --landing's text (the defaults where empty); `predicting`:
+// whether the command's loop predicts at all (else a given --landing is refused); throws Error
+// naming --landing.
+LandingParams resolve_landing(const std::string& text, bool predicting = true);
 // Size, display and renderer options → validated params (gaze unset).
 RenderParams resolve_render_params(const ViewOptions& view, const RenderOptions& options);
 

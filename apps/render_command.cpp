@@ -88,16 +88,15 @@ void add_device_option(CLI::App& cmd, std::string& device) {
 }
 
 void add_landing_option(CLI::App& cmd, std::string& landing, const std::string& needs) {
+  std::string names;  // each parameter with its default
+  for (const auto& [name, value] : landing_parameters(LandingParams{}))
+    names += fmt::format("{}{} ({:g})", names.empty() ? "" : ", ", name, value);
   cmd.add_option("--landing", landing,
-                 needs +
-                     "the saccade landing predictor's parameters, NAME=VALUE[,…]: onset_deg_s (40), offset_deg_s (30), "
-                     "min_flight_deg (0.5), skew (1), skew_per_deg (0.03), max_skew (4), peak_drop (0.8), "
-                     "max_velocity_deg_s (1000), main_sequence_ms (21), main_sequence_ms_per_deg (2.2), "
-                     "main_sequence_vmax_deg_s (500), main_sequence_c_deg (14), duration_slack (3) (docs/realtime.md)");
+                 needs + "the saccade landing predictor's parameters, NAME=VALUE[,…]: " + names + " (docs/realtime.md)");
 }
 
-LandingParams resolve_landing(const std::string& text) {
-  if (text.empty()) return {};
+LandingParams resolve_landing(const std::string& text, bool predicting) {
+  if (!text.empty() && !predicting) fail("--landing: needs --realtime with its prediction (no --no-predict)");
   try {
     return parse_landing_params(text);
   } catch (const Error& e) {

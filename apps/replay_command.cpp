@@ -52,8 +52,7 @@ ReplaySettings replay_settings(const ReplayOptions& o) {
   settings.reuse = !o.no_reuse;
   settings.realtime = o.realtime;
   settings.predict = !o.no_predict;
-  settings.landing = resolve_landing(o.landing);
-  if (!o.landing.empty() && (!o.realtime || o.no_predict)) fail("--landing: needs --realtime with its prediction (no --no-predict)");
+  settings.landing = resolve_landing(o.landing, o.realtime && !o.no_predict);
   settings.orbit_deg_s = o.orbit;
   settings.keep_history = !o.no_history;
   check_video_output(o.video, o.output);

@@ -49,8 +49,7 @@ int run_view(const ViewCommandOptions& o) {
   s.realtime = o.realtime;
   s.frame_budget_ms = o.frame_budget_ms;
   s.predict = !o.no_predict;
-  s.landing = resolve_landing(o.landing);
-  if (!o.landing.empty() && (!o.realtime || o.no_predict)) fail("--landing: needs --realtime with its prediction (no --no-predict)");
+  s.landing = resolve_landing(o.landing, o.realtime && !o.no_predict);
   if (o.realtime && s.mode != ViewMode::foveated) fail("--realtime: the real-time loop shows the foveated mode (--mode foveated)");
   resolve(s);  // (every setting, whatever the mode: a value out of range is a mistake either way)
   WindowOptions w;

@@ -132,11 +132,16 @@ def cast_frame(cast, order, budget):
             budget = 0
 
 
+def flight_start(flight, t, deg):
+    """Where the eye was at the flight's onset (a sample's time)."""
+    return deg[int(np.searchsorted(t, flight["onset_s"]))]
+
+
 def simulate(flight, t, deg, first, last, strategy, phase, a):
     """The share of the landed fovea's rays that frames at `phase` after the flight's onset cast before the landing."""
     end = deg[last]
     onset = flight["onset_s"]
-    start = deg[int(np.searchsorted(t, onset))]
+    start = flight_start(flight, t, deg)
     pred_t = np.asarray(flight["prediction_s"])
     pred = np.stack([np.asarray(flight["prediction_x_deg"]), np.asarray(flight["prediction_y_deg"])], 1)
     points = np.vstack([pred, start, end, deg[first:last + 1]])
@@ -188,8 +193,7 @@ def simulate(flight, t, deg, first, last, strategy, phase, a):
 def prediction_errors(flight, t, deg, last):
     """Each prediction's distance from the labelled landing along the flight (onset → prediction) and across it,
     with whether it was made before the peak was passed."""
-    start = deg[int(np.searchsorted(t, flight["onset_s"]))]
-    end = deg[last]
+    start, end = flight_start(flight, t, deg), deg[last]
     out = []
     for ts, x, y in zip(flight["prediction_s"], flight["prediction_x_deg"], flight["prediction_y_deg"]):
         pred = np.array([x, y])
@@ -225,9 +229,11 @@ def main():
     recordings = a.recording or [str(f) for f in sorted(lund.glob("*/*_MN.csv"))]
     if not recordings:
         p.error(f"no recordings: give --recording, or place Lund 2013's training part at {lund}")
-    for name, value, low in (("--refresh-hz", a.refresh_hz, 0), ("--px-per-deg", a.px_per_deg, 0), ("--min-amplitude", a.min_amplitude, -1)):
-        if not (math.isfinite(value) and value > low):
-            p.error(f"{name}: must be a finite number > {max(low, 0)}, got {value}")
+    for name, value in (("--refresh-hz", a.refresh_hz), ("--px-per-deg", a.px_per_deg)):
+        if not (math.isfinite(value) and value > 0):
+            p.error(f"{name}: must be a finite number > 0, got {value}")
+    if not (math.isfinite(a.min_amplitude) and a.min_amplitude >= 0):
+        p.error(f"--min-amplitude: must be a finite number >= 0, got {a.min_amplitude}")
     if a.rays_per_frame <= 0:
         p.error(f"--rays-per-frame: must be > 0, got {a.rays_per_frame}")
     if a.phases <= 0:

@@ -72,21 +72,13 @@ def check_args(parser, args):
         assert len(display) == 3 and all(math.isfinite(v) and v > 0 for v in display)
     except (ValueError, AssertionError):
         parser.error(f"--display: expected three positive numbers W_CM,H_CM,DIST_CM, got {args.display!r}")
-    args.landing_params = {}
-    for part in filter(None, (s.strip() for s in args.landing.split(","))):
-        name, _, value = part.partition("=")
-        try:
-            args.landing_params[name.strip()] = float(value)
-        except ValueError:
-            parser.error(f"--landing: expected NAME=VALUE, got {part!r}")
-    if args.landing_params:
-        if args.no_predict:
-            parser.error("--landing: the predictor's parameters, but --no-predict turns it off")
-        import foveal
-        try:  # checked by the predictor itself, on two samples
-            foveal.gaze.predict_landings([0.0, 0.001], [[0.0, 0.0], [0.0, 0.0]], **args.landing_params)
-        except ValueError as error:
-            parser.error(f"--landing: {error}")
+    if args.landing and args.no_predict:
+        parser.error("--landing: the predictor's parameters, but --no-predict turns it off")
+    import foveal
+    try:  # parsed and checked as the command line's --landing
+        args.landing_params = foveal.gaze.landing_params(args.landing)
+    except ValueError as error:
+        parser.error(f"--landing: {error}")
     if args.refresh_hz is not None and not 1 <= args.refresh_hz <= 1000:
         parser.error(f"--refresh-hz: must be in [1, 1000] Hz, got {args.refresh_hz}")
     for name, value in (("--frames", args.frames), ("--max-rays", args.max_rays), ("--probe-stalls", args.probe_stalls)):

@@ -308,6 +308,12 @@ def compare(a: ImageLike, b: ImageLike, gaze: Optional[Tuple[float, float]] = No
     return _numbers(_core._compare(ia, ib, ib2, gaze, display, ellipse, ssim_border))
 
 
+def _landing(landing) -> dict:
+    if landing is not None and not isinstance(landing, dict):
+        raise TypeError(f"landing: expected a dict of the landing predictor's parameters, got {type(landing).__name__}")
+    return landing or {}
+
+
 def bench_latency(recordings: Any, scene: Scene, camera: Any = None, size: Tuple[int, int] = (840, 525),
                   display: Optional[Display] = None, start_s: float = 0.0, duration_s: float = 3.0, refresh_hz: float = 60.0,
                   frame_budget_ms: Optional[float] = None, latency_ms: Optional[float] = None, margin_ms: Optional[float] = None,
@@ -328,8 +334,8 @@ def bench_latency(recordings: Any, scene: Scene, camera: Any = None, size: Tuple
     ``model_fixed_ms``), the ``loops`` (whole-frame, deadline, deadline+prediction,
     deadline+oracle), the judged saccades' ``min_amplitude_deg``. ``progress`` prints the
     command line's progress lines; ``timeline`` draws a saccade's timeline (.png or .svg);
-    ``landing`` the prediction loops' landing predictor parameters by name (``--landing``; those of
-    ``foveal.gaze.predict_landings``). Returns
+    ``landing`` the prediction loops' landing predictor parameters by name (``--landing``;
+    ``foveal.gaze.landing_params()`` lists them). Returns
     the dict of ``--json`` with its tables under ``"markdown"``; the GIL is released while it runs.
     """
     if isinstance(recordings, (str, os.PathLike, _gaze.Recording)):
@@ -356,4 +362,4 @@ def bench_latency(recordings: Any, scene: Scene, camera: Any = None, size: Tuple
         number(latency_ms, "latency_ms"), number(margin_ms, "margin_ms"), clock, number(model_rays_per_ms, "model_rays_per_ms"),
         number(model_fixed_ms, "model_fixed_ms"), list(loops), number(min_amplitude_deg, "min_amplitude_deg"), max_rays,
         number(tolerance, "tolerance"), seed, device, threads, progress, "" if timeline is None else os.fspath(timeline),
-        timeline_saccade, _gaze._parameters(landing or {}, _gaze._LANDING_PARAMETERS)))
+        timeline_saccade, _landing(landing)))

@@ -45,7 +45,7 @@ LANDINGS_DTYPE = np.dtype([("event", "i8"), ("onset_s", "f8"), ("landing_s", "f8
                            ("error_deg", "f8"), ("two_thirds_x_deg", "f8"), ("two_thirds_y_deg", "f8"),
                            ("two_thirds_error_deg", "f8"), ("gained_ms", "f8")])
 
-__all__ = ["Recording", "Events", "read", "fixations", "events", "evaluate", "predict_landings", "PupilSource", "LslSource", "SAMPLE_DTYPE",
+__all__ = ["Recording", "Events", "read", "fixations", "events", "evaluate", "landing_params", "predict_landings", "PupilSource", "LslSource", "SAMPLE_DTYPE",
            "EVENT_DTYPE", "FIXATION_DTYPE", "EVENTS_DTYPE", "LANDINGS_DTYPE", "LABELS"]
 
 
@@ -306,9 +306,15 @@ def events(recording, method: str = "auto", display: Optional[_core.Display] = N
                   tsv=d["tsv"], landings=landings, landings_tsv=d["landings_tsv"])
 
 
-_LANDING_PARAMETERS = ("onset_deg_s", "offset_deg_s", "min_flight_deg", "skew", "skew_per_deg", "max_skew", "peak_drop",
-                       "max_velocity_deg_s", "main_sequence_ms", "main_sequence_ms_per_deg", "main_sequence_vmax_deg_s",
-                       "main_sequence_c_deg", "duration_slack")
+def landing_params(text: str = "", **params) -> dict:
+    """Every parameter of the real-time loop's saccade landing predictor (gaze/landing.h;
+    docs/realtime.md) by name: the defaults, with those of ``text`` (``"NAME=VALUE,…"``, as the
+    command line's ``--landing``) and then ``params`` over them, checked. The dict goes to
+    ``predict_landings(…, **d)``, ``foveal.Loop(landing=d)`` and ``foveal.bench_latency(landing=d)``;
+    an unknown name, a value that is no number or one out of range raises ValueError naming it."""
+    if not isinstance(text, str):
+        raise TypeError(f"text: expected 'NAME=VALUE,…', got {type(text).__name__}")
+    return _core._landing_params(text, params)
 
 
 def predict_landings(t_s, deg, **params) -> list:
@@ -316,10 +322,7 @@ def predict_landings(t_s, deg, **params) -> list:
 
     ``t_s``: rising sample times in seconds; ``deg``: an (N, 2) array of gaze positions in degrees
     in any fixed planar frame (NaN marks a lost sample, which ends a flight). ``params``: the
-    predictor's (gaze/landing.h; docs/realtime.md): onset_deg_s (40), offset_deg_s (30),
-    min_flight_deg (0.5), skew (1), skew_per_deg (0.03), max_skew (4), peak_drop (0.8),
-    max_velocity_deg_s (1000), main_sequence_ms (21), main_sequence_ms_per_deg (2.2),
-    main_sequence_vmax_deg_s (500), main_sequence_c_deg (14), duration_slack (3).
+    predictor's, by name (``landing_params()`` lists them with their defaults).
 
     Returns one dict per saccade the predictor saw land: ``onset_s``, ``detected_s`` (the sample
     that revealed the onset), ``first_prediction_s`` and ``first_landing_deg`` (the first
@@ -336,8 +339,7 @@ def predict_landings(t_s, deg, **params) -> list:
         raise ValueError(f"deg: expected an (N, 2) array of positions in degrees, got shape {d.shape}")
     if len(d) != len(t):
         raise ValueError(f"deg: {len(d)} positions for {len(t)} times")
-    return _core._predict_landings(t, np.ascontiguousarray(d[:, 0]), np.ascontiguousarray(d[:, 1]),
-                                   _parameters(params, _LANDING_PARAMETERS))
+    return _core._predict_landings(t, np.ascontiguousarray(d[:, 0]), np.ascontiguousarray(d[:, 1]), params)
 
 
 def _label_codes(labels, argument: str) -> np.ndarray:

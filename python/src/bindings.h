@@ -39,9 +39,9 @@ Recording recording_from(const nb::dict& columns);
 // The filter's (and, given `events`, the detectors') parameters by keyword; throws Error naming one
 // it does not know.
 void set_parameters(const nb::dict& params, FixationParams& fixation, EventParams* events);
-// The saccade landing predictor's parameters by keyword (gaze/landing.h), checked; throws Error
-// naming one it does not know or that is no number.
-LandingParams landing_params(const nb::dict& params);
+// The saccade landing predictor's parameters by keyword (gaze/landing.h) over `base`, checked;
+// throws Error naming one it does not know or that is no number.
+LandingParams landing_params(const nb::dict& params, LandingParams base = {});
 // foveal._core's perceive (perceive.cpp).
 void bind_perceive(nb::module_& m);
 

@@ -133,13 +133,13 @@ Recording recording_from(const nb::dict& columns) {
 }
 
 // The filters' and detectors' parameters by keyword (seconds and degrees, as the library's fields).
-LandingParams landing_params(const nb::dict& params) {
-  LandingParams p;
+LandingParams landing_params(const nb::dict& params, LandingParams p) {
   for (auto [key, value] : params) {
     const std::string k = nb::cast<std::string>(key);
-    if (nb::isinstance<nb::bool_>(value) || !(nb::isinstance<nb::float_>(value) || nb::isinstance<nb::int_>(value)))
+    double v = 0;  // (a NumPy scalar is a number too; a bool or a string is not)
+    if (nb::isinstance<nb::bool_>(value) || nb::isinstance<nb::str>(value) || !nb::try_cast<double>(value, v))
       fail("{}: expected a number, got {}", k, nb::cast<std::string>(nb::str(value.type().attr("__name__"))));
-    set_landing_parameter(p, k, nb::cast<double>(value));
+    set_landing_parameter(p, k, v);
   }
   validate(p);
   return p;
@@ -423,6 +423,17 @@ void bind_gaze(nb::module_& m) {
         return out;
       },
       "t_s"_a, "x_deg"_a, "y_deg"_a, "params"_a);
+
+  // Every parameter of the landing predictor: the defaults, `text`'s (as --landing) and `params`
+  // over them, checked
+  m.def(
+      "_landing_params",
+      [](const std::string& text, const nb::dict& params) {
+        nb::dict out;
+        for (const auto& [name, value] : landing_parameters(landing_params(params, parse_landing_params(text)))) out[name.c_str()] = value;
+        return out;
+      },
+      "text"_a, "params"_a);
 
   // The Python writers' one path: every writer's rules (never over an input or a read-only file;
   // an existing file replaced only once the new one is whole)

@@ -336,8 +336,16 @@ def test_the_loop_takes_the_landing_predictors_parameters(box):
         foveal.Loop(box, size=(64, 40), landing={"speed": 1})
     with pytest.raises(ValueError, match="onset_deg_s: expected a number, got str"):
         foveal.Loop(box, size=(64, 40), landing={"onset_deg_s": "fast"})
-    with pytest.raises(ValueError, match="speed: unknown parameter"):
+    with pytest.raises(ValueError, match="speed: no parameter of the landing predictor"):
         foveal.bench_latency(shared("gaze", "eyelink", "monoRemote500.asc"), box, landing={"speed": 1})
+    # landing_params: every parameter, the defaults with a text's (as --landing) and keywords over them
+    d = foveal.gaze.landing_params("onset_deg_s=60, skew=1.2", skew=1.5, max_skew=np.float32(3))
+    assert d["onset_deg_s"] == 60 and d["skew"] == 1.5 and d["max_skew"] == 3 and d["offset_deg_s"] == 30
+    assert set(foveal.gaze.landing_params()) == set(d) and len(d) == 13
+    with pytest.raises(ValueError, match="skew: '1x' is no number"):
+        foveal.gaze.landing_params("skew=1x")
+    with pytest.raises(ValueError, match="min_flight_deg: must be a finite number"):
+        foveal.gaze.landing_params(min_flight_deg=float("inf"))
 
 
 def test_predict_landings_gives_every_prediction_of_each_flight():
@@ -362,7 +370,7 @@ def test_predict_landings_gives_every_prediction_of_each_flight():
         foveal.gaze.predict_landings(t, np.zeros((5, 2)))
     with pytest.raises(ValueError, match="deg: expected an"):
         foveal.gaze.predict_landings(t, x)
-    with pytest.raises(ValueError, match="speed: unknown parameter"):
+    with pytest.raises(ValueError, match="speed: no parameter of the landing predictor"):
         foveal.gaze.predict_landings(t, np.stack([x, x], 1), speed=3)
     with pytest.raises(ValueError, match="skew: must be in"):
         foveal.gaze.predict_landings(t, np.stack([x, x], 1), skew=9)
@@ -402,3 +410,6 @@ def test_the_landing_rays_script_bounds_each_strategy_by_the_oracle(tmp_path):
     nope = subprocess.run([sys.executable, script, "--recording", str(rec), "--strategies", "region:0.5"], capture_output=True,
                           text=True, timeout=60)
     assert nope.returncode != 0 and "--strategies: region:0.5" in nope.stderr
+    negative = subprocess.run([sys.executable, script, "--recording", str(rec), "--min-amplitude", "-1"], capture_output=True, text=True,
+                              timeout=60)
+    assert negative.returncode != 0 and "--min-amplitude: must be a finite number >= 0" in negative.stderr

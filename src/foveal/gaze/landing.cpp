@@ -82,7 +82,7 @@ std::vector<std::pair<std::string, double>> landing_parameters(const LandingPara
 }
 
 LandingParams parse_landing_params(const std::string& text, LandingParams base) {
-  size_t begin = 0;
+  size_t begin = text.find_first_not_of(" \t") == std::string::npos ? text.size() + 1 : 0;  // (nothing given: the base)
   while (begin <= text.size()) {
     const size_t end = std::min(text.find(',', begin), text.size());
     auto trimmed = [](std::string s) {  // (spaces around names and values are allowed)

@@ -56,8 +56,8 @@ void validate(const LandingParams& params);
 void set_landing_parameter(LandingParams& params, const std::string& name, double value);
 // Every parameter by name, in the order of LandingParams (what a run used, for its report).
 std::vector<std::pair<std::string, double>> landing_parameters(const LandingParams& params);
-// "NAME=VALUE[,NAME=VALUE…]" over `base`, checked (the command line's --landing); throws Error
-// naming the part that is wrong.
+// "NAME=VALUE[,NAME=VALUE…]" over `base` (blank: `base` itself), checked (the command line's
+// --landing); throws Error naming the part that is wrong.
 LandingParams parse_landing_params(const std::string& text, LandingParams base = {});
 
 // What the predictor knows at the latest sample.

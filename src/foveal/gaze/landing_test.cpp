@@ -144,7 +144,8 @@ TEST(Landing, ParametersAreSetByNameAndChecked) {
   EXPECT_EQ(p.onset_deg_s, 60);
   EXPECT_EQ(p.skew, 1.5);
   EXPECT_EQ(p.max_skew, 3);
-  EXPECT_EQ(p.offset_deg_s, LandingParams{}.offset_deg_s);  // the rest keep their defaults
+  EXPECT_EQ(p.offset_deg_s, LandingParams{}.offset_deg_s);          // the rest keep their defaults
+  EXPECT_EQ(parse_landing_params(" ").skew, LandingParams{}.skew);  // nothing given: the defaults
   auto error = [](const std::string& text) {
     try {
       parse_landing_params(text);
@@ -161,15 +162,10 @@ TEST(Landing, ParametersAreSetByNameAndChecked) {
   EXPECT_NE(error("onset_deg_s=60,").find("expected NAME=VALUE"), std::string::npos);
   EXPECT_NE(error("min_flight_deg=inf").find("min_flight_deg: must be a finite number"), std::string::npos);
   // A parameter changes what the predictor does: an onset above every velocity of a saccade finds none
-  std::vector<double> t;
-  std::vector<glm::dvec2> deg;
-  for (int i = 0; i < 400; ++i) {
-    t.push_back(i * 0.001);
-    const double tau = std::clamp((t.back() - 0.1) / 0.05, 0.0, 1.0);
-    deg.emplace_back(12 * tau * tau * tau * (10 - 15 * tau + 6 * tau * tau), 0);
-  }
-  EXPECT_EQ(predict_landings(t, deg).size(), 1u);
-  EXPECT_TRUE(predict_landings(t, deg, parse_landing_params("onset_deg_s=900,offset_deg_s=30")).empty());
+  std::mt19937 rng(3);
+  const Trial trial = make_trial(12, 0.3, 1000, 0.05, rng);
+  EXPECT_EQ(predict_landings(trial.t, trial.deg).size(), 1u);
+  EXPECT_TRUE(predict_landings(trial.t, trial.deg, parse_landing_params("onset_deg_s=900,offset_deg_s=30")).empty());
 }
 
 TEST(Landing, ParametersAreChecked) {
