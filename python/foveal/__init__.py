@@ -308,10 +308,11 @@ def compare(a: ImageLike, b: ImageLike, gaze: Optional[Tuple[float, float]] = No
     return _numbers(_core._compare(ia, ib, ib2, gaze, display, ellipse, ssim_border))
 
 
-def _landing(landing) -> dict:
-    if landing is not None and not isinstance(landing, dict):
-        raise TypeError(f"landing: expected a dict of the landing predictor's parameters, got {type(landing).__name__}")
-    return landing or {}
+def _landing(landing):
+    if landing is not None and not isinstance(landing, (dict, str)):
+        raise TypeError(f"landing: expected a dict of the landing predictor's parameters or their text ('NAME=VALUE,…', as "
+                        f"--landing), got {type(landing).__name__}")
+    return landing
 
 
 def bench_latency(recordings: Any, scene: Scene, camera: Any = None, size: Tuple[int, int] = (840, 525),
@@ -321,7 +322,7 @@ def bench_latency(recordings: Any, scene: Scene, camera: Any = None, size: Tuple
                   loops: Sequence[str] = ("whole-frame", "deadline", "deadline+prediction"), min_amplitude_deg: float = 2.0,
                   max_rays: int = 400, tolerance: float = 0.35, seed: int = 1, device: str = "cpu", threads: int = 0,
                   progress: bool = False, timeline: Optional[Union[str, "os.PathLike[str]"]] = None,
-                  timeline_saccade: int = 0, landing: Optional[dict] = None) -> dict:
+                  timeline_saccade: int = 0, landing: Optional[Union[dict, str]] = None) -> dict:
     """``foveal bench latency`` from Python: gaze-to-photon latency of the display loops on recorded gaze.
 
     ``recordings``: one or a list of recordings — paths (read as the command line reads them, the
@@ -334,8 +335,8 @@ def bench_latency(recordings: Any, scene: Scene, camera: Any = None, size: Tuple
     ``model_fixed_ms``), the ``loops`` (whole-frame, deadline, deadline+prediction,
     deadline+oracle), the judged saccades' ``min_amplitude_deg``. ``progress`` prints the
     command line's progress lines; ``timeline`` draws a saccade's timeline (.png or .svg);
-    ``landing`` the prediction loops' landing predictor parameters by name (``--landing``;
-    ``foveal.gaze.landing_params()`` lists them). Returns
+    ``landing`` the prediction loops' landing predictor parameters, a dict by name or the text of
+    ``--landing`` (``foveal.gaze.landing_params()`` lists them). Returns
     the dict of ``--json`` with its tables under ``"markdown"``; the GIL is released while it runs.
     """
     if isinstance(recordings, (str, os.PathLike, _gaze.Recording)):

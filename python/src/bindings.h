@@ -42,6 +42,9 @@ void set_parameters(const nb::dict& params, FixationParams& fixation, EventParam
 // The saccade landing predictor's parameters by keyword (gaze/landing.h) over `base`, checked;
 // throws Error naming one it does not know or that is no number.
 LandingParams landing_params(const nb::dict& params, LandingParams base = {});
+// The same from what a Loop or bench_latency takes as `landing`: None (the defaults), a dict by
+// keyword, or the text of --landing ("NAME=VALUE,…"); throws TypeError for anything else.
+LandingParams landing_params_of(const nb::handle& landing);
 // foveal._core's perceive (perceive.cpp).
 void bind_perceive(nb::module_& m);
 

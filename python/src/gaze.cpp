@@ -145,6 +145,16 @@ LandingParams landing_params(const nb::dict& params, LandingParams p) {
   return p;
 }
 
+LandingParams landing_params_of(const nb::handle& landing) {
+  if (landing.is_none()) return {};
+  if (nb::isinstance<nb::str>(landing)) return parse_landing_params(nb::cast<std::string>(landing));
+  if (nb::isinstance<nb::dict>(landing)) return landing_params(nb::borrow<nb::dict>(landing));
+  throw nb::type_error(fmt::format("landing: expected a dict of the landing predictor's parameters or their text "
+                                   "('NAME=VALUE,…', as --landing), got {}",
+                                   nb::cast<std::string>(nb::str(landing.type().attr("__name__"))))
+                           .c_str());
+}
+
 void set_parameters(const nb::dict& params, FixationParams& f, EventParams* e) {
   for (auto [key, value] : params) {
     const std::string k = nb::cast<std::string>(key);

@@ -327,6 +327,7 @@ def test_the_loop_takes_the_landing_predictors_parameters(box):
         return count
     assert predicted_frames() > 0
     assert predicted_frames(landing={"onset_deg_s": 999, "offset_deg_s": 30}) == 0
+    assert predicted_frames(landing="onset_deg_s=999, offset_deg_s=30") == 0  # or the text of --landing
     # bench_latency takes them too, and its report says which it used
     report = foveal.bench_latency(shared("gaze", "eyelink", "monoRemote500.asc"), box, size=(64, 40), duration_s=0.5,
                                   loops=("deadline+prediction",), clock="model", model_rays_per_ms=2000, model_fixed_ms=3,
@@ -338,6 +339,15 @@ def test_the_loop_takes_the_landing_predictors_parameters(box):
         foveal.Loop(box, size=(64, 40), landing={"onset_deg_s": "fast"})
     with pytest.raises(ValueError, match="speed: no parameter of the landing predictor"):
         foveal.bench_latency(shared("gaze", "eyelink", "monoRemote500.asc"), box, landing={"speed": 1})
+    with pytest.raises(ValueError, match="speed: no parameter of the landing predictor"):
+        foveal.bench_latency(shared("gaze", "eyelink", "monoRemote500.asc"), box, landing="speed=1")
+    with pytest.raises(ValueError, match="skew: given twice"):
+        foveal.Loop(box, size=(64, 40), landing="skew=1, skew=2")
+    for bad in (5, ["skew=1"]):
+        with pytest.raises(TypeError, match="landing: expected a dict of the landing predictor's parameters or their text"):
+            foveal.Loop(box, size=(64, 40), landing=bad)
+        with pytest.raises(TypeError, match="landing: expected a dict of the landing predictor's parameters or their text"):
+            foveal.bench_latency(shared("gaze", "eyelink", "monoRemote500.asc"), box, landing=bad)
     # landing_params: every parameter, the defaults with a text's (as --landing) and keywords over them
     d = foveal.gaze.landing_params("onset_deg_s=60, skew=1.2", skew=1.5, max_skew=np.float32(3))
     assert d["onset_deg_s"] == 60 and d["skew"] == 1.5 and d["max_skew"] == 3 and d["offset_deg_s"] == 30
@@ -346,6 +356,21 @@ def test_the_loop_takes_the_landing_predictors_parameters(box):
         foveal.gaze.landing_params("skew=1x")
     with pytest.raises(ValueError, match="min_flight_deg: must be a finite number"):
         foveal.gaze.landing_params(min_flight_deg=float("inf"))
+
+
+def test_the_loop_names_samples_too_far_apart_to_predict_from(box):
+    # Times in milliseconds (an EyeLink's clock) where the loop takes seconds: every saccade would go
+    # unpredicted without a word; gaze_note says why
+    def note(unit, samples=40, **kw):
+        loop = foveal.Loop(box, size=(64, 40), max_rays=16, device="cpu", **kw)
+        for k in range(samples):  # 500 Hz
+            loop.push(k * 0.002 * unit, (30 + k % 3, 20))
+        return loop.gaze_note
+    assert note(1) == ""
+    assert "come 2 s apart" in note(1000) and "times in milliseconds" in note(1000)
+    assert "come 0.1 s apart" in note(50) and "milliseconds" not in note(50)  # 10 Hz in seconds: too slow, no more
+    assert note(1000, predict=False) == ""
+    assert note(1000, samples=10) == ""  # not before 16 intervals
 
 
 def test_predict_landings_gives_every_prediction_of_each_flight():

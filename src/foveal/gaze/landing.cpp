@@ -12,6 +12,7 @@
 #include <stdexcept>
 #include <string>
 #include <utility>
+#include <vector>
 
 namespace foveal {
 
@@ -83,6 +84,7 @@ std::vector<std::pair<std::string, double>> landing_parameters(const LandingPara
 
 LandingParams parse_landing_params(const std::string& text, LandingParams base) {
   size_t begin = text.find_first_not_of(" \t") == std::string::npos ? text.size() + 1 : 0;  // (nothing given: the base)
+  std::vector<std::string> given;  // (a name twice is a slip, not a choice of the last)
   while (begin <= text.size()) {
     const size_t end = std::min(text.find(',', begin), text.size());
     auto trimmed = [](std::string s) {  // (spaces around names and values are allowed)
@@ -102,6 +104,8 @@ LandingParams parse_landing_params(const std::string& text, LandingParams base) 
     } catch (const std::exception&) {
       fail("{}: '{}' is no number", name, number);
     }
+    if (std::find(given.begin(), given.end(), name) != given.end()) fail("{}: given twice", name);
+    given.push_back(name);
     set_landing_parameter(base, name, value);
     begin = end + 1;
   }

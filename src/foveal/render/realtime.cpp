@@ -130,8 +130,23 @@ void RealtimeLoop::push_gaze(double t_s, std::optional<glm::dvec2> gaze_px) {
   if (gaze_px && std::isfinite(gaze_px->x) && std::isfinite(gaze_px->y))  // NaN: a lost sample; a finite point must be near the image
     check_gaze_point("gaze_px", gaze_px->x, gaze_px->y, requested_.width, requested_.height);
   const bool valid = gaze_px && std::isfinite(gaze_px->x) && std::isfinite(gaze_px->y);
-  if (valid) measured_px_ = *gaze_px;
+  if (valid) {
+    measured_px_ = *gaze_px;
+    if (last_sample_s_ && t_s > *last_sample_s_) intervals_s_.add(t_s - *last_sample_s_);
+    last_sample_s_ = t_s;
+  }
   predictor_.push(t_s, valid ? px_to_deg(*gaze_px) : glm::dvec2(NAN), valid);
+}
+
+std::string RealtimeLoop::gaze_note() const {
+  constexpr double kSlowestS = 0.05;  // 20 Hz: a saccade's onset needs two samples above 40°/s within its first tens of ms
+  if (!settings_.predict || intervals_s_.size() < 16) return "";
+  const double median = intervals_s_.median();
+  if (median <= kSlowestS) return "";
+  return fmt::format(
+      "gaze samples come {:.3g} s apart (the median of the latest 16): saccade landings are not predicted from samples under "
+      "20 Hz{}",
+      median, median >= 0.5 ? "; are their times in milliseconds? The loop takes seconds" : "");
 }
 
 void RealtimeLoop::set_budget_ms(double budget_ms) {

@@ -203,6 +203,11 @@ class RealtimeLoop {
   const LoopSettings& settings() const { return settings_; }
   double scale() const { return scale_; }            // render size / requested size
   const std::string& note() const { return note_; }  // why the resolution was lowered ("" if not)
+  // With prediction on: why the landing predictor cannot follow the samples pushed ("" if it can):
+  // they come further apart than a saccade's onset can be seen (under 20 Hz, as the median of the
+  // latest intervals), most often times given in milliseconds where seconds are asked for (an
+  // EyeLink's own clock), which would leave every saccade unpredicted without a word
+  std::string gaze_note() const;
   const LandingPredictor& predictor() const { return predictor_; }
   // Per pixel: AO rays cast so far in this view and found open (the loop's state, for tests and
   // pictures), and the rays kept from the views before (reprojected: fractional; zero where none).
@@ -256,6 +261,8 @@ class RealtimeLoop {
   std::string note_;
   LandingPredictor predictor_;
   std::optional<glm::dvec2> measured_px_;
+  std::optional<double> last_sample_s_;         // the latest valid sample's time
+  RecentMedian<16> intervals_s_;                // … and the intervals between the latest valid samples (gaze_note)
   std::optional<glm::dvec2> known_landing_px_;  // set_known_landing
   bool have_view_ = false;
   Camera camera_;

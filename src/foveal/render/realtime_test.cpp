@@ -594,6 +594,27 @@ TEST(RealtimeLoop, ARightPredictionHelpsAndAWrongOneIsAbandonedAtLanding) {
   EXPECT_LT(right.fovea_error[0], without.fovea_error[0]);
 }
 
+TEST(RealtimeLoop, SamplesTooFarApartForThePredictorAreNamed) {
+  const std::unique_ptr<FrameRenderer> renderer = make_frame_renderer(sphere_plane(), ComputeDevice::cpu);
+  // 500 Hz samples whose times are given in `unit`s of a second
+  auto note_for = [&](double unit, bool predict, int samples) {
+    LoopSettings settings = model_clock(2500);
+    settings.predict = predict;
+    RealtimeLoop loop(*renderer, sphere_plane(), loop_params(200, 125, 400), settings);
+    for (int k = 0; k < samples; ++k) loop.push_gaze(k * 0.002 * unit, glm::dvec2(100 + k % 3, 60));
+    return loop.gaze_note();
+  };
+  EXPECT_EQ(note_for(1, true, 40), "");
+  const std::string ms = note_for(1000, true, 40);  // an EyeLink's clock: milliseconds
+  EXPECT_NE(ms.find("come 2 s apart"), std::string::npos) << ms;
+  EXPECT_NE(ms.find("times in milliseconds"), std::string::npos) << ms;
+  const std::string slow = note_for(50, true, 40);  // 10 Hz, in seconds: too slow, and no word of milliseconds
+  EXPECT_NE(slow.find("come 0.1 s apart"), std::string::npos) << slow;
+  EXPECT_EQ(slow.find("milliseconds"), std::string::npos) << slow;
+  EXPECT_EQ(note_for(1000, false, 40), "");  // nothing predicted, nothing to say
+  EXPECT_EQ(note_for(1000, true, 10), "");   // not before 16 intervals
+}
+
 TEST(RealtimeLoop, SettingsAreChecked) {
   const std::unique_ptr<FrameRenderer> renderer = make_frame_renderer(box(), ComputeDevice::cpu);
   LoopSettings s;
