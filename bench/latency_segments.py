@@ -14,7 +14,7 @@ within its segment counts as the longest, as in the bench.
 
     .venv/bin/python bench/latency_segments.py [--recording REC ...] [--segment 10] [--first 2]
         [--count N] [--loops deadline,deadline+prediction] [--clock model] [--model-rays-per-ms 25000]
-        [--model-fixed-ms 4] [--size 840x525] [--scene scenes/dragon-box.json] [--json F] [--markdown F]
+        [--model-fixed-ms 4] [--size 840x525] [--scene scenes/dragon-box.json] [--landing NAME=VALUE,…] [--json F] [--markdown F]
 
 The defaults are BENCHMARKS.md's: the EyeLink recording and IRF S1 and S2, the model clock (the
 same figures on any machine), 10-s segments from 2 s on, as many as each recording holds.
@@ -56,6 +56,7 @@ def main():
     p.add_argument("--model-fixed-ms", type=float, default=4.0, help="the model clock's fixed part of each frame (4)")
     p.add_argument("--size", default="840x525", help="render size WxH (840x525)")
     p.add_argument("--scene", default=str(here / "scenes" / "dragon-box.json"), help="the scene (the dragon box)")
+    p.add_argument("--landing", default="", help="the prediction loops' landing predictor's parameters, NAME=VALUE,… (as bench latency's)")
     p.add_argument("--json", help="write the pooled figures and every saccade as JSON")
     p.add_argument("--markdown", help="write the table as Markdown")
     a = p.parse_args()
@@ -75,6 +76,10 @@ def main():
     except ValueError:
         p.error(f"--size: {a.size} is not WxH")
     check_outputs(p, [("--json", a.json), ("--markdown", a.markdown)], recordings + [a.scene])
+    try:
+        landing = foveal.gaze.landing_params(a.landing)
+    except ValueError as error:
+        p.error(f"--landing: {error}")
     scene = foveal.Scene(a.scene)
     read = {r: foveal.gaze.read(r) for r in recordings}
     length = {r: float(rec.samples["t_s"][-1] - rec.samples["t_s"][0]) for r, rec in read.items()}
@@ -97,7 +102,7 @@ def main():
         print(f"segment {start:g}–{start + a.segment:g} s: {len(these)} recording(s) ({time.perf_counter() - began:.0f} s so far)",
               file=sys.stderr, flush=True)
         report = foveal.bench_latency(these, scene, size=(width, height), start_s=start, duration_s=a.segment, clock=a.clock,
-                                      loops=loops, **model)
+                                      loops=loops, landing=a.landing, **model)
         for r, rec in zip(these, report["recordings"]):
             segments[r] += 1
             for l in loops:
@@ -107,7 +112,7 @@ def main():
             durations[r] += [s["duration_ms"] for s in rec["deadline"]["saccades"]]
         start += a.segment
     out = {"clock": a.clock, "segment_s": a.segment, "first_s": a.first, "size": [width, height], "scene": a.scene,
-           "loops": loops, "recordings": []}
+           "loops": loops, "landing": landing, "recordings": []}
     if a.clock == "model":
         out["model"] = {"rays_per_ms": a.model_rays_per_ms, "fixed_ms": a.model_fixed_ms}
     header = "| recording (segments, saccades) | " + " | ".join(f"`{l}` median ms" for l in loops) + \

@@ -305,6 +305,10 @@ def test_the_segments_script_pools_every_judged_saccade(tmp_path):
     bad = subprocess.run([sys.executable, script, "--recording", str(recording), "--loops", "deadline+prediction"],
                          capture_output=True, text=True)
     assert bad.returncode != 0 and "--loops" in bad.stderr
+    # --landing: the prediction loops' predictor parameters, checked before any work and kept in the JSON
+    bad = subprocess.run([sys.executable, script, "--recording", str(recording), "--landing", "speed=1"], capture_output=True, text=True)
+    assert bad.returncode != 0 and "--landing: speed: no parameter of the landing predictor" in bad.stderr
+    assert json.loads(out.read_text())["landing"] == foveal.gaze.landing_params()
 
 
 def _min_jerk(t, t0, duration, amplitude):
