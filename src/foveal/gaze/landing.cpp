@@ -113,9 +113,11 @@ LandingParams parse_landing_params(const std::string& text, LandingParams base) 
   return base;
 }
 
-LandingPredictor::LandingPredictor(const LandingParams& params) : params_(params) { validate(params); }
+LandingPredictor::LandingPredictor(const LandingParams& params, bool keep_saccades) : params_(params), keep_saccades_(keep_saccades) {
+  validate(params);
+}
 
-void LandingPredictor::reset() { *this = LandingPredictor(params_); }
+void LandingPredictor::reset() { *this = LandingPredictor(params_, keep_saccades_); }
 
 void LandingPredictor::abandon() {
   state_.in_flight = false;
@@ -199,7 +201,7 @@ void LandingPredictor::land(double t_s, glm::dvec2 deg) {
   s.landing_deg = deg;
   s.landing_s = t_s;
   s.amplitude_deg = amplitude;
-  if (amplitude >= params_.min_flight_deg && s.past_peak) {
+  if (amplitude >= params_.min_flight_deg && s.past_peak && keep_saccades_) {
     current_.landing_s = t_s;
     current_.landing_deg = deg;
     current_.amplitude_deg = amplitude;
@@ -324,7 +326,7 @@ std::string landings_tsv(const std::vector<LandingReport>& reports) {
 std::vector<PredictedSaccade> predict_landings(const std::vector<double>& t_s, const std::vector<glm::dvec2>& deg,
                                                const LandingParams& params) {
   if (t_s.size() != deg.size()) fail("predict_landings: {} times for {} positions", t_s.size(), deg.size());
-  LandingPredictor predictor(params);
+  LandingPredictor predictor(params, true);
   for (size_t i = 0; i < t_s.size(); ++i) predictor.push(t_s[i], deg[i]);
   return predictor.saccades();
 }

@@ -92,12 +92,14 @@ struct PredictedSaccade {
 
 class LandingPredictor {
  public:
-  explicit LandingPredictor(const LandingParams& params = {});
+  // `keep_saccades`: keep every landed saccade with its predictions (saccades(), for evaluation); a
+  // live loop does not, so that a session of hours holds no growing history
+  explicit LandingPredictor(const LandingParams& params = {}, bool keep_saccades = false);
   // The next sample, in time order: position in degrees (any fixed planar frame: x right, y up or
   // down), valid false for a lost sample (which ends a flight without a landing).
   void push(double t_s, glm::dvec2 deg, bool valid = true);
   const LandingState& state() const { return state_; }
-  // Saccades that have landed since the start (with the prediction history of each).
+  // Saccades that have landed since the start (with the prediction history of each), where kept.
   const std::vector<PredictedSaccade>& saccades() const { return done_; }
   void reset();
 
@@ -115,6 +117,7 @@ class LandingPredictor {
     glm::dvec2 deg{0};
   };
   LandingParams params_;
+  bool keep_saccades_ = false;
   LandingState state_;
   std::vector<Sample> history_;  // the samples of the velocity baseline
   Sample onset_candidate_;       // where the first fast sample's baseline started

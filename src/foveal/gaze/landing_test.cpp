@@ -104,14 +104,18 @@ TEST(Landing, SyntheticMainSequenceSaccadesLandWithinOneDegree) {
 TEST(Landing, APredictionIsRefinedAndTheMeasuredLandingReplacesIt) {
   std::mt19937 rng(3);
   const Trial trial = make_trial(12, 0.3, 1000, 0.02, rng);
-  LandingPredictor predictor;
+  LandingPredictor predictor({}, true);
+  LandingPredictor live;  // a live loop's: the same predictions, no saccade kept (a session of hours grows nothing)
   bool saw_flight = false;
   for (size_t i = 0; i < trial.t.size(); ++i) {
     predictor.push(trial.t[i], trial.deg[i]);
+    live.push(trial.t[i], trial.deg[i]);
     if (predictor.state().in_flight) saw_flight = true;
+    EXPECT_EQ(live.state().landing_deg, predictor.state().landing_deg);
   }
   ASSERT_TRUE(saw_flight);
   EXPECT_FALSE(predictor.state().in_flight);
+  EXPECT_TRUE(live.saccades().empty());
   ASSERT_EQ(predictor.saccades().size(), 1u);
   const PredictedSaccade& s = predictor.saccades()[0];
   EXPECT_LT(glm::length(s.landing_deg - trial.landing), 0.3);  // the measured landing (30°/s offset: a little early)
