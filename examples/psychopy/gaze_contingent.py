@@ -49,7 +49,9 @@ def parse_args(argv=None):
     p.add_argument("--frames", type=int, default=0, help="stop after this many frames (0: until Escape)")
     p.add_argument("--tracker", default=None, help="ioHub eye-tracker configuration (YAML); default MouseGaze")
     p.add_argument("--move-mouse", action="store_true", help="move the pointer along a path (XTest), for runs without a person")
-    p.add_argument("--log", default="gaze_contingent_frames.csv", help="per-frame log (CSV)")
+    p.add_argument("--log", default="gaze_contingent_frames.csv",
+                   help="per-flip log (CSV; written as the session runs into LOG.partial, which takes the name LOG at its end: a failed "
+                        "session keeps its flips there)")
     p.add_argument("--summary", default=None, help="write the latency summary as JSON")
     p.add_argument("--fullscreen", action="store_true", help="full screen (ioHub's mouse wants it for exact positions)")
     p.add_argument("--probe-stalls", type=float, default=0, metavar="SECONDS",
@@ -178,10 +180,16 @@ def main(argv=None) -> int:
         # ioHub 'pix' units: origin at the window centre, y up → render pixels, origin top-left, y down
         return (x + w / 2.0, h / 2.0 - y)
 
-    rows = []
+    # Each flip is logged as it happens, into LOG.partial (flushed every second), and the file takes
+    # its name once the session has ended: a session that fails keeps every flip logged so far there
+    partial = args.log + ".partial"
+    log_file = open(partial, "w", newline="")
+    writer = None
+    rows = []  # the numbers the summary needs, per flip
     session = foveal.machine_snapshot()  # what else runs on the machine during the session (named at its end)
     own_ms = 0.0
     flip_index = 0
+    completed = False
     gaze_px = (w / 2.0, h / 2.0)
     sample_time = core.getTime()
     try:
@@ -215,24 +223,35 @@ def main(argv=None) -> int:
             overhead = flip - rendered
             own_ms = overhead * 1000 if not rows else 0.8 * own_ms + 0.2 * overhead * 1000
             loop.budget_ms = max(4.0, 1000.0 / refresh_hz - own_ms - 1.0)
-            rows.append({"flip": flip_index, "gaze_x": gaze_px[0], "gaze_y": gaze_px[1], "sample_time_s": sample_time,
-                         "fovea_x": frame.gaze[0] / loop.scale, "fovea_y": frame.gaze[1] / loop.scale,
-                         "predicted": int(frame.predicted), "fovea": frame.fovea,
-                         "fovea_converged": round(frame.fovea_converged, 4), "rays": frame.rays,
-                         "render_start_s": start, "render_ms": 1000 * (rendered - start), "library_ms": frame.ms,
-                         "late": int(frame.late), "flip_time_s": flip, "gaze_to_flip_ms": 1000 * (flip - sample_time)})
+            row = {"flip": flip_index, "gaze_x": gaze_px[0], "gaze_y": gaze_px[1], "sample_time_s": sample_time,
+                   "fovea_x": frame.gaze[0] / loop.scale, "fovea_y": frame.gaze[1] / loop.scale,
+                   "predicted": int(frame.predicted), "fovea": frame.fovea,
+                   "fovea_converged": round(frame.fovea_converged, 4), "rays": frame.rays,
+                   "render_start_s": start, "render_ms": 1000 * (rendered - start), "library_ms": frame.ms,
+                   "late": int(frame.late), "flip_time_s": flip, "gaze_to_flip_ms": 1000 * (flip - sample_time)}
+            if writer is None:
+                writer = csv.DictWriter(log_file, fieldnames=list(row))
+                writer.writeheader()
+            writer.writerow(row)
+            if flip_index % max(1, round(refresh_hz)) == 0:
+                log_file.flush()
+            rows.append({k: row[k] for k in ("gaze_x", "gaze_y", "sample_time_s", "fovea", "render_ms", "late", "gaze_to_flip_ms")})
             flip_index += 1
+        completed = True
     finally:
+        log_file.close()  # (first: what follows talks to ioHub and the window, which may fail in turn)
+        if not completed:
+            print(f"gaze_contingent: the session failed after {flip_index} flips; they are logged in {partial}", file=sys.stderr)
         others = foveal.busiest_others(session)
         stop.set()
         tracker.setRecordingState(False)
         io.quit()
         win.close()
 
-    with open(args.log, "w", newline="") as f:
-        writer = csv.DictWriter(f, fieldnames=list(rows[0]) if rows else ["flip"])
-        writer.writeheader()
-        writer.writerows(rows)
+    if writer is None:
+        with open(partial, "w", newline="") as f:
+            csv.writer(f).writerow(["flip"])
+    os.replace(partial, args.log)
     latencies = np.array([r["gaze_to_flip_ms"] for r in rows[1:]])  # the first flip waits for the tracker
     summary = {"flips": len(rows), "size": [w, h], "render_size": list(loop.size), "scene": args.scene, "device": loop.device,
                "refresh_hz": refresh_hz, "budget_ms": loop.budget_ms, "predict": not args.no_predict,

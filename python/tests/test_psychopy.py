@@ -4,8 +4,10 @@ import json
 import os
 import pathlib
 import shutil
+import signal
 import subprocess
 import sys
+import time
 
 import pytest
 
@@ -34,6 +36,8 @@ def test_gaze_contingent_follows_the_mouse_gaze_and_logs_latency(tmp_path):
     rows = list(csv.DictReader(open(tmp_path / "frames.csv")))
     summary = json.loads((tmp_path / "summary.json").read_text())
     assert len(rows) == summary["flips"] == flips
+    assert not (tmp_path / "frames.csv.partial").exists()  # logged as it ran, then given its name
+    assert summary["gaze_note"] == ""  # ioHub's times are seconds
     # The frames followed a moving gaze (MouseGaze driven by the moving pointer), every flip logged
     assert summary["gaze_positions"] > flips // 3
     for r in rows[1:]:
@@ -55,6 +59,44 @@ def test_gaze_contingent_follows_the_mouse_gaze_and_logs_latency(tmp_path):
     assert isinstance(others, list) and len(others) <= 5
     assert all(set(o) == {"pid", "name", "kernel", "cpu_ms", "slices"} and o["cpu_ms"] > 0 for o in others)
     assert [o["cpu_ms"] for o in others] == sorted((o["cpu_ms"] for o in others), reverse=True)
+
+
+def test_a_failed_gaze_contingent_session_keeps_its_flips(tmp_path):
+    # Interrupted mid-session (Ctrl-C), the flips logged so far stay in LOG.partial and it says so;
+    # LOG itself is written only by a session that ends
+    if shutil.which("xvfb-run") is None:
+        pytest.skip("xvfb-run is not installed")
+    pytest.importorskip("psychopy", reason="psychopy is not installed (scripts/python-env.sh installs it)")
+    command = ["xvfb-run", "-a", "-s", "-screen 0 320x200x24", sys.executable, str(EXAMPLES / "gaze_contingent.py"), "--size",
+               "320x200", "--frames", "0", "--device", "cpu", "--fullscreen", "--refresh-hz", "60", "--move-mouse", "--log", "frames.csv"]
+    run = subprocess.Popen(command, cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                           env={**os.environ, "PYTHONUNBUFFERED": "1"})
+    partial = tmp_path / "frames.csv.partial"
+    try:
+        deadline = time.monotonic() + 300
+        while time.monotonic() < deadline and (not partial.exists() or partial.read_text().count("\n") < 62):
+            assert run.poll() is None, run.communicate()[1][-3000:]
+            time.sleep(0.2)
+        # the script's own process: xvfb-run's child (/proc: no tool needed)
+        children = [int(d) for d in os.listdir("/proc") if d.isdigit() and _parent(int(d)) == run.pid]
+        script = next(pid for pid in children if "gaze_contingent.py" in pathlib.Path(f"/proc/{pid}/cmdline").read_text())
+        os.kill(script, signal.SIGINT)
+        _, err = run.communicate(timeout=120)
+    finally:
+        if run.poll() is None:
+            run.kill()
+    assert run.returncode != 0
+    assert "the session failed after" in err and "frames.csv.partial" in err, err[-3000:]
+    rows = list(csv.DictReader(open(partial)))
+    assert len(rows) >= 61 and [int(r["flip"]) for r in rows[:61]] == list(range(61))
+    assert not (tmp_path / "frames.csv").exists()
+
+
+def _parent(pid):
+    try:
+        return int(pathlib.Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[1])
+    except (OSError, IndexError, ValueError):
+        return -1
 
 
 def test_gaze_contingent_refuses_bad_options_before_the_session(tmp_path):
