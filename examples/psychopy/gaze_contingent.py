@@ -26,6 +26,7 @@ import csv
 import json
 import math
 import os
+import signal
 import sys
 import threading
 import time
@@ -181,7 +182,12 @@ def main(argv=None) -> int:
         return (x + w / 2.0, h / 2.0 - y)
 
     # Each flip is logged as it happens, into LOG.partial (flushed every second), and the file takes
-    # its name once the session has ended: a session that fails keeps every flip logged so far there
+    # its name once the session has ended: a session that fails keeps every flip logged so far there —
+    # one stopped by SIGTERM too (a session manager's kill, a cluster's time limit), which otherwise
+    # ends Python without its clean-up
+    def terminated(signum, _frame):
+        raise SystemExit(128 + signum)
+    signal.signal(signal.SIGTERM, terminated)
     partial = args.log + ".partial"
     log_file = open(partial, "w", newline="")
     writer = None

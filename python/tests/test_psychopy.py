@@ -62,14 +62,14 @@ def test_gaze_contingent_follows_the_mouse_gaze_and_logs_latency(tmp_path):
 
 
 def test_a_failed_gaze_contingent_session_keeps_its_flips(tmp_path):
-    # Interrupted mid-session (Ctrl-C), the flips logged so far stay in LOG.partial and it says so;
-    # LOG itself is written only by a session that ends
+    # Stopped mid-session (SIGTERM: a session manager's kill, a cluster's time limit), the flips
+    # logged so far stay in LOG.partial and it says so; LOG itself is written only by a session that ends
     if shutil.which("xvfb-run") is None:
         pytest.skip("xvfb-run is not installed")
     pytest.importorskip("psychopy", reason="psychopy is not installed (scripts/python-env.sh installs it)")
     command = ["xvfb-run", "-a", "-s", "-screen 0 320x200x24", sys.executable, str(EXAMPLES / "gaze_contingent.py"), "--size",
                "320x200", "--frames", "0", "--device", "cpu", "--fullscreen", "--refresh-hz", "60", "--move-mouse", "--log", "frames.csv"]
-    run = subprocess.Popen(command, cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+    run = subprocess.Popen(command, cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True,
                            env={**os.environ, "PYTHONUNBUFFERED": "1"})
     partial = tmp_path / "frames.csv.partial"
     try:
@@ -80,11 +80,12 @@ def test_a_failed_gaze_contingent_session_keeps_its_flips(tmp_path):
         # the script's own process: xvfb-run's child (/proc: no tool needed)
         children = [int(d) for d in os.listdir("/proc") if d.isdigit() and _parent(int(d)) == run.pid]
         script = next(pid for pid in children if "gaze_contingent.py" in pathlib.Path(f"/proc/{pid}/cmdline").read_text())
-        os.kill(script, signal.SIGINT)
+        os.kill(script, signal.SIGTERM)
         _, err = run.communicate(timeout=120)
     finally:
-        if run.poll() is None:
-            run.kill()
+        if run.poll() is None:  # (the whole session: xvfb-run, Xvfb, the script, ioHub's server)
+            os.killpg(run.pid, signal.SIGKILL)
+            run.communicate()
     assert run.returncode != 0
     assert "the session failed after" in err and "frames.csv.partial" in err, err[-3000:]
     rows = list(csv.DictReader(open(partial)))
