@@ -16,8 +16,10 @@ of the landed fovea's rays (its pixels × n_max) cast before the landing.
 Strategies: `eye` (the fovea where the eye is: the loop without prediction), `prediction` (at the
 predicted landing), `region:R` (before the peak, the fovea stretched along the flight from the
 prediction out to R times its amplitude; the tried idea of docs/realtime.md), `oracle` (at the
-labelled landing: the most any predictor could put there). Before the onset is detected every
-strategy's fovea is where the eye is.
+labelled landing: the most any predictor could put there), `oracle-pre` and `oracle-post` (at the
+labelled landing only where the prediction in force was made before the velocity peak was passed,
+or only after it; the prediction otherwise: where the gap to the oracle lies). Before the onset is
+detected every strategy's fovea is where the eye is.
 
 The default recordings are Lund 2013's training part (Andersson et al. 2017; 500 Hz, 1024×768 px on
 38×30 cm at 67 cm), where any constant of a predictor is chosen; the IRF recordings are test data.
@@ -173,7 +175,7 @@ def simulate(flight, t, deg, first, last, strategy, phase, a):
                 continue
             b_pt = a_pt
             centre_out = False  # the loop's fovea at a measured gaze goes in pixel order
-        elif strategy == "oracle":
+        elif strategy == "oracle" or strategy == ("oracle-pre" if pred_t[k] < flight["first_prediction_s"] else "oracle-post"):
             a_pt = b_pt = end
         else:
             a_pt = b_pt = pred[k]
@@ -222,7 +224,8 @@ def main():
     p.add_argument("--px-per-deg", type=float, default=19.4, help="render pixels a degree (19.4: 840 px on the default display)")
     p.add_argument("--phases", type=int, default=3, help="frame phases per saccade, drawn at random (3)")
     p.add_argument("--seed", type=int, default=1, help="the phases' seed (1)")
-    p.add_argument("--strategies", default="eye,prediction,region:2,oracle", help="eye, prediction, region:R, oracle (comma-separated)")
+    p.add_argument("--strategies", default="eye,prediction,region:2,oracle",
+                   help="eye, prediction, region:R, oracle, oracle-pre, oracle-post (comma-separated)")
     p.add_argument("--json", help="write every saccade's share per strategy as JSON")
     p.add_argument("--markdown", help="write the table as Markdown")
     a = p.parse_args()
@@ -245,7 +248,7 @@ def main():
         p.error(f"--fovea-deg: expected two semi-axes in degrees, X,Y > 0, got {a.fovea_deg}")
     strategies = [s.strip() for s in a.strategies.split(",") if s.strip()]
     for s in strategies:
-        if s in ("eye", "prediction", "oracle"):
+        if s in ("eye", "prediction", "oracle", "oracle-pre", "oracle-post"):
             continue
         if s.startswith("region:"):
             try:
@@ -253,7 +256,7 @@ def main():
                     continue
             except ValueError:
                 pass
-        p.error(f"--strategies: {s}: expected eye, prediction, region:R (R >= 1) or oracle")
+        p.error(f"--strategies: {s}: expected eye, prediction, region:R (R >= 1), oracle, oracle-pre or oracle-post")
     check_outputs(p, [("--json", a.json), ("--markdown", a.markdown)], recordings)
 
     rng = np.random.default_rng(a.seed)

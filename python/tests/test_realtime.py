@@ -416,8 +416,9 @@ def test_the_landing_rays_script_bounds_each_strategy_by_the_oracle(tmp_path):
     rec.write_text("t,x,y,label\n" + "".join(f"{a:.3f},{b:.2f},{c:.2f},{d}\n" for a, b, c, d in zip(t, x_px, y_px, label)))
     script = os.path.join(os.path.dirname(__file__), "..", "..", "bench", "landing_rays.py")
     out = tmp_path / "rays.json"
-    run = subprocess.run([sys.executable, script, "--recording", str(rec), "--strategies", "eye,prediction,region:2,oracle",
-                          "--json", str(out)], capture_output=True, text=True, timeout=120)
+    run = subprocess.run([sys.executable, script, "--recording", str(rec), "--strategies",
+                          "eye,prediction,region:2,oracle,oracle-pre,oracle-post", "--json", str(out)], capture_output=True, text=True,
+                         timeout=120)
     assert run.returncode == 0, run.stderr
     rows = json.loads(out.read_text())["saccades"]
     assert len(rows) == 2 and [round(r["amplitude_deg"]) for r in rows] == [12, 9]
@@ -427,6 +428,9 @@ def test_the_landing_rays_script_bounds_each_strategy_by_the_oracle(tmp_path):
         assert share["oracle"] > share["eye"] >= 0
         assert share["oracle"] >= max(share["prediction"], share["region:2"])
         assert share["prediction"] >= share["eye"]  # a clean saccade's prediction lands its rays
+        # the oracle for part of the flight only: between the prediction and the oracle
+        for part in ("oracle-pre", "oracle-post"):
+            assert share["prediction"] <= share[part] <= share["oracle"]
     assert "| oracle |" in run.stdout
     # a file that is no Lund recording is named, with its line
     bad = tmp_path / "bad.csv"
