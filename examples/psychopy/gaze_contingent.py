@@ -191,7 +191,8 @@ def main(argv=None) -> int:
     partial = args.log + ".partial"
     log_file = open(partial, "w", newline="")
     writer = None
-    rows = []  # the numbers the summary needs, per flip
+    # The numbers the summary needs, per flip (a tuple each: an hour at 60 Hz is 216,000 of them)
+    rows = []  # (gaze x, gaze y, sample time, converged, render ms, late, gaze-to-flip ms)
     session = foveal.machine_snapshot()  # what else runs on the machine during the session (named at its end)
     own_ms = 0.0
     flip_index = 0
@@ -213,7 +214,7 @@ def main(argv=None) -> int:
                 gaze_px = to_render(x, y)
                 sample_time = e.time
                 loop.push(e.time, gaze_px)
-            if not rows or sample_time <= rows[-1]["sample_time_s"]:
+            if not rows or sample_time <= rows[-1][2]:
                 position = tracker.getLastGazePosition()  # trackers whose events carry no gaze
                 if position is not None:
                     gaze_px = to_render(*position)
@@ -241,7 +242,7 @@ def main(argv=None) -> int:
             writer.writerow(row)
             if flip_index % max(1, round(refresh_hz)) == 0:
                 log_file.flush()
-            rows.append({k: row[k] for k in ("gaze_x", "gaze_y", "sample_time_s", "fovea", "render_ms", "late", "gaze_to_flip_ms")})
+            rows.append((gaze_px[0], gaze_px[1], sample_time, frame.fovea == "converged", row["render_ms"], frame.late, row["gaze_to_flip_ms"]))
             flip_index += 1
         completed = True
     finally:
@@ -258,16 +259,16 @@ def main(argv=None) -> int:
         with open(partial, "w", newline="") as f:
             csv.writer(f).writerow(["flip"])
     os.replace(partial, args.log)
-    latencies = np.array([r["gaze_to_flip_ms"] for r in rows[1:]])  # the first flip waits for the tracker
+    latencies = np.array([r[6] for r in rows[1:]])  # the first flip waits for the tracker
     summary = {"flips": len(rows), "size": [w, h], "render_size": list(loop.size), "scene": args.scene, "device": loop.device,
                "refresh_hz": refresh_hz, "budget_ms": loop.budget_ms, "predict": not args.no_predict,
-               "gaze_positions": len({(round(r["gaze_x"]), round(r["gaze_y"])) for r in rows}),
-               "frames_late": sum(r["late"] for r in rows),
-               "flips_converged": sum(r["fovea"] == "converged" for r in rows),
+               "gaze_positions": len({(round(r[0]), round(r[1])) for r in rows}),
+               "frames_late": sum(bool(r[5]) for r in rows),
+               "flips_converged": sum(r[3] for r in rows),
                "gaze_to_flip_ms_median": float(np.median(latencies)) if len(latencies) else None,
                "gaze_to_flip_ms_p95": float(np.percentile(latencies, 95)) if len(latencies) else None,
                "gaze_to_flip_refreshes_median": float(np.median(latencies)) * refresh_hz / 1000 if len(latencies) else None,
-               "render_ms_median": float(np.median([r["render_ms"] for r in rows])) if rows else None,
+               "render_ms_median": float(np.median([r[4] for r in rows])) if rows else None,
                "machine_stalls": machine, "other_processes": others, "gaze_note": loop.gaze_note}
     print(f"gaze_contingent: {summary['flips']} flips at {w}x{h} on {summary['device']} ({refresh_hz:.0f} Hz, budget "
           f"{loop.budget_ms:.1f} ms), {summary['gaze_positions']} gaze positions, gaze-to-flip median "
