@@ -102,7 +102,7 @@ def main():
         print(f"segment {start:g}–{start + a.segment:g} s: {len(these)} recording(s) ({time.perf_counter() - began:.0f} s so far)",
               file=sys.stderr, flush=True)
         report = foveal.bench_latency(these, scene, size=(width, height), start_s=start, duration_s=a.segment, clock=a.clock,
-                                      loops=loops, landing=a.landing, **model)
+                                      loops=loops, landing=landing, **model)
         for r, rec in zip(these, report["recordings"]):
             segments[r] += 1
             for l in loops:

@@ -97,6 +97,10 @@ def check_args(parser, args):
             parser.error(f"{name}: {path}: the folder {folder} does not exist")
         if not os.access(folder, os.W_OK):
             parser.error(f"{name}: {path}: the folder {folder} cannot be written")
+        if os.path.exists(path) and not os.stat(path).st_mode & 0o222:  # (root may write anything: the mode says)
+            parser.error(f"{name}: {path}: is read-only; it is not replaced (give another name, or make it writable)")
+    if args.log is not None and os.path.exists(args.log + ".partial"):  # a failed session's flips: never written over
+        parser.error(f"--log: {args.log}.partial holds the flips of a session that failed; move it away first")
 
 
 # Linear [0, 1] → sRGB → PsychoPy's float range [−1, 1], tabulated at 4096 steps (finer than the

@@ -308,13 +308,6 @@ def compare(a: ImageLike, b: ImageLike, gaze: Optional[Tuple[float, float]] = No
     return _numbers(_core._compare(ia, ib, ib2, gaze, display, ellipse, ssim_border))
 
 
-def _landing(landing):
-    if landing is not None and not isinstance(landing, (dict, str)):
-        raise TypeError(f"landing: expected a dict of the landing predictor's parameters or their text ('NAME=VALUE,…', as "
-                        f"--landing), got {type(landing).__name__}")
-    return landing
-
-
 def bench_latency(recordings: Any, scene: Scene, camera: Any = None, size: Tuple[int, int] = (840, 525),
                   display: Optional[Display] = None, start_s: float = 0.0, duration_s: float = 3.0, refresh_hz: float = 60.0,
                   frame_budget_ms: Optional[float] = None, latency_ms: Optional[float] = None, margin_ms: Optional[float] = None,
@@ -363,4 +356,4 @@ def bench_latency(recordings: Any, scene: Scene, camera: Any = None, size: Tuple
         number(latency_ms, "latency_ms"), number(margin_ms, "margin_ms"), clock, number(model_rays_per_ms, "model_rays_per_ms"),
         number(model_fixed_ms, "model_fixed_ms"), list(loops), number(min_amplitude_deg, "min_amplitude_deg"), max_rays,
         number(tolerance, "tolerance"), seed, device, threads, progress, "" if timeline is None else os.fspath(timeline),
-        timeline_saccade, _landing(landing)))
+        timeline_saccade, landing))  # (a dict or --landing's text; the core names anything else)

@@ -132,7 +132,6 @@ Recording recording_from(const nb::dict& columns) {
   return r;
 }
 
-// The filters' and detectors' parameters by keyword (seconds and degrees, as the library's fields).
 LandingParams landing_params(const nb::dict& params, LandingParams p) {
   for (auto [key, value] : params) {
     const std::string k = nb::cast<std::string>(key);
@@ -155,6 +154,7 @@ LandingParams landing_params_of(const nb::handle& landing) {
                            .c_str());
 }
 
+// The filters' and detectors' parameters by keyword (seconds and degrees, as the library's fields).
 void set_parameters(const nb::dict& params, FixationParams& f, EventParams* e) {
   for (auto [key, value] : params) {
     const std::string k = nb::cast<std::string>(key);

@@ -112,6 +112,19 @@ def test_gaze_contingent_refuses_bad_options_before_the_session(tmp_path):
         assert result.returncode == 2, (args, result.stderr)
         assert f"error: {name}" in result.stderr.splitlines()[-1], (args, result.stderr)
     assert not (tmp_path / "missing").exists()
+    # A read-only log or summary is not replaced (by root either), nor a failed session's kept flips
+    locked = tmp_path / "locked.csv"
+    locked.write_text("kept\n")
+    locked.chmod(0o444)
+    kept = tmp_path / "frames.csv.partial"
+    kept.write_text("flip\n0\n")
+    for args, words in ((["--log", str(locked)], "--log: " + str(locked) + ": is read-only"),
+                        (["--summary", str(locked)], "--summary: " + str(locked) + ": is read-only"),
+                        (["--log", str(tmp_path / "frames.csv")], "frames.csv.partial holds the flips of a session that failed")):
+        result = subprocess.run([sys.executable, str(EXAMPLES / "gaze_contingent.py"), *args], cwd=tmp_path, capture_output=True,
+                                text=True, timeout=60)
+        assert result.returncode == 2 and words in result.stderr, (args, result.stderr)
+    assert locked.read_text() == "kept\n" and kept.read_text() == "flip\n0\n"
 
 
 def test_foveation_threshold_quest_converges_to_the_model_observers_threshold(tmp_path):
