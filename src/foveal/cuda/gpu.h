@@ -68,6 +68,10 @@ class Renderer {
   AoSchedule ao_schedule() const;
   const Bvh& bvh() const;
 
+  // The view's surfaces alone (FrameRenderer::surfaces): the primary rays' G-buffer, without a
+  // frame's maps, AO or shading, copied back through page-locked memory.
+  GBuffer surfaces(const Camera& camera, int width, int height);
+
   // AO rays continuing pixels' sequences (FrameRenderer::trace_ao_batch) from the G-buffer's
   // surfaces, uploaded when batch.gbuffer_version changes: the tasks' rays laid end to end and
   // spread evenly over the GPU's threads, in launches of about two million rays; with

@@ -22,6 +22,7 @@ class GpuFrameRenderer final : public FrameRenderer {
   uint32_t history_frames() const override { return gpu_.history_frames(); }
   uint64_t trace_ao_batch(const AoRayBatch& batch) override { return gpu_.trace_ao_tasks(batch); }
   void prepare_ao_batches(const GBuffer& surfaces, uint64_t version) override { gpu_.prepare_ao_tasks(surfaces, version); }
+  GBuffer surfaces(const Camera& camera, int width, int height) override { return gpu_.surfaces(camera, width, height); }
   double raw_occlusion_rays_per_ms(std::span<const Ray> rays) override { return gpu_.measure_occlusion_rate(rays) / 1000; }
   ComputeDevice device() const override { return ComputeDevice::cuda; }
   size_t triangles() const override { return triangles_; }

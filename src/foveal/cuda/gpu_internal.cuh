@@ -58,6 +58,31 @@ class DeviceArray {
   size_t capacity_ = 0;
 };
 
+// Growable page-locked host memory, which the GPU copies into at the bus's speed (a copy into
+// ordinary memory goes through the driver's own buffers); contents are not kept when it grows.
+class PinnedBuffer {
+ public:
+  PinnedBuffer() = default;
+  PinnedBuffer(const PinnedBuffer&) = delete;
+  PinnedBuffer& operator=(const PinnedBuffer&) = delete;
+  ~PinnedBuffer() {
+    if (ptr_) cudaFreeHost(ptr_);
+  }
+  void reserve(size_t bytes) {
+    if (bytes <= capacity_) return;
+    if (ptr_) cudaFreeHost(ptr_);
+    ptr_ = nullptr;
+    capacity_ = 0;
+    FOVEAL_CUDA_CHECK(cudaMallocHost(&ptr_, std::max<size_t>(bytes, 1)));
+    capacity_ = bytes;
+  }
+  unsigned char* get() const { return static_cast<unsigned char*>(ptr_); }
+
+ private:
+  void* ptr_ = nullptr;
+  size_t capacity_ = 0;
+};
+
 // Counters one frame accumulates on the GPU, read back once at its end.
 struct FrameCounters {
   unsigned long long total_rays;    // AO rays of the frame (the prefix sum's total)
@@ -173,6 +198,9 @@ struct Renderer::Impl {
     int width = 0, height = 0;
     uint32_t frames = 0;  // stored since the last reset
   } history;
+
+  // A view's surfaces on their way to the host (Renderer::surfaces)
+  detail::PinnedBuffer staging;
 
   // AO tasks (the real-time loop): the surfaces of the last G-buffer version, the tasks, results
   struct Tasks {

@@ -31,6 +31,7 @@ const GpuPassTimes& Renderer::last_times() const { fail("no CUDA backend"); }
 void Renderer::set_ao_schedule(AoSchedule) {}
 void Renderer::reset_history() {}
 uint32_t Renderer::history_frames() const { return 0; }
+GBuffer Renderer::surfaces(const Camera&, int, int) { fail("no CUDA backend"); }
 uint64_t Renderer::trace_ao_tasks(const AoRayBatch&) { fail("no CUDA backend"); }
 void Renderer::prepare_ao_tasks(const GBuffer&, uint64_t) { fail("no CUDA backend"); }
 AoSchedule Renderer::ao_schedule() const { return AoSchedule::balanced; }

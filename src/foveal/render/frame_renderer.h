@@ -76,8 +76,9 @@ class FrameRenderer {
   // and loads its kernel. Nothing to do on the CPU.
   virtual void prepare_ao_batches(const GBuffer& /*surfaces*/, uint64_t /*version*/) {}
   // The view's surfaces alone (the G-buffer of a frame at width × height): what the real-time loop
-  // traces when its camera moves. By default a frame without AO rays; the CPU traces the primary
-  // rays only (a frame's foveation maps, AO pass and shading were 40 of its 82 ms at 840×525).
+  // traces when its camera moves. By default a frame without AO rays; the CPU and the GPU trace the
+  // primary rays only (a frame's foveation maps, AO pass and shading were 40 of its 82 ms at 840×525
+  // on the CPU; on the GPU a frame's copy-back was most of a view's cost).
   virtual GBuffer surfaces(const Camera& camera, int width, int height);
   // Rows from y0 of those surfaces, at least one and at most up to y1 (0 <= y0 < y1 <= height), as
   // a G-buffer of width × (rows returned): what the real-time loop traces a few rows at a time in

@@ -241,6 +241,56 @@ TEST(FrameRenderer, GpuAoTasksAreTheCpus) {
   EXPECT_EQ(again, blocked[1]);
 }
 
+// A view's surfaces on the GPU come by their own path (the primary rays alone, copied back through
+// page-locked memory): its frame's G-buffer to the bit, the CPU's but where a ray grazes an edge,
+// and their rows the rows of the whole. Skipped without a GPU.
+TEST(FrameRenderer, GpuSurfacesAreItsFramesGBuffer) {
+  if (!availability().usable) GTEST_SKIP() << "skipped: " << availability().reason;
+  const Scene& scene = foveal_test::sphere_plane();
+  const std::unique_ptr<FrameRenderer> cpu = make_frame_renderer(scene, ComputeDevice::cpu);
+  const std::unique_ptr<FrameRenderer> gpu = make_frame_renderer(scene, ComputeDevice::cuda);
+  const Camera& camera = scene.cameras.front();
+  const int w = 203, h = 127;  // blocks that the image does not fill
+  const size_t n = static_cast<size_t>(w) * h;
+  for (int round = 0; round < 2; ++round) {  // the second reuses the first's buffers
+    const GBuffer s = gpu->surfaces(camera, w, h);
+    RenderParams p;
+    p.width = w;
+    p.height = h;
+    p.foveation.max_rays = p.foveation.min_rays = 0;
+    FrameOptions options;
+    options.outputs = {false, false, true};
+    options.use_history = false;
+    const GBuffer f = gpu->render(camera, p, options).gbuffer;
+    EXPECT_EQ(s.width, w);
+    EXPECT_EQ(s.height, h);
+    ASSERT_EQ(s.prim.size(), n);
+    EXPECT_EQ(s.prim, f.prim);
+    EXPECT_TRUE(foveal_test::same_bits(s.depth, f.depth));
+    EXPECT_EQ(s.position, f.position);
+    EXPECT_EQ(s.normal, f.normal);
+    EXPECT_EQ(s.geo_normal, f.geo_normal);
+    EXPECT_EQ(s.albedo, f.albedo);
+    EXPECT_EQ(s.view, f.view);
+  }
+  const GBuffer s = gpu->surfaces(camera, w, h);
+  const GBuffer c = cpu->surfaces(camera, w, h);
+  size_t hits = 0, same = 0, close = 0;
+  for (size_t i = 0; i < n; ++i) {
+    hits += c.hit(i) ? 1 : 0;
+    same += c.hit(i) == s.hit(i) ? 1 : 0;
+    close += c.hit(i) && s.hit(i) && glm::length(c.position[i] - s.position[i]) < 1e-3f ? 1 : 0;
+  }
+  EXPECT_GT(hits, n / 4);
+  EXPECT_GE(same, n * 995 / 1000);
+  EXPECT_GE(close, hits * 99 / 100);
+  const GBuffer rows = gpu->surfaces_rows(camera, w, h, 40, h);
+  EXPECT_EQ(rows.height, h - 40);
+  EXPECT_EQ(rows.prim, std::vector<uint32_t>(s.prim.begin() + 40 * w, s.prim.end()));
+  EXPECT_EQ(rows.position, std::vector<glm::vec3>(s.position.begin() + 40 * w, s.position.end()));
+  EXPECT_THROW(gpu->surfaces(camera, 0, h), Error);
+}
+
 // The raw occlusion rate each device reports for the ray bound is a rate: positive and finite.
 TEST(FrameRenderer, RawOcclusionRateIsMeasuredOnItsDevice) {
   const Scene& scene = foveal_test::sphere_plane();

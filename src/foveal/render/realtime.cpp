@@ -22,11 +22,13 @@ namespace foveal {
 
 namespace {
 
-constexpr uint32_t kFirstRound = 16;  // a pixel's first round of rays (adaptive sampling's)
-constexpr int kBuckets = 64;          // priority buckets of the periphery (half powers of two)
-constexpr double kSlipDecay = 0.995;  // per frame: the margin's memory of a late end
-constexpr double kSlipPad = 0.5;      // ms kept beyond the latest slip
-constexpr double kRestMs = 500;       // a camera still this long is at rest: a size lowered for its motion comes back
+constexpr uint32_t kFirstRound = 16;   // a pixel's first round of rays (adaptive sampling's)
+constexpr int kBuckets = 64;           // priority buckets of the periphery (half powers of two)
+constexpr double kSlipDecay = 0.995;   // per frame: the margin's memory of a late end
+constexpr double kSlipPad = 0.5;       // ms kept beyond the latest slip
+constexpr double kRestMs = 500;        // a camera still this long is at rest: a size lowered for its motion comes back
+constexpr double kGrowth = 1.1;        // a moving camera's size grows by this factor at least, or to the size before it moved
+constexpr double kGrowthShare = 0.75;  // … to where its frame's work would take this share of the time to the deadline
 // A moved view's cost over a fresh one's until one is measured: the rays kept, 1.4–1.6 on the
 // dragon at 840×525 while the surfaces were copied into the history (less now that they move)
 constexpr double kCarryCost = 1.6;
@@ -681,6 +683,7 @@ LoopFrame RealtimeLoop::frame(const Camera& camera) {
   out.compose_planned_ms = finish_ms_;
   const double model_fixed = settings_.model_fixed_ms * scale_ * scale_;  // the model's fixed cost scales with the pixels
   uint64_t allowance = wall ? 0 : static_cast<uint64_t>(std::max(0.0, (settings_.budget_ms - model_fixed) * settings_.model_rays_per_ms));
+  bool ran_out = false;  // the rays stopped for want of work, not for the deadline
   for (;;) {
     uint64_t limit = allowance;
     if (wall) {
@@ -707,6 +710,7 @@ LoopFrame RealtimeLoop::frame(const Camera& camera) {
     if (planned == 0) {
       // (nothing for the fovea, and the periphery's sweep did not fit: try it again a little sooner)
       if (wall && !periphery) sweep_.skipped();
+      ran_out = periphery;  // every pixel had its rays
       break;
     }
     blocked_.resize(tasks_.size());
@@ -780,6 +784,23 @@ LoopFrame RealtimeLoop::frame(const Camera& camera) {
   if (fixed_.add(fixed, settings_.budget_ms, wall ? 5 : 1)) {
     if (rescale(fixed_.median_ms()) && moving && !motion_scale_) motion_scale_ = scale_before;  // the size to return to at rest
     fixed_.clear();
+  }
+  // A moving camera whose frame ran out of work before its deadline grows towards the size it had
+  // before it moved. The first moved view's size comes from an estimate (the first view's cost,
+  // which pays the loop's first allocations), and a device whose views are cheap stayed at that
+  // size until the camera rested (a third of 840x525 on a GPU whose frames then ended 8 ms before
+  // the deadline). A frame's work (the view's surfaces, maps, the rays its pixels lack) grows with
+  // its pixels, so the grown frame's fits in kGrowthShare of the time to the deadline and gives no
+  // pixel fewer rays; a frame that traces until its deadline (a CPU's, mostly) does not grow.
+  if (wall && moving && ran_out && motion_scale_ && scale_ == scale_before && out.rays_end_ms > 0) {
+    const double target = std::min(*motion_scale_, scale_ * std::sqrt(kGrowthShare * deadline / out.rays_end_ms));
+    if (target > kGrowth * scale_ || (target == *motion_scale_ && target > scale_)) {
+      set_scale(target);
+      note_ = scale_ < 1 ? fmt::format("rendering at {}x{} ({:.0f} %) while the camera moves", params_.width, params_.height, 100 * scale_)
+                         : "";
+      if (scale_ == *motion_scale_) motion_scale_.reset();  // nothing left to get back at rest
+      fixed_.clear();
+    }
   }
   // A camera come to rest gets back the size it had before it moved, and the rays kept at the
   // smaller size carry over (a view stayed small for good once a camera had moved). On the wall

@@ -13,9 +13,11 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <thread>
 
 namespace foveal {
 namespace {
@@ -283,6 +285,68 @@ TEST(RealtimeLoop, ASizeComingBackIsForgottenWhenTheCameraMovesAgain) {
   // … and the size comes back once it rests again
   for (frames = 0; frames < 400 && loop.scale() == lowered; ++frames) loop.frame(orbit_camera(camera, 2.5));
   EXPECT_EQ(loop.scale(), 1.0);
+}
+
+// A CPU renderer whose first view costs `first_ms` more, as a loop's first view pays its first
+// allocations: what a camera that starts to move is sized from says too much.
+class FirstViewSlow final : public FrameRenderer {
+ public:
+  FirstViewSlow(const Scene& scene, double first_ms) : cpu_(make_frame_renderer(scene, ComputeDevice::cpu)), first_ms_(first_ms) {}
+  Frame render(const Camera& camera, const RenderParams& params, const FrameOptions& options) override {
+    return cpu_->render(camera, params, options);
+  }
+  void reset_history() override { cpu_->reset_history(); }
+  uint32_t history_frames() const override { return cpu_->history_frames(); }
+  uint64_t trace_ao_batch(const AoRayBatch& batch) override { return cpu_->trace_ao_batch(batch); }
+  GBuffer surfaces(const Camera& camera, int width, int height) override {
+    if (views_++ == 0) std::this_thread::sleep_for(std::chrono::duration<double, std::milli>(first_ms_));
+    return cpu_->surfaces(camera, width, height);
+  }
+  GBuffer surfaces_rows(const Camera& camera, int width, int height, int y0, int y1) override {
+    return cpu_->surfaces_rows(camera, width, height, y0, y1);
+  }
+  double raw_occlusion_rays_per_ms(std::span<const Ray> rays) override { return cpu_->raw_occlusion_rays_per_ms(rays); }
+  ComputeDevice device() const override { return ComputeDevice::cpu; }
+  size_t triangles() const override { return cpu_->triangles(); }
+  double build_ms() const override { return cpu_->build_ms(); }
+  std::string trace_api() const override { return cpu_->trace_api(); }
+
+ private:
+  std::unique_ptr<FrameRenderer> cpu_;
+  double first_ms_;
+  int views_ = 0;
+};
+
+// A camera that starts to move is sized from the first view's cost per pixel. Where that said too
+// much, the moving camera's cheaper views grow back to the size it had before it moved while it
+// still moves (they stayed small until it rested), and the rays of the smaller view carry over.
+TEST(RealtimeLoop, AMovingCamerasCheapViewsGrowBackWhileItMoves) {
+  FirstViewSlow renderer(sphere_plane(), 400);
+  LoopSettings settings;
+  settings.budget_ms = 100;
+  RealtimeLoop loop{renderer, sphere_plane(), loop_params(320, 200, 16), settings};
+  const Camera& camera = sphere_plane().cameras.front();
+  loop.push_gaze(0, glm::dvec2(160, 100));
+  EXPECT_GT(loop.frame(camera).ms, 400.0);  // the first view
+  const LoopFrame first_moved = loop.frame(orbit_camera(camera, 0.5));
+  EXPECT_TRUE(first_moved.new_view);
+  EXPECT_LT(first_moved.color.width, 160) << "sized from the first view's 400 ms";
+  // Those views cost a few milliseconds: the moving camera gets the size it had before it moved
+  // back (at once, or in steps on a busy machine), each grown view with the rays of the one before
+  int k = 2;
+  for (double before = loop.scale(); k <= 12 && loop.scale() < 1.0; ++k, before = loop.scale()) {
+    const LoopFrame f = loop.frame(orbit_camera(camera, 0.5 * k));
+    EXPECT_TRUE(f.new_view);
+    EXPECT_GT(f.kept_pixels, static_cast<uint64_t>(f.color.width) * static_cast<uint64_t>(f.color.height) / 4)
+        << "moving frame " << k << " at " << f.color.width << " wide, " << before;
+  }
+  EXPECT_EQ(loop.scale(), 1.0) << "after " << k - 1 << " moving frames";
+  EXPECT_TRUE(loop.note().empty()) << loop.note();
+  const LoopFrame full = loop.frame(orbit_camera(camera, 0.5 * k));
+  EXPECT_EQ(full.color.width, 320);
+  EXPECT_GT(full.kept_pixels, 10000u);
+  // A camera at rest has no smaller size to come back from
+  for (int still = 0; still < 40; ++still) EXPECT_FALSE(loop.frame(orbit_camera(camera, 2)).rebuilding);
 }
 
 TEST(RealtimeLoop, AnOrbitingCameraGivesTheSameFramesWhateverTheThreadCount) {
