@@ -52,8 +52,9 @@ class Renderer {
 
   // One frame, as render_frame() on the CPU: the same RenderParams, the same Frame. With
   // params.reuse (adaptive rays, the filter, temporal reuse) the CPU's passes run as kernels over
-  // the same per-pixel functions (render/reuse_pixel.h), the AO pass one thread per pixel whatever
-  // the schedule; with params.reuse.temporal the frame builds on the history the Renderer keeps
+  // the same per-pixel functions (render/reuse_pixel.h), the AO pass in rounds (with the balanced
+  // schedule a launch per round over every pixel's rays of it, with the per-pixel schedule a thread
+  // per pixel: the same frame); with params.reuse.temporal the frame builds on the history the Renderer keeps
   // from its last temporal frame (render_frame's AoHistory) and leaves its own there. Frames
   // without temporal neither read nor change it. outputs.visibility also brings back
   // Frame::ao_traced when params.reuse is on.

@@ -4,6 +4,7 @@
 #pragma once
 
 #include "foveal/cuda/gpu.h"
+#include "foveal/cuda/reuse_kernels.h"
 
 #include "foveal/render/pixel.h"
 #include "foveal/util/error.h"
@@ -125,6 +126,22 @@ struct GBufferPtrs {
 
 inline unsigned blocks_for(size_t count, unsigned threads) { return static_cast<unsigned>((count + threads - 1) / threads); }
 
+// The balanced AO passes' consecutive rays per GPU thread.
+constexpr int kAoChunk = 8;
+
+// The last of the entries [lo, hi) whose offset (an exclusive prefix sum of rays) is ≤ r: the one
+// whose rays hold ray r. Entries without rays share their successor's offset and come before it.
+__device__ inline size_t holder_of(const unsigned long long* offset, size_t lo, size_t hi, unsigned long long r) {
+  while (hi - lo > 1) {
+    const size_t mid = (lo + hi) / 2;
+    if (offset[mid] <= r)
+      lo = mid;
+    else
+      hi = mid;
+  }
+  return lo;
+}
+
 // Events that time the passes of one frame on the default stream.
 struct PassEvents {
   cudaEvent_t e[8] = {};
@@ -190,6 +207,8 @@ struct Renderer::Impl {
   DeviceArray<float> count_open, count_cast, filtered;
   DeviceArray<glm::vec3> count_origin;
   DeviceArray<uint16_t> traced;
+  DeviceArray<AoRoundState> round_state;       // the balanced schedule's rounds (gpu_reuse.cu)
+  DeviceArray<unsigned long long> round_rays;  // … one round's rays in all
   struct History {
     DeviceArray<glm::vec3> position, normal, origin;
     DeviceArray<uint8_t> hit;

@@ -76,35 +76,22 @@ __device__ AoPixelRays pixel_rays(const AoArgs& a, size_t i) {
                      static_cast<uint32_t>(i / a.width), a.sobol);
 }
 
-// The last of the entries [lo, hi) whose offset (an exclusive prefix sum of rays) is ≤ r: the one
-// whose rays hold ray r. Entries without rays share their successor's offset and come before it.
-__device__ size_t holder_of(const unsigned long long* offset, size_t lo, size_t hi, unsigned long long r) {
-  while (hi - lo > 1) {
-    const size_t mid = (lo + hi) / 2;
-    if (offset[mid] <= r)
-      lo = mid;
-    else
-      hi = mid;
-  }
-  return lo;
-}
-
-// Balanced: the frame's rays in pixel order, kAoChunk consecutive rays per thread, a grid-stride
-// loop over chunks. A thread finds its first pixel by binary search in the prefix sum, then
-// walks on; blocked counts are integers added atomically, so the result is exact in any order.
-constexpr int kAoChunk = 8;
+// Balanced: the frame's rays in pixel order, kAoChunk consecutive rays per thread (gpu_internal.cuh),
+// a grid-stride loop over chunks. A thread finds its first pixel by binary search in the prefix
+// sum (holder_of), then walks on; blocked counts are integers added atomically, so the result is
+// exact in any order.
 // The real-time loop's AO tasks go in launches of about this many rays (0.2–0.5 ms on an H100), each
 // a point where a batch stops at its deadline
 constexpr unsigned long long kTaskLaunchRays = 1ULL << 21;
 
 __global__ void ao_balanced_kernel(AoArgs a) {
   const unsigned long long total = a.counters->total_rays;
-  const unsigned long long chunks = (total + kAoChunk - 1) / kAoChunk;
+  const unsigned long long chunks = (total + detail::kAoChunk - 1) / detail::kAoChunk;
   for (unsigned long long c = blockIdx.x * static_cast<unsigned long long>(blockDim.x) + threadIdx.x; c < chunks;
        c += static_cast<unsigned long long>(gridDim.x) * blockDim.x) {
-    unsigned long long r = c * kAoChunk;
-    const unsigned long long end = min(r + kAoChunk, total);
-    size_t pixel = holder_of(a.offset, 0, a.pixels, r);
+    unsigned long long r = c * detail::kAoChunk;
+    const unsigned long long end = min(r + detail::kAoChunk, total);
+    size_t pixel = detail::holder_of(a.offset, 0, a.pixels, r);
     unsigned long long pixel_end = a.offset[pixel] + a.ray_count[pixel];
     AoPixelRays rays = pixel_rays(a, pixel);
     uint32_t blocked = 0;
@@ -162,12 +149,12 @@ __device__ AoPixelRays task_rays(const AoTaskArgs& a, uint32_t pixel) {
 
 __global__ void ao_tasks_kernel(AoTaskArgs a) {
   const unsigned long long begin = a.offset[a.first_task], total = a.offset[a.end_task];
-  const unsigned long long chunks = (total - begin + kAoChunk - 1) / kAoChunk;
+  const unsigned long long chunks = (total - begin + detail::kAoChunk - 1) / detail::kAoChunk;
   for (unsigned long long c = blockIdx.x * static_cast<unsigned long long>(blockDim.x) + threadIdx.x; c < chunks;
        c += static_cast<unsigned long long>(gridDim.x) * blockDim.x) {
-    unsigned long long r = begin + c * kAoChunk;
-    const unsigned long long end = min(r + kAoChunk, total);
-    size_t t = holder_of(a.offset, a.first_task, a.end_task, r);
+    unsigned long long r = begin + c * detail::kAoChunk;
+    const unsigned long long end = min(r + detail::kAoChunk, total);
+    size_t t = detail::holder_of(a.offset, a.first_task, a.end_task, r);
     AoPixelRays rays = task_rays(a, a.tasks[t].pixel);
     uint32_t blocked = 0;
     for (; r < end; ++r) {
@@ -699,7 +686,7 @@ uint64_t Renderer::trace_ao_tasks(const AoRayBatch& batch) {
                          batch.epsilon,
                          batch.seed};
       const unsigned blocks =
-          std::min<unsigned>(static_cast<unsigned>(m.ao_grid), blocks_for((launch_rays + kAoChunk - 1) / kAoChunk, 128));
+          std::min<unsigned>(static_cast<unsigned>(m.ao_grid), blocks_for((launch_rays + detail::kAoChunk - 1) / detail::kAoChunk, 128));
       ao_tasks_kernel<<<blocks, 128>>>(a);
       FOVEAL_CUDA_LAUNCHED("ao tasks");
       if (batch.expired) FOVEAL_CUDA_CHECK(cudaDeviceSynchronize());

@@ -11,9 +11,11 @@
 #include "foveal/experiments/sequence.h"
 #include "foveal/render/reuse.h"
 #include "foveal/util/sampling.h"
+#include "test_scenes.h"
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
@@ -51,6 +53,10 @@ struct KernelsOnTheCpu {
   int h_width = 0, h_height = 0;
   uint32_t frames = 0;
   uint64_t rays = 0, kept = 0, changed = 0;
+  // The AO pass as the balanced schedule launches it: each round of every pixel laid end to end
+  // (ao_rounds_*_body), else each pixel's rounds in turn (ao_reuse_body, the per-pixel schedule)
+  bool rounds_end_to_end = false;
+  uint32_t rounds = 0;  // … the rounds that pass took
 
   void frame(const Frame& f, const Camera& camera, const RenderParams& p) {
     const size_t n = static_cast<size_t>(p.width) * p.height;
@@ -85,7 +91,29 @@ struct KernelsOnTheCpu {
                               resolve_ao_distance(scene, bounds, p.ao_distance),
                               surface_epsilon(bounds),
                               p.seed};
-    for (size_t i = 0; i < n; ++i) rays += gpu::ao_reuse_body(ao, i);
+    if (rounds_end_to_end) {
+      // As gpu_reuse.cu's launches: the plans, then per round every pixel's rays (in any order: the
+      // counts are integers) and every pixel that cast one judged
+      std::vector<gpu::AoRoundState> state(n);
+      std::vector<uint32_t> round_rays(n), blocked(n);
+      for (size_t i = 0; i < n; ++i) round_rays[i] = gpu::ao_rounds_begin_body(ao, state.data(), i);
+      for (rounds = 0; std::any_of(round_rays.begin(), round_rays.end(), [](uint32_t r) { return r > 0; }); ++rounds) {
+        for (size_t i = n; i-- > 0;) {  // (last pixel first: any order gives the same counts)
+          const AoPixelRays pixel_rays = gpu::ao_round_rays(ao, state[i], i);
+          const uint32_t first = state[i].rounds.offset + state[i].rounds.cast;
+          blocked[i] = 0;
+          for (uint32_t k = 0; k < round_rays[i]; ++k) blocked[i] += bvh_trace<true>(bvh, pixel_rays(first + k), nullptr) ? 1U : 0U;
+        }
+        for (size_t i = 0; i < n; ++i) {
+          if (round_rays[i] == 0) continue;
+          uint32_t traced_rays = 0;
+          round_rays[i] = gpu::ao_rounds_next_body(ao, state.data(), blocked[i], i, &traced_rays);
+          rays += traced_rays;
+        }
+      }
+    } else {
+      for (size_t i = 0; i < n; ++i) rays += gpu::ao_reuse_body(ao, i);
+    }
     for (size_t i = 0; i < n; ++i) gpu::counts_visibility_body(g, quality, budget, open.data(), cast.data(), visibility.data(), i);
     const gpu::DenoiseArgs denoise{g,
                                    quality,
@@ -179,6 +207,38 @@ TEST(GpuReuseKernels, MatchTheCpuRendererOnTheDragon) {
   expect_kernels_match_the_cpu(scene, find_camera(scene, "camera1"), p);
 }
 
+// The balanced schedule's AO pass, every pixel's round laid end to end a launch per round, is the
+// per-pixel schedule's to the bit over a moving sequence: the same rays, rounds, dropped
+// histories and counts, frame after frame (temporal, adaptive, the filter).
+TEST(GpuReuseKernels, RoundsLaidEndToEndAreEachPixelsOwnRounds) {
+  const Scene scene = make_builtin_scene("box");
+  const Tracer tracer(scene);
+  const Bvh bvh = build_bvh(scene);
+  KernelsOnTheCpu own{scene, {bvh.nodes.data(), bvh.triangles.data()}};
+  KernelsOnTheCpu laid{scene, {bvh.nodes.data(), bvh.triangles.data()}};
+  laid.rounds_end_to_end = true;
+  const RenderParams p = reuse_params();
+  const Camera start = first_camera(scene);
+  AoHistory history;
+  uint32_t most_rounds = 0;
+  for (int k = 0; k < 4; ++k) {
+    const Camera camera = moved(start, 3 * k);  // a few pixels a frame: some history is contradicted
+    const Frame cpu = render_frame(tracer, scene, camera, p, {}, &history);
+    own.frame(cpu, camera, p);
+    laid.frame(cpu, camera, p);
+    EXPECT_GT(own.rays, 0u);
+    EXPECT_EQ(laid.rays, own.rays) << "frame " << k;
+    EXPECT_EQ(laid.traced, own.traced) << "frame " << k;
+    EXPECT_TRUE(foveal_test::same_bits(laid.open, own.open)) << "frame " << k;
+    EXPECT_TRUE(foveal_test::same_bits(laid.cast, own.cast)) << "frame " << k;
+    EXPECT_EQ(laid.origin, own.origin) << "frame " << k;
+    EXPECT_TRUE(foveal_test::same_bits(laid.filtered, own.filtered)) << "frame " << k;
+    EXPECT_EQ(laid.kept, own.kept) << "frame " << k;
+    most_rounds = std::max(most_rounds, laid.rounds);
+  }
+  EXPECT_GE(most_rounds, 3u);  // adaptive rounds: 16, 32, 64 rays
+}
+
 // On a plane nothing occludes, so the traversals cannot differ: the kernels' frames equal the CPU
 // renderer's exactly, ray counts, history and all.
 TEST(GpuReuseKernels, EqualTheCpuRendererExactlyOnAnOpenPlane) {
@@ -245,6 +305,32 @@ TEST(Gpu, QualityPerRayMatchesTheCpu) {
 // The first temporal frame is the GPU's own paper frame bit for bit (the per-pixel rounds trace
 // the balanced schedule's rays); the next casts far fewer rays; a reset starts afresh, and the
 // same sequence again gives the same frames (integer sums only).
+// On the GPU the balanced schedule's rounds (each round's rays of every pixel laid end to end) give
+// the per-pixel schedule's frames to the bit over a moving sequence with every option on.
+TEST(Gpu, QualityPerRayIsTheSameFrameWithEitherSchedule) {
+  FOVEAL_NEED_GPU();
+  const Scene scene = make_builtin_scene("box");
+  gpu::Renderer balanced(scene), per_pixel(scene);
+  balanced.set_ao_schedule(gpu::AoSchedule::balanced);
+  per_pixel.set_ao_schedule(gpu::AoSchedule::per_pixel);
+  RenderParams p = reuse_params();
+  p.width = 320;
+  p.height = 200;
+  p.gaze_px = glm::dvec2(120, 80);
+  const Camera start = first_camera(scene);
+  for (int k = 0; k < 4; ++k) {
+    const Camera camera = moved(start, 3 * k);
+    const Frame a = balanced.render(camera, p), b = per_pixel.render(camera, p);
+    EXPECT_GT(a.stats.ao_rays, 0u);
+    EXPECT_EQ(a.stats.ao_rays, b.stats.ao_rays) << "frame " << k;
+    EXPECT_EQ(a.stats.history_pixels, b.stats.history_pixels) << "frame " << k;
+    EXPECT_EQ(a.stats.denoised_pixels, b.stats.denoised_pixels) << "frame " << k;
+    EXPECT_EQ(a.ao_traced, b.ao_traced) << "frame " << k;
+    EXPECT_TRUE(foveal_test::same_bits(a.visibility, b.visibility)) << "frame " << k;
+    EXPECT_TRUE(foveal_test::same_bits(a.color.pixels, b.color.pixels)) << "frame " << k;
+  }
+}
+
 TEST(Gpu, FirstTemporalFrameIsThePapersFrameAndRepeats) {
   FOVEAL_NEED_GPU();
   const Scene scene = make_builtin_scene("sphere-plane");

@@ -54,6 +54,50 @@ FOVEAL_HD inline uint32_t ao_reuse_body(const AoReuseArgs& a, size_t i) {
   return r.dropped + r.cast;
 }
 
+// The same rounds with every pixel's round laid end to end (gpu_reuse.cu's balanced schedule: a
+// launch per round over all pixels' rays, as the paper's balanced pass lays a frame's). Between
+// launches each pixel keeps its rounds and its sequence's scramble; the rays and every count are
+// ao_reuse_body's, since a round's blocked rays are an integer sum in any order.
+struct AoRoundState {
+  AoPixelRounds rounds;
+  uint64_t seed = 0;  // AoPixelPlan::seed
+};
+
+// Pixel i's plan: its state, and the rays of its first round (0: none, and pixel i is done).
+// (A pixel with rays casts at least one in its first round: plan_ao_pixel's limit is at least
+// ceil(n/F) ≥ 1.)
+FOVEAL_HD inline uint32_t ao_rounds_begin_body(const AoReuseArgs& a, AoRoundState* state, size_t i) {
+  const int n = a.rays[i];
+  if (!a.g.hit(i) || n == 0) {
+    a.traced[i] = 0;
+    state[i].rounds = AoPixelRounds();
+    return 0;
+  }
+  const AoPixelPlan plan = plan_ao_pixel(n, a.counts.cast[i], a.sampling, a.seed);
+  state[i].rounds = AoPixelRounds(plan, n);
+  state[i].seed = plan.seed;
+  return state[i].rounds.round_end - state[i].rounds.cast;
+}
+
+// Pixel i's rays (ray k of its sequence: the round's first is rounds.offset + rounds.cast).
+FOVEAL_HD inline AoPixelRays ao_round_rays(const AoReuseArgs& a, const AoRoundState& state, size_t i) {
+  return AoPixelRays(a.g.position[i], a.g.geo_normal[i], a.epsilon, a.ao_distance, state.seed, static_cast<uint32_t>(i % a.g.width),
+                     static_cast<uint32_t>(i / a.g.width), a.sobol);
+}
+
+// After pixel i's round, `blocked` of its rays blocked: the pixel judged on all its rays. Returns
+// the rays of its next round, or 0 once it is done; then its counts and traced[i] are final and
+// *traced holds the rays it traced this frame.
+FOVEAL_HD inline uint32_t ao_rounds_next_body(const AoReuseArgs& a, AoRoundState* state, uint32_t blocked, size_t i, uint32_t* traced) {
+  AoPixelRounds& r = state[i].rounds;
+  r.blocked += blocked;
+  r.cast = r.round_end;
+  if (r.next_round(a.counts, i, a.quality[i], a.sampling)) return r.round_end - r.cast;
+  a.traced[i] = r.finish(a.counts, i, a.g.position[i]);
+  *traced = r.dropped + r.cast;
+  return 0;
+}
+
 // V = open / cast of pixel i (1 without rays); true where it counts towards the `auto` ambient
 // constant (a q = 1 pixel with rays).
 FOVEAL_HD inline bool counts_visibility_body(const SurfaceView& g, const float* quality, const uint16_t* rays, const float* open,
