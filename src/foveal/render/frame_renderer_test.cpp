@@ -254,14 +254,7 @@ TEST(FrameRenderer, GpuSurfacesAreItsFramesGBuffer) {
   const size_t n = static_cast<size_t>(w) * h;
   for (int round = 0; round < 2; ++round) {  // the second reuses the first's buffers
     const GBuffer s = gpu->surfaces(camera, w, h);
-    RenderParams p;
-    p.width = w;
-    p.height = h;
-    p.foveation.max_rays = p.foveation.min_rays = 0;
-    FrameOptions options;
-    options.outputs = {false, false, true};
-    options.use_history = false;
-    const GBuffer f = gpu->render(camera, p, options).gbuffer;
+    const GBuffer f = gpu->FrameRenderer::surfaces(camera, w, h);  // the default: a frame without AO rays
     EXPECT_EQ(s.width, w);
     EXPECT_EQ(s.height, h);
     ASSERT_EQ(s.prim.size(), n);
