@@ -796,9 +796,12 @@ LoopFrame RealtimeLoop::frame(const Camera& camera) {
     const double target = std::min(*motion_scale_, scale_ * std::sqrt(kGrowthShare * deadline / out.rays_end_ms));
     if (target > kGrowth * scale_ || (target == *motion_scale_ && target > scale_)) {
       set_scale(target);
-      note_ = scale_ < 1 ? fmt::format("rendering at {}x{} ({:.0f} %) while the camera moves", params_.width, params_.height, 100 * scale_)
-                         : "";
-      if (scale_ == *motion_scale_) motion_scale_.reset();  // nothing left to get back at rest
+      const bool back = scale_ == *motion_scale_;
+      if (back) motion_scale_.reset();  // nothing left to get back at rest
+      note_ = scale_ == 1 ? ""
+              : back      ? fmt::format("rendering at {}x{} ({:.0f} %), the size before the camera moved", params_.width, params_.height,
+                                        100 * scale_)
+                     : fmt::format("rendering at {}x{} ({:.0f} %) while the camera moves", params_.width, params_.height, 100 * scale_);
       fixed_.clear();
     }
   }
