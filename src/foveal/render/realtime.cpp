@@ -467,6 +467,10 @@ bool RealtimeLoop::rescale(double fixed_ms) {
   return true;
 }
 
+std::string RealtimeLoop::size_note(const char* why) const {
+  return scale_ < 1 ? fmt::format("rendering at {}x{} ({:.0f} %), {}", params_.width, params_.height, 100 * scale_, why) : "";
+}
+
 void RealtimeLoop::set_scale(double scale) {
   rebuild_.reset();
   const double pixels_before = static_cast<double>(params_.width) * params_.height;
@@ -609,9 +613,7 @@ void RealtimeLoop::adopt_rebuild(uint64_t& kept_pixels) {
   finish_ms_ *= ratio;
   plan_ms_ *= ratio;
   sweep_.scale(ratio);
-  note_ = scale_ < 1
-              ? fmt::format("rendering at {}x{} ({:.0f} %), the size before the camera moved", params_.width, params_.height, 100 * scale_)
-              : "";
+  note_ = size_note("the size before the camera moved");
   motion_scale_.reset();
   fixed_.clear();
   rebuild_.reset();
@@ -798,10 +800,7 @@ LoopFrame RealtimeLoop::frame(const Camera& camera) {
       set_scale(target);
       const bool back = scale_ == *motion_scale_;
       if (back) motion_scale_.reset();  // nothing left to get back at rest
-      note_ = scale_ == 1 ? ""
-              : back      ? fmt::format("rendering at {}x{} ({:.0f} %), the size before the camera moved", params_.width, params_.height,
-                                        100 * scale_)
-                     : fmt::format("rendering at {}x{} ({:.0f} %) while the camera moves", params_.width, params_.height, 100 * scale_);
+      note_ = size_note(back ? "the size before the camera moved" : "while the camera moves");
       fixed_.clear();
     }
   }
@@ -814,9 +813,7 @@ LoopFrame RealtimeLoop::frame(const Camera& camera) {
     if (!rebuild_) start_rebuild(*motion_scale_);
   } else if (motion_scale_ && static_cast<double>(still_frames_) * settings_.budget_ms >= kRestMs) {
     set_scale(*motion_scale_);
-    note_ = scale_ < 1 ? fmt::format("rendering at {}x{} ({:.0f} %), the size before the camera moved", params_.width, params_.height,
-                                     100 * scale_)
-                       : "";
+    note_ = size_note("the size before the camera moved");
     motion_scale_.reset();
     fixed_.clear();
   }

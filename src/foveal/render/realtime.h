@@ -243,6 +243,8 @@ class RealtimeLoop {
   void compose(Image& color);
   bool rescale(double fixed_ms);  // whether it lowered the size
   void set_scale(double scale);
+  // "rendering at WxH (P %)" and why, where the size is below the one asked for; "" at full size
+  std::string size_note(const char* why) const;
   // A camera at rest gets back the size it had before it moved. On the wall clock that view is
   // built a few rows at a time in what frames leave (its surfaces, their shading, its eye rays and
   // maps, the rays it keeps) while the smaller one is still shown, and taken over once complete: the
