@@ -125,6 +125,11 @@ class VisionPasses {
   // The variable blur of the traced image with the last sharpness()'s CoCs (elliptical with the
   // model's shape when it was astigmatic, the cylinder's axis at `axis_deg`).
   void blur(float axis_deg);
+  // An impaired eye's media, retina and colour on the blurred image, in place (perceived() is then
+  // the impaired image): ImpairmentPasses::apply's operations in its order, each pixel by the CPU's
+  // rules (the models' own, and OpenCV's resampling as impair/resample.h computes it), the glare's
+  // convolution summed directly on its coarse grid (cuda/gpu_impair.cu). Times from CUDA events.
+  ImpairTimes impair(const ImpairmentPasses& passes, const RetinotopyGrid& grid);
 
   Image color() const;      // the traced image
   Image perceived() const;  // the blurred one

@@ -159,6 +159,22 @@ struct PassEvents {
   }
 };
 
+// An impaired eye's passes over an image on the GPU (cuda/gpu_impair.cu; VisionPasses::impair), with
+// their buffers, the glare's kernel and the field's map kept from one step to the next.
+class ImpairKernels {
+ public:
+  ImpairKernels();
+  ~ImpairKernels();
+  ImpairKernels(const ImpairKernels&) = delete;
+  ImpairKernels& operator=(const ImpairKernels&) = delete;
+  // In place on `rgb` (width × height, three floats a pixel, on the GPU).
+  ImpairTimes apply(const ImpairmentPasses& passes, const RetinotopyGrid& grid, float* rgb, int width, int height);
+
+ private:
+  struct State;
+  std::unique_ptr<State> s_;
+};
+
 }  // namespace detail
 
 struct Renderer::Impl {

@@ -2,6 +2,7 @@
 // none is usable (CI has none); the device choice is tested everywhere.
 #include "foveal/cuda/gpu.h"
 #include "foveal/experiments/gpu_benchmark.h"
+#include "foveal/impair/profile.h"
 #include "foveal/perception/eye.h"
 #include "foveal/util/error.h"
 #include "foveal/vision/simulate.h"
@@ -282,6 +283,74 @@ TEST(Gpu, VisionStepsMatchTheCpu) {
       EXPECT_LT(diff / cpu.perceived().pixels.size(), 2e-3) << eye << " step " << k;
       EXPECT_EQ(gpu.perceived().pixels, again.perceived().pixels) << eye << " step " << k;
     }
+  }
+}
+
+// An impaired eye's passes on the GPU give the CPU's image (ImpairmentPasses::apply on the same
+// input) for every kind of impairment and field-loss display, at a size whose glare grid divides
+// the image and at one where it does not, and repeat themselves exactly.
+TEST(Gpu, ImpairmentsAreTheCpusOnTheSameInput) {
+  FOVEAL_NEED_GPU();
+  const Scene scene = make_builtin_scene("box");
+  const SharpnessField field(scene.bounds(), default_voxel_size(scene.bounds()));
+  const Camera camera = default_camera(scene);
+  for (auto [w, h] : {std::pair{640, 360}, {333, 250}}) {
+    gpu::VisionPasses passes(scene, field, {});
+    passes.trace(camera, w, h, 0.3f);
+    passes.sharpness(CocModel{}, 1, false, 20.0f, 1.0f);  // no defocus: the blur leaves the image as traced
+    for (const char* spec :
+         {"cataract:0.5+field:arcuate:20+metamorphopsia:0.3+cvd:deutan:0.6", "presbyopia:70+field:central:5+field-mode:blur+cvd:protanopia",
+          "field:constriction:15+field-mode:grey+achromatopsia", "cataract:0.8+field:arcuate:20+field-mode:fill+cvd:tritanopia",
+          "metamorphopsia:1+cvd:tritan:0.4"}) {
+      const ImpairmentPasses impair(parse_eye_spec(spec).impair);
+      const RetinotopyGrid grid = camera_retinotopy_grid(camera, w, h, glm::vec2(0.4f * w, 0.55f * h));
+      passes.blur(0.0f);
+      Image cpu = passes.perceived();
+      const Image plain = cpu;
+      impair.apply(cpu, expand(grid));
+      const ImpairTimes t = passes.impair(impair, grid);
+      const Image gpu = passes.perceived();
+      ASSERT_EQ(cpu.pixels.size(), gpu.pixels.size());
+      double worst = 0, sum = 0, changed = 0;
+      for (size_t i = 0; i < cpu.pixels.size(); ++i) {
+        const double d = std::abs(double(cpu.pixels[i]) - gpu.pixels[i]);
+        worst = std::max(worst, d);
+        sum += d;
+        changed += std::abs(double(cpu.pixels[i]) - plain.pixels[i]);
+      }
+      const double n = double(cpu.pixels.size());
+      EXPECT_LT(worst, 1e-3) << spec << " at " << w << "x" << h;
+      EXPECT_LT(sum / n, 1e-5) << spec << " at " << w << "x" << h;
+      EXPECT_GT(changed / n, 0.001) << spec << ": the impairments change the image";
+      EXPECT_GT(t.total_ms, 0.0) << spec;
+      passes.blur(0.0f);
+      passes.impair(impair, grid);
+      EXPECT_EQ(passes.perceived().pixels, gpu.pixels) << spec << ": a second run is the same image";
+    }
+  }
+}
+
+// Whole steps with an impaired eye: the GPU simulation's perceived image is the CPU's.
+TEST(Gpu, ImpairedVisionStepsMatchTheCpu) {
+  FOVEAL_NEED_GPU();
+  const Scene scene = make_builtin_scene("box");
+  const Tracer tracer(scene);
+  const Camera camera = default_camera(scene);
+  SimulateParams p;
+  p.width = 320;
+  p.height = 240;
+  const EyeSpec spec = parse_eye_spec("cataract:0.5+field:arcuate:20+metamorphopsia:0.3+cvd:deutan:0.6");
+  p.eye = spec.eye;
+  p.impair = spec.impair;
+  VisionSimulation cpu(tracer, scene, p);
+  p.cuda = true;
+  VisionSimulation gpu(tracer, scene, p);
+  for (glm::vec2 fixation : {glm::vec2{160, 120}, glm::vec2{60, 80}, glm::vec2{250, 200}}) {
+    const StepStats a = cpu.step(camera, fixation), b = gpu.step(camera, fixation);
+    EXPECT_GT(b.impair.total_ms, 0.0);
+    double diff = 0;
+    for (size_t i = 0; i < cpu.perceived().pixels.size(); ++i) diff += std::abs(cpu.perceived().pixels[i] - gpu.perceived().pixels[i]);
+    EXPECT_LT(diff / cpu.perceived().pixels.size(), 2e-3) << "fixation " << fixation.x << "," << fixation.y;
   }
 }
 

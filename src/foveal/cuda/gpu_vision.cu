@@ -193,6 +193,9 @@ struct VisionPasses::Impl {
   DeviceArray<float> level_min[blur::kMaxLevels], level_quad[blur::kMaxLevels];
   DeviceArray<float> clamped, tile_min;
 
+  // An impaired eye's passes (cuda/gpu_impair.cu)
+  ImpairKernels impair;
+
   Renderer::Impl* rimpl = nullptr;  // the renderer's buffers (set by VisionPasses, its friend)
 
   explicit Impl(const Scene& scene) : renderer(scene) {}
@@ -431,6 +434,12 @@ Image VisionPasses::color() const {
   Image img = download_image(impl_->r().color, impl_->width, impl_->height);
   impl_->times.download_ms += t.ms();
   return img;
+}
+
+ImpairTimes VisionPasses::impair(const ImpairmentPasses& passes, const RetinotopyGrid& grid) {
+  Impl& m = *impl_;
+  if (!m.traced) throw Error("gpu::VisionPasses::impair before trace");
+  return m.impair.apply(passes, grid, reinterpret_cast<float*>(m.perceived.get()), m.width, m.height);
 }
 
 Image VisionPasses::perceived() const {

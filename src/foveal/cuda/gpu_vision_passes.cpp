@@ -30,6 +30,10 @@ class GpuPasses final : public VisionStepPasses {
     gpu_.blur(axis_deg);
     perceived_ = std::nullopt;
   }
+  ImpairTimes impair(const ImpairmentPasses& passes, const RetinotopyGrid& grid) override {
+    perceived_ = std::nullopt;
+    return gpu_.impair(passes, grid);
+  }
   const Image& color() override { return color_ ? *color_ : color_.emplace(gpu_.color()); }
   const Image& perceived() override { return perceived_ ? *perceived_ : perceived_.emplace(gpu_.perceived()); }
   const std::vector<float>& coc_px() override { return coc_ ? *coc_ : coc_.emplace(gpu_.coc_px()); }

@@ -106,15 +106,6 @@ const Dichromat& dichromat(CvdType type) {
   return type == CvdType::protanopia ? protan : type == CvdType::deuteranopia ? deutan : tritan;
 }
 
-glm::dvec3 brettel(const Dichromat& d, glm::dvec3 lms) {
-  const bool below = lms[d.den] > 0 ? lms[d.num] / lms[d.den] < d.neutral_ratio : false;
-  const glm::dvec3 n = below ? d.normal_below : d.normal_above;
-  // the point of the half-plane with the same two remaining cone signals: n · lms' = 0
-  const int a = (d.missing + 1) % 3, b = (d.missing + 2) % 3;
-  lms[d.missing] = -(n[a] * lms[a] + n[b] * lms[b]) / n[d.missing];
-  return lms;
-}
-
 }  // namespace
 
 const char* to_string(CvdType type) {
@@ -174,38 +165,51 @@ glm::dmat3 machado_matrix(CvdType type, double severity) {
 glm::dvec3 rgb_to_lms(glm::dvec3 rgb) { return kLmsFromRgb * rgb; }
 glm::dvec3 lms_to_rgb(glm::dvec3 lms) { return kRgbFromLms * lms; }
 
-glm::dvec3 simulate_cvd(const CvdParams& p, glm::dvec3 rgb) {
+CvdTransform cvd_transform(const CvdParams& p) {
+  CvdTransform t;
   switch (p.type) {
     case CvdType::none:
-      return rgb;
+      break;
     case CvdType::protan:
     case CvdType::deutan:
     case CvdType::tritan:
-      return machado_matrix(p.type, p.severity) * rgb;
+      t.kind = CvdTransform::matrix;
+      t.rgb_matrix = machado_matrix(p.type, p.severity);
+      break;
+    case CvdType::achromatopsia:  // every channel the relative luminance Y
+      t.kind = CvdTransform::matrix;
+      t.rgb_matrix = glm::dmat3(glm::dvec3(0.2126729), glm::dvec3(0.7151522), glm::dvec3(0.0721750));
+      break;
     case CvdType::protanopia:
     case CvdType::deuteranopia:
-    case CvdType::tritanopia:
-      return lms_to_rgb(brettel(dichromat(p.type), rgb_to_lms(rgb)));
-    case CvdType::achromatopsia:
-      return glm::dvec3(glm::dot(glm::dvec3(0.2126729, 0.7151522, 0.0721750), rgb));
+    case CvdType::tritanopia: {
+      const Dichromat& d = dichromat(p.type);
+      t.kind = CvdTransform::half_planes;
+      t.lms_from_rgb = kLmsFromRgb;
+      t.rgb_from_lms = kRgbFromLms;
+      t.missing = d.missing;
+      t.num = d.num;
+      t.den = d.den;
+      t.normal_below = d.normal_below;
+      t.normal_above = d.normal_above;
+      t.neutral_ratio = d.neutral_ratio;
+      break;
+    }
   }
-  return rgb;
+  return t;
 }
+
+glm::dvec3 simulate_cvd(const CvdParams& p, glm::dvec3 rgb) { return cvd_apply(cvd_transform(p), rgb); }
 
 void apply_cvd(const CvdParams& p, Image& image) {
   if (p.type == CvdType::none) return;
   if (image.channels != 3) fail("colour-vision deficiency needs a 3-channel image, got {} channels", image.channels);
   const size_t n = size_t(image.width) * image.height;
-  const bool linear =
-      p.type == CvdType::protan || p.type == CvdType::deutan || p.type == CvdType::tritan || p.type == CvdType::achromatopsia;
-  const glm::dmat3 m = p.type == CvdType::achromatopsia ? glm::dmat3(glm::dvec3(0.2126729), glm::dvec3(0.7151522), glm::dvec3(0.0721750))
-                       : linear                         ? machado_matrix(p.type, p.severity)
-                                                        : glm::dmat3(1.0);
+  const CvdTransform t = cvd_transform(p);
   tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 8192), [&](const tbb::blocked_range<size_t>& r) {
     for (size_t i = r.begin(); i < r.end(); ++i) {
       float* px = &image.pixels[i * 3];
-      const glm::dvec3 in(px[0], px[1], px[2]);
-      const glm::dvec3 out = linear ? m * in : simulate_cvd(p, in);
+      const glm::dvec3 out = cvd_apply(t, glm::dvec3(px[0], px[1], px[2]));
       for (int c = 0; c < 3; ++c) px[c] = static_cast<float>(std::max(0.0, out[c]));
     }
   });

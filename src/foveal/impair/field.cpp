@@ -267,21 +267,6 @@ FieldMap FieldMap::best_of(const FieldMap& a, const FieldMap& b) {
   return m;
 }
 
-double FieldMap::loss_db(double x, double y) const {
-  if (max_loss_ == 0 || !std::isfinite(x) || !std::isfinite(y)) return 0.0;
-  const int half = n_ / 2;
-  // rows of the query's hemifield only: the upper half is rows [0, half), the lower [half, n)
-  const bool upper = y >= 0;
-  const int row_lo = upper ? 0 : half, row_hi = upper ? half - 1 : n_ - 1;
-  const double fx = std::clamp((x + kExtentDeg) / kStepDeg - 0.5, 0.0, n_ - 1.0);
-  const double fy = std::clamp((kExtentDeg - y) / kStepDeg - 0.5, double(row_lo), double(row_hi));
-  const int x0 = std::min(static_cast<int>(fx), n_ - 2), y0 = std::min(static_cast<int>(fy), std::max(row_lo, row_hi - 1));
-  const int y1 = std::min(y0 + 1, row_hi);
-  const double tx = fx - x0, ty = y1 > y0 ? fy - y0 : 0.0;
-  auto at = [&](int i, int j) { return double(loss_[size_t(j) * n_ + i]); };
-  return (1 - ty) * ((1 - tx) * at(x0, y0) + tx * at(x0 + 1, y0)) + ty * ((1 - tx) * at(x0, y1) + tx * at(x0 + 1, y1));
-}
-
 namespace {
 
 double smooth_step(double edge0, double edge1, double v) {

@@ -7,8 +7,12 @@
 // Loss is in dB of contrast sensitivity (≥ 0; 0 = an age-normal location).
 #pragma once
 
+#include "foveal/util/hd.h"
+
 #include <glm/glm.hpp>
 
+#include <algorithm>
+#include <cmath>
 #include <functional>
 #include <optional>
 #include <string>
@@ -76,6 +80,28 @@ glm::dvec2 blind_spot_centre(Eye eye);
 // The blind spot's loss at a location (0 outside; a 0.5° soft edge).
 double blind_spot_loss_db(Eye eye, glm::dvec2 location);
 
+// A loss map's samples as both devices read them: n × n cells of kStepDeg over ±kExtentDeg, row 0 at
+// the top. field_loss_db is FieldMap::loss_db's rule, written once for the CPU and the CUDA backend.
+struct FieldMapView {
+  const float* loss = nullptr;
+  int n = 0;
+  bool empty = true;
+};
+FOVEAL_HD inline double field_loss_db(const FieldMapView& m, double x, double y, double extent_deg, double step_deg) {
+  if (m.empty || !std::isfinite(x) || !std::isfinite(y)) return 0.0;
+  const int n = m.n, half = n / 2;
+  // rows of the query's hemifield only: the upper half is rows [0, half), the lower [half, n)
+  const bool upper = y >= 0;
+  const int row_lo = upper ? 0 : half, row_hi = upper ? half - 1 : n - 1;
+  const double fx = std::clamp((x + extent_deg) / step_deg - 0.5, 0.0, n - 1.0);
+  const double fy = std::clamp((extent_deg - y) / step_deg - 0.5, double(row_lo), double(row_hi));
+  const int x0 = std::min(static_cast<int>(fx), n - 2), y0 = std::min(static_cast<int>(fy), std::max(row_lo, row_hi - 1));
+  const int y1 = std::min(y0 + 1, row_hi);
+  const double tx = fx - x0, ty = y1 > y0 ? fy - y0 : 0.0;
+  auto at = [&](int i, int j) { return double(m.loss[size_t(j) * n + i]); };
+  return (1 - ty) * ((1 - tx) * at(x0, y0) + tx * at(x0 + 1, y0)) + ty * ((1 - tx) * at(x0, y1) + tx * at(x0 + 1, y1));
+}
+
 // A continuous loss map, sampled every `step` degrees over ±extent; a lookup never mixes the upper
 // and lower hemifields (the rows' boundary is the horizontal meridian), and holds the edge value
 // beyond the extent.
@@ -85,7 +111,8 @@ class FieldMap {
   FieldMap();  // no loss anywhere
   // Sample loss(x, y) at the cell centres.
   static FieldMap from_function(const std::function<double(double, double)>& loss_db);
-  double loss_db(double x_deg, double y_deg) const;
+  double loss_db(double x_deg, double y_deg) const { return field_loss_db(view(), x_deg, y_deg, kExtentDeg, kStepDeg); }
+  FieldMapView view() const { return {loss_.data(), n_, max_loss_ == 0}; }
   // Per cell: the smaller loss of the two (the better eye; Crabb & Viswanathan 1998).
   static FieldMap best_of(const FieldMap& a, const FieldMap& b);
   bool empty() const { return max_loss_ == 0; }

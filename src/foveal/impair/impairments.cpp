@@ -10,6 +10,7 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <numbers>
 
@@ -93,35 +94,47 @@ struct GlareSpectrum {
   double eta = 0;    // the kernel's sum
 };
 
+GlareGrid glare_grid(int width, int height) {
+  // the scatter is smooth beyond a few tenths of a degree: compute it on a grid of at most 160 columns
+  const int factor = std::max(1, (width + 159) / 160);
+  return {factor, (width + factor - 1) / factor, (height + factor - 1) / factor};
+}
+
+std::vector<float> glare_grid_kernel(const GlareGrid& grid, double grid_ppd, const MediaParams& m, double* eta_out) {
+  // the kernel covers every pair of pixels
+  std::vector<float> k = glare_kernel(grid_ppd, grid.columns - 1, grid.rows - 1, m);
+  double eta = 0;
+  for (float v : k) eta += v;
+  if (eta > 0.95) {  // more than the light there is: the straylight saturates
+    for (float& v : k) v = static_cast<float>(v * 0.95 / eta);
+    eta = 0.95;
+  }
+  if (eta_out) *eta_out = eta;
+  return k;
+}
+
 void apply_glare(Image& image, double ppd, const MediaParams& m, std::shared_ptr<GlareSpectrum>* cache) {
   if (image.empty()) return;
-  // the scatter is smooth beyond a few tenths of a degree: compute it on a grid of at most 160 columns
-  const int factor = std::max(1, (image.width + 159) / 160);
+  const GlareGrid grid = glare_grid(image.width, image.height);
+  const int factor = grid.factor;
   const cv::Mat full = as_mat(image);
   cv::Mat small;
   if (factor > 1)
-    cv::resize(full, small, cv::Size((image.width + factor - 1) / factor, (image.height + factor - 1) / factor), 0, 0, cv::INTER_AREA);
+    cv::resize(full, small, cv::Size(grid.columns, grid.rows), 0, 0, cv::INTER_AREA);
   else
     small = full.clone();
   const double small_ppd = ppd * small.cols / image.width;
   std::shared_ptr<GlareSpectrum> g = cache ? *cache : nullptr;
   if (!g || g->width != small.cols || g->height != small.rows || g->ppd != small_ppd || g->media.age_years != m.age_years ||
       g->media.pigmentation != m.pigmentation || g->media.cataract != m.cataract) {
-    // the kernel covers every pair of pixels; the linear convolution fits the padded size
+    // the linear convolution fits the padded size
     g = std::make_shared<GlareSpectrum>();
     g->width = small.cols;
     g->height = small.rows;
     g->ppd = small_ppd;
     g->media = m;
     const int rx = small.cols - 1, ry = small.rows - 1;
-    std::vector<float> k = glare_kernel(small_ppd, rx, ry, m);
-    double eta = 0;
-    for (float v : k) eta += v;
-    if (eta > 0.95) {  // more than the light there is: the straylight saturates
-      for (float& v : k) v = static_cast<float>(v * 0.95 / eta);
-      eta = 0.95;
-    }
-    g->eta = eta;
+    std::vector<float> k = glare_grid_kernel(grid, small_ppd, m, &g->eta);
     g->padded = cv::Size(cv::getOptimalDFTSize(small.cols + 2 * rx), cv::getOptimalDFTSize(small.rows + 2 * ry));
     cv::Mat padded = cv::Mat::zeros(g->padded, CV_32F);
     cv::Mat(2 * ry + 1, 2 * rx + 1, CV_32F, k.data()).copyTo(padded(cv::Rect(0, 0, 2 * rx + 1, 2 * ry + 1)));
@@ -192,16 +205,17 @@ void scale_channels(cv::Mat& a, const cv::Mat& w) {
   });
 }
 
-int pyramid_levels(cv::Size size) {
+}  // namespace
+
+int field_pyramid_levels(int width, int height) {
   int levels = 0;
-  while (levels < 8 && std::min(size.width, size.height) >= 16) {
-    size = cv::Size((size.width + 1) / 2, (size.height + 1) / 2);
+  while (levels < 8 && std::min(width, height) >= 16) {
+    width = (width + 1) / 2;
+    height = (height + 1) / 2;
     ++levels;
   }
   return levels;
 }
-
-}  // namespace
 
 void apply_field_loss(Image& image, const std::vector<float>& loss_db, FieldMode mode) {
   if (loss_db.size() != size_t(image.width) * image.height)
@@ -223,7 +237,7 @@ void apply_field_loss(Image& image, const std::vector<float>& loss_db, FieldMode
     out.copyTo(img);
     return;
   }
-  const int levels = pyramid_levels(img.size());
+  const int levels = field_pyramid_levels(img.cols, img.rows);
   std::vector<cv::Mat> g{img};  // level 0 is the image itself (read before the last pass writes it)
   for (int k = 0; k < levels; ++k) {
     cv::Mat down;
@@ -294,23 +308,32 @@ void apply_field_loss(Image& image, const std::vector<float>& loss_db, FieldMode
   }
 }
 
-glm::dvec2 Metamorphopsia::displacement(double x, double y) const {
-  if (!any()) return {0, 0};
-  const double r = std::hypot(x, y);
-  if (r > radius_deg + 1) return {0, 0};
+MetamorphopsiaBumps Metamorphopsia::bumps() const {
+  MetamorphopsiaBumps b;
+  b.radius = radius_deg;
+  b.sigma = radius_deg / 3.0;
+  b.half_amplitude = any() ? amplitude_deg / 2.0 : 0.0;
   // 12 Gaussian bumps in the disc, each pushing in its own direction
   uint64_t state = seed * 0x2545F4914F6CDD1Dull + 17;
-  const double sigma = radius_deg / 3.0;
-  glm::dvec2 d(0);
-  for (int k = 0; k < 12; ++k) {
+  for (int k = 0; k < MetamorphopsiaBumps::kCount; ++k) {
     const double cr = radius_deg * std::sqrt(uniform(state)), ca = 2 * std::numbers::pi * uniform(state);
     const double da = 2 * std::numbers::pi * uniform(state);
-    const glm::dvec2 c(cr * std::cos(ca), cr * std::sin(ca));
-    const double e = std::exp(-((x - c.x) * (x - c.x) + (y - c.y) * (y - c.y)) / (2 * sigma * sigma));
-    d += e * glm::dvec2(std::cos(da), std::sin(da));
+    b.cx[k] = cr * std::cos(ca);
+    b.cy[k] = cr * std::sin(ca);
+    b.ux[k] = std::cos(da);
+    b.uy[k] = std::sin(da);
   }
-  const double window = 1.0 - std::clamp((r - radius_deg + 1) / 2.0, 0.0, 1.0);
-  return d * (amplitude_deg * window / 2.0);
+  return b;
+}
+
+Retinotopy expand(const RetinotopyGrid& g) {
+  Retinotopy r{g.width, g.height, std::vector<glm::vec2>(g.field_deg.empty() ? 0 : size_t(g.width) * g.height), g.ppd};
+  if (g.field_deg.empty()) return r;
+  tbb::parallel_for(tbb::blocked_range<int>(0, g.height, 8), [&](const tbb::blocked_range<int>& rows) {
+    for (int y = rows.begin(); y < rows.end(); ++y)
+      for (int x = 0; x < g.width; ++x) r.field_deg[size_t(y) * g.width + x] = retinotopy_between(g.field_deg.data(), g.columns, x, y);
+  });
+  return r;
 }
 
 std::string Impairments::describe() const {
@@ -324,7 +347,10 @@ std::string Impairments::describe() const {
   return s.empty() ? "none" : s;
 }
 
-ImpairmentPasses::ImpairmentPasses(const Impairments& impairments) : impairments_(impairments), map_(impairments.field.map()) {}
+ImpairmentPasses::ImpairmentPasses(const Impairments& impairments) : impairments_(impairments), map_(impairments.field.map()) {
+  static std::atomic<uint64_t> next{1};
+  id_ = next++;
+}
 
 std::vector<float> ImpairmentPasses::loss_db(const Retinotopy& r) const {
   std::vector<float> loss(r.field_deg.size(), 0.0f);

@@ -5,6 +5,7 @@
 
 #include "foveal/impair/cvd.h"
 #include "foveal/impair/field.h"
+#include "foveal/util/hd.h"
 #include "foveal/util/image.h"
 
 #include <glm/glm.hpp>
@@ -47,6 +48,16 @@ glm::dvec3 lens_transmittance(const MediaParams& media);
 // CIE equation times its solid angle, the centre the integral from 0.1° to the pixel's own radius.
 // The cataract's straylight factor multiplies the equation's lens term; the sum is the scattered fraction η.
 std::vector<float> glare_kernel(double ppd, int rx, int ry, const MediaParams& media);
+// The glare's coarse grid: the image divided by the smallest whole factor that leaves at most 160
+// columns (the last cell may be partial).
+struct GlareGrid {
+  int factor = 1, columns = 0, rows = 0;
+};
+GlareGrid glare_grid(int width, int height);
+// Its kernel over every pair of the grid's cells ((2·columns − 1) × (2·rows − 1), glare_kernel at the
+// grid's own pixels per degree), scaled down where η would pass 0.95 (the straylight saturates); η
+// is returned through `eta`.
+std::vector<float> glare_grid_kernel(const GlareGrid& grid, double grid_ppd, const MediaParams& media, double* eta);
 // out = (1 − η)·I + K ⊛ I (light scattered beyond the image is lost). Computed on a grid of at most
 // 160 columns, the scattered part upsampled (the kernel's spectrum cached for the next frame).
 void apply_glare(Image& image, double ppd, const MediaParams& media);
@@ -61,8 +72,31 @@ void apply_glare(Image& image, double ppd, const MediaParams& media, std::shared
 enum class FieldMode { contrast, blur, grey, fill };
 FieldMode parse_field_mode(const std::string& name);
 const char* to_string(FieldMode mode);
+// The Laplacian pyramid's levels below the image (halving while the smaller side is ≥ 16, at most 8).
+int field_pyramid_levels(int width, int height);
 // `loss_db` per pixel (width × height).
 void apply_field_loss(Image& image, const std::vector<float>& loss_db, FieldMode mode);
+
+// Metamorphopsia's distortion as both devices evaluate it: Gaussian bumps in the disc, each
+// pushing in its own direction, windowed to zero beyond the radius + 1°.
+struct MetamorphopsiaBumps {
+  static constexpr int kCount = 12;
+  double cx[kCount], cy[kCount];  // centres, degrees
+  double ux[kCount], uy[kCount];  // unit directions
+  double sigma = 1, radius = 0, half_amplitude = 0;
+};
+FOVEAL_HD inline glm::dvec2 metamorphopsia_displacement(const MetamorphopsiaBumps& b, double x, double y) {
+  if (b.half_amplitude == 0) return {0, 0};
+  const double r = sqrt(x * x + y * y);
+  if (r > b.radius + 1) return {0, 0};
+  glm::dvec2 d(0);
+  for (int k = 0; k < MetamorphopsiaBumps::kCount; ++k) {
+    const double e = exp(-((x - b.cx[k]) * (x - b.cx[k]) + (y - b.cy[k]) * (y - b.cy[k])) / (2 * b.sigma * b.sigma));
+    d += e * glm::dvec2(b.ux[k], b.uy[k]);
+  }
+  const double window = 1.0 - std::clamp((r - b.radius + 1) / 2.0, 0.0, 1.0);
+  return d * (b.half_amplitude * window);
+}
 
 // Metamorphopsia: a smooth retinotopic distortion within `radius_deg` of the fovea, displacements
 // up to about `amplitude_deg`, the same for a seed.
@@ -72,7 +106,8 @@ struct Metamorphopsia {
   uint64_t seed = 1;
   bool any() const { return amplitude_deg > 0; }
   // The displacement (degrees, field coordinates: x right, y up) at a field location.
-  glm::dvec2 displacement(double x_deg, double y_deg) const;
+  glm::dvec2 displacement(double x_deg, double y_deg) const { return metamorphopsia_displacement(bumps(), x_deg, y_deg); }
+  MetamorphopsiaBumps bumps() const;  // the seed's bumps
 };
 
 struct Impairments {
@@ -92,6 +127,26 @@ struct Retinotopy {
   double ppd = 1;                    // pixels per degree at the fixation
 };
 
+// A retinotopy computed exactly on every `step`-th pixel ((width + step − 1)/step + 1 columns, as
+// many rows likewise) and bilinear between: where each pixel lies, as both devices expand it.
+struct RetinotopyGrid {
+  static constexpr int kStep = 4;
+  int width = 0, height = 0;
+  int columns = 0, rows = 0;
+  std::vector<glm::vec2> field_deg;  // columns × rows, empty where the retina is unimpaired
+  double ppd = 1;
+};
+FOVEAL_HD inline glm::vec2 retinotopy_between(const glm::vec2* grid, int columns, int x, int y) {
+  constexpr int step = RetinotopyGrid::kStep;
+  const int i = x / step, j = y / step;
+  const float tx = float(x - i * step) / step, ty = float(y - j * step) / step;
+  const glm::vec2 a = grid[size_t(j) * columns + i], b = grid[size_t(j) * columns + i + 1];
+  const glm::vec2 c = grid[size_t(j + 1) * columns + i], d = grid[size_t(j + 1) * columns + i + 1];
+  return (1 - ty) * ((1 - tx) * a + tx * b) + ty * ((1 - tx) * c + tx * d);
+}
+// Every pixel's place (Retinotopy) from the grid.
+Retinotopy expand(const RetinotopyGrid& grid);
+
 // The render fills a display seen from its centre (perception/foveation.h): the exact angle from the
 // gaze, split as the foveation model splits it, y turned upwards; ppd at the display centre.
 struct Display;
@@ -107,6 +162,9 @@ class ImpairmentPasses {
   explicit ImpairmentPasses(const Impairments& impairments);
   const Impairments& impairments() const { return impairments_; }
   const FieldMap& field_map() const { return map_; }
+  // Unique to each constructed set of passes (a copy keeps it: the same impairments): what a device
+  // that keeps a copy of the field's map knows it by.
+  uint64_t id() const { return id_; }
   bool needs_retinotopy() const { return !map_.empty() || impairments_.metamorphopsia.any(); }
   // Media, then retina (metamorphopsia, field loss), then colour, in place on linear RGB. The
   // retinotopy's field_deg may be empty when the retina is unimpaired (needs_retinotopy()).
@@ -117,6 +175,7 @@ class ImpairmentPasses {
  private:
   Impairments impairments_;
   FieldMap map_;
+  uint64_t id_;
   mutable std::shared_ptr<GlareSpectrum> glare_cache_;  // apply() is not for concurrent use
 };
 

@@ -81,6 +81,8 @@ class CpuPasses final : public VisionStepPasses {
     times_.blur_ms = t.ms();
   }
 
+  ImpairTimes impair(const ImpairmentPasses& passes, const RetinotopyGrid& grid) override { return passes.apply(perceived_, expand(grid)); }
+
   const Image& color() override { return color_; }
   const Image& perceived() override { return perceived_; }
   const std::vector<float>& coc_px() override { return coc_; }

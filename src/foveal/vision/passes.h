@@ -6,6 +6,7 @@
 // never includes the backend: the factory below is its only contact with it.
 #pragma once
 
+#include "foveal/impair/impairments.h"
 #include "foveal/scene/scene.h"
 #include "foveal/trace/tracer.h"
 #include "foveal/util/image.h"
@@ -42,6 +43,10 @@ class VisionStepPasses {
   // pixels; returns how many pixels are sharp
   virtual size_t sharpness(const CocModel& model, uint32_t step, bool update, float ppd, float sharp_px) = 0;
   virtual void blur(float axis_deg) = 0;
+  // An impaired eye's media, retina and colour (ImpairmentPasses::apply's passes, in its order) on
+  // the blurred image, in place: perceived() is then the impaired image. The grid is the fixation's
+  // retinotopy (without points where the retina is unimpaired).
+  virtual ImpairTimes impair(const ImpairmentPasses& passes, const RetinotopyGrid& grid) = 0;
   virtual const Image& color() = 0;
   virtual const Image& perceived() = 0;
   virtual const std::vector<float>& coc_px() = 0;

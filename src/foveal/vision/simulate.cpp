@@ -55,7 +55,7 @@ VisionSimulation::VisionSimulation(const Tracer& tracer, const Scene& scene, con
 VisionSimulation::~VisionSimulation() = default;
 
 const Image& VisionSimulation::color() const { return passes_->color(); }
-const Image& VisionSimulation::perceived() const { return impair_ ? impaired_ : passes_->perceived(); }
+const Image& VisionSimulation::perceived() const { return passes_->perceived(); }
 
 nlohmann::json step_stats_json(const StepStats& s) {
   return {{"step", s.step},
@@ -76,13 +76,12 @@ nlohmann::json step_stats_json(const StepStats& s) {
             {"total", s.total_ms}}}};
 }
 
-Retinotopy camera_retinotopy(const Camera& camera, int width, int height, glm::vec2 fixation_px) {
+RetinotopyGrid camera_retinotopy_grid(const Camera& camera, int width, int height, glm::vec2 fixation_px) {
   const CameraRays rays(camera, width, height);
   const glm::vec3 g = rays(fixation_px.x, fixation_px.y).dir;
   const glm::vec3 forward = glm::normalize(camera.look - camera.eye);
   const glm::vec3 right = glm::normalize(glm::cross(forward, camera.up));
   const glm::vec3 h = glm::normalize(right - glm::dot(right, g) * g), v = glm::normalize(glm::cross(h, g));
-  Retinotopy r{width, height, std::vector<glm::vec2>(size_t(width) * height), camera_pixels_per_degree(camera, height)};
   // exact on a grid of every 4th pixel, bilinear between (the field position is smooth: within
   // 1e-3° of the exact one at 1280x720 and 60° of view)
   auto exact = [&](double x, double y) {
@@ -92,26 +91,18 @@ Retinotopy camera_retinotopy(const Camera& camera, int width, int height, glm::v
     const float angle = glm::degrees(angle_atan2(len, glm::dot(g, p)));
     return len > 0 ? glm::vec2(angle * ph / len, angle * pv / len) : glm::vec2(0.0f);
   };
-  constexpr int step = 4;
-  const int gw = (width + step - 1) / step + 1, gh = (height + step - 1) / step + 1;
-  std::vector<glm::vec2> grid(size_t(gw) * gh);
-  tbb::parallel_for(0, gh, [&](int j) {
-    for (int i = 0; i < gw; ++i) grid[size_t(j) * gw + i] = exact(i * step + 0.5, j * step + 0.5);
-  });
-  tbb::parallel_for(tbb::blocked_range<int>(0, height, 8), [&](const tbb::blocked_range<int>& rows) {
-    for (int y = rows.begin(); y < rows.end(); ++y) {
-      const int j = y / step;
-      const float ty = float(y - j * step) / step;
-      for (int x = 0; x < width; ++x) {
-        const int i = x / step;
-        const float tx = float(x - i * step) / step;
-        const glm::vec2 a = grid[size_t(j) * gw + i], b = grid[size_t(j) * gw + i + 1];
-        const glm::vec2 c = grid[size_t(j + 1) * gw + i], d = grid[size_t(j + 1) * gw + i + 1];
-        r.field_deg[size_t(y) * width + x] = (1 - ty) * ((1 - tx) * a + tx * b) + ty * ((1 - tx) * c + tx * d);
-      }
-    }
+  constexpr int step = RetinotopyGrid::kStep;
+  RetinotopyGrid r{
+      width, height, (width + step - 1) / step + 1, (height + step - 1) / step + 1, {}, camera_pixels_per_degree(camera, height)};
+  r.field_deg.resize(size_t(r.columns) * r.rows);
+  tbb::parallel_for(0, r.rows, [&](int j) {
+    for (int i = 0; i < r.columns; ++i) r.field_deg[size_t(j) * r.columns + i] = exact(i * step + 0.5, j * step + 0.5);
   });
   return r;
+}
+
+Retinotopy camera_retinotopy(const Camera& camera, int width, int height, glm::vec2 fixation_px) {
+  return expand(camera_retinotopy_grid(camera, width, height, fixation_px));
 }
 
 const std::vector<float>& VisionSimulation::coc_px() const { return passes_->coc_px(); }
@@ -189,9 +180,8 @@ StepStats VisionSimulation::step(const Camera& camera, std::optional<glm::vec2> 
   // 6. Media, retina and colour, centred on the fixation
   if (impair_) {
     const Timer timer;
-    impaired_ = passes.perceived();
-    s.impair =
-        impair_->apply(impaired_, impair_->needs_retinotopy() ? camera_retinotopy(camera, w, h, s.focus_px) : Retinotopy{w, h, {}, ppd_});
+    s.impair = passes.impair(
+        *impair_, impair_->needs_retinotopy() ? camera_retinotopy_grid(camera, w, h, s.focus_px) : RetinotopyGrid{w, h, 0, 0, {}, ppd_});
     s.impair.total_ms = timer.ms();  // with the retinotopy
   }
 

@@ -35,7 +35,7 @@ struct SimulateParams {
   uint64_t seed = 1;
   bool cuda = false;  // run the passes on the GPU (make_cuda_vision_passes); the saccades stay on the CPU
   // After the optics: ocular media, the retina (metamorphopsia, field loss centred on the fixation),
-  // colour vision (impair/impairments.h); on the CPU, also after the GPU's passes
+  // colour vision (impair/impairments.h), on the device of the passes
   Impairments impair;
 };
 void validate(const SimulateParams& params);
@@ -66,6 +66,8 @@ nlohmann::json step_stats_json(const StepStats& s);
 // `fixation_px`: the exact angle between the two rays, split along the fixation's tangent-plane
 // axes (the camera's right and up); ppd = the camera's at the image centre.
 Retinotopy camera_retinotopy(const Camera& camera, int width, int height, glm::vec2 fixation_px);
+// … exact on every 4th pixel (what camera_retinotopy expands, and the GPU expands on the GPU).
+RetinotopyGrid camera_retinotopy_grid(const Camera& camera, int width, int height, glm::vec2 fixation_px);
 
 class VisionSimulation {
  public:
@@ -101,7 +103,6 @@ class VisionSimulation {
   std::vector<Corner> corners_;
   std::unique_ptr<VisionStepPasses> passes_;  // one step's passes on one device (vision/passes.h)
   std::unique_ptr<ImpairmentPasses> impair_;  // with params.impair.any()
-  Image impaired_;                            // this step's perceived image through the impairments
   bool blink_due(int step);                   // a blink every blink_every steps, or one asked for (consumed)
   uint32_t step_ = 0;
   bool blink_requested_ = false;
