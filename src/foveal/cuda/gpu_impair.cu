@@ -145,9 +145,7 @@ __global__ void band_kernel(const float* g, int w, int h, const float* g_below, 
   if (x >= w || y >= h) return;
   const float l = level == 0 ? loss[static_cast<size_t>(y) * w + x] : resample::resize_linear_at(loss, lw, lh, 1, w, h, x, y, 0);
   const float ln10_10 = static_cast<float>(2.302585092994046 / 10.0);
-  const float weight = l == 0.0f ? 1.0f
-                       : contrast ? expf(-l * ln10_10)
-                                  : fminf(fmaxf((level + 1.0f) - l / 6.0f, 0.0f), 1.0f);
+  const float weight = l == 0.0f ? 1.0f : contrast ? expf(-l * ln10_10) : fminf(fmaxf((level + 1.0f) - l / 6.0f, 0.0f), 1.0f);
   const size_t i = (static_cast<size_t>(y) * w + x) * 3;
   for (int c = 0; c < 3; ++c) {
     const float up_g = resample::pyr_up_at(g_below, bw, bh, 3, x, y, c), up_o = resample::pyr_up_at(out_below, bw, bh, 3, x, y, c);
@@ -244,8 +242,8 @@ ImpairTimes ImpairKernels::apply(const ImpairmentPasses& passes, const Retinotop
   ImpairTimes t;
   const Impairments& im = passes.impairments();
   if (w <= 0 || h <= 0) return t;
-  if (passes.needs_retinotopy() && (grid.width != w || grid.height != h || grid.field_deg.size() != size_t(grid.columns) * grid.rows ||
-                                    grid.field_deg.empty()))
+  if (passes.needs_retinotopy() &&
+      (grid.width != w || grid.height != h || grid.field_deg.size() != size_t(grid.columns) * grid.rows || grid.field_deg.empty()))
     throw Error("impairments: the retinotopy does not fit the image");
   const size_t pixels = static_cast<size_t>(w) * h;
   const dim3 block(16, 8);
@@ -274,14 +272,14 @@ ImpairTimes ImpairKernels::apply(const ImpairmentPasses& passes, const Retinotop
       FOVEAL_CUDA_LAUNCHED("glare grid");
       const dim3 conv_block(32, 4);
       glare_slice_kernel<<<grid_for(gg.columns, gg.rows, conv_block, slices), conv_block>>>(s.small.get(), gg.columns, gg.rows,
-                                                                                           s.kernel.get(), s.partial.get());
+                                                                                            s.kernel.get(), s.partial.get());
       FOVEAL_CUDA_LAUNCHED("glare convolution");
       glare_sum_kernel<<<blocks_for(cells * 3, 256), 256>>>(s.partial.get(), slices, cells * 3, s.scattered.get());
       FOVEAL_CUDA_LAUNCHED("glare sum");
     }
     const glm::dvec3 tr = im.media.yellowing ? lens_transmittance(im.media) : glm::dvec3(1.0);
     media_kernel<<<grid_for(w, h, block), block>>>(img, w, h, s.scattered.get(), gg.columns, gg.rows, static_cast<float>(1.0 - s.eta),
-                                                  im.media.glare, im.media.yellowing, glm::vec3(tr));
+                                                   im.media.glare, im.media.yellowing, glm::vec3(tr));
     FOVEAL_CUDA_LAUNCHED("media");
   }
   s.events.record(1);
@@ -295,9 +293,8 @@ ImpairTimes ImpairKernels::apply(const ImpairmentPasses& passes, const Retinotop
     s.box.reserve(4);
     const int empty_box[4] = {grid.columns, -1, grid.rows, -1};
     FOVEAL_CUDA_CHECK(cudaMemcpy(s.box.get(), empty_box, sizeof(empty_box), cudaMemcpyHostToDevice));
-    distortion_grid_kernel<<<grid_for(grid.columns, grid.rows, block), block>>>(s.retina.get(), grid.columns, grid.rows, w, h,
-                                                                               im.metamorphopsia.bumps(), grid.ppd, s.gx.get(), s.gy.get(),
-                                                                               s.box.get());
+    distortion_grid_kernel<<<grid_for(grid.columns, grid.rows, block), block>>>(
+        s.retina.get(), grid.columns, grid.rows, w, h, im.metamorphopsia.bumps(), grid.ppd, s.gx.get(), s.gy.get(), s.box.get());
     FOVEAL_CUDA_LAUNCHED("distortion grid");
     int box[4];
     FOVEAL_CUDA_CHECK(cudaMemcpy(box, s.box.get(), sizeof(box), cudaMemcpyDeviceToHost));
@@ -341,7 +338,7 @@ ImpairTimes ImpairKernels::apply(const ImpairmentPasses& passes, const Retinotop
           dst = s.outputs[k].get();
         }
         band_kernel<<<grid_for(lw[k], lh[k], block), block>>>(g[k], lw[k], lh[k], g[k + 1], below, lw[k + 1], lh[k + 1], s.loss.get(), w, h,
-                                                             k, mode == FieldMode::contrast, dst);
+                                                              k, mode == FieldMode::contrast, dst);
         FOVEAL_CUDA_LAUNCHED("field band");
         below = dst;
       }
@@ -391,7 +388,7 @@ ImpairTimes ImpairKernels::apply(const ImpairmentPasses& passes, const Retinotop
           dst = s.outputs[k].get();
         }
         fill_level_kernel<<<grid_for(lw[k], lh[k], block), block>>>(s.levels[k].get(), s.weights[k].get(), lw[k], lh[k], below, lw[k + 1],
-                                                                   lh[k + 1], dst);
+                                                                    lh[k + 1], dst);
         FOVEAL_CUDA_LAUNCHED("filling-in pull");
         below = dst;
       }

@@ -73,9 +73,9 @@ FOVEAL_HD inline float pyr_up_at(const float* s, int sw, int sh, int cn, int x, 
 // the output pixel's footprint (OpenCV's computeResizeAreaTab); integer factors are plain box means.
 namespace detail {
 struct AreaTaps {
-  int first;           // the first source index
-  int count;           // up to …
-  float weight[64];    // … 64 taps (a factor of at most 62)
+  int first;         // the first source index
+  int count;         // up to …
+  float weight[64];  // … 64 taps (a factor of at most 62)
 };
 FOVEAL_HD inline void area_taps(int ssize, int dsize, int d, AreaTaps& t) {
   const double scale = static_cast<double>(ssize) / dsize;

@@ -83,8 +83,8 @@ TEST(Resample, AreaResizeIsOpenCvsForWholeAndFractionalFactors) {
   struct Case {
     int sw, sh, dw, dh;
   };
-  for (const Case k : {Case{1280, 720, 160, 90}, Case{840, 525, 140, 88}, Case{1024, 768, 147, 110}, Case{420, 262, 140, 88},
-                       Case{100, 60, 100, 60}}) {
+  for (const Case k :
+       {Case{1280, 720, 160, 90}, Case{840, 525, 140, 88}, Case{1024, 768, 147, 110}, Case{420, 262, 140, 88}, Case{100, 60, 100, 60}}) {
     const cv::Mat src = random_image(k.sw, k.sh, 3, k.sw + k.sh);
     cv::Mat dst;
     cv::resize(src, dst, cv::Size(k.dw, k.dh), 0, 0, cv::INTER_AREA);
