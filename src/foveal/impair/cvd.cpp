@@ -77,18 +77,16 @@ glm::dvec3 spectral_lms(double x, double y) {
 }
 
 // Brettel et al. 1997: the two half-planes of one dichromacy, each the plane through the origin,
-// the neutral stimulus E and an anchor, as its normal.
-struct Dichromat {
-  int missing;              // 0 = L, 1 = M, 2 = S
-  int num, den;             // the ratio LMS[num]/LMS[den] that chooses the half-plane
-  glm::dvec3 normal_below;  // used where the ratio is below E's
-  glm::dvec3 normal_above;
-  double neutral_ratio;
-};
-
-Dichromat make_dichromat(int missing, glm::dvec3 anchor_below, glm::dvec3 anchor_above) {
+// the neutral stimulus E and an anchor, as its normal (CvdTransform's half_planes).
+CvdTransform make_dichromat(int missing, glm::dvec3 anchor_below, glm::dvec3 anchor_above) {
   const glm::dvec3 e = rgb_to_lms(glm::dvec3(1.0));  // the display's white
-  Dichromat d{missing, 0, 0, glm::cross(e, anchor_below), glm::cross(e, anchor_above), 0};
+  CvdTransform d;
+  d.kind = CvdTransform::half_planes;
+  d.lms_from_rgb = kLmsFromRgb;
+  d.rgb_from_lms = kRgbFromLms;
+  d.missing = missing;
+  d.normal_below = glm::cross(e, anchor_below);
+  d.normal_above = glm::cross(e, anchor_above);
   // protan (L missing) and deutan (M missing) choose by S/M resp. S/L; tritan by M/L
   if (missing == 0) d.num = 2, d.den = 1;
   if (missing == 1) d.num = 2, d.den = 0;
@@ -97,12 +95,12 @@ Dichromat make_dichromat(int missing, glm::dvec3 anchor_below, glm::dvec3 anchor
   return d;
 }
 
-const Dichromat& dichromat(CvdType type) {
+const CvdTransform& dichromat(CvdType type) {
   // CIE 1931 chromaticities of the anchors: 475 nm (0.1096, 0.0868), 575 nm (0.4788, 0.5202),
   // 485 nm (0.0687, 0.2007), 660 nm (0.7300, 0.2700)
-  static const Dichromat protan = make_dichromat(0, spectral_lms(0.4788, 0.5202), spectral_lms(0.1096, 0.0868));
-  static const Dichromat deutan = make_dichromat(1, spectral_lms(0.4788, 0.5202), spectral_lms(0.1096, 0.0868));
-  static const Dichromat tritan = make_dichromat(2, spectral_lms(0.7300, 0.2700), spectral_lms(0.0687, 0.2007));
+  static const CvdTransform protan = make_dichromat(0, spectral_lms(0.4788, 0.5202), spectral_lms(0.1096, 0.0868));
+  static const CvdTransform deutan = make_dichromat(1, spectral_lms(0.4788, 0.5202), spectral_lms(0.1096, 0.0868));
+  static const CvdTransform tritan = make_dichromat(2, spectral_lms(0.7300, 0.2700), spectral_lms(0.0687, 0.2007));
   return type == CvdType::protanopia ? protan : type == CvdType::deuteranopia ? deutan : tritan;
 }
 
@@ -182,19 +180,9 @@ CvdTransform cvd_transform(const CvdParams& p) {
       break;
     case CvdType::protanopia:
     case CvdType::deuteranopia:
-    case CvdType::tritanopia: {
-      const Dichromat& d = dichromat(p.type);
-      t.kind = CvdTransform::half_planes;
-      t.lms_from_rgb = kLmsFromRgb;
-      t.rgb_from_lms = kRgbFromLms;
-      t.missing = d.missing;
-      t.num = d.num;
-      t.den = d.den;
-      t.normal_below = d.normal_below;
-      t.normal_above = d.normal_above;
-      t.neutral_ratio = d.neutral_ratio;
+    case CvdType::tritanopia:
+      t = dichromat(p.type);
       break;
-    }
   }
   return t;
 }
