@@ -24,8 +24,6 @@ namespace {
 constexpr int kSliceRows = 8;     // rows of the glare's grid each slice of the convolution sums
 constexpr int kMaxColumns = 160;  // the glare grid's widest (glare_grid)
 
-dim3 grid_for(int w, int h, dim3 block, int z = 1) { return dim3((w + block.x - 1) / block.x, (h + block.y - 1) / block.y, z); }
-
 // ---- Media ---------------------------------------------------------------------------------------
 
 __global__ void area_down_kernel(const float* src, int sw, int sh, float* dst, int dw, int dh) {
@@ -228,7 +226,6 @@ struct ImpairKernels::State {
   DeviceArray<int> box;
   uint64_t map_of = 0;  // the passes (ImpairmentPasses::id) whose map the device holds
   DeviceArray<float> map;
-  FieldMapView map_view;
   DeviceArray<float> levels[9], outputs[9], weights[9];  // a pyramid's levels 1…8 (and filling-in's level 0)
   DeviceArray<double> sums;
   PassEvents events;
@@ -313,10 +310,10 @@ ImpairTimes ImpairKernels::apply(const ImpairmentPasses& passes, const Retinotop
     if (passes.id() != s.map_of) {
       s.map.upload(host.loss, static_cast<size_t>(host.n) * host.n);
       s.map_of = passes.id();
-      s.map_view = {s.map.get(), host.n, false};
     }
     s.loss.reserve(pixels);
-    loss_kernel<<<grid_for(w, h, block), block>>>(s.retina.get(), grid.columns, w, h, s.map_view, s.loss.get());
+    loss_kernel<<<grid_for(w, h, block), block>>>(s.retina.get(), grid.columns, w, h, FieldMapView{s.map.get(), host.n, false},
+                                                  s.loss.get());
     FOVEAL_CUDA_LAUNCHED("field loss map");
     const FieldMode mode = im.field_mode;
     const int levels = field_pyramid_levels(w, h);

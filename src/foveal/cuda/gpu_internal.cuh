@@ -125,6 +125,10 @@ struct GBufferPtrs {
 };
 
 inline unsigned blocks_for(size_t count, unsigned threads) { return static_cast<unsigned>((count + threads - 1) / threads); }
+// Blocks covering a w × h image (and `depth` layers).
+inline dim3 grid_for(int w, int h, dim3 block, int depth = 1) {
+  return dim3((w + block.x - 1) / block.x, (h + block.y - 1) / block.y, depth);
+}
 
 // The balanced AO passes' consecutive rays per GPU thread.
 constexpr int kAoChunk = 8;

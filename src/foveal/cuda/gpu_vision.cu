@@ -154,8 +154,6 @@ __global__ void gather_kernel(blur::GatherView<glm::vec4> g, const float* image,
   blur::gather_pixel<3>(g, image, out + (static_cast<size_t>(y) * g.width + x) * 3, x, y);
 }
 
-dim3 grid_for(int w, int h, dim3 block) { return dim3((w + block.x - 1) / block.x, (h + block.y - 1) / block.y); }
-
 }  // namespace
 
 struct VisionPasses::Impl {

@@ -72,12 +72,9 @@ FOVEAL_HD inline float pyr_up_at(const float* s, int sw, int sh, int cn, int x, 
 // cv::resize with INTER_AREA, one output pixel: each source pixel weighted by its overlap with
 // the output pixel's footprint (OpenCV's computeResizeAreaTab); integer factors are plain box means.
 namespace detail {
-struct AreaTaps {
-  int first;         // the first source index
-  int count;         // up to …
-  float weight[64];  // … 64 taps (a factor of at most 62)
-};
-FOVEAL_HD inline void area_taps(int ssize, int dsize, int d, AreaTaps& t) {
+// Calls tap(source index, weight) for each source pixel under output pixel d, in order.
+template <class Tap>
+FOVEAL_HD inline void area_taps(int ssize, int dsize, int d, Tap&& tap) {
   const double scale = static_cast<double>(ssize) / dsize;
   const double f1 = d * scale, f2 = f1 + scale;
   const double cell = scale < ssize - f1 ? scale : ssize - f1;
@@ -85,16 +82,11 @@ FOVEAL_HD inline void area_taps(int ssize, int dsize, int d, AreaTaps& t) {
   s2 = s2 < ssize - 1 ? s2 : ssize - 1;
   int s1 = static_cast<int>(ceil(f1));
   s1 = s1 < s2 ? s1 : s2;
-  t.count = 0;
-  t.first = s1;
-  if (s1 - f1 > 1e-3) {
-    t.first = s1 - 1;
-    t.weight[t.count++] = static_cast<float>((s1 - f1) / cell);
-  }
-  for (int s = s1; s < s2 && t.count < 63; ++s) t.weight[t.count++] = static_cast<float>(1.0 / cell);
-  if (f2 - s2 > 1e-3 && t.count < 64) {
+  if (s1 - f1 > 1e-3) tap(s1 - 1, static_cast<float>((s1 - f1) / cell));
+  for (int s = s1; s < s2; ++s) tap(s, static_cast<float>(1.0 / cell));
+  if (f2 - s2 > 1e-3) {
     const double part = f2 - s2 < 1.0 ? f2 - s2 : 1.0;
-    t.weight[t.count++] = static_cast<float>((part < cell ? part : cell) / cell);
+    tap(s2, static_cast<float>((part < cell ? part : cell) / cell));
   }
 }
 }  // namespace detail
@@ -112,16 +104,13 @@ FOVEAL_HD inline float resize_area_at(const float* s, int sw, int sh, int cn, in
     }
     return sum * static_cast<float>(1.0 / (fx * fy));
   }
-  detail::AreaTaps tx, ty;
-  detail::area_taps(sw, dw, x, tx);
-  detail::area_taps(sh, dh, y, ty);
   float sum = 0.0f;
-  for (int j = 0; j < ty.count; ++j) {
-    const float* row = s + static_cast<size_t>(ty.first + j) * sw * cn;
+  detail::area_taps(sh, dh, y, [&](int sy, float wy) {
+    const float* row = s + static_cast<size_t>(sy) * sw * cn;
     float h = 0.0f;
-    for (int i = 0; i < tx.count; ++i) h += row[(tx.first + i) * cn + c] * tx.weight[i];
-    sum += h * ty.weight[j];
-  }
+    detail::area_taps(sw, dw, x, [&](int sx, float wx) { h += row[sx * cn + c] * wx; });
+    sum += h * wy;
+  });
   return sum;
 }
 
