@@ -129,7 +129,7 @@ class VisionPasses {
   // the impaired image): ImpairmentPasses::apply's operations in its order, each pixel by the CPU's
   // rules (the models' own, and OpenCV's resampling as impair/resample.h computes it), the glare's
   // convolution summed directly on its coarse grid (cuda/gpu_impair.cu). Times from CUDA events.
-  ImpairTimes impair(const ImpairmentPasses& passes, const RetinotopyGrid& grid);
+  ImpairTimes impair(const ImpairmentPasses& passes, const CameraRetinotopy& where);
 
   Image color() const;      // the traced image
   Image perceived() const;  // the blurred one

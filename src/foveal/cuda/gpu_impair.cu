@@ -16,6 +16,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <string>
 #include <vector>
 
 namespace foveal::gpu::detail {
@@ -234,14 +235,15 @@ struct ImpairKernels::State {
 ImpairKernels::ImpairKernels() : s_(std::make_unique<State>()) {}
 ImpairKernels::~ImpairKernels() = default;
 
-ImpairTimes ImpairKernels::apply(const ImpairmentPasses& passes, const RetinotopyGrid& grid, float* img, int w, int h) {
+ImpairTimes ImpairKernels::apply(const ImpairmentPasses& passes, const CameraRetinotopy& where, float* img, int w, int h) {
   State& s = *s_;
   ImpairTimes t;
   const Impairments& im = passes.impairments();
   if (w <= 0 || h <= 0) return t;
-  if (passes.needs_retinotopy() &&
-      (grid.width != w || grid.height != h || grid.field_deg.size() != size_t(grid.columns) * grid.rows || grid.field_deg.empty()))
-    throw Error("impairments: the retinotopy does not fit the image");
+  if (where.width() != w || where.height() != h)
+    throw Error("impairments: the retinotopy is of " + std::to_string(where.width()) + "x" + std::to_string(where.height()) +
+                ", the image " + std::to_string(w) + "x" + std::to_string(h));
+  const RetinotopyGrid grid = where.sizes();
   const size_t pixels = static_cast<size_t>(w) * h;
   const dim3 block(16, 8);
   s.events.record(0);
@@ -282,7 +284,7 @@ ImpairTimes ImpairKernels::apply(const ImpairmentPasses& passes, const Retinotop
   s.events.record(1);
 
   // 2. Retina: metamorphopsia moves the image, the field loss acts where it lands
-  if (passes.needs_retinotopy()) s.retina.upload(grid.field_deg);
+  if (passes.needs_retinotopy()) s.retina.upload(where.grid().field_deg);  // the fixation's place of every 4th pixel
   if (im.metamorphopsia.any()) {
     const size_t points = static_cast<size_t>(grid.columns) * grid.rows;
     s.gx.reserve(points);

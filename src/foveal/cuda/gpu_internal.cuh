@@ -172,7 +172,7 @@ class ImpairKernels {
   ImpairKernels(const ImpairKernels&) = delete;
   ImpairKernels& operator=(const ImpairKernels&) = delete;
   // In place on `rgb` (width × height, three floats a pixel, on the GPU).
-  ImpairTimes apply(const ImpairmentPasses& passes, const RetinotopyGrid& grid, float* rgb, int width, int height);
+  ImpairTimes apply(const ImpairmentPasses& passes, const CameraRetinotopy& where, float* rgb, int width, int height);
 
  private:
   struct State;

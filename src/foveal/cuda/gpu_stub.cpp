@@ -51,7 +51,7 @@ float VisionPasses::depth_at(int, int, glm::vec3*) { fail("no CUDA backend"); }
 void VisionPasses::blink() { fail("no CUDA backend"); }
 size_t VisionPasses::sharpness(const CocModel&, uint32_t, bool, float, float) { fail("no CUDA backend"); }
 void VisionPasses::blur(float) { fail("no CUDA backend"); }
-ImpairTimes VisionPasses::impair(const ImpairmentPasses&, const RetinotopyGrid&) { fail("no CUDA backend"); }
+ImpairTimes VisionPasses::impair(const ImpairmentPasses&, const CameraRetinotopy&) { fail("no CUDA backend"); }
 Image VisionPasses::color() const { fail("no CUDA backend"); }
 Image VisionPasses::perceived() const { fail("no CUDA backend"); }
 std::vector<float> VisionPasses::coc_px() const { fail("no CUDA backend"); }

@@ -303,12 +303,12 @@ TEST(Gpu, ImpairmentsAreTheCpusOnTheSameInput) {
           "field:constriction:15+field-mode:grey+achromatopsia", "cataract:0.8+field:arcuate:20+field-mode:fill+cvd:tritanopia",
           "metamorphopsia:1+cvd:tritan:0.4"}) {
       const ImpairmentPasses impair(parse_eye_spec(spec).impair);
-      const RetinotopyGrid grid = camera_retinotopy_grid(camera, w, h, glm::vec2(0.4f * w, 0.55f * h));
+      const CameraRetinotopy where(camera, w, h, glm::vec2(0.4f * w, 0.55f * h));
       passes.blur(0.0f);
       Image cpu = passes.perceived();
       const Image plain = cpu;
-      impair.apply(cpu, expand(grid));
-      const ImpairTimes t = passes.impair(impair, grid);
+      impair.apply(cpu, expand(impair.needs_retinotopy() ? where.grid() : where.sizes()));
+      const ImpairTimes t = passes.impair(impair, where);
       const Image gpu = passes.perceived();
       ASSERT_EQ(cpu.pixels.size(), gpu.pixels.size());
       double worst = 0, sum = 0, changed = 0;
@@ -324,7 +324,7 @@ TEST(Gpu, ImpairmentsAreTheCpusOnTheSameInput) {
       EXPECT_GT(changed / n, 0.001) << spec << ": the impairments change the image";
       EXPECT_GT(t.total_ms, 0.0) << spec;
       passes.blur(0.0f);
-      passes.impair(impair, grid);
+      passes.impair(impair, where);
       EXPECT_EQ(passes.perceived().pixels, gpu.pixels) << spec << ": a second run is the same image";
     }
   }

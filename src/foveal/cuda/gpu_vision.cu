@@ -434,10 +434,10 @@ Image VisionPasses::color() const {
   return img;
 }
 
-ImpairTimes VisionPasses::impair(const ImpairmentPasses& passes, const RetinotopyGrid& grid) {
+ImpairTimes VisionPasses::impair(const ImpairmentPasses& passes, const CameraRetinotopy& where) {
   Impl& m = *impl_;
   if (!m.traced) throw Error("gpu::VisionPasses::impair before trace");
-  return m.impair.apply(passes, grid, reinterpret_cast<float*>(m.perceived.get()), m.width, m.height);
+  return m.impair.apply(passes, where, reinterpret_cast<float*>(m.perceived.get()), m.width, m.height);
 }
 
 Image VisionPasses::perceived() const {

@@ -30,9 +30,9 @@ class GpuPasses final : public VisionStepPasses {
     gpu_.blur(axis_deg);
     perceived_ = std::nullopt;
   }
-  ImpairTimes impair(const ImpairmentPasses& passes, const RetinotopyGrid& grid) override {
+  ImpairTimes impair(const ImpairmentPasses& passes, const CameraRetinotopy& where) override {
     perceived_ = std::nullopt;
-    return gpu_.impair(passes, grid);
+    return gpu_.impair(passes, where);
   }
   const Image& color() override { return color_ ? *color_ : color_.emplace(gpu_.color()); }
   const Image& perceived() override { return perceived_ ? *perceived_ : perceived_.emplace(gpu_.perceived()); }

@@ -81,7 +81,9 @@ class CpuPasses final : public VisionStepPasses {
     times_.blur_ms = t.ms();
   }
 
-  ImpairTimes impair(const ImpairmentPasses& passes, const RetinotopyGrid& grid) override { return passes.apply(perceived_, expand(grid)); }
+  ImpairTimes impair(const ImpairmentPasses& passes, const CameraRetinotopy& where) override {
+    return passes.apply(perceived_, expand(passes.needs_retinotopy() ? where.grid() : where.sizes()));
+  }
 
   const Image& color() override { return color_; }
   const Image& perceived() override { return perceived_; }

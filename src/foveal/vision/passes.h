@@ -13,6 +13,7 @@
 #include "foveal/vision/blur.h"
 #include "foveal/vision/coc.h"
 #include "foveal/vision/features.h"
+#include "foveal/vision/retinotopy.h"
 #include "foveal/vision/sharpness.h"
 
 #include <glm/glm.hpp>
@@ -44,9 +45,9 @@ class VisionStepPasses {
   virtual size_t sharpness(const CocModel& model, uint32_t step, bool update, float ppd, float sharp_px) = 0;
   virtual void blur(float axis_deg) = 0;
   // An impaired eye's media, retina and colour (ImpairmentPasses::apply's passes, in its order) on
-  // the blurred image, in place: perceived() is then the impaired image. The grid is the fixation's
-  // retinotopy (without points where the retina is unimpaired).
-  virtual ImpairTimes impair(const ImpairmentPasses& passes, const RetinotopyGrid& grid) = 0;
+  // the blurred image, in place: perceived() is then the impaired image, centred on `where`'s
+  // fixation (its grid is evaluated only where the retina is impaired).
+  virtual ImpairTimes impair(const ImpairmentPasses& passes, const CameraRetinotopy& where) = 0;
   virtual const Image& color() = 0;
   virtual const Image& perceived() = 0;
   virtual const std::vector<float>& coc_px() = 0;

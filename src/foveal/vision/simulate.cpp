@@ -76,35 +76,6 @@ nlohmann::json step_stats_json(const StepStats& s) {
             {"total", s.total_ms}}}};
 }
 
-RetinotopyGrid camera_retinotopy_grid(const Camera& camera, int width, int height, glm::vec2 fixation_px) {
-  const CameraRays rays(camera, width, height);
-  const glm::vec3 g = rays(fixation_px.x, fixation_px.y).dir;
-  const glm::vec3 forward = glm::normalize(camera.look - camera.eye);
-  const glm::vec3 right = glm::normalize(glm::cross(forward, camera.up));
-  const glm::vec3 h = glm::normalize(right - glm::dot(right, g) * g), v = glm::normalize(glm::cross(h, g));
-  // exact on a grid of every 4th pixel, bilinear between (the field position is smooth: within
-  // 1e-3° of the exact one at 1280x720 and 60° of view)
-  auto exact = [&](double x, double y) {
-    const glm::vec3 p = rays(x, y).dir;
-    const float ph = glm::dot(p, h), pv = glm::dot(p, v), len = std::sqrt(ph * ph + pv * pv);
-    // the exact angle between the rays, along the direction of p in the fixation's tangent plane
-    const float angle = glm::degrees(angle_atan2(len, glm::dot(g, p)));
-    return len > 0 ? glm::vec2(angle * ph / len, angle * pv / len) : glm::vec2(0.0f);
-  };
-  constexpr int step = RetinotopyGrid::kStep;
-  RetinotopyGrid r{
-      width, height, (width + step - 1) / step + 1, (height + step - 1) / step + 1, {}, camera_pixels_per_degree(camera, height)};
-  r.field_deg.resize(size_t(r.columns) * r.rows);
-  tbb::parallel_for(0, r.rows, [&](int j) {
-    for (int i = 0; i < r.columns; ++i) r.field_deg[size_t(j) * r.columns + i] = exact(i * step + 0.5, j * step + 0.5);
-  });
-  return r;
-}
-
-Retinotopy camera_retinotopy(const Camera& camera, int width, int height, glm::vec2 fixation_px) {
-  return expand(camera_retinotopy_grid(camera, width, height, fixation_px));
-}
-
 const std::vector<float>& VisionSimulation::coc_px() const { return passes_->coc_px(); }
 
 bool VisionSimulation::blink_due(int step) {
@@ -180,8 +151,7 @@ StepStats VisionSimulation::step(const Camera& camera, std::optional<glm::vec2> 
   // 6. Media, retina and colour, centred on the fixation
   if (impair_) {
     const Timer timer;
-    s.impair = passes.impair(
-        *impair_, impair_->needs_retinotopy() ? camera_retinotopy_grid(camera, w, h, s.focus_px) : RetinotopyGrid{w, h, 0, 0, {}, ppd_});
+    s.impair = passes.impair(*impair_, CameraRetinotopy(camera, w, h, s.focus_px));
     s.impair.total_ms = timer.ms();  // with the retinotopy
   }
 

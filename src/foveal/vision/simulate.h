@@ -8,6 +8,7 @@
 #include "foveal/vision/blur.h"
 #include "foveal/vision/coc.h"
 #include "foveal/vision/features.h"
+#include "foveal/vision/retinotopy.h"
 #include "foveal/vision/sharpness.h"
 
 #include <nlohmann/json.hpp>
@@ -61,13 +62,6 @@ struct StepStats {
 // One step's record as JSON (`simulate --stats`' "steps" entries, the Python step's stats): the
 // fixation, depth and accommodation, blink, skip, corners, sharp share and stage times in ms.
 nlohmann::json step_stats_json(const StepStats& s);
-
-// Where each pixel of a camera's image lies in the visual field of an eye at the camera fixating
-// `fixation_px`: the exact angle between the two rays, split along the fixation's tangent-plane
-// axes (the camera's right and up); ppd = the camera's at the image centre.
-Retinotopy camera_retinotopy(const Camera& camera, int width, int height, glm::vec2 fixation_px);
-// … exact on every 4th pixel (what camera_retinotopy expands, and the GPU expands on the GPU).
-RetinotopyGrid camera_retinotopy_grid(const Camera& camera, int width, int height, glm::vec2 fixation_px);
 
 class VisionSimulation {
  public:
