@@ -12,7 +12,7 @@ and what else ran on the machine meanwhile (`foveal.machine_snapshot`).
 
     .venv/bin/python bench/paced_loop.py [--recording REC] [--start 2] [--duration 40]
                                          [--refresh-hz 60] [--size 840x525] [--scene SCENE]
-                                         [--max-rays 400] [--json F]
+                                         [--max-rays 400] [--device cpu|cuda|auto] [--json F]
 
 Run it under a scheduling policy to compare (for example `chrt -f 50`, as root).
 """
@@ -42,6 +42,7 @@ def main():
     p.add_argument("--scene", default=str(here / "scenes/dragon-box.json"),
                    help="the scene (the dragon box, bench latency's)")
     p.add_argument("--max-rays", type=int, default=400, help="n_max (400)")
+    p.add_argument("--device", default="cpu", help="where the loop renders: cpu, cuda or auto (cpu, as bench latency)")
     p.add_argument("--json", help="write the figures as JSON")
     a = p.parse_args()
     if not (a.duration > 0 and a.refresh_hz > 0 and a.start >= 0):
@@ -60,7 +61,10 @@ def main():
     if a.start >= t[-1]:
         p.error(f"--start: {a.start} s is past the recording's end ({t[-1]:.1f} s)")
     sx, sy = width / rec.screen[0], height / rec.screen[1]
-    loop = foveal.Loop(scene, size=(width, height), max_rays=a.max_rays, refresh_hz=a.refresh_hz, device="cpu")
+    try:
+        loop = foveal.Loop(scene, size=(width, height), max_rays=a.max_rays, refresh_hz=a.refresh_hz, device=a.device)
+    except (ValueError, RuntimeError) as e:
+        p.error(f"--device: {e}")
     period = 1.0 / a.refresh_hz
     count = int(round(a.duration * a.refresh_hz))
     first = int(np.searchsorted(t, a.start))
@@ -92,12 +96,12 @@ def main():
             missed += 1
     others = foveal.busiest_others(snapshot, most=5)
     out = {
-        "recording": a.recording, "scene": a.scene, "size": [width, height],
+        "recording": a.recording, "scene": a.scene, "device": loop.device, "size": [width, height],
         "refresh_hz": a.refresh_hz, "budget_ms": loop.budget_ms, "frames": count, "frames_late": len(late),
         "refreshes_missed": missed, "frame_ms_p50": float(np.percentile(ms, 50)), "frame_ms_p99": float(np.percentile(ms, 99)),
         "late_frames": late, "scale": loop.scale, "others": others,
     }
-    print(f"{count} frames at {a.refresh_hz:g} Hz ({loop.budget_ms:.1f} ms each): {len(late)} late, {missed} refreshes missed; "
+    print(f"{count} frames at {a.refresh_hz:g} Hz ({loop.budget_ms:.1f} ms each) on {loop.device}: {len(late)} late, {missed} refreshes missed; "
           f"frame p50 {out['frame_ms_p50']:.1f} ms, p99 {out['frame_ms_p99']:.1f} ms")
     if others:
         print("what else ran: " + "; ".join(f"{o['name']} {o['cpu_ms']:.1f} ms in {int(o['slices'])} turns" for o in others))

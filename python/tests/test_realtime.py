@@ -266,7 +266,10 @@ def test_the_paced_loop_script_reports_every_frame(tmp_path):
     figures = json.loads(out.read_text())
     assert figures["frames"] == 30 and figures["budget_ms"] == pytest.approx(1000 / 60)
     assert 0 <= figures["frames_late"] <= 30 and figures["frame_ms_p50"] > 0
-    assert "30 frames at 60 Hz" in run.stdout
+    assert "30 frames at 60 Hz" in run.stdout and figures["device"].startswith("cpu")
+    # --device: what foveal.Loop takes, an unknown one refused by name before any frame
+    unknown = subprocess.run([sys.executable, script, "--recording", str(recording), "--device", "gpu"], capture_output=True, text=True)
+    assert unknown.returncode != 0 and "--device" in unknown.stderr and "unknown device 'gpu'" in unknown.stderr
     bad = subprocess.run([sys.executable, script, "--recording", str(recording), "--start", "1e6"], capture_output=True, text=True)
     assert bad.returncode != 0 and "--start" in bad.stderr and "past the recording's end" in bad.stderr
     # Its output is checked before any frame, as foveal's commands check theirs
