@@ -386,11 +386,12 @@ ImpairTimes ImpairmentPasses::apply(Image& image, const Retinotopy& r) const {
       constexpr int step = 4;
       const int gw = (image.width + step - 1) / step + 1, gh = (image.height + step - 1) / step + 1;
       cv::Mat gx(gh, gw, CV_32F), gy(gh, gw, CV_32F);
+      const MetamorphopsiaBumps bumps = im.metamorphopsia.bumps();  // the seed's, drawn once (not per point)
       tbb::parallel_for(0, gh, [&](int j) {
         for (int i = 0; i < gw; ++i) {
           const int x = std::min(i * step, image.width - 1), y = std::min(j * step, image.height - 1);
           const glm::vec2 f = r.field_deg[size_t(y) * image.width + x];
-          const glm::dvec2 d = im.metamorphopsia.displacement(f.x, f.y);
+          const glm::dvec2 d = metamorphopsia_displacement(bumps, f.x, f.y);
           gx.at<float>(j, i) = static_cast<float>(d.x * r.ppd);
           gy.at<float>(j, i) = static_cast<float>(-d.y * r.ppd);
         }

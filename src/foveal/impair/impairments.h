@@ -105,7 +105,8 @@ struct Metamorphopsia {
   double radius_deg = 6;
   uint64_t seed = 1;
   bool any() const { return amplitude_deg > 0; }
-  // The displacement (degrees, field coordinates: x right, y up) at a field location.
+  // The displacement (degrees, field coordinates: x right, y up) at a field location (draws the
+  // bumps each call: a pass over many locations takes bumps() once).
   glm::dvec2 displacement(double x_deg, double y_deg) const { return metamorphopsia_displacement(bumps(), x_deg, y_deg); }
   MetamorphopsiaBumps bumps() const;  // the seed's bumps
 };
