@@ -66,7 +66,10 @@ void add_render_options(CLI::App& command, RenderOptions& options);
 // An output file's option: its folder must exist and be writable, and, where `extensions` are
 // given, its name end in one of them — checked when the command line is read, not after the run
 // (util/files.h check_output_file).
+// Its name marks the option an output: main.cpp checks every output against the others and against
+// the command's other arguments before the run (util/files.h check_outputs_apart).
 CLI::Validator output_file(std::vector<std::string> extensions = {});
+inline constexpr const char* kOutputFileValidator = "output-file";
 // --video of a command that writes a folder of outputs (`output`, created by the run): a file in
 // that folder, or one output_file accepts — checked before the run (throws Error naming --video).
 void check_video_output(const std::string& video, const std::string& output);

@@ -11,6 +11,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <exception>
+#include <vector>
 
 namespace {
 
@@ -32,6 +33,29 @@ void refuse_non_finite(const CLI::App& app) {
     }
   }
   for (const CLI::App* sub : app.get_subcommands()) refuse_non_finite(*sub);
+}
+
+// Each parsed (sub)command's outputs — the options output_file() checks — and its other arguments,
+// from the command down through the subcommand chosen
+void collect_paths(CLI::App& app, std::vector<foveal::OptionPath>& outputs, std::vector<foveal::OptionPath>& arguments) {
+  for (CLI::Option* option : app.get_options()) {
+    if (option->count() == 0) continue;
+    bool output = false;
+    try {
+      option->get_validator(foveal::app::kOutputFileValidator);
+      output = true;
+    } catch (const CLI::OptionNotFound&) {}
+    const std::string name = option->get_name();
+    for (const std::string& value : option->results()) (output ? outputs : arguments).push_back({name, value});
+  }
+  for (CLI::App* sub : app.get_subcommands()) collect_paths(*sub, outputs, arguments);
+}
+
+// No two outputs into one file, and none over an input: checked before the run, not when it writes
+void refuse_outputs_over_arguments(CLI::App& app) {
+  std::vector<foveal::OptionPath> outputs, arguments;
+  collect_paths(app, outputs, arguments);
+  foveal::check_outputs_apart(outputs, arguments);
 }
 
 }  // namespace
@@ -66,6 +90,7 @@ int main(int argc, char** argv) {
   }
   try {
     refuse_non_finite(app);
+    refuse_outputs_over_arguments(app);
     if (app.got_subcommand("render")) return render();
     if (app.got_subcommand("bench")) return bench();
     if (app.got_subcommand("gaze")) return gaze();

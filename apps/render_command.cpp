@@ -64,7 +64,7 @@ CLI::Validator output_file(std::vector<std::string> extensions) {
         }
         return std::string();
       },
-      "FILE");
+      "FILE", kOutputFileValidator);
 }
 
 void check_video_output(const std::string& video, const std::string& output) {

@@ -6,10 +6,14 @@ import foveal
 
 def check_outputs(parser, outputs, inputs):
     """Before any work, foveal's own check of each output (its folder exists, it may be written,
-    never a read-only file), and no output one of the inputs."""
-    for flag, path in outputs:
-        if not path:
-            continue
+    never a read-only file), no output one of the inputs, and no two outputs one file."""
+    named = [(flag, path) for flag, path in outputs if path]
+    for k, (flag, path) in enumerate(named):
+        for other_flag, other in named[k + 1:]:
+            if os.path.abspath(path) == os.path.abspath(other) or (
+                    os.path.exists(path) and os.path.exists(other) and os.path.samefile(path, other)):
+                parser.error(f"{flag} {path} and {other_flag} {other}: two outputs into one file; give each its own name")
+    for flag, path in named:
         if any(os.path.exists(path) and os.path.exists(i) and os.path.samefile(path, i) for i in inputs):
             parser.error(f"{flag}: {path}: is an input of this run; it is never written over")
         try:

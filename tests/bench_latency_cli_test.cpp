@@ -142,6 +142,7 @@ TEST(BenchLatencyCli, BadOptionsAreOneClearLine) {
   const std::string rec = write_saccades("saccades2.csv");
   const std::string base = "bench latency --scene builtin:box --size 64x40 --recording " + rec;
   expect_one_line_error(base + " --loops bogus", "--loops");
+  expect_one_line_error(base + " --loops deadline,whole-frame,deadline", "--loops: 'deadline' given twice");  // one figure per name
   expect_one_line_error(base + " --start 99", "--start");
   EXPECT_EQ(foveal_test::foveal(base + " --start 99").out.find("references"), std::string::npos);  // refused before any tracing
   expect_one_line_error(base + " --clock sundial", "--clock");

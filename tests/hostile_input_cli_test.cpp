@@ -10,8 +10,10 @@
 #include "foveal/util/files.h"
 #include "foveal/util/text.h"
 
+#include <fmt/core.h>
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <cmath>
 #include <cstdint>
 #include <filesystem>
@@ -59,11 +61,35 @@ TEST(HostileInput, OutputOverAnInputIsRefused) {
   fs::create_directories(scratch("h1-frames"));
   foveal::save_image(card(32, 20), scratch("h1-frames/a.png").string());
   expect_one_line_error("perceive h1-frames -o h1-frames --eye cataract:0.5", "foveal never writes over its inputs");
-  // Every writer, through the input guard: gaze's outputs over its own recording
+  // An output over another argument that names a file is refused when the command line is read:
+  // gaze's outputs over its own recording, a bench's --json over its --recording (which it had
+  // refused only once its work was done) …
   write(scratch("h1.csv"), "t,x,y\n0,1,1\n0.01,2,2\n0.02,3,3\n");
   const std::string rec = bytes_of(scratch("h1.csv"));
-  expect_one_line_error("gaze h1.csv --screen 100x100 --no-scanpath --json h1.csv", "h1.csv: is an input of this run");
+  expect_one_line_error("gaze h1.csv --screen 100x100 --no-scanpath --json h1.csv",
+                        "--json h1.csv: is RECORDING h1.csv, an input of this run; foveal never writes over its inputs");
   EXPECT_EQ(bytes_of(scratch("h1.csv")), rec);
+  const auto started = std::chrono::steady_clock::now();
+  expect_one_line_error("bench latency --scene builtin:sphere-plane --size 64x40 --duration 3 --recording h1.csv --json ./h1.csv",
+                        "--json ./h1.csv: is --recording h1.csv, an input of this run");
+  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count(), 5.0);  // no bench ran first
+  EXPECT_EQ(bytes_of(scratch("h1.csv")), rec);
+  // … and two outputs into one file, where the second would have replaced the first
+  expect_one_line_error("gaze h1.csv --screen 100x100 --no-scanpath --json h1-out.txt --samples-out ./h1-out.txt",
+                        "--json h1-out.txt and --samples-out ./h1-out.txt: two outputs into one file");
+  EXPECT_FALSE(fs::exists(scratch("h1-out.txt")));
+  // Every writer, through the input guard, where the input is no argument: a mesh a scene names,
+  // its material library and its texture (--stats had replaced the mesh)
+  foveal::save_image(card(8, 8), scratch("h1-tex.png").string());
+  write(scratch("h1-tri.mtl"), "newmtl m\nKd 1 1 1\nmap_Kd h1-tex.png\n");
+  write(scratch("h1-tri.obj"), "mtllib h1-tri.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\nusemtl m\nf 1/1 2/2 3/3\n");
+  write(scratch("h1-scene.json"), R"({"meshes": [{"file": "h1-tri.obj"}]})");
+  for (const char* input : {"h1-tri.obj", "h1-tri.mtl", "h1-tex.png"}) {
+    const std::string before_run = bytes_of(scratch(input));
+    expect_one_line_error(fmt::format("render --scene h1-scene.json --size 16x10 --max-rays 2 -o h1-out.png --stats {} -q", input),
+                          fmt::format("{}: is an input of this run", input));
+    EXPECT_EQ(bytes_of(scratch(input)), before_run) << input;
+  }
 }
 
 // 2. A folder with one corrupt image: no output folder at all (nothing half-written); replay that

@@ -312,6 +312,11 @@ def test_the_segments_script_pools_every_judged_saccade(tmp_path):
     bad = subprocess.run([sys.executable, script, "--recording", str(recording), "--landing", "speed=1"], capture_output=True, text=True)
     assert bad.returncode != 0 and "--landing: speed: no parameter of the landing predictor" in bad.stderr
     assert json.loads(out.read_text())["landing"] == foveal.gaze.landing_params()
+    # Two outputs into one file (the Markdown would have replaced the JSON): refused before any work
+    both = tmp_path / "both.txt"
+    bad = subprocess.run([sys.executable, script, "--recording", str(recording), "--json", str(both), "--markdown",
+                          str(tmp_path / "." / "both.txt")], capture_output=True, text=True, timeout=60)
+    assert bad.returncode != 0 and "two outputs into one file" in bad.stderr and not both.exists()
 
 
 def _min_jerk(t, t0, duration, amplitude):

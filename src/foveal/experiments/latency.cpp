@@ -507,6 +507,9 @@ void validate(const LatencyParams& p) {
   for (const std::string& l : p.loops)
     if (l != "whole-frame" && l != "deadline" && l != "deadline+prediction" && l != "deadline+oracle")
       fail("loops: unknown loop '{}' (known: whole-frame, deadline, deadline+prediction, deadline+oracle)", l);
+  for (size_t k = 0; k < p.loops.size(); ++k)  // (the report keys each loop's figures by its name)
+    if (std::find(p.loops.begin() + static_cast<std::ptrdiff_t>(k) + 1, p.loops.end(), p.loops[k]) != p.loops.end())
+      fail("loops: '{}' given twice", p.loops[k]);
 }
 
 LatencyReport run_latency_bench(const LatencyRun& run, const std::vector<Recording>& recordings, const LatencyParams& p) {

@@ -32,6 +32,7 @@ int load_texture(Scene& scene, std::map<std::string, int>& cache, const std::fil
   std::string why = "unknown or corrupt format";
   try {
     check_image_file(key);
+    note_input(key);
     image = cv::imread(key, cv::IMREAD_COLOR);
   } catch (const Error& e) {
     why = e.what();
@@ -190,6 +191,8 @@ void check_ply(const std::string& path) {
 class CheckedFiles : public Assimp::DefaultIOSystem {
  public:
   Assimp::IOStream* Open(const char* file, const char* mode) override {
+    // Every file a mesh is read from (the mesh, its .mtl, a glTF's buffers) is an input of the run
+    if (mode != nullptr && mode[0] == 'r' && Exists(file)) note_input(file);
     if (lower_extension(file) == ".mtl" && Exists(file)) {  // (Assimp may open it more than once)
       try {
         check_material_library(file);

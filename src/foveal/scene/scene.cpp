@@ -217,8 +217,7 @@ Scene load_scene(const std::string& spec) {
     if (ext == ".json") {
       scene = parse_scene_json(text::read_file(spec), spec, fs::path(spec).parent_path().string());
     } else {
-      note_input(spec);
-      append_mesh_file(scene, spec, glm::mat4(1.0f));
+      append_mesh_file(scene, spec, glm::mat4(1.0f));  // (which notes the files it reads as inputs)
     }
   }
   if (scene.source.empty()) scene.source = spec;

@@ -104,6 +104,23 @@ void check_output_is_not_input(const std::string& output, const std::string& inp
   if (same_file(output, input)) fail("{} {}: is the input {}; foveal never writes over its inputs", option, output, input);
 }
 
+void check_outputs_apart(const std::vector<OptionPath>& outputs, const std::vector<OptionPath>& arguments) {
+  for (size_t i = 0; i < outputs.size(); ++i) {
+    const OptionPath& out = outputs[i];
+    if (out.path.empty()) continue;
+    for (size_t j = i + 1; j < outputs.size(); ++j)
+      if (!outputs[j].path.empty() && same_file(out.path, outputs[j].path))
+        fail("{} {} and {} {}: two outputs into one file (the second would replace the first); give each its own name", out.option,
+             out.path, outputs[j].option, outputs[j].path);
+    for (const OptionPath& arg : arguments) {
+      std::error_code ec;
+      if (arg.path.empty() || !fs::exists(arg.path, ec)) continue;
+      if (same_file(out.path, arg.path))
+        fail("{} {}: is {} {}, an input of this run; foveal never writes over its inputs", out.option, out.path, arg.option, arg.path);
+    }
+  }
+}
+
 void set_input_guard(bool on) { guard().on = on; }
 
 void note_input(const std::string& path) {

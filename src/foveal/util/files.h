@@ -23,6 +23,17 @@ namespace foveal {
 // `output` names the same file or folder as `input` (after resolving links, . and ..).
 void check_output_is_not_input(const std::string& output, const std::string& input, const char* option);
 
+// An option's value on a command line: `option` as the user gave it, `path` its text.
+struct OptionPath {
+  std::string option, path;
+};
+// The outputs of one command line against each other and against its other arguments, checked when
+// it is read: no two outputs may name one file (the later would replace the earlier: `--json r.txt
+// --markdown r.txt` kept only the Markdown), and no output may be the same file as another argument
+// that names an existing file or folder (an input: a bench's --json named its own recording and was
+// refused only once its minutes of work were done). Throws Error naming both options.
+void check_outputs_apart(const std::vector<OptionPath>& outputs, const std::vector<OptionPath>& arguments);
+
 // Whether a file can be written at `path`, checked before a run does the work: throws Error naming
 // the path and the reason (its folder is missing or is no folder, the path is a folder, nothing
 // may be written there, or its extension is none of `extensions`, where given: lower case, with

@@ -78,6 +78,36 @@ TEST(Files, AnOutputFileIsCheckedBeforeAnyWork) {
   fs::remove_all(dir);
 }
 
+// The outputs of one command line, against each other and its other arguments (main.cpp passes them)
+TEST(Files, OutputsAreApartFromEachOtherAndFromTheInputs) {
+  const fs::path dir = fs::temp_directory_path() / ("foveal-apart-test-" + std::to_string(getpid()));
+  fs::create_directories(dir / "sub");
+  std::ofstream(dir / "rec.csv") << "t,x,y\n";
+  const auto message = [](const std::vector<foveal::OptionPath>& outputs, const std::vector<foveal::OptionPath>& arguments) {
+    try {
+      foveal::check_outputs_apart(outputs, arguments);
+    } catch (const std::exception& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  const std::string rec = (dir / "rec.csv").string(), other_spelling = (dir / "sub" / ".." / "rec.csv").string();
+  const std::string a = (dir / "a.json").string(), b = (dir / "b.md").string();
+  EXPECT_EQ(message({{"--json", a}, {"--markdown", b}}, {{"--recording", rec}, {"--size", "64x40"}}), "");
+  EXPECT_EQ(message({{"--json", rec}}, {{"--recording", (dir / "missing.csv").string()}}), "");  // not an input: overwritten
+  EXPECT_EQ(message({{"--json", rec}}, {{"--json", ""}}), "");
+  EXPECT_EQ(message({{"--json", other_spelling}}, {{"--recording", rec}}),
+            "--json " + other_spelling + ": is --recording " + rec + ", an input of this run; foveal never writes over its inputs");
+  const std::string a_again = (dir / "sub" / ".." / "a.json").string();
+  EXPECT_EQ(message({{"--json", a}, {"--markdown", a_again}}, {}),
+            "--json " + a + " and --markdown " + a_again +
+                ": two outputs into one file (the second would replace the first); give each its own name");
+  fs::create_hard_link(dir / "rec.csv", dir / "link.csv");  // one file under two names
+  EXPECT_NE(message({{"--samples-out", (dir / "link.csv").string()}}, {{"RECORDING", rec}}).find("is RECORDING"), std::string::npos);
+  EXPECT_FALSE(fs::exists(a));  // nothing created
+  fs::remove_all(dir);
+}
+
 // A read-only file or folder is left alone by every user, root too (the system would let root
 // replace it): the check before the work, the writers and a folder of outputs all refuse it.
 TEST(Files, ReadOnlyFilesAndFoldersAreNeverReplaced) {
