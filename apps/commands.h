@@ -70,9 +70,15 @@ void add_render_options(CLI::App& command, RenderOptions& options);
 // the command's other arguments before the run (util/files.h check_outputs_apart).
 CLI::Validator output_file(std::vector<std::string> extensions = {});
 inline constexpr const char* kOutputFileValidator = "output-file";
-// --video of a command that writes a folder of outputs (`output`, created by the run): a file in
-// that folder, or one output_file accepts — checked before the run (throws Error naming --video).
-void check_video_output(const std::string& video, const std::string& output);
+// An output whose own check its command makes (--video, which may lie in the command's folder of
+// outputs): marked so that main.cpp checks it against the other outputs and the inputs as well.
+CLI::Validator an_output();
+// An output file of a command that also writes a folder of outputs (`folder`, -o, which the run
+// creates): a file in that folder, or one output_file accepts — but none of the files the command
+// writes there (`written_there(name)`: `replay -o out --stats out/frames.csv` replaced the
+// per-frame table). Checked before the run; throws Error naming `option`.
+void check_output_beside_folder(const char* option, const std::string& path, const std::string& folder,
+                                const std::function<bool(const std::string&)>& written_there);
 // --device auto|cpu|cuda (see choose_device).
 void add_device_option(CLI::App& command, std::string& device);
 // --landing NAME=VALUE[,…]: the real-time loop's saccade landing predictor (gaze/landing.h);

@@ -67,18 +67,29 @@ CLI::Validator output_file(std::vector<std::string> extensions) {
       "FILE", kOutputFileValidator);
 }
 
-void check_video_output(const std::string& video, const std::string& output) {
-  if (video.empty()) return;
+CLI::Validator an_output() {
+  return CLI::Validator([](std::string&) { return std::string(); }, "", kOutputFileValidator);
+}
+
+void check_output_beside_folder(const char* option, const std::string& path, const std::string& folder,
+                                const std::function<bool(const std::string&)>& written_there) {
+  if (path.empty()) return;
   namespace fs = std::filesystem;
-  const fs::path folder = fs::path(video).has_parent_path() ? fs::path(video).parent_path() : fs::path(".");
-  const auto same = [](const fs::path& a, const fs::path& b) {
-    return (fs::absolute(a) / "").lexically_normal() == (fs::absolute(b) / "").lexically_normal();
+  std::error_code ec;
+  const auto place = [&ec](const fs::path& p) {
+    fs::path r = fs::weakly_canonical(fs::absolute(p), ec).lexically_normal();
+    return r.has_filename() ? r : r.parent_path();  // "out/"
   };
-  if (!output.empty() && same(folder, output)) return;
+  const fs::path file = place(path);
+  if (!folder.empty() && file.parent_path() == place(folder)) {
+    const std::string name = file.filename().string();
+    if (written_there(name)) fail("{} {}: is a file this command writes into {} ({}); give it another name", option, path, folder, name);
+    return;  // the folder is the run's: created with its outputs
+  }
   try {
-    check_output_file(video);
+    check_output_file(path);
   } catch (const Error& e) {
-    fail("--video: {}", e.what());
+    fail("{}: {}", option, e.what());
   }
 }
 

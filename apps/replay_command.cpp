@@ -55,7 +55,10 @@ ReplaySettings replay_settings(const ReplayOptions& o) {
   settings.landing = resolve_landing(o.landing, o.realtime && !o.no_predict);
   settings.orbit_deg_s = o.orbit;
   settings.keep_history = !o.no_history;
-  check_video_output(o.video, o.output);
+  for (const auto& [option, path] : {std::pair{"--stats", &o.stats}, std::pair{"--video", &o.video}})
+    check_output_beside_folder(option, *path, o.output, [](const std::string& name) {
+      return name == "frames.csv" || (name.rfind("frame_", 0) == 0 && lower_extension(name) == ".png");
+    });
   if (o.no_predict && !o.realtime) fail("--no-predict needs --realtime");
   if (o.no_history && !o.realtime) fail("--no-history needs --realtime (without it, --temporal keeps rays across frames)");
   validate(settings);
@@ -247,8 +250,8 @@ std::function<int()> add_replay_command(CLI::App& app) {
   cmd->add_flag("--no-history", o->no_history,
                 "--realtime: a moved camera starts its AO afresh instead of keeping the rays of the surfaces it still sees");
   cmd->add_flag("--no-reuse", o->no_reuse, "render every frame, even when the gaze has not moved since the previous one");
-  cmd->add_option("--video", o->video, "also encode the frames into a video with ffmpeg (.mp4, .mkv, .webm, …)");
-  cmd->add_option("--stats", o->stats, "write a summary of the sequence as JSON")->check(output_file());
+  cmd->add_option("--video", o->video, "also encode the frames into a video with ffmpeg (.mp4, .mkv, .webm, …)")->check(an_output());
+  cmd->add_option("--stats", o->stats, "write a summary of the sequence as JSON")->check(an_output());
   cmd->add_flag("-q,--quiet", o->quiet, "print nothing on success");
 
   return [o] { return run_replay(*o); };

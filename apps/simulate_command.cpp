@@ -10,6 +10,7 @@
 #include "foveal/util/parallel.h"
 #include "foveal/util/parse.h"
 #include "foveal/impair/profile.h"
+#include "foveal/util/files.h"
 #include "foveal/util/stats.h"
 #include "foveal/util/timer.h"
 #include "foveal/vision/simulate.h"
@@ -267,7 +268,11 @@ void print_summary(const SimulateOptions& o, const SimulateParams& p, const Scen
 
 int run_simulate(const SimulateOptions& o) {
   const ThreadScope threads(o.view.threads);
-  check_video_output(o.video, o.output);
+  for (const auto& [option, path] : {std::pair{"--stats", &o.stats}, std::pair{"--video", &o.video}})
+    check_output_beside_folder(option, *path, o.output, [](const std::string& name) {
+      return name == "sharp.png" || name == "perceived.png" || name == "scanpath.png" ||
+             ((name.rfind("step_", 0) == 0 || name.rfind("frame_", 0) == 0) && lower_extension(name) == ".png");
+    });
   resolve_fixation_params(o.gaze);  // the fixation filter's options are checked without --gaze too
   const ComputeDevice device = choose_device(o.device);
   const SimulateParams p = simulate_params(o, device);
@@ -361,8 +366,8 @@ std::function<int()> add_simulate_command(CLI::App& app) {
                   "steps whose perceived image is saved (step_NNNN.png), e.g. 1,4,20,69; 'all' for every step")
       ->capture_default_str();
   cmd->add_option("-o,--output", o->output, "output folder (created)")->required();
-  cmd->add_option("--video", o->video, "also a video of every step's perceived image (ffmpeg)");
-  cmd->add_option("--stats", o->stats, "per-stage timings and per-step records as JSON")->check(output_file());
+  cmd->add_option("--video", o->video, "also a video of every step's perceived image (ffmpeg)")->check(an_output());
+  cmd->add_option("--stats", o->stats, "per-stage timings and per-step records as JSON")->check(an_output());
   cmd->add_flag("-q,--quiet", o->quiet, "print nothing on success");
   add_device_option(*cmd, o->device);
 

@@ -92,6 +92,32 @@ TEST(HostileInput, OutputOverAnInputIsRefused) {
   }
 }
 
+// An output file beside a folder of outputs may lie in that folder (created by the run), but is
+// none of the files the command writes there: `--stats OUT/frames.csv` replaced replay's
+// per-frame table (and `--stats OUT/x.json` was refused while OUT did not exist yet).
+TEST(HostileInput, AnOutputInAFolderOfOutputsIsNoneOfItsFiles) {
+  fs::remove_all(scratch("h1b-replay"));
+  fs::remove_all(scratch("h1b-sim"));
+  const std::string rec = write_three_fixations("h1b.csv");
+  const std::string replay =
+      "replay --gaze " + rec + " --scene builtin:box --size 32x20 --max-rays 4 --fps 20 --screen 480x300 --duration 0.3 -o h1b-replay";
+  const CliRun first = foveal_test::foveal(replay + " --stats h1b-replay/stats.json -q");
+  ASSERT_EQ(first.status, 0) << first.err;
+  ASSERT_TRUE(fs::exists(scratch("h1b-replay/stats.json")));
+  const std::string table = bytes_of(scratch("h1b-replay/frames.csv"));
+  ASSERT_NE(table.find("frame,t_s"), std::string::npos);
+  expect_one_line_error(replay + " --stats h1b-replay/frames.csv",
+                        "--stats h1b-replay/frames.csv: is a file this command writes into h1b-replay (frames.csv)");
+  expect_one_line_error(replay + " --video h1b-replay/frame_00001.png",
+                        "--video h1b-replay/frame_00001.png: is a file this command writes");
+  EXPECT_EQ(bytes_of(scratch("h1b-replay/frames.csv")), table);
+  expect_one_line_error("simulate --scene builtin:box --size 32x20 -o h1b-sim --stats h1b-sim/perceived.png",
+                        "--stats h1b-sim/perceived.png: is a file this command writes into h1b-sim (perceived.png)");
+  EXPECT_FALSE(fs::exists(scratch("h1b-sim")));
+  expect_one_line_error(replay + " --stats h1b-missing/stats.json",
+                        "--stats: h1b-missing/stats.json: the folder h1b-missing does not exist");
+}
+
 // 2. A folder with one corrupt image: no output folder at all (nothing half-written); replay that
 // fails on its first frame leaves no folder either (it left one with a header-only frames.csv).
 TEST(HostileInput, AFailedRunLeavesNoPartialOutput) {
