@@ -152,6 +152,20 @@ TEST(BenchLatencyCli, BadOptionsAreOneClearLine) {
   expect_one_line_error(base + " --max-rays 0", "--max-rays: bench latency judges the fovea's AO");
   expect_one_line_error(base + " --model-rays-per-ms 100 --model-fixed-ms 1", "--model-rays-per-ms");
   expect_one_line_error("bench latency --scene builtin:box --recording /no/such/recording.asc", "/no/such/recording.asc");
+  // A recording it cannot replay is named before any tracing: one sample, or times in milliseconds
+  std::ofstream(scratch("one-sample.csv")) << "t,x,y\n0,10,10\n";
+  expect_one_line_error("bench latency --scene builtin:box --size 64x40 --recording one-sample.csv",
+                        "one-sample.csv: 1 sample at one time: bench latency replays a recording over time");
+  {
+    std::ofstream ms(scratch("milliseconds.csv"));
+    ms << "t,x,y\n";
+    for (int i = 0; i < 2000; i += 2) ms << i << ",100,100\n";  // 500 Hz in milliseconds
+  }
+  const CliRun in_ms = foveal_test::foveal("bench latency --scene builtin:box --size 64x40 --recording milliseconds.csv");
+  EXPECT_EQ(in_ms.status, 1);
+  EXPECT_NE(in_ms.err.find("milliseconds.csv: its samples come 2 s apart: under 20 Hz no saccade is seen"), std::string::npos) << in_ms.err;
+  EXPECT_NE(in_ms.err.find("are its times in milliseconds?"), std::string::npos) << in_ms.err;
+  EXPECT_EQ(in_ms.out.find("references"), std::string::npos);
   // The landing predictor's parameters, each named (not renamed into another option's words)
   expect_one_line_error(base + " --landing speed=3", "--landing: speed: no parameter of the landing predictor");
   expect_one_line_error(base + " --landing skew=9", "--landing: skew: must be in [0.25, 4]");

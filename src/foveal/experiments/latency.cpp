@@ -515,9 +515,17 @@ void validate(const LatencyParams& p) {
 LatencyReport run_latency_bench(const LatencyRun& run, const std::vector<Recording>& recordings, const LatencyParams& p) {
   validate(p);
   if (!run.renderer || !run.scene) fail("run_latency_bench: no renderer or scene");
-  for (const Recording& rec : recordings)  // before the references are traced
-    if (!rec.samples.empty() && p.start_s >= rec.duration_s())
-      fail("start_s: {} s is past the end of {} ({:.1f} s)", p.start_s, rec.source, rec.duration_s());
+  for (const Recording& rec : recordings) {  // before the references are traced
+    if (rec.samples.size() < 2 || !(rec.duration_s() > 0))
+      fail("{}: {} sample{} at one time: bench latency replays a recording over time", rec.source, rec.samples.size(),
+           rec.samples.size() == 1 ? "" : "s");
+    // (RealtimeLoop::gaze_note's bound: a saccade's onset needs two samples above 40°/s in its first tens of ms)
+    const double hz = rec.rate_hz();
+    if (hz < 20)
+      fail("{}: its samples come {:.3g} s apart: under 20 Hz no saccade is seen, and no landing predicted{}", rec.source,
+           hz > 0 ? 1 / hz : INFINITY, hz > 0 && 1 / hz >= 0.5 ? "; are its times in milliseconds? bench latency reads seconds" : "");
+    if (p.start_s >= rec.duration_s()) fail("start_s: {} s is past the end of {} ({:.1f} s)", p.start_s, rec.source, rec.duration_s());
+  }
   const auto say = [&](const std::string& line) {
     if (run.say) run.say(line);
   };
@@ -601,8 +609,11 @@ LatencyReport run_latency_bench(const LatencyRun& run, const std::vector<Recordi
         out.gaze_t.push_back(s.t[i]);
         out.gaze_px.push_back(*s.px[i]);
       }
-    say(fmt::format("{}: {:.0f} Hz, tracker latency {:.1f} ms, {:.1f}–{:.1f} s: {} saccades of at least {}°", rec.source, out.sampling_hz,
-                    out.tracker_latency_ms, s.begin, s.end, s.saccades.size(), p.min_amplitude_deg));
+    say(fmt::format("{}: {:.0f} Hz, tracker latency {:.1f} ms, {:.1f}–{:.1f} s: {} saccade{} of at least {}°", rec.source, out.sampling_hz,
+                    out.tracker_latency_ms, s.begin, s.end, s.saccades.size(), s.saccades.size() == 1 ? "" : "s", p.min_amplitude_deg));
+    if (out.gaze_t.empty())
+      say(fmt::format("  (no valid gaze sample in {:.1f}–{:.1f} s: the tracker lost the eye throughout; the loops follow no gaze here)",
+                      s.begin, s.end));
     for (const std::string& name : p.loops) {
       const Timer timer;
       LatencyLoop loop = name == "whole-frame" ? run_whole_frame(run, s, p, budget, model_rate, model_fixed)
