@@ -70,8 +70,9 @@ void add_render_options(CLI::App& command, RenderOptions& options);
 // the command's other arguments before the run (util/files.h check_outputs_apart).
 CLI::Validator output_file(std::vector<std::string> extensions = {});
 inline constexpr const char* kOutputFileValidator = "output-file";
-// An output whose own check its command makes (--video, which may lie in the command's folder of
-// outputs): marked so that main.cpp checks it against the other outputs and the inputs as well.
+// An output whose own check its command makes (-o of a folder or of any kind, --video and --stats
+// beside a folder of outputs): marked so that main.cpp checks it against the other outputs and the
+// inputs as well.
 CLI::Validator an_output();
 // An output file of a command that also writes a folder of outputs (`folder`, -o, which the run
 // creates): a file in that folder, or one output_file accepts — but none of the files the command

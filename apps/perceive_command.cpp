@@ -91,11 +91,7 @@ void print_perceive(const PerceiveOptions& o, const Perceiver& p, const Perceive
 int run_perceive(const PerceiveOptions& o) {
   resolve_fixation_params(o.gaze_options);  // the fixation filter's options are checked without --gaze too
   const ThreadScope threads(o.threads);
-  for (const std::string* extra : {&o.amsler, &o.field_map})
-    if (!extra->empty()) check_output_is_not_input(*extra, o.input, extra == &o.amsler ? "--amsler" : "--field-map");
   const Perceiver p = make_perceiver(o);
-  if (!o.amsler.empty()) save_image(amsler_grid(p.passes(), 20), o.amsler);
-  if (!o.field_map.empty()) write_field_picture(p.params().eye.impair.field, p.passes().field_map(), o.field_map);
   const PerceiveInput in = open_perceive_input(o.input, o.output, o.fps, "-o");
   if (in.amsler && !o.gaze.empty()) fail("--gaze: the Amsler grid is always fixated at its centre");
   const FrameGaze gaze = open_gaze(o, in);
@@ -106,6 +102,10 @@ int run_perceive(const PerceiveOptions& o) {
     if (show && clock.ms() > 1000) fmt::print(stderr, "\r  frame {}/{} ", done, total);
   });
   if (show && clock.ms() > 1000) fmt::print(stderr, "\r{:40}\r", "");
+  // The pictures of the eye last, once the frames are written: a run that fails writes neither (an
+  // Amsler grid named like a missing input was written first, and then read as the input)
+  if (!o.amsler.empty()) save_image(amsler_grid(p.passes(), 20), o.amsler);
+  if (!o.field_map.empty()) write_field_picture(p.params().eye.impair.field, p.passes().field_map(), o.field_map);
   if (!o.quiet) print_perceive(o, p, in, frame_ms);
   return 0;
 }
@@ -122,7 +122,9 @@ std::function<int()> add_perceive_command(CLI::App& app) {
                   "a PNG/JPEG/EXR/PFM image, a folder of images, a video (ffmpeg), builtin:amsler (an Amsler grid) or builtin:lamps "
                   "(a glare test card: bright lamps in a dark room, linear HDR)")
       ->required();
-  cmd->add_option("-o,--output", o->output, "the same kind as the input: an image file, a folder, a video file")->required();
+  cmd->add_option("-o,--output", o->output, "the same kind as the input: an image file, a folder, a video file")
+      ->required()
+      ->check(an_output());
   cmd->add_option("--eye", o->eye,
                   "the eye: presets joined with '+' (as for simulate: cataract:0.5, cvd:deutan:0.6, field:arcuate:20, "
                   "field:24-2:FILE.csv, amd:5, myopia:-2, …) or a profile .json")

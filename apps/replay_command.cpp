@@ -228,7 +228,7 @@ std::function<int()> add_replay_command(CLI::App& app) {
   add_render_options(*cmd, o->render);
   add_gaze_options(*cmd, o->gaze);
   add_device_option(*cmd, o->device);
-  cmd->add_option("-o,--output", o->output, "folder for frame_NNNNN.png and frames.csv (created)")->required();
+  cmd->add_option("-o,--output", o->output, "folder for frame_NNNNN.png and frames.csv (created)")->required()->check(an_output());
   cmd->add_option("--fps", o->fps, "frames per second of gaze time")->capture_default_str();
   cmd->add_option("--frames", o->frames, "number of frames (0: to the end of the recording; live: 10 s)")->capture_default_str();
   cmd->add_option("--start", o->start, "recordings: start this many seconds after the first sample")->capture_default_str();

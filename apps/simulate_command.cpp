@@ -365,7 +365,7 @@ std::function<int()> add_simulate_command(CLI::App& app) {
   cmd->add_option("--save-steps", o->save_steps,
                   "steps whose perceived image is saved (step_NNNN.png), e.g. 1,4,20,69; 'all' for every step")
       ->capture_default_str();
-  cmd->add_option("-o,--output", o->output, "output folder (created)")->required();
+  cmd->add_option("-o,--output", o->output, "output folder (created)")->required()->check(an_output());
   cmd->add_option("--video", o->video, "also a video of every step's perceived image (ffmpeg)")->check(an_output());
   cmd->add_option("--stats", o->stats, "per-stage timings and per-step records as JSON")->check(an_output());
   cmd->add_flag("-q,--quiet", o->quiet, "print nothing on success");

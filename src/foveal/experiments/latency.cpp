@@ -519,11 +519,10 @@ LatencyReport run_latency_bench(const LatencyRun& run, const std::vector<Recordi
     if (rec.samples.size() < 2 || !(rec.duration_s() > 0))
       fail("{}: {} sample{} at one time: bench latency replays a recording over time", rec.source, rec.samples.size(),
            rec.samples.size() == 1 ? "" : "s");
-    // (RealtimeLoop::gaze_note's bound: a saccade's onset needs two samples above 40°/s in its first tens of ms)
-    const double hz = rec.rate_hz();
-    if (hz < 20)
-      fail("{}: its samples come {:.3g} s apart: under 20 Hz no saccade is seen, and no landing predicted{}", rec.source,
-           hz > 0 ? 1 / hz : INFINITY, hz > 0 && 1 / hz >= 0.5 ? "; are its times in milliseconds? bench latency reads seconds" : "");
+    const double hz = rec.rate_hz();  // (0 where no two samples follow each other in time)
+    if (hz > 0 && 1 / hz > kSlowestLandingSampleS)
+      fail("{}: its samples come {:.3g} s apart: under 20 Hz no saccade is seen, and no landing predicted{}", rec.source, 1 / hz,
+           1 / hz >= 0.5 ? "; are its times in milliseconds? bench latency reads seconds" : "");
     if (p.start_s >= rec.duration_s()) fail("start_s: {} s is past the end of {} ({:.1f} s)", p.start_s, rec.source, rec.duration_s());
   }
   const auto say = [&](const std::string& line) {

@@ -29,6 +29,11 @@
 
 namespace foveal {
 
+// The slowest sample stream the predictor can follow: a saccade's onset needs two samples above
+// its onset velocity within the saccade's first tens of milliseconds, so under 20 Hz (samples more
+// than 50 ms apart) no saccade is seen and no landing predicted.
+inline constexpr double kSlowestLandingSampleS = 0.05;
+
 struct LandingParams {
   double onset_deg_s = 40;      // a velocity above this (two samples in a row) starts a saccade
   double offset_deg_s = 30;     // the saccade ends when the velocity falls below this

@@ -141,10 +141,9 @@ void RealtimeLoop::push_gaze(double t_s, std::optional<glm::dvec2> gaze_px) {
 }
 
 std::string RealtimeLoop::gaze_note() const {
-  constexpr double kSlowestS = 0.05;  // 20 Hz: a saccade's onset needs two samples above 40°/s within its first tens of ms
   if (!settings_.predict || intervals_s_.size() < 16) return "";
   const double median = intervals_s_.median();
-  if (median <= kSlowestS) return "";
+  if (median <= kSlowestLandingSampleS) return "";
   return fmt::format(
       "gaze samples come {:.3g} s apart (the median of the latest 16): saccade landings are not predicted from samples under "
       "20 Hz{}",
