@@ -181,7 +181,6 @@ struct PyLoop {
   Camera camera;
   int threads = 0;
   std::mutex mutex;  // one frame at a time (the GIL is released while it renders)
-  std::optional<double> last_t;
 
   PyLoop(const PyScene& s, const std::array<int, 2>& size, const nb::object& camera_arg, std::optional<Display> display, int max_rays,
          double gamma, double refresh_hz, std::optional<double> frame_budget_ms, bool predict, const std::string& device_name, int threads_,
@@ -213,16 +212,17 @@ struct PyLoop {
     loop->frame(camera);  // the view's surfaces, before the first frame is asked for
   }
 
-  void push(double t, std::optional<std::array<double, 2>> gaze) {
-    if (!std::isfinite(t)) fail("t: must be a finite time in seconds, got {}", t);
+  // A sample at `t` (unset: just after the latest); a repeated or older one is ignored there, a
+  // clock that went back taken and noted (gaze_note)
+  void push(std::optional<double> t, std::optional<std::array<double, 2>> gaze) {
+    if (t && !std::isfinite(*t)) fail("t: must be a finite time in seconds, got {}", *t);
     const std::lock_guard<std::mutex> lock(mutex);
-    if (last_t && t <= *last_t) return;  // a repeated or older sample (a tracker's duplicate) is ignored
-    last_t = t;
-    loop->push_gaze(t, gaze ? std::optional<glm::dvec2>(glm::dvec2((*gaze)[0], (*gaze)[1])) : std::nullopt);
+    loop->push_gaze(t ? *t : loop->latest_sample_s().value_or(0.0) + 1e-6,
+                    gaze ? std::optional<glm::dvec2>(glm::dvec2((*gaze)[0], (*gaze)[1])) : std::nullopt);
   }
 
   std::unique_ptr<PyLoopFrame> frame(std::optional<std::array<double, 2>> gaze, std::optional<double> t, const nb::object& camera_arg) {
-    if (gaze || t) push(t.value_or(last_t.value_or(0.0) + 1e-6), gaze);
+    if (gaze || t) push(t, gaze);
     if (!camera_arg.is_none()) {
       const Camera moved = resolve_camera(*scene, camera_arg);
       const std::lock_guard<std::mutex> lock(mutex);
@@ -564,9 +564,11 @@ NB_MODULE(_core, m) {
            "still sees (else it starts afresh); `landing` the saccade landing predictor's parameters: a dict by name (as "
            "foveal.gaze.predict_landings's keywords: onset_deg_s, …) or the text of --landing ('onset_deg_s=60,skew=1.2').")
       .def("push", &PyLoop::push, "t"_a, "gaze"_a,
-           "A tracker sample: its time in seconds (any clock, increasing) and the gaze (x, y) in render pixels, or None "
-           "when the tracker lost the eye. Push every sample a fast tracker delivers between frames: the saccade predictor "
-           "needs them.")
+           "A tracker sample: its time in seconds (any clock, increasing; None: just after the latest sample) and the gaze "
+           "(x, y) in render pixels, or None when the tracker lost the eye. Push every sample a fast tracker delivers "
+           "between frames: the saccade predictor needs them. A repeated time, or one up to 0.5 s before the latest, is "
+           "ignored (a duplicate, samples out of order); one further back is a clock that restarted: the sample is taken, "
+           "the predictor starts afresh, and gaze_note says so.")
       .def("frame", &PyLoop::frame, "gaze"_a = nb::none(), "t"_a = nb::none(), "camera"_a = nb::none(),
            "The next frame, within the budget: `gaze` (x, y) and `t` (seconds), when given, are pushed first; `camera` (a "
            "Camera or a camera name of the scene), when given, is the view from this frame on. The GIL is released while it "
@@ -578,8 +580,9 @@ NB_MODULE(_core, m) {
           "note", [](const PyLoop& l) { return l.loop->note(); }, "Why the resolution was lowered ('' if it was not).")
       .def_prop_ro(
           "gaze_note", [](const PyLoop& l) { return l.loop->gaze_note(); },
-          "With prediction on: why saccade landings cannot be predicted from the samples pushed — they come under 20 Hz, most "
-          "often times in milliseconds where seconds are asked for ('' if they can).")
+          "What is wrong with the samples pushed ('' if nothing): with prediction on, that saccade landings cannot be "
+          "predicted from them — they come under 20 Hz, most often times in milliseconds where seconds are asked for; and "
+          "that their clock went back (a trial clock that restarts).")
       .def_prop_ro(
           "size",
           [](const PyLoop& l) {

@@ -385,6 +385,25 @@ def test_the_loop_names_samples_too_far_apart_to_predict_from(box):
     assert note(1000, samples=10) == ""  # not before 16 intervals
 
 
+def test_a_gaze_clock_that_goes_back_is_taken_and_named(box):
+    # A trial clock that restarts (psychopy's trialClock.reset()): every later sample was ignored as
+    # older than the latest, and the fovea stayed where the first trial left it, without a word
+    loop = foveal.Loop(box, size=(64, 40), max_rays=16, device="cpu")
+    for k in range(300):  # the first trial: 3 s at 100 Hz
+        loop.push(k * 0.01, (10, 10))
+    loop.push(2.8, (50, 30))  # a sample out of order (older than what is shown): ignored
+    assert loop.frame().measured_gaze == pytest.approx((10, 10)) and loop.gaze_note == ""
+    loop.push(0.0, (50, 30))  # the second trial's clock starts again
+    frame = loop.frame(gaze=(52, 30), t=0.01)
+    assert frame.measured_gaze == pytest.approx((52, 30))
+    assert "clock went back once, the latest time by 2.99 s" in loop.gaze_note
+    assert "one increasing clock" in loop.gaze_note
+    frame = loop.frame(gaze=(40, 20))  # no time: just after the latest
+    assert frame.measured_gaze == pytest.approx((40, 20))
+    with pytest.raises(ValueError, match="t: must be a finite time"):
+        loop.push(float("nan"), (10, 10))
+
+
 def test_predict_landings_gives_every_prediction_of_each_flight():
     # foveal.gaze.predict_landings: the loop's live predictor over a stream (gaze/landing.h)
     t = np.arange(0, 0.6, 0.001)

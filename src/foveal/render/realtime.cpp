@@ -127,10 +127,19 @@ glm::dvec2 RealtimeLoop::deg_to_px(glm::dvec2 deg) const {
 }
 
 void RealtimeLoop::push_gaze(double t_s, std::optional<glm::dvec2> gaze_px) {
+  if (!std::isfinite(t_s)) fail("t_s: must be a finite time in seconds, got {}", t_s);
   if (gaze_px && (std::isinf(gaze_px->x) || std::isinf(gaze_px->y)))  // (an infinity is no lost sample: a unit or scale gone wrong)
     fail("gaze_px: ({}, {}) is no point; NaN marks a lost sample", gaze_px->x, gaze_px->y);
   if (gaze_px && std::isfinite(gaze_px->x) && std::isfinite(gaze_px->y))  // NaN: a lost sample; a finite point must be near the image
     check_gaze_point("gaze_px", gaze_px->x, gaze_px->y, requested_.width, requested_.height);
+  if (last_pushed_s_ && t_s <= *last_pushed_s_) {
+    if (*last_pushed_s_ - t_s <= kClockRestartS) return;  // repeated, or out of order: older than what is shown
+    ++clock_restarts_;                                    // the clock restarted: its samples are taken from here on
+    clock_back_s_ = *last_pushed_s_ - t_s;
+    predictor_.push(t_s, glm::dvec2(NAN), false);  // a flight across the restart is no saccade
+    last_sample_s_.reset();
+  }
+  last_pushed_s_ = t_s;
   const bool valid = gaze_px && std::isfinite(gaze_px->x) && std::isfinite(gaze_px->y);
   if (valid) {
     measured_px_ = *gaze_px;
@@ -141,13 +150,21 @@ void RealtimeLoop::push_gaze(double t_s, std::optional<glm::dvec2> gaze_px) {
 }
 
 std::string RealtimeLoop::gaze_note() const {
-  if (!settings_.predict || intervals_s_.size() < 16) return "";
-  const double median = intervals_s_.median();
-  if (median <= kSlowestLandingSampleS) return "";
-  return fmt::format(
-      "gaze samples come {:.3g} s apart (the median of the latest 16): saccade landings are not predicted from samples under "
-      "20 Hz{}",
-      median, median >= 0.5 ? "; are their times in milliseconds? The loop takes seconds" : "");
+  std::string note;
+  if (settings_.predict && intervals_s_.size() >= 16 && intervals_s_.median() > kSlowestLandingSampleS) {
+    const double median = intervals_s_.median();
+    note = fmt::format(
+        "gaze samples come {:.3g} s apart (the median of the latest 16): saccade landings are not predicted from samples "
+        "under 20 Hz{}",
+        median, median >= 0.5 ? "; are their times in milliseconds? The loop takes seconds" : "");
+  }
+  if (clock_restarts_ > 0)
+    note += fmt::format(
+        "{}the gaze samples' clock went back {}, the latest time by {:.3g} s: each time the loop took the samples from there "
+        "on{}; give every sample one increasing clock (a trial clock that restarts is not one)",
+        note.empty() ? "" : "; ", clock_restarts_ == 1 ? std::string("once") : fmt::format("{} times", clock_restarts_), clock_back_s_,
+        settings_.predict ? " and the landing predictor started afresh" : "");
+  return note;
 }
 
 void RealtimeLoop::set_budget_ms(double budget_ms) {

@@ -181,9 +181,18 @@ class RealtimeLoop {
   // the renderer's), reuse.tolerance (τ); the mode must be foveated.
   RealtimeLoop(FrameRenderer& renderer, const Scene& scene, const RenderParams& params, const LoopSettings& settings);
 
+  // A sample more than this older than the latest is a clock that restarted (a trial clock reset, a
+  // tracker reconnected), not a sample out of order
+  static constexpr double kClockRestartS = 0.5;
   // A tracker sample: its time (seconds, the tracker's clock) and point in render pixels (unset or
-  // NaN: lost). Samples must come in time order.
+  // NaN: lost); throws Error naming t_s where the time is not finite. Samples come in time order: a
+  // repeated time, or one up to kClockRestartS older than the latest, is ignored (a tracker's
+  // duplicate, two sources' samples interleaved); one older than that restarts the clock — the
+  // sample is taken, the predictor starts afresh and gaze_note() says so (ignoring every sample
+  // until the old clock's time came round again froze the fovea without a word).
   void push_gaze(double t_s, std::optional<glm::dvec2> gaze_px);
+  // The latest sample's time taken (seconds; unset before the first)
+  std::optional<double> latest_sample_s() const { return last_pushed_s_; }
   // The next frame for `camera`, within the budget.
   LoopFrame frame(const Camera& camera);
   // Hand back a frame's image once it is no longer shown: the next frame is composed into it
@@ -206,7 +215,8 @@ class RealtimeLoop {
   // With prediction on: why the landing predictor cannot follow the samples pushed ("" if it can):
   // they come further apart than a saccade's onset can be seen (under 20 Hz, as the median of the
   // latest intervals), most often times given in milliseconds where seconds are asked for (an
-  // EyeLink's own clock), which would leave every saccade unpredicted without a word
+  // EyeLink's own clock), which would leave every saccade unpredicted without a word; and whether the
+  // samples' clock went back (push_gaze)
   std::string gaze_note() const;
   const LandingPredictor& predictor() const { return predictor_; }
   // Per pixel: AO rays cast so far in this view and found open (the loop's state, for tests and
@@ -264,6 +274,9 @@ class RealtimeLoop {
   LandingPredictor predictor_;
   std::optional<glm::dvec2> measured_px_;
   std::optional<double> last_sample_s_;         // the latest valid sample's time
+  std::optional<double> last_pushed_s_;         // the latest sample's time taken, valid or not
+  uint32_t clock_restarts_ = 0;                 // times the samples' clock went back (push_gaze)
+  double clock_back_s_ = 0;                     // … by how much, the latest time
   RecentMedian<16> intervals_s_;                // … and the intervals between the latest valid samples (gaze_note)
   std::optional<glm::dvec2> known_landing_px_;  // set_known_landing
   bool have_view_ = false;

@@ -679,6 +679,39 @@ TEST(RealtimeLoop, SamplesTooFarApartForThePredictorAreNamed) {
   EXPECT_EQ(note_for(1000, true, 10), "");   // not before 16 intervals
 }
 
+// A trial clock that restarts at 0 (a session's second trial): its samples were all ignored as
+// "older than the latest" until the first trial's time came round again, so the loop kept the fovea
+// where the first trial left it and predicted nothing, without a word.
+TEST(RealtimeLoop, AClockThatGoesBackIsTakenAndNamed) {
+  const std::unique_ptr<FrameRenderer> renderer = make_frame_renderer(sphere_plane(), ComputeDevice::cpu);
+  LoopSettings settings = model_clock(2500);
+  settings.predict = true;
+  RealtimeLoop loop(*renderer, sphere_plane(), loop_params(200, 125, 16), settings);
+  const Camera& camera = sphere_plane().cameras.front();
+  EXPECT_THROW(loop.push_gaze(NAN, glm::dvec2(60, 60)), Error);
+  EXPECT_THROW(loop.push_gaze(INFINITY, glm::dvec2(60, 60)), Error);
+  for (int k = 0; k <= 1500; ++k) loop.push_gaze(k * 0.001, glm::dvec2(60, 60));  // the first trial: 1.5 s at 1000 Hz
+  loop.push_gaze(1.2, glm::dvec2(150, 60));  // a sample out of order: older than what is shown, ignored
+  EXPECT_EQ(loop.frame(camera).measured_px, glm::dvec2(60, 60));
+  EXPECT_EQ(loop.gaze_note(), "");
+  // The second trial's clock starts at 0 again: a 19° saccade from (60, 60) to (150, 60) at 0.1 s
+  const glm::dvec2 from(60, 60), to(150, 60);
+  const double onset = 0.1, duration = 0.063;
+  auto position = [&](double t) {
+    const double tau = std::clamp((t - onset) / duration, 0.0, 1.0);
+    return from + (to - from) * (tau - std::sin(2 * M_PI * tau) / (2 * M_PI));
+  };
+  for (int k = 0; k <= 100 + 40; ++k) loop.push_gaze(k * 0.001, position(k * 0.001));  // up to two thirds into the flight
+  const LoopFrame flying = loop.frame(camera);
+  EXPECT_TRUE(flying.in_flight);
+  EXPECT_TRUE(flying.predicted);
+  EXPECT_GT(flying.gaze_px.x, flying.measured_px.x);  // ahead of the eye, towards the landing
+  EXPECT_GT(flying.measured_px.x, 100);
+  const std::string note = loop.gaze_note();
+  EXPECT_NE(note.find("clock went back once, the latest time by 1.5 s"), std::string::npos) << note;
+  EXPECT_NE(note.find("the landing predictor started afresh"), std::string::npos) << note;
+}
+
 TEST(RealtimeLoop, SettingsAreChecked) {
   const std::unique_ptr<FrameRenderer> renderer = make_frame_renderer(box(), ComputeDevice::cpu);
   LoopSettings s;

@@ -443,10 +443,12 @@ void ViewSession::realtime_frame() {
   r = Result{};
   r.generation = generation_;
   r.last = f.fovea_done;
-  r.stage = fmt::format("realtime: fovea {} ({:.0f} %){}{}{}{}", f.fovea_done ? "converged" : "refining", 100 * f.fovea_converged,
+  const std::string gaze_note = loop_->gaze_note();  // samples too slow to predict from, a clock that went back
+  r.stage = fmt::format("realtime: fovea {} ({:.0f} %){}{}{}{}{}", f.fovea_done ? "converged" : "refining", 100 * f.fovea_converged,
                         f.predicted ? ", at the predicted landing" : "",
                         f.new_view && f.kept_pixels > 0 ? fmt::format(", a new view: {} px kept their rays", f.kept_pixels) : "",
-                        loop_->scale() < 1 ? ", " + loop_->note() : "", f.rebuilding ? ", the camera rests: building the full size" : "");
+                        loop_->scale() < 1 ? ", " + loop_->note() : "", f.rebuilding ? ", the camera rests: building the full size" : "",
+                        gaze_note.empty() ? "" : "; " + gaze_note);
   r.gaze = f.gaze_px / loop_->scale();
   r.stats.ao_rays = f.rays;
   r.stats.ao_ms = f.trace_ms;
