@@ -6,11 +6,14 @@
 #include "foveal/util/text.h"
 
 #include <fmt/core.h>
+#include <fmt/ranges.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <exception>
+#include <string>
 #include <vector>
 
 namespace {
@@ -84,8 +87,26 @@ int main(int argc, char** argv) {
   } catch (const CLI::CallForVersion& e) {
     return app.exit(e);
   } catch (const CLI::ParseError& e) {
-    // One clear line instead of CLI11's usage dump
-    fmt::print(stderr, "foveal: error: {} (see 'foveal --help')\n", foveal::text::printable(e.what()));
+    // One clear line instead of CLI11's usage dump, pointing to the help of the command it is about
+    std::string command = "foveal";
+    const CLI::App* deepest = &app;
+    while (!deepest->get_subcommands().empty()) {
+      deepest = deepest->get_subcommands().front();
+      command += " " + deepest->get_name();
+    }
+    std::string what = e.what();
+    // A command that is none of those there are: name it and them ("A subcommand is required" named neither)
+    const std::vector<const CLI::App*> known = deepest->get_subcommands([](const CLI::App*) { return true; });
+    if (!known.empty() && what.find("subcommand") != std::string::npos) {
+      const int depth = static_cast<int>(std::count(command.begin(), command.end(), ' '));
+      std::vector<std::string> names;
+      for (const CLI::App* k : known) names.push_back(k->get_name());
+      const std::string given = argc > depth + 1 ? argv[depth + 1] : "";
+      what = given.empty() || given[0] == '-'
+                 ? fmt::format("a command is needed: {}", fmt::join(names, ", "))
+                 : fmt::format("'{}' is no command of {} (the commands: {})", given, command, fmt::join(names, ", "));
+    }
+    fmt::print(stderr, "foveal: error: {} (see '{} --help')\n", foveal::text::printable(what), command);
     return e.get_exit_code() != 0 ? e.get_exit_code() : 2;
   }
   try {

@@ -103,8 +103,14 @@ TEST(Cli, BadInputGivesOneClearLineAndNonZeroExit) {
       {"render --bogus", "bogus"},
       {"render --aov colour=x.pfm --size 8x8 --max-rays 1", "unknown buffer"},
       {"render -o /nonexistent/dir/x.png --size 8x8 --max-rays 1", "/nonexistent/dir/x.png"},
-      {"bench nothing", "subcommand"},
-      {"bench", "subcommand"},
+      // A command that is none: named, with those there are; the help pointed to is the command's
+      {"bench nothing", "'nothing' is no command of foveal bench (the commands: ao, vision, blur, quality, latency, events, stalls)"},
+      {"bench", "a command is needed: ao, vision,"},
+      {"nothing", "'nothing' is no command of foveal (the commands: render, bench,"},
+      {"", "a command is needed: render, bench,"},
+      {"render --bogus", "(see 'foveal render --help')"},
+      {"replay -o x", "--gaze is required (see 'foveal replay --help')"},
+      {"bench latency --bogus", "(see 'foveal bench latency --help')"},
   };
   expect_clear_errors(cases);
 }
