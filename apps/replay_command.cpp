@@ -32,7 +32,8 @@ struct ReplayOptions {
   RenderOptions render;
   GazeOptions gaze;
   std::string source, output, video, stats, stimulus, landing;
-  double fps = 30, start = 0, duration = 0, live_timeout = 5, orbit = 0;
+  std::optional<double> fps, refresh_hz, budget_ms;  // (fps: 30, or with --realtime 60)
+  double start = 0, duration = 0, live_timeout = 5, orbit = 0;
   int frames = 0;
   bool no_reuse = false, mark = false, quiet = false, realtime = false, no_predict = false, no_history = false;
   std::string device = "auto";
@@ -41,7 +42,13 @@ struct ReplayOptions {
 // The sequence's settings from the options (checked).
 ReplaySettings replay_settings(const ReplayOptions& o) {
   ReplaySettings settings;
-  settings.fps = o.fps;
+  // --realtime: frames at the display's refresh (--refresh-hz, the loop's name for it, or --fps; 60 Hz)
+  if (o.refresh_hz && !o.realtime) fail("--refresh-hz needs --realtime (a replay's frames per second of gaze time are --fps)");
+  if (o.budget_ms && !o.realtime) fail("--frame-budget-ms needs --realtime (only the real-time loop has a frame budget)");
+  if (o.refresh_hz && o.fps && *o.refresh_hz != *o.fps)
+    fail("--refresh-hz {:g} and --fps {:g}: with --realtime both are the display's refresh; give one", *o.refresh_hz, *o.fps);
+  settings.fps = o.refresh_hz.value_or(o.fps.value_or(o.realtime ? 60.0 : 30.0));
+  settings.budget_ms = o.budget_ms;
   settings.frames = o.frames;
   settings.start_s = o.start;
   settings.duration_s = o.duration;
@@ -123,15 +130,15 @@ struct ProgressBar {
 };
 
 // --stats: the sequence's totals.
-nlohmann::json replay_stats_json(const ReplayOptions& o, const ReplaySummary& summary, const RenderParams& params,
-                                 const FrameRenderer& renderer, const Scene& scene, const std::optional<Recording>& recording, bool live,
-                                 int threads, ComputeDevice device) {
+nlohmann::json replay_stats_json(const ReplayOptions& o, const ReplaySettings& settings, const ReplaySummary& summary,
+                                 const RenderParams& params, const FrameRenderer& renderer, const Scene& scene,
+                                 const std::optional<Recording>& recording, bool live, int threads, ComputeDevice device) {
   const std::string& source_name = o.source;
   nlohmann::json j = {
       {"gaze_source", source_name},
       {"live", live},
       {"fixation", o.gaze.fixation},
-      {"fps", o.fps},
+      {"fps", settings.fps},
       {"frames", summary.frames},
       {"reused_frames", summary.reused},
       {"width", params.width},
@@ -155,11 +162,11 @@ nlohmann::json replay_stats_json(const ReplayOptions& o, const ReplaySummary& su
   return j;
 }
 
-void print_replay(const ReplayOptions& o, const ReplaySummary& summary, const RenderParams& params, const FrameRenderer& renderer,
-                  const std::string& csv_path, int threads) {
+void print_replay(const ReplayOptions& o, const ReplaySettings& settings, const ReplaySummary& summary, const RenderParams& params,
+                  const FrameRenderer& renderer, const std::string& csv_path, int threads) {
   const std::string& source_name = o.source;
   fmt::print("foveal replay: {} → {} frames at {:g} fps ({} rendered, {} reused: gaze unchanged), {}x{}, {} filter, {} threads\n",
-             source_name, summary.frames, o.fps, summary.frames - summary.reused, summary.reused, params.width, params.height,
+             source_name, summary.frames, settings.fps, summary.frames - summary.reused, summary.reused, params.width, params.height,
              o.gaze.fixation, threads);
   fmt::print("  device   {}\n", renderer.describe());
   fmt::print("  time     {:.1f} s ({:.0f} ms per rendered frame), {:.1f} M AO rays\n", summary.wall_ms / 1000,
@@ -206,11 +213,11 @@ int run_replay(const ReplayOptions& o) {
   }
   writer.close();
   writer.commit();  // whole: every frame rendered (a live session that stopped: up to the stop, as frames.csv says)
-  if (!o.video.empty() && summary.frames > 0) encode_video(writer.pattern(), o.fps, o.video);
+  if (!o.video.empty() && summary.frames > 0) encode_video(writer.pattern(), settings.fps, o.video);
   if (!o.stats.empty())
-    write_json_file(o.stats, replay_stats_json(o, summary, params, *renderer, scene, recording, live, threads.threads(), device));
+    write_json_file(o.stats, replay_stats_json(o, settings, summary, params, *renderer, scene, recording, live, threads.threads(), device));
   if (!summary.stopped.empty()) fail("{}", summary.stopped);
-  if (!o.quiet) print_replay(o, summary, params, *renderer, writer.csv_path(), threads.threads());
+  if (!o.quiet) print_replay(o, settings, summary, params, *renderer, writer.csv_path(), threads.threads());
   return 0;
 }
 
@@ -229,7 +236,7 @@ std::function<int()> add_replay_command(CLI::App& app) {
   add_gaze_options(*cmd, o->gaze);
   add_device_option(*cmd, o->device);
   cmd->add_option("-o,--output", o->output, "folder for frame_NNNNN.png and frames.csv (created)")->required()->check(an_output());
-  cmd->add_option("--fps", o->fps, "frames per second of gaze time")->capture_default_str();
+  cmd->add_option("--fps", o->fps, "frames per second of gaze time (default 30; with --realtime the display's refresh, 60)");
   cmd->add_option("--frames", o->frames, "number of frames (0: to the end of the recording; live: 10 s)")->capture_default_str();
   cmd->add_option("--start", o->start, "recordings: start this many seconds after the first sample")->capture_default_str();
   cmd->add_option("--duration", o->duration, "seconds of gaze to render (0: all)")->capture_default_str();
@@ -239,8 +246,14 @@ std::function<int()> add_replay_command(CLI::App& app) {
       ->capture_default_str();
   cmd->add_flag("--mark", o->mark, "draw a red cross at each frame's gaze point on the saved frames");
   cmd->add_flag("--realtime", o->realtime,
-                "each frame is what the real-time loop shows on a display of --fps Hz: made within 1/fps of compute from the raw "
-                "samples up to its time, the fovea refined first (docs/realtime.md); frames.csv's ms is each frame's time");
+                "each frame is what the real-time loop shows on a display of --refresh-hz (or --fps) Hz: made within its budget "
+                "of compute from the raw samples up to its time, the fovea refined first (docs/realtime.md); frames.csv's ms is "
+                "each frame's time");
+  cmd->add_option("--refresh-hz", o->refresh_hz, "--realtime: the display's refresh rate, Hz: a frame each (60; --fps says the same)")
+      ->check(CLI::Range(1.0, 1000.0));
+  cmd->add_option("--frame-budget-ms", o->budget_ms,
+                  "--realtime: what each frame may take of the refresh, ms (default: all of it; less leaves the rest to an "
+                  "application's own drawing)");
   cmd->add_flag("--no-predict", o->no_predict, "--realtime: keep the fovea at the measured gaze during saccades (no landing prediction)");
   add_landing_option(*cmd, o->landing, "--realtime: ");
   cmd->add_option("--orbit", o->orbit,

@@ -165,6 +165,36 @@ TEST(GazeCli, RealtimeReplayOfAnOrbitingCameraKeepsItsRays) {
   }
 }
 
+// replay --realtime takes the loop's names for its display: a frame every refresh at --refresh-hz
+// (60 by default, as the loop's; --fps says the same) within --frame-budget-ms of it.
+TEST(GazeCli, RealtimeReplayRunsAtTheDisplaysRefresh) {
+  const std::string rec = write_three_fixations("refresh.csv");
+  const std::string base = "replay --gaze " + rec + " --screen 480x300 --scene builtin:plane --size 32x20 --max-rays 4 --duration 0.5 -q ";
+  auto frames = [&](const std::string& args, const std::string& out) {
+    const CliRun r = foveal_test::foveal(base + args + " -o " + out + " --stats " + out + ".json");
+    EXPECT_EQ(r.status, 0) << args << ": " << r.err;
+    const nlohmann::json stats = nlohmann::json::parse(std::ifstream(scratch(out + ".json")));
+    return std::pair{read_csv(scratch(out + "/frames.csv")).size() - 1, stats.at("fps").get<double>()};
+  };
+  EXPECT_EQ(frames("--realtime", "refresh60"), std::pair(size_t{31}, 60.0));  // 0.5 s at 60 Hz, both ends
+  EXPECT_EQ(frames("--realtime --refresh-hz 120 --frame-budget-ms 4", "refresh120"), std::pair(size_t{61}, 120.0));
+  EXPECT_EQ(frames("--realtime --fps 30", "refresh30"), std::pair(size_t{16}, 30.0));
+  EXPECT_EQ(frames("", "whole30"), std::pair(size_t{16}, 30.0));  // without --realtime, 30 frames a second of gaze
+  for (const auto& [bad, needle] : std::vector<std::pair<std::string, std::string>>{
+           {"--refresh-hz 60", "--refresh-hz needs --realtime"},
+           {"--frame-budget-ms 5", "--frame-budget-ms needs --realtime"},
+           {"--realtime --refresh-hz 120 --fps 60", "--refresh-hz 120 and --fps 60"},
+           {"--realtime --frame-budget-ms 20", "--frame-budget-ms: must be in (0, 16.6667] ms"},
+           {"--realtime --frame-budget-ms 0", "--frame-budget-ms"},
+           {"--realtime --refresh-hz 0", "--refresh-hz"}}) {
+    const CliRun r = foveal_test::foveal(base + bad + " -o refresh_bad");
+    EXPECT_NE(r.status, 0) << bad;
+    EXPECT_EQ(lines(r.err), 1u) << bad << ": " << r.err;
+    EXPECT_NE(r.err.find(needle), std::string::npos) << bad << ": " << r.err;
+    EXPECT_FALSE(fs::exists(scratch("refresh_bad"))) << bad;
+  }
+}
+
 // A moving camera at 960x600 and 120 Hz: the loop renders smaller while it moves (its surfaces do
 // not fit 8 ms on a few cores), and every frame is written at the size asked for, scaled up.
 TEST(GazeCli, RealtimeReplayWritesEveryFrameAtTheSizeAskedFor) {

@@ -20,6 +20,9 @@ void validate(const ReplaySettings& s) {
   if (!(s.live_timeout_s > 0)) fail("live_timeout_s: must be positive seconds, got {}", s.live_timeout_s);
   if (!std::isfinite(s.orbit_deg_s) || std::abs(s.orbit_deg_s) > 3600)
     fail("orbit_deg_s: must be within ±3600 degrees per second, got {}", s.orbit_deg_s);
+  if (s.budget_ms && !s.realtime) fail("frame_budget_ms: is the real-time loop's (realtime)");
+  if (s.budget_ms && !(*s.budget_ms > 0 && *s.budget_ms <= 1000 / s.fps))
+    fail("frame_budget_ms: must be in (0, {:g}] ms (a frame at {:g} Hz), got {}", 1000 / s.fps, s.fps, *s.budget_ms);
   validate(s.fixation);
 }
 
@@ -94,7 +97,7 @@ class LoopMaker {
  private:
   static LoopSettings loop_settings(const ReplaySettings& s) {
     LoopSettings l;
-    l.budget_ms = 1000.0 / s.fps;
+    l.budget_ms = s.budget_ms.value_or(1000.0 / s.fps);
     l.predict = s.predict;
     l.landing = s.landing;
     l.keep_history = s.keep_history;

@@ -33,8 +33,9 @@ struct ReplaySettings {
   // `fps` Hz: made within 1/fps of compute from the raw samples up to its time (the loop's own
   // saccade predictor, not the fixation filter, places the fovea)
   bool realtime = false;
-  bool predict = true;    // realtime: place the fovea at a saccade's predicted landing while it flies
-  LandingParams landing;  // realtime: the landing predictor's parameters (gaze/landing.h)
+  std::optional<double> budget_ms;  // realtime: what each frame may take, ms (unset: one frame, 1000/fps)
+  bool predict = true;              // realtime: place the fovea at a saccade's predicted landing while it flies
+  LandingParams landing;            // realtime: the landing predictor's parameters (gaze/landing.h)
   // The camera orbits its look point about its up axis at this speed, degrees per second of the
   // sequence (0: still): a moving view, on the renderer's temporal history (params.reuse.temporal)
   // or the real-time loop's kept rays
