@@ -48,7 +48,7 @@ constexpr std::array kOptions = std::to_array<ParameterName>({
     // the real-time loop and bench latency
     {"frame_budget_ms", "--frame-budget-ms"},
     {"refresh_hz", "--refresh-hz"},
-    {"tracker_latency_ms", "--latency-ms"},
+    {"latency_ms", "--latency-ms"},
     {"min_amplitude_deg", "--min-amplitude"},
     {"clock", "--clock"},
     {"loops", "--loops"},

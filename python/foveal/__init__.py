@@ -334,6 +334,8 @@ def bench_latency(recordings: Any, scene: Scene, camera: Any = None, size: Tuple
     """
     if isinstance(recordings, (str, os.PathLike, _gaze.Recording)):
         recordings = [recordings]
+    elif not isinstance(recordings, (list, tuple)):
+        raise TypeError(f"recordings: a path, a foveal.gaze.Recording or a list of them, got {type(recordings).__name__}")
     d = display if display is not None else Display()
     columns = []
     for k, r in enumerate(recordings):

@@ -229,6 +229,15 @@ def test_bench_latency_from_python_equals_the_command_lines(cli, box, tmp_path):
         foveal.bench_latency([3], box)
     with pytest.raises(ValueError, match="timeline"):
         foveal.bench_latency(str(recording), box, size=(168, 105), loops="deadline", timeline=tmp_path / "t.gif")
+    # Errors name the keywords given: a run of no loop, the tracker's latency, a recording that is no list
+    with pytest.raises(ValueError, match="loops: give at least one"):
+        foveal.bench_latency(str(recording), box, size=(168, 105), loops=[])
+    with pytest.raises(ValueError, match=r"^latency_ms: must be in \[0, 1000\) ms, got -1"):
+        foveal.bench_latency(str(recording), box, size=(168, 105), latency_ms=-1)
+    with pytest.raises(ValueError, match=r"margin_ms: must be in \[0, the frame budget 16.6667 ms\)"):
+        foveal.bench_latency(str(recording), box, size=(168, 105), margin_ms=100)
+    with pytest.raises(TypeError, match="recordings: a path, a foveal.gaze.Recording or a list of them, got int"):
+        foveal.bench_latency(5, box)
 
 
 def test_what_else_ran_on_the_machine_is_named():

@@ -487,7 +487,7 @@ void validate(const LatencyParams& p) {
   if (!(p.refresh_hz >= 1 && p.refresh_hz <= 1000)) fail("refresh_hz: must be in [1, 1000] Hz, got {}", p.refresh_hz);
   if (p.budget_ms && !(*p.budget_ms > 0 && *p.budget_ms <= 10000)) fail("frame_budget_ms: must be in (0, 10000] ms, got {}", *p.budget_ms);
   if (p.tracker_latency_ms && !(*p.tracker_latency_ms >= 0 && *p.tracker_latency_ms < 1000))
-    fail("tracker_latency_ms: must be in [0, 1000) ms, got {}", *p.tracker_latency_ms);
+    fail("latency_ms: must be in [0, 1000) ms, got {}", *p.tracker_latency_ms);  // (the tracker's: --latency-ms, latency_ms=)
   if (!(p.start_s >= 0) || !std::isfinite(p.start_s)) fail("start_s: must be >= 0 s, got {}", p.start_s);
   if (!(p.duration_s > 0) || p.duration_s > 3600) fail("duration_s: must be in (0, 3600] s, got {}", p.duration_s);
   if (!(p.min_amplitude_deg >= 0)) fail("min_amplitude_deg: must be >= 0, got {}", p.min_amplitude_deg);
@@ -504,6 +504,7 @@ void validate(const LatencyParams& p) {
     loop.margin_ms = *p.margin_ms;
     validate(loop);
   }
+  if (p.loops.empty()) fail("loops: give at least one (whole-frame, deadline, deadline+prediction, deadline+oracle)");
   for (const std::string& l : p.loops)
     if (l != "whole-frame" && l != "deadline" && l != "deadline+prediction" && l != "deadline+oracle")
       fail("loops: unknown loop '{}' (known: whole-frame, deadline, deadline+prediction, deadline+oracle)", l);

@@ -96,7 +96,7 @@ void validate(const LoopSettings& s) {
     if (!(s.model_fixed_ms >= 0) || !std::isfinite(s.model_fixed_ms)) fail("model_fixed_ms: must be >= 0, got {}", s.model_fixed_ms);
   }
   if (s.margin_ms && (!(*s.margin_ms >= 0) || *s.margin_ms >= s.budget_ms))
-    fail("margin_ms: must be in [0, the frame budget {} ms), got {}", s.budget_ms, *s.margin_ms);
+    fail("margin_ms: must be in [0, the frame budget {:g} ms), got {}", s.budget_ms, *s.margin_ms);
   if (!(s.min_scale > 0 && s.min_scale <= 1)) fail("min_scale: must be in (0, 1], got {}", s.min_scale);
   if (!(s.slowdown >= 1) || !std::isfinite(s.slowdown)) fail("slowdown: must be >= 1, got {}", s.slowdown);
   validate(s.landing);
