@@ -54,8 +54,14 @@ def main():
     except ValueError:
         p.error(f"--size: {a.size} is not WxH")
     check_outputs(p, [("--json", a.json)], [a.recording, a.scene])
-    scene = foveal.Scene(a.scene)
-    rec = foveal.gaze.read(a.recording)
+    try:
+        scene = foveal.Scene(a.scene)
+    except (OSError, ValueError) as e:
+        p.error(f"--scene: {e}")
+    try:
+        rec = foveal.gaze.read(a.recording)
+    except (OSError, ValueError) as e:
+        p.error(f"--recording: {e}")
     samples = rec.samples
     t = samples["t_s"] - samples["t_s"][0]
     if a.start >= t[-1]:
@@ -63,8 +69,12 @@ def main():
     sx, sy = width / rec.screen[0], height / rec.screen[1]
     try:
         loop = foveal.Loop(scene, size=(width, height), max_rays=a.max_rays, refresh_hz=a.refresh_hz, device=a.device)
-    except (ValueError, RuntimeError) as e:
-        p.error(f"--device: {e}")
+    except (ValueError, RuntimeError) as e:  # the loop names its keyword: the option that set it
+        message = str(e)
+        for keyword, option in (("size", "--size"), ("max_rays", "--max-rays"), ("refresh_hz", "--refresh-hz"), ("device", "--device")):
+            if message.startswith(keyword + ":"):
+                p.error(option + message[len(keyword):])
+        p.error(f"--device {a.device}: {message}")
     period = 1.0 / a.refresh_hz
     count = int(round(a.duration * a.refresh_hz))
     first = int(np.searchsorted(t, a.start))

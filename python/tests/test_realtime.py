@@ -281,6 +281,13 @@ def test_the_paced_loop_script_reports_every_frame(tmp_path):
     assert unknown.returncode != 0 and "--device" in unknown.stderr and "unknown device 'gpu'" in unknown.stderr
     bad = subprocess.run([sys.executable, script, "--recording", str(recording), "--start", "1e6"], capture_output=True, text=True)
     assert bad.returncode != 0 and "--start" in bad.stderr and "past the recording's end" in bad.stderr
+    # Each refusal names the option that set it (a bad size was said to be --device's), in one line, no traceback
+    for args, said in ((["--size", "0x0"], "--size: width and height must be in 1..16384"),
+                       (["--max-rays", "-1"], "--max-rays: must be in [0, 65535]"),
+                       (["--scene", str(tmp_path / "none.obj")], "--scene: "),
+                       (["--scene", script], "--scene: "), (["--recording", script], "--recording: ")):
+        bad = subprocess.run([sys.executable, script, "--recording", str(recording)] + args, capture_output=True, text=True)
+        assert bad.returncode == 2 and said in bad.stderr and "Traceback" not in bad.stderr, (args, bad.stderr)
     # Its output is checked before any frame, as foveal's commands check theirs
     locked = tmp_path / "locked.json"
     locked.write_text("kept")
