@@ -29,7 +29,7 @@ import time
 from pathlib import Path
 
 import foveal
-from outputs import check_outputs, write_output
+from outputs import check_outputs, refuse_by_option, write_output
 
 
 
@@ -71,6 +71,8 @@ def main():
         p.error("--loops: give deadline and at least one loop to compare with it")
     if not (a.segment > 0 and a.first >= 0):
         p.error("--segment must be > 0 and --first >= 0")
+    if a.count < 0:
+        p.error(f"--count: must be 0 (every segment) or more, got {a.count}")
     try:
         width, height = (int(v) for v in a.size.lower().split("x"))
     except ValueError:
@@ -80,8 +82,16 @@ def main():
         landing = foveal.gaze.landing_params(a.landing)
     except ValueError as error:
         p.error(f"--landing: {error}")
-    scene = foveal.Scene(a.scene)
-    read = {r: foveal.gaze.read(r) for r in recordings}
+    try:
+        scene = foveal.Scene(a.scene)
+    except (OSError, ValueError) as error:
+        p.error(f"--scene: {error}")
+    read = {}
+    for r in recordings:
+        try:
+            read[r] = foveal.gaze.read(r)
+        except (OSError, ValueError) as error:
+            p.error(f"--recording: {error}")
     length = {r: float(rec.samples["t_s"][-1] - rec.samples["t_s"][0]) for r, rec in read.items()}
     model = dict(model_rays_per_ms=a.model_rays_per_ms, model_fixed_ms=a.model_fixed_ms) if a.clock == "model" else {}
     short = [r for r in recordings if a.first + a.segment > length[r]]
@@ -101,8 +111,12 @@ def main():
             break
         print(f"segment {start:g}–{start + a.segment:g} s: {len(these)} recording(s) ({time.perf_counter() - began:.0f} s so far)",
               file=sys.stderr, flush=True)
-        report = foveal.bench_latency(these, scene, size=(width, height), start_s=start, duration_s=a.segment, clock=a.clock,
-                                      loops=loops, landing=landing, **model)
+        try:  # (its arguments are checked before any tracing: a bad one stops the first segment at once)
+            report = foveal.bench_latency(these, scene, size=(width, height), start_s=start, duration_s=a.segment, clock=a.clock,
+                                          loops=loops, landing=landing, **model)
+        except ValueError as error:
+            refuse_by_option(p, error, {"size": "--size", "loops": "--loops", "model_rays_per_ms": "--model-rays-per-ms",
+                                        "model_fixed_ms": "--model-fixed-ms", "duration_s": "--segment", "start_s": "--first"})
         for r, rec in zip(these, report["recordings"]):
             segments[r] += 1
             for l in loops:

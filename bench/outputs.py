@@ -25,3 +25,13 @@ def check_outputs(parser, outputs, inputs):
 def write_output(path, text):
     """Written as every foveal writer writes: whole or not at all, never over a read-only file."""
     foveal._core._write_text(os.fspath(path), text)
+
+
+def refuse_by_option(parser, error, options):
+    """A library error that names its keyword ("size: …") as one line naming the option that set it
+    (`options`: keyword → option), or as given where it names none of them."""
+    message = str(error)
+    for keyword, option in options.items():
+        if message.startswith(keyword + ":"):
+            parser.error(option + message[len(keyword):])
+    parser.error(message)

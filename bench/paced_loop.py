@@ -26,7 +26,7 @@ from pathlib import Path
 import numpy as np
 
 import foveal
-from outputs import check_outputs, write_output
+from outputs import check_outputs, refuse_by_option, write_output
 
 
 
@@ -70,11 +70,7 @@ def main():
     try:
         loop = foveal.Loop(scene, size=(width, height), max_rays=a.max_rays, refresh_hz=a.refresh_hz, device=a.device)
     except (ValueError, RuntimeError) as e:  # the loop names its keyword: the option that set it
-        message = str(e)
-        for keyword, option in (("size", "--size"), ("max_rays", "--max-rays"), ("refresh_hz", "--refresh-hz"), ("device", "--device")):
-            if message.startswith(keyword + ":"):
-                p.error(option + message[len(keyword):])
-        p.error(f"--device {a.device}: {message}")
+        refuse_by_option(p, e, {"size": "--size", "max_rays": "--max-rays", "refresh_hz": "--refresh-hz", "device": "--device"})
     period = 1.0 / a.refresh_hz
     count = int(round(a.duration * a.refresh_hz))
     first = int(np.searchsorted(t, a.start))

@@ -327,6 +327,14 @@ def test_the_segments_script_pools_every_judged_saccade(tmp_path):
     # --landing: the prediction loops' predictor parameters, checked before any work and kept in the JSON
     bad = subprocess.run([sys.executable, script, "--recording", str(recording), "--landing", "speed=1"], capture_output=True, text=True)
     assert bad.returncode != 0 and "--landing: speed: no parameter of the landing predictor" in bad.stderr
+    # Each refusal names its option in one line, no traceback (the library's keyword was shown, with one)
+    for args, said in ((["--size", "0x0"], "--size: width and height must be in 1..16384"),
+                       (["--model-rays-per-ms", "-1"], "--model-rays-per-ms: must be > 0"),
+                       (["--count", "-1"], "--count: must be 0"), (["--scene", script], "--scene: "),
+                       (["--recording", script], "--recording: ")):
+        bad = subprocess.run([sys.executable, script, "--recording", str(recording), "--segment", "1", "--count", "1"] + args,
+                             capture_output=True, text=True, timeout=120)
+        assert bad.returncode == 2 and said in bad.stderr and "Traceback" not in bad.stderr, (args, bad.stderr)
     assert json.loads(out.read_text())["landing"] == foveal.gaze.landing_params()
     # Two outputs into one file (the Markdown would have replaced the JSON): refused before any work
     both = tmp_path / "both.txt"
