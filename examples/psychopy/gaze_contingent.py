@@ -101,6 +101,31 @@ def check_args(parser, args):
             parser.error(f"{name}: {path}: is read-only; it is not replaced (give another name, or make it writable)")
     if args.log is not None and os.path.exists(args.log + ".partial"):  # a failed session's flips: never written over
         parser.error(f"--log: {args.log}.partial holds the flips of a session that failed; move it away first")
+    outputs = [(name, path) for name, path in (("--log", args.log), ("--summary", args.summary)) if path is not None]
+    if len(outputs) == 2 and os.path.abspath(args.log) == os.path.abspath(args.summary):
+        parser.error(f"--log {args.log} and --summary {args.summary}: two outputs into one file; give each its own name")
+    for name, path in outputs:  # never over an input of the session
+        for input_name, given in (("--scene", args.scene), ("--tracker", args.tracker)):
+            if given and os.path.exists(given) and os.path.exists(path) and os.path.samefile(path, given):
+                parser.error(f"{name}: {path}: is {input_name} {given}, an input of this session; it is never written over")
+    # What foveal checks, before the stall probe and the window: the scene, its camera, the device
+    try:
+        scene = foveal.Scene(args.scene)
+    except (OSError, ValueError) as error:
+        parser.error(f"--scene: {error}")
+    if args.camera is not None:
+        try:
+            scene.camera(args.camera)
+        except ValueError as error:
+            parser.error(f"--camera: {error}")
+    if args.device not in ("auto", "cpu", "cuda"):
+        parser.error(f"--device: unknown device {args.device!r} (known: auto, cpu, cuda)")
+    if args.device == "cuda" and not foveal.device_available():
+        parser.error(f"--device cuda: no usable NVIDIA GPU answered ({foveal.device_description()}); give --device auto or cpu")
+    # A window needs a display: without one PsychoPy's window fails deep inside pyglet
+    if sys.platform.startswith("linux") and not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")):
+        parser.error("no display to open the window on (DISPLAY is not set): run it on a desktop, or under "
+                     "xvfb-run -a -s \"-screen 0 840x525x24\" (docs/realtime.md)")
 
 
 # Linear [0, 1] → sRGB → PsychoPy's float range [−1, 1], tabulated at 4096 steps (finer than the

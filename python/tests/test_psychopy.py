@@ -125,6 +125,23 @@ def test_gaze_contingent_refuses_bad_options_before_the_session(tmp_path):
                                 text=True, timeout=60)
         assert result.returncode == 2 and words in result.stderr, (args, result.stderr)
     assert locked.read_text() == "kept\n" and kept.read_text() == "flip\n0\n"
+    # foveal's own checks come before the stall probe and the window too; an input is never an output
+    scene = tmp_path / "scene.obj"
+    scene.write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n")
+    for args, words in ((["--device", "tpu"], "--device: unknown device 'tpu'"),
+                        (["--scene", str(tmp_path / "none.obj")], "--scene: "),
+                        (["--camera", "nope"], "--camera: scene 'builtin:box' has no camera named 'nope'"),
+                        (["--scene", str(scene), "--log", str(scene)], "--log: " + str(scene) + ": is --scene"),
+                        (["--log", "a.csv", "--summary", "./a.csv"], "two outputs into one file")):
+        result = subprocess.run([sys.executable, str(EXAMPLES / "gaze_contingent.py"), *args], cwd=tmp_path, capture_output=True,
+                                text=True, timeout=60)
+        assert result.returncode == 2 and words in result.stderr.splitlines()[-1], (args, result.stderr)
+    assert scene.read_text().startswith("v 0 0 0")
+    # No display: one line saying so (it was pyglet's traceback, after the scene and the stall probe)
+    env = {k: v for k, v in os.environ.items() if k not in ("DISPLAY", "WAYLAND_DISPLAY")}
+    result = subprocess.run([sys.executable, str(EXAMPLES / "gaze_contingent.py")], cwd=tmp_path, capture_output=True, text=True,
+                            timeout=60, env=env)
+    assert result.returncode == 2 and "no display to open the window on" in result.stderr and "Traceback" not in result.stderr
 
 
 def test_foveation_threshold_quest_converges_to_the_model_observers_threshold(tmp_path):
