@@ -50,7 +50,50 @@ def parse_args(argv=None):
     p.add_argument("--seed", type=int, default=1, help="seed of the interval order and the simulated observer")
     p.add_argument("--simulate", type=float, default=None, metavar="GAMMA", help="a simulated observer with this threshold γ")
     p.add_argument("--out", default="data", help="folder for PsychoPy's data files")
-    return p.parse_args(argv)
+    args = p.parse_args(argv)
+    check_args(p, args)
+    return args
+
+
+def check_args(parser, args):
+    """Every option, before any rendering or window: one line naming it (a bad one was a traceback,
+    or surfaced only once the reference had rendered and the window opened)."""
+    try:
+        args.w, args.h = (int(v) for v in args.size.lower().split("x"))
+        assert 1 <= args.w <= 16384 and 1 <= args.h <= 16384
+    except (ValueError, AssertionError):
+        parser.error(f"--size: expected WxH in pixels (1–16384 each), got {args.size!r}")
+    try:
+        args.wcm, args.hcm, args.dcm = (float(v) for v in args.display.split(","))
+        assert all(math.isfinite(v) and v > 0 for v in (args.wcm, args.hcm, args.dcm))
+    except (ValueError, AssertionError):
+        parser.error(f"--display: expected three positive numbers W_CM,H_CM,DIST_CM, got {args.display!r}")
+    if args.trials < 1:
+        parser.error(f"--trials: must be at least 1, got {args.trials}")
+    if not args.max_rays >= 1:
+        parser.error(f"--max-rays: must be at least 1, got {args.max_rays}")
+    if not 1.0 <= args.start_gamma <= MAX_GAMMA:
+        parser.error(f"--start-gamma: must be within QUEST's range of γ, [1, {MAX_GAMMA:g}], got {args.start_gamma}")
+    if not (math.isfinite(args.interval_s) and args.interval_s > 0):
+        parser.error(f"--interval-s: must be positive seconds, got {args.interval_s}")
+    if args.simulate is not None and not (math.isfinite(args.simulate) and args.simulate > 0):
+        parser.error(f"--simulate: the threshold γ must be positive, got {args.simulate}")
+    if not args.participant or os.sep in args.participant or args.participant in (".", ".."):
+        parser.error(f"--participant: {args.participant!r} names the data files: no path separator")
+    if os.path.exists(args.out) and not os.path.isdir(args.out):
+        parser.error(f"--out: {args.out} is a file; give a folder")
+    summary = os.path.join(args.out, f"{args.participant}_summary.json")
+    if os.path.exists(summary):  # a participant's earlier session: never written over
+        parser.error(f"--participant {args.participant}: {summary} holds a session already; give another --participant or --out")
+    import foveal
+    try:
+        args.scene_object = foveal.Scene(args.scene)
+    except (OSError, ValueError) as error:
+        parser.error(f"--scene: {error}")
+    if args.device not in ("auto", "cpu", "cuda"):
+        parser.error(f"--device: unknown device {args.device!r} (known: auto, cpu, cuda)")
+    if sys.platform.startswith("linux") and not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")):
+        parser.error("no display to open the window on (DISPLAY is not set): run it on a desktop, or under xvfb-run -a")
 
 
 # QUEST's psychometric function (Watson & Pelli 1983, as PsychoPy's QuestHandler uses it)
@@ -87,14 +130,10 @@ def main(argv=None) -> int:
     import foveal
     from psychopy import core, data, event, visual
 
-    if args.trials < 1:
-        raise SystemExit("--trials: must be at least 1")
-    if args.simulate is not None and not args.simulate > 0:
-        raise SystemExit("--simulate: the threshold γ must be positive")
-    w, h = (int(v) for v in args.size.lower().split("x"))
-    wcm, hcm, dcm = (float(v) for v in args.display.split(","))
+    w, h = args.w, args.h
+    wcm, hcm, dcm = args.wcm, args.hcm, args.dcm
     display = foveal.Display(wcm, hcm, dcm, w, h)
-    renderer = foveal.Renderer(foveal.Scene(args.scene), device=args.device)
+    renderer = foveal.Renderer(args.scene_object, device=args.device)
     gaze = (w / 2.0, h / 2.0)
     reference_linear = renderer.render(size=(w, h), gaze=gaze, mode="full", max_rays=args.max_rays, display=display).image.copy()
     reference = to_psychopy(reference_linear)

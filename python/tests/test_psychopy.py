@@ -181,3 +181,24 @@ def test_foveation_threshold_refuses_a_display_where_foveation_changes_no_pixel(
     assert result.returncode != 0
     assert "foveation changes no pixel" in result.stderr and "320x200" in result.stderr
     assert not (tmp_path / "data").exists()
+
+
+def test_foveation_threshold_refuses_bad_options_before_any_rendering(tmp_path):
+    """Each bad option is one line naming it, before the reference renders or a window opens (a bad
+    size was a traceback, a missing scene surfaced after the window), and a participant's earlier
+    session is never written over."""
+    (tmp_path / "data").mkdir()
+    earlier = tmp_path / "data" / "p1_summary.json"
+    earlier.write_text('{"threshold_gamma": 3}')
+    cases = [(["--size", "0x0"], "--size"), (["--size", "abc"], "--size"), (["--display", "1,2"], "--display"),
+             (["--trials", "0"], "--trials"), (["--start-gamma", "20"], "--start-gamma"), (["--interval-s", "-1"], "--interval-s"),
+             (["--simulate", "nan"], "--simulate"), (["--participant", "a/b"], "--participant"),
+             (["--max-rays", "0"], "--max-rays"), (["--scene", str(tmp_path / "none.obj")], "--scene"),
+             (["--device", "tpu"], "--device"), (["--participant", "p1"], "--participant p1: "),
+             (["--out", str(earlier)], "--out")]
+    for args, name in cases:
+        result = subprocess.run([sys.executable, str(EXAMPLES / "foveation_threshold.py"), *args], cwd=tmp_path,
+                                capture_output=True, text=True, timeout=60)
+        assert result.returncode == 2, (args, result.stderr)
+        assert f"error: {name}" in result.stderr.splitlines()[-1] and "Traceback" not in result.stderr, (args, result.stderr)
+    assert earlier.read_text() == '{"threshold_gamma": 3}'
