@@ -60,13 +60,15 @@ def check_args(parser, args):
     or surfaced only once the reference had rendered and the window opened)."""
     try:
         args.w, args.h = (int(v) for v in args.size.lower().split("x"))
-        assert 1 <= args.w <= 16384 and 1 <= args.h <= 16384
-    except (ValueError, AssertionError):
+    except ValueError:
+        args.w = args.h = 0
+    if not (1 <= args.w <= 16384 and 1 <= args.h <= 16384):
         parser.error(f"--size: expected WxH in pixels (1–16384 each), got {args.size!r}")
     try:
         args.wcm, args.hcm, args.dcm = (float(v) for v in args.display.split(","))
-        assert all(math.isfinite(v) and v > 0 for v in (args.wcm, args.hcm, args.dcm))
-    except (ValueError, AssertionError):
+    except ValueError:
+        args.wcm = args.hcm = args.dcm = 0.0
+    if not all(math.isfinite(v) and v > 0 for v in (args.wcm, args.hcm, args.dcm)):
         parser.error(f"--display: expected three positive numbers W_CM,H_CM,DIST_CM, got {args.display!r}")
     if args.trials < 1:
         parser.error(f"--trials: must be at least 1, got {args.trials}")

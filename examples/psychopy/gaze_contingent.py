@@ -110,7 +110,7 @@ def check_args(parser, args):
                 parser.error(f"{name}: {path}: is {input_name} {given}, an input of this session; it is never written over")
     # What foveal checks, before the stall probe and the window: the scene, its camera, the device
     try:
-        scene = foveal.Scene(args.scene)
+        scene = args.scene_object = foveal.Scene(args.scene)  # (loaded once: the session takes it)
     except (OSError, ValueError) as error:
         parser.error(f"--scene: {error}")
     if args.camera is not None:
@@ -187,7 +187,7 @@ def main(argv=None) -> int:
     w, h = (int(v) for v in args.size.lower().split("x"))
     wcm, hcm, dcm = (float(v) for v in args.display.split(","))
     display = foveal.Display(wcm, hcm, dcm, w, h)
-    scene = foveal.Scene(args.scene)
+    scene = args.scene_object
 
     win = visual.Window((w, h), units="pix", fullscr=args.fullscreen, allowGUI=False, color=(-1, -1, -1), pos=(0, 0))
     refresh_hz = args.refresh_hz or win.getActualFrameRate(nIdentical=10, nMaxFrames=60) or 60.0
