@@ -35,6 +35,8 @@ import sys
 
 import numpy as np
 
+from session_checks import check_display, check_foveal_inputs
+
 
 def parse_args(argv=None):
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0], formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -87,15 +89,8 @@ def check_args(parser, args):
     summary = os.path.join(args.out, f"{args.participant}_summary.json")
     if os.path.exists(summary):  # a participant's earlier session: never written over
         parser.error(f"--participant {args.participant}: {summary} holds a session already; give another --participant or --out")
-    import foveal
-    try:
-        args.scene_object = foveal.Scene(args.scene)
-    except (OSError, ValueError) as error:
-        parser.error(f"--scene: {error}")
-    if args.device not in ("auto", "cpu", "cuda"):
-        parser.error(f"--device: unknown device {args.device!r} (known: auto, cpu, cuda)")
-    if sys.platform.startswith("linux") and not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")):
-        parser.error("no display to open the window on (DISPLAY is not set): run it on a desktop, or under xvfb-run -a")
+    args.scene_object = check_foveal_inputs(parser, args.scene, None, args.device)
+    check_display(parser)
 
 
 # QUEST's psychometric function (Watson & Pelli 1983, as PsychoPy's QuestHandler uses it)

@@ -33,6 +33,8 @@ import time
 
 import numpy as np
 
+from session_checks import check_display, check_foveal_inputs
+
 
 def parse_args(argv=None):
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0], formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -108,24 +110,9 @@ def check_args(parser, args):
         for input_name, given in (("--scene", args.scene), ("--tracker", args.tracker)):
             if given and os.path.exists(given) and os.path.exists(path) and os.path.samefile(path, given):
                 parser.error(f"{name}: {path}: is {input_name} {given}, an input of this session; it is never written over")
-    # What foveal checks, before the stall probe and the window: the scene, its camera, the device
-    try:
-        scene = args.scene_object = foveal.Scene(args.scene)  # (loaded once: the session takes it)
-    except (OSError, ValueError) as error:
-        parser.error(f"--scene: {error}")
-    if args.camera is not None:
-        try:
-            scene.camera(args.camera)
-        except ValueError as error:
-            parser.error(f"--camera: {error}")
-    if args.device not in ("auto", "cpu", "cuda"):
-        parser.error(f"--device: unknown device {args.device!r} (known: auto, cpu, cuda)")
-    if args.device == "cuda" and not foveal.device_available():
-        parser.error(f"--device cuda: no usable NVIDIA GPU answered ({foveal.device_description()}); give --device auto or cpu")
-    # A window needs a display: without one PsychoPy's window fails deep inside pyglet
-    if sys.platform.startswith("linux") and not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")):
-        parser.error("no display to open the window on (DISPLAY is not set): run it on a desktop, or under "
-                     "xvfb-run -a -s \"-screen 0 840x525x24\" (docs/realtime.md)")
+    # Before the stall probe and the window: the scene (loaded once: the session takes it), its camera, the device
+    args.scene_object = check_foveal_inputs(parser, args.scene, args.camera, args.device)
+    check_display(parser)
 
 
 # Linear [0, 1] → sRGB → PsychoPy's float range [−1, 1], tabulated at 4096 steps (finer than the

@@ -32,6 +32,7 @@ from ._core import (  # noqa: F401  (re-exported)
     Scene,
     VisionSimulation,
     VisionStep,
+    choose_device,
     device_available,
     device_description,
     busiest_others,
@@ -45,7 +46,7 @@ from . import gaze as _gaze
 __all__ = [
     "Camera", "Display", "Frame", "Loop", "LoopFrame", "MachineSnapshot", "Renderer", "Scene", "VisionSimulation", "VisionStep",
     "bench_latency", "busiest_others", "compare", "gaze", "load_image", "machine_snapshot", "perceive", "save_image", "stalls",
-    "device_available", "device_description",
+    "choose_device", "device_available", "device_description",
 ]
 __version__ = "0.1.0"
 

@@ -17,6 +17,7 @@
 #include "foveal/render/frame_renderer.h"
 #include "foveal/render/realtime.h"
 #include "foveal/util/cpu_share.h"
+#include "foveal/util/device.h"
 #include "foveal/util/error.h"
 #include "foveal/util/files.h"
 #include "foveal/util/parallel.h"
@@ -805,6 +806,10 @@ NB_MODULE(_core, m) {
       "device_available", [] { return availability().usable; }, "Whether a usable NVIDIA GPU answered.");
   m.def(
       "device_description", [] { return availability().describe(); }, "The GPU, or why there is none.");
+  m.def(
+      "choose_device", [](const std::string& name) { return std::string(to_string(choose_device(name))); }, "name"_a,
+      "The device `name` (auto, cpu or cuda) renders on, 'cpu' or 'cuda', as every device= argument chooses it: "
+      "ValueError for an unknown name, RuntimeError for cuda where no usable GPU answered.");
 
   bind_gaze(m);
   bind_perceive(m);

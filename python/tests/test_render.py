@@ -85,6 +85,21 @@ def test_no_gpu_is_a_runtime_error_when_cuda_is_asked_for(box):
         foveal.Renderer(box, device="cuda")
 
 
+def test_choose_device_is_the_rule_every_device_argument_follows(box):
+    # What a session checks before it starts: the device it would render on, or the error it would get
+    gpu = foveal.device_available()
+    assert foveal.choose_device("cpu") == "cpu"
+    assert foveal.choose_device("auto") == ("cuda" if gpu else "cpu")
+    assert foveal.Renderer(box, device="auto").device_description.startswith(foveal.choose_device("auto"))
+    with pytest.raises(ValueError, match="unknown device 'tpu' \\(known: auto, cpu, cuda\\)"):
+        foveal.choose_device("tpu")
+    if gpu:
+        assert foveal.choose_device("cuda") == "cuda"
+    else:
+        with pytest.raises(RuntimeError, match="cuda"):
+            foveal.choose_device("cuda")
+
+
 def test_the_gil_is_released_while_rendering(box):
     renderer = foveal.Renderer(box, device="cpu", threads=1)
     done = threading.Event()
