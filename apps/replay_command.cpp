@@ -154,6 +154,8 @@ nlohmann::json replay_stats_json(const ReplayOptions& o, const ReplaySettings& s
         {"total", summary.wall_ms},
         {"per_rendered_frame", summary.frames > summary.reused ? summary.render_ms / (summary.frames - summary.reused) : 0.0}}},
       {"stopped", summary.stopped},
+      {"budget_ms", summary.budget_ms ? nlohmann::json(*summary.budget_ms) : nlohmann::json(nullptr)},  // --realtime: the loop's
+      {"frames_late", summary.budget_ms ? nlohmann::json(summary.late) : nlohmann::json(nullptr)},
       {"peak_rss_mib", peak_rss_mib()}};
   if (recording)
     j["recording"] = {{"format", to_string(recording->format)},
@@ -169,6 +171,9 @@ void print_replay(const ReplayOptions& o, const ReplaySettings& settings, const 
              source_name, summary.frames, settings.fps, summary.frames - summary.reused, summary.reused, params.width, params.height,
              o.gaze.fixation, threads);
   fmt::print("  device   {}\n", renderer.describe());
+  if (summary.budget_ms)
+    fmt::print("  loop     a frame every {:.1f} ms at {:g} Hz, each within {:.1f} ms: {} late of {}\n", 1000 / settings.fps, settings.fps,
+               *summary.budget_ms, summary.late, summary.frames);
   fmt::print("  time     {:.1f} s ({:.0f} ms per rendered frame), {:.1f} M AO rays\n", summary.wall_ms / 1000,
              summary.frames > summary.reused ? summary.render_ms / (summary.frames - summary.reused) : 0.0, summary.ao_rays / 1e6);
   fmt::print("  wrote    {}/frame_00000.png … , {}", o.output, csv_path);

@@ -170,16 +170,25 @@ TEST(GazeCli, RealtimeReplayOfAnOrbitingCameraKeepsItsRays) {
 TEST(GazeCli, RealtimeReplayRunsAtTheDisplaysRefresh) {
   const std::string rec = write_three_fixations("refresh.csv");
   const std::string base = "replay --gaze " + rec + " --screen 480x300 --scene builtin:plane --size 32x20 --max-rays 4 --duration 0.5 -q ";
+  std::map<std::string, nlohmann::json> stats;
   auto frames = [&](const std::string& args, const std::string& out) {
     const CliRun r = foveal_test::foveal(base + args + " -o " + out + " --stats " + out + ".json");
     EXPECT_EQ(r.status, 0) << args << ": " << r.err;
-    const nlohmann::json stats = nlohmann::json::parse(std::ifstream(scratch(out + ".json")));
-    return std::pair{read_csv(scratch(out + "/frames.csv")).size() - 1, stats.at("fps").get<double>()};
+    stats[out] = nlohmann::json::parse(std::ifstream(scratch(out + ".json")));
+    return std::pair{read_csv(scratch(out + "/frames.csv")).size() - 1, stats[out].at("fps").get<double>()};
   };
   EXPECT_EQ(frames("--realtime", "refresh60"), std::pair(size_t{31}, 60.0));  // 0.5 s at 60 Hz, both ends
   EXPECT_EQ(frames("--realtime --refresh-hz 120 --frame-budget-ms 4", "refresh120"), std::pair(size_t{61}, 120.0));
   EXPECT_EQ(frames("--realtime --fps 30", "refresh30"), std::pair(size_t{16}, 30.0));
   EXPECT_EQ(frames("", "whole30"), std::pair(size_t{16}, 30.0));  // without --realtime, 30 frames a second of gaze
+  // Each frame's budget as the loop took it: a refresh, or the one given; none without the loop
+  EXPECT_NEAR(stats["refresh60"].at("budget_ms").get<double>(), 1000.0 / 60, 1e-9);
+  EXPECT_EQ(stats["refresh120"].at("budget_ms").get<double>(), 4.0);
+  EXPECT_NEAR(stats["refresh30"].at("budget_ms").get<double>(), 1000.0 / 30, 1e-9);
+  EXPECT_TRUE(stats["whole30"].at("budget_ms").is_null());
+  EXPECT_TRUE(stats["whole30"].at("frames_late").is_null());
+  const int late = stats["refresh120"].at("frames_late").get<int>();
+  EXPECT_TRUE(late >= 0 && late <= 61) << late;
   for (const auto& [bad, needle] : std::vector<std::pair<std::string, std::string>>{
            {"--refresh-hz 60", "--refresh-hz needs --realtime"},
            {"--frame-budget-ms 5", "--frame-budget-ms needs --realtime"},

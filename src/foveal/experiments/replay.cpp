@@ -74,6 +74,7 @@ class LoopMaker {
     loop_.frame(camera);  // the view's surfaces, before the first frame is due
   }
   void push(const GazeSample& g, std::optional<glm::dvec2> render_px) { loop_.push_gaze(g.t_s, g.valid ? render_px : std::nullopt); }
+  double budget_ms() const { return loop_.settings().budget_ms; }
   // The loop's next frame, seen from `view` (the sequence's camera at its time, replay_camera)
   const Frame& make(const Camera& view, ReplayFrame& info) {
     loop_.recycle(std::move(frame_.color));  // the last frame is written: composed into again
@@ -83,6 +84,7 @@ class LoopMaker {
     info.ms = f.ms;
     info.fovea_converged = f.fovea_converged;
     info.kept_pixels = f.kept_pixels;
+    info.late = f.late;
     // Every frame at the size asked for (a video needs one size; the gaze columns are in its
     // pixels): where the loop rendered smaller, scaled up as a display would show it
     info.scale = loop_.scale();
@@ -152,6 +154,7 @@ void account(ReplaySummary& summary, const ReplayFrame& f) {
   summary.reused += f.reused;
   if (!f.reused) summary.ao_rays += f.ao_rays;
   summary.render_ms += f.ms;
+  summary.late += f.late;
 }
 
 }  // namespace
@@ -197,6 +200,7 @@ ReplaySummary replay_recording_realtime(const Recording& r, const Display& displ
       },
       [&](const GazeSample& g, glm::dvec2 px) { maker.push(g, px); });
   summary.wall_ms = wall.ms();
+  summary.budget_ms = maker.budget_ms();
   return summary;
 }
 
@@ -272,12 +276,14 @@ ReplaySummary replay_live_realtime(GazeSource& source, const Display& display, F
   (void)display;  // the loop's saccade predictor measures angles on the render's display
   const ScreenMapping mapping = make_screen_mapping(source.screen_px(), {params.width, params.height}, s.stimulus);
   LoopMaker maker(renderer, scene, camera, params, s);
-  return follow_live(
+  ReplaySummary summary = follow_live(
       source, mapping, s, sink, progress,
       [&](const std::vector<GazeSample>& samples) {
         for (const GazeSample& g : samples) maker.push(g, mapping.to_render(g.px));
       },
       [&](ReplayFrame& info) -> const Frame& { return maker.make(replay_camera(camera, s, info.t_s), info); });
+  summary.budget_ms = maker.budget_ms();
+  return summary;
 }
 
 }  // namespace foveal

@@ -60,7 +60,8 @@ struct ReplayFrame {
   // that kept AO rays from the view before
   double fovea_converged = NAN;
   uint64_t kept_pixels = 0;
-  double scale = 1;  // realtime: the loop's render size / the size asked for (the frame is scaled up where < 1)
+  double scale = 1;   // realtime: the loop's render size / the size asked for (the frame is scaled up where < 1)
+  bool late = false;  // realtime: the frame took longer than its budget
 };
 
 struct ReplaySummary {
@@ -69,6 +70,9 @@ struct ReplaySummary {
   double render_ms = 0;  // sum of the frames' ms
   double wall_ms = 0;
   std::string stopped;  // why it stopped early ("" when it ran to the end)
+  // realtime: each frame's budget as the loop took it (unset without the loop), and the frames late
+  std::optional<double> budget_ms;
+  int late = 0;
 };
 
 using ReplaySink = std::function<void(const ReplayFrame&, const Frame&)>;
