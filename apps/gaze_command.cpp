@@ -261,6 +261,7 @@ nlohmann::json events_json(const GazeCommandOptions& o, const EventsRun& run) {
   if (run.second) ev["coder2"] = scores(*run.second), ev["coder2"]["labels"] = o.coder2;
   if (run.ceiling) ev["ceiling"] = scores(*run.ceiling), ev["ceiling"]["labels"] = o.coder2;
   ev["landings"] = landings_json(run.landings);
+  if (const std::string slow = late_landing_note(1 / run.detection->sampling_hz); !slow.empty()) ev["landings"]["note"] = slow;
   return ev;
 }
 
@@ -317,11 +318,12 @@ void print_gaze(const GazeCommandOptions& o, const Recording& recording, const G
     const auto [fm, f90] = median_p90(first);
     const auto [tm, t90] = median_p90(third);
     const double gm = median_p90(gained).first;
+    const std::string note = late_landing_note(1 / run.detection->sampling_hz);
     if (!run.landings.empty())
       fmt::print(
           "  landings  {} of {} saccades predicted live: error at the first prediction median {:.2f} deg (p90 {:.2f}), two "
-          "thirds in {:.2f} deg (p90 {:.2f}); within 1 deg for good {:.0f} ms before landing (median)\n",
-          predicted, run.landings.size(), fm, f90, tm, t90, gm);
+          "thirds in {:.2f} deg (p90 {:.2f}); within 1 deg for good {:.0f} ms before landing (median){}\n",
+          predicted, run.landings.size(), fm, f90, tm, t90, gm, note.empty() ? "" : "; " + note);
   }
   if (run.evaluation) print_scores(*run.evaluation, fmt::format("scores    {} against {}", run.detector, o.evaluate));
   if (run.second) print_scores(*run.second, fmt::format("scores    {} against {}", run.detector, o.coder2));

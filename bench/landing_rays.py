@@ -21,11 +21,15 @@ labelled landing only where the prediction in force was made before the velocity
 or only after it; the prediction otherwise: where the gap to the oracle lies). Before the onset is
 detected every strategy's fovea is where the eye is.
 
+`--sample-hz` replays each recording as a slower tracker would have delivered it (every k-th
+sample; its latency then one of its sample periods + 2 ms): what prediction is worth with a 60-Hz
+or 120-Hz tracker, where a saccade holds a few samples.
+
 The default recordings are Lund 2013's training part (Andersson et al. 2017; 500 Hz, 1024×768 px on
 38×30 cm at 67 cm), where any constant of a predictor is chosen; the IRF recordings are test data.
 
     .venv/bin/python bench/landing_rays.py [--recording CSV ...] [--min-amplitude 5] [--refresh-hz 60]
-        [--rays-per-frame 316667] [--fovea-deg 5.7,3.7] [--px-per-deg 19.4] [--phases 3] [--seed 1]
+        [--sample-hz HZ] [--rays-per-frame 316667] [--fovea-deg 5.7,3.7] [--px-per-deg 19.4] [--phases 3] [--seed 1]
         [--strategies eye,prediction,region:2,oracle] [--json F] [--markdown F]
 """
 import argparse
@@ -78,6 +82,16 @@ def read_lund(path):
                     np.degrees(np.arctan((y / LUND_SCREEN_PX[1] - 0.5) * LUND_SCREEN_CM[1] / LUND_DISTANCE_CM))], 1)
     deg[lost] = np.nan
     return t, deg, label
+
+
+def every_kth(path, t, deg, label, sample_hz):
+    """The samples a tracker at `sample_hz` would have delivered: every k-th, k the recording's rate over `sample_hz`,
+    rounded. A label is that of the sample kept, so a saccade keeps the samples that fall inside it."""
+    native = 1.0 / float(np.median(np.diff(t)))
+    if sample_hz > native * 1.01:
+        raise ValueError(f"{sample_hz:g} Hz is faster than {os.path.basename(path)}'s own {native:.0f} Hz")
+    k = max(1, int(round(native / sample_hz)))
+    return t[::k], deg[::k], label[::k]
 
 
 def labelled_saccades(t, deg, label, min_amplitude):
@@ -217,6 +231,9 @@ def main():
                    help="a Lund 2013 labelled recording (repeatable; default: the eleven *_MN.csv of the training part)")
     p.add_argument("--min-amplitude", type=float, default=5.0, help="labelled saccades at least this long, degrees (5)")
     p.add_argument("--refresh-hz", type=float, default=60.0, help="the display's refresh rate (60)")
+    p.add_argument("--sample-hz", type=float,
+                   help="replay each recording as a slower tracker would deliver it: every k-th sample, k the recording's "
+                        "rate over this one, rounded (default: every sample)")
     p.add_argument("--rays-per-frame", type=int, default=316667,
                    help="AO rays a frame (316667: the model clock's 25,000 rays/ms over a 16.7-ms frame less 4 ms)")
     p.add_argument("--fovea-deg", default="5.7,3.7",
@@ -235,6 +252,8 @@ def main():
     for name, value in (("--refresh-hz", a.refresh_hz), ("--px-per-deg", a.px_per_deg)):
         if not (math.isfinite(value) and value > 0):
             p.error(f"{name}: must be a finite number > 0, got {value}")
+    if a.sample_hz is not None and not (math.isfinite(a.sample_hz) and a.sample_hz > 0):
+        p.error(f"--sample-hz: must be a finite number > 0, got {a.sample_hz}")
     if not (math.isfinite(a.min_amplitude) and a.min_amplitude >= 0):
         p.error(f"--min-amplitude: must be a finite number >= 0, got {a.min_amplitude}")
     if a.rays_per_frame <= 0:
@@ -261,15 +280,24 @@ def main():
 
     rng = np.random.default_rng(a.seed)
     rows = []
+    rates = []
+    labelled = 0
     errors = []
     for path in recordings:
         try:
             t, deg, label = read_lund(path)
         except (OSError, ValueError) as error:
             sys.exit(f"landing_rays.py: error: {error}")
+        if a.sample_hz is not None:
+            try:
+                t, deg, label = every_kth(path, t, deg, label, a.sample_hz)
+            except ValueError as error:
+                p.error(f"--sample-hz: {error}")
+        rates.append(1.0 / float(np.median(np.diff(t))))
         flights = foveal.gaze.predict_landings(t, deg)
         found = 0
         saccades = labelled_saccades(t, deg, label, a.min_amplitude)
+        labelled += len(saccades)
         for first, last in saccades:
             flight = next((f for f in flights if t[first] - 0.02 <= f["onset_s"] <= t[last]), None)
             if flight is None or not len(flight["prediction_s"]):
@@ -284,7 +312,9 @@ def main():
               file=sys.stderr)
     if not rows:
         sys.exit("landing_rays.py: error: no labelled saccade the predictor saw")
-    lines = [f"{len(rows)} labelled saccades >= {a.min_amplitude:g} deg, {a.refresh_hz:g} Hz, {a.rays_per_frame} rays a frame, "
+    rate = f"{min(rates):.0f} Hz" if round(min(rates)) == round(max(rates)) else f"{min(rates):.0f}–{max(rates):.0f} Hz"
+    lines = [f"{len(rows)} of {labelled} labelled saccades >= {a.min_amplitude:g} deg seen by the predictor (samples at {rate}), "
+             f"display {a.refresh_hz:g} Hz, {a.rays_per_frame} rays a frame, "
              f"fovea {a.fovea[0]:g} x {a.fovea[1]:g} deg, {a.phases} phases each", "",
              "| strategy | share of the landed fovea's rays cast before the landing, mean | median |", "|---|---:|---:|"]
     for before, when in ((True, "before the peak was passed"), (False, "after")):
@@ -303,6 +333,7 @@ def main():
         write_output(a.markdown, text)
     if a.json:
         write_output(a.json, json.dumps({"recordings": [os.path.basename(r) for r in recordings], "refresh_hz": a.refresh_hz,
+                                         "sample_hz": [float(r) for r in rates], "labelled_saccades": labelled,
                                          "rays_per_frame": a.rays_per_frame, "fovea_deg": list(a.fovea), "px_per_deg": a.px_per_deg,
                                          "phases": a.phases, "seed": a.seed, "summary": summary, "saccades": rows}, indent=1) + "\n")
 

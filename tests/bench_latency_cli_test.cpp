@@ -13,9 +13,9 @@ using namespace foveal_test;
 
 namespace {
 
-// 1.6 s at 500 Hz on a 1680×1050 screen: a fixation, a 20° saccade (a smooth bell of velocity over
-// 65 ms), a fixation, a saccade back, a fixation.
-std::string write_saccades(const std::string& name) {
+// 1.6 s at 500 Hz (or `hz`) on a 1680×1050 screen: a fixation, a 20° saccade (a smooth bell of
+// velocity over 65 ms), a fixation, a saccade back, a fixation.
+std::string write_saccades(const std::string& name, double hz = 500) {
   const fs::path path = scratch(name);
   fs::create_directories(path.parent_path());
   std::ofstream out(path);
@@ -24,8 +24,8 @@ std::string write_saccades(const std::string& name) {
     auto bell = [](double tau) { return tau <= 0 ? 0.0 : tau >= 1 ? 1.0 : tau - std::sin(2 * M_PI * tau) / (2 * M_PI); };
     return 400 + 800 * bell((t - 0.4) / 0.065) - 800 * bell((t - 1.0) / 0.065);
   };
-  for (int i = 0; i < 800; ++i) {
-    const double t = i / 500.0;
+  for (int i = 0; i < 1.6 * hz; ++i) {
+    const double t = i / hz;
     out << t << "," << x_at(t) + 0.3 * (i % 3) << "," << 520 + 0.2 * (i % 2) << "\n";
   }
   return path.string();
@@ -109,6 +109,7 @@ TEST(BenchLatencyCli, ThreeLoopsUnderTheModelClockWriteTheDocumentedJson) {
                                                               r["deadline+prediction"]["median_landing_to_converged_ms"].get<double>());
   EXPECT_NEAR(r["third_of_median_saccade_ms"].get<double>(), r["deadline"]["saccades"][0]["duration_ms"].get<double>() / 3, 10);
   EXPECT_NE(a.out.find("Gained over the deadline loop's median: deadline+prediction"), std::string::npos) << a.out;
+  EXPECT_FALSE(r.contains("prediction_note"));  // 500 Hz: nothing to say
   for (const char* loop : {"deadline", "deadline+prediction"}) {
     EXPECT_EQ(without_bound(k["recordings"][0][loop]["saccades"]), without_bound(r[loop]["saccades"])) << loop;
     EXPECT_EQ(k["recordings"][0][loop]["timeline"], r[loop]["timeline"]) << loop;
@@ -136,6 +137,19 @@ TEST(BenchLatencyCli, TheOracleLoopPlacesTheFoveaAtTheTrueLanding) {
   double predicted = 0;                                   // the mirror's last prediction before each landing is not exact
   for (const auto& s : rec_json["deadline+prediction"]["saccades"]) predicted += s["predicted_error_deg"].get<double>();
   EXPECT_GT(predicted, 1e-3);
+}
+
+// A 60-Hz tracker: a saccade spans a few samples and its landing is known too late to gain much,
+// which the report says beside the gain (Landing.UnderNinetyHertzALandingIsKnownTooLate)
+TEST(BenchLatencyCli, ASlowTrackersPredictionIsSaidToGainLittle) {
+  const std::string rec = write_saccades("saccades60.csv", 60);
+  const CliRun run = foveal_test::foveal("bench latency --scene builtin:box --size 64x40 --max-rays 16 --recording " + rec +
+                                         " --duration 1.5 --clock model --model-rays-per-ms 500 --model-fixed-ms 3 --min-amplitude 5"
+                                         " --loops deadline,deadline+prediction --json slow.json");
+  ASSERT_EQ(run.status, 0) << run.err << run.out;
+  EXPECT_NE(run.out.find("Prediction: gaze samples come 16.7 ms apart (60 Hz)"), std::string::npos) << run.out;
+  const auto j = nlohmann::json::parse(std::ifstream(scratch("slow.json")));
+  EXPECT_NE(j["recordings"][0]["prediction_note"].get<std::string>().find("too late to gain much"), std::string::npos);
 }
 
 TEST(BenchLatencyCli, BadOptionsAreOneClearLine) {

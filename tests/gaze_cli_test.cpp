@@ -511,6 +511,26 @@ TEST(GazeCli, EventsReportEachSaccadesPredictedLanding) {
   while (std::getline(tsv, line)) ++tsv_rows;
   EXPECT_EQ(tsv_rows, rows);
   expect_one_line_error("gaze " + path + " --landings-out x.tsv", "--landings-out");
+  EXPECT_FALSE(landings.contains("note"));  // 1000 Hz: landings known in time
+}
+
+// A 60-Hz recording: its saccades span a few samples, and the report says the landings are known
+// too late to gain much (Landing.UnderNinetyHertzALandingIsKnownTooLate)
+TEST(GazeCli, ASlowRecordingsLandingsAreSaidToComeLate) {
+  {
+    std::ofstream out(scratch("sixty.csv"));
+    out << "t,x,y\n";
+    for (int i = 0; i < 240; ++i) {  // 4 s: a 15° step of gaze each second, over 50 ms
+      const double t = i / 60.0, phase = std::fmod(t, 1.0);
+      const double x = 400 + 500 * std::min(1.0, std::max(0.0, (phase - 0.5) / 0.05)) + 0.3 * (i % 3);
+      out << t << "," << (static_cast<int>(t) % 2 ? 1300 - (x - 400) : x) << ",520\n";
+    }
+  }
+  const CliRun r = foveal_test::foveal("gaze sixty.csv --events nhp --no-scanpath --json sixty.json");
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_NE(r.out.find("gaze samples come 16.7 ms apart (60 Hz)"), std::string::npos) << r.out;
+  const auto j = nlohmann::json::parse(std::ifstream(scratch("sixty.json")))["events"]["landings"];
+  EXPECT_NE(j["note"].get<std::string>().find("too late to gain much"), std::string::npos) << j.dump();
 }
 
 }  // namespace foveal_test

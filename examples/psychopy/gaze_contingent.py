@@ -285,12 +285,13 @@ def main(argv=None) -> int:
                "gaze_to_flip_ms_p95": float(np.percentile(latencies, 95)) if len(latencies) else None,
                "gaze_to_flip_refreshes_median": float(np.median(latencies)) * refresh_hz / 1000 if len(latencies) else None,
                "render_ms_median": float(np.median([r[4] for r in rows])) if rows else None,
+               "gaze_sample_hz": loop.gaze_sample_hz,
                "machine_stalls": machine, "other_processes": others, "gaze_note": loop.gaze_note}
     print(f"gaze_contingent: {summary['flips']} flips at {w}x{h} on {summary['device']} ({refresh_hz:.0f} Hz, budget "
           f"{loop.budget_ms:.1f} ms), {summary['gaze_positions']} gaze positions, gaze-to-flip median "
           f"{summary['gaze_to_flip_ms_median']:.1f} ms ({summary['gaze_to_flip_refreshes_median']:.2f} refreshes), 95th percentile "
           f"{summary['gaze_to_flip_ms_p95']:.1f} ms; {summary['frames_late']} late frames; log {args.log}")
-    if loop.gaze_note:  # the tracker's samples could not be predicted from (too slow, or times not in seconds)
+    if loop.gaze_note:  # what the tracker's samples leave the predictor (too slow, times not in seconds, a clock gone back)
         print(f"gaze_contingent: {loop.gaze_note}")
     if others:  # what took the loop's cores: what to stop before the next session
         print("gaze_contingent: what else ran during the session: " + "; ".join(

@@ -581,9 +581,14 @@ NB_MODULE(_core, m) {
           "note", [](const PyLoop& l) { return l.loop->note(); }, "Why the resolution was lowered ('' if it was not).")
       .def_prop_ro(
           "gaze_note", [](const PyLoop& l) { return l.loop->gaze_note(); },
-          "What is wrong with the samples pushed ('' if nothing): with prediction on, that saccade landings cannot be "
-          "predicted from them — they come under 20 Hz, most often times in milliseconds where seconds are asked for; and "
-          "that their clock went back (a trial clock that restarts).")
+          "What the samples pushed leave the landing predictor ('' if nothing to say): with prediction on, that saccade "
+          "landings cannot be predicted from them — they come under 20 Hz, most often times in milliseconds where seconds are "
+          "asked for — or only too late to gain much (under 90 Hz); and that their clock went back (a trial clock that "
+          "restarts).")
+      .def_prop_ro(
+          "gaze_sample_hz", [](const PyLoop& l) { return l.loop->gaze_sample_hz(); },
+          "The rate the valid samples pushed come at: 1 / the median of the latest 16 intervals, as gaze_note judges it "
+          "(0 before two have come).")
       .def_prop_ro(
           "size",
           [](const PyLoop& l) {

@@ -399,12 +399,17 @@ def test_the_loop_names_samples_too_far_apart_to_predict_from(box):
     # unpredicted without a word; gaze_note says why
     def note(unit, samples=40, **kw):
         loop = foveal.Loop(box, size=(64, 40), max_rays=16, device="cpu", **kw)
+        assert loop.gaze_sample_hz == 0
         for k in range(samples):  # 500 Hz
             loop.push(k * 0.002 * unit, (30 + k % 3, 20))
+        assert loop.gaze_sample_hz == pytest.approx(500 / unit)  # the rate the note judges
         return loop.gaze_note
     assert note(1) == ""
     assert "come 2 s apart" in note(1000) and "times in milliseconds" in note(1000)
     assert "come 0.1 s apart" in note(50) and "milliseconds" not in note(50)  # 10 Hz in seconds: too slow, no more
+    # 60 Hz: followed, but a saccade spans a few samples and its landing is known too late to gain much
+    assert "come 16.7 ms apart (60 Hz)" in note(1000 / 120) and "too late to gain much" in note(1000 / 120)
+    assert note(5) == ""  # 100 Hz
     assert note(1000, predict=False) == ""
     assert note(1000, samples=10) == ""  # not before 16 intervals
 
@@ -483,6 +488,20 @@ def test_the_landing_rays_script_bounds_each_strategy_by_the_oracle(tmp_path):
         for part in ("oracle-pre", "oracle-post"):
             assert share["prediction"] <= share[part] <= share["oracle"]
     assert "| oracle |" in run.stdout
+    assert json.loads(out.read_text())["sample_hz"] == [pytest.approx(500)]
+    # as a 100-Hz tracker would deliver it: every fifth sample, and its latency one of their periods + 2 ms
+    slow = tmp_path / "slow.json"
+    run = subprocess.run([sys.executable, script, "--recording", str(rec), "--sample-hz", "100", "--strategies", "eye,prediction,oracle",
+                          "--json", str(slow)], capture_output=True, text=True, timeout=120)
+    assert run.returncode == 0, run.stderr
+    report = json.loads(slow.read_text())
+    assert report["sample_hz"] == [pytest.approx(100)] and report["labelled_saccades"] == 2
+    assert "(samples at 100 Hz)" in run.stdout
+    for fast, r in zip(rows, report["saccades"]):  # fewer samples, later known: no strategy gains by them
+        assert r["share"]["oracle"] <= fast["share"]["oracle"] + 1e-9
+    faster = subprocess.run([sys.executable, script, "--recording", str(rec), "--sample-hz", "1000"], capture_output=True, text=True,
+                            timeout=60)
+    assert faster.returncode != 0 and "--sample-hz: 1000 Hz is faster than made_up_labelled_MN.csv's own 500 Hz" in faster.stderr
     # a file that is no Lund recording is named, with its line
     bad = tmp_path / "bad.csv"
     bad.write_text("time,x,y\n0,1,2\n")

@@ -34,6 +34,18 @@ namespace foveal {
 // than 50 ms apart) no saccade is seen and no landing predicted.
 inline constexpr double kSlowestLandingSampleS = 0.05;
 
+// Samples further apart than this (under 90 Hz) show a saccade in a few: its onset is seen late, and
+// a landing predicted then is too late to gain much, even a perfect prediction. On Lund 2013's
+// training recordings (their saccades of 5° or more, `bench/landing_rays.py --sample-hz`, a 60-Hz
+// display) a perfect predictor put 3.3 points more of a landed fovea's rays there before the
+// landing than none at 500 Hz, 1.1 at 100 Hz, 0.4 at 83 Hz, 0.1 at 62 Hz; the loop's predictor
+// 0.54, 0.33, 0.14 and 0.05 (docs/realtime.md).
+inline constexpr double kLateLandingSampleS = 1.0 / 90;
+
+// What samples `interval_s` apart leave the predictor to gain, in words: "" where they come at
+// 90 Hz or faster (or are too slow to be followed at all: kSlowestLandingSampleS, said apart).
+std::string late_landing_note(double interval_s);
+
 struct LandingParams {
   double onset_deg_s = 40;      // a velocity above this (two samples in a row) starts a saccade
   double offset_deg_s = 30;     // the saccade ends when the velocity falls below this

@@ -101,6 +101,35 @@ TEST(Landing, SyntheticMainSequenceSaccadesLandWithinOneDegree) {
   }
 }
 
+// Under 90 Hz a saccade spans a few samples: the landing is known within 1° too late to place a
+// frame's rays there (kLateLandingSampleS, late_landing_note). Known in time means a tracker latency
+// (a sample period + 2 ms) before the landing, the most a frame can use.
+TEST(Landing, UnderNinetyHertzALandingIsKnownTooLate) {
+  std::mt19937 rng(11);
+  auto in_time = [&](double hz) {
+    int judged = 0, known = 0;
+    for (double amplitude = 5; amplitude <= 20.01; amplitude += 0.5)
+      for (int k = 0; k < 4; ++k) {
+        const Trial trial = make_trial(amplitude, 0.7 + 1.3 * k + 0.1 * amplitude, hz, 0.05, rng);
+        const auto saccades = predict_landings(trial.t, trial.deg);
+        ++judged;
+        if (saccades.size() == 1 && saccades[0].settled_s + 1 / hz + 0.002 < trial.landing_s) ++known;
+      }
+    return static_cast<double>(known) / judged;
+  };
+  const double at250 = in_time(250), at120 = in_time(120), at60 = in_time(60);
+  SCOPED_TRACE(::testing::Message() << "known in time: " << at250 << " at 250 Hz, " << at120 << " at 120 Hz, " << at60 << " at 60 Hz");
+  EXPECT_GT(at250, 0.9);
+  EXPECT_LT(at60, 0.2);
+  EXPECT_GT(at120, at60);
+  EXPECT_EQ(late_landing_note(1.0 / 250), "");
+  EXPECT_EQ(late_landing_note(1.0 / 100), "");
+  EXPECT_EQ(late_landing_note(0.5), "");  // too slow to follow at all: said apart (kSlowestLandingSampleS)
+  EXPECT_EQ(late_landing_note(1.0 / 60),
+            "gaze samples come 16.7 ms apart (60 Hz): a saccade spans only a few, its onset is seen late, "
+            "and under 90 Hz a predicted landing comes too late to gain much");
+}
+
 TEST(Landing, APredictionIsRefinedAndTheMeasuredLandingReplacesIt) {
   std::mt19937 rng(3);
   const Trial trial = make_trial(12, 0.3, 1000, 0.02, rng);

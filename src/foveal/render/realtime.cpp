@@ -157,6 +157,8 @@ std::string RealtimeLoop::gaze_note() const {
         "gaze samples come {:.3g} s apart (the median of the latest 16): saccade landings are not predicted from samples "
         "under 20 Hz{}",
         median, median >= 0.5 ? "; are their times in milliseconds? The loop takes seconds" : "");
+  } else if (settings_.predict && intervals_s_.size() >= 16) {
+    note = late_landing_note(intervals_s_.median());
   }
   if (clock_restarts_ > 0)
     note += fmt::format(

@@ -212,12 +212,16 @@ class RealtimeLoop {
   const LoopSettings& settings() const { return settings_; }
   double scale() const { return scale_; }            // render size / requested size
   const std::string& note() const { return note_; }  // why the resolution was lowered ("" if not)
-  // With prediction on: why the landing predictor cannot follow the samples pushed ("" if it can):
-  // they come further apart than a saccade's onset can be seen (under 20 Hz, as the median of the
-  // latest intervals), most often times given in milliseconds where seconds are asked for (an
-  // EyeLink's own clock), which would leave every saccade unpredicted without a word; and whether the
-  // samples' clock went back (push_gaze)
+  // With prediction on: what the samples pushed leave the landing predictor ("" if it can follow
+  // them in time): they come further apart than a saccade's onset can be seen (under 20 Hz, as the
+  // median of the latest intervals), most often times given in milliseconds where seconds are asked
+  // for (an EyeLink's own clock), which would leave every saccade unpredicted without a word; or so
+  // far apart that a landing is known too late to gain much (under 90 Hz: late_landing_note); and
+  // whether the samples' clock went back (push_gaze)
   std::string gaze_note() const;
+  // The rate the valid samples come at: 1 / the median of the latest 16 intervals (what gaze_note
+  // judges); 0 before two have come
+  double gaze_sample_hz() const { return intervals_s_.size() ? 1 / intervals_s_.median() : 0.0; }
   const LandingPredictor& predictor() const { return predictor_; }
   // Per pixel: AO rays cast so far in this view and found open (the loop's state, for tests and
   // pictures), and the rays kept from the views before (reprojected: fractional; zero where none).

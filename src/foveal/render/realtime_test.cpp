@@ -665,7 +665,9 @@ TEST(RealtimeLoop, SamplesTooFarApartForThePredictorAreNamed) {
     LoopSettings settings = model_clock(2500);
     settings.predict = predict;
     RealtimeLoop loop(*renderer, sphere_plane(), loop_params(200, 125, 400), settings);
+    EXPECT_EQ(loop.gaze_sample_hz(), 0.0);
     for (int k = 0; k < samples; ++k) loop.push_gaze(k * 0.002 * unit, glm::dvec2(100 + k % 3, 60));
+    EXPECT_NEAR(loop.gaze_sample_hz(), 500 / unit, 1e-6 * 500 / unit);  // the rate the note judges
     return loop.gaze_note();
   };
   EXPECT_EQ(note_for(1, true, 40), "");
@@ -675,6 +677,12 @@ TEST(RealtimeLoop, SamplesTooFarApartForThePredictorAreNamed) {
   const std::string slow = note_for(50, true, 40);  // 10 Hz, in seconds: too slow, and no word of milliseconds
   EXPECT_NE(slow.find("come 0.1 s apart"), std::string::npos) << slow;
   EXPECT_EQ(slow.find("milliseconds"), std::string::npos) << slow;
+  // 60 Hz: followed, but a saccade spans a few samples and its landing is predicted too late to gain much
+  const std::string late = note_for(1000.0 / 120, true, 40);
+  EXPECT_NE(late.find("come 16.7 ms apart (60 Hz)"), std::string::npos) << late;
+  EXPECT_NE(late.find("too late to gain much"), std::string::npos) << late;
+  EXPECT_EQ(note_for(5, true, 40), "");  // 100 Hz: nothing to say
+  EXPECT_EQ(note_for(1000.0 / 120, false, 40), "");
   EXPECT_EQ(note_for(1000, false, 40), "");  // nothing predicted, nothing to say
   EXPECT_EQ(note_for(1000, true, 10), "");   // not before 16 intervals
 }
