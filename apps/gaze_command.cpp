@@ -261,8 +261,7 @@ nlohmann::json events_json(const GazeCommandOptions& o, const EventsRun& run) {
   if (run.second) ev["coder2"] = scores(*run.second), ev["coder2"]["labels"] = o.coder2;
   if (run.ceiling) ev["ceiling"] = scores(*run.ceiling), ev["ceiling"]["labels"] = o.coder2;
   ev["landings"] = landings_json(run.landings);
-  if (const double hz = run.detection->sampling_hz; hz > 0 && !late_landing_note(1 / hz).empty())
-    ev["landings"]["note"] = late_landing_note(1 / hz);
+  if (const std::string slow = late_landing_note(run.detection->sampling_hz); !slow.empty()) ev["landings"]["note"] = slow;
   return ev;
 }
 
@@ -319,8 +318,7 @@ void print_gaze(const GazeCommandOptions& o, const Recording& recording, const G
     const auto [fm, f90] = median_p90(first);
     const auto [tm, t90] = median_p90(third);
     const double gm = median_p90(gained).first;
-    const double hz = run.detection->sampling_hz;
-    const std::string note = hz > 0 ? late_landing_note(1 / hz) : "";
+    const std::string note = late_landing_note(run.detection->sampling_hz);
     if (!run.landings.empty())
       fmt::print(
           "  landings  {} of {} saccades predicted live: error at the first prediction median {:.2f} deg (p90 {:.2f}), two "

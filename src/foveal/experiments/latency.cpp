@@ -694,7 +694,7 @@ LatencyReport run_latency_bench(const LatencyRun& run, const std::vector<Recordi
         }
       if (!gains.empty()) {
         jr["third_of_median_saccade_ms"] = third;
-        const std::string slow = r.sampling_hz > 0 ? late_landing_note(1 / r.sampling_hz) : "";
+        const std::string slow = late_landing_note(r.sampling_hz);
         md += fmt::format("Gained over the deadline loop's median: {} (a third of the median saccade: {:.0f} ms).{}\n\n", gains, third,
                           slow.empty() ? "" : " Prediction: " + slow + ".");
         if (!slow.empty()) jr["prediction_note"] = slow;

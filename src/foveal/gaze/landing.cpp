@@ -24,12 +24,12 @@ constexpr double kVelocityBaselineS = 0.004;
 
 }  // namespace
 
-std::string late_landing_note(double interval_s) {
-  if (!(interval_s > kLateLandingSampleS && interval_s <= kSlowestLandingSampleS)) return "";
+std::string late_landing_note(double sample_hz) {
+  if (!(sample_hz < 1 / kLateLandingSampleS && sample_hz >= 1 / kSlowestLandingSampleS)) return "";
   return fmt::format(
       "gaze samples come {:.3g} ms apart ({:.0f} Hz): a saccade spans only a few, its onset is seen late, and under 90 Hz a "
       "predicted landing comes too late to gain much",
-      interval_s * 1000, 1 / interval_s);
+      1000 / sample_hz, sample_hz);
 }
 
 void validate(const LandingParams& p) {

@@ -42,9 +42,10 @@ inline constexpr double kSlowestLandingSampleS = 0.05;
 // 0.54, 0.33, 0.14 and 0.05 (docs/realtime.md).
 inline constexpr double kLateLandingSampleS = 1.0 / 90;
 
-// What samples `interval_s` apart leave the predictor to gain, in words: "" where they come at
-// 90 Hz or faster (or are too slow to be followed at all: kSlowestLandingSampleS, said apart).
-std::string late_landing_note(double interval_s);
+// What samples at `sample_hz` leave the predictor to gain, in words: "" where they come at 90 Hz
+// or faster, or too slowly to be followed at all (under 20 Hz: kSlowestLandingSampleS, said apart),
+// or at no rate (0: fewer than two).
+std::string late_landing_note(double sample_hz);
 
 struct LandingParams {
   double onset_deg_s = 40;      // a velocity above this (two samples in a row) starts a saccade

@@ -122,10 +122,11 @@ TEST(Landing, UnderNinetyHertzALandingIsKnownTooLate) {
   EXPECT_GT(at250, 0.9);
   EXPECT_LT(at60, 0.2);
   EXPECT_GT(at120, at60);
-  EXPECT_EQ(late_landing_note(1.0 / 250), "");
-  EXPECT_EQ(late_landing_note(1.0 / 100), "");
-  EXPECT_EQ(late_landing_note(0.5), "");  // too slow to follow at all: said apart (kSlowestLandingSampleS)
-  EXPECT_EQ(late_landing_note(1.0 / 60),
+  EXPECT_EQ(late_landing_note(250), "");
+  EXPECT_EQ(late_landing_note(100), "");
+  EXPECT_EQ(late_landing_note(2), "");  // too slow to follow at all: said apart (kSlowestLandingSampleS)
+  EXPECT_EQ(late_landing_note(0), "");  // no rate
+  EXPECT_EQ(late_landing_note(60),
             "gaze samples come 16.7 ms apart (60 Hz): a saccade spans only a few, its onset is seen late, "
             "and under 90 Hz a predicted landing comes too late to gain much");
 }

@@ -158,7 +158,7 @@ std::string RealtimeLoop::gaze_note() const {
         "under 20 Hz{}",
         median, median >= 0.5 ? "; are their times in milliseconds? The loop takes seconds" : "");
   } else if (settings_.predict && intervals_s_.size() >= 16) {
-    note = late_landing_note(intervals_s_.median());
+    note = late_landing_note(gaze_sample_hz());
   }
   if (clock_restarts_ > 0)
     note += fmt::format(
