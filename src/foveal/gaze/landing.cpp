@@ -50,6 +50,11 @@ void validate(const LandingParams& p) {
   if (!(p.peak_drop > 0 && p.peak_drop < 1)) fail("peak_drop: must be in (0, 1), got {}", p.peak_drop);
   if (!(p.main_sequence_ms >= 0)) fail("main_sequence_ms: must be >= 0, got {}", p.main_sequence_ms);
   if (p.offset_deg_s > p.onset_deg_s) fail("offset_deg_s: must be <= onset_deg_s = {}, got {}", p.onset_deg_s, p.offset_deg_s);
+  // Samples faster than max_velocity_deg_s are dropped as tracker noise, so an onset at or above it would
+  // never be crossed: the predictor would find no saccade, without a word.
+  if (p.onset_deg_s >= p.max_velocity_deg_s)
+    fail("onset_deg_s: must be < max_velocity_deg_s = {} (faster samples are dropped as noise, so no saccade would start), got {}",
+         p.max_velocity_deg_s, p.onset_deg_s);
 }
 
 namespace {

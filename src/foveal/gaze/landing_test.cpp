@@ -196,6 +196,9 @@ TEST(Landing, ParametersAreSetByNameAndChecked) {
   EXPECT_NE(error("onset_deg_s=60,").find("expected NAME=VALUE"), std::string::npos);
   EXPECT_NE(error("min_flight_deg=inf").find("min_flight_deg: must be a finite number"), std::string::npos);
   EXPECT_NE(error("skew=1, skew=2").find("skew: given twice"), std::string::npos);
+  EXPECT_NE(error("onset_deg_s=1e308").find("onset_deg_s: must be < max_velocity_deg_s = 1000"), std::string::npos);
+  EXPECT_NE(error("onset_deg_s=500,max_velocity_deg_s=400").find("must be < max_velocity_deg_s = 400"), std::string::npos);
+  EXPECT_EQ(error("onset_deg_s=500,max_velocity_deg_s=1200"), "accepted");
   // A parameter changes what the predictor does: an onset above every velocity of a saccade finds none
   std::mt19937 rng(3);
   const Trial trial = make_trial(12, 0.3, 1000, 0.05, rng);
