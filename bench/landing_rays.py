@@ -294,7 +294,12 @@ def main():
             except ValueError as error:
                 p.error(f"--sample-hz: {error}")
         rates.append(1.0 / float(np.median(np.diff(t))))
-        flights = foveal.gaze.predict_landings(t, deg)
+        try:
+            flights = foveal.gaze.predict_landings(t, deg)
+        except ValueError as error:  # samples under 20 Hz: no onset shows, so such a tracker sees no saccade
+            if a.sample_hz is None:
+                sys.exit(f"landing_rays.py: error: {path}: {error}")
+            flights = []
         found = 0
         saccades = labelled_saccades(t, deg, label, a.min_amplitude)
         labelled += len(saccades)

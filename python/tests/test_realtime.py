@@ -459,6 +459,12 @@ def test_predict_landings_gives_every_prediction_of_each_flight():
         foveal.gaze.predict_landings(t, np.stack([x, x], 1), speed=3)
     with pytest.raises(ValueError, match="skew: must be in"):
         foveal.gaze.predict_landings(t, np.stack([x, x], 1), skew=9)
+    # times in milliseconds (an EyeLink's own clock) found nothing, without a word; now they are named
+    with pytest.raises(ValueError, match=r"t_s: samples come 1 s apart .*are the times in milliseconds"):
+        foveal.gaze.predict_landings(t * 1000, np.stack([x, np.zeros_like(x)], 1))
+    with pytest.raises(ValueError, match=r"t_s: samples come 0\.06 s apart .*under 20 Hz"):  # 16.7 Hz: no onset shows
+        foveal.gaze.predict_landings(t[::60], np.stack([x, np.zeros_like(x)], 1)[::60])
+    assert len(foveal.gaze.predict_landings(t[::20], np.stack([x, np.zeros_like(x)], 1)[::20])) == 2  # 50 Hz: taken, both seen
 
 
 def test_the_landing_rays_script_bounds_each_strategy_by_the_oracle(tmp_path):
