@@ -6,6 +6,7 @@ import subprocess
 import sys
 import threading
 import time
+import warnings
 
 import numpy as np
 import pytest
@@ -156,8 +157,12 @@ def test_a_gaze_or_fixation_far_from_the_image_is_refused(box):
         loop.push(1.0, (1e155, 1e155))
     sim = foveal.VisionSimulation(box, size=(64, 48), device="cpu")
     for fixation in [(float("nan"), float("nan")), (1e200, 1e200)]:
-        with pytest.raises(ValueError, match="fixation"):
-            sim.step(fixation=fixation)
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")  # the refusal alone: no "far periphery" warning before it
+            with pytest.raises(ValueError, match="fixation"):
+                sim.step(fixation=fixation)
+    with pytest.warns(UserWarning, match="fixation: .* off the frame: the whole image is far periphery"):
+        sim.step(fixation=(300, 20))  # off the frame, yet near enough: taken, with a word
     assert sim.step(fixation=(30, 20)).fixation == pytest.approx((30, 20))
 
 
