@@ -30,7 +30,7 @@ The default recordings are Lund 2013's training part (Andersson et al. 2017; 500
 
     .venv/bin/python bench/landing_rays.py [--recording CSV ...] [--min-amplitude 5] [--refresh-hz 60]
         [--sample-hz HZ] [--rays-per-frame 316667] [--fovea-deg 5.7,3.7] [--px-per-deg 19.4] [--phases 3] [--seed 1]
-        [--strategies eye,prediction,region:2,oracle] [--json F] [--markdown F]
+        [--strategies eye,prediction,region:2,oracle] [--landing NAME=VALUE,...] [--json F] [--markdown F]
 """
 import argparse
 import json
@@ -243,6 +243,8 @@ def main():
     p.add_argument("--seed", type=int, default=1, help="the phases' seed (1)")
     p.add_argument("--strategies", default="eye,prediction,region:2,oracle",
                    help="eye, prediction, region:R, oracle, oracle-pre, oracle-post (comma-separated)")
+    p.add_argument("--landing", default="", metavar="NAME=VALUE,…",
+                   help="the landing predictor's parameters, as --landing of bench latency (default: its own)")
     p.add_argument("--json", help="write every saccade's share per strategy as JSON")
     p.add_argument("--markdown", help="write the table as Markdown")
     a = p.parse_args()
@@ -276,6 +278,10 @@ def main():
             except ValueError:
                 pass
         p.error(f"--strategies: {s}: expected eye, prediction, region:R (R >= 1), oracle, oracle-pre or oracle-post")
+    try:
+        landing = foveal.gaze.landing_params(a.landing)
+    except ValueError as error:
+        p.error(f"--landing: {error}")
     check_outputs(p, [("--json", a.json), ("--markdown", a.markdown)], recordings)
 
     rng = np.random.default_rng(a.seed)
@@ -295,7 +301,7 @@ def main():
                 p.error(f"--sample-hz: {error}")
         rates.append(1.0 / float(np.median(np.diff(t))))
         try:
-            flights = foveal.gaze.predict_landings(t, deg)
+            flights = foveal.gaze.predict_landings(t, deg, **landing)
         except ValueError as error:  # samples under 20 Hz: no onset shows, so such a tracker sees no saccade
             if a.sample_hz is None:
                 sys.exit(f"landing_rays.py: error: {path}: {error}")
@@ -340,7 +346,8 @@ def main():
         write_output(a.json, json.dumps({"recordings": [os.path.basename(r) for r in recordings], "refresh_hz": a.refresh_hz,
                                          "sample_hz": [float(r) for r in rates], "labelled_saccades": labelled,
                                          "rays_per_frame": a.rays_per_frame, "fovea_deg": list(a.fovea), "px_per_deg": a.px_per_deg,
-                                         "phases": a.phases, "seed": a.seed, "summary": summary, "saccades": rows}, indent=1) + "\n")
+                                         "phases": a.phases, "seed": a.seed, "landing": landing, "summary": summary,
+                                         "saccades": rows}, indent=1) + "\n")
 
 
 if __name__ == "__main__":

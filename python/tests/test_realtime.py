@@ -500,6 +500,7 @@ def test_the_landing_rays_script_bounds_each_strategy_by_the_oracle(tmp_path):
             assert share["prediction"] <= share[part] <= share["oracle"]
     assert "| oracle |" in run.stdout
     assert json.loads(out.read_text())["sample_hz"] == [pytest.approx(500)]
+    assert json.loads(out.read_text())["landing"] == foveal.gaze.landing_params()  # the predictor's parameters, kept with the figures
     # as a 100-Hz tracker would deliver it: every fifth sample, and its latency one of their periods + 2 ms
     slow = tmp_path / "slow.json"
     run = subprocess.run([sys.executable, script, "--recording", str(rec), "--sample-hz", "100", "--strategies", "eye,prediction,oracle",
@@ -527,3 +528,10 @@ def test_the_landing_rays_script_bounds_each_strategy_by_the_oracle(tmp_path):
     negative = subprocess.run([sys.executable, script, "--recording", str(rec), "--min-amplitude", "-1"], capture_output=True, text=True,
                               timeout=60)
     assert negative.returncode != 0 and "--min-amplitude: must be a finite number >= 0" in negative.stderr
+    # --landing reaches the predictor: an onset above both saccades' velocities sees neither; a wrong one is named
+    blind = subprocess.run([sys.executable, script, "--recording", str(rec), "--landing", "onset_deg_s=900"], capture_output=True,
+                           text=True, timeout=60)
+    assert blind.returncode != 0 and "no labelled saccade the predictor saw" in blind.stderr
+    bad_landing = subprocess.run([sys.executable, script, "--recording", str(rec), "--landing", "skew=9"], capture_output=True,
+                                 text=True, timeout=60)
+    assert bad_landing.returncode != 0 and "--landing: skew: must be in [0.25, 4]" in bad_landing.stderr
