@@ -444,11 +444,19 @@ void ViewSession::realtime_frame() {
   r.generation = generation_;
   r.last = f.fovea_done;
   const std::string gaze_note = loop_->gaze_note();  // samples too slow to predict from, a clock that went back
-  r.stage = fmt::format("realtime: fovea {} ({:.0f} %){}{}{}{}{}", f.fovea_done ? "converged" : "refining", 100 * f.fovea_converged,
+  const double refresh_ms = display_refresh_hz_ > 0 ? 1000 / display_refresh_hz_ : 0;
+  const std::string budget_note =
+      refresh_ms > 0 && settings_.frame_budget_ms > refresh_ms
+          ? fmt::format(
+                "; the frame budget of {:g} ms is longer than the display's refresh ({:.3g} ms at {:g} Hz): each frame misses "
+                "refreshes (--frame-budget-ms)",
+                settings_.frame_budget_ms, refresh_ms, display_refresh_hz_)
+          : "";
+  r.stage = fmt::format("realtime: fovea {} ({:.0f} %){}{}{}{}{}{}", f.fovea_done ? "converged" : "refining", 100 * f.fovea_converged,
                         f.predicted ? ", at the predicted landing" : "",
                         f.new_view && f.kept_pixels > 0 ? fmt::format(", a new view: {} px kept their rays", f.kept_pixels) : "",
                         loop_->scale() < 1 ? ", " + loop_->note() : "", f.rebuilding ? ", the camera rests: building the full size" : "",
-                        gaze_note.empty() ? "" : "; " + gaze_note);
+                        gaze_note.empty() ? "" : "; " + gaze_note, budget_note);
   r.gaze = f.gaze_px / loop_->scale();
   r.stats.ao_rays = f.rays;
   r.stats.ao_ms = f.trace_ms;

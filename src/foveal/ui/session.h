@@ -20,6 +20,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <cmath>
 #include <memory>
 #include <optional>
 #include <string>
@@ -96,6 +97,9 @@ class ViewSession {
   // Width of the shown image in render widths: 3 side by side, else 1.
   int panes() const { return settings_.mode == ViewMode::side_by_side ? 3 : 1; }
 
+  // The refresh rate of the display the window is on, Hz (0: unknown). --realtime: a frame budget
+  // longer than one refresh makes every frame miss refreshes, and the stage line says so.
+  void set_display_refresh_hz(double hz) { display_refresh_hz_ = hz > 0 && std::isfinite(hz) ? hz : 0; }
   // Poll the gaze, start renders, take finished stages, draw the overlays. Call once per displayed frame.
   void update(const Overlays& overlays);
   const Rgba8& image() const { return shown_; }
@@ -136,6 +140,7 @@ class ViewSession {
   std::unique_ptr<RealtimeLoop> loop_;
   std::string loop_key_;
   double loop_t_ = 0;  // fixed gaze: the time pushed with it
+  double display_refresh_hz_ = 0;
   std::unique_ptr<Shown> shown_state_;
   Rgba8 base_, layered_, shown_;  // the renders; with the region overlays; with the marks too
   bool base_dirty_ = true;

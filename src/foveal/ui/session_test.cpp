@@ -86,8 +86,10 @@ TEST(ViewSession, RealtimeUpdatesAreFramesOfTheLoop) {
   s.realtime = true;
   s.frame_budget_ms = 5;
   ViewSession session(box(), box_tracer(), camera, s, fixed({50, 40}));
+  session.set_display_refresh_hz(60);
   ASSERT_TRUE(session.wait_until_converged(60, kNone));
   EXPECT_NE(session.status().stage.find("realtime: fovea converged"), std::string::npos) << session.status().stage;
+  EXPECT_EQ(session.status().stage.find("frame budget"), std::string::npos) << session.status().stage;  // 5 ms fits 60 Hz
   EXPECT_EQ(session.status().render_gaze, glm::dvec2(50, 40));
   RenderParams p = s.render;
   p.gaze_px = glm::dvec2(50, 40);
@@ -113,6 +115,25 @@ TEST(ViewSession, RealtimeUpdatesAreFramesOfTheLoop) {
   ASSERT_NE(open, std::string::npos) << stage;
   EXPECT_GE(std::stod(stage.substr(open + 1)), 50.0) << stage;
   EXPECT_TRUE(session.wait_until_converged(60, kNone));
+}
+
+// --realtime: a budget longer than the display's refresh makes every frame miss refreshes; the
+// stage line says so, where the window knows the refresh
+TEST(ViewSession, ABudgetLongerThanTheRefreshIsNamed) {
+  ViewSettings s = small_settings(ViewMode::foveated);
+  s.realtime = true;
+  s.frame_budget_ms = 12;
+  ViewSession session(box(), box_tracer(), default_camera(box()), s, fixed({50, 40}));
+  session.update(kNone);
+  EXPECT_EQ(session.status().stage.find("frame budget"), std::string::npos) << session.status().stage;  // refresh unknown
+  session.set_display_refresh_hz(120);
+  session.update(kNone);
+  EXPECT_NE(session.status().stage.find("the frame budget of 12 ms is longer than the display's refresh (8.33 ms at 120 Hz)"),
+            std::string::npos)
+      << session.status().stage;
+  session.set_display_refresh_hz(60);
+  session.update(kNone);
+  EXPECT_EQ(session.status().stage.find("frame budget"), std::string::npos) << session.status().stage;
 }
 
 TEST(ViewSession, SideBySideShowsFoveatedReferenceAndTheirDifference) {

@@ -92,6 +92,7 @@ class ViewerWindow {
     if (const GLFWvidmode* mode = glfwGetVideoMode(glfwGetPrimaryMonitor())) {
       win_w = std::min(win_w, mode->width);
       win_h = std::min(win_h, mode->height - 60);
+      session_.set_display_refresh_hz(mode->refreshRate);
     }
     window_ = glfwCreateWindow(win_w, win_h, options_.title.c_str(), nullptr, nullptr);
     if (!window_) fail("cannot open a window: {} (needs OpenGL 3.0; under xvfb-run Mesa's software renderer provides it)", glfw_error);
