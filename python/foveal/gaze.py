@@ -329,7 +329,8 @@ def predict_landings(t_s, deg, **params) -> list:
     prediction past the velocity peak), ``settled_s`` (from then on every prediction was within 1°
     of the landing; NaN if never), ``landing_s``, ``landing_deg`` and ``amplitude_deg`` (measured),
     and every prediction of the flight: ``prediction_s``, ``prediction_x_deg``,
-    ``prediction_y_deg``. The GIL is released while it runs.
+    ``prediction_y_deg``. The GIL is released while it runs. Samples under 20 Hz (a median interval
+    over 50 ms, most often times in milliseconds) raise ValueError: no saccade's onset shows in them.
     """
     t = np.ascontiguousarray(t_s, dtype=np.float64)
     d = np.asarray(deg, dtype=np.float64)
