@@ -11,6 +11,7 @@
 #include "foveal/util/error.h"
 #include "foveal/util/files.h"
 #include "foveal/util/gzip.h"
+#include "foveal/util/stats.h"
 
 #include <nanobind/stl/array.h>
 #include <nanobind/stl/optional.h>
@@ -404,18 +405,14 @@ void bind_gaze(nb::module_& m) {
           if (i > 0 && !(times[i] > times[i - 1])) fail("t_s: must rise, but t_s[{}] = {} follows {}", i, times[i], times[i - 1]);
           deg[i] = {x.data()[i], y.data()[i]};
         }
-        // Samples under 20 Hz show no saccade's onset: the predictor would return nothing, without a
-        // word, most often for times in milliseconds (an EyeLink's clock) where seconds are asked.
+        // Samples under 20 Hz show no saccade: the predictor would return nothing, without a word,
+        // most often for times in milliseconds (an EyeLink's clock) where seconds are asked.
         if (n >= 3) {
           std::vector<double> intervals(n - 1);
           for (size_t i = 1; i < n; ++i) intervals[i - 1] = times[i] - times[i - 1];
-          std::nth_element(intervals.begin(), intervals.begin() + intervals.size() / 2, intervals.end());
-          const double median = intervals[intervals.size() / 2];
-          if (median > kSlowestLandingSampleS)
-            fail(
-                "t_s: samples come {:.3g} s apart (median): no saccade's onset shows in samples under 20 Hz, so no landing "
-                "could be predicted{}",
-                median, median >= 0.5 ? "; are the times in milliseconds? predict_landings takes seconds" : "");
+          const double interval = median(std::move(intervals));
+          if (const std::string unseen = unseen_saccades_note(interval, "predict_landings"); !unseen.empty())
+            fail("t_s: samples come {:.3g} s apart (median): {}", interval, unseen);
         }
         std::vector<PredictedSaccade> flights;
         {

@@ -521,9 +521,8 @@ LatencyReport run_latency_bench(const LatencyRun& run, const std::vector<Recordi
       fail("{}: {} sample{} at one time: bench latency replays a recording over time", rec.source, rec.samples.size(),
            rec.samples.size() == 1 ? "" : "s");
     const double hz = rec.rate_hz();  // (0 where no two samples follow each other in time)
-    if (hz > 0 && 1 / hz > kSlowestLandingSampleS)
-      fail("{}: its samples come {:.3g} s apart: under 20 Hz no saccade is seen, and no landing predicted{}", rec.source, 1 / hz,
-           1 / hz >= 0.5 ? "; are its times in milliseconds? bench latency reads seconds" : "");
+    if (const std::string unseen = hz > 0 ? unseen_saccades_note(1 / hz, "bench latency") : ""; !unseen.empty())
+      fail("{}: its samples come {:.3g} s apart: {}", rec.source, 1 / hz, unseen);
     if (p.start_s >= rec.duration_s()) fail("start_s: {} s is past the end of {} ({:.1f} s)", p.start_s, rec.source, rec.duration_s());
   }
   const auto say = [&](const std::string& line) {

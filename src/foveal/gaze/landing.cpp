@@ -24,6 +24,12 @@ constexpr double kVelocityBaselineS = 0.004;
 
 }  // namespace
 
+std::string unseen_saccades_note(double interval_s, const std::string& reader) {
+  if (!(interval_s > kSlowestLandingSampleS)) return "";
+  return fmt::format("under 20 Hz no saccade is seen, and no landing predicted{}",
+                     interval_s >= 0.5 ? "; are the times in milliseconds? " + reader + " takes seconds" : "");
+}
+
 std::string late_landing_note(double sample_hz) {
   if (!(sample_hz < 1 / kLateLandingSampleS && sample_hz >= 1 / kSlowestLandingSampleS)) return "";
   return fmt::format(

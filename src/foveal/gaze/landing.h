@@ -42,6 +42,12 @@ inline constexpr double kSlowestLandingSampleS = 0.05;
 // 0.54, 0.33, 0.14 and 0.05 (docs/realtime.md).
 inline constexpr double kLateLandingSampleS = 1.0 / 90;
 
+// Why samples `interval_s` apart (their median) show the predictor nothing, in words: "" where they
+// come at 20 Hz or faster; else "under 20 Hz no saccade is seen, and no landing predicted", and
+// from half a second apart what most often causes that: times in milliseconds, where `reader` (the
+// caller: "the loop", "bench latency", …) takes seconds.
+std::string unseen_saccades_note(double interval_s, const std::string& reader);
+
 // What samples at `sample_hz` leave the predictor to gain, in words: "" where they come at 90 Hz
 // or faster, or too slowly to be followed at all (under 20 Hz: kSlowestLandingSampleS, said apart),
 // or at no rate (0: fewer than two).

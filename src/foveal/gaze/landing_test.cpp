@@ -126,6 +126,11 @@ TEST(Landing, UnderNinetyHertzALandingIsKnownTooLate) {
   EXPECT_EQ(late_landing_note(100), "");
   EXPECT_EQ(late_landing_note(2), "");  // too slow to follow at all: said apart (kSlowestLandingSampleS)
   EXPECT_EQ(late_landing_note(0), "");  // no rate
+  // Under 20 Hz nothing is seen at all, said in other words; from half a second apart, most often milliseconds
+  EXPECT_EQ(unseen_saccades_note(kSlowestLandingSampleS, "the loop"), "");
+  EXPECT_EQ(unseen_saccades_note(0.1, "the loop"), "under 20 Hz no saccade is seen, and no landing predicted");
+  EXPECT_EQ(unseen_saccades_note(2, "the loop"),
+            "under 20 Hz no saccade is seen, and no landing predicted; are the times in milliseconds? the loop takes seconds");
   EXPECT_EQ(late_landing_note(60),
             "gaze samples come 16.7 ms apart (60 Hz): a saccade spans only a few, its onset is seen late, "
             "and under 90 Hz a predicted landing comes too late to gain much");

@@ -151,14 +151,11 @@ void RealtimeLoop::push_gaze(double t_s, std::optional<glm::dvec2> gaze_px) {
 
 std::string RealtimeLoop::gaze_note() const {
   std::string note;
-  if (settings_.predict && intervals_s_.size() >= 16 && intervals_s_.median() > kSlowestLandingSampleS) {
+  if (settings_.predict && intervals_s_.size() >= 16) {
     const double median = intervals_s_.median();
-    note = fmt::format(
-        "gaze samples come {:.3g} s apart (the median of the latest 16): saccade landings are not predicted from samples "
-        "under 20 Hz{}",
-        median, median >= 0.5 ? "; are their times in milliseconds? The loop takes seconds" : "");
-  } else if (settings_.predict && intervals_s_.size() >= 16) {
-    note = late_landing_note(gaze_sample_hz());
+    const std::string unseen = unseen_saccades_note(median, "the loop");
+    note = unseen.empty() ? late_landing_note(gaze_sample_hz())
+                          : fmt::format("gaze samples come {:.3g} s apart (the median of the latest 16): {}", median, unseen);
   }
   if (clock_restarts_ > 0)
     note += fmt::format(
