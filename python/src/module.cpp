@@ -53,11 +53,7 @@ bool warn_if_far(const char* name, double x, double y, int width, int height) {
   if (!(x < -width || x > 2.0 * width || y < -height || y > 2.0 * height)) return false;
   // A point the renderers refuse (not finite, or beyond kGazeReachImages image sizes) gets their
   // error alone, not a warning before it
-  try {
-    check_gaze_point(name, x, y, width, height);
-  } catch (const Error&) {
-    return false;
-  }
+  if (!gaze_point_near(x, y, width, height)) return false;
   const std::string message = fmt::format(
       "{}: ({}, {}) is more than the frame's size ({}x{}) off the frame: the whole image is far periphery", name, x, y, width, height);
   if (PyErr_WarnEx(PyExc_UserWarning, message.c_str(), 1) != 0) throw nb::python_error();  // warnings turned into errors

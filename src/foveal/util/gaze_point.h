@@ -12,14 +12,20 @@ namespace foveal {
 
 inline constexpr double kGazeReachImages = 10;  // how many image sizes beyond its edges a point may lie
 
+// Whether (x, y) lies within kGazeReachImages image sizes of a width × height image (false for a
+// coordinate that is not finite).
+inline bool gaze_point_near(double x, double y, int width, int height) {
+  const double w = width, h = height, k = kGazeReachImages;
+  return x >= -k * w && x <= (k + 1) * w && y >= -k * h && y <= (k + 1) * h;
+}
+
 // Throws Error naming `name` unless (x, y) is finite and within kGazeReachImages image sizes of a
 // width × height image.
 inline void check_gaze_point(const char* name, double x, double y, int width, int height) {
-  const double w = width, h = height, k = kGazeReachImages;
   if (!(std::isfinite(x) && std::isfinite(y))) fail("{}: must be finite render pixels, got ({}, {})", name, x, y);
-  if (!(x >= -k * w && x <= (k + 1) * w && y >= -k * h && y <= (k + 1) * h))
+  if (!gaze_point_near(x, y, width, height))
     fail("{}: ({}, {}) is not near the {}x{} image (render pixels; at most {:g} image widths and heights beyond its edges)", name, x, y,
-         width, height, k);
+         width, height, kGazeReachImages);
 }
 
 }  // namespace foveal
