@@ -167,9 +167,14 @@ nlohmann::json replay_stats_json(const ReplayOptions& o, const ReplaySettings& s
 void print_replay(const ReplayOptions& o, const ReplaySettings& settings, const ReplaySummary& summary, const RenderParams& params,
                   const FrameRenderer& renderer, const std::string& csv_path, int threads) {
   const std::string& source_name = o.source;
-  fmt::print("foveal replay: {} → {} frames at {:g} fps ({} rendered, {} reused: gaze unchanged), {}x{}, {} filter, {} threads\n",
-             source_name, summary.frames, settings.fps, summary.frames - summary.reused, summary.reused, params.width, params.height,
-             o.gaze.fixation, threads);
+  if (summary.budget_ms)  // --realtime: every frame is the loop's, its fovea from the raw samples (the filter steers nothing)
+    fmt::print(
+        "foveal replay: {} → {} frames at {:g} fps, {}x{}, the loop's fovea from the raw samples (landing prediction {}), {} threads\n",
+        source_name, summary.frames, settings.fps, params.width, params.height, settings.predict ? "on" : "off", threads);
+  else
+    fmt::print("foveal replay: {} → {} frames at {:g} fps ({} rendered, {} reused: gaze unchanged), {}x{}, {} filter, {} threads\n",
+               source_name, summary.frames, settings.fps, summary.frames - summary.reused, summary.reused, params.width, params.height,
+               o.gaze.fixation, threads);
   fmt::print("  device   {}\n", renderer.describe());
   if (summary.budget_ms)
     fmt::print("  loop     a frame every {:.1f} ms at {:g} Hz, each within {:.1f} ms: {} late of {}\n", 1000 / settings.fps, settings.fps,

@@ -165,6 +165,26 @@ TEST(GazeCli, RealtimeReplayOfAnOrbitingCameraKeepsItsRays) {
   }
 }
 
+// replay's first line says what steers the frames: the fixation filter (and how many frames it let
+// be reused), or with --realtime the loop, from the raw samples, whose frames are never reused
+TEST(GazeCli, RealtimeReplaySaysTheLoopNotTheFilterSteersIt) {
+  const std::string rec = write_three_fixations("steers.csv");
+  const std::string base = "replay --gaze " + rec + " --screen 480x300 --scene builtin:plane --size 32x20 --max-rays 4 --duration 0.2 ";
+  const CliRun whole = foveal_test::foveal(base + "-o steers_whole");
+  ASSERT_EQ(whole.status, 0) << whole.err;
+  EXPECT_NE(whole.out.find("reused: gaze unchanged"), std::string::npos) << whole.out;
+  EXPECT_NE(whole.out.find("ivvt filter"), std::string::npos) << whole.out;
+  for (const auto& [args, predicting] : {std::pair{"--realtime", "on"}, std::pair{"--realtime --no-predict", "off"}}) {
+    const CliRun r = foveal_test::foveal(base + args + " -o steers_" + predicting);
+    ASSERT_EQ(r.status, 0) << r.err;
+    const std::string first = r.out.substr(0, r.out.find('\n'));
+    EXPECT_NE(first.find(std::string("the loop's fovea from the raw samples (landing prediction ") + predicting + ")"), std::string::npos)
+        << first;
+    EXPECT_EQ(first.find("filter"), std::string::npos) << first;
+    EXPECT_EQ(first.find("reused"), std::string::npos) << first;
+  }
+}
+
 // replay --realtime takes the loop's names for its display: a frame every refresh at --refresh-hz
 // (60 by default, as the loop's; --fps says the same) within --frame-budget-ms of it.
 TEST(GazeCli, RealtimeReplayRunsAtTheDisplaysRefresh) {
