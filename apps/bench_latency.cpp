@@ -84,6 +84,7 @@ int run_bench_latency(const BenchLatencyOptions& o) {
   if (!o.timeline.empty()) {
     const size_t k = write_latency_timeline(report, o.min_amplitude, o.timeline);
     fmt::print("timeline of saccade {} written to {}\n", k, o.timeline);
+    if (const std::string note = latency_timeline_note(report, "--timeline-saccade "); !note.empty()) fmt::print("  ({})\n", note);
   }
   return 0;
 }
@@ -138,7 +139,9 @@ std::function<int()> add_bench_latency_command(CLI::App& bench) {
   cmd->add_option("--markdown", o->markdown, "write the tables as Markdown")->check(output_file());
   cmd->add_option("--timeline", o->timeline, "draw one saccade's timeline (gaze, fovea placement, fovea error per frame): .png or .svg")
       ->check(output_file(plot_extensions()));
-  cmd->add_option("--timeline-saccade", o->timeline_saccade, "which saccade of the first recording --timeline draws (0 = the first)")
+  cmd->add_option("--timeline-saccade", o->timeline_saccade,
+                  "which saccade of the first recording --timeline draws (0 = the first; where its fovea was ready at its landing, the "
+                  "bench names the one the deadline loop waited longest for)")
       ->capture_default_str()
       ->check(CLI::NonNegativeNumber);
   return [o] { return run_bench_latency(*o); };

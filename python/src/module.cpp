@@ -802,7 +802,10 @@ NB_MODULE(_core, m) {
                 std::fflush(stdout);
               });
           report.json["markdown"] = report.markdown;
-          if (!timeline.empty()) write_latency_timeline(report, min_amplitude_deg, timeline);
+          if (!timeline.empty()) {
+            write_latency_timeline(report, min_amplitude_deg, timeline);
+            report.json["timeline_note"] = latency_timeline_note(report, "timeline_saccade=");
+          }
           j = std::move(report.json);
         }
         return to_python(j);

@@ -748,6 +748,29 @@ LatencyReport bench_latency(const Scene& scene, const std::string& scene_name, c
   return report;
 }
 
+std::string latency_timeline_note(const LatencyReport& report, const std::string& option) {
+  if (report.recordings.empty() || !report.recordings.front().drawn) return "";
+  const LatencyRecording& r = report.recordings.front();
+  const size_t drawn = *r.drawn;
+  const auto wait_ms = [](const LatencySaccade& s) { return s.converged_ms.value_or(INFINITY); };
+  const LatencyLoop* first = nullptr;
+  for (const LatencyLoop& loop : r.loops) {
+    if (loop.name == "whole-frame" || drawn >= loop.saccades.size()) continue;
+    if (wait_ms(loop.saccades[drawn]) > 0) return "";  // the picture shows this loop waiting
+    if (!first) first = &loop;
+  }
+  if (!first) return "";
+  size_t longest = drawn;
+  for (size_t k = 0; k < first->saccades.size(); ++k)
+    if (wait_ms(first->saccades[k]) > wait_ms(first->saccades[longest])) longest = k;
+  const std::string picture =
+      fmt::format("saccade {}'s fovea was ready at its landing in every deadline loop, so its picture shows no wait", drawn);
+  if (longest == drawn) return picture + fmt::format(" (nor did any other landing in {}'s segment wait)", r.recording);
+  const std::optional<double> ms = first->saccades[longest].converged_ms;
+  return picture + fmt::format("; the {} loop waited longest for saccade {} ({}): {}{}", first->name, longest,
+                               ms ? fmt::format("{:.0f} ms", *ms) : std::string("not converged within the segment"), option, longest);
+}
+
 size_t write_latency_timeline(const LatencyReport& report, double min_amplitude_deg, const std::string& path) {
   if (report.recordings.empty()) fail("timeline: no recording");
   const LatencyRecording& r = report.recordings.front();
@@ -774,15 +797,22 @@ size_t write_latency_timeline(const LatencyReport& report, double min_amplitude_
   for (size_t i = 0; i < r.gaze_t.size(); ++i)
     if (r.gaze_t[i] >= t0 && r.gaze_t[i] <= t1) gaze.points.emplace_back(x_of(r.gaze_t[i]), y_top(r.gaze_px[i].x));
   plot.strokes.push_back(gaze);
-  const glm::vec3 colours[4] = {{0.6f, 0.6f, 0.6f}, {0.15f, 0.45f, 0.85f}, {0.85f, 0.35f, 0.1f}, {0.55f, 0.2f, 0.65f}};
+  // Each loop's colour follows its name, whichever loops ran (as docs/realtime.md's pictures show them)
+  const auto colour_of = [](const std::string& loop) -> glm::vec3 {
+    if (loop == "whole-frame") return {0.6f, 0.6f, 0.6f};
+    if (loop == "deadline") return {0.15f, 0.45f, 0.85f};
+    if (loop == "deadline+prediction") return {0.85f, 0.35f, 0.1f};
+    return {0.55f, 0.2f, 0.65f};  // deadline+oracle
+  };
   // Bottom: this saccade's landed fovea's error per shown frame, before the landing too (× the
   // reference's noise, log scale 0.5–64)
   const auto y_bottom = [&](double e) {
     const double l = std::clamp(std::log2(std::max(e, 0.5)), -1.0, 6.0);
     return bottom - static_cast<float>((l + 1) / 7) * (bottom - mid - 30);
   };
-  for (size_t k = 0; k < r.loops.size() && k < std::size(colours); ++k) {
-    Stroke place{{}, colours[k], 1.5f, false}, err{{}, colours[k], 2};
+  for (size_t k = 0; k < r.loops.size(); ++k) {
+    const glm::vec3 colour = colour_of(r.loops[k].name);
+    Stroke place{{}, colour, 1.5f, false}, err{{}, colour, 2};
     for (const LatencyFrame& f : r.loops[k].timeline) {
       if (f.shown_s < t0 || f.start_s > t1) continue;
       const double a = std::max(f.start_s, t0), b = std::min(f.shown_s, t1);
@@ -793,7 +823,7 @@ size_t write_latency_timeline(const LatencyReport& report, double min_amplitude_
     plot.strokes.push_back(place);
     plot.strokes.push_back(err);
     const float ly = bottom + 48 + 18.0f * static_cast<float>(k);
-    plot.strokes.push_back({{{left, ly - 5}, {left + 30, ly - 5}}, colours[k], 3});
+    plot.strokes.push_back({{{left, ly - 5}, {left + 30, ly - 5}}, colour, 3});
     plot.labels.push_back({{left + 40, ly}, r.loops[k].name});
   }
   plot.strokes.push_back({{{x_of(sac.landing_s), top}, {x_of(sac.landing_s), bottom}}, {0.2f, 0.6f, 0.2f}, 1, true});

@@ -11,6 +11,8 @@
 #include <cmath>
 #include <unistd.h>
 #include <filesystem>
+#include <fstream>
+#include <sstream>
 
 #include <fmt/format.h>
 
@@ -176,11 +178,58 @@ TEST(LatencyTimeline, EveryFrameJudgesTheDrawnSaccadesFovea) {
   const std::string path = (std::filesystem::temp_directory_path() / ("foveal_timeline_" + std::to_string(getpid()) + ".svg")).string();
   EXPECT_EQ(write_latency_timeline(report, 5, path), 1u);
   EXPECT_GT(std::filesystem::file_size(path), 1000u);
+  {
+    // Each loop keeps its name's colour whichever loops ran: deadline blue, the oracle purple, and no
+    // grey, which is the whole-frame loop's (they had taken the colours in the order the loops ran)
+    std::stringstream svg;
+    svg << std::ifstream(path).rdbuf();
+    EXPECT_NE(svg.str().find("stroke=\"#2672d8\""), std::string::npos);
+    EXPECT_NE(svg.str().find("stroke=\"#8c33a5\""), std::string::npos);
+    EXPECT_EQ(svg.str().find("stroke=\"#999999\""), std::string::npos);
+  }
   std::filesystem::remove(path);
   const LatencyReport plain = run(std::nullopt);
   EXPECT_FALSE(plain.recordings.front().drawn);
   for (const LatencyFrame& f : plain.recordings.front().loops[0].timeline) EXPECT_TRUE(std::isnan(f.drawn_error));
   EXPECT_THROW(write_latency_timeline(plain, 5, path), Error);
+}
+
+// A drawn saccade whose fovea every deadline loop had ready at its landing shows no wait: the note
+// names the saccade the first deadline loop waited longest for (one never converged counts as
+// longest); no note where the drawn one shows a wait, or where nothing was drawn.
+TEST(LatencyTimeline, APictureWithoutAWaitNamesTheSaccadeThatWaitedLongest) {
+  const auto saccades = [](std::vector<std::optional<double>> waits) {
+    std::vector<LatencySaccade> out(waits.size());
+    for (size_t k = 0; k < waits.size(); ++k) out[k].converged_ms = waits[k];
+    return out;
+  };
+  LatencyReport report;
+  report.recordings.resize(1);
+  LatencyRecording& r = report.recordings.front();
+  r.recording = "rec.asc";
+  r.loops.resize(3);
+  r.loops[0].name = "whole-frame";  // (always waits: not what the picture is about)
+  r.loops[0].saccades = saccades({300.0, 250.0, 280.0, 310.0});
+  r.loops[1].name = "deadline";
+  r.loops[1].saccades = saccades({0.0, 17.0, 50.0, 0.0});
+  r.loops[2].name = "deadline+prediction";
+  r.loops[2].saccades = saccades({0.0, 0.0, 33.0, 0.0});
+  EXPECT_EQ(latency_timeline_note(report, "--timeline-saccade "), "");  // nothing drawn
+  r.drawn = 0;
+  EXPECT_EQ(latency_timeline_note(report, "--timeline-saccade "),
+            "saccade 0's fovea was ready at its landing in every deadline loop, so its picture shows no wait; the deadline loop "
+            "waited longest for saccade 2 (50 ms): --timeline-saccade 2");
+  r.drawn = 1;  // the deadline loop waits for it: the picture shows that
+  EXPECT_EQ(latency_timeline_note(report, "--timeline-saccade "), "");
+  r.drawn = 3;
+  r.loops[1].saccades[1].converged_ms.reset();  // never converged within the segment: the longest
+  EXPECT_NE(latency_timeline_note(report, "timeline_saccade=").find("saccade 1 (not converged within the segment): timeline_saccade=1"),
+            std::string::npos);
+  for (LatencyLoop& loop : r.loops)
+    for (LatencySaccade& s : loop.saccades) s.converged_ms = 0.0;
+  EXPECT_EQ(latency_timeline_note(report, "--timeline-saccade "),
+            "saccade 3's fovea was ready at its landing in every deadline loop, so its picture shows no wait (nor did any other "
+            "landing in rec.asc's segment wait)");
 }
 
 }  // namespace
