@@ -84,7 +84,9 @@ int run_bench_latency(const BenchLatencyOptions& o) {
   if (!o.timeline.empty()) {
     const size_t k = write_latency_timeline(report, o.min_amplitude, o.timeline);
     fmt::print("timeline of saccade {} written to {}\n", k, o.timeline);
-    if (const std::string note = latency_timeline_note(report, "--timeline-saccade "); !note.empty()) fmt::print("  ({})\n", note);
+    if (const std::string note = latency_timeline_note(report, static_cast<size_t>(o.timeline_saccade), "--timeline-saccade ");
+        !note.empty())
+      fmt::print("  ({})\n", note);
   }
   return 0;
 }
@@ -143,7 +145,7 @@ std::function<int()> add_bench_latency_command(CLI::App& bench) {
                   "which saccade of the first recording --timeline draws (0 = the first; where its fovea was ready at its landing, the "
                   "bench names the one the deadline loop waited longest for)")
       ->capture_default_str()
-      ->check(CLI::NonNegativeNumber);
+      ->check(non_negative());
   return [o] { return run_bench_latency(*o); };
 }
 

@@ -15,6 +15,7 @@
 #include <fmt/core.h>
 
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <unistd.h>
 #include <memory>
@@ -65,6 +66,17 @@ CLI::Validator output_file(std::vector<std::string> extensions) {
         return std::string();
       },
       "FILE", kOutputFileValidator);
+}
+
+CLI::Validator non_negative() {
+  return CLI::Validator(
+      [](std::string& value) {
+        char* end = nullptr;
+        const double x = std::strtod(value.c_str(), &end);
+        if (end == value.c_str() || *end != '\0' || x >= 0) return std::string();
+        return fmt::format("must be 0 or more, got {}", value);
+      },
+      "NONNEGATIVE");
 }
 
 CLI::Validator an_output() {

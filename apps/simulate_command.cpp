@@ -335,7 +335,7 @@ std::function<int()> add_simulate_command(CLI::App& app) {
   cmd->add_option("--blur-taps", o->taps, "most taps of the variable blur per pixel (large CoCs)")->capture_default_str();
   cmd->add_option("--ambient", o->ambient, "constant Phong ambient factor of the ray-cast colour")
       ->capture_default_str()
-      ->check(CLI::NonNegativeNumber);
+      ->check(non_negative());
   cmd->add_option("--seed", o->seed, "seed of the saccades")->capture_default_str();
   auto* gaze_option = cmd->add_option(
       "--gaze", o->gaze_source,

@@ -164,11 +164,11 @@ TEST(Cli, EveryNumberIsFiniteAndNoUnsignedOneNegative) {
       {"perceive a.png -o b.png --ivt-threshold nan", "--ivt-threshold: must be a finite number"},
       {"perceive " + rec + " -o b.png --ivt-threshold -1", "--ivt-threshold"},
       {"simulate -o s --velocity-window-ms -1", "--velocity-window-ms"},
-      {"simulate -o s --ambient -1", "--ambient"},
+      {"simulate -o s --ambient -1", "--ambient: must be 0 or more, got -1"},  // (not CLI11's range up to the largest double)
       {"gaze " + rec + " --ek-lambda -2", "--ek-lambda"},
       {"gaze " + rec + " --max-blink-ms nan", "--max-blink-ms: must be a finite number"},
       {"bench latency --min-amplitude -inf", "--min-amplitude: must be a finite number, got -inf"},
-      {"bench latency --timeline-saccade -1", "--timeline-saccade"},
+      {"bench latency --timeline-saccade -1", "--timeline-saccade: must be 0 or more, got -1"},
       {"bench quality --max-error -1", "--max-error"},
       {"view --frame-budget-ms -1", "--frame-budget-ms"},  // (without --realtime: before any window opens)
       {"view --starvation -1", "--starvation"},

@@ -804,7 +804,7 @@ NB_MODULE(_core, m) {
           report.json["markdown"] = report.markdown;
           if (!timeline.empty()) {
             write_latency_timeline(report, min_amplitude_deg, timeline);
-            report.json["timeline_note"] = latency_timeline_note(report, "timeline_saccade=");
+            report.json["timeline_note"] = latency_timeline_note(report, static_cast<size_t>(timeline_saccade), "timeline_saccade=");
           }
           j = std::move(report.json);
         }

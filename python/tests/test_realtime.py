@@ -227,6 +227,10 @@ def test_bench_latency_from_python_equals_the_command_lines(cli, box, tmp_path):
                                   loops=("deadline", "deadline+prediction"), timeline=tmp_path / "second.svg", timeline_saccade=1)
     assert [s["landing_to_converged_ms"] for s in second["recordings"][0]["deadline"]["saccades"]][1] == 0
     assert second["timeline_note"].endswith("the deadline loop waited longest for saccade 0 (17 ms): timeline_saccade=0")
+    past = foveal.bench_latency(str(recording), box, size=(168, 105), max_rays=64, duration_s=1.5, clock="model",
+                                model_rays_per_ms=2000, model_fixed_ms=3, min_amplitude_deg=5, loops="deadline",
+                                timeline=tmp_path / "past.svg", timeline_saccade=9)
+    assert past["timeline_note"].startswith("saccade 9 was asked for, and ") and "judged 2 (0–1): the last is drawn" in past["timeline_note"]
     assert got["clock"] == "model" and got["size"] == [168, 105]
     a, b = got["recordings"][0], expected["recordings"][0]
     assert a["recording"] == b["recording"] and a["tracker_latency_ms"] == b["tracker_latency_ms"]

@@ -748,27 +748,33 @@ LatencyReport bench_latency(const Scene& scene, const std::string& scene_name, c
   return report;
 }
 
-std::string latency_timeline_note(const LatencyReport& report, const std::string& option) {
+std::string latency_timeline_note(const LatencyReport& report, size_t asked, const std::string& option) {
   if (report.recordings.empty() || !report.recordings.front().drawn) return "";
   const LatencyRecording& r = report.recordings.front();
   const size_t drawn = *r.drawn;
+  std::string past;  // the saccade asked for is past the last
+  if (asked > drawn)
+    past =
+        fmt::format("saccade {} was asked for, and {}'s segment judged {} (0–{}): the last is drawn", asked, r.recording, drawn + 1, drawn);
+  const auto joined = [&](const std::string& note) { return past.empty() ? note : note.empty() ? past : past + "; " + note; };
   const auto wait_ms = [](const LatencySaccade& s) { return s.converged_ms.value_or(INFINITY); };
   const LatencyLoop* first = nullptr;
   for (const LatencyLoop& loop : r.loops) {
     if (loop.name == "whole-frame" || drawn >= loop.saccades.size()) continue;
-    if (wait_ms(loop.saccades[drawn]) > 0) return "";  // the picture shows this loop waiting
+    if (wait_ms(loop.saccades[drawn]) > 0) return joined("");  // the picture shows this loop waiting
     if (!first) first = &loop;
   }
-  if (!first) return "";
+  if (!first) return joined("");
   size_t longest = drawn;
   for (size_t k = 0; k < first->saccades.size(); ++k)
     if (wait_ms(first->saccades[k]) > wait_ms(first->saccades[longest])) longest = k;
   const std::string picture =
       fmt::format("saccade {}'s fovea was ready at its landing in every deadline loop, so its picture shows no wait", drawn);
-  if (longest == drawn) return picture + fmt::format(" (nor did any other landing in {}'s segment wait)", r.recording);
+  if (longest == drawn) return joined(picture + fmt::format(" (nor did any other landing in {}'s segment wait)", r.recording));
   const std::optional<double> ms = first->saccades[longest].converged_ms;
-  return picture + fmt::format("; the {} loop waited longest for saccade {} ({}): {}{}", first->name, longest,
-                               ms ? fmt::format("{:.0f} ms", *ms) : std::string("not converged within the segment"), option, longest);
+  return joined(picture + fmt::format("; the {} loop waited longest for saccade {} ({}): {}{}", first->name, longest,
+                                      ms ? fmt::format("{:.0f} ms", *ms) : std::string("not converged within the segment"), option,
+                                      longest));
 }
 
 size_t write_latency_timeline(const LatencyReport& report, double min_amplitude_deg, const std::string& path) {

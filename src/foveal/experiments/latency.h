@@ -169,11 +169,12 @@ LatencyReport bench_latency(const Scene& scene, const std::string& scene_name, c
 // segment has no judged saccade.
 size_t write_latency_timeline(const LatencyReport& report, double min_amplitude_deg, const std::string& path);
 
-// Where the drawn saccade's fovea was ready at its landing in every deadline loop, its picture shows
-// no wait: a sentence naming the saccade the first deadline loop waited longest for (one that never
-// converged within the segment counts as longest) and the option that draws it (`option`:
-// "--timeline-saccade", or Python's "timeline_saccade="); '' where the drawn saccade shows a wait or
-// no timeline was drawn.
-std::string latency_timeline_note(const LatencyReport& report, const std::string& option);
+// What to know of the drawn saccade, '' where nothing (or no timeline was drawn): that the saccade
+// asked for (`asked`, LatencyParams::timeline_saccade) is past the segment's last, which is drawn
+// instead; and where the drawn saccade's fovea was ready at its landing in every deadline loop, so
+// that its picture shows no wait, the saccade the first deadline loop waited longest for (one that
+// never converged within the segment counts as longest) with the option that draws it (`option`:
+// "--timeline-saccade ", or Python's "timeline_saccade=").
+std::string latency_timeline_note(const LatencyReport& report, size_t asked, const std::string& option);
 
 }  // namespace foveal

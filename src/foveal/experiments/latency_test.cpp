@@ -214,20 +214,30 @@ TEST(LatencyTimeline, APictureWithoutAWaitNamesTheSaccadeThatWaitedLongest) {
   r.loops[1].saccades = saccades({0.0, 17.0, 50.0, 0.0});
   r.loops[2].name = "deadline+prediction";
   r.loops[2].saccades = saccades({0.0, 0.0, 33.0, 0.0});
-  EXPECT_EQ(latency_timeline_note(report, "--timeline-saccade "), "");  // nothing drawn
+  EXPECT_EQ(latency_timeline_note(report, 0, "--timeline-saccade "), "");  // nothing drawn
   r.drawn = 0;
-  EXPECT_EQ(latency_timeline_note(report, "--timeline-saccade "),
+  EXPECT_EQ(latency_timeline_note(report, *r.drawn, "--timeline-saccade "),
             "saccade 0's fovea was ready at its landing in every deadline loop, so its picture shows no wait; the deadline loop "
             "waited longest for saccade 2 (50 ms): --timeline-saccade 2");
   r.drawn = 1;  // the deadline loop waits for it: the picture shows that
-  EXPECT_EQ(latency_timeline_note(report, "--timeline-saccade "), "");
+  EXPECT_EQ(latency_timeline_note(report, *r.drawn, "--timeline-saccade "), "");
+  r.drawn = 3;  // a saccade past the last was asked for: the last is drawn, and that is said
+  EXPECT_EQ(latency_timeline_note(report, 50, "--timeline-saccade "),
+            "saccade 50 was asked for, and rec.asc's segment judged 4 (0–3): the last is drawn; saccade 3's fovea was ready at its "
+            "landing in every deadline loop, so its picture shows no wait; the deadline loop waited longest for saccade 2 (50 ms): "
+            "--timeline-saccade 2");
+  r.loops[1].saccades[3].converged_ms = 10.0;
+  EXPECT_EQ(latency_timeline_note(report, 50, "--timeline-saccade "),
+            "saccade 50 was asked for, and rec.asc's segment judged 4 (0–3): the last is drawn");
+  r.loops[1].saccades[3].converged_ms = 0.0;
   r.drawn = 3;
   r.loops[1].saccades[1].converged_ms.reset();  // never converged within the segment: the longest
-  EXPECT_NE(latency_timeline_note(report, "timeline_saccade=").find("saccade 1 (not converged within the segment): timeline_saccade=1"),
-            std::string::npos);
+  EXPECT_NE(
+      latency_timeline_note(report, *r.drawn, "timeline_saccade=").find("saccade 1 (not converged within the segment): timeline_saccade=1"),
+      std::string::npos);
   for (LatencyLoop& loop : r.loops)
     for (LatencySaccade& s : loop.saccades) s.converged_ms = 0.0;
-  EXPECT_EQ(latency_timeline_note(report, "--timeline-saccade "),
+  EXPECT_EQ(latency_timeline_note(report, *r.drawn, "--timeline-saccade "),
             "saccade 3's fovea was ready at its landing in every deadline loop, so its picture shows no wait (nor did any other "
             "landing in rec.asc's segment wait)");
 }
