@@ -113,7 +113,7 @@ std::function<int()> add_bench_latency_command(CLI::App& bench) {
   cmd->add_option("--tolerance", o->tolerance,
                   "the deadline loops' τ(E) scale: a pixel stops once its standard error is within it (as render --tolerance)")
       ->capture_default_str()
-      ->check(CLI::PositiveNumber);
+      ->check(positive());
   cmd->add_option("--seed", o->seed, "seed of the loops (the references use seed+1000 and seed+2000)")->capture_default_str();
   cmd->add_option("--refresh-hz", o->refresh_hz, "display refresh rate, Hz")->capture_default_str()->check(CLI::Range(1.0, 1000.0));
   cmd->add_option("--frame-budget-ms", o->budget_ms, "each frame's budget, ms (default: one refresh)");

@@ -250,7 +250,7 @@ std::function<int()> add_bench_quality_command(CLI::App& bench) {
           ->capture_default_str();
   cmd->add_option("--tolerance", o->tolerance, "every method's τ(E) scale (adaptive rays and denoising; as render --tolerance)")
       ->capture_default_str()
-      ->check(CLI::PositiveNumber);
+      ->check(positive());
   cmd->add_option("--denoise-radius", o->denoise_radius, "every method's filter footprint factor (as render --denoise-radius)")
       ->capture_default_str()
       ->check(CLI::Range(0.0, 100.0));
@@ -272,10 +272,10 @@ std::function<int()> add_bench_quality_command(CLI::App& bench) {
                   "the recommendation: the fastest configuration whose fovea is within the reference's noise and whose "
                   "acuity-weighted error is at most this many times the reference's noise")
       ->capture_default_str()
-      ->check(CLI::PositiveNumber);
+      ->check(positive());
   cmd->add_option("--max-flicker", o->max_flicker, "… and whose flicker after a saccade is at most this many times the reference's noise")
       ->capture_default_str()
-      ->check(CLI::PositiveNumber);
+      ->check(positive());
   cmd->add_option("--saccade", o->saccade, "flicker: the saccade between the two frames compared, degrees (horizontal)")
       ->capture_default_str()
       ->check(CLI::Range(0.0, 90.0));

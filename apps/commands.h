@@ -74,9 +74,11 @@ inline constexpr const char* kOutputFileValidator = "output-file";
 // beside a folder of outputs): marked so that main.cpp checks it against the other outputs and the
 // inputs as well.
 CLI::Validator an_output();
-// A number of 0 or more: "must be 0 or more, got -1" (CLI11's NonNegativeNumber printed its range's
-// upper end, the largest double, in full). Text that is no number is left to the option's own reading.
+// A number of 0 or more: "must be 0 or more, got -1", and one above 0: "must be more than 0, got 0"
+// (CLI11's NonNegativeNumber and PositiveNumber printed their range's upper end, the largest double,
+// in full). Text that is no number is left to the option's own reading.
 CLI::Validator non_negative();
+CLI::Validator positive();
 // An output file of a command that also writes a folder of outputs (`folder`, -o, which the run
 // creates): a file in that folder, or one output_file accepts — but none of the files the command
 // writes there (`written_there(name)`: `replay -o out --stats out/frames.csv` replaced the

@@ -68,16 +68,24 @@ CLI::Validator output_file(std::vector<std::string> extensions) {
       "FILE", kOutputFileValidator);
 }
 
-CLI::Validator non_negative() {
+namespace {
+
+// A number's lower bound (0, and whether 0 itself is taken) as a validator
+CLI::Validator at_least_zero(bool zero_taken) {
   return CLI::Validator(
-      [](std::string& value) {
+      [zero_taken](std::string& value) {
         char* end = nullptr;
         const double x = std::strtod(value.c_str(), &end);
-        if (end == value.c_str() || *end != '\0' || x >= 0) return std::string();
-        return fmt::format("must be 0 or more, got {}", value);
+        if (end == value.c_str() || *end != '\0' || x > 0 || (zero_taken && x == 0)) return std::string();
+        return zero_taken ? fmt::format("must be 0 or more, got {}", value) : fmt::format("must be more than 0, got {}", value);
       },
-      "NONNEGATIVE");
+      zero_taken ? "NONNEGATIVE" : "POSITIVE");
 }
+
+}  // namespace
+
+CLI::Validator non_negative() { return at_least_zero(true); }
+CLI::Validator positive() { return at_least_zero(false); }
 
 CLI::Validator an_output() {
   return CLI::Validator([](std::string&) { return std::string(); }, "", kOutputFileValidator);

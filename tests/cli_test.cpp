@@ -170,6 +170,8 @@ TEST(Cli, EveryNumberIsFiniteAndNoUnsignedOneNegative) {
       {"bench latency --min-amplitude -inf", "--min-amplitude: must be a finite number, got -inf"},
       {"bench latency --timeline-saccade -1", "--timeline-saccade: must be 0 or more, got -1"},
       {"bench quality --max-error -1", "--max-error"},
+      {"bench latency --tolerance 0", "--tolerance: must be more than 0, got 0"},
+      {"bench quality --tolerance -0.5", "--tolerance: must be more than 0, got -0.5"},
       {"view --frame-budget-ms -1", "--frame-budget-ms"},  // (without --realtime: before any window opens)
       {"view --starvation -1", "--starvation"},
       {"bench quality --max-flicker 0", "--max-flicker"},
