@@ -167,7 +167,7 @@ nlohmann::json replay_stats_json(const ReplayOptions& o, const ReplaySettings& s
 void print_replay(const ReplayOptions& o, const ReplaySettings& settings, const ReplaySummary& summary, const RenderParams& params,
                   const FrameRenderer& renderer, const std::string& csv_path, int threads) {
   const std::string& source_name = o.source;
-  if (summary.budget_ms)  // --realtime: every frame is the loop's, its fovea from the raw samples (the filter steers nothing)
+  if (settings.realtime)  // every frame is the loop's, its fovea from the raw samples (the filter steers nothing)
     fmt::print(
         "foveal replay: {} → {} frames at {:g} fps, {}x{}, the loop's fovea from the raw samples (landing prediction {}), {} threads\n",
         source_name, summary.frames, settings.fps, params.width, params.height, settings.predict ? "on" : "off", threads);

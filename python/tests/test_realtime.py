@@ -216,11 +216,9 @@ def test_bench_latency_from_python_equals_the_command_lines(cli, box, tmp_path):
                                model_rays_per_ms=2000, model_fixed_ms=3, min_amplitude_deg=5,
                                loops=("deadline", "deadline+prediction"), timeline=tmp_path / "timeline.svg")
     assert "| deadline+prediction |" in got["markdown"] and (tmp_path / "timeline.svg").exists()
-    # The picture's note, as the command line prints it: '' where the drawn saccade shows a wait
-    waited = any(s["landing_to_converged_ms"] != 0 for s in [got["recordings"][0][loop]["saccades"][0]
-                                                              for loop in ("deadline", "deadline+prediction")])
-    assert (got["timeline_note"] == "") == waited, (got["timeline_note"], waited)
-    assert waited or "timeline_saccade=" in got["timeline_note"]
+    # The picture's note, as the command line prints it: '' where the drawn saccade (the first) shows a wait
+    assert got["recordings"][0]["deadline"]["saccades"][0]["landing_to_converged_ms"] > 0
+    assert got["timeline_note"] == ""
     # The second saccade's fovea was ready at its landing in both loops (the first waited 17 ms): named
     second = foveal.bench_latency(str(recording), box, size=(168, 105), max_rays=64, duration_s=1.5, clock="model",
                                   model_rays_per_ms=2000, model_fixed_ms=3, min_amplitude_deg=5,

@@ -12,6 +12,7 @@
 #include "foveal/util/units.h"
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include <algorithm>
 #include <cmath>
@@ -748,33 +749,42 @@ LatencyReport bench_latency(const Scene& scene, const std::string& scene_name, c
   return report;
 }
 
-std::string latency_timeline_note(const LatencyReport& report, size_t asked, const std::string& option) {
-  if (report.recordings.empty() || !report.recordings.front().drawn) return "";
-  const LatencyRecording& r = report.recordings.front();
-  const size_t drawn = *r.drawn;
-  std::string past;  // the saccade asked for is past the last
-  if (asked > drawn)
-    past =
-        fmt::format("saccade {} was asked for, and {}'s segment judged {} (0–{}): the last is drawn", asked, r.recording, drawn + 1, drawn);
-  const auto joined = [&](const std::string& note) { return past.empty() ? note : note.empty() ? past : past + "; " + note; };
+namespace {
+
+// Where `drawn`'s fovea was ready at its landing in every deadline loop, its picture shows no wait:
+// the saccade the first deadline loop waited longest for instead ('' where the picture shows a wait)
+std::string no_wait_note(const LatencyRecording& r, size_t drawn, const std::string& option) {
   const auto wait_ms = [](const LatencySaccade& s) { return s.converged_ms.value_or(INFINITY); };
   const LatencyLoop* first = nullptr;
   for (const LatencyLoop& loop : r.loops) {
     if (loop.name == "whole-frame" || drawn >= loop.saccades.size()) continue;
-    if (wait_ms(loop.saccades[drawn]) > 0) return joined("");  // the picture shows this loop waiting
+    if (wait_ms(loop.saccades[drawn]) > 0) return "";  // the picture shows this loop waiting
     if (!first) first = &loop;
   }
-  if (!first) return joined("");
+  if (!first) return "";
   size_t longest = drawn;
   for (size_t k = 0; k < first->saccades.size(); ++k)
     if (wait_ms(first->saccades[k]) > wait_ms(first->saccades[longest])) longest = k;
   const std::string picture =
       fmt::format("saccade {}'s fovea was ready at its landing in every deadline loop, so its picture shows no wait", drawn);
-  if (longest == drawn) return joined(picture + fmt::format(" (nor did any other landing in {}'s segment wait)", r.recording));
+  if (longest == drawn) return picture + fmt::format(" (nor did any other landing in {}'s segment wait)", r.recording);
   const std::optional<double> ms = first->saccades[longest].converged_ms;
-  return joined(picture + fmt::format("; the {} loop waited longest for saccade {} ({}): {}{}", first->name, longest,
-                                      ms ? fmt::format("{:.0f} ms", *ms) : std::string("not converged within the segment"), option,
-                                      longest));
+  return picture + fmt::format("; the {} loop waited longest for saccade {} ({}): {}{}", first->name, longest,
+                               ms ? fmt::format("{:.0f} ms", *ms) : std::string("not converged within the segment"), option, longest);
+}
+
+}  // namespace
+
+std::string latency_timeline_note(const LatencyReport& report, size_t asked, const std::string& option) {
+  if (report.recordings.empty() || !report.recordings.front().drawn) return "";
+  const LatencyRecording& r = report.recordings.front();
+  const size_t drawn = *r.drawn;
+  std::vector<std::string> parts;
+  if (asked > drawn)
+    parts.push_back(fmt::format("saccade {} was asked for, and {}'s segment judged {} (0–{}): the last is drawn", asked, r.recording,
+                                drawn + 1, drawn));
+  if (std::string note = no_wait_note(r, drawn, option); !note.empty()) parts.push_back(std::move(note));
+  return fmt::format("{}", fmt::join(parts, "; "));
 }
 
 size_t write_latency_timeline(const LatencyReport& report, double min_amplitude_deg, const std::string& path) {
