@@ -56,6 +56,7 @@ constexpr std::array kOptions = std::to_array<ParameterName>({
     {"model_rays_per_ms", "--model-rays-per-ms"},
     {"model_fixed_ms", "--model-fixed-ms"},
     {"margin_ms", "--margin-ms"},
+    {"periphery_share", "--periphery-share"},
     {"threshold_ms", "--threshold-ms"},
     {"chunk_us", "--chunk-us"},
     {"device cuda", "--device cuda"},

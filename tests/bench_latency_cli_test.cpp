@@ -43,6 +43,8 @@ TEST(BenchLatencyCli, ThreeLoopsUnderTheModelClockWriteTheDocumentedJson) {
   EXPECT_NE(a.out.find("× ray bound (model's rate)"), std::string::npos) << a.out;
   const auto j = nlohmann::json::parse(std::ifstream(scratch("a.json")));
   ASSERT_EQ(j["recordings"].size(), 1u);
+  EXPECT_EQ(j["periphery_share"].get<double>(), 1.0);  // the periphery runs to the deadline by default
+  EXPECT_EQ(a.out.find("the periphery's rays within"), std::string::npos);
   const auto& r = j["recordings"][0];
   for (const char* loop : {"whole-frame", "deadline", "deadline+prediction"}) {
     SCOPED_TRACE(loop);
@@ -163,6 +165,8 @@ TEST(BenchLatencyCli, BadOptionsAreOneClearLine) {
   expect_one_line_error(base + " --frame-budget-ms -3", "--frame-budget-ms");
   expect_one_line_error(base + " --latency-ms -1", "--latency-ms");
   expect_one_line_error(base + " --margin-ms 20", "--margin-ms");
+  expect_one_line_error(base + " --periphery-share 0", "--periphery-share: must be in (0, 1]");
+  expect_one_line_error(base + " --periphery-share 1.5", "--periphery-share: must be in (0, 1]");
   expect_one_line_error(base + " --max-rays 0", "--max-rays: bench latency judges the fovea's AO");
   expect_one_line_error(base + " --model-rays-per-ms 100 --model-fixed-ms 1", "--model-rays-per-ms");
   expect_one_line_error("bench latency --scene builtin:box --recording /no/such/recording.asc", "/no/such/recording.asc");
@@ -197,4 +201,32 @@ TEST(BenchLatencyCli, AShortBudgetKeepsAQuarterOfItByDefault) {
   const CliRun r = foveal_test::foveal(base + " --frame-budget-ms 1");
   EXPECT_EQ(r.status, 0) << r.err;
   expect_one_line_error(base + " --frame-budget-ms 1 --margin-ms 1", "--margin-ms");
+}
+
+// --periphery-share: the deadline loops' periphery stops at that share of each budget. Under the
+// model clock no frame of the periphery alone costs more than the share; the run says so and keeps it.
+TEST(BenchLatencyCli, ThePeripherysShareIsTheLoopsAndIsKept) {
+  const std::string rec = write_saccades("saccades4.csv");
+  const std::string base = "bench latency --scene builtin:box --size 168x105 --max-rays 64 --recording " + rec +
+                           " --duration 1.5 --clock model --model-rays-per-ms 2000 --model-fixed-ms 3 --min-amplitude 5 --loops deadline";
+  auto costs = [&](const std::string& extra, const std::string& json) {
+    const CliRun r = foveal_test::foveal(base + extra + " --json " + json);
+    EXPECT_EQ(r.status, 0) << r.err;
+    const auto j = nlohmann::json::parse(std::ifstream(scratch(json)));
+    std::vector<double> out;
+    for (const auto& f : j["recordings"][0]["deadline"]["timeline"]) out.push_back(f["cost_ms"].get<double>());
+    return std::make_pair(j, out);
+  };
+  const auto [half, half_costs] = costs(" --periphery-share 0.5", "half.json");
+  const auto [whole, whole_costs] = costs("", "whole.json");
+  EXPECT_EQ(half["periphery_share"].get<double>(), 0.5);
+  const double budget = 1000.0 / 60;
+  // Frames between 0.5 and the whole budget are the fovea's: fewer at 0.5, where the periphery stops at half
+  auto between = [&](const std::vector<double>& c) {
+    return std::count_if(c.begin(), c.end(), [&](double ms) { return ms > 0.5 * budget + 1e-3 && ms <= budget; });
+  };
+  EXPECT_LT(between(half_costs), between(whole_costs));
+  EXPECT_GT(std::count_if(half_costs.begin(), half_costs.end(), [&](double ms) { return std::abs(ms - 0.5 * budget) < 1e-3; }), 0);
+  EXPECT_NE(foveal_test::foveal(base + " --periphery-share 0.5").out.find("the periphery's rays within 50 % of each budget"),
+            std::string::npos);
 }

@@ -316,7 +316,7 @@ def bench_latency(recordings: Any, scene: Scene, camera: Any = None, size: Tuple
                   loops: Sequence[str] = ("whole-frame", "deadline", "deadline+prediction"), min_amplitude_deg: float = 2.0,
                   max_rays: int = 400, tolerance: float = 0.35, seed: int = 1, device: str = "cpu", threads: int = 0,
                   progress: bool = False, timeline: Optional[Union[str, "os.PathLike[str]"]] = None,
-                  timeline_saccade: int = 0, landing: Optional[Union[dict, str]] = None) -> dict:
+                  timeline_saccade: int = 0, landing: Optional[Union[dict, str]] = None, periphery_share: Optional[float] = None) -> dict:
     """``foveal bench latency`` from Python: gaze-to-photon latency of the display loops on recorded gaze.
 
     ``recordings``: one or a list of recordings — paths (read as the command line reads them, the
@@ -325,7 +325,7 @@ def bench_latency(recordings: Any, scene: Scene, camera: Any = None, size: Tuple
     ``camera`` a camera name or ``Camera`` (its first). The other arguments are the command line's
     options (docs/realtime.md): the segment (``start_s``, ``duration_s``), the display
     (``refresh_hz``, ``frame_budget_ms``), the tracker's ``latency_ms``, the deadline loops'
-    ``margin_ms``, the ``clock`` (wall or model, with ``model_rays_per_ms`` and
+    ``margin_ms`` and ``periphery_share`` (None: the loop's default, 1), the ``clock`` (wall or model, with ``model_rays_per_ms`` and
     ``model_fixed_ms``), the ``loops`` (whole-frame, deadline, deadline+prediction,
     deadline+oracle), the judged saccades' ``min_amplitude_deg``. ``progress`` prints the
     command line's progress lines; ``timeline`` draws a saccade's timeline (.png or .svg);
@@ -359,4 +359,5 @@ def bench_latency(recordings: Any, scene: Scene, camera: Any = None, size: Tuple
         number(latency_ms, "latency_ms"), number(margin_ms, "margin_ms"), clock, number(model_rays_per_ms, "model_rays_per_ms"),
         number(model_fixed_ms, "model_fixed_ms"), list(loops), number(min_amplitude_deg, "min_amplitude_deg"), max_rays,
         number(tolerance, "tolerance"), seed, device, threads, progress, "" if timeline is None else os.fspath(timeline),
-        timeline_saccade, landing))  # (a dict or --landing's text; the core names anything else)
+        timeline_saccade, landing,  # (a dict or --landing's text; the core names anything else)
+        number(periphery_share, "periphery_share")))

@@ -189,7 +189,8 @@ struct PyLoop {
 
   PyLoop(const PyScene& s, const std::array<int, 2>& size, const nb::object& camera_arg, std::optional<Display> display, int max_rays,
          double gamma, double refresh_hz, std::optional<double> frame_budget_ms, bool predict, const std::string& device_name, int threads_,
-         uint64_t seed, const std::string& clock, double tolerance, double ellipse, bool keep_history, const nb::object& landing)
+         uint64_t seed, const std::string& clock, double tolerance, double ellipse, bool keep_history, const nb::object& landing,
+         double periphery_share)
       : scene(s.scene), threads(threads_) {
     if (threads < 0) fail("threads: must be 0 (all cores) or more, got {}", threads);
     if (!(refresh_hz >= 1 && refresh_hz <= 1000)) fail("refresh_hz: must be in [1, 1000] Hz, got {}", refresh_hz);
@@ -205,6 +206,7 @@ struct PyLoop {
     settings.budget_ms = frame_budget_ms.value_or(1000.0 / refresh_hz);
     settings.predict = predict;
     settings.keep_history = keep_history;
+    settings.periphery_share = periphery_share;
     settings.landing = landing_params_of(landing);
     settings.clock = parse_loop_clock(clock);
     if (settings.clock == LoopClock::model) fail("clock: the model clock is bench latency's; a Loop in Python runs on the wall clock");
@@ -557,17 +559,19 @@ NB_MODULE(_core, m) {
                      "is refined first (docs/realtime.md).")
       .def(nb::init<const PyScene&, const std::array<int, 2>&, const nb::object&, std::optional<Display>, int, double, double,
                     std::optional<double>, bool, const std::string&, int, uint64_t, const std::string&, double, double, bool,
-                    const nb::object&>(),
+                    const nb::object&, double>(),
            "scene"_a, "size"_a = std::array<int, 2>{840, 525}, "camera"_a = nb::none(), "display"_a = nb::none(), "max_rays"_a = 400,
            "gamma"_a = 2.0, "refresh_hz"_a = 60.0, "frame_budget_ms"_a = nb::none(), "predict"_a = true, "device"_a = "auto",
            "threads"_a = 0, "seed"_a = 1, "clock"_a = "wall", "tolerance"_a = foveal::AoReuseParams{}.tolerance, "ellipse"_a = 1.538,
-           "keep_history"_a = true, "landing"_a.none() = nb::none(),
+           "keep_history"_a = true, "landing"_a.none() = nb::none(), "periphery_share"_a = kDefaultPeripheryShare,
            "A loop for a view (traced here, once; frame(camera=…) moves it). `frame_budget_ms` (default: one refresh at "
            "`refresh_hz`) is what each frame() may take; `predict` places the fovea at a saccade's predicted landing while it "
            "flies; `display` the screen the image fills (default: the papers' 47.5×30 cm, 1680×1050 at 60 cm); `tolerance` the "
            "periphery's τ(E) scale (as render --tolerance); `keep_history` lets a moved camera keep the AO of the surfaces it "
            "still sees (else it starts afresh); `landing` the saccade landing predictor's parameters: a dict by name (as "
-           "foveal.gaze.predict_landings's keywords: onset_deg_s, …) or the text of --landing ('onset_deg_s=60,skew=1.2').")
+           "foveal.gaze.predict_landings's keywords: onset_deg_s, …) or the text of --landing ('onset_deg_s=60,skew=1.2'); "
+           "`periphery_share` the share of the budget after which a frame casts no more rays for the periphery (the fovea's go "
+           "on to the deadline; 1: the periphery's too).")
       .def("push", &PyLoop::push, "t"_a, "gaze"_a,
            "A tracker sample: its time in seconds (any clock, increasing; None: just after the latest sample) and the gaze "
            "(x, y) in render pixels, or None when the tracker lost the eye. Push every sample a fast tracker delivers "
@@ -750,7 +754,8 @@ NB_MODULE(_core, m) {
          std::optional<double> frame_budget_ms, std::optional<double> latency_ms, std::optional<double> margin_ms, const std::string& clock,
          std::optional<double> model_rays_per_ms, std::optional<double> model_fixed_ms, const std::vector<std::string>& loops,
          double min_amplitude_deg, int max_rays, double tolerance, uint64_t seed, const std::string& device_name, int threads,
-         bool progress, const std::string& timeline, int timeline_saccade, const nb::object& landing) {
+         bool progress, const std::string& timeline, int timeline_saccade, const nb::object& landing,
+         std::optional<double> periphery_share) {
         // `bench latency` (apps/bench_latency.cpp) on recordings foveal.gaze hands over as columns
         LatencyParams p;
         std::tie(p.render.width, p.render.height) = size_of(size, "size");
@@ -762,6 +767,7 @@ NB_MODULE(_core, m) {
         p.budget_ms = frame_budget_ms;
         p.tracker_latency_ms = latency_ms;
         p.margin_ms = margin_ms;
+        p.periphery_share = periphery_share.value_or(kDefaultPeripheryShare);
         p.clock = parse_loop_clock(clock);
         p.model_rays_per_ms = model_rays_per_ms;
         p.model_fixed_ms = model_fixed_ms;
@@ -813,7 +819,7 @@ NB_MODULE(_core, m) {
       "scene"_a, "scene_name"_a, "recordings"_a, "camera"_a.none(), "size"_a, "display"_a.none(), "start_s"_a, "duration_s"_a,
       "refresh_hz"_a, "frame_budget_ms"_a.none(), "latency_ms"_a.none(), "margin_ms"_a.none(), "clock"_a, "model_rays_per_ms"_a.none(),
       "model_fixed_ms"_a.none(), "loops"_a, "min_amplitude_deg"_a, "max_rays"_a, "tolerance"_a, "seed"_a, "device"_a, "threads"_a,
-      "progress"_a, "timeline"_a, "timeline_saccade"_a, "landing"_a.none());
+      "progress"_a, "timeline"_a, "timeline_saccade"_a, "landing"_a.none(), "periphery_share"_a.none());
   m.def(
       "device_available", [] { return availability().usable; }, "Whether a usable NVIDIA GPU answered.");
   m.def(

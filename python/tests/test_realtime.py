@@ -131,6 +131,8 @@ def test_bad_arguments_are_clear_errors(box):
         foveal.Loop(box, clock="model")
     with pytest.raises(ValueError, match="size"):
         foveal.Loop(box, size=(0, 10))
+    with pytest.raises(ValueError, match=r"periphery_share: must be in \(0, 1\]"):
+        foveal.Loop(box, size=(64, 40), periphery_share=0)
     loop = foveal.Loop(box, size=(64, 40), max_rays=8, device="cpu")
     with pytest.raises(ValueError, match="t: must be a finite"):
         loop.push(float("nan"), (1, 2))
@@ -254,6 +256,8 @@ def test_bench_latency_from_python_equals_the_command_lines(cli, box, tmp_path):
         foveal.bench_latency(str(recording), box, size=(168, 105), latency_ms=-1)
     with pytest.raises(ValueError, match=r"margin_ms: must be in \[0, the frame budget 16.6667 ms\)"):
         foveal.bench_latency(str(recording), box, size=(168, 105), margin_ms=100)
+    with pytest.raises(ValueError, match=r"^periphery_share: must be in \(0, 1\]"):
+        foveal.bench_latency(str(recording), box, size=(168, 105), periphery_share=1.5)
     with pytest.raises(TypeError, match="recordings: a path, a foveal.gaze.Recording or a list of them, got int"):
         foveal.bench_latency(5, box)
 
@@ -349,6 +353,7 @@ def test_the_segments_script_pools_every_judged_saccade(tmp_path):
     for args, said in ((["--size", "0x0"], "--size: width and height must be in 1..16384"),
                        (["--model-rays-per-ms", "-1"], "--model-rays-per-ms: must be > 0"),
                        (["--count", "-1"], "--count: must be 0"), (["--scene", script], "--scene: "),
+                       (["--periphery-share", "2"], "--periphery-share: must be in (0, 1]"),
                        (["--recording", script], "--recording: ")):
         bad = subprocess.run([sys.executable, script, "--recording", str(recording), "--segment", "1", "--count", "1"] + args,
                              capture_output=True, text=True, timeout=120)

@@ -212,6 +212,7 @@ LatencyLoop run_deadline(const LatencyRun& run, const Segment& s, const LatencyP
   settings.model_rays_per_ms = model_rate;
   settings.model_fixed_ms = model_fixed;
   settings.margin_ms = p.margin_ms;
+  settings.periphery_share = p.periphery_share;
   RealtimeLoop rt(*run.renderer, *run.scene, p.render, settings);
   // Samples from a second before the segment: the predictor and the fovea start where the eye is
   size_t next = 0;
@@ -499,10 +500,11 @@ void validate(const LatencyParams& p) {
   if ((p.model_rays_per_ms || p.model_fixed_ms) && p.clock != LoopClock::model) fail("model_rays_per_ms: needs the model clock");
   if (p.model_rays_per_ms.has_value() != p.model_fixed_ms.has_value())
     fail("model_fixed_ms: give both parts of the cost model, or neither");
-  if (p.margin_ms) {  // the loop's own rule, checked before the references are traced
+  {  // the loop's own rules, checked before the references are traced
     LoopSettings loop;
     loop.budget_ms = p.budget_ms.value_or(1000.0 / p.refresh_hz);
-    loop.margin_ms = *p.margin_ms;
+    loop.margin_ms = p.margin_ms;
+    loop.periphery_share = p.periphery_share;
     validate(loop);
   }
   if (p.loops.empty()) fail("loops: give at least one (whole-frame, deadline, deadline+prediction, deadline+oracle)");
@@ -626,8 +628,9 @@ LatencyReport run_latency_bench(const LatencyRun& run, const std::vector<Recordi
   }
   // Markdown and JSON
   std::string md =
-      fmt::format("Scene {}, {}x{}, n_max {}, device {}, {:.0f} Hz display (budget {:.1f} ms), {} clock.\n\n", run.scene_name,
-                  p.render.width, p.render.height, p.render.foveation.max_rays, run.device, p.refresh_hz, budget, to_string(p.clock));
+      fmt::format("Scene {}, {}x{}, n_max {}, device {}, {:.0f} Hz display (budget {:.1f} ms), {} clock{}.\n\n", run.scene_name,
+                  p.render.width, p.render.height, p.render.foveation.max_rays, run.device, p.refresh_hz, budget, to_string(p.clock),
+                  p.periphery_share < 1 ? fmt::format(", the periphery's rays within {:g} % of each budget", 100 * p.periphery_share) : "");
   nlohmann::json j;
   j["scene"] = run.scene_name;
   j["device"] = run.device;
@@ -635,7 +638,8 @@ LatencyReport run_latency_bench(const LatencyRun& run, const std::vector<Recordi
   j["max_rays"] = p.render.foveation.max_rays;
   j["refresh_hz"] = p.refresh_hz;
   j["clock"] = to_string(p.clock);
-  j["landing"] = nlohmann::json::object();  // the prediction loops' landing predictor (--landing)
+  j["periphery_share"] = p.periphery_share;  // the deadline loops' (--periphery-share)
+  j["landing"] = nlohmann::json::object();   // the prediction loops' landing predictor (--landing)
   for (const auto& [name, value] : landing_parameters(p.landing)) j["landing"][name] = value;
   j["recordings"] = nlohmann::json::array();
   for (const LatencyRecording& r : report.recordings) {

@@ -48,8 +48,9 @@ struct LatencyParams {
   double start_s = 0, duration_s = 3;  // the segment replayed (seconds from the recording's first sample)
   double min_amplitude_deg = 2;        // smaller saccades are not judged
   std::vector<std::string> loops = {"whole-frame", "deadline", "deadline+prediction"};
-  std::optional<double> margin_ms;  // the deadline loops' least margin (unset: the loop's default, loop_margin_ms)
-  LandingParams landing;            // the prediction loops' landing predictor (gaze/landing.h; the oracle's detects flights with it)
+  std::optional<double> margin_ms;                  // the deadline loops' least margin (unset: the loop's default, loop_margin_ms)
+  double periphery_share = kDefaultPeripheryShare;  // the deadline loops' periphery: its rays up to this share of the budget
+  LandingParams landing;  // the prediction loops' landing predictor (gaze/landing.h; the oracle's detects flights with it)
   // The first recording's judged saccade a timeline picture will draw (the last where there are
   // fewer): each frame also judges its fovea (LatencyFrame::drawn_error). Unset: no picture
   std::optional<size_t> timeline_saccade;

@@ -97,6 +97,8 @@ void validate(const LoopSettings& s) {
   }
   if (s.margin_ms && (!(*s.margin_ms >= 0) || *s.margin_ms >= s.budget_ms))
     fail("margin_ms: must be in [0, the frame budget {:g} ms), got {}", s.budget_ms, *s.margin_ms);
+  if (!(s.periphery_share > 0 && s.periphery_share <= 1))
+    fail("periphery_share: must be in (0, 1] (the share of the frame budget the periphery's rays may run to), got {}", s.periphery_share);
   if (!(s.min_scale > 0 && s.min_scale <= 1)) fail("min_scale: must be in (0, 1], got {}", s.min_scale);
   if (!(s.slowdown >= 1) || !std::isfinite(s.slowdown)) fail("slowdown: must be >= 1, got {}", s.slowdown);
   validate(s.landing);
@@ -371,7 +373,7 @@ void RealtimeLoop::prepare_rounds(size_t n) {
   grow(key_);
 }
 
-size_t RealtimeLoop::plan_round(uint64_t ray_limit, bool periphery, bool& swept) {
+size_t RealtimeLoop::plan_round(uint64_t ray_limit, uint64_t periphery_limit, bool& swept) {
   tasks_.clear();
   swept = false;
   // What n(E) still lacks, in rounds that double the pixel's rays (kept ones included)
@@ -393,8 +395,9 @@ size_t RealtimeLoop::plan_round(uint64_t ray_limit, bool periphery, bool& swept)
     if (rays >= ray_limit) break;
     if (!converged(i)) add(i);
   }
-  if (!tasks_.empty() || !periphery || all_converged_) return tasks_.size();
+  if (!tasks_.empty() || periphery_limit == 0 || all_converged_) return tasks_.size();
   swept = true;
+  ray_limit = std::min(ray_limit, periphery_limit);
   // Then the periphery by q²·σ̂²·k/(c + k), in buckets of half powers of two from the highest
   const size_t n = cast_.size();
   std::array<uint32_t, kBuckets + 2> count{};
@@ -686,6 +689,9 @@ LoopFrame RealtimeLoop::frame(const Camera& camera) {
   // The margin: at least the settings', more where frames have lately ended later than planned
   const double margin = std::max(loop_margin_ms(settings_), slip_ms_);  // (slip_ms_ at most a quarter of the budget)
   const double deadline = settings_.budget_ms - margin - finish_ms_;
+  // The periphery's rays stop at their share of the budget (1: at the deadline): a frame that ends
+  // early is not made late by a pause of the machine's
+  const double periphery_deadline = std::min(deadline, settings_.periphery_share * settings_.budget_ms - finish_ms_);
   // A size coming back: half of what is left before the deadline builds it (the rest after the
   // rays, if they leave any)
   auto rebuild = [&](double until_ms) {
@@ -699,22 +705,29 @@ LoopFrame RealtimeLoop::frame(const Camera& camera) {
   out.deadline_ms = deadline;
   out.compose_planned_ms = finish_ms_;
   const double model_fixed = settings_.model_fixed_ms * scale_ * scale_;  // the model's fixed cost scales with the pixels
-  uint64_t allowance = wall ? 0 : static_cast<uint64_t>(std::max(0.0, (settings_.budget_ms - model_fixed) * settings_.model_rays_per_ms));
+  auto model_rays = [&](double ms) { return static_cast<uint64_t>(std::max(0.0, (ms - model_fixed) * settings_.model_rays_per_ms)); };
+  uint64_t allowance = wall ? 0 : model_rays(settings_.budget_ms);
+  const uint64_t periphery_allowance = wall ? 0 : model_rays(settings_.periphery_share * settings_.budget_ms);
   bool ran_out = false;  // the rays stopped for want of work, not for the deadline
   for (;;) {
     uint64_t limit = allowance;
+    uint64_t periphery_limit = std::min(allowance, periphery_allowance - std::min(periphery_allowance, out.rays));
+    bool periphery = periphery_limit > 0;
     if (wall) {
       const double left = deadline - timer.ms() - plan_ms_;
       if (left <= 0) break;
-      limit = rays_per_ms_ > 0 ? static_cast<uint64_t>(rays_per_ms_ * left * 1.5) + 1024 : 65536;
+      auto rays_in = [&](double ms) { return rays_per_ms_ > 0 ? static_cast<uint64_t>(rays_per_ms_ * ms * 1.5) + 1024 : 65536; };
+      limit = rays_in(left);
+      // A periphery round plans over every pixel: only when its planning fits
+      const double periphery_left = periphery_deadline - timer.ms() - plan_ms_;
+      periphery = sweep_.fits(periphery_left);
+      periphery_limit = periphery ? std::min(limit, rays_in(periphery_left)) : 0;
     } else if (allowance == 0) {
       break;
     }
-    // A periphery round plans over every pixel: only when its planning fits
-    const bool periphery = !wall || sweep_.fits(deadline - timer.ms() - plan_ms_);
     const Timer plan_timer;
     bool swept;
-    const size_t planned = plan_round(limit, periphery, swept);
+    const size_t planned = plan_round(limit, periphery_limit, swept);
     const double plan_ms = plan_timer.ms();
     out.plan_ms += plan_ms;
     if (swept) {  // a pass over every pixel
@@ -726,7 +739,7 @@ LoopFrame RealtimeLoop::frame(const Camera& camera) {
     }
     if (planned == 0) {
       // (nothing for the fovea, and the periphery's sweep did not fit: try it again a little sooner)
-      if (wall && !periphery) sweep_.skipped();
+      if (wall && !periphery && periphery_deadline - timer.ms() > 0) sweep_.skipped();
       ran_out = periphery;  // every pixel had its rays
       break;
     }
@@ -742,7 +755,8 @@ LoopFrame RealtimeLoop::frame(const Camera& camera) {
     batch.blocked = blocked_;
     batch.done = done_;
     batch.slowdown = settings_.slowdown;
-    if (wall) batch.expired = [&] { return timer.ms() >= deadline; };
+    const double until = swept ? periphery_deadline : deadline;
+    if (wall) batch.expired = [&] { return timer.ms() >= until; };
     const Timer trace_timer;
     const uint64_t traced = renderer_.trace_ao_batch(batch);
     const double ms = trace_timer.ms();

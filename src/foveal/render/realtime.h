@@ -59,6 +59,7 @@ enum class LoopClock { wall, model };
 const char* to_string(LoopClock clock);
 LoopClock parse_loop_clock(const std::string& name);  // throws Error naming --clock
 
+inline constexpr double kDefaultPeripheryShare = 1.0;
 struct LoopSettings {
   double budget_ms = 1000.0 / 60;  // a frame every refresh
   bool predict = false;            // place the fovea at a saccade's predicted landing while it flies
@@ -69,6 +70,11 @@ struct LoopSettings {
   // Wall clock: kept free at the end of each frame for the machine's pauses. Unset: kDefaultMarginMs,
   // at most a quarter of the budget (so a short budget is not refused for a margin nobody asked for)
   std::optional<double> margin_ms;
+  // The periphery's rays stop once the frame has spent this share of the budget (the fovea's go on
+  // to the deadline): a frame that ends early is not made late by a pause of the machine's, at the
+  // cost of the periphery's pace (docs/realtime.md). 1: the periphery's too go on to the deadline.
+  // Both clocks (the model's: its rays up to the share)
+  double periphery_share = kDefaultPeripheryShare;
   double min_scale = 0.25;   // the smallest resolution scale the loop may choose
   double slowdown = 1;       // tests only: the tracer this many times slower
   bool keep_history = true;  // a new view (the camera moved) keeps the AO of the surfaces it still sees
@@ -248,8 +254,10 @@ class RealtimeLoop {
   // the view is replaced next, and its surfaces move into the history instead of being copied
   void keep_rays(bool leaving);
   void update_maps(glm::dvec2 gaze_px, bool predicted);  // predicted: the fovea's pixels centre-out
-  // `swept`: set where the round planned the periphery (a pass over every pixel)
-  size_t plan_round(uint64_t ray_limit, bool periphery, bool& swept);
+  // A round: the fovea's pixels short of their rays, up to `ray_limit` rays; where it has none, the
+  // periphery's, up to `periphery_limit` (0: not this round). `swept`: set where the round planned
+  // the periphery (a pass over every pixel)
+  size_t plan_round(uint64_t ray_limit, uint64_t periphery_limit, bool& swept);
   // The fovea's pixels (q = 1, hit, rays) of the current maps at `gaze_px`; centre-out where predicted
   void collect_fovea(glm::dvec2 gaze_px, bool predicted);
   // Room for a round over all n pixels, its pages touched (where a new view needs more)

@@ -105,6 +105,66 @@ TEST(RealtimeLoop, DISABLED_EveryFrameIsDeliveredWithinBudgetUnderASlowedTracer)
   EXPECT_GT(rays, 0u);
 }
 
+// The periphery's rays stop at their share of the frame; the fovea's go on to the deadline. Model
+// clock: a frame's rays are its allowance exactly, (share·budget − fixed) × rate for the periphery.
+TEST(RealtimeLoop, ThePeripheryStopsAtItsShareOfTheFrameAndTheFoveaGoesOnToTheDeadline) {
+  const std::unique_ptr<FrameRenderer> renderer = make_frame_renderer(sphere_plane(), ComputeDevice::cpu);
+  const Camera& camera = sphere_plane().cameras.front();
+  auto run = [&](double share, uint64_t& fovea_frame_rays, uint64_t& periphery_frame_rays) {
+    LoopSettings settings = model_clock(3000);
+    settings.periphery_share = share;
+    RealtimeLoop loop(*renderer, sphere_plane(), loop_params(200, 125, 400), settings);
+    loop.push_gaze(0, glm::dvec2(100, 112));
+    fovea_frame_rays = periphery_frame_rays = 0;
+    bool fovea_done = false;
+    for (int k = 0; k < 60 && periphery_frame_rays == 0; ++k) {
+      const LoopFrame f = loop.frame(camera);
+      if (!f.fovea_done) fovea_frame_rays = std::max(fovea_frame_rays, f.rays);
+      if (fovea_done && f.rays > 0) periphery_frame_rays = f.rays;  // a frame of the periphery alone
+      fovea_done = f.fovea_done;
+    }
+  };
+  const double budget = LoopSettings{}.budget_ms;
+  const auto allowance = static_cast<uint64_t>((budget - 2) * 3000), periphery = static_cast<uint64_t>((0.6 * budget - 2) * 3000);
+  uint64_t fovea_rays = 0, periphery_rays = 0;
+  run(0.6, fovea_rays, periphery_rays);
+  EXPECT_EQ(fovea_rays, allowance);  // the fovea's frames: to the deadline
+  EXPECT_EQ(periphery_rays, periphery);
+  run(1.0, fovea_rays, periphery_rays);  // 1: the periphery too goes on to the deadline
+  EXPECT_EQ(fovea_rays, allowance);
+  EXPECT_EQ(periphery_rays, allowance);
+}
+
+// Timed, as the deadline test (its own ctest entry, alone): on the wall clock a frame of the
+// periphery alone stops its rays at the share of the budget, one refining the fovea goes on to the
+// deadline. Medians over the frames of each kind (the machine may pause a frame).
+TEST(RealtimeLoop, DISABLED_OnTheWallClockThePeripheryStopsAtItsShareOfTheFrame) {
+  const std::unique_ptr<FrameRenderer> renderer = make_frame_renderer(box(), ComputeDevice::cpu);
+  LoopSettings settings;
+  settings.budget_ms = 30;
+  settings.periphery_share = 0.3;
+  settings.slowdown = 4;  // rays four times dearer: the periphery has work in every frame
+  RealtimeLoop loop(*renderer, box(), loop_params(320, 200, 400), settings);
+  const Camera& camera = box().cameras.front();
+  loop.push_gaze(0, glm::dvec2(160, 100));
+  std::vector<double> fovea_end, periphery_end;
+  bool fovea_done = false;
+  for (int k = 0; k < 200 && periphery_end.size() < 15; ++k) {
+    const LoopFrame f = loop.frame(camera);
+    if (k > 0 && !f.fovea_done) fovea_end.push_back(f.rays_end_ms);
+    if (fovea_done && f.rays > 0) periphery_end.push_back(f.rays_end_ms);
+    fovea_done = f.fovea_done;
+  }
+  ASSERT_GE(fovea_end.size(), 3u);
+  ASSERT_GE(periphery_end.size(), 15u);
+  auto median = [](std::vector<double> v) {
+    std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
+    return v[v.size() / 2];
+  };
+  EXPECT_LT(median(periphery_end), 0.3 * 30 + 1.0);  // 9 ms, and a chunk of rays
+  EXPECT_GT(median(fovea_end), 0.3 * 30 + 8.0);      // the deadline: 30 − 2 − composing
+}
+
 // The CUDA backend runs the same loop: its variants of these tests skip where there is no GPU.
 #define FOVEAL_NEED_GPU() \
   if (!availability().usable) GTEST_SKIP() << "skipped: " << availability().reason
