@@ -14,7 +14,8 @@ within its segment counts as the longest, as in the bench.
 
     .venv/bin/python bench/latency_segments.py [--recording REC ...] [--segment 10] [--first 2]
         [--count N] [--loops deadline,deadline+prediction] [--clock model] [--model-rays-per-ms 25000]
-        [--model-fixed-ms 4] [--size 840x525] [--scene scenes/dragon-box.json] [--landing NAME=VALUE,…] [--periphery-share S] [--json F] [--markdown F]
+        [--model-fixed-ms 4] [--size 840x525] [--scene scenes/dragon-box.json] [--landing NAME=VALUE,…]
+        [--periphery-share S] [--json F] [--markdown F]
 
 The defaults are BENCHMARKS.md's: the EyeLink recording and IRF S1 and S2, the model clock (the
 same figures on any machine), 10-s segments from 2 s on, as many as each recording holds.
@@ -117,8 +118,9 @@ def main():
             report = foveal.bench_latency(these, scene, size=(width, height), start_s=start, duration_s=a.segment, clock=a.clock,
                                           loops=loops, landing=landing, periphery_share=a.periphery_share, **model)
         except ValueError as error:
-            refuse_by_option(p, error, {"periphery_share": "--periphery-share", "size": "--size", "loops": "--loops", "model_rays_per_ms": "--model-rays-per-ms",
-                                        "model_fixed_ms": "--model-fixed-ms", "duration_s": "--segment", "start_s": "--first"})
+            refuse_by_option(p, error, {"size": "--size", "loops": "--loops", "model_rays_per_ms": "--model-rays-per-ms",
+                                        "model_fixed_ms": "--model-fixed-ms", "duration_s": "--segment", "start_s": "--first",
+                                        "periphery_share": "--periphery-share"})
         for r, rec in zip(these, report["recordings"]):
             segments[r] += 1
             for l in loops:

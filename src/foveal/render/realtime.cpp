@@ -710,9 +710,7 @@ LoopFrame RealtimeLoop::frame(const Camera& camera) {
   const uint64_t periphery_allowance = wall ? 0 : model_rays(settings_.periphery_share * settings_.budget_ms);
   bool ran_out = false;  // the rays stopped for want of work, not for the deadline
   for (;;) {
-    uint64_t limit = allowance;
-    uint64_t periphery_limit = std::min(allowance, periphery_allowance - std::min(periphery_allowance, out.rays));
-    bool periphery = periphery_limit > 0;
+    uint64_t limit = allowance, periphery_limit = 0;  // (0: no periphery this round)
     if (wall) {
       const double left = deadline - timer.ms() - plan_ms_;
       if (left <= 0) break;
@@ -720,11 +718,12 @@ LoopFrame RealtimeLoop::frame(const Camera& camera) {
       limit = rays_in(left);
       // A periphery round plans over every pixel: only when its planning fits
       const double periphery_left = periphery_deadline - timer.ms() - plan_ms_;
-      periphery = sweep_.fits(periphery_left);
-      periphery_limit = periphery ? std::min(limit, rays_in(periphery_left)) : 0;
-    } else if (allowance == 0) {
-      break;
+      if (sweep_.fits(periphery_left)) periphery_limit = std::min(limit, rays_in(periphery_left));
+    } else {
+      if (allowance == 0) break;
+      periphery_limit = std::min(allowance, periphery_allowance - std::min(periphery_allowance, out.rays));
     }
+    const bool periphery = periphery_limit > 0;
     const Timer plan_timer;
     bool swept;
     const size_t planned = plan_round(limit, periphery_limit, swept);
