@@ -117,9 +117,9 @@ def model_observer_p(difference: float, threshold_difference: float) -> float:
 
 
 def to_psychopy(image: np.ndarray) -> np.ndarray:
-    c = np.clip(image, 0.0, 1.0)
-    srgb = np.where(c <= 0.0031308, 12.92 * c, 1.055 * np.power(c, 1 / 2.4) - 0.055)
-    return np.flipud(srgb * 2.0 - 1.0).astype(np.float32)
+    """Linear RGB → sRGB in PsychoPy's float range [−1, 1], rows bottom-up (as ImageStim takes them)."""
+    import foveal
+    return foveal.linear_to_srgb(image, low=-1.0, high=1.0, bottom_up=True)
 
 
 def main(argv=None) -> int:

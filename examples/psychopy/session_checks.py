@@ -32,3 +32,25 @@ def check_display(parser):
     if sys.platform.startswith("linux") and not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")):
         parser.error("no display to open the window on (DISPLAY is not set): run it on a desktop, or under "
                      "xvfb-run -a -s \"-screen 0 840x525x24\" (docs/realtime.md)")
+
+
+# Lab displays run at 60–240 Hz as a rule; a rate measured above this is most likely the pace of
+# flips that do not wait for the vertical blank (Xvfb, or vsync off in the driver)
+FASTEST_USUAL_HZ = 240.0
+
+
+def refresh_rate(given_hz, measured_hz):
+    """The refresh rate a session runs at, and a note where it is not the display's for certain:
+    `given_hz` (--refresh-hz) where given; else what PsychoPy measured (`measured_hz`, None where it
+    found no steady rate: then 60 Hz). Under Xvfb PsychoPy measured flips at about 490 Hz at 840x525:
+    a budget of 4 ms, which lowered the render's size, and no fovea converged in 240 flips."""
+    if given_hz is not None:
+        return given_hz, ""
+    if measured_hz is None or not measured_hz > 0:
+        return 60.0, ("PsychoPy found no steady refresh rate: 60 Hz assumed; give the display's rate with --refresh-hz")
+    if measured_hz > FASTEST_USUAL_HZ:
+        return measured_hz, (f"PsychoPy measured flips at {measured_hz:.0f} Hz, faster than lab displays run as a rule: where "
+                             "the flip does not wait for the vertical blank (Xvfb, or vsync off in the driver) that is the "
+                             f"drawing's pace, not the display's, and the loop's budget follows it ({1000 / measured_hz:.1f} ms a "
+                             "frame); give the display's rate with --refresh-hz (e.g. 60)")
+    return measured_hz, ""

@@ -702,6 +702,18 @@ NB_MODULE(_core, m) {
       },
       "image"_a, "path"_a, "Write a linear float32 H×W×3 image as the CLI does (.png sRGB; .pfm/.exr exact).");
   m.def(
+      "_linear_to_srgb",
+      [](const nb::ndarray<const float, nb::ndim<3>, nb::c_contig, nb::device::cpu>& a,
+         nb::ndarray<float, nb::ndim<3>, nb::c_contig, nb::device::cpu> out, float low, float high, bool bottom_up) {
+        // (shapes checked by foveal.linear_to_srgb; the conversion on foveal's threads, without the GIL)
+        const float* in = a.data();
+        float* to = out.data();
+        const int h = static_cast<int>(a.shape(0)), w = static_cast<int>(a.shape(1)), c = static_cast<int>(a.shape(2));
+        nb::gil_scoped_release release;
+        linear_to_srgb(in, to, w, h, c, low, high, bottom_up);
+      },
+      "image"_a, "out"_a, "low"_a, "high"_a, "bottom_up"_a);
+  m.def(
       "stalls",
       [](double duration_s, int threads, double threshold_ms, double chunk_us, double margin_ms) {
         validate_stall_margin(margin_ms);

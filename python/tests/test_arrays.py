@@ -60,6 +60,61 @@ def test_srgb_to_linear_is_the_png_decoding(tmp_path):
     assert np.isclose(foveal.srgb_to_linear(np.array([[128]], np.uint8))[0, 0], ((128 / 255 + 0.055) / 1.055) ** 2.4)
 
 
+def test_linear_to_srgb_is_the_png_encoding_for_a_window():
+    # The PNG's bytes are the same curve rounded: foveal.linear_to_srgb's floats round to them
+    linear = np.linspace(0, 1, 9 * 16 * 3, dtype=np.float32).reshape(9, 16, 3)
+    srgb = foveal.linear_to_srgb(linear)
+    assert srgb.dtype == np.float32 and srgb.shape == linear.shape
+    curve = np.where(linear <= 0.0031308, 12.92 * linear.astype(np.float64), 1.055 * linear.astype(np.float64) ** (1 / 2.4) - 0.055)
+    assert np.abs(srgb - curve).max() < 1e-6
+    assert np.allclose(foveal.srgb_to_linear(srgb), linear, atol=1e-5)  # and back
+    # PsychoPy's texture: [−1, 1], rows bottom-up, into one buffer, the same buffer returned
+    texture = np.empty_like(linear)
+    assert foveal.linear_to_srgb(linear, texture, low=-1, high=1, bottom_up=True) is texture
+    assert np.allclose(texture, (2 * curve - 1)[::-1], atol=2e-6)
+    # Clipped; grey 2-D images keep their shape; a 4th channel (alpha) is clipped and mapped, not encoded
+    assert np.array_equal(foveal.linear_to_srgb(np.array([[-2.0, 0.0, 1.0, 9.0]])), [[0, 0, 1, 1]])
+    rgba = np.full((2, 2, 4), 0.5, np.float32)
+    encoded = foveal.linear_to_srgb(rgba)
+    assert np.allclose(encoded[..., :3], 1.055 * 0.5 ** (1 / 2.4) - 0.055) and np.all(encoded[..., 3] == 0.5)
+    # In place, top-down
+    copy = linear.copy()
+    assert foveal.linear_to_srgb(copy, copy) is copy and np.array_equal(copy, srgb)
+
+
+@pytest.mark.parametrize("image, out, keywords, kind, says", [
+    (np.full((2, 3, 3), 128, np.uint8), None, {}, TypeError, "image: uint8 pixels"),
+    (np.zeros((2, 3, 5), np.float32), None, {}, ValueError, "image: expected an H×W×C image"),
+    (IMAGE, np.empty((3, 3), np.float32), {}, ValueError, "out: expected a writable C-contiguous float32 array of shape (8, 12, 3)"),
+    (IMAGE, np.empty((8, 12, 3), np.float64), {}, ValueError, "got float64"),
+    (IMAGE, np.empty((8, 24, 3), np.float32)[:, ::2], {}, ValueError, "not C-contiguous"),
+    (IMAGE, "buffer", {}, ValueError, "got str"),
+    (IMAGE, None, {"low": float("nan")}, ValueError, "low: expected a finite number"),
+    (IMAGE, None, {"high": "1"}, ValueError, "high: expected a finite number"),
+])
+def test_linear_to_srgb_names_what_is_wrong(image, out, keywords, kind, says):
+    with pytest.raises(kind) as error:
+        foveal.linear_to_srgb(image, out, **keywords)
+    assert says in str(error.value), str(error.value)
+
+
+def test_linear_to_srgb_names_a_pixel_that_is_not_finite_and_never_reverses_rows_into_its_own_image():
+    bad = np.full((4, 5, 3), 0.5, np.float32)
+    bad[2, 3, 1] = np.inf
+    out = np.full_like(bad, -7)
+    with pytest.raises(ValueError, match=r"image: pixel \(3, 2\) channel 1 is inf"):
+        foveal.linear_to_srgb(bad, out)
+    assert np.all(out == -7)  # nothing written
+    read_only = np.empty_like(IMAGE)
+    read_only.flags.writeable = False
+    with pytest.raises(ValueError, match="read-only"):
+        foveal.linear_to_srgb(IMAGE, read_only)
+    same = IMAGE.copy()
+    with pytest.raises(ValueError, match="out: shares memory with image"):
+        foveal.linear_to_srgb(same, same, bottom_up=True)
+    assert np.array_equal(same, IMAGE)
+
+
 def test_every_error_speaks_pythons_words(box, tmp_path):
     """A sweep over the public API's arguments: each message starts with the argument's name."""
     renderer = foveal.Renderer(box, device="cpu")

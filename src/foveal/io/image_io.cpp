@@ -18,6 +18,8 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
+#include <cstdint>
 #include <bit>
 #include <cctype>
 #include <cmath>
@@ -104,6 +106,63 @@ inline uint8_t srgb_byte(float v, const float* steps, const uint8_t* start) {
 }  // namespace
 
 uint8_t srgb_byte(float v) { return srgb_byte(v, srgb_steps().data(), srgb_bucket_start().data()); }
+
+namespace {
+
+// linear_to_srgb at k / kSrgbTableSteps, k = 0 … kSrgbTableSteps: interpolated between neighbours it
+// is within 1e-7 of the curve (the error of linear interpolation, h²/8 · |f''|, peaks at the curve's
+// knee, 0.0031308: 7e-8), where a pow a value costs ~20 ns — 13 ms a frame at 840x525 on two cores
+constexpr int kSrgbTableSteps = 65536;
+const std::vector<float>& srgb_table() {
+  static const std::vector<float> table = [] {
+    std::vector<float> t(kSrgbTableSteps + 1);
+    for (int k = 0; k <= kSrgbTableSteps; ++k)
+      t[static_cast<size_t>(k)] = linear_to_srgb(static_cast<float>(static_cast<double>(k) / kSrgbTableSteps));
+    return t;
+  }();
+  return table;
+}
+
+}  // namespace
+
+void linear_to_srgb(const float* in, float* out, int width, int height, int channels, float low, float high, bool bottom_up) {
+  const size_t row = static_cast<size_t>(width) * static_cast<size_t>(channels);
+  if (bottom_up && in == out && height > 1) fail("image: rows reversed into the image itself would overwrite rows not yet read");
+  // Every value finite, checked before anything is written (`out` may be `in`)
+  std::atomic<size_t> first_bad{SIZE_MAX};
+  tbb::parallel_for(0, height, [&](int y) {
+    const float* p = in + static_cast<size_t>(y) * row;
+    for (size_t i = 0; i < row; ++i)
+      if (!std::isfinite(p[i])) {
+        const size_t at = static_cast<size_t>(y) * row + i;
+        size_t seen = first_bad.load();
+        while (at < seen && !first_bad.compare_exchange_weak(seen, at)) {}
+        return;
+      }
+  });
+  if (const size_t at = first_bad.load(); at != SIZE_MAX) {
+    const size_t pixel = at / static_cast<size_t>(channels);
+    fail("image: pixel ({}, {}) channel {} is {}: a linear image's values are finite", pixel % static_cast<size_t>(width),
+         pixel / static_cast<size_t>(width), at % static_cast<size_t>(channels), in[at]);
+  }
+  const float* table = srgb_table().data();
+  const float span = high - low;
+  tbb::parallel_for(0, height, [&](int y) {
+    const float* p = in + static_cast<size_t>(y) * row;
+    float* q = out + static_cast<size_t>(bottom_up ? height - 1 - y : y) * row;
+    for (size_t i = 0; i < row; ++i) {
+      const float v = std::clamp(p[i], 0.0f, 1.0f);
+      float e = v;
+      if (channels != 4 || i % 4 != 3) {  // (alpha is no colour)
+        const float x = v * static_cast<float>(kSrgbTableSteps);
+        const int k = std::min(static_cast<int>(x), kSrgbTableSteps - 1);
+        const float f = x - static_cast<float>(k);
+        e = table[k] + f * (table[k + 1] - table[k]);
+      }
+      q[i] = low + span * e;
+    }
+  });
+}
 
 Rgba8 to_rgba8(const Image& linear) {
   Rgba8 out(linear.width, linear.height);

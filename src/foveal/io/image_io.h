@@ -16,6 +16,14 @@ float linear_to_srgb(float v);
 float srgb_to_linear(float v);
 // Linear value → sRGB byte, lround(255·linear_to_srgb(v)) by table (what 8-bit files and the viewer show).
 uint8_t srgb_byte(float v);
+// A linear image's floats (`height` rows of `width` pixels of `channels`, interleaved) → sRGB-encoded
+// floats into `out` (the same layout; `in` itself where rows are not reversed): each value clipped to
+// [0, 1], encoded (within 1e-6 of linear_to_srgb, by a table of 65,537 values interpolated: no pow
+// per value) and mapped to [low, high]; a 4th channel (alpha) is clipped and mapped, not encoded.
+// `bottom_up` writes the rows in reverse order, as OpenGL's textures take them (PsychoPy's ImageStim:
+// low −1, high 1). On foveal's threads; what a display shows every frame, so one pass, no pow. Throws
+// Error naming the first value that is not finite (pixel x, y, channel), before writing anything.
+void linear_to_srgb(const float* in, float* out, int width, int height, int channels, float low, float high, bool bottom_up);
 // Linear RGB (or grey) → sRGB bytes with alpha 255, as save_image() writes a PNG.
 Rgba8 to_rgba8(const Image& linear);
 // Write 8-bit RGBA as PNG/JPEG/BMP (alpha dropped); throws Error naming the file.

@@ -263,3 +263,58 @@ TEST(ImageIO, DisplayBytesAreTheSavedPngBytes) {
     ASSERT_EQ(srgb_byte(values[i]), expected) << "v = " << values[i];
   }
 }
+
+TEST(ImageIO, DisplayFloatsFollowTheSrgbCurve) {
+  // IEC 61966-2-1's curve, in double precision: the oracle
+  auto srgb = [](double v) { return v <= 0.0031308 ? 12.92 * v : 1.055 * std::pow(v, 1 / 2.4) - 0.055; };
+  std::vector<float> values;
+  for (int i = 0; i <= 300000; ++i) values.push_back(static_cast<float>(i) / 300000.0f);
+  for (float v = 0.0031308f, d = 0; d < 64; ++d) values.push_back(v = std::nextafter(v, 2.0f));  // the knee
+  for (float v = 1e-6f; v < 1; v *= 1.37f) values.push_back(v);
+  const int width = static_cast<int>(values.size());
+  std::vector<float> out(values.size());
+  linear_to_srgb(values.data(), out.data(), width, 1, 1, 0.0f, 1.0f, false);
+  double worst = 0;
+  for (size_t i = 0; i < values.size(); ++i) worst = std::max(worst, std::abs(out[i] - srgb(values[i])));
+  EXPECT_LT(worst, 1e-6);
+  // Clipped to [0, 1] first, then mapped to [low, high] (PsychoPy's −1 … 1)
+  const std::vector<float> edge = {-3.0f, 0.0f, 0.5f, 1.0f, 7.0f};
+  std::vector<float> mapped(edge.size());
+  linear_to_srgb(edge.data(), mapped.data(), 5, 1, 1, -1.0f, 1.0f, false);
+  EXPECT_FLOAT_EQ(mapped[0], -1.0f);
+  EXPECT_FLOAT_EQ(mapped[1], -1.0f);
+  EXPECT_NEAR(mapped[2], -1.0 + 2 * srgb(0.5), 1e-6);
+  EXPECT_FLOAT_EQ(mapped[3], 1.0f);
+  EXPECT_FLOAT_EQ(mapped[4], 1.0f);
+}
+
+TEST(ImageIO, DisplayFloatsGoBottomUpWithAlphaUnencodedAndRefuseWhatIsNotFinite) {
+  // 2 × 3 pixels of RGBA: rows reversed (OpenGL's order), alpha clipped and mapped but not encoded
+  std::vector<float> in(2 * 3 * 4);
+  for (size_t i = 0; i < in.size(); ++i) in[i] = static_cast<float>(i) / static_cast<float>(in.size());
+  std::vector<float> out(in.size());
+  linear_to_srgb(in.data(), out.data(), 2, 3, 4, 0.0f, 1.0f, true);
+  for (int y = 0; y < 3; ++y)
+    for (int x = 0; x < 2; ++x)
+      for (int c = 0; c < 4; ++c) {
+        const float v = in[static_cast<size_t>(((2 - y) * 2 + x) * 4 + c)];
+        EXPECT_NEAR(out[static_cast<size_t>((y * 2 + x) * 4 + c)], c == 3 ? v : linear_to_srgb(v), 1e-6) << x << "," << y << "," << c;
+      }
+  // In place, top-down: the same values
+  std::vector<float> same = in;
+  linear_to_srgb(same.data(), same.data(), 2, 3, 4, 0.0f, 1.0f, false);
+  for (size_t i = 0; i < in.size(); ++i) EXPECT_FLOAT_EQ(same[i], out[static_cast<size_t>(((2 - i / 8) * 8) + i % 8)]);
+  // Reversed into itself it would overwrite rows not yet read: refused
+  EXPECT_THROW(linear_to_srgb(same.data(), same.data(), 2, 3, 4, 0.0f, 1.0f, true), Error);
+  // A value not finite: an error naming its pixel and channel, and nothing written
+  std::vector<float> bad(2 * 3 * 3, 0.25f);
+  bad[static_cast<size_t>((2 * 2 + 1) * 3 + 2)] = NAN;  // pixel (1, 2), channel 2
+  std::vector<float> untouched(bad.size(), -5.0f);
+  try {
+    linear_to_srgb(bad.data(), untouched.data(), 2, 3, 3, 0.0f, 1.0f, false);
+    FAIL() << "no error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("pixel (1, 2) channel 2 is nan"), std::string::npos) << e.what();
+  }
+  for (const float v : untouched) EXPECT_EQ(v, -5.0f);
+}

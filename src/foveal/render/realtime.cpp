@@ -505,9 +505,10 @@ void RealtimeLoop::set_scale(double scale) {
   ray_z_.clear();
 }
 
-void RealtimeLoop::start_rebuild(double scale) {
+void RealtimeLoop::start_rebuild(double scale, std::string why) {
   Rebuild r;
   r.scale = scale;
+  r.why = std::move(why);
   r.width = std::max(1, static_cast<int>(std::lround(requested_.width * scale)));
   r.height = std::max(1, static_cast<int>(std::lround(requested_.height * scale)));
   // The view's memory reserved, not touched: each step touches only its own rows' pages (a whole
@@ -631,7 +632,7 @@ void RealtimeLoop::adopt_rebuild(uint64_t& kept_pixels) {
   finish_ms_ *= ratio;
   plan_ms_ *= ratio;
   sweep_.scale(ratio);
-  note_ = size_note("the size before the camera moved");
+  note_ = size_note(r.why.c_str());
   motion_scale_.reset();
   fixed_.clear();
   rebuild_.reset();
@@ -832,13 +833,33 @@ LoopFrame RealtimeLoop::frame(const Camera& camera) {
       fixed_.clear();
     }
   }
+  // A still view made smaller for its fixed part grows back where that part would now fit: a budget
+  // raised (an experiment that leaves the loop more of the refresh once its own first frames are
+  // done), a busy spell of the machine's over. (Lowered once, a still view stayed small for good: a
+  // PsychoPy session's first flips, which upload its window's first textures, left the loop 4 ms a
+  // frame for a few frames, and 840x525 rendered at 85 % for the rest of the session at 8.8 ms.)
+  // The grown view's fixed part takes half the budget by its pixels, below the 60 % that lowers it;
+  // a part that does not shrink with the pixels makes that estimate high, not low.
+  if (!out.new_view && !motion_scale_ && !rebuild_ && scale_ < 1 && fixed_.size() >= (wall ? FixedPartWindow::kFrames : 1)) {
+    const double target = std::min(1.0, scale_ * std::sqrt(0.5 * settings_.budget_ms / fixed_.median_ms()));
+    if (target > scale_ && (target == 1.0 || target >= kGrowth * scale_)) {
+      constexpr const char* kFits = "the base shading fits the budget again";
+      if (wall) {
+        start_rebuild(target, kFits);  // (built over the next frames, as a camera come to rest)
+      } else {
+        set_scale(target);
+        note_ = size_note(kFits);
+        fixed_.clear();
+      }
+    }
+  }
   // A camera come to rest gets back the size it had before it moved, and the rays kept at the
   // smaller size carry over (a view stayed small for good once a camera had moved). On the wall
   // clock that view is built over the next frames (start_rebuild; traced at once, its surfaces
   // made the frame late by 50–90 ms at 840×525 on two cores); the model clock takes it at once.
   still_frames_ = out.new_view ? 0 : still_frames_ + 1;
   if (motion_scale_ && static_cast<double>(still_frames_) * settings_.budget_ms >= kRestMs && wall) {
-    if (!rebuild_) start_rebuild(*motion_scale_);
+    if (!rebuild_) start_rebuild(*motion_scale_, "the size before the camera moved");
   } else if (motion_scale_ && static_cast<double>(still_frames_) * settings_.budget_ms >= kRestMs) {
     set_scale(*motion_scale_);
     note_ = size_note("the size before the camera moved");

@@ -144,6 +144,7 @@ class FixedPartWindow {
   // them) is above 60 % of the budget.
   bool add(double fixed_ms, double budget_ms, size_t min_frames);
   double median_ms() const { return latest_.median(); }
+  size_t size() const { return latest_.size(); }  // frames in the window
   void clear() { latest_.clear(); }
 
  private:
@@ -267,11 +268,13 @@ class RealtimeLoop {
   void set_scale(double scale);
   // "rendering at WxH (P %)" and why, where the size is below the one asked for; "" at full size
   std::string size_note(const char* why) const;
-  // A camera at rest gets back the size it had before it moved. On the wall clock that view is
+  // A camera at rest gets back the size it had before it moved, and a still view made smaller for
+  // its fixed part a larger one where that part fits again (`why`: the note then). That view is
   // built a few rows at a time in what frames leave (its surfaces, their shading, its eye rays and
   // maps, the rays it keeps) while the smaller one is still shown, and taken over once complete: the
-  // full-size surfaces at once made that frame late by 50–90 ms at 840×525 on two cores.
-  void start_rebuild(double scale);
+  // full-size surfaces at once made that frame late by 50–90 ms at 840×525 on two cores. (On the wall
+  // clock; the model clock takes the size at once.)
+  void start_rebuild(double scale, std::string why);
   void advance_rebuild(const Timer& frame_timer, double until_ms);  // steps of ~1 ms until then (frame's clock)
   void adopt_rebuild(uint64_t& kept_pixels);
   glm::dvec2 px_to_deg(glm::dvec2 px) const;
@@ -337,6 +340,7 @@ class RealtimeLoop {
   double moved_view_ms_per_px_ = 0, fresh_view_ms_per_px_ = 0;
   struct Rebuild {
     double scale = 1;
+    std::string why;  // the note's reason once it is shown
     int width = 0, height = 0;
     enum Stage { surfaces, shading, keep, reproject, done } stage = surfaces;
     int row = 0;             // the stage's next row

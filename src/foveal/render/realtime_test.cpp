@@ -510,6 +510,53 @@ TEST(RealtimeLoop, WhereTheBaseShadingCannotFitTheResolutionScalesDownAndSaysSo)
   EXPECT_FALSE(next.late);
 }
 
+// A still view made smaller for its fixed part grows back once the budget leaves that part room: at
+// once on the model clock (to where it takes half the budget), over a few frames on the wall clock,
+// where the larger view is built while the smaller one is shown, none of them late
+TEST(RealtimeLoop, ASmallerStillViewGrowsBackWhenTheBudgetLeavesItRoom) {
+  const std::unique_ptr<FrameRenderer> renderer = make_frame_renderer(box(), ComputeDevice::cpu);
+  const Camera& camera = box().cameras.front();
+  LoopSettings settings = model_clock(1000);
+  settings.model_fixed_ms = 40;  // 40 ms of a 16.7 ms budget: sqrt(0.5 · 16.7 / 40) = 0.456 of the size
+  RealtimeLoop model(*renderer, box(), loop_params(320, 200, 64), settings);
+  model.frame(camera);
+  ASSERT_NEAR(model.scale(), std::sqrt(0.5 * settings.budget_ms / 40), 1e-9);
+  for (int k = 0; k < 5; ++k) model.frame(camera);
+  EXPECT_NEAR(model.scale(), std::sqrt(0.5 * settings.budget_ms / 40), 1e-9);  // the budget as it was: no growth
+  model.set_budget_ms(40);                                                     // room for 0.707 of it
+  model.frame(camera);
+  EXPECT_NEAR(model.scale(), std::sqrt(0.5), 1e-9);
+  EXPECT_NE(model.note().find("fits the budget again"), std::string::npos) << model.note();
+  model.set_budget_ms(100);  // room for the whole, once the 0.707 view has been traced (a frame)
+  LoopFrame grown;
+  for (int k = 0; k < 3 && model.scale() < 1.0; ++k) grown = model.frame(camera);
+  EXPECT_EQ(model.scale(), 1.0);
+  EXPECT_TRUE(model.note().empty()) << model.note();
+  EXPECT_EQ(model.frame(camera).color.width, 320);
+  EXPECT_FALSE(grown.late);
+
+  // The wall clock: a budget of 10 µs lowers the size at once (a still frame's fixed part, composing,
+  // takes about 0.08 ms at 320x200); 200 ms brings it back, built over frames
+  LoopSettings wall;
+  wall.budget_ms = 0.01;
+  RealtimeLoop loop(*renderer, box(), loop_params(320, 200, 64), wall);
+  for (int k = 0; k < 12 && loop.scale() == 1.0; ++k) loop.frame(camera);
+  ASSERT_LT(loop.scale(), 1.0) << "a 10 µs budget did not lower the size";
+  const double lowered = loop.scale();
+  loop.set_budget_ms(200);
+  int frames = 0, rebuilding = 0;
+  for (; frames < 100 && loop.scale() == lowered; ++frames) {
+    const LoopFrame f = loop.frame(camera);
+    rebuilding += f.rebuilding ? 1 : 0;
+    EXPECT_FALSE(f.late) << "frame " << frames << ": " << f.ms << " ms";
+  }
+  EXPECT_EQ(loop.scale(), 1.0) << "after " << frames << " frames";
+  EXPECT_GE(frames, static_cast<int>(FixedPartWindow::kFrames));  // a window of frames at the smaller size first
+  EXPECT_GE(rebuilding, 1);
+  EXPECT_TRUE(loop.note().empty()) << loop.note();
+  EXPECT_EQ(loop.frame(camera).color.width, 320);
+}
+
 // One frame's pause (a thread descheduled for 66 ms: an 80 ms frame on a shared VM) does not lower
 // the resolution for the rest of a run; a sustained fixed part does, within five frames
 TEST(RealtimeLoop, OnePausedFrameDoesNotLowerTheResolution) {
