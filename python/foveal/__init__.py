@@ -130,7 +130,7 @@ def linear_to_srgb(image: Any, out: Optional[np.ndarray] = None, *, low: float =
     naming its pixel. ``out``: a C-contiguous float32 array of the result's shape to write into
     (no allocation per frame; ``image`` itself unless ``bottom_up``), else a new one. Returned.
     Runs on foveal's threads with the GIL released: 1.7 ms for an 840×525 frame on two cores, where
-    NumPy's lookup in a table of 4096 levels took 3.1 ms (``bench/python_overhead.py``).
+    NumPy's lookup in a table of 4096 levels took 2.9–3.1 ms (``bench/python_overhead.py``).
     """
     array = _float_image(image, "image", finite=False)  # (the core names a value that is not finite: no pass of NumPy's)
     for name, value in (("low", low), ("high", high)):
