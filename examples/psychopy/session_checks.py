@@ -42,8 +42,8 @@ FASTEST_USUAL_HZ = 240.0
 def refresh_rate(given_hz, measured_hz):
     """The refresh rate a session runs at, and a note where it is not the display's for certain:
     `given_hz` (--refresh-hz) where given; else what PsychoPy measured (`measured_hz`, None where it
-    found no steady rate: then 60 Hz). Under Xvfb PsychoPy measured flips at about 490 Hz at 840x525:
-    a budget of 4 ms, which lowered the render's size, and no fovea converged in 240 flips."""
+    found no steady rate: then 60 Hz). Under Xvfb PsychoPy measured flips at 490–533 Hz at 840x525:
+    a budget of 4 ms, which lowered the render's size."""
     if given_hz is not None:
         return given_hz, ""
     if measured_hz is None or not measured_hz > 0:

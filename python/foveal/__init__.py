@@ -140,12 +140,13 @@ def linear_to_srgb(image: Any, out: Optional[np.ndarray] = None, *, low: float =
     if out is None:
         result = np.empty(array.shape, np.float32)
     else:
-        if not isinstance(out, np.ndarray) or out.dtype != np.float32 or out.shape != shape or not out.flags.c_contiguous \
-                or not out.flags.writeable:
-            raise ValueError(f"out: expected a writable C-contiguous float32 array of shape {shape}, got "
-                             + (f"{out.dtype} of shape {out.shape}" + ("" if out.flags.c_contiguous else ", not C-contiguous")
-                                + ("" if out.flags.writeable else ", read-only") if isinstance(out, np.ndarray)
-                                else type(out).__name__))
+        if not isinstance(out, np.ndarray):
+            got = type(out).__name__
+        else:
+            got = f"{out.dtype} of shape {out.shape}" + ("" if out.flags.c_contiguous else ", not C-contiguous") \
+                + ("" if out.flags.writeable else ", read-only")
+        if got != f"float32 of shape {shape}":
+            raise ValueError(f"out: expected a writable C-contiguous float32 array of shape {shape}, got {got}")
         if bottom_up and np.shares_memory(out, array):
             raise ValueError("out: shares memory with image: reversing the rows into it would overwrite rows not yet read; "
                              "give another array (or bottom_up=False)")

@@ -842,31 +842,27 @@ LoopFrame RealtimeLoop::frame(const Camera& camera) {
   // a part that does not shrink with the pixels makes that estimate high, not low.
   if (!out.new_view && !motion_scale_ && !rebuild_ && scale_ < 1 && fixed_.size() >= (wall ? FixedPartWindow::kFrames : 1)) {
     const double target = std::min(1.0, scale_ * std::sqrt(0.5 * settings_.budget_ms / fixed_.median_ms()));
-    if (target > scale_ && (target == 1.0 || target >= kGrowth * scale_)) {
-      constexpr const char* kFits = "the base shading fits the budget again";
-      if (wall) {
-        start_rebuild(target, kFits);  // (built over the next frames, as a camera come to rest)
-      } else {
-        set_scale(target);
-        note_ = size_note(kFits);
-        fixed_.clear();
-      }
-    }
+    if (target > scale_ && (target == 1.0 || target >= kGrowth * scale_)) grow_back(target, "the base shading fits the budget again");
   }
   // A camera come to rest gets back the size it had before it moved, and the rays kept at the
   // smaller size carry over (a view stayed small for good once a camera had moved). On the wall
   // clock that view is built over the next frames (start_rebuild; traced at once, its surfaces
   // made the frame late by 50–90 ms at 840×525 on two cores); the model clock takes it at once.
   still_frames_ = out.new_view ? 0 : still_frames_ + 1;
-  if (motion_scale_ && static_cast<double>(still_frames_) * settings_.budget_ms >= kRestMs && wall) {
-    if (!rebuild_) start_rebuild(*motion_scale_, "the size before the camera moved");
-  } else if (motion_scale_ && static_cast<double>(still_frames_) * settings_.budget_ms >= kRestMs) {
-    set_scale(*motion_scale_);
-    note_ = size_note("the size before the camera moved");
-    motion_scale_.reset();
-    fixed_.clear();
-  }
+  if (motion_scale_ && !rebuild_ && static_cast<double>(still_frames_) * settings_.budget_ms >= kRestMs)
+    grow_back(*motion_scale_, "the size before the camera moved");
   return out;
+}
+
+void RealtimeLoop::grow_back(double scale, const char* why) {
+  if (settings_.clock == LoopClock::wall) {
+    start_rebuild(scale, why);  // adopted once built (adopt_rebuild)
+    return;
+  }
+  set_scale(scale);
+  note_ = size_note(why);
+  motion_scale_.reset();
+  fixed_.clear();
 }
 
 }  // namespace foveal

@@ -275,6 +275,9 @@ class RealtimeLoop {
   // full-size surfaces at once made that frame late by 50–90 ms at 840×525 on two cores. (On the wall
   // clock; the model clock takes the size at once.)
   void start_rebuild(double scale, std::string why);
+  // A larger size for a still view (a camera come to rest, a fixed part that fits again): built
+  // over frames on the wall clock (start_rebuild), at once on the model clock; `why`: the note then.
+  void grow_back(double scale, const char* why);
   void advance_rebuild(const Timer& frame_timer, double until_ms);  // steps of ~1 ms until then (frame's clock)
   void adopt_rebuild(uint64_t& kept_pixels);
   glm::dvec2 px_to_deg(glm::dvec2 px) const;
