@@ -64,7 +64,10 @@ int run_bench_latency(const BenchLatencyOptions& o) {
   validate(p);
   std::vector<std::string> paths = o.recordings;
   if (paths.empty()) {
-    const std::string eyelink = std::string(FOVEAL_SOURCE_DIR) + "/../shared/data/gaze/eyelink/monoRemote500.asc";
+    const std::string eyelink =  // (written without the "..": it heads the tables)
+        std::filesystem::path(std::string(FOVEAL_SOURCE_DIR) + "/../shared/data/gaze/eyelink/monoRemote500.asc")
+            .lexically_normal()
+            .string();
     if (!std::filesystem::exists(eyelink)) fail("--recording: none given, and the shared EyeLink recording is absent ({})", eyelink);
     paths.push_back(eyelink);
   }

@@ -141,6 +141,11 @@ def test_bad_arguments_are_clear_errors(box):
     with pytest.raises(ValueError, match="gaze: .*NaN marks a lost sample"):  # an infinity is no lost sample
         loop.push(2.0, (float("inf"), 3))
     assert loop.frame().image.shape == (40, 64, 3)
+    for bad in (0.0, -1.0, float("nan"), 1e300):  # the attribute's own name, and the budget kept
+        with pytest.raises(ValueError, match=r"budget_ms: must be in \(0, 10000\] ms") as caught:
+            loop.budget_ms = bad
+        assert "frame_budget_ms" not in str(caught.value)
+        assert loop.budget_ms == pytest.approx(1000 / 60)
     for camera in (3, [1, 2], object()):  # a camera of the wrong type: named, not a bare std::bad_cast
         with pytest.raises(TypeError, match="camera: a camera name"):
             foveal.Loop(box, size=(64, 40), camera=camera)
