@@ -1,6 +1,7 @@
 // foveal bench stalls: the table and the JSON the docs name, and bad options as one clear line.
 #include "cli_helpers.h"
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
@@ -37,6 +38,18 @@ TEST(BenchStallsCli, AShortProbeWritesTheDocumentedFigures) {
   for (size_t k = 1; k < j["others"].size(); ++k)
     EXPECT_LE(j["others"][k]["cpu_ms"].get<double>(), j["others"][k - 1]["cpu_ms"].get<double>());
   if (!j["others"].empty()) EXPECT_NE(a.out.find("What else ran on this machine meanwhile"), std::string::npos) << a.out;
+  // The kernel's tick where its config states it, and then the sentence on it against the margin
+  ASSERT_TRUE(j["kernel"].is_object());
+  for (const char* key : {"release", "hz", "preempt", "source"}) EXPECT_TRUE(j["kernel"].contains(key)) << key;
+  if (j["kernel"]["hz"].is_number()) {
+    const int hz = j["kernel"]["hz"].get<int>();
+    EXPECT_NE(a.out.find(fmt::format("ticks at {} Hz", hz)), std::string::npos) << a.out;
+    EXPECT_NE(a.out.find(fmt::format("up to {:.1f} ms, {} the 2 ms margin", 1000.0 / hz, 1000.0 / hz > 2 ? "longer than" : "within")),
+              std::string::npos)
+        << a.out;
+  } else {
+    EXPECT_EQ(a.out.find("ticks at"), std::string::npos) << a.out;
+  }
   std::ifstream md(scratch("s.md"));
   EXPECT_TRUE(md.good());
 }

@@ -186,6 +186,9 @@ def test_stalls_probe_the_machine_as_bench_stalls_does():
     assert len(r["others"]) <= 5
     assert all(set(o) == {"pid", "name", "kernel", "cpu_ms", "slices"} and o["cpu_ms"] > 0 for o in r["others"])
     assert all(o["pid"] != os.getpid() for o in r["others"])
+    assert set(r["kernel"]) == {"release", "hz", "preempt", "source"}
+    assert r["kernel"]["release"] == os.uname().release  # the tick where the kernel's config states it
+    assert r["kernel"]["hz"] is None or (isinstance(r["kernel"]["hz"], int) and r["kernel"]["hz"] >= 24)
     assert [o["cpu_ms"] for o in r["others"]] == sorted((o["cpu_ms"] for o in r["others"]), reverse=True)
     with pytest.raises(ValueError, match="duration_s"):
         foveal.stalls(duration_s=0)

@@ -740,8 +740,11 @@ LatencyReport bench_latency(const Scene& scene, const std::string& scene_name, c
   // What else ran: a frame comes late when another process or the hypervisor takes its core
   const CpuShare share = cpu_share(before, read_cpu_times());
   if (std::isfinite(share.others)) {
-    report.json["machine"] = {
-        {"others_cpu_fraction", share.others}, {"steal_fraction", share.steal}, {"others", others_json(report.others)}};
+    const KernelScheduling kernel = read_kernel_scheduling();
+    report.json["machine"] = {{"others_cpu_fraction", share.others},
+                              {"steal_fraction", share.steal},
+                              {"others", others_json(report.others)},
+                              {"kernel", kernel_json(kernel)}};
     if (!report.markdown.ends_with("\n\n")) report.markdown += "\n";
     report.markdown += fmt::format(
         "The machine during the run: other processes kept {:.0f} % of all CPUs' time busy, the hypervisor took {:.0f} % "
@@ -749,6 +752,12 @@ LatencyReport bench_latency(const Scene& scene, const std::string& scene_name, c
         100 * share.others, 100 * share.steal,
         share.others > 0.05 || share.steal > 0.01 ? ": wall-clock late frames may be theirs, not the loop's" : "");
     if (!report.others.empty()) report.markdown += fmt::format("What else ran, the busiest first: {}.\n", others_sentence(report.others));
+    if (params.clock == LoopClock::wall) {  // (how long another thread may keep a core, against the loops' margin)
+      LoopSettings loop;
+      loop.budget_ms = params.budget_ms.value_or(1000.0 / params.refresh_hz);
+      loop.margin_ms = params.margin_ms;
+      if (const std::string k = kernel_sentence(kernel, loop_margin_ms(loop)); !k.empty()) report.markdown += k + "\n";
+    }
   }
   return report;
 }

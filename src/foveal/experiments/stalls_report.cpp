@@ -39,6 +39,25 @@ std::string others_sentence(const std::vector<BusyProcess>& others) {
   return s;
 }
 
+nlohmann::json kernel_json(const KernelScheduling& k) {
+  const auto text = [](const std::string& v) { return v.empty() ? nlohmann::json() : nlohmann::json(v); };
+  return {{"release", text(k.release)},
+          {"hz", k.hz > 0 ? nlohmann::json(k.hz) : nlohmann::json()},
+          {"preempt", text(k.preempt)},
+          {"source", text(k.source)}};
+}
+
+std::string kernel_sentence(const KernelScheduling& k, double margin_ms) {
+  const std::string phrase = kernel_phrase(k);
+  if (phrase.empty()) return {};
+  const double tick_ms = 1000.0 / k.hz;
+  return fmt::format(
+      "Here {}: a thread that wakes takes a core from a working one once the latter's slice is spent, and may keep it to the "
+      "next tick — up to {:.1f} ms, {} the {} ms margin; on Linux 6.6 and later (EEVDF) whatever the working thread's nice value "
+      "(docs/realtime.md).",
+      phrase, tick_ms, tick_ms > margin_ms ? "longer than" : "within", margin_ms);
+}
+
 nlohmann::json stalls_json(const StallReport& r, double threshold_ms, double margin_ms) {
   nlohmann::json j;
   j["threads"] = r.threads;
@@ -55,6 +74,7 @@ nlohmann::json stalls_json(const StallReport& r, double threshold_ms, double mar
   j["on_cpu"] = counts(count_stalls(r, true, margin_ms));
   j["late_frames_per_minute_at_most"] = late_per_minute(r, margin_ms);
   j["others"] = others_json(r.others);
+  j["kernel"] = kernel_json(r.kernel);
   j["stalls"] = nlohmann::json::array();
   for (const Stall& s : r.stalls)
     j["stalls"].push_back({{"thread", s.thread}, {"at_s", s.at_s}, {"wall_ms", s.wall_ms}, {"cpu_ms", s.cpu_ms}, {"on_cpu", s.on_cpu}});
@@ -85,6 +105,7 @@ std::string stalls_markdown(const StallReport& r, double threshold_ms, double ma
         "\nWhat else ran on this machine meanwhile, the busiest first, with its time on a CPU and in how many turns (what "
         "takes the working threads' cores: what to switch off or move before a session): {}.\n",
         others_sentence(r.others));
+  if (const std::string k = kernel_sentence(r.kernel, margin_ms); !k.empty()) md += "\n" + k + "\n";
   return md;
 }
 

@@ -20,6 +20,11 @@ nlohmann::json stalls_json(const StallReport& r, double threshold_ms, double mar
 nlohmann::json others_json(const std::vector<BusyProcess>& others);
 std::string others_sentence(const std::vector<BusyProcess>& others);
 std::string stalls_markdown(const StallReport& r, double threshold_ms, double margin_ms);
+// The kernel's tick and preemption model as JSON (release, hz, preempt, source; null where unknown)
+// and as a sentence on how long another thread may keep a core, against a loop's margin ("" where
+// the tick is unknown)
+nlohmann::json kernel_json(const KernelScheduling& k);
+std::string kernel_sentence(const KernelScheduling& k, double margin_ms);
 // Check a margin; throws Error naming margin_ms.
 void validate_stall_margin(double margin_ms);
 

@@ -99,6 +99,7 @@ StallReport probe_stalls(const StallProbeParams& p) {
   for (int t = 0; t < r.threads; ++t) workers.emplace_back(body, t);
   for (std::thread& w : workers) w.join();
   r.others = busiest_others(census, read_machine_threads(), current_process_id(), kBusiestOthers);
+  r.kernel = read_kernel_scheduling();
   std::sort(r.stalls.begin(), r.stalls.end(), [](const Stall& a, const Stall& b) { return a.at_s < b.at_s; });
   r.duration_s = (last - first) / 1000;
   r.chunk_us = chunk_ms.empty() ? 0 : 1000 * median(chunk_ms);

@@ -15,6 +15,7 @@
 #pragma once
 
 #include "foveal/util/cpu_share.h"
+#include "foveal/util/kernel_info.h"
 
 #include <functional>
 #include <vector>
@@ -49,6 +50,7 @@ struct StallReport {
   long chunks = 0;                  // over all threads
   std::vector<Stall> stalls;        // in the order of their start
   std::vector<BusyProcess> others;  // the other processes that ran meanwhile, the busiest first (util/cpu_share.h)
+  KernelScheduling kernel;          // the kernel's tick and preemption model (util/kernel_info.h)
 };
 // Run the probe (the calling thread waits; each worker is a std::thread of its own).
 StallReport probe_stalls(const StallProbeParams& p);
