@@ -87,9 +87,18 @@ LoopClock parse_loop_clock(const std::string& name) {
 
 double loop_margin_ms(const LoopSettings& s) { return s.margin_ms.value_or(std::min(kDefaultMarginMs, 0.25 * s.budget_ms)); }
 
+namespace {
+
+// `name`: the option or attribute that set it (frame_budget_ms where the loop is made, budget_ms on
+// RealtimeLoop::set_budget_ms and Python's Loop.budget_ms)
+void check_budget(double budget_ms, const char* name) {
+  if (!(budget_ms > 0) || !std::isfinite(budget_ms) || budget_ms > 10000) fail("{}: must be in (0, 10000] ms, got {}", name, budget_ms);
+}
+
+}  // namespace
+
 void validate(const LoopSettings& s) {
-  if (!(s.budget_ms > 0) || !std::isfinite(s.budget_ms) || s.budget_ms > 10000)
-    fail("frame_budget_ms: must be in (0, 10000] ms, got {}", s.budget_ms);
+  check_budget(s.budget_ms, "frame_budget_ms");
   if (s.clock == LoopClock::model) {
     if (!(s.model_rays_per_ms > 0) || !std::isfinite(s.model_rays_per_ms))
       fail("model_rays_per_ms: the model clock needs a ray rate > 0, got {}", s.model_rays_per_ms);
@@ -169,6 +178,7 @@ std::string RealtimeLoop::gaze_note() const {
 }
 
 void RealtimeLoop::set_budget_ms(double budget_ms) {
+  check_budget(budget_ms, "budget_ms");
   LoopSettings s = settings_;
   s.budget_ms = budget_ms;
   if (s.margin_ms) s.margin_ms = std::min(*s.margin_ms, 0.25 * budget_ms);

@@ -862,6 +862,18 @@ TEST(RealtimeLoop, SettingsAreChecked) {
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find("margin_ms"), std::string::npos);
   }
+  // A budget set later is refused by the setter's own name, and the one before is kept
+  s = {};
+  RealtimeLoop loop(*renderer, box(), loop_params(32, 20, 8), s);
+  for (const double bad : {0.0, -1.0, double(NAN), 1e300}) {
+    try {
+      loop.set_budget_ms(bad);
+      ADD_FAILURE() << bad;
+    } catch (const Error& e) {
+      EXPECT_EQ(std::string(e.what()).rfind("budget_ms: must be in (0, 10000] ms", 0), 0u) << e.what();
+    }
+    EXPECT_DOUBLE_EQ(loop.settings().budget_ms, s.budget_ms);
+  }
 }
 
 }  // namespace

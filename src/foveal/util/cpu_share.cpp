@@ -32,14 +32,6 @@ std::optional<double> counter(std::string_view field) {
   return v && *v >= 0 ? v : std::nullopt;
 }
 
-std::string read_or_empty(const char* path) {
-  try {
-    return text::read_file(path);
-  } catch (const Error&) {
-    return {};
-  }
-}
-
 }  // namespace
 
 CpuTimes parse_cpu_times(std::string_view proc_stat, std::string_view self_stat) {
@@ -72,7 +64,7 @@ CpuTimes parse_cpu_times(std::string_view proc_stat, std::string_view self_stat)
   return t;
 }
 
-CpuTimes read_cpu_times() { return parse_cpu_times(read_or_empty("/proc/stat"), read_or_empty("/proc/self/stat")); }
+CpuTimes read_cpu_times() { return parse_cpu_times(text::read_file_or_empty("/proc/stat"), text::read_file_or_empty("/proc/self/stat")); }
 
 CpuShare cpu_share(const CpuTimes& before, const CpuTimes& after) {
   CpuShare s;
@@ -103,7 +95,7 @@ ThreadTimes read_thread_times() {
     const std::optional<double> tid = text::to_number(dir.filename().string());
     if (!tid) continue;
     // A thread that ended since the listing has no file: left out
-    if (const std::optional<ThreadTime> t = parse_schedstat(read_or_empty((dir / "schedstat").c_str())))
+    if (const std::optional<ThreadTime> t = parse_schedstat(text::read_file_or_empty((dir / "schedstat").c_str())))
       times[static_cast<long>(*tid)] = *t;
   }
   return times;
@@ -155,15 +147,15 @@ MachineThreads read_machine_threads() {
     const std::optional<double> pid = text::to_number(p->path().filename().string());
     if (!pid) continue;
     ProcessThreads proc;
-    std::string name = read_or_empty((p->path() / "comm").c_str());
+    std::string name = text::read_file_or_empty((p->path() / "comm").c_str());
     while (!name.empty() && (name.back() == '\n' || name.back() == ' ')) name.pop_back();
     proc.name = name;
-    proc.kernel = parse_kernel_thread(read_or_empty((p->path() / "stat").c_str())).value_or(false);
+    proc.kernel = parse_kernel_thread(text::read_file_or_empty((p->path() / "stat").c_str())).value_or(false);
     std::error_code tec;
     for (std::filesystem::directory_iterator t(p->path() / "task", tec); !tec && t != end; t.increment(tec)) {
       const std::optional<double> tid = text::to_number(t->path().filename().string());
       if (!tid) continue;
-      if (const std::optional<ThreadTime> times = parse_schedstat(read_or_empty((t->path() / "schedstat").c_str())))
+      if (const std::optional<ThreadTime> times = parse_schedstat(text::read_file_or_empty((t->path() / "schedstat").c_str())))
         proc.threads[static_cast<long>(*tid)] = *times;
     }
     if (!proc.threads.empty()) all[static_cast<long>(*pid)] = std::move(proc);  // (a process that ended since the listing: left out)
@@ -222,7 +214,7 @@ std::vector<WatchedThread> threads_to_watch(const MachineThreads& before, const 
 ThreadTimes read_watched(const std::vector<WatchedThread>& watch) {
   ThreadTimes times;
   for (const WatchedThread& w : watch)
-    if (const std::optional<ThreadTime> t = parse_schedstat(read_or_empty(w.schedstat.c_str()))) times[w.tid] = *t;
+    if (const std::optional<ThreadTime> t = parse_schedstat(text::read_file_or_empty(w.schedstat.c_str()))) times[w.tid] = *t;
   return times;
 }
 

@@ -8,8 +8,6 @@
 
 #include <charconv>
 #include <filesystem>
-#include <fstream>
-#include <sstream>
 
 #include <sys/utsname.h>
 
@@ -19,27 +17,14 @@ namespace {
 
 // The value of `NAME=` in a config text ("" where absent or "is not set")
 std::string_view config_value(std::string_view config, std::string_view name) {
-  size_t at = 0;
-  while (at < config.size()) {
-    const size_t end = std::min(config.find('\n', at), config.size());
-    const std::string_view line = config.substr(at, end - at);
+  for (const std::string_view line : text::split(config, '\n'))
     if (line.size() > name.size() && line.starts_with(name) && line[name.size()] == '=') return line.substr(name.size() + 1);
-    at = end + 1;
-  }
   return {};
 }
 
 bool config_set(std::string_view config, std::string_view name) { return config_value(config, name) == "y"; }
 
 bool known_mode(std::string_view m) { return m == "none" || m == "voluntary" || m == "full" || m == "lazy"; }
-
-std::string read_small_file(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) return {};
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str().substr(0, 1 << 16);
-}
 
 }  // namespace
 
@@ -58,6 +43,7 @@ KernelScheduling parse_kernel_scheduling(std::string_view config, std::string_vi
     const std::string_view m = debugfs_preempt.substr(open + 1, close - open - 1);
     if (known_mode(m)) {
       k.preempt = std::string(m);
+      k.source = "/sys/kernel/debug/sched/preempt";
       return k;
     }
   }
@@ -98,10 +84,12 @@ KernelScheduling read_kernel_scheduling() {
       config.clear();
     }
   }
-  KernelScheduling k =
-      parse_kernel_scheduling(config, read_small_file("/proc/cmdline"), read_small_file("/sys/kernel/debug/sched/preempt"));
+  KernelScheduling k = parse_kernel_scheduling(config, text::read_file_or_empty("/proc/cmdline", 1 << 16),
+                                               text::read_file_or_empty("/sys/kernel/debug/sched/preempt", 1 << 16));
   k.release = release;
-  k.source = k.source.empty() ? source : source.empty() ? k.source : source + ", " + k.source;
+  // The config's file, and the one that chose the preemption model where another did
+  if (!k.source.empty() && !source.empty()) source += ", ";
+  k.source = source + k.source;
   return k;
 }
 

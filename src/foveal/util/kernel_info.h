@@ -20,7 +20,7 @@ struct KernelScheduling {
   std::string release;  // uname's release ("6.18.44-…"; "" where unknown)
   int hz = 0;           // CONFIG_HZ, ticks a second (0 where unknown)
   std::string preempt;  // none, voluntary, full, lazy or rt ("" where unknown)
-  std::string source;   // where they were read ("/proc/config.gz", "/boot/config-…", with "/proc/cmdline" where it chose)
+  std::string source;  // where they were read ("/proc/config.gz", "/boot/config-…", then the boot line or debugfs where it chose the model)
 };
 
 // From the texts of a kernel config, the kernel's command line and debugfs's sched/preempt (any may

@@ -31,7 +31,10 @@ TEST(KernelInfo, TheBootLineAndDebugfsOverrideADynamicKernelsDefault) {
   EXPECT_EQ(boot.preempt, "full");
   EXPECT_EQ(boot.source, "/proc/cmdline");
   // debugfs marks the mode in force (it may have been changed since boot)
-  EXPECT_EQ(parse_kernel_scheduling(kDebianLike, "preempt=full", "none voluntary full (lazy)\n").preempt, "lazy");
+  const KernelScheduling debugfs = parse_kernel_scheduling(kDebianLike, "preempt=full", "none voluntary full (lazy)\n");
+  EXPECT_EQ(debugfs.preempt, "lazy");
+  EXPECT_EQ(debugfs.source, "/sys/kernel/debug/sched/preempt");
+  EXPECT_EQ(parse_kernel_scheduling(kDebianLike, "", "").source, "");  // (the config's own file is the reader's to name)
   // Without PREEMPT_DYNAMIC the boot line's word means nothing
   EXPECT_EQ(parse_kernel_scheduling("CONFIG_PREEMPT_NONE=y\n", "preempt=full", "").preempt, "none");
   // An unknown mode is not taken

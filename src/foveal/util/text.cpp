@@ -96,6 +96,14 @@ std::string read_file(const std::string& path, size_t max_bytes) {
   return out;
 }
 
+std::string read_file_or_empty(const std::string& path, size_t max_bytes) {
+  try {
+    return read_file(path, max_bytes);
+  } catch (const Error&) {
+    return {};
+  }
+}
+
 std::string printable(std::string_view message) {
   std::string out;
   out.reserve(message.size());

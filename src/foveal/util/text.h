@@ -36,6 +36,8 @@ std::optional<double> to_number(std::string_view field, bool decimal_comma = fal
 // as /dev/zero is refused, not read until memory runs out).
 inline constexpr size_t kMaxTextBytes = size_t(1) << 30;
 std::string read_file(const std::string& path, size_t max_bytes = kMaxTextBytes);
+// The same, or "" where it cannot be read (the kernel's files under /proc and /sys, which may be absent)
+std::string read_file_or_empty(const std::string& path, size_t max_bytes = kMaxTextBytes);
 // A UTF-8 byte-order mark at the start (spreadsheet programs on Windows write one): every text
 // reader drops it.
 inline bool has_bom(std::string_view text) { return text.substr(0, 3) == "\xEF\xBB\xBF"; }
