@@ -29,9 +29,23 @@ std::vector<double> parse_numbers(const std::string& option, const std::string& 
 }
 
 glm::ivec2 parse_size(const std::string& option, const std::string& text) {
+  // One number each side of one x: "840x525". Anything else ("10x", "x10", "1,2x3", "10x10x10") is
+  // named as the wrong form, not as a list of numbers the user never meant to give.
   const auto x = text.find_first_of("xX");
-  if (x == std::string::npos) fail("{}: expected WIDTHxHEIGHT, got '{}'", option, text);
-  const auto w = parse_numbers(option, text.substr(0, x), 1)[0], h = parse_numbers(option, text.substr(x + 1), 1)[0];
+  const auto side = [&](const std::string& part) {
+    size_t used = 0;
+    double v = 0;
+    try {
+      v = std::stod(part, &used);
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    if (part.empty() || used != part.size() || !std::isfinite(v) || part.find_first_of(" \t") != std::string::npos)
+      fail("{}: expected WIDTHxHEIGHT in pixels (as 840x525), got '{}'", option, text);
+    return v;
+  };
+  if (x == std::string::npos) fail("{}: expected WIDTHxHEIGHT in pixels (as 840x525), got '{}'", option, text);
+  const double w = side(text.substr(0, x)), h = side(text.substr(x + 1));
   if (w != std::floor(w) || h != std::floor(h) || w < 1 || h < 1 || w > 16384 || h > 16384)
     fail("{}: size must be whole pixels between 1x1 and 16384x16384, got '{}'", option, text);
   return {static_cast<int>(w), static_cast<int>(h)};
