@@ -156,6 +156,9 @@ nlohmann::json replay_stats_json(const ReplayOptions& o, const ReplaySettings& s
       {"stopped", summary.stopped},
       {"budget_ms", summary.budget_ms ? nlohmann::json(*summary.budget_ms) : nlohmann::json(nullptr)},  // --realtime: the loop's
       {"frames_late", summary.budget_ms ? nlohmann::json(summary.late) : nlohmann::json(nullptr)},
+      {"resolution_scale_min", summary.budget_ms ? nlohmann::json(summary.min_scale) : nlohmann::json(nullptr)},
+      {"resolution_note", summary.budget_ms ? nlohmann::json(summary.scale_note) : nlohmann::json(nullptr)},
+      {"gaze_note", summary.budget_ms ? nlohmann::json(summary.gaze_note) : nlohmann::json(nullptr)},
       {"peak_rss_mib", peak_rss_mib()}};
   if (recording)
     j["recording"] = {{"format", to_string(recording->format)},
@@ -179,6 +182,9 @@ void print_replay(const ReplayOptions& o, const ReplaySettings& settings, const 
   if (summary.budget_ms)
     fmt::print("  loop     a frame every {:.1f} ms at {:g} Hz, each within {:.1f} ms: {} late of {}\n", 1000 / settings.fps, settings.fps,
                *summary.budget_ms, summary.late, summary.frames);
+  if (summary.budget_ms && summary.min_scale < 1)  // frames.csv's scale says which frames
+    fmt::print("  size     lowered to {:.0f} % at the least: {}\n", 100 * summary.min_scale, summary.scale_note);
+  if (summary.budget_ms && !summary.gaze_note.empty()) fmt::print("  gaze     {}\n", summary.gaze_note);
   fmt::print("  time     {:.1f} s ({:.0f} ms per rendered frame), {:.1f} M AO rays\n", summary.wall_ms / 1000,
              summary.frames > summary.reused ? summary.render_ms / (summary.frames - summary.reused) : 0.0, summary.ao_rays / 1e6);
   fmt::print("  wrote    {}/frame_00000.png … , {}", o.output, csv_path);

@@ -209,6 +209,13 @@ TEST(GazeCli, RealtimeReplayRunsAtTheDisplaysRefresh) {
   EXPECT_TRUE(stats["whole30"].at("frames_late").is_null());
   const int late = stats["refresh120"].at("frames_late").get<int>();
   EXPECT_TRUE(late >= 0 && late <= 61) << late;
+  // the smallest size the loop chose and why ("" where it kept the size), what the samples left its
+  // predictor; none of it without the loop
+  for (const char* key : {"resolution_scale_min", "resolution_note", "gaze_note"}) EXPECT_TRUE(stats["whole30"].at(key).is_null()) << key;
+  const double least = stats["refresh60"].at("resolution_scale_min").get<double>();
+  EXPECT_TRUE(least > 0 && least <= 1) << least;
+  EXPECT_EQ(stats["refresh60"].at("resolution_note").get<std::string>().empty(), least == 1);
+  EXPECT_TRUE(stats["refresh60"].at("gaze_note").is_string());
   for (const auto& [bad, needle] : std::vector<std::pair<std::string, std::string>>{
            {"--refresh-hz 60", "--refresh-hz needs --realtime"},
            {"--frame-budget-ms 5", "--frame-budget-ms needs --realtime"},
@@ -230,20 +237,29 @@ TEST(GazeCli, RealtimeReplayWritesEveryFrameAtTheSizeAskedFor) {
   const std::string rec = write_three_fixations("orbit_size.csv");
   const CliRun r = foveal_test::foveal("replay --gaze " + rec +
                                        " --screen 480x300 --scene builtin:sphere-plane --size 960x600 --max-rays 4 --fps 120 "
-                                       "--duration 0.2 --realtime --orbit 30 -q -o orbit_size");
+                                       "--duration 0.2 --realtime --orbit 30 -o orbit_size --stats orbit_size.json");
   ASSERT_EQ(r.status, 0) << r.err;
   const auto rows = read_csv(scratch("orbit_size/frames.csv"));
   ASSERT_GE(rows.size(), 10u);
   bool smaller = false;
+  double least = 1;
   for (size_t k = 1; k < rows.size(); ++k) {
     const double scale = std::stod(rows[k][12]);
     EXPECT_TRUE(scale > 0 && scale <= 1) << scale;
     smaller |= scale < 1;
+    least = std::min(least, scale);
     const foveal::Image frame = foveal::load_image(scratch("orbit_size/frame_" + fmt::format("{:05d}", k - 1) + ".png").string());
     EXPECT_EQ(frame.width, 960);
     EXPECT_EQ(frame.height, 600);
   }
+  // the summary and --stats say the smallest size, and why the loop chose it
+  const auto stats = nlohmann::json::parse(std::ifstream(scratch("orbit_size.json")));
+  EXPECT_NEAR(stats.at("resolution_scale_min").get<double>(), least, 5e-5);  // frames.csv: 4 decimals
   if (!smaller) GTEST_SKIP() << "this machine traced every moved 960x600 view within 8 ms: nothing was scaled";
+  const std::string note = stats.at("resolution_note").get<std::string>();
+  EXPECT_NE(note.find("rendering at "), std::string::npos) << note;
+  EXPECT_NE(note.find(fmt::format("({:.0f} %)", 100 * least)), std::string::npos) << note;
+  EXPECT_NE(r.out.find(fmt::format("  size     lowered to {:.0f} % at the least: {}\n", 100 * least, note)), std::string::npos) << r.out;
 }
 
 TEST(BenchQualityCli, SequenceFollowsARecordingAsReplayDoes) {

@@ -74,7 +74,14 @@ class LoopMaker {
     loop_.frame(camera);  // the view's surfaces, before the first frame is due
   }
   void push(const GazeSample& g, std::optional<glm::dvec2> render_px) { loop_.push_gaze(g.t_s, g.valid ? render_px : std::nullopt); }
-  double budget_ms() const { return loop_.settings().budget_ms; }
+  // The loop's part of the summary: its budget, the smallest size it chose and why, and what the
+  // samples left its predictor
+  void finish(ReplaySummary& summary) const {
+    summary.budget_ms = loop_.settings().budget_ms;
+    summary.min_scale = min_scale_;
+    summary.scale_note = scale_note_;
+    summary.gaze_note = loop_.gaze_note();
+  }
   // The loop's next frame, seen from `view` (the sequence's camera at its time, replay_camera)
   const Frame& make(const Camera& view, ReplayFrame& info) {
     loop_.recycle(std::move(frame_.color));  // the last frame is written: composed into again
@@ -88,6 +95,10 @@ class LoopMaker {
     // Every frame at the size asked for (a video needs one size; the gaze columns are in its
     // pixels): where the loop rendered smaller, scaled up as a display would show it
     info.scale = loop_.scale();
+    if (info.scale < min_scale_) {
+      min_scale_ = info.scale;
+      scale_note_ = loop_.note();
+    }
     if (f.color.width != width_ || f.color.height != height_) f.color = scaled_nearest(f.color, width_, height_);
     frame_.color = std::move(f.color);
     frame_.gaze_px = info.render_gaze;
@@ -108,6 +119,8 @@ class LoopMaker {
   RealtimeLoop loop_;
   int width_, height_;  // the size asked for
   Frame frame_;
+  double min_scale_ = 1;
+  std::string scale_note_;
 };
 
 // Walks a recording's frames: for each, the samples up to t_k through the causal fixation filter
@@ -200,7 +213,7 @@ ReplaySummary replay_recording_realtime(const Recording& r, const Display& displ
       },
       [&](const GazeSample& g, glm::dvec2 px) { maker.push(g, px); });
   summary.wall_ms = wall.ms();
-  summary.budget_ms = maker.budget_ms();
+  maker.finish(summary);
   return summary;
 }
 
@@ -282,7 +295,7 @@ ReplaySummary replay_live_realtime(GazeSource& source, const Display& display, F
         for (const GazeSample& g : samples) maker.push(g, mapping.to_render(g.px));
       },
       [&](ReplayFrame& info) -> const Frame& { return maker.make(replay_camera(camera, s, info.t_s), info); });
-  summary.budget_ms = maker.budget_ms();
+  maker.finish(summary);
   return summary;
 }
 

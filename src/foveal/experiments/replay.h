@@ -73,6 +73,11 @@ struct ReplaySummary {
   // realtime: each frame's budget as the loop took it (unset without the loop), and the frames late
   std::optional<double> budget_ms;
   int late = 0;
+  // realtime: the smallest render size the loop chose (a scale of the size asked for) and what it
+  // said then (RealtimeLoop::note: why it lowered the size; "" where it never did), and what the
+  // samples left its predictor (RealtimeLoop::gaze_note at the end; "" where nothing)
+  double min_scale = 1;
+  std::string scale_note, gaze_note;
 };
 
 using ReplaySink = std::function<void(const ReplayFrame&, const Frame&)>;

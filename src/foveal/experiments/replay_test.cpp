@@ -14,11 +14,11 @@ using namespace foveal;
 
 namespace {
 
-// 1.2 s of gaze at 250 Hz: a fixation on the left, a saccade, a fixation on the right (screen px).
-Recording two_fixations() {
+// 1.2 s of gaze at `hz` (250): a fixation on the left, a saccade, a fixation on the right (screen px).
+Recording two_fixations(int hz = 250) {
   std::string csv = "t,x,y\n";
-  for (int i = 0; i < 300; ++i) {
-    const double t = i / 250.0;
+  for (int i = 0; i < hz * 6 / 5; ++i) {
+    const double t = static_cast<double>(i) / hz;
     const double x = t < 0.6 ? 500 : 1200, y = 520;
     csv += std::to_string(t) + "," + std::to_string(x + (i % 3)) + "," + std::to_string(y + (i % 2)) + "\n";
   }
@@ -92,4 +92,41 @@ TEST(Replay, RealtimeFramesFollowTheRawGazeThroughTheLoop) {
     if (f.t_s < 0.55) EXPECT_NEAR(f.render_gaze.x, 50, 1.5) << f.t_s;
     if (f.t_s > 0.62) EXPECT_NEAR(f.render_gaze.x, 120, 1.5) << f.t_s;
   }
+}
+
+// replay --realtime's summary says how small the loop rendered and why (its note at the smallest
+// size), and what the samples left its predictor: nothing at 250 Hz, too late to gain much at 60.
+TEST(Replay, RealtimeSummarySaysTheSmallestSizeAndWhy) {
+  const Scene box = make_builtin_scene("box");
+  RenderParams p;
+  p.width = 168, p.height = 105, p.foveation.max_rays = 16;
+  ReplaySettings s;
+  s.fps = 60;
+  s.realtime = true;
+  s.duration_s = 0.5;
+  const Display display;
+  const std::unique_ptr<FrameRenderer> renderer = make_frame_renderer(box, ComputeDevice::cpu);
+  const auto run = [&](const Recording& recording) {
+    double smallest = 1;
+    const ReplaySummary summary =
+        replay_recording_realtime(recording, display, *renderer, box, box.cameras.front(), p, s,
+                                  [&](const ReplayFrame& f, const Frame&) { smallest = std::min(smallest, f.scale); });
+    EXPECT_EQ(summary.min_scale, smallest);
+    return summary;
+  };
+  // a refresh's budget: the base shading of 168x105 fits, the size is kept, and nothing is said
+  const ReplaySummary kept = run(two_fixations());
+  EXPECT_EQ(kept.min_scale, 1);
+  EXPECT_EQ(kept.scale_note, "");
+  EXPECT_EQ(kept.gaze_note, "");
+  // a budget no base shading fits: the loop renders smaller, and the summary keeps its reason
+  s.budget_ms = 0.02;
+  const ReplaySummary lowered = run(two_fixations());
+  EXPECT_LT(lowered.min_scale, 1);
+  EXPECT_NE(lowered.scale_note.find("of the 0.02 ms frame budget at 168x105: rendering at"), std::string::npos) << lowered.scale_note;
+  EXPECT_GT(lowered.late, 0);
+  // 60-Hz samples: the predictor's note reaches the summary
+  s.budget_ms.reset();
+  const ReplaySummary slow = run(two_fixations(60));
+  EXPECT_NE(slow.gaze_note.find("(60 Hz)"), std::string::npos) << slow.gaze_note;
 }

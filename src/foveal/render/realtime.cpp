@@ -490,7 +490,7 @@ bool RealtimeLoop::rescale(double fixed_ms) {
   const double scale = std::clamp(target, settings_.min_scale, 1.0);
   if (scale > 0.95 * scale_) return false;
   set_scale(scale);
-  note_ = fmt::format("the base shading took {:.1f} ms of the {:.1f} ms frame budget at {}x{}: rendering at {}x{} ({:.0f} %) instead",
+  note_ = fmt::format("the base shading took {:.3g} ms of the {:.3g} ms frame budget at {}x{}: rendering at {}x{} ({:.0f} %) instead",
                       fixed_ms, settings_.budget_ms, requested_.width, requested_.height, params_.width, params_.height, 100 * scale);
   return true;
 }

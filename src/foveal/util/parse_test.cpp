@@ -31,15 +31,13 @@ TEST(Parse, SizesAreWholePixelsEachSideOfOneX) {
   // a malformed size names the form, the option and the text, whatever part of it is wrong
   for (const char* bad : {"10x", "x10", "840", "", "1,2x3", "10x10x10", "ax5", "5xb", " 5x5", "5x 5", "nanx5", "5xinf"}) {
     const auto message = error_of([&] { parse_size("--size", bad); });
-    EXPECT_NE(message.find("--size: expected WIDTHxHEIGHT in pixels (as 840x525), got '" + std::string(bad) + "'"),
-              std::string::npos)
+    EXPECT_NE(message.find("--size: expected WIDTHxHEIGHT in pixels (as 840x525), got '" + std::string(bad) + "'"), std::string::npos)
         << bad << ": " << message;
   }
   // a well-formed size out of range says the range
   for (const char* bad : {"0x10", "10x0", "16385x2", "2.5x3", "-4x3"}) {
     const auto message = error_of([&] { parse_size("--size", bad); });
-    EXPECT_NE(message.find("between 1x1 and 16384x16384, got '" + std::string(bad) + "'"), std::string::npos)
-        << bad << ": " << message;
+    EXPECT_NE(message.find("between 1x1 and 16384x16384, got '" + std::string(bad) + "'"), std::string::npos) << bad << ": " << message;
   }
 }
 
@@ -47,17 +45,14 @@ TEST(Parse, NumbersAreFiniteAndCounted) {
   EXPECT_EQ(parse_numbers("--at", "1.5,-2,3e2"), (std::vector<double>{1.5, -2, 300}));
   EXPECT_EQ(parse_vec2("--gaze", "418,292"), glm::dvec2(418, 292));
   EXPECT_EQ(parse_vec3("--eye", "0,1.5,-2"), glm::vec3(0, 1.5f, -2));
-  EXPECT_NE(error_of([] { parse_vec2("--gaze", "418"); }).find("--gaze: expected 2 comma-separated numbers, got '418'"),
-            std::string::npos);
+  EXPECT_NE(error_of([] { parse_vec2("--gaze", "418"); }).find("--gaze: expected 2 comma-separated numbers, got '418'"), std::string::npos);
   EXPECT_NE(error_of([] { parse_vec2("--gaze", "1,2,3"); }).find("expected 2"), std::string::npos);
   for (const char* bad : {"1,,2", "1,x", "nan,1", "1,inf", "1.5.2,1"})
     EXPECT_NE(error_of([&] { parse_vec2("--gaze", bad); }).find("is not a finite number"), std::string::npos) << bad;
   EXPECT_EQ(parse_length_or_inf("--focus", "inf"), INFINITY);
   EXPECT_EQ(parse_length_or_inf("--focus", "0.5"), 0.5f);
-  EXPECT_NE(error_of([] { parse_length_or_inf("--focus", "0"); }).find("--focus: must be > 0 or 'inf', got '0'"),
-            std::string::npos);
+  EXPECT_NE(error_of([] { parse_length_or_inf("--focus", "0"); }).find("--focus: must be > 0 or 'inf', got '0'"), std::string::npos);
   EXPECT_NE(error_of([] { require_positive(0, "--rate"); }).find("--rate: must be a positive number"), std::string::npos);
-  EXPECT_NE(error_of([] { require_non_negative(-1, "--start"); }).find("--start: must be zero or positive"),
-            std::string::npos);
+  EXPECT_NE(error_of([] { require_non_negative(-1, "--start"); }).find("--start: must be zero or positive"), std::string::npos);
   EXPECT_EQ(error_of([] { require_non_negative(0, "--start"); }), "");
 }
