@@ -24,8 +24,8 @@ struct BenchLatencyOptions {
   std::string json, markdown, timeline, loops = "whole-frame,deadline,deadline+prediction", landing;
   std::vector<std::string> recordings;
   double start = 0, duration = 3, refresh_hz = 60, min_amplitude = 2;
-  std::optional<double> budget_ms, latency_ms, model_rays_per_ms, model_fixed_ms, margin_ms;
-  double periphery_share = kDefaultPeripheryShare;
+  std::optional<double> budget_ms, latency_ms, model_rays_per_ms, model_fixed_ms;
+  LoopOptions loop;
   int max_rays = 400, threads = 0, timeline_saccade = 0;
   double tolerance = AoReuseParams{}.tolerance;
   uint64_t seed = 1;
@@ -49,8 +49,8 @@ int run_bench_latency(const BenchLatencyOptions& o) {
   p.refresh_hz = o.refresh_hz;
   p.budget_ms = o.budget_ms;
   p.tracker_latency_ms = o.latency_ms;
-  p.margin_ms = o.margin_ms;
-  p.periphery_share = o.periphery_share;
+  p.margin_ms = o.loop.margin_ms;
+  p.periphery_share = o.loop.periphery_share.value_or(kDefaultPeripheryShare);
   p.clock = parse_loop_clock(o.clock);
   p.model_rays_per_ms = o.model_rays_per_ms;
   p.model_fixed_ms = o.model_fixed_ms;
@@ -122,14 +122,7 @@ std::function<int()> add_bench_latency_command(CLI::App& bench) {
   cmd->add_option("--seed", o->seed, "seed of the loops (the references use seed+1000 and seed+2000)")->capture_default_str();
   cmd->add_option("--refresh-hz", o->refresh_hz, "display refresh rate, Hz")->capture_default_str()->check(CLI::Range(1.0, 1000.0));
   cmd->add_option("--frame-budget-ms", o->budget_ms, "each frame's budget, ms (default: one refresh)");
-  cmd->add_option("--margin-ms", o->margin_ms,
-                  "wall clock: the least time each deadline frame keeps free for the machine's pauses, ms (default 2, or a "
-                  "quarter of a shorter budget; more after frames that ended late, up to a quarter of the budget)");
-  cmd->add_option("--periphery-share", o->periphery_share,
-                  "the deadline loops' periphery casts its rays until the frame has spent this share of its budget; the "
-                  "fovea's go on to the deadline (1: the periphery's too; 0.6 had a quarter of the late frames on a busy "
-                  "2-core machine, and a fresh view's landings waited longer: docs/realtime.md)")
-      ->capture_default_str();
+  add_loop_options(*cmd, o->loop, "the deadline loops: ");
   cmd->add_option("--latency-ms", o->latency_ms,
                   "tracker latency: a sample reaches the renderer this long after it was taken (default: "
                   "the sample period + 2 ms)");

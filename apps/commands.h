@@ -90,6 +90,14 @@ void add_device_option(CLI::App& command, std::string& device);
 // --landing NAME=VALUE[,…]: the real-time loop's saccade landing predictor (gaze/landing.h);
 // `needs`: what the option goes with, for its help ("" for none).
 void add_landing_option(CLI::App& command, std::string& landing, const std::string& needs = "");
+// --margin-ms and --periphery-share: how a real-time loop's frame keeps clear of the machine's own
+// pauses (render/realtime.h's LoopSettings; docs/realtime.md); unset: the loop's defaults.
+// `needs`: what the options go with, for their help.
+struct LoopOptions {
+  std::optional<double> margin_ms, periphery_share;
+  bool given() const { return margin_ms || periphery_share; }
+};
+void add_loop_options(CLI::App& command, LoopOptions& loop, const std::string& needs);
 // The predictor's parameters from --landing's text (the defaults where empty); `predicting`:
 // whether the command's loop predicts at all (else a given --landing is refused); throws Error
 // naming --landing.

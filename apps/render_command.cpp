@@ -126,6 +126,18 @@ void add_landing_option(CLI::App& cmd, std::string& landing, const std::string& 
                  needs + "the saccade landing predictor's parameters, NAME=VALUE[,…]: " + names + " (docs/realtime.md)");
 }
 
+void add_loop_options(CLI::App& cmd, LoopOptions& loop, const std::string& needs) {
+  cmd.add_option("--margin-ms", loop.margin_ms,
+                 needs +
+                     "the least time each frame keeps free for the machine's pauses, ms (default 2, or a quarter of a shorter "
+                     "budget; more after frames that ended late, up to a quarter of the budget; wall clock)");
+  cmd.add_option("--periphery-share", loop.periphery_share,
+                 needs +
+                     "the periphery's rays stop once the frame has spent this share of its budget; the fovea's go on to the "
+                     "deadline (default 1: the periphery's too; 0.6 had a quarter of the late frames on a busy 2-core machine, "
+                     "and a fresh view's landings waited longer: docs/realtime.md)");
+}
+
 LandingParams resolve_landing(const std::string& text, bool predicting) {
   if (!text.empty() && !predicting) fail("--landing: needs --realtime with its prediction (no --no-predict)");
   try {

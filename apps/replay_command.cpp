@@ -36,6 +36,7 @@ struct ReplayOptions {
   double start = 0, duration = 0, live_timeout = 5, orbit = 0;
   int frames = 0;
   bool no_reuse = false, mark = false, quiet = false, realtime = false, no_predict = false, no_history = false;
+  LoopOptions loop;
   std::string device = "auto";
 };
 
@@ -62,6 +63,10 @@ ReplaySettings replay_settings(const ReplayOptions& o) {
   settings.landing = resolve_landing(o.landing, o.realtime && !o.no_predict);
   settings.orbit_deg_s = o.orbit;
   settings.keep_history = !o.no_history;
+  if (o.loop.given() && !o.realtime)
+    fail("{} needs --realtime (only the real-time loop has a frame deadline)", o.loop.margin_ms ? "--margin-ms" : "--periphery-share");
+  settings.margin_ms = o.loop.margin_ms;
+  settings.periphery_share = o.loop.periphery_share.value_or(kDefaultPeripheryShare);
   for (const auto& [option, path] : {std::pair{"--stats", &o.stats}, std::pair{"--video", &o.video}})
     check_output_beside_folder(option, *path, o.output, [](const std::string& name) {
       return name == "frames.csv" || (name.rfind("frame_", 0) == 0 && lower_extension(name) == ".png");
@@ -155,6 +160,8 @@ nlohmann::json replay_stats_json(const ReplayOptions& o, const ReplaySettings& s
         {"per_rendered_frame", summary.frames > summary.reused ? summary.render_ms / (summary.frames - summary.reused) : 0.0}}},
       {"stopped", summary.stopped},
       {"budget_ms", summary.budget_ms ? nlohmann::json(*summary.budget_ms) : nlohmann::json(nullptr)},  // --realtime: the loop's
+      {"margin_ms", summary.margin_ms ? nlohmann::json(*summary.margin_ms) : nlohmann::json(nullptr)},
+      {"periphery_share", summary.budget_ms ? nlohmann::json(summary.periphery_share) : nlohmann::json(nullptr)},
       {"frames_late", summary.budget_ms ? nlohmann::json(summary.late) : nlohmann::json(nullptr)},
       {"resolution_scale_min", summary.budget_ms ? nlohmann::json(summary.min_scale) : nlohmann::json(nullptr)},
       {"resolution_note", summary.budget_ms ? nlohmann::json(summary.scale_note) : nlohmann::json(nullptr)},
@@ -272,6 +279,7 @@ std::function<int()> add_replay_command(CLI::App& app) {
                   "application's own drawing)");
   cmd->add_flag("--no-predict", o->no_predict, "--realtime: keep the fovea at the measured gaze during saccades (no landing prediction)");
   add_landing_option(*cmd, o->landing, "--realtime: ");
+  add_loop_options(*cmd, o->loop, "--realtime: ");
   cmd->add_option("--orbit", o->orbit,
                   "the camera orbits its look point about its up axis at this many degrees per second of the sequence (a moving "
                   "view; with --realtime the loop keeps the AO of the surfaces it still sees, without it use --temporal for that)")

@@ -29,6 +29,7 @@ struct ViewCommandOptions {
   bool no_panel = false, no_progressive = false, realtime = false, no_predict = false;
   std::string landing;
   double frame_budget_ms = 10;
+  LoopOptions loop;
   std::string device = "auto";
 };
 
@@ -50,6 +51,10 @@ int run_view(const ViewCommandOptions& o) {
   s.frame_budget_ms = o.frame_budget_ms;
   s.predict = !o.no_predict;
   s.landing = resolve_landing(o.landing, o.realtime && !o.no_predict);
+  if (o.loop.given() && !o.realtime)
+    fail("{} needs --realtime (only the real-time loop has a frame deadline)", o.loop.margin_ms ? "--margin-ms" : "--periphery-share");
+  s.margin_ms = o.loop.margin_ms;
+  s.periphery_share = o.loop.periphery_share.value_or(kDefaultPeripheryShare);
   if (o.realtime && s.mode != ViewMode::foveated) fail("--realtime: the real-time loop shows the foveated mode (--mode foveated)");
   resolve(s);  // (every setting, whatever the mode: a value out of range is a mistake either way)
   WindowOptions w;
@@ -162,6 +167,7 @@ std::function<int()> add_view_command(CLI::App& app) {
       ->capture_default_str();
   cmd->add_flag("--no-predict", o->no_predict, "--realtime: keep the fovea at the measured gaze during saccades");
   add_landing_option(*cmd, o->landing, "--realtime: ");
+  add_loop_options(*cmd, o->loop, "--realtime: ");
   cmd->add_option("--frames", o->frames,
                   "show this many frames, wait for the finished image, write --screenshot, and exit (scripts, tests)")
       ->check(CLI::Range(0, 1000000));

@@ -216,13 +216,25 @@ TEST(GazeCli, RealtimeReplayRunsAtTheDisplaysRefresh) {
   EXPECT_TRUE(least > 0 && least <= 1) << least;
   EXPECT_EQ(stats["refresh60"].at("resolution_note").get<std::string>().empty(), least == 1);
   EXPECT_TRUE(stats["refresh60"].at("gaze_note").is_string());
+  // the loop's margin and periphery share: its defaults, or as given
+  EXPECT_EQ(stats["refresh60"].at("margin_ms").get<double>(), 2.0);
+  EXPECT_EQ(stats["refresh120"].at("margin_ms").get<double>(), 1.0);  // a quarter of a 4-ms budget
+  EXPECT_EQ(stats["refresh60"].at("periphery_share").get<double>(), 1.0);
+  EXPECT_TRUE(stats["whole30"].at("margin_ms").is_null());
+  frames("--realtime --margin-ms 3.5 --periphery-share 0.6", "margin");
+  EXPECT_EQ(stats["margin"].at("margin_ms").get<double>(), 3.5);
+  EXPECT_EQ(stats["margin"].at("periphery_share").get<double>(), 0.6);
   for (const auto& [bad, needle] : std::vector<std::pair<std::string, std::string>>{
            {"--refresh-hz 60", "--refresh-hz needs --realtime"},
            {"--frame-budget-ms 5", "--frame-budget-ms needs --realtime"},
            {"--realtime --refresh-hz 120 --fps 60", "--refresh-hz 120 and --fps 60"},
            {"--realtime --frame-budget-ms 20", "--frame-budget-ms: must be in (0, 16.6667] ms"},
            {"--realtime --frame-budget-ms 0", "--frame-budget-ms"},
-           {"--realtime --refresh-hz 0", "--refresh-hz"}}) {
+           {"--realtime --refresh-hz 0", "--refresh-hz"},
+           {"--margin-ms 3", "--margin-ms needs --realtime"},
+           {"--periphery-share 0.5", "--periphery-share needs --realtime"},
+           {"--realtime --margin-ms 20", "--margin-ms: must be in [0, the frame budget 16.6667 ms), got 20"},
+           {"--realtime --periphery-share 0", "--periphery-share: must be in (0, 1]"}}) {
     const CliRun r = foveal_test::foveal(base + bad + " -o refresh_bad");
     EXPECT_NE(r.status, 0) << bad;
     EXPECT_EQ(lines(r.err), 1u) << bad << ": " << r.err;

@@ -109,11 +109,15 @@ TEST(ViewCli, NoDisplayAndBadOptionsAreOneClearLine) {
   EXPECT_EQ(no_display.status, 1) << no_display.err;
   EXPECT_NE(no_display.err.find("needs a display"), std::string::npos) << no_display.err;
   EXPECT_EQ(lines(no_display.err), 1u) << no_display.err;
-  for (const auto& [args, expected] :
-       std::vector<std::pair<std::string, std::string>>{{"view --mode fullscreen", "unknown view mode 'fullscreen'"},
-                                                        {"view --overlays gaze,heat", "unknown overlay 'heat'"},
-                                                        {"view --frames 3", "--screenshot"},
-                                                        {"view --gaze no_such_recording.asc", "no_such_recording.asc"}})
+  for (const auto& [args, expected] : std::vector<std::pair<std::string, std::string>>{
+           {"view --mode fullscreen", "unknown view mode 'fullscreen'"},
+           {"view --overlays gaze,heat", "unknown overlay 'heat'"},
+           {"view --frames 3", "--screenshot"},
+           {"view --gaze no_such_recording.asc", "no_such_recording.asc"},
+           {"view --margin-ms 3", "--margin-ms needs --realtime"},
+           {"view --periphery-share 0.5", "--periphery-share needs --realtime"},
+           {"view --realtime --margin-ms 10", "--margin-ms: must be in [0, the frame budget 10 ms)"},
+           {"view --realtime --periphery-share 2", "--periphery-share: must be in (0, 1]"}})
     expect_one_line_error(args, expected);
 }
 

@@ -51,6 +51,12 @@ def parse_args(argv=None):
     p.add_argument("--no-predict", action="store_true", help="no saccade landing prediction: the fovea stays at the measured gaze")
     p.add_argument("--landing", default="", metavar="NAME=VALUE,…",
                    help="the saccade landing predictor's parameters (docs/realtime.md), e.g. onset_deg_s=60 for a noisy tracker")
+    p.add_argument("--margin-ms", type=float, default=None,
+                   help="the least time each frame keeps free for the machine's pauses, ms (default: the loop's, 2 ms; more where "
+                        "`foveal bench stalls` finds longer pauses; docs/realtime.md)")
+    p.add_argument("--periphery-share", type=float, default=1.0,
+                   help="the periphery's rays stop once a frame has spent this share of its budget, the fovea's go on to the "
+                        "deadline (default 1: the periphery's too; less leaves a busy machine's pauses room; docs/realtime.md)")
     p.add_argument("--frames", type=int, default=0, help="stop after this many frames (0: until Escape)")
     p.add_argument("--tracker", default=None, help="ioHub eye-tracker configuration (YAML); default MouseGaze")
     p.add_argument("--move-mouse", action="store_true", help="move the pointer along a path (XTest), for runs without a person")
@@ -86,6 +92,10 @@ def check_args(parser, args):
         args.landing_params = foveal.gaze.landing_params(args.landing)
     except ValueError as error:
         parser.error(f"--landing: {error}")
+    if args.margin_ms is not None and not (math.isfinite(args.margin_ms) and args.margin_ms >= 0):
+        parser.error(f"--margin-ms: must be 0 or more ms, got {args.margin_ms}")
+    if not 0 < args.periphery_share <= 1:
+        parser.error(f"--periphery-share: must be in (0, 1], got {args.periphery_share}")
     if args.refresh_hz is not None and not 1 <= args.refresh_hz <= 1000:
         parser.error(f"--refresh-hz: must be in [1, 1000] Hz, got {args.refresh_hz}")
     for name, value in (("--frames", args.frames), ("--max-rays", args.max_rays), ("--probe-stalls", args.probe_stalls)):
@@ -173,7 +183,8 @@ def main(argv=None) -> int:
     if refresh_note:
         print(f"gaze_contingent: {refresh_note}")
     loop = foveal.Loop(scene, size=(w, h), camera=args.camera, display=display, max_rays=args.max_rays, gamma=args.gamma,
-                       refresh_hz=refresh_hz, predict=not args.no_predict, device=args.device, landing=args.landing_params)
+                       refresh_hz=refresh_hz, predict=not args.no_predict, device=args.device, landing=args.landing_params,
+                       margin_ms=args.margin_ms, periphery_share=args.periphery_share)
     if loop.note:
         print(f"gaze_contingent: {loop.note}")
     io = launchHubServer(window=win, **tracker_config(args.tracker))
@@ -280,7 +291,8 @@ def main(argv=None) -> int:
     latencies = np.array([r[6] for r in rows[1:]])  # the first flip waits for the tracker
     summary = {"flips": len(rows), "size": [w, h], "render_size": list(loop.size), "scene": args.scene, "device": loop.device,
                "refresh_hz": refresh_hz, "refresh_measured": args.refresh_hz is None, "refresh_note": refresh_note,
-               "budget_ms": loop.budget_ms, "predict": not args.no_predict,
+               "budget_ms": loop.budget_ms, "margin_ms": loop.margin_ms, "periphery_share": loop.periphery_share,
+               "predict": not args.no_predict,
                "gaze_positions": len({(round(r[0]), round(r[1])) for r in rows}),
                "frames_late": sum(bool(r[5]) for r in rows),
                "flips_converged": sum(r[3] for r in rows),

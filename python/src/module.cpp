@@ -190,7 +190,7 @@ struct PyLoop {
   PyLoop(const PyScene& s, const std::array<int, 2>& size, const nb::object& camera_arg, std::optional<Display> display, int max_rays,
          double gamma, double refresh_hz, std::optional<double> frame_budget_ms, bool predict, const std::string& device_name, int threads_,
          uint64_t seed, const std::string& clock, double tolerance, double ellipse, bool keep_history, const nb::object& landing,
-         double periphery_share)
+         double periphery_share, std::optional<double> margin_ms)
       : scene(s.scene), threads(threads_) {
     if (threads < 0) fail("threads: must be 0 (all cores) or more, got {}", threads);
     if (!(refresh_hz >= 1 && refresh_hz <= 1000)) fail("refresh_hz: must be in [1, 1000] Hz, got {}", refresh_hz);
@@ -207,6 +207,7 @@ struct PyLoop {
     settings.predict = predict;
     settings.keep_history = keep_history;
     settings.periphery_share = periphery_share;
+    settings.margin_ms = margin_ms;
     settings.landing = landing_params_of(landing);
     settings.clock = parse_loop_clock(clock);
     if (settings.clock == LoopClock::model) fail("clock: the model clock is bench latency's; a Loop in Python runs on the wall clock");
@@ -559,11 +560,12 @@ NB_MODULE(_core, m) {
                      "is refined first (docs/realtime.md).")
       .def(nb::init<const PyScene&, const std::array<int, 2>&, const nb::object&, std::optional<Display>, int, double, double,
                     std::optional<double>, bool, const std::string&, int, uint64_t, const std::string&, double, double, bool,
-                    const nb::object&, double>(),
+                    const nb::object&, double, std::optional<double>>(),
            "scene"_a, "size"_a = std::array<int, 2>{840, 525}, "camera"_a = nb::none(), "display"_a = nb::none(), "max_rays"_a = 400,
            "gamma"_a = 2.0, "refresh_hz"_a = 60.0, "frame_budget_ms"_a = nb::none(), "predict"_a = true, "device"_a = "auto",
            "threads"_a = 0, "seed"_a = 1, "clock"_a = "wall", "tolerance"_a = foveal::AoReuseParams{}.tolerance, "ellipse"_a = 1.538,
            "keep_history"_a = true, "landing"_a.none() = nb::none(), "periphery_share"_a = kDefaultPeripheryShare,
+           "margin_ms"_a.none() = nb::none(),
            "A loop for a view (traced here, once; frame(camera=…) moves it). `frame_budget_ms` (default: one refresh at "
            "`refresh_hz`) is what each frame() may take; `predict` places the fovea at a saccade's predicted landing while it "
            "flies; `display` the screen the image fills (default: the papers' 47.5×30 cm, 1680×1050 at 60 cm); `tolerance` the "
@@ -571,7 +573,9 @@ NB_MODULE(_core, m) {
            "still sees (else it starts afresh); `landing` the saccade landing predictor's parameters: a dict by name (as "
            "foveal.gaze.predict_landings's keywords: onset_deg_s, …) or the text of --landing ('onset_deg_s=60,skew=1.2'); "
            "`periphery_share` the share of the budget after which a frame casts no more rays for the periphery (the fovea's go "
-           "on to the deadline; 1: the periphery's too).")
+           "on to the deadline; 1: the periphery's too); `margin_ms` the least time each frame keeps free for the machine's "
+           "pauses (None: 2 ms, or a quarter of a shorter budget; more after frames that ended late, up to a quarter of the "
+           "budget; a budget set later keeps it within a quarter).")
       .def("push", &PyLoop::push, "t"_a, "gaze"_a,
            "A tracker sample: its time in seconds (any clock, increasing; None: just after the latest sample) and the gaze "
            "(x, y) in render pixels, or None when the tracker lost the eye. Push every sample a fast tracker delivers "
@@ -611,6 +615,13 @@ NB_MODULE(_core, m) {
           },
           "Each frame's budget, ms; settable, so that an experiment leaves the loop what its own per-frame work (drawing, "
           "flipping) does not take of the refresh.")
+      .def_prop_ro(
+          "margin_ms", [](const PyLoop& l) { return loop_margin_ms(l.loop->settings()); },
+          "The least time each frame keeps free for the machine's pauses, ms: margin_ms as given (within a quarter of the "
+          "budget), else 2 ms or a quarter of a shorter budget.")
+      .def_prop_ro(
+          "periphery_share", [](const PyLoop& l) { return l.loop->settings().periphery_share; },
+          "The share of the budget after which a frame casts no more rays for the periphery.")
       .def_prop_ro(
           "device", [](const PyLoop& l) { return l.renderer->describe(); }, "Where the loop renders.");
 

@@ -31,7 +31,8 @@ def run_example(script, args, cwd, screen="1024x768"):
 def test_gaze_contingent_follows_the_mouse_gaze_and_logs_latency(tmp_path):
     flips = 60
     run_example("gaze_contingent.py", ["--size", "320x200", "--frames", flips, "--device", "cpu", "--fullscreen", "--refresh-hz", 60,
-                                       "--move-mouse", "--log", "frames.csv", "--summary", "summary.json", "--probe-stalls", 0.3], tmp_path,
+                                       "--move-mouse", "--log", "frames.csv", "--summary", "summary.json", "--probe-stalls", 0.3,
+                                       "--margin-ms", 3, "--periphery-share", 0.8], tmp_path,
                 screen="320x200")
     rows = list(csv.DictReader(open(tmp_path / "frames.csv")))
     summary = json.loads((tmp_path / "summary.json").read_text())
@@ -52,6 +53,8 @@ def test_gaze_contingent_follows_the_mouse_gaze_and_logs_latency(tmp_path):
     # The loop answers within what the script's own work leaves of the 60 Hz refresh, so the image
     # shown is at most two refreshes behind the gaze
     assert summary["refresh_hz"] == 60 and 0 < summary["budget_ms"] <= 1000 / 60
+    # the margin given (within a quarter of the budget the script leaves the loop) and share, as the loop took them
+    assert summary["margin_ms"] == pytest.approx(min(3, summary["budget_ms"] / 4)) and summary["periphery_share"] == 0.8
     assert summary["refresh_measured"] is False and summary["refresh_note"] == ""  # (given: nothing to doubt)
     assert 0 < summary["gaze_to_flip_ms_median"] <= summary["gaze_to_flip_ms_p95"]
     assert summary["gaze_to_flip_refreshes_median"] <= 2.0
@@ -131,7 +134,9 @@ def test_gaze_contingent_refuses_bad_options_before_the_session(tmp_path):
     cases = [(["--log", str(tmp_path / "missing" / "frames.csv")], "--log"), (["--summary", str(tmp_path)], "--summary"),
              (["--size", "320"], "--size"), (["--display", "47.5,0,60"], "--display"), (["--frames", "-1"], "--frames"),
              (["--refresh-hz", "0"], "--refresh-hz"), (["--landing", "speed=3"], "--landing"),
-             (["--landing", "onset_deg_s=fast"], "--landing"), (["--landing", "skew=9"], "--landing")]
+             (["--landing", "onset_deg_s=fast"], "--landing"), (["--landing", "skew=9"], "--landing"),
+             (["--margin-ms", "-1"], "--margin-ms"), (["--margin-ms", "nan"], "--margin-ms"),
+             (["--periphery-share", "0"], "--periphery-share"), (["--periphery-share", "1.5"], "--periphery-share")]
     for args, name in cases:
         result = subprocess.run([sys.executable, str(EXAMPLES / "gaze_contingent.py"), *args], cwd=tmp_path, capture_output=True,
                                 text=True, timeout=60)

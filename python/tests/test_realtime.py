@@ -133,7 +133,15 @@ def test_bad_arguments_are_clear_errors(box):
         foveal.Loop(box, size=(0, 10))
     with pytest.raises(ValueError, match=r"periphery_share: must be in \(0, 1\]"):
         foveal.Loop(box, size=(64, 40), periphery_share=0)
+    for bad in (-1.0, 16.7, float("nan")):
+        with pytest.raises(ValueError, match=r"margin_ms: must be in \[0, the frame budget 16.6667 ms\)"):
+            foveal.Loop(box, size=(64, 40), margin_ms=bad)
+    kept = foveal.Loop(box, size=(64, 40), max_rays=8, device="cpu", margin_ms=5, periphery_share=0.6)
+    assert (kept.margin_ms, kept.periphery_share) == (5.0, 0.6)
+    kept.budget_ms = 8  # a margin within a quarter of a shorter budget
+    assert kept.margin_ms == 2.0
     loop = foveal.Loop(box, size=(64, 40), max_rays=8, device="cpu")
+    assert (loop.margin_ms, loop.periphery_share) == (2.0, 1.0)  # the loop's defaults
     with pytest.raises(ValueError, match="t: must be a finite"):
         loop.push(float("nan"), (1, 2))
     loop.push(1.0, None)  # a lost sample is fine, and so is NaN

@@ -11,6 +11,17 @@
 
 namespace foveal {
 
+LoopSettings replay_loop_settings(const ReplaySettings& s) {
+  LoopSettings l;
+  l.budget_ms = s.budget_ms.value_or(1000.0 / s.fps);
+  l.predict = s.predict;
+  l.landing = s.landing;
+  l.keep_history = s.keep_history;
+  l.margin_ms = s.margin_ms;
+  l.periphery_share = s.periphery_share;
+  return l;
+}
+
 void validate(const ReplaySettings& s) {
   if (!(s.fps > 0 && s.fps <= 1000)) fail("fps: must be in (0, 1000], got {}", s.fps);
   if (s.frames < 0) fail("frames: must be zero (all) or positive, got {}", s.frames);
@@ -23,6 +34,9 @@ void validate(const ReplaySettings& s) {
   if (s.budget_ms && !s.realtime) fail("frame_budget_ms: is the real-time loop's (realtime)");
   if (s.budget_ms && !(*s.budget_ms > 0 && *s.budget_ms <= 1000 / s.fps))
     fail("frame_budget_ms: must be in (0, {:g}] ms (a frame at {:g} Hz), got {}", 1000 / s.fps, s.fps, *s.budget_ms);
+  if (!s.realtime && (s.margin_ms || s.periphery_share != kDefaultPeripheryShare))
+    fail("{}: is the real-time loop's (realtime)", s.margin_ms ? "margin_ms" : "periphery_share");
+  if (s.realtime) validate(replay_loop_settings(s));
   validate(s.fixation);
 }
 
@@ -70,7 +84,7 @@ class FrameMaker {
 class LoopMaker {
  public:
   LoopMaker(FrameRenderer& renderer, const Scene& scene, const Camera& camera, const RenderParams& params, const ReplaySettings& s)
-      : loop_(renderer, scene, params, loop_settings(s)), width_(params.width), height_(params.height) {
+      : loop_(renderer, scene, params, replay_loop_settings(s)), width_(params.width), height_(params.height) {
     loop_.frame(camera);  // the view's surfaces, before the first frame is due
   }
   void push(const GazeSample& g, std::optional<glm::dvec2> render_px) { loop_.push_gaze(g.t_s, g.valid ? render_px : std::nullopt); }
@@ -78,6 +92,8 @@ class LoopMaker {
   // samples left its predictor
   void finish(ReplaySummary& summary) const {
     summary.budget_ms = loop_.settings().budget_ms;
+    summary.margin_ms = loop_margin_ms(loop_.settings());
+    summary.periphery_share = loop_.settings().periphery_share;
     summary.min_scale = min_scale_;
     summary.scale_note = scale_note_;
     summary.gaze_note = loop_.gaze_note();
@@ -108,14 +124,6 @@ class LoopMaker {
   }
 
  private:
-  static LoopSettings loop_settings(const ReplaySettings& s) {
-    LoopSettings l;
-    l.budget_ms = s.budget_ms.value_or(1000.0 / s.fps);
-    l.predict = s.predict;
-    l.landing = s.landing;
-    l.keep_history = s.keep_history;
-    return l;
-  }
   RealtimeLoop loop_;
   int width_, height_;  // the size asked for
   Frame frame_;

@@ -36,6 +36,10 @@ struct ReplaySettings {
   std::optional<double> budget_ms;  // realtime: what each frame may take, ms (unset: one frame, 1000/fps)
   bool predict = true;              // realtime: place the fovea at a saccade's predicted landing while it flies
   LandingParams landing;            // realtime: the landing predictor's parameters (gaze/landing.h)
+  // realtime: what each frame keeps free for the machine's pauses, and the share of the budget the
+  // periphery's rays may run to (LoopSettings' margin_ms and periphery_share; unset: the loop's)
+  std::optional<double> margin_ms;
+  double periphery_share = kDefaultPeripheryShare;
   // The camera orbits its look point about its up axis at this speed, degrees per second of the
   // sequence (0: still): a moving view, on the renderer's temporal history (params.reuse.temporal)
   // or the real-time loop's kept rays
@@ -45,6 +49,8 @@ struct ReplaySettings {
 // The sequence's camera at `t_s` seconds after its first frame (the orbit of orbit_deg_s).
 Camera replay_camera(const Camera& camera, const ReplaySettings& settings, double t_s);
 void validate(const ReplaySettings& settings);
+// The real-time loop's settings for a replay (realtime): its budget, prediction, margin and share
+LoopSettings replay_loop_settings(const ReplaySettings& settings);
 
 struct ReplayFrame {
   int index = 0;
@@ -71,7 +77,8 @@ struct ReplaySummary {
   double wall_ms = 0;
   std::string stopped;  // why it stopped early ("" when it ran to the end)
   // realtime: each frame's budget as the loop took it (unset without the loop), and the frames late
-  std::optional<double> budget_ms;
+  std::optional<double> budget_ms, margin_ms;  // (margin_ms: what each frame kept free, as the loop took it)
+  double periphery_share = kDefaultPeripheryShare;
   int late = 0;
   // realtime: the smallest render size the loop chose (a scale of the size asked for) and what it
   // said then (RealtimeLoop::note: why it lowered the size; "" where it never did), and what the

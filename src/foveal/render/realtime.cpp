@@ -114,7 +114,13 @@ void validate(const LoopSettings& s) {
 }
 
 RealtimeLoop::RealtimeLoop(FrameRenderer& renderer, const Scene& scene, const RenderParams& params, const LoopSettings& settings)
-    : renderer_(renderer), scene_(scene), requested_(params), params_(params), settings_(settings), predictor_(settings.landing) {
+    : renderer_(renderer),
+      scene_(scene),
+      requested_(params),
+      params_(params),
+      settings_(settings),
+      given_margin_ms_(settings.margin_ms),
+      predictor_(settings.landing) {
   validate(params);
   validate(settings);
   if (params.shadows) fail("shadows: the real-time loop shades without shadow rays (as the papers' frames)");
@@ -181,7 +187,8 @@ void RealtimeLoop::set_budget_ms(double budget_ms) {
   check_budget(budget_ms, "budget_ms");
   LoopSettings s = settings_;
   s.budget_ms = budget_ms;
-  if (s.margin_ms) s.margin_ms = std::min(*s.margin_ms, 0.25 * budget_ms);
+  // (from the margin given, so that a budget lowered for one frame does not shrink it for good)
+  if (given_margin_ms_) s.margin_ms = std::min(*given_margin_ms_, 0.25 * budget_ms);
   validate(s);
   settings_ = s;
 }

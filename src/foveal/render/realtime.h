@@ -212,7 +212,8 @@ class RealtimeLoop {
   // Forget the accumulated AO (the next frame starts afresh).
   void reset();
   // A new frame budget (an application that measures its own per-frame work leaves the loop the
-  // rest of the refresh); throws Error naming frame_budget_ms.
+  // rest of the refresh); throws Error naming budget_ms. A margin the settings gave is kept within a
+  // quarter of each budget set (of the margin given: a budget lowered once does not shrink it for good).
   void set_budget_ms(double budget_ms);
 
   const RenderParams& params() const { return params_; }  // at the render size in use
@@ -287,6 +288,7 @@ class RealtimeLoop {
   const Scene& scene_;
   RenderParams requested_, params_;
   LoopSettings settings_;
+  std::optional<double> given_margin_ms_;  // the margin the settings gave, before a later budget's quarter bounded it
   double scale_ = 1;
   std::string note_;
   LandingPredictor predictor_;

@@ -54,6 +54,17 @@ void resolve(ViewSettings& s) {
   validate(s.vision);
   if (!(s.diff_gain > 0)) fail("diff_gain: must be positive, got {}", s.diff_gain);
   if (!(s.frame_budget_ms > 0 && s.frame_budget_ms <= 1000)) fail("frame_budget_ms: must be in (0, 1000] ms, got {}", s.frame_budget_ms);
+  validate(view_loop_settings(s));  // (whatever the mode, as above)
+}
+
+LoopSettings view_loop_settings(const ViewSettings& s) {
+  LoopSettings ls;
+  ls.budget_ms = s.frame_budget_ms;
+  ls.predict = s.predict;
+  ls.landing = s.landing;
+  ls.margin_ms = s.margin_ms;
+  ls.periphery_share = s.periphery_share;
+  return ls;
 }
 
 namespace {
@@ -64,7 +75,11 @@ nlohmann::json settings_json(const ViewSettings& s) {
   const RenderParams& r = s.render;
   const EyeParams& e = s.vision.eye;
   return {{"mode", to_string(s.mode)},
-          {"realtime", s.realtime ? nlohmann::json{{"frame_budget_ms", s.frame_budget_ms}, {"predict", s.predict}} : nlohmann::json(false)},
+          {"realtime", s.realtime ? nlohmann::json{{"frame_budget_ms", s.frame_budget_ms},
+                                                   {"predict", s.predict},
+                                                   {"margin_ms", loop_margin_ms(view_loop_settings(s))},
+                                                   {"periphery_share", s.periphery_share}}
+                                  : nlohmann::json(false)},
           {"width", r.width},
           {"height", r.height},
           {"display",
@@ -428,11 +443,7 @@ void ViewSession::realtime_frame() {
   if (!loop_ || key != loop_key_) {
     loop_.reset();
     loop_renderer_ = make_frame_renderer(scene_, settings_.cuda ? ComputeDevice::cuda : ComputeDevice::cpu, tracer_);
-    LoopSettings ls;
-    ls.budget_ms = settings_.frame_budget_ms;
-    ls.predict = settings_.predict;
-    ls.landing = settings_.landing;
-    loop_ = std::make_unique<RealtimeLoop>(*loop_renderer_, scene_, settings_.render, ls);
+    loop_ = std::make_unique<RealtimeLoop>(*loop_renderer_, scene_, settings_.render, view_loop_settings(settings_));
     loop_key_ = key;
     if (raw_gaze_) loop_->push_gaze(loop_t_ += 1e-3, raw_gaze_);
   }

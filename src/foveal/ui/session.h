@@ -50,7 +50,13 @@ struct ViewSettings {
   double frame_budget_ms = 10;
   bool predict = true;
   LandingParams landing;  // the saccade landing predictor's parameters (gaze/landing.h)
+  // what each frame keeps free for the machine's pauses, and the share of the budget the
+  // periphery's rays may run to (LoopSettings' margin_ms and periphery_share; unset: the loop's)
+  std::optional<double> margin_ms;
+  double periphery_share = kDefaultPeripheryShare;
 };
+// The real-time loop's settings for the view (realtime)
+LoopSettings view_loop_settings(const ViewSettings& settings);
 // Resolve `eye` with `eye_overrides` into vision.eye and vision.impair (resolve_eye, the one rule for
 // an eye) and check everything; throws Error.
 void resolve(ViewSettings& settings);

@@ -15,6 +15,7 @@
 #include <filesystem>
 #include <cmath>
 #include <fstream>
+#include <tuple>
 #include <unistd.h>
 
 namespace foveal {
@@ -324,6 +325,27 @@ TEST(ViewSession, BadSettingsAreRefusedWithTheReason) {
   s = small_settings(ViewMode::vision);
   s.frame_budget_ms = 0;
   EXPECT_THROW(resolve(s), Error);
+  // the loop's margin and periphery share (--margin-ms, --periphery-share) reach its settings, checked
+  s = small_settings(ViewMode::foveated);
+  s.realtime = true;
+  s.frame_budget_ms = 8;
+  s.margin_ms = 3;
+  s.periphery_share = 0.6;
+  EXPECT_NO_THROW(resolve(s));
+  EXPECT_EQ(view_loop_settings(s).margin_ms, 3.0);
+  EXPECT_EQ(view_loop_settings(s).periphery_share, 0.6);
+  EXPECT_EQ(view_loop_settings(s).budget_ms, 8.0);
+  for (const auto& [margin, share, name] :
+       std::vector<std::tuple<double, double, std::string>>{{8, 1, "margin_ms"}, {-1, 1, "margin_ms"}, {2, 0, "periphery_share"}}) {
+    s.margin_ms = margin;
+    s.periphery_share = share;
+    try {
+      resolve(s);
+      ADD_FAILURE() << name;
+    } catch (const Error& e) {
+      EXPECT_EQ(std::string(e.what()).rfind(name + ": must be in", 0), 0u) << e.what();
+    }
+  }
   EXPECT_THROW(parse_view_mode("fullscreen"), Error);
   try {
     parse_overlays("gaze,heat");

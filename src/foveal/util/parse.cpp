@@ -5,24 +5,37 @@
 
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <sstream>
 
 namespace foveal {
+
+namespace {
+
+// The whole of `item` as a finite number (leading spaces allowed: "418, 292"), or nothing (trailing
+// text, inf, nan)
+std::optional<double> finite_number(const std::string& item) {
+  size_t used = 0;
+  double v = 0;
+  try {
+    v = std::stod(item, &used);
+  } catch (const std::exception&) {
+    return std::nullopt;
+  }
+  if (used != item.size() || !std::isfinite(v)) return std::nullopt;
+  return v;
+}
+
+}  // namespace
 
 std::vector<double> parse_numbers(const std::string& option, const std::string& text, size_t count) {
   std::vector<double> values;
   std::stringstream stream(text);
   std::string item;
   while (std::getline(stream, item, ',')) {
-    size_t used = 0;
-    double v = 0;
-    try {
-      v = std::stod(item, &used);
-    } catch (const std::exception&) {
-      used = 0;
-    }
-    if (used == 0 || used != item.size() || !std::isfinite(v)) fail("{}: '{}' is not a finite number", option, item);
-    values.push_back(v);
+    const auto v = finite_number(item);
+    if (!v) fail("{}: '{}' is not a finite number", option, item);
+    values.push_back(*v);
   }
   if (count != 0 && values.size() != count) fail("{}: expected {} comma-separated numbers, got '{}'", option, count, text);
   return values;
@@ -33,16 +46,9 @@ glm::ivec2 parse_size(const std::string& option, const std::string& text) {
   // named as the wrong form, not as a list of numbers the user never meant to give.
   const auto x = text.find_first_of("xX");
   const auto side = [&](const std::string& part) {
-    size_t used = 0;
-    double v = 0;
-    try {
-      v = std::stod(part, &used);
-    } catch (const std::exception&) {
-      used = 0;
-    }
-    if (part.empty() || used != part.size() || !std::isfinite(v) || part.find_first_of(" \t") != std::string::npos)
-      fail("{}: expected WIDTHxHEIGHT in pixels (as 840x525), got '{}'", option, text);
-    return v;
+    const auto v = finite_number(part);
+    if (!v) fail("{}: expected WIDTHxHEIGHT in pixels (as 840x525), got '{}'", option, text);
+    return *v;
   };
   if (x == std::string::npos) fail("{}: expected WIDTHxHEIGHT in pixels (as 840x525), got '{}'", option, text);
   const double w = side(text.substr(0, x)), h = side(text.substr(x + 1));

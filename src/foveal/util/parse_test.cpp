@@ -29,7 +29,7 @@ TEST(Parse, SizesAreWholePixelsEachSideOfOneX) {
   EXPECT_EQ(parse_size("--size", "1X1"), glm::ivec2(1, 1));
   EXPECT_EQ(parse_size("--size", "16384x16384"), glm::ivec2(16384, 16384));
   // a malformed size names the form, the option and the text, whatever part of it is wrong
-  for (const char* bad : {"10x", "x10", "840", "", "1,2x3", "10x10x10", "ax5", "5xb", " 5x5", "5x 5", "nanx5", "5xinf"}) {
+  for (const char* bad : {"10x", "x10", "840", "", "1,2x3", "10x10x10", "ax5", "5xb", "5 x5", "nanx5", "5xinf"}) {
     const auto message = error_of([&] { parse_size("--size", bad); });
     EXPECT_NE(message.find("--size: expected WIDTHxHEIGHT in pixels (as 840x525), got '" + std::string(bad) + "'"), std::string::npos)
         << bad << ": " << message;
@@ -44,6 +44,8 @@ TEST(Parse, SizesAreWholePixelsEachSideOfOneX) {
 TEST(Parse, NumbersAreFiniteAndCounted) {
   EXPECT_EQ(parse_numbers("--at", "1.5,-2,3e2"), (std::vector<double>{1.5, -2, 300}));
   EXPECT_EQ(parse_vec2("--gaze", "418,292"), glm::dvec2(418, 292));
+  EXPECT_EQ(parse_vec2("--gaze", "418, 292"), glm::dvec2(418, 292));  // a space after the comma
+  EXPECT_EQ(parse_size("--size", "840x 525"), glm::ivec2(840, 525));
   EXPECT_EQ(parse_vec3("--eye", "0,1.5,-2"), glm::vec3(0, 1.5f, -2));
   EXPECT_NE(error_of([] { parse_vec2("--gaze", "418"); }).find("--gaze: expected 2 comma-separated numbers, got '418'"), std::string::npos);
   EXPECT_NE(error_of([] { parse_vec2("--gaze", "1,2,3"); }).find("expected 2"), std::string::npos);
