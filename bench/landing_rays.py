@@ -223,6 +223,52 @@ def prediction_errors(flight, t, deg, last):
     return out
 
 
+def pre_peak_features(flight, t, deg, last):
+    """For each prediction made before the velocity peak was passed: the flight so far (distance from its start, velocity
+    over the latest interval, time since the onset) and the labelled amplitude, to ask how much the flight then says of it."""
+    start, end = flight_start(flight, t, deg), deg[last]
+    amplitude = float(np.hypot(*(end - start)))
+    out = []
+    for ts in flight["prediction_s"]:
+        if ts >= flight["first_prediction_s"]:
+            continue
+        k = int(np.searchsorted(t, ts, side="right")) - 1
+        if k < 1:
+            continue
+        distance = float(np.hypot(*(deg[k] - start)))
+        velocity = float(np.hypot(*(deg[k] - deg[k - 1]))) / float(t[k] - t[k - 1])
+        since = ts - flight["onset_s"]
+        if distance > 0.1 and velocity > 1 and since > 0 and amplitude > 0:
+            out.append((distance, velocity, since, amplitude))
+    return out
+
+
+def amplitude_regression(features, groups):
+    """log amplitude ~ 1 + log distance + log velocity + log time, least squares: the share of its variance the flight before
+    the peak explains (R²), and the error of the fitted amplitude left out one recording at a time (degrees, median and p90)."""
+    f = np.asarray(features, float)
+    groups = np.asarray(groups)
+    design = np.column_stack([np.ones(len(f)), np.log(f[:, 0]), np.log(f[:, 1]), np.log(f[:, 2])])
+    y = np.log(f[:, 3])
+    coef, *_ = np.linalg.lstsq(design, y, rcond=None)
+    r2 = 1 - float(np.var(y - design @ coef)) / float(np.var(y))
+    error = np.full(len(f), np.nan)
+    constant = np.full(len(f), np.nan)  # the same, from the other recordings' median amplitude alone
+    for g in np.unique(groups):
+        held = groups == g
+        if held.all():
+            continue
+        c, *_ = np.linalg.lstsq(design[~held], y[~held], rcond=None)
+        error[held] = np.abs(np.exp(design[held] @ c) - f[held, 3])
+        constant[held] = np.abs(np.median(f[~held, 3]) - f[held, 3])
+    error, constant = error[np.isfinite(error)], constant[np.isfinite(constant)]
+    return {"predictions": int(len(f)), "r2": r2, "slopes": [float(v) for v in coef[1:]],
+            "held_out_error_deg_median": float(np.median(error)) if len(error) else None,
+            "held_out_error_deg_p90": float(np.percentile(error, 90)) if len(error) else None,
+            "constant_error_deg_median": float(np.median(constant)) if len(constant) else None,
+            "constant_error_deg_p90": float(np.percentile(constant, 90)) if len(constant) else None}
+
+
 def main():
     here = Path(__file__).resolve().parent.parent
     lund = here.parent / "shared" / "data" / "eye-movements" / "lund2013-train"
@@ -289,6 +335,7 @@ def main():
     rates = []
     labelled = 0
     errors = []
+    features, groups = [], []
     for path in recordings:
         try:
             t, deg, label = read_lund(path)
@@ -315,6 +362,9 @@ def main():
                 continue
             found += 1
             errors += prediction_errors(flight, t, deg, last)
+            before_peak = pre_peak_features(flight, t, deg, last)
+            features += before_peak
+            groups += [path] * len(before_peak)
             phases = rng.uniform(0, 1.0 / a.refresh_hz, a.phases)
             share = {s: float(np.mean([simulate(flight, t, deg, first, last, s, ph, a) for ph in phases])) for s in strategies}
             rows.append({"recording": os.path.basename(path), "onset_s": float(t[first]), "landing_s": float(t[last]),
@@ -333,6 +383,15 @@ def main():
         if len(e):
             lines.insert(1, f"predictions made {when}: {len(e)}, the labelled landing a median {np.median(e[:, 0]):.2f} deg "
                             f"from them along the flight and {np.median(e[:, 1]):.2f} deg across it")
+    regression = amplitude_regression(features, groups) if len(features) >= 8 else None
+    if regression:
+        held_out = (f"; fitted on the other recordings, the amplitude {regression['held_out_error_deg_median']:.2f} deg off "
+                    f"(median; p90 {regression['held_out_error_deg_p90']:.2f}), their median amplitude alone "
+                    f"{regression['constant_error_deg_median']:.2f} (p90 {regression['constant_error_deg_p90']:.2f})"
+                    ) if regression["held_out_error_deg_median"] is not None else ""
+        lines.insert(1, f"before the peak, the flight so far (log distance, velocity, time since the onset) explains "
+                        f"{100 * regression['r2']:.0f} % of the variance of log amplitude over {regression['predictions']} predictions"
+                        f"{held_out}")
     summary = {}
     for s in strategies:
         v = np.array([r["share"][s] for r in rows])
@@ -347,6 +406,7 @@ def main():
                                          "sample_hz": [float(r) for r in rates], "labelled_saccades": labelled,
                                          "rays_per_frame": a.rays_per_frame, "fovea_deg": list(a.fovea), "px_per_deg": a.px_per_deg,
                                          "phases": a.phases, "seed": a.seed, "landing": landing, "summary": summary,
+                                         "pre_peak_amplitude_regression": regression,
                                          "saccades": rows}, indent=1) + "\n")
 
 

@@ -569,3 +569,22 @@ def test_the_landing_rays_script_bounds_each_strategy_by_the_oracle(tmp_path):
     bad_landing = subprocess.run([sys.executable, script, "--recording", str(rec), "--landing", "skew=9"], capture_output=True,
                                  text=True, timeout=60)
     assert bad_landing.returncode != 0 and "--landing: skew: must be in [0.25, 4]" in bad_landing.stderr
+
+
+def test_the_landing_rays_script_measures_what_the_flight_says_of_its_amplitude():
+    # bench/landing_rays.py's regression of log amplitude on the flight before the peak: an amplitude the
+    # flight fixes is found exactly, one it does not leaves R² near 0 and the error of the usual amplitude
+    sys.path.insert(0, os.path.join(os.path.dirname(__file__), "..", "..", "bench"))
+    try:
+        import landing_rays
+    finally:
+        sys.path.pop(0)
+    rng = np.random.default_rng(3)
+    distance, velocity, since = rng.uniform(0.5, 5, 300), rng.uniform(50, 400, 300), rng.uniform(0.004, 0.03, 300)
+    groups = np.repeat(["a", "b", "c"], 100)
+    fixed = landing_rays.amplitude_regression(np.column_stack([distance, velocity, since, 2.5 * distance ** 1.2]), groups)
+    assert fixed["r2"] == pytest.approx(1) and fixed["slopes"][0] == pytest.approx(1.2)
+    assert fixed["held_out_error_deg_median"] < 1e-9 < fixed["constant_error_deg_median"]
+    unrelated = landing_rays.amplitude_regression(np.column_stack([distance, velocity, since, rng.uniform(5, 20, 300)]), groups)
+    assert unrelated["r2"] < 0.05 and unrelated["predictions"] == 300
+    assert unrelated["held_out_error_deg_median"] == pytest.approx(unrelated["constant_error_deg_median"], rel=0.25)
