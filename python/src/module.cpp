@@ -575,7 +575,7 @@ NB_MODULE(_core, m) {
            "`periphery_share` the share of the budget after which a frame casts no more rays for the periphery (the fovea's go "
            "on to the deadline; 1: the periphery's too); `margin_ms` the least time each frame keeps free for the machine's "
            "pauses (None: 2 ms, or a quarter of a shorter budget; more after frames that ended late, up to a quarter of the "
-           "budget; a budget set later keeps it within a quarter).")
+           "budget; a budget set later keeps a margin given within half of it).")
       .def("push", &PyLoop::push, "t"_a, "gaze"_a,
            "A tracker sample: its time in seconds (any clock, increasing; None: just after the latest sample) and the gaze "
            "(x, y) in render pixels, or None when the tracker lost the eye. Push every sample a fast tracker delivers "
@@ -617,8 +617,8 @@ NB_MODULE(_core, m) {
           "flipping) does not take of the refresh.")
       .def_prop_ro(
           "margin_ms", [](const PyLoop& l) { return loop_margin_ms(l.loop->settings()); },
-          "The least time each frame keeps free for the machine's pauses, ms: margin_ms as given (within a quarter of the "
-          "budget), else 2 ms or a quarter of a shorter budget.")
+          "The least time each frame keeps free for the machine's pauses, ms: margin_ms as given (within half of a budget "
+          "set later), else 2 ms or a quarter of a shorter budget.")
       .def_prop_ro(
           "periphery_share", [](const PyLoop& l) { return l.loop->settings().periphery_share; },
           "The share of the budget after which a frame casts no more rays for the periphery.")

@@ -53,8 +53,8 @@ def test_gaze_contingent_follows_the_mouse_gaze_and_logs_latency(tmp_path):
     # The loop answers within what the script's own work leaves of the 60 Hz refresh, so the image
     # shown is at most two refreshes behind the gaze
     assert summary["refresh_hz"] == 60 and 0 < summary["budget_ms"] <= 1000 / 60
-    # the margin given (within a quarter of the budget the script leaves the loop) and share, as the loop took them
-    assert summary["margin_ms"] == pytest.approx(min(3, summary["budget_ms"] / 4)) and summary["periphery_share"] == 0.8
+    # the margin given (within half the budget the script leaves the loop) and share, as the loop took them
+    assert summary["margin_ms"] == pytest.approx(min(3, summary["budget_ms"] / 2)) and summary["periphery_share"] == 0.8
     assert summary["refresh_measured"] is False and summary["refresh_note"] == ""  # (given: nothing to doubt)
     assert 0 < summary["gaze_to_flip_ms_median"] <= summary["gaze_to_flip_ms_p95"]
     assert summary["gaze_to_flip_refreshes_median"] <= 2.0

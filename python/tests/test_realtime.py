@@ -138,8 +138,10 @@ def test_bad_arguments_are_clear_errors(box):
             foveal.Loop(box, size=(64, 40), margin_ms=bad)
     kept = foveal.Loop(box, size=(64, 40), max_rays=8, device="cpu", margin_ms=5, periphery_share=0.6)
     assert (kept.margin_ms, kept.periphery_share) == (5.0, 0.6)
-    kept.budget_ms = 8  # a margin within a quarter of a shorter budget
-    assert kept.margin_ms == 2.0
+    kept.budget_ms = 8  # a margin given, within half of a shorter budget
+    assert kept.margin_ms == 4.0
+    kept.budget_ms = 16  # … and again as given once the budget allows it
+    assert kept.margin_ms == 5.0
     loop = foveal.Loop(box, size=(64, 40), max_rays=8, device="cpu")
     assert (loop.margin_ms, loop.periphery_share) == (2.0, 1.0)  # the loop's defaults
     with pytest.raises(ValueError, match="t: must be a finite"):

@@ -187,8 +187,9 @@ void RealtimeLoop::set_budget_ms(double budget_ms) {
   check_budget(budget_ms, "budget_ms");
   LoopSettings s = settings_;
   s.budget_ms = budget_ms;
-  // (from the margin given, so that a budget lowered for one frame does not shrink it for good)
-  if (given_margin_ms_) s.margin_ms = std::min(*given_margin_ms_, 0.25 * budget_ms);
+  // (from the margin given, so that a budget lowered for one frame does not shrink it for good; a
+  // margin asked for is kept up to half the budget, the default one within a quarter)
+  if (given_margin_ms_) s.margin_ms = std::min(*given_margin_ms_, 0.5 * budget_ms);
   validate(s);
   settings_ = s;
 }

@@ -212,8 +212,9 @@ class RealtimeLoop {
   // Forget the accumulated AO (the next frame starts afresh).
   void reset();
   // A new frame budget (an application that measures its own per-frame work leaves the loop the
-  // rest of the refresh); throws Error naming budget_ms. A margin the settings gave is kept within a
-  // quarter of each budget set (of the margin given: a budget lowered once does not shrink it for good).
+  // rest of the refresh); throws Error naming budget_ms. A margin the settings gave is kept within
+  // half of each budget set (of the margin given: a budget lowered once does not shrink it for good);
+  // the default one stays within a quarter.
   void set_budget_ms(double budget_ms);
 
   const RenderParams& params() const { return params_; }  // at the render size in use
@@ -288,7 +289,7 @@ class RealtimeLoop {
   const Scene& scene_;
   RenderParams requested_, params_;
   LoopSettings settings_;
-  std::optional<double> given_margin_ms_;  // the margin the settings gave, before a later budget's quarter bounded it
+  std::optional<double> given_margin_ms_;  // the margin the settings gave, before a later budget's half bounded it
   double scale_ = 1;
   std::string note_;
   LandingPredictor predictor_;

@@ -874,12 +874,14 @@ TEST(RealtimeLoop, SettingsAreChecked) {
     }
     EXPECT_DOUBLE_EQ(loop.settings().budget_ms, s.budget_ms);
   }
-  // A margin given is kept within a quarter of each budget set, from the margin given: one short
+  // A margin given is kept within half of each budget set, from the margin given: one short
   // budget does not shrink it for good (an experiment that sets the budget every flip)
   s.margin_ms = 3;
   RealtimeLoop given(*renderer, box(), loop_params(32, 20, 8), s);
   EXPECT_DOUBLE_EQ(loop_margin_ms(given.settings()), 3);
   given.set_budget_ms(8);
+  EXPECT_DOUBLE_EQ(loop_margin_ms(given.settings()), 3);
+  given.set_budget_ms(4);
   EXPECT_DOUBLE_EQ(loop_margin_ms(given.settings()), 2);
   given.set_budget_ms(14);
   EXPECT_DOUBLE_EQ(loop_margin_ms(given.settings()), 3);
