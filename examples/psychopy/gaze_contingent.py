@@ -53,7 +53,8 @@ def parse_args(argv=None):
                    help="the saccade landing predictor's parameters (docs/realtime.md), e.g. onset_deg_s=60 for a noisy tracker")
     p.add_argument("--margin-ms", type=float, default=None,
                    help="the least time each frame keeps free for the machine's pauses, ms (default: the loop's, 2 ms; more where "
-                        "`foveal bench stalls` finds longer pauses; docs/realtime.md)")
+                        "`foveal bench stalls` finds longer pauses; kept within half the budget the script leaves the loop each "
+                        "flip; docs/realtime.md)")
     p.add_argument("--periphery-share", type=float, default=1.0,
                    help="the periphery's rays stop once a frame has spent this share of its budget, the fovea's go on to the "
                         "deadline (default 1: the periphery's too; less leaves a busy machine's pauses room; docs/realtime.md)")
