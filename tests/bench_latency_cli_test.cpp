@@ -202,9 +202,16 @@ TEST(BenchLatencyCli, BadOptionsAreOneClearLine) {
 TEST(BenchLatencyCli, AShortBudgetKeepsAQuarterOfItByDefault) {
   const std::string rec = write_saccades("saccades3.csv");
   const std::string base = "bench latency --scene builtin:box --size 64x40 --duration 0.2 --loops deadline --recording " + rec;
-  const CliRun r = foveal_test::foveal(base + " --frame-budget-ms 1");
+  const CliRun r = foveal_test::foveal(base + " --frame-budget-ms 1 --json short.json");
   EXPECT_EQ(r.status, 0) << r.err;
   expect_one_line_error(base + " --frame-budget-ms 1 --margin-ms 1", "--margin-ms");
+  // The JSON keeps the margin the wall clock's loops kept: a quarter of the short budget, or as given;
+  // the model clock keeps none
+  EXPECT_EQ(nlohmann::json::parse(std::ifstream(scratch("short.json")))["margin_ms"].get<double>(), 0.25);
+  ASSERT_EQ(foveal_test::foveal(base + " --margin-ms 3 --json given.json").status, 0);
+  EXPECT_EQ(nlohmann::json::parse(std::ifstream(scratch("given.json")))["margin_ms"].get<double>(), 3.0);
+  ASSERT_EQ(foveal_test::foveal(base + " --clock model --model-rays-per-ms 2000 --model-fixed-ms 3 --json model.json").status, 0);
+  EXPECT_TRUE(nlohmann::json::parse(std::ifstream(scratch("model.json")))["margin_ms"].is_null());
 }
 
 // --periphery-share: the deadline loops' periphery stops at that share of each budget. Under the

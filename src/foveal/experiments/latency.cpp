@@ -639,7 +639,13 @@ LatencyReport run_latency_bench(const LatencyRun& run, const std::vector<Recordi
   j["refresh_hz"] = p.refresh_hz;
   j["clock"] = to_string(p.clock);
   j["periphery_share"] = p.periphery_share;  // the deadline loops' (--periphery-share)
-  j["landing"] = nlohmann::json::object();   // the prediction loops' landing predictor (--landing)
+  {
+    LoopSettings kept;  // the least margin the deadline loops keep (--margin-ms, else the default); the wall clock's alone
+    kept.budget_ms = budget;
+    kept.margin_ms = p.margin_ms;
+    j["margin_ms"] = p.clock == LoopClock::wall ? nlohmann::json(loop_margin_ms(kept)) : nlohmann::json(nullptr);
+  }
+  j["landing"] = nlohmann::json::object();  // the prediction loops' landing predictor (--landing)
   for (const auto& [name, value] : landing_parameters(p.landing)) j["landing"][name] = value;
   j["recordings"] = nlohmann::json::array();
   for (const LatencyRecording& r : report.recordings) {
