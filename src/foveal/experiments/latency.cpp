@@ -23,6 +23,9 @@ namespace foveal {
 
 namespace {
 
+// Each frame's budget: the one given, else a refresh
+double frame_budget(const LatencyParams& p) { return p.budget_ms.value_or(1000.0 / p.refresh_hz); }
+
 constexpr size_t kWatchedThreads = 8;  // other processes' threads read around each wall-clock frame
 
 // The q = 1 pixels (that hit the scene) around a landing, and the reference's noise over them.
@@ -502,7 +505,7 @@ void validate(const LatencyParams& p) {
     fail("model_fixed_ms: give both parts of the cost model, or neither");
   {  // the loop's own rules, checked before the references are traced
     LoopSettings loop;
-    loop.budget_ms = p.budget_ms.value_or(1000.0 / p.refresh_hz);
+    loop.budget_ms = frame_budget(p);
     loop.margin_ms = p.margin_ms;
     loop.periphery_share = p.periphery_share;
     validate(loop);
@@ -531,7 +534,7 @@ LatencyReport run_latency_bench(const LatencyRun& run, const std::vector<Recordi
   const auto say = [&](const std::string& line) {
     if (run.say) run.say(line);
   };
-  const double budget = p.budget_ms.value_or(1000.0 / p.refresh_hz);
+  const double budget = frame_budget(p);
   LatencyReport report;
   // The machine's threads now: what else runs while the references are traced is watched around
   // each wall-clock frame (the likely takers of a late frame's cores), and what ran during the
@@ -639,12 +642,8 @@ LatencyReport run_latency_bench(const LatencyRun& run, const std::vector<Recordi
   j["refresh_hz"] = p.refresh_hz;
   j["clock"] = to_string(p.clock);
   j["periphery_share"] = p.periphery_share;  // the deadline loops' (--periphery-share)
-  {
-    LoopSettings kept;  // the least margin the deadline loops keep (--margin-ms, else the default); the wall clock's alone
-    kept.budget_ms = budget;
-    kept.margin_ms = p.margin_ms;
-    j["margin_ms"] = p.clock == LoopClock::wall ? nlohmann::json(loop_margin_ms(kept)) : nlohmann::json(nullptr);
-  }
+  // the least margin the deadline loops keep (--margin-ms, else the default); the wall clock's alone
+  j["margin_ms"] = p.clock == LoopClock::wall ? nlohmann::json(loop_margin_ms(budget, p.margin_ms)) : nlohmann::json(nullptr);
   j["landing"] = nlohmann::json::object();  // the prediction loops' landing predictor (--landing)
   for (const auto& [name, value] : landing_parameters(p.landing)) j["landing"][name] = value;
   j["recordings"] = nlohmann::json::array();
@@ -759,10 +758,8 @@ LatencyReport bench_latency(const Scene& scene, const std::string& scene_name, c
         share.others > 0.05 || share.steal > 0.01 ? ": wall-clock late frames may be theirs, not the loop's" : "");
     if (!report.others.empty()) report.markdown += fmt::format("What else ran, the busiest first: {}.\n", others_sentence(report.others));
     if (params.clock == LoopClock::wall) {  // (how long another thread may keep a core, against the loops' margin)
-      LoopSettings loop;
-      loop.budget_ms = params.budget_ms.value_or(1000.0 / params.refresh_hz);
-      loop.margin_ms = params.margin_ms;
-      if (const std::string k = kernel_sentence(kernel, loop_margin_ms(loop)); !k.empty()) report.markdown += k + "\n";
+      const double margin = loop_margin_ms(frame_budget(params), params.margin_ms);
+      if (const std::string k = kernel_sentence(kernel, margin); !k.empty()) report.markdown += k + "\n";
     }
   }
   return report;

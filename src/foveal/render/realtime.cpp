@@ -85,7 +85,11 @@ LoopClock parse_loop_clock(const std::string& name) {
   fail("clock: unknown clock '{}' (known: wall, model)", name);
 }
 
-double loop_margin_ms(const LoopSettings& s) { return s.margin_ms.value_or(std::min(kDefaultMarginMs, 0.25 * s.budget_ms)); }
+double loop_margin_ms(double budget_ms, std::optional<double> margin_ms) {
+  return margin_ms.value_or(std::min(kDefaultMarginMs, 0.25 * budget_ms));
+}
+
+double loop_margin_ms(const LoopSettings& s) { return loop_margin_ms(s.budget_ms, s.margin_ms); }
 
 namespace {
 

@@ -82,6 +82,8 @@ struct LoopSettings {
 inline constexpr double kDefaultMarginMs = 2.0;
 // The margin the settings keep: the given one, else the default within a quarter of the budget
 double loop_margin_ms(const LoopSettings& settings);
+// The same for a budget and a margin given or not
+double loop_margin_ms(double budget_ms, std::optional<double> margin_ms);
 // Check the settings; throws Error naming the option.
 void validate(const LoopSettings& settings);
 

@@ -77,7 +77,7 @@ nlohmann::json settings_json(const ViewSettings& s) {
   return {{"mode", to_string(s.mode)},
           {"realtime", s.realtime ? nlohmann::json{{"frame_budget_ms", s.frame_budget_ms},
                                                    {"predict", s.predict},
-                                                   {"margin_ms", loop_margin_ms(view_loop_settings(s))},
+                                                   {"margin_ms", loop_margin_ms(s.frame_budget_ms, s.margin_ms)},
                                                    {"periphery_share", s.periphery_share}}
                                   : nlohmann::json(false)},
           {"width", r.width},

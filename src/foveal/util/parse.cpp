@@ -2,38 +2,20 @@
 #include "foveal/util/parse.h"
 
 #include "foveal/util/error.h"
+#include "foveal/util/text.h"
 
 #include <cmath>
 #include <limits>
-#include <optional>
 #include <sstream>
 
 namespace foveal {
-
-namespace {
-
-// The whole of `item` as a finite number (leading spaces allowed: "418, 292"), or nothing (trailing
-// text, inf, nan)
-std::optional<double> finite_number(const std::string& item) {
-  size_t used = 0;
-  double v = 0;
-  try {
-    v = std::stod(item, &used);
-  } catch (const std::exception&) {
-    return std::nullopt;
-  }
-  if (used != item.size() || !std::isfinite(v)) return std::nullopt;
-  return v;
-}
-
-}  // namespace
 
 std::vector<double> parse_numbers(const std::string& option, const std::string& text, size_t count) {
   std::vector<double> values;
   std::stringstream stream(text);
   std::string item;
   while (std::getline(stream, item, ',')) {
-    const auto v = finite_number(item);
+    const auto v = foveal::text::to_number(item);  // (the whole field, finite; spaces around it allowed: "418, 292")
     if (!v) fail("{}: '{}' is not a finite number", option, item);
     values.push_back(*v);
   }
@@ -46,7 +28,7 @@ glm::ivec2 parse_size(const std::string& option, const std::string& text) {
   // named as the wrong form, not as a list of numbers the user never meant to give.
   const auto x = text.find_first_of("xX");
   const auto side = [&](const std::string& part) {
-    const auto v = finite_number(part);
+    const auto v = foveal::text::to_number(part);
     if (!v) fail("{}: expected WIDTHxHEIGHT in pixels (as 840x525), got '{}'", option, text);
     return *v;
   };

@@ -29,7 +29,7 @@ TEST(Parse, SizesAreWholePixelsEachSideOfOneX) {
   EXPECT_EQ(parse_size("--size", "1X1"), glm::ivec2(1, 1));
   EXPECT_EQ(parse_size("--size", "16384x16384"), glm::ivec2(16384, 16384));
   // a malformed size names the form, the option and the text, whatever part of it is wrong
-  for (const char* bad : {"10x", "x10", "840", "", "1,2x3", "10x10x10", "ax5", "5xb", "5 x5", "nanx5", "5xinf"}) {
+  for (const char* bad : {"10x", "x10", "840", "", "1,2x3", "10x10x10", "ax5", "5xb", "5x5 px", "nanx5", "5xinf"}) {
     const auto message = error_of([&] { parse_size("--size", bad); });
     EXPECT_NE(message.find("--size: expected WIDTHxHEIGHT in pixels (as 840x525), got '" + std::string(bad) + "'"), std::string::npos)
         << bad << ": " << message;
