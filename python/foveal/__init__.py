@@ -363,7 +363,7 @@ def bench_latency(recordings: Any, scene: Scene, camera: Any = None, size: Tuple
 
     ``recordings``: one or a list of recordings — paths (read as the command line reads them, the
     recording's screen filling ``display``) or ``foveal.gaze.Recording`` objects. ``scene`` a
-    ``foveal.Scene`` (the command line's default is the dragon box, ``scenes/dragon-box.json``),
+    ``foveal.Scene``, or its path or ``builtin:NAME`` (the command line's default is the dragon box, ``scenes/dragon-box.json``),
     ``camera`` a camera name or ``Camera`` (its first). The other arguments are the command line's
     options (docs/realtime.md): the segment (``start_s``, ``duration_s``), the display
     (``refresh_hz``, ``frame_budget_ms``), the tracker's ``latency_ms``, the deadline loops'
@@ -387,6 +387,10 @@ def bench_latency(recordings: Any, scene: Scene, camera: Any = None, size: Tuple
         elif not isinstance(r, _gaze.Recording):
             raise TypeError(f"recordings[{k}]: a path or a foveal.gaze.Recording, got {type(r).__name__}")
         columns.append((r.source or f"recordings[{k}]", _gaze._columns(r, None, f"recordings[{k}]")))
+    if isinstance(scene, (str, os.PathLike)):
+        scene = Scene(scene)  # as Renderer and Loop take it
+    elif not isinstance(scene, Scene):
+        raise TypeError(f"scene: a foveal.Scene, a path or builtin:box|sphere-plane|plane, got {type(scene).__name__}")
     if isinstance(loops, str):
         loops = loops.split(",")
     def number(value, name):  # ints are numbers too (the core takes floats)

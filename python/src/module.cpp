@@ -79,7 +79,25 @@ Vec3 tuple(glm::vec3 v) { return {v.x, v.y, v.z}; }
 // A scene shared by the renderers and simulations made from it.
 struct PyScene {
   std::shared_ptr<const Scene> scene;
+
+  static PyScene load(const std::filesystem::path& path) {
+    const std::string spec = path.string();
+    nb::gil_scoped_release release;
+    return {std::make_shared<const Scene>(load_scene(spec))};
+  }
 };
+
+// A scene argument: a Scene, or what the command line's --scene takes (a path, an os.PathLike or builtin:NAME), loaded then;
+// a file that does not load is its loader's error, naming the file.
+PyScene scene_of(const nb::object& scene) {
+  if (nb::isinstance<PyScene>(scene)) return nb::cast<const PyScene&>(scene);
+  std::filesystem::path path;
+  if (!nb::try_cast<std::filesystem::path>(scene, path))
+    throw nb::type_error(fmt::format("scene: a foveal.Scene, a path or builtin:box|sphere-plane|plane, got {}",
+                                     nb::cast<std::string>(nb::str(scene.type().attr("__name__"))))
+                             .c_str());
+  return PyScene::load(path);
+}
 
 // The camera to use: a Camera, a camera name of the scene, or None (the scene's first, or one framing it).
 Camera resolve_camera(const Scene& scene, const nb::object& camera) {
@@ -118,7 +136,7 @@ struct PyRenderer {
   int threads = 0;
   std::mutex render_mutex;  // temporal frames, and GPU frames, from several Python threads take turns (the GIL is released)
 
-  PyRenderer(const PyScene& s, const std::string& device_name, int threads_) : scene(s.scene), threads(threads_) {
+  PyRenderer(const nb::object& s, const std::string& device_name, int threads_) : scene(scene_of(s).scene), threads(threads_) {
     if (threads < 0) fail("threads: must be 0 (all cores) or more, got {}", threads);
     device = choose_device(device_name);
     nb::gil_scoped_release release;
@@ -187,11 +205,11 @@ struct PyLoop {
   int threads = 0;
   std::mutex mutex;  // one frame at a time (the GIL is released while it renders)
 
-  PyLoop(const PyScene& s, const std::array<int, 2>& size, const nb::object& camera_arg, std::optional<Display> display, int max_rays,
+  PyLoop(const nb::object& s, const std::array<int, 2>& size, const nb::object& camera_arg, std::optional<Display> display, int max_rays,
          double gamma, double refresh_hz, std::optional<double> frame_budget_ms, bool predict, const std::string& device_name, int threads_,
          uint64_t seed, const std::string& clock, double tolerance, double ellipse, bool keep_history, const nb::object& landing,
          double periphery_share, std::optional<double> margin_ms)
-      : scene(s.scene), threads(threads_) {
+      : scene(scene_of(s).scene), threads(threads_) {
     if (threads < 0) fail("threads: must be 0 (all cores) or more, got {}", threads);
     if (!(refresh_hz >= 1 && refresh_hz <= 1000)) fail("refresh_hz: must be in [1, 1000] Hz, got {}", refresh_hz);
     RenderParams p;
@@ -412,17 +430,8 @@ NB_MODULE(_core, m) {
 
   nb::class_<PyScene>(m, "Scene", "A scene: a mesh file, a scene .json, or builtin:box|sphere-plane|plane.")
       .def(
-          "__init__",
-          [](PyScene* s, const std::filesystem::path& path) {
-            const std::string spec = path.string();
-            std::shared_ptr<const Scene> scene;
-            {
-              nb::gil_scoped_release release;
-              scene = std::make_shared<const Scene>(load_scene(spec));
-            }
-            new (s) PyScene{std::move(scene)};
-          },
-          "path_or_builtin"_a, "Load a mesh (OBJ, PLY, glTF, … through Assimp), a scene .json or a built-in scene.")
+          "__init__", [](PyScene* s, const std::filesystem::path& path) { new (s) PyScene(PyScene::load(path)); }, "path_or_builtin"_a,
+          "Load a mesh (OBJ, PLY, glTF, … through Assimp), a scene .json or a built-in scene.")
       .def_prop_ro("source", [](const PyScene& s) { return s.scene->source; })
       .def_prop_ro(
           "triangles", [](const PyScene& s) { return s.scene->triangles.size(); }, "Triangles loaded.")
@@ -479,8 +488,9 @@ NB_MODULE(_core, m) {
           "Write the image as the CLI does (.png sRGB; .pfm/.exr linear floats).");
 
   nb::class_<PyRenderer>(m, "Renderer", "The foveated-AO renderer of one scene on one device.")
-      .def(nb::init<const PyScene&, const std::string&, int>(), "scene"_a, "device"_a = "auto", "threads"_a = 0,
-           "Build the scene's BVH on `device` (auto: cuda when a usable NVIDIA GPU is present, else cpu); "
+      .def(nb::init<const nb::object&, const std::string&, int>(), "scene"_a, "device"_a = "auto", "threads"_a = 0,
+           "Build the BVH of `scene` (a Scene, or a path or builtin:NAME, loaded then) on `device` (auto: cuda when a usable NVIDIA GPU is "
+           "present, else cpu); "
            "`threads` = 0 uses all cores.")
       .def("render", &PyRenderer::render, "size"_a = std::array<int, 2>{840, 525}, "camera"_a = nb::none(), "gaze"_a = nb::none(),
            "mode"_a = "foveated", "max_rays"_a = 400, "min_rays"_a = 0, "gamma"_a = 2.0, "beta"_a = 0.0, "seed"_a = 1,
@@ -558,7 +568,7 @@ NB_MODULE(_core, m) {
   nb::class_<PyLoop>(m, "Loop",
                      "Gaze-contingent rendering in real time: frame() returns within the frame budget an image whose fovea "
                      "is refined first (docs/realtime.md).")
-      .def(nb::init<const PyScene&, const std::array<int, 2>&, const nb::object&, std::optional<Display>, int, double, double,
+      .def(nb::init<const nb::object&, const std::array<int, 2>&, const nb::object&, std::optional<Display>, int, double, double,
                     std::optional<double>, bool, const std::string&, int, uint64_t, const std::string&, double, double, bool,
                     const nb::object&, double, std::optional<double>>(),
            "scene"_a, "size"_a = std::array<int, 2>{840, 525}, "camera"_a = nb::none(), "display"_a = nb::none(), "max_rays"_a = 400,
@@ -566,7 +576,8 @@ NB_MODULE(_core, m) {
            "threads"_a = 0, "seed"_a = 1, "clock"_a = "wall", "tolerance"_a = foveal::AoReuseParams{}.tolerance, "ellipse"_a = 1.538,
            "keep_history"_a = true, "landing"_a.none() = nb::none(), "periphery_share"_a = kDefaultPeripheryShare,
            "margin_ms"_a.none() = nb::none(),
-           "A loop for a view (traced here, once; frame(camera=…) moves it). `frame_budget_ms` (default: one refresh at "
+           "A loop for a view of `scene` (a Scene, or a path or builtin:NAME, loaded then; traced here, once; frame(camera=…) "
+           "moves it). `frame_budget_ms` (default: one refresh at "
            "`refresh_hz`) is what each frame() may take; `predict` places the fovea at a saccade's predicted landing while it "
            "flies; `display` the screen the image fills (default: the papers' 47.5×30 cm, 1680×1050 at 60 cm); `tolerance` the "
            "periphery's τ(E) scale (as render --tolerance); `keep_history` lets a moved camera keep the AO of the surfaces it "
@@ -578,7 +589,8 @@ NB_MODULE(_core, m) {
            "budget; a budget set later keeps a margin given within half of it).")
       .def("push", &PyLoop::push, "t"_a, "gaze"_a,
            "A tracker sample: its time in seconds (any clock, increasing; None: just after the latest sample) and the gaze "
-           "(x, y) in render pixels, or None when the tracker lost the eye. Push every sample a fast tracker delivers "
+           "(x, y) in render pixels, or None (or NaN, as many trackers write it) when the tracker lost the eye. Push every sample a fast "
+           "tracker delivers "
            "between frames: the saccade predictor needs them. A repeated time, or one up to 0.5 s before the latest, is "
            "ignored (a duplicate, samples out of order); one further back is a clock that restarted: the sample is taken, "
            "the predictor starts afresh, and gaze_note says so.")
@@ -643,17 +655,18 @@ NB_MODULE(_core, m) {
   nb::class_<PyVision>(m, "VisionSimulation", "The second paper's simulation of human vision over time.")
       .def(
           "__init__",
-          [](PyVision* v, const PyScene& s, const std::string& eye, const std::array<int, 2>& size, uint64_t seed, const nb::object& camera,
-             const std::string& device, int threads, int blink_every, std::optional<double> pupil_mm, double starvation,
-             bool features_every_step) {
-            new (v) PyVision(std::move(
-                *make_vision(s, eye, size, seed, camera, device, threads, blink_every, pupil_mm, starvation, features_every_step)));
+          [](PyVision* v, const nb::object& s, const std::string& eye, const std::array<int, 2>& size, uint64_t seed,
+             const nb::object& camera, const std::string& device, int threads, int blink_every, std::optional<double> pupil_mm,
+             double starvation, bool features_every_step) {
+            new (v) PyVision(std::move(*make_vision(scene_of(s), eye, size, seed, camera, device, threads, blink_every, pupil_mm,
+                                                    starvation, features_every_step)));
           },
           "scene"_a, "eye"_a = "healthy", "size"_a = std::array<int, 2>{1024, 768}, "seed"_a = 1, "camera"_a = nb::none(),
           "device"_a = "auto", "threads"_a = 0, "blink_every"_a = 0, "pupil_mm"_a = nb::none(), "starvation"_a = 0.015,
           "features_every_step"_a = false,
           "A simulation of `eye` (the CLI's --eye: presets joined with '+', e.g. 'myopia:-2+cvd:deutan:0.6', or a profile "
-          ".json) looking at `scene` through `camera`. `pupil_mm` (the CLI's --pupil), when given, overrides the eye's pupil "
+          ".json) looking at `scene` (a Scene, or a path or builtin:NAME, loaded then) through `camera`. `pupil_mm` (the CLI's --pupil), "
+          "when given, overrides the eye's pupil "
           "(a profile's pupil_mm, else 3.5 mm).")
       .def("step", &vision_step, "fixation"_a = nb::none(), "camera"_a = nb::none(),
            "One step: the next fixation (simulated saccade, or `fixation` (x, y) in render pixels from real gaze), "

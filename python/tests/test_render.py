@@ -57,6 +57,31 @@ def test_scene_cameras_and_named_camera(box, tmp_path, cli):
     assert not np.array_equal(frame.image, f2.image)
 
 
+def test_a_scene_is_also_taken_as_what_the_command_lines_scene_takes(box, tmp_path):
+    """Wherever a Scene is taken, its path or builtin:NAME is too (as --scene), loaded then; a bad one is named."""
+    frame = foveal.Renderer(box, device="cpu").render(size=(64, 40), max_rays=8)
+    by_name = foveal.Renderer("builtin:box", device="cpu").render(size=(64, 40), max_rays=8)
+    assert np.array_equal(by_name.image.view(np.uint32), frame.image.view(np.uint32))
+    obj = tmp_path / "tri.obj"
+    obj.write_text("v -1 -1 0\nv 1 -1 0\nv 0 1 0\nf 1 2 3\n")
+    assert foveal.Renderer(obj, device="cpu").render(size=(16, 10), max_rays=2).image.shape == (10, 16, 3)  # an os.PathLike
+    loop = foveal.Loop("builtin:sphere-plane", size=(32, 20), max_rays=4, device="cpu")
+    assert loop.frame(gaze=(16, 10), t=0.0).image.shape == (20, 32, 3)
+    assert foveal.VisionSimulation(str(obj), size=(16, 10), device="cpu").step().perceived.shape == (10, 16, 3)
+    missing = tmp_path / "no-such-scene.obj"
+    makers = {
+        "Renderer": lambda scene: foveal.Renderer(scene, device="cpu"),
+        "Loop": lambda scene: foveal.Loop(scene, size=(32, 20)),
+        "VisionSimulation": lambda scene: foveal.VisionSimulation(scene, size=(16, 10)),
+        "bench_latency": lambda scene: foveal.bench_latency([], scene),
+    }
+    for name, make in makers.items():
+        with pytest.raises(FileNotFoundError, match="no-such-scene.obj"):
+            make(missing)
+        with pytest.raises(TypeError, match="scene: a foveal.Scene, a path or builtin:box"):
+            make(3)
+
+
 def test_errors_carry_the_command_lines_message_in_pythons_words(cli, box, tmp_path):
     missing = str(tmp_path / "missing.obj")
     with pytest.raises(FileNotFoundError) as e:
