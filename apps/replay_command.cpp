@@ -86,7 +86,8 @@ class FrameWriter {
     csv_path_ = (dir_ / "frames.csv").string();
     csv_.open(csv_path_);
     if (!csv_) fail("{}: cannot write", csv_path_);
-    csv_ << "frame,t_s,gaze_x,gaze_y,fix_x,fix_y,ao_rays,ms,reused,source_state,fovea_converged,kept_pixels,scale\n";
+    csv_ << "frame,t_s,gaze_x,gaze_y,fix_x,fix_y,ao_rays,ms,reused,source_state,fovea_converged,kept_pixels,scale,fovea_x,fovea_y,"
+            "predicted,late\n";
   }
   void operator()(const ReplayFrame& f, const Frame& frame) {
     const std::string path = (dir_ / fmt::format("frame_{:05d}.png", f.index)).string();
@@ -97,11 +98,12 @@ class FrameWriter {
     } else {
       save_image(frame.color, path);
     }
-    csv_ << fmt::format("{},{:.6f},{},{},{},{},{},{:.3f},{},{},{},{},{}\n", f.index, f.t_s, cell(f.gaze, 0), cell(f.gaze, 1),
-                        cell(f.fixation, 0), cell(f.fixation, 1), f.ao_rays, f.ms, f.reused ? 1 : 0, to_string(f.state),
-                        o_.realtime ? fmt::format("{:.4f}", f.fovea_converged) : std::string(),
-                        o_.realtime ? std::to_string(f.kept_pixels) : std::string(),
-                        o_.realtime ? fmt::format("{:.4f}", f.scale) : std::string());
+    const auto realtime = [&](auto value) { return o_.realtime ? fmt::format("{}", value) : std::string(); };
+    csv_ << fmt::format("{},{:.6f},{},{},{},{},{},{:.3f},{},{},{},{},{},{:.2f},{:.2f},{},{}\n", f.index, f.t_s, cell(f.gaze, 0),
+                        cell(f.gaze, 1), cell(f.fixation, 0), cell(f.fixation, 1), f.ao_rays, f.ms, f.reused ? 1 : 0, to_string(f.state),
+                        realtime(fmt::format("{:.4f}", f.fovea_converged)), realtime(f.kept_pixels),
+                        realtime(fmt::format("{:.4f}", f.scale)), f.render_gaze.x, f.render_gaze.y, realtime(f.predicted ? 1 : 0),
+                        realtime(f.late ? 1 : 0));
     csv_.flush();
   }
   void close() { csv_.close(); }

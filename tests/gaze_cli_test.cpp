@@ -185,6 +185,51 @@ TEST(GazeCli, RealtimeReplaySaysTheLoopNotTheFilterSteersIt) {
   }
 }
 
+// frames.csv says where each frame's fovea was: the filter's fixation (the centre before one), or
+// with --realtime where the loop put it — the latest sample, or a flying saccade's predicted
+// landing (predicted 1) — and which of the loop's frames were late
+TEST(GazeCli, RealtimeReplaySaysWhereEachFramesFoveaWasAndWhetherPredicted) {
+  const std::string rec = write_three_fixations("fovea_columns.csv");
+  const std::string base = "replay --gaze " + rec + " --screen 480x300 --scene builtin:sphere-plane --size 48x30 --max-rays 4 -q ";
+  std::map<std::string, std::vector<std::vector<std::string>>> runs;
+  for (const std::string args : {"", "--realtime", "--realtime --no-predict"}) {
+    const std::string out = "fovea_columns" + std::to_string(runs.size());
+    const CliRun r = foveal_test::foveal(base + args + " -o " + out);
+    ASSERT_EQ(r.status, 0) << args << ": " << r.err;
+    runs[args] = read_csv(scratch(out + "/frames.csv"));
+    const auto& header = runs[args][0];
+    ASSERT_EQ(header.size(), 17u);
+    EXPECT_EQ(std::vector<std::string>(header.begin() + 13, header.end()),
+              (std::vector<std::string>{"fovea_x", "fovea_y", "predicted", "late"}));
+  }
+  auto cell = [](const std::vector<std::string>& row, size_t c) { return std::stod(row[c]); };
+  for (size_t k = 1; k < runs[""].size(); ++k) {  // the filter's fixation, else the centre; no loop columns
+    const auto& row = runs[""][k];
+    EXPECT_NEAR(cell(row, 13), row[4].empty() ? 24.0 : cell(row, 4), 0.006) << k;
+    EXPECT_NEAR(cell(row, 14), row[5].empty() ? 15.0 : cell(row, 5), 0.006) << k;
+    EXPECT_EQ(row[15] + row[16], "") << k;
+  }
+  int predicted = 0;
+  for (const std::string args : {"--realtime", "--realtime --no-predict"}) {
+    for (size_t k = 1; k < runs[args].size(); ++k) {
+      const auto& row = runs[args][k];
+      ASSERT_TRUE(row[15] == "0" || row[15] == "1") << row[15];
+      if (row[15] == "1") {
+        EXPECT_EQ(args, "--realtime") << "frame " << k - 1;
+        ++predicted;
+      } else if (!row[2].empty()) {  // the latest valid sample
+        EXPECT_NEAR(cell(row, 13), cell(row, 2), 0.006) << args << " frame " << k - 1;
+        EXPECT_NEAR(cell(row, 14), cell(row, 3), 0.006) << args << " frame " << k - 1;
+      }
+      const double ms = cell(row, 7), budget = 1000.0 / 60;
+      if (std::abs(ms - budget) > 0.001) EXPECT_EQ(row[16], ms > budget ? "1" : "0") << args << " frame " << k - 1 << ": " << ms << " ms";
+    }
+  }
+  // the two saccades' flights (30 ms each, at 60 Hz a frame or two each) had their fovea at the predicted landing
+  EXPECT_GE(predicted, 2);
+  EXPECT_LE(predicted, 6);
+}
+
 // replay --realtime takes the loop's names for its display: a frame every refresh at --refresh-hz
 // (60 by default, as the loop's; --fps says the same) within --frame-budget-ms of it.
 TEST(GazeCli, RealtimeReplayRunsAtTheDisplaysRefresh) {

@@ -108,6 +108,7 @@ class LoopMaker {
     info.fovea_converged = f.fovea_converged;
     info.kept_pixels = f.kept_pixels;
     info.late = f.late;
+    info.predicted = f.predicted;
     // Every frame at the size asked for (a video needs one size; the gaze columns are in its
     // pixels): where the loop rendered smaller, scaled up as a display would show it
     info.scale = loop_.scale();

@@ -66,8 +66,9 @@ struct ReplayFrame {
   // that kept AO rays from the view before
   double fovea_converged = NAN;
   uint64_t kept_pixels = 0;
-  double scale = 1;   // realtime: the loop's render size / the size asked for (the frame is scaled up where < 1)
-  bool late = false;  // realtime: the frame took longer than its budget
+  double scale = 1;        // realtime: the loop's render size / the size asked for (the frame is scaled up where < 1)
+  bool late = false;       // realtime: the frame took longer than its budget
+  bool predicted = false;  // realtime: render_gaze is a saccade's predicted landing, not the measured gaze
 };
 
 struct ReplaySummary {
