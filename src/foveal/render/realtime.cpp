@@ -16,6 +16,7 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cmath>
 
 namespace foveal {
@@ -32,6 +33,7 @@ constexpr double kGrowthShare = 0.75;  // … to where its frame's work would ta
 // A moved view's cost over a fresh one's until one is measured: the rays kept, 1.4–1.6 on the
 // dragon at 840×525 while the surfaces were copied into the history (less now that they move)
 constexpr double kCarryCost = 1.6;
+constexpr int kEstimateEvery = 4;  // frames between estimates of the pixels without rays (estimate_unreached)
 
 // body(i) for every pixel, in parallel blocks of 4096
 template <class Body>
@@ -273,6 +275,7 @@ bool RealtimeLoop::new_view(const Camera& camera, uint64_t& kept_pixels) {
   shade(gbuffer_, camera, 0, n, lit_, ambient_);
   cast_.assign(n, 0);
   open_.assign(n, 0);
+  estimates_ = false;  // (those of the view before)
   prepare_rounds(n);
   // The maps at the latest gaze (the frame moves them where a prediction says), then what the
   // view keeps of the rays before: the renderer's temporal reprojection (reuse.h)
@@ -349,6 +352,7 @@ void RealtimeLoop::collect_fovea(glm::dvec2 gaze_px, bool predicted) {
   // fovea's middle rows in three frames, and converged two frames after the loop without
   // prediction). The centre is where the landing most likely is.
   maps_predicted_ = predicted;
+  unreached_possible_ = true;  // (new maps, a new view: compose looks for pixels without rays)
   if (predicted) {
     const size_t w = static_cast<size_t>(params_.width);
     auto ring = [&](uint32_t i) {
@@ -393,6 +397,7 @@ void RealtimeLoop::prepare_rounds(size_t n) {
   grow(done_);
   grow(order_);
   grow(key_);
+  pull_push_.prepare(params_.width, params_.height);  // (estimate_unreached's pyramid)
 }
 
 size_t RealtimeLoop::plan_round(uint64_t ray_limit, uint64_t periphery_limit, bool& swept) {
@@ -476,15 +481,41 @@ void RealtimeLoop::compose(Image& color) {
       }
     if (count > 0) k_const = static_cast<float>(sum / static_cast<double>(count));
   }
+  // A pixel that will get rays but has none yet (a fresh view's periphery while it fills in, a
+  // fresh fovea) shows its visibility as the pixels around it that have rays have it
+  // (estimate_unreached). With the constant term instead, a visible edge swept out through the
+  // periphery as it filled in: the default k_const = 1 lit the unreached walls of the dragon box
+  // as unoccluded, brighter than the refined ones beside them. (A pixel of n(E) = 0 keeps the
+  // constant term, as in the paper's frame.)
   const size_t n = cast_.size();
   for_each_pixel(n, [&](size_t i) {
     const float rays = total_cast(i);
-    const float v = rays > 0 ? total_open(i) / rays : k_const;
+    const float v = rays > 0 ? total_open(i) / rays : estimates_ && maps_.rays[i] > 0 ? pull_push_.estimate(i) : k_const;
     const float b = maps_.blend[i];
     const float ka = b * v + (1 - b) * k_const;
     const glm::vec3 c = lit_[i] + ka * ambient_[i];
     for (int k = 0; k < 3; ++k) color.pixels[i * 3 + static_cast<size_t>(k)] = c[k];
   });
+}
+
+void RealtimeLoop::estimate_unreached() {
+  // The pixels without rays take their visibility from those around them that have rays (pull-push,
+  // pull_push.h), estimated from the rays so far before a frame casts its own: while pixels lack
+  // their rays (after a new view, or new maps), every kEstimateEvery frames, and at once where
+  // there was no estimate yet. A pass over every pixel and the pyramid: 1.0–1.5 ms at 840×525 on two
+  // cores, so not every frame; between, a pixel reached meanwhile shows its own rays.
+  if (!unreached_possible_ || (estimates_ && ++estimate_age_ < kEstimateEvery)) return;
+  std::atomic<bool> unreached{false};
+  pull_push_.pull(params_.width, params_.height, [&](size_t i) {
+    const float rays = total_cast(i);
+    const bool hit = gbuffer_.hit(i);
+    if (rays == 0 && hit && maps_.rays[i] > 0 && !unreached.load(std::memory_order_relaxed))
+      unreached.store(true, std::memory_order_relaxed);
+    return std::pair{rays > 0 && hit, rays > 0 ? total_open(i) / rays : 0.0f};
+  });
+  unreached_possible_ = unreached;
+  estimates_ = unreached && pull_push_.push();
+  estimate_age_ = 0;
 }
 
 bool FixedPartWindow::add(double fixed_ms, double budget_ms, size_t min_frames) {
@@ -634,6 +665,7 @@ void RealtimeLoop::adopt_rebuild(uint64_t& kept_pixels) {
   const size_t n = gbuffer_.prim.size();
   cast_.assign(n, 0);
   open_.assign(n, 0);
+  estimates_ = false;  // (those of the view before)
   prepare_rounds(n);
   kept_pixels = r.kept_pixels;
   if (kept_pixels > 0) {
@@ -705,6 +737,7 @@ LoopFrame RealtimeLoop::frame(const Camera& camera) {
   out.gaze_px = gaze * scale_;
   const Timer maps_timer;
   update_maps(out.gaze_px, out.predicted);
+  estimate_unreached();
   out.maps_ms = maps_timer.ms();
   // AO rays, in rounds, within what the frame may spend on them
   double trace_ms = 0, sweep_ms = 0;

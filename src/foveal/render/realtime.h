@@ -39,6 +39,7 @@
 
 #include "foveal/gaze/landing.h"
 #include "foveal/render/frame_renderer.h"
+#include "foveal/render/pull_push.h"
 #include "foveal/render/render.h"
 #include "foveal/render/reuse.h"
 #include "foveal/util/stats.h"
@@ -268,6 +269,7 @@ class RealtimeLoop {
   // Room for a round over all n pixels, its pages touched (where a new view needs more)
   void prepare_rounds(size_t n);
   void compose(Image& color);
+  void estimate_unreached();
   bool rescale(double fixed_ms);  // whether it lowered the size
   void set_scale(double scale);
   // "rendering at WxH (P %)" and why, where the size is below the one asked for; "" at full size
@@ -320,6 +322,11 @@ class RealtimeLoop {
   uint64_t view_seed_ = 0;                    // the AO seed of this view's rays
   uint32_t views_ = 0;                        // views traced so far
   Image spare_;                               // a shown frame's image handed back (recycle)
+  // The visibility of the pixels without rays yet, from those around them (estimate_unreached)
+  PullPush pull_push_;
+  bool unreached_possible_ = true;  // some pixel may lack the rays its n(E) asks for
+  bool estimates_ = false;          // pull_push_ holds estimates for this view
+  int estimate_age_ = 0;            // frames since they were made
   std::vector<AoRayTask> tasks_;
   std::vector<uint32_t> blocked_;
   std::vector<uint8_t> done_;

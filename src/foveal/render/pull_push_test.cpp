@@ -1,0 +1,88 @@
+// Pull-push: known pixels kept, unknown ones a convex blend of the known ones nearest them.
+#include "foveal/render/pull_push.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+
+namespace {
+
+using foveal::PullPush;
+
+struct Field {
+  int width, height;
+  std::vector<float> value, out;
+  std::vector<uint8_t> known;
+  Field(int w, int h) : width(w), height(h), value(static_cast<size_t>(w) * h), out(value.size()), known(value.size()) {}
+  size_t at(int x, int y) const { return static_cast<size_t>(y) * width + x; }
+};
+
+TEST(PullPush, AConstantFieldIsFilledWithItsValueAndKnownPixelsAreKept) {
+  Field f(97, 61);  // odd sizes: the levels round up
+  std::mt19937 rng(3);
+  for (size_t i = 0; i < f.value.size(); ++i) {
+    f.known[i] = rng() % 10 == 0;
+    f.value[i] = f.known[i] ? 0.625f : -1.0f;
+  }
+  PullPush().fill(f.width, f.height, f.value.data(), f.known.data(), 7.0f, f.out.data());
+  for (size_t i = 0; i < f.value.size(); ++i) EXPECT_NEAR(f.out[i], 0.625f, 1e-5) << i;
+}
+
+TEST(PullPush, NothingKnownIsTheFallback) {
+  Field f(40, 30);
+  PullPush().fill(f.width, f.height, f.value.data(), f.known.data(), 0.3f, f.out.data());
+  for (float v : f.out) EXPECT_EQ(v, 0.3f);
+}
+
+// Every estimate is a weighted mean of known values (area means and bilinear weights are
+// non-negative and sum to one, and each level blends in proportion to coverage): within their range
+TEST(PullPush, EveryEstimateLiesWithinTheKnownValuesRange) {
+  Field f(200, 120);
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<float> u(0.2f, 0.9f);
+  for (size_t i = 0; i < f.value.size(); ++i) {
+    f.known[i] = rng() % 50 == 0;
+    f.value[i] = u(rng);
+  }
+  float lo = 1, hi = 0;
+  for (size_t i = 0; i < f.value.size(); ++i)
+    if (f.known[i]) lo = std::min(lo, f.value[i]), hi = std::max(hi, f.value[i]);
+  PullPush p;
+  p.fill(f.width, f.height, f.value.data(), f.known.data(), 5.0f, f.out.data());
+  for (size_t i = 0; i < f.value.size(); ++i) {
+    if (f.known[i]) EXPECT_EQ(f.out[i], f.value[i]) << i;
+    EXPECT_GE(f.out[i], lo - 1e-5f) << i;
+    EXPECT_LE(f.out[i], hi + 1e-5f) << i;
+  }
+  // The same again with the pyramid kept: the same result
+  std::vector<float> again(f.out.size());
+  p.fill(f.width, f.height, f.value.data(), f.known.data(), 5.0f, again.data());
+  EXPECT_EQ(again, f.out);
+}
+
+// The known region's values carry on past its edge, where a constant would jump: a disc known to be
+// 0.4 on the left half of the image and 0.8 on the right leaves, just outside each half's edge,
+// nearly that half's value, and a smooth passage between them
+TEST(PullPush, AnUnknownPixelTakesTheValueOfTheKnownPixelsNearestIt) {
+  Field f(256, 128);
+  for (int y = 0; y < f.height; ++y)
+    for (int x = 0; x < f.width; ++x) {
+      const bool inside = std::hypot(x - 128.0, y - 64.0) < 48;
+      f.known[f.at(x, y)] = inside;
+      f.value[f.at(x, y)] = x < 128 ? 0.4f : 0.8f;
+    }
+  PullPush().fill(f.width, f.height, f.value.data(), f.known.data(), 0.0f, f.out.data());
+  EXPECT_NEAR(f.out[f.at(128 - 52, 64)], 0.4f, 0.05f);  // 4 px outside the disc, on the left
+  EXPECT_NEAR(f.out[f.at(128 + 52, 64)], 0.8f, 0.05f);  // and on the right
+  EXPECT_LT(f.out[f.at(4, 64)], 0.6f);  // far out, still nearer the left's value than the right's
+  EXPECT_GT(f.out[f.at(251, 64)], 0.6f);
+  // Along the row through the centre, outside the disc, neighbouring pixels differ little: no edge
+  for (int x = 1; x < f.width; ++x) {
+    if (std::abs(x - 128) < 49) continue;
+    EXPECT_LT(std::abs(f.out[f.at(x, 64)] - f.out[f.at(x - 1, 64)]), 0.03f) << x;
+  }
+}
+
+}  // namespace
