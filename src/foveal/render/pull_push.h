@@ -98,8 +98,12 @@ void PullPush::pull(int width, int height, const At& at) {
       sizes_[0], sum_[0].data(), cover_[0].data());
   for (size_t l = 1; l < levels; ++l) {
     const std::vector<float>&s = sum_[l - 1], &c = cover_[l - 1];
-    pull_level(sizes_[l - 1].width, sizes_[l - 1].height, [&](size_t i) { return std::pair{s[i], c[i]}; }, sizes_[l],
-               sum_[l].data(), cover_[l].data());
+    pull_level(
+        sizes_[l - 1].width, sizes_[l - 1].height,
+        [&](size_t i) {
+          return std::pair{s[i], c[i]};
+        },
+        sizes_[l], sum_[l].data(), cover_[l].data());
   }
 }
 

@@ -76,7 +76,7 @@ TEST(PullPush, AnUnknownPixelTakesTheValueOfTheKnownPixelsNearestIt) {
   PullPush().fill(f.width, f.height, f.value.data(), f.known.data(), 0.0f, f.out.data());
   EXPECT_NEAR(f.out[f.at(128 - 52, 64)], 0.4f, 0.05f);  // 4 px outside the disc, on the left
   EXPECT_NEAR(f.out[f.at(128 + 52, 64)], 0.8f, 0.05f);  // and on the right
-  EXPECT_LT(f.out[f.at(4, 64)], 0.6f);  // far out, still nearer the left's value than the right's
+  EXPECT_LT(f.out[f.at(4, 64)], 0.6f);                  // far out, still nearer the left's value than the right's
   EXPECT_GT(f.out[f.at(251, 64)], 0.6f);
   // Along the row through the centre, outside the disc, neighbouring pixels differ little: no edge
   for (int x = 1; x < f.width; ++x) {
