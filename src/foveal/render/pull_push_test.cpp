@@ -30,6 +30,18 @@ TEST(PullPush, AConstantFieldIsFilledWithItsValueAndKnownPixelsAreKept) {
   for (size_t i = 0; i < f.value.size(); ++i) EXPECT_NEAR(f.out[i], 0.625f, 1e-5) << i;
 }
 
+// A single pixel, a single row or column: the levels round up to one cell, and one known pixel
+// fills them all
+TEST(PullPush, OnePixelAndOneRowOrColumnAreFilled) {
+  for (const auto& [w, h] : {std::pair{1, 1}, std::pair{7, 1}, std::pair{1, 9}, std::pair{2, 3}}) {
+    Field f(w, h);
+    f.known.back() = 1;
+    f.value.back() = 0.25f;
+    PullPush().fill(f.width, f.height, f.value.data(), f.known.data(), 9.0f, f.out.data());
+    for (float v : f.out) EXPECT_NEAR(v, 0.25f, 1e-6) << w << "x" << h;
+  }
+}
+
 TEST(PullPush, NothingKnownIsTheFallback) {
   Field f(40, 30);
   PullPush().fill(f.width, f.height, f.value.data(), f.known.data(), 0.3f, f.out.data());
