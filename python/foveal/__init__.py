@@ -387,10 +387,6 @@ def bench_latency(recordings: Any, scene: Scene, camera: Any = None, size: Tuple
         elif not isinstance(r, _gaze.Recording):
             raise TypeError(f"recordings[{k}]: a path or a foveal.gaze.Recording, got {type(r).__name__}")
         columns.append((r.source or f"recordings[{k}]", _gaze._columns(r, None, f"recordings[{k}]")))
-    if isinstance(scene, (str, os.PathLike)):
-        scene = Scene(scene)  # as Renderer and Loop take it
-    elif not isinstance(scene, Scene):
-        raise TypeError(f"scene: a foveal.Scene, a path or builtin:box|sphere-plane|plane, got {type(scene).__name__}")
     if isinstance(loops, str):
         loops = loops.split(",")
     def number(value, name):  # ints are numbers too (the core takes floats)
@@ -400,7 +396,7 @@ def bench_latency(recordings: Any, scene: Scene, camera: Any = None, size: Tuple
             raise TypeError(f"{name}: expected a number, got {type(value).__name__}")
         return float(value)
     return _numbers(_core._bench_latency(
-        scene, getattr(scene, "source", ""), columns, camera, size, display, number(start_s, "start_s"),
+        scene, columns, camera, size, display, number(start_s, "start_s"),
         number(duration_s, "duration_s"), number(refresh_hz, "refresh_hz"), number(frame_budget_ms, "frame_budget_ms"),
         number(latency_ms, "latency_ms"), number(margin_ms, "margin_ms"), clock, number(model_rays_per_ms, "model_rays_per_ms"),
         number(model_fixed_ms, "model_fixed_ms"), list(loops), number(min_amplitude_deg, "min_amplitude_deg"), max_rays,

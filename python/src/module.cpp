@@ -785,14 +785,15 @@ NB_MODULE(_core, m) {
       "name, kernel (a kernel thread), cpu_ms and slices (turns on a CPU) — what takes a real-time loop's cores.");
   m.def(
       "_bench_latency",
-      [](const PyScene& s, const std::string& scene_name, const nb::list& recordings, const nb::object& camera_arg,
-         const std::array<int, 2>& size, std::optional<Display> display, double start_s, double duration_s, double refresh_hz,
-         std::optional<double> frame_budget_ms, std::optional<double> latency_ms, std::optional<double> margin_ms, const std::string& clock,
+      [](const nb::object& scene, const nb::list& recordings, const nb::object& camera_arg, const std::array<int, 2>& size,
+         std::optional<Display> display, double start_s, double duration_s, double refresh_hz, std::optional<double> frame_budget_ms,
+         std::optional<double> latency_ms, std::optional<double> margin_ms, const std::string& clock,
          std::optional<double> model_rays_per_ms, std::optional<double> model_fixed_ms, const std::vector<std::string>& loops,
          double min_amplitude_deg, int max_rays, double tolerance, uint64_t seed, const std::string& device_name, int threads,
          bool progress, const std::string& timeline, int timeline_saccade, const nb::object& landing,
          std::optional<double> periphery_share) {
         // `bench latency` (apps/bench_latency.cpp) on recordings foveal.gaze hands over as columns
+        const PyScene s = scene_of(scene);
         LatencyParams p;
         std::tie(p.render.width, p.render.height) = size_of(size, "size");
         p.render.display = display ? *display : Display{};
@@ -838,7 +839,7 @@ NB_MODULE(_core, m) {
           nb::gil_scoped_release release;
           const ThreadScope scope(threads);
           LatencyReport report =
-              bench_latency(*s.scene, scene_name, camera, device, scope.threads(), recs, p, [progress](const std::string& line) {
+              bench_latency(*s.scene, s.scene->source, camera, device, scope.threads(), recs, p, [progress](const std::string& line) {
                 if (!progress) return;
                 fmt::print("{}\n", line);
                 std::fflush(stdout);
@@ -852,8 +853,8 @@ NB_MODULE(_core, m) {
         }
         return to_python(j);
       },
-      "scene"_a, "scene_name"_a, "recordings"_a, "camera"_a.none(), "size"_a, "display"_a.none(), "start_s"_a, "duration_s"_a,
-      "refresh_hz"_a, "frame_budget_ms"_a.none(), "latency_ms"_a.none(), "margin_ms"_a.none(), "clock"_a, "model_rays_per_ms"_a.none(),
+      "scene"_a, "recordings"_a, "camera"_a.none(), "size"_a, "display"_a.none(), "start_s"_a, "duration_s"_a, "refresh_hz"_a,
+      "frame_budget_ms"_a.none(), "latency_ms"_a.none(), "margin_ms"_a.none(), "clock"_a, "model_rays_per_ms"_a.none(),
       "model_fixed_ms"_a.none(), "loops"_a, "min_amplitude_deg"_a, "max_rays"_a, "tolerance"_a, "seed"_a, "device"_a, "threads"_a,
       "progress"_a, "timeline"_a, "timeline_saccade"_a, "landing"_a.none(), "periphery_share"_a.none());
   m.def(

@@ -43,11 +43,4 @@ bool PullPush::push() {
   return true;
 }
 
-void PullPush::fill(int width, int height, const float* value, const uint8_t* known, float fallback, float* out) {
-  pull(width, height, [&](size_t i) { return std::pair{known[i] != 0, value[i]}; });
-  const bool any = push();
-  for (size_t i = 0; i < static_cast<size_t>(width) * static_cast<size_t>(height); ++i)
-    out[i] = known[i] ? value[i] : any ? pixels_[i] : fallback;
-}
-
 }  // namespace foveal

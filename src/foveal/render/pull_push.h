@@ -18,7 +18,6 @@
 
 #include <algorithm>
 #include <cstddef>
-#include <cstdint>
 #include <utility>
 #include <vector>
 
@@ -39,9 +38,6 @@ class PullPush {
   // Pixel i's estimate after a push() that found a known pixel (at a known pixel: its own cell's
   // mean, not necessarily its value)
   float estimate(size_t i) const { return pixels_[i]; }
-  // pull() and push(), then every pixel: value[i] where known[i], else the estimate; `fallback`
-  // everywhere where nothing is known.
-  void fill(int width, int height, const float* value, const uint8_t* known, float fallback, float* out);
 
  private:
   struct Size {

@@ -352,7 +352,7 @@ void RealtimeLoop::collect_fovea(glm::dvec2 gaze_px, bool predicted) {
   // fovea's middle rows in three frames, and converged two frames after the loop without
   // prediction). The centre is where the landing most likely is.
   maps_predicted_ = predicted;
-  unreached_possible_ = true;  // (new maps, a new view: compose looks for pixels without rays)
+  unreached_possible_ = true;  // (new maps, a new view: estimate_unreached looks for pixels without rays)
   if (predicted) {
     const size_t w = static_cast<size_t>(params_.width);
     auto ring = [&](uint32_t i) {
