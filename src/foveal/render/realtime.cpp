@@ -34,6 +34,10 @@ constexpr double kGrowthShare = 0.75;  // … to where its frame's work would ta
 // dragon at 840×525 while the surfaces were copied into the history (less now that they move)
 constexpr double kCarryCost = 1.6;
 constexpr int kEstimateEvery = 4;  // frames between estimates of the pixels without rays (estimate_unreached)
+// The periphery's first rays: every kCoarseGrid-th pixel in each direction, a first round each
+// (plan_round): spread over the view, they make the estimate of the pixels still without rays an
+// interpolation of measured values rather than the fovea's carried outwards
+constexpr size_t kCoarseGrid = 16;
 
 // body(i) for every pixel, in parallel blocks of 4096
 template <class Body>
@@ -427,6 +431,8 @@ size_t RealtimeLoop::plan_round(uint64_t ray_limit, uint64_t periphery_limit, bo
   ray_limit = std::min(ray_limit, periphery_limit);
   // Then the periphery by q²·σ̂²·k/(c + k), in buckets of half powers of two from the highest
   const size_t n = cast_.size();
+  const auto width = static_cast<size_t>(params_.width);
+  auto on_grid = [&](size_t i) { return i % width % kCoarseGrid == 0 && i / width % kCoarseGrid == 0; };
   std::array<uint32_t, kBuckets + 2> count{};
   order_.resize(n);
   key_.resize(n);
@@ -437,6 +443,12 @@ size_t RealtimeLoop::plan_round(uint64_t ray_limit, uint64_t periphery_limit, bo
       const float c = total_cast(i), k = static_cast<float>(rays_for(i));
       const float p = (total_open(i) + 0.5f) / (c + 1.0f);
       const float gain = q * q * p * (1 - p) * k / (c + k);
+      // A pixel on the coarse grid still without rays goes first: its rays stand for its unreached
+      // neighbours too (their estimate), so the periphery's first rays span the view
+      if (c == 0 && on_grid(i)) {
+        key_[i] = 0;
+        return;
+      }
       b = gain > 0 ? std::clamp(static_cast<int>(-2.0f * std::log2(gain)), 0, kBuckets - 1) : kBuckets;
     }
     key_[i] = static_cast<int8_t>(b);
