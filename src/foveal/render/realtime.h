@@ -10,9 +10,10 @@
 // - Each pixel keeps its AO rays across frames (open and cast counts) and continues its own Sobol
 //   sequence, so n rays over many frames are exactly the paper's pixel's first n rays.
 // - Inside the budget, rays go where they lower the perceived error most: first the pixels of the
-//   fovea (q(E) = 1) not yet converged, then a coarse grid over the rest (every 16th pixel: its
-//   rays stand for the pixels around it, which show their estimate until they have rays of their
-//   own), then the rest in order of the q(E)²-weighted variance their next rays remove (σ̂²·k/(c + k) from each pixel's own running estimate). A fovea pixel
+//   fovea (q(E) = 1) not yet converged — at a new view with a coarse grid over the rest (every
+//   16th pixel: its rays stand for the pixels around it, which show their estimate until they
+//   have rays of their own) — then the rest in order of the q(E)²-weighted variance their next
+//   rays remove (σ̂²·k/(c + k) from each pixel's own running estimate). A fovea pixel
 //   is converged with its n_max rays (the reference's); a peripheral one once its standard error
 //   is within τ(E) (issue 21's threshold, AoReuseParams::tolerance) or it has its n(E) rays. Rays
 //   come in rounds that double a pixel's count, so a peripheral pixel whose rays all agree stops
@@ -327,6 +328,7 @@ class RealtimeLoop {
   PullPush pull_push_;
   bool unreached_possible_ = true;  // some pixel may lack the rays its n(E) asks for
   bool estimates_ = false;          // pull_push_ holds estimates for this view
+  bool grid_pending_ = false;       // the view's coarse grid is still to be planned (plan_round)
   int estimate_age_ = 0;            // frames since they were made
   std::vector<AoRayTask> tasks_;
   std::vector<uint32_t> blocked_;

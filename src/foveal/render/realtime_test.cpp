@@ -13,6 +13,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <numeric>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -994,49 +995,44 @@ TEST(RealtimeLoop, APixelWithoutRaysYetShowsTheVisibilityOfThePixelsAroundIt) {
   EXPECT_GT(off_constant / without, 0.3);  // the plane is mostly open (V ≈ 0.9), far from the constant 0.5
 }
 
-// The periphery's first rays go to a coarse grid over the whole view (every 16th pixel in each
-// direction) before they fill in beside the fovea: while its neighbours have none, a pixel's rays
-// stand for them too (their estimate, pull-push), so the first ones spread out. The pixels still
-// without rays then show the plane's AO as measured around them, not carried on from the fovea's.
-TEST(RealtimeLoop, ThePeripherysFirstRaysSpanTheViewBeforeTheyFillIn) {
+// A new view's first rays include a coarse grid outside the fovea (every 16th pixel in each
+// direction, 64 rays each), so that while the fovea converges the pixels without rays show the
+// view's AO measured across it (their estimate, pull-push), not the fovea's carried outwards:
+// there the plane under the sphere's analytic AO within 0.03 on average, against 0.2 before. The fovea still gets the
+// rest of every frame's rays, and after a gaze jump none of the periphery's (the test above).
+TEST(RealtimeLoop, ANewViewsFirstRaysSpanItSoThatItsPixelsWithoutRaysShowItsAo) {
   const std::unique_ptr<FrameRenderer> renderer = make_frame_renderer(sphere_plane(), ComputeDevice::cpu);
   const Camera& camera = sphere_plane().cameras.front();
   const RenderParams params = loop_params(200, 125, 64);
   RealtimeLoop loop(*renderer, sphere_plane(), params, model_clock(1500));  // ~20,000 rays a frame
   loop.push_gaze(0, glm::dvec2(100, 62));
-  LoopFrame f;
-  for (int k = 0; k < 20 && f.sweeps == 0; ++k) f = loop.frame(camera);
-  ASSERT_GT(f.sweeps, 0u) << "the periphery got no rays in 20 frames";
+  LoopFrame f = loop.frame(camera);
   const GBuffer& g = loop.gbuffer();
   const FoveationMaps& maps = loop.maps();
   const int w = params.width;
   size_t grid = 0;
   for (size_t i = 0; i < loop.cast().size(); ++i)
-    if (static_cast<int>(i) % w % 16 == 0 && static_cast<int>(i) / w % 16 == 0 && g.hit(i) && maps.rays[i] > 0) {
+    if (static_cast<int>(i) % w % 16 == 0 && static_cast<int>(i) / w % 16 == 0 && g.hit(i) && maps.rays[i] > 0 && maps.quality[i] < 1.0f) {
       EXPECT_GT(loop.cast()[i], 0u) << "pixel " << i % w << "," << i / w;
       ++grid;
     }
   ASSERT_GT(grid, 50u);
-  for (int k = 0; k < 4; ++k) f = loop.frame(camera);  // an estimate made from them
+  f = loop.frame(camera);  // the estimate made before its rays, from the first frame's
+  ASSERT_FALSE(f.fovea_done) << "the fovea converged too fast to see the periphery meanwhile";
   const VisibilityShown shown(*renderer, camera, params, f);
-  size_t without = 0, plane = 0;
-  double error = 0, worst = 0;
+  std::vector<double> errors;
   for (size_t i = 0; i < loop.cast().size(); ++i) {
-    if (!g.hit(i) || maps.rays[i] == 0 || maps.blend[i] < 1.0f) continue;
-    if (loop.cast()[i] > 0) continue;
-    ++without;
-    if (!on_plane(g, i)) continue;
-    const double e = std::abs(shown(i) - plane_visibility(g.position[i]));
-    error += e;
-    worst = std::max(worst, e);
-    ++plane;
+    if (loop.cast()[i] > 0 || !on_plane(g, i) || maps.rays[i] == 0 || maps.blend[i] < 1.0f) continue;
+    errors.push_back(std::abs(shown(i) - plane_visibility(g.position[i])));
   }
-  ASSERT_GT(without, loop.cast().size() / 3) << "the periphery filled in too fast to see its order";
-  ASSERT_GT(plane, 1000u);
-  // 0.019 measured (0.118 with the periphery filled in from the fovea out); the worst, 0.20, is
-  // the plane's far edge, whose estimate takes in the sphere's rim (the estimate knows no surfaces)
-  EXPECT_LT(error / plane, 0.03) << "over " << plane << " plane pixels without rays";
-  EXPECT_LT(worst, 0.25);
+  ASSERT_GT(errors.size(), 10000u);
+  // Measured: 0.020 on average, 0.050 at the 95th percentile (from the fovea's pixels alone, as
+  // before the grid: 0.199 and 0.292). The worst, 0.42, are plane pixels beside the sphere's silhouette, whose
+  // estimate takes in the sphere's measured pixels next to them (the estimate knows no surfaces).
+  const double mean = std::accumulate(errors.begin(), errors.end(), 0.0) / static_cast<double>(errors.size());
+  std::sort(errors.begin(), errors.end());
+  EXPECT_LT(mean, 0.03) << "over " << errors.size() << " plane pixels without rays";
+  EXPECT_LT(errors[errors.size() * 95 / 100], 0.08);
 }
 
 TEST(RealtimeLoop, AFinishedLoopShowsThePapersFrame) {
