@@ -431,10 +431,10 @@ size_t RealtimeLoop::plan_round(uint64_t ray_limit, uint64_t periphery_limit, bo
   auto on_grid = [&](size_t i) { return i % width % kCoarseGrid == 0 && i / width % kCoarseGrid == 0; };
   // A new view's coarse grid first, outside the fovea: every kCoarseGrid-th pixel, kCoarseRound
   // rays each (at 840×525 some 1,400 pixels that see a surface, 90,000 rays: under a third of a
-  // frame's on two cores). Until the
-  // fovea has converged and the periphery's sweep reaches them, the pixels without rays show the
-  // estimate made from these (estimate_unreached): the view's AO measured across it, instead of the
-  // fovea's visibility carried outwards. (Only a new view: after a gaze jump the grid has its rays.)
+  // frame's on two cores). Until the fovea has converged and the periphery's sweep reaches them,
+  // the pixels without rays show the estimate made from these (estimate_unreached): the view's AO
+  // measured across it, instead of the fovea's visibility carried outwards. (Only a new view:
+  // after a gaze jump the grid has its rays, and the fovea's rounds are its own.)
   if (grid_pending_ && periphery_limit > 0) {
     grid_pending_ = false;
     const uint64_t limit = std::min(ray_limit, periphery_limit);
