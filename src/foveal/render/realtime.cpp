@@ -451,8 +451,8 @@ size_t RealtimeLoop::plan_round(uint64_t ray_limit, uint64_t periphery_limit, bo
         rays += r;
       }
   }
-  // While the fovea has unconverged pixels a round is theirs alone: no peripheral
-  // pixel gets a ray before the fovea is at full quality
+  // While the fovea has unconverged pixels a round is theirs alone (a new view's grid aside): no
+  // peripheral pixel gets a ray before the fovea is at full quality
   for (const uint32_t i : fovea_) {
     if (rays >= ray_limit) break;
     if (!converged(i)) add(i);
