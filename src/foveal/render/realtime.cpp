@@ -143,6 +143,7 @@ RealtimeLoop::RealtimeLoop(FrameRenderer& renderer, const Scene& scene, const Re
   epsilon_ = surface_epsilon(bounds);
   // τ where q = 1: the reference's worst-case noise at n_max rays, times the tolerance
   tau_fovea_ = static_cast<float>(params.reuse.tolerance * 0.5 / std::sqrt(std::max(1, params.foveation.max_rays)));
+  sweep_.set_budget(settings.budget_ms);
 }
 
 glm::dvec2 RealtimeLoop::px_to_deg(glm::dvec2 px) const {
@@ -206,6 +207,7 @@ void RealtimeLoop::set_budget_ms(double budget_ms) {
   if (given_margin_ms_) s.margin_ms = std::min(*given_margin_ms_, 0.5 * budget_ms);
   validate(s);
   settings_ = s;
+  sweep_.set_budget(budget_ms);
 }
 
 void RealtimeLoop::reset() {
@@ -565,7 +567,9 @@ bool FixedPartWindow::add(double fixed_ms, double budget_ms, size_t min_frames) 
 }
 
 void SweepCost::swept(double ms) {
-  estimate_ms_ = std::max(0.7 * estimate_ms_ + 0.3 * ms, ms);
+  // (the first sweep's own time, not a mean with the untimed guess)
+  estimate_ms_ = timed_ ? std::max(0.7 * estimate_ms_ + 0.3 * ms, ms) : ms;
+  timed_ = true;
   latest_.add(ms);
 }
 

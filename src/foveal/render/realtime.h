@@ -163,26 +163,43 @@ class FixedPartWindow {
 // periphery's refinement for the rest of a run. (Raised and never lowered, the estimate stopped the
 // sweeps for good on a shared 2-core VM: frames cost 1.5 ms at p50 where other runs spent 4 ms on
 // rays, and landings on what had been periphery waited for rays.)
+//
+// Before the first sweep is timed its cost is unknown, and it is taken as half the frame's budget:
+// the first sweep then starts only where a frame has that much left before its deadline. (Taken as
+// 1 ms, the first sweep at 840×525 took 3.3–4.8 ms on a 2-core Intel Xeon VM: in 7 of 18 loops of
+// `bench latency` on the dragon box it ended past the deadline, by up to 2.8 ms, and in 2 past the
+// 2-ms margin too — that VM's only late frames while it was quiet.)
 class SweepCost {
  public:
-  static constexpr double kSkipDecay = 0.95;  // per frame that skips: from a pause's 30 ms to 12 in ~18 frames
-  static constexpr size_t kSweeps = 5;        // the typical cost: the median of the latest sweeps
+  static constexpr double kSkipDecay = 0.95;    // per frame that skips: from a pause's 30 ms to 12 in ~18 frames
+  static constexpr size_t kSweeps = 5;          // the typical cost: the median of the latest sweeps
+  static constexpr double kUntimedShare = 0.5;  // of the budget: the cost taken before a sweep is timed
+  // The frame budget (ms): while no sweep has been timed, the estimate is kUntimedShare of it.
+  void set_budget(double budget_ms) {
+    if (!timed_) estimate_ms_ = kUntimedShare * budget_ms;
+  }
   // Whether a sweep fits in the `left_ms` before the deadline.
   bool fits(double left_ms) const { return left_ms > estimate_ms_; }
   // A sweep took `ms`.
   void swept(double ms);
-  // A frame did not sweep because it did not fit.
-  void skipped() { estimate_ms_ = std::max(typical_ms(), kSkipDecay * estimate_ms_); }
+  // A frame did not sweep because it did not fit: the estimate falls a little, down to the latest
+  // sweeps' median (freely before the first sweep, so that a budget whose frames never leave
+  // kUntimedShare of it still gets its sweeps; not at all after a new size, until a sweep is timed)
+  void skipped() {
+    const double floor = !timed_ ? 0.0 : latest_.size() == 0 ? estimate_ms_ : latest_.median();
+    estimate_ms_ = std::max(floor, kSkipDecay * estimate_ms_);
+  }
   // The pixels changed by this factor (a new size): so does a sweep's cost
   void scale(double factor) {
     estimate_ms_ *= factor;
     latest_.clear();
   }
   double estimate_ms() const { return estimate_ms_; }
-  double typical_ms() const { return latest_.size() == 0 ? estimate_ms_ : latest_.median(); }
+  bool timed() const { return timed_; }
 
  private:
-  double estimate_ms_ = 1;
+  double estimate_ms_ = kUntimedShare * 1000.0 / 60;
+  bool timed_ = false;
   RecentMedian<kSweeps> latest_;
 };
 

@@ -627,6 +627,38 @@ TEST(RealtimeLoop, OnePausedSweepDoesNotStopThePeripherysRefinement) {
   EXPECT_NEAR(slow.estimate_ms(), 20.0, 1e-9);
 }
 
+// Before a sweep has been timed its cost is unknown and taken as half the budget, so the first sweep
+// waits for a frame with that much left (taken as 1 ms, the first sweep ran up to 2.8 ms past the
+// deadline at 840×525); a budget whose frames never leave so much still gets its sweeps; the first
+// sweep's own time replaces the guess, which neither a later budget nor frames that skip lower
+TEST(RealtimeLoop, TheFirstSweepWaitsForAFrameWithHalfTheBudgetLeft) {
+  SweepCost cost;
+  cost.set_budget(1000.0 / 60);
+  EXPECT_FALSE(cost.timed());
+  EXPECT_FALSE(cost.fits(8.0));  // of a 16.7-ms frame
+  EXPECT_TRUE(cost.fits(8.5));
+  cost.set_budget(1000.0 / 120);  // a new budget before any sweep: half of it
+  EXPECT_FALSE(cost.fits(4.1));
+  EXPECT_TRUE(cost.fits(4.2));
+  int skipped = 0;  // frames that leave 3 ms at most
+  while (!cost.fits(3.0) && skipped < 1000) {
+    cost.skipped();
+    ++skipped;
+  }
+  EXPECT_GE(skipped, 5);   // 0.95⁷ · 4.17 ms < 3 ms
+  EXPECT_LE(skipped, 10);  // within a sixth of a second at 60 Hz
+  cost.swept(3.5);
+  EXPECT_TRUE(cost.timed());
+  EXPECT_DOUBLE_EQ(cost.estimate_ms(), 3.5);
+  cost.set_budget(1000.0 / 60);
+  EXPECT_DOUBLE_EQ(cost.estimate_ms(), 3.5);
+  EXPECT_FALSE(cost.fits(3.4));
+  EXPECT_TRUE(cost.fits(3.6));
+  cost.scale(2.0);  // a new size: the timed cost scaled, and kept until a sweep at it is timed
+  for (int k = 0; k < 100; ++k) cost.skipped();
+  EXPECT_DOUBLE_EQ(cost.estimate_ms(), 7.0);
+}
+
 // A saccade from `from` to `to` (render pixels) at 1000 Hz, its velocity a symmetric bell over the
 // main sequence's duration, then the fixation; pushed up to each frame's time (60 Hz) less 3 ms.
 struct SaccadeRun {
