@@ -265,7 +265,9 @@ def main(argv=None) -> int:
                    "predicted": int(frame.predicted), "fovea": frame.fovea,
                    "fovea_converged": round(frame.fovea_converged, 4), "rays": frame.rays,
                    "render_start_s": start, "render_ms": 1000 * (rendered - start), "library_ms": frame.ms,
-                   "late": int(frame.late), "flip_time_s": flip, "gaze_to_flip_ms": 1000 * (flip - sample_time)}
+                   "late": int(frame.late), "flip_time_s": flip, "gaze_to_flip_ms": 1000 * (flip - sample_time),
+                   # (appended: readers by column index keep theirs)
+                   "budget_ms": frame.budget_ms, "width": frame.image.shape[1], "height": frame.image.shape[0]}
             if writer is None:
                 writer = csv.DictWriter(log_file, fieldnames=list(row))
                 writer.writeheader()

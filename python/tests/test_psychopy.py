@@ -50,6 +50,14 @@ def test_gaze_contingent_follows_the_mouse_gaze_and_logs_latency(tmp_path):
         assert float(r["flip_time_s"]) > float(r["render_start_s"]) >= float(r["sample_time_s"])
         assert r["fovea"] in ("refining", "converged")
         assert 0 <= float(r["fovea_converged"]) <= 1
+    # Each flip's budget (the refresh less the script's own work, from the second flip) and the size
+    # the loop rendered at (smaller than asked only where the base shading did not fit)
+    assert float(rows[0]["budget_ms"]) == pytest.approx(1000 / 60)
+    assert all(0 < float(r["budget_ms"]) <= 1000 / 60 for r in rows)
+    assert any(float(r["budget_ms"]) < 1000 / 60 for r in rows[2:])
+    sizes = [(int(r["width"]), int(r["height"])) for r in rows]
+    assert all(0 < w <= 320 and 0 < h <= 200 and abs(w / h - 1.6) < 0.05 for w, h in sizes)
+    assert sizes[-1] == tuple(summary["render_size"])
     # The loop answers within what the script's own work leaves of the 60 Hz refresh, so the image
     # shown is at most two refreshes behind the gaze
     assert summary["refresh_hz"] == 60 and 0 < summary["budget_ms"] <= 1000 / 60
