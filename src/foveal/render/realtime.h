@@ -198,7 +198,7 @@ class SweepCost {
   bool timed() const { return timed_; }
 
  private:
-  double estimate_ms_ = kUntimedShare * 1000.0 / 60;
+  double estimate_ms_ = kUntimedShare * LoopSettings{}.budget_ms;  // (the loop sets its own: set_budget)
   bool timed_ = false;
   RecentMedian<kSweeps> latest_;
 };
