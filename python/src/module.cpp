@@ -555,7 +555,12 @@ NB_MODULE(_core, m) {
           "budget_ms", [](const PyLoopFrame& f) { return f.budget_ms; }, "The frame budget, ms.")
       .def_prop_ro(
           "new_view", [](const PyLoopFrame& f) { return f.frame.new_view; },
-          "The camera had moved, or the size it had before moving came back: the view's surfaces were traced.")
+          "The camera had moved, or the size it had before moving came back: the view's surfaces were traced; or a still "
+          "view's size was lowered (`lowered`).")
+      .def_prop_ro(
+          "lowered", [](const PyLoopFrame& f) { return f.frame.lowered; },
+          "A still view's size was lowered for its fixed part (Loop.note says why), taken from the view at hand: each smaller "
+          "pixel one of the larger pixels nearest it, the one with the most rays, with its rays so far; no surface traced.")
       .def_prop_ro(
           "rebuilding", [](const PyLoopFrame& f) { return f.frame.rebuilding; },
           "Part of this frame built, a few rows at a time, the full-size view a camera at rest gets back (the smaller one is shown "

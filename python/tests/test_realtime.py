@@ -103,6 +103,35 @@ def test_a_resting_camera_gets_its_size_back_over_several_frames():
     assert 500 <= 40 * shown.index(next(s for s in shown if s[0]))  # after half a second at rest
 
 
+def test_a_still_view_made_smaller_is_the_larger_one_sampled(box):
+    # A budget its fixed part does not fit lowers a still view's size from the view at hand: no
+    # surface traced, each smaller pixel one of the larger pixels nearest it, with its rays so far
+    loop = foveal.Loop(box, size=(320, 200), max_rays=64, device="cpu", predict=False)
+    frame = None
+    for k in range(30):
+        frame = loop.frame(gaze=(160, 100), t=k / 60)
+    assert not frame.lowered and frame.image.shape == (200, 320, 3)
+    loop.budget_ms = 0.05  # (less than composing alone takes)
+    for k in range(30):
+        before, frame = frame, loop.frame(gaze=(160, 100), t=(30 + k) / 60)
+        if frame.image.shape[1] < 320:
+            break
+    assert frame.lowered and frame.new_view and frame.kept_pixels > 0
+    assert "frame budget" in loop.note
+    h, w = frame.image.shape[:2]
+    assert (w, h) == tuple(loop.size) and w < 320
+    # each smaller pixel's colour is one of the larger pixels' whose nearest smaller pixel it is
+    ys = ((np.arange(200) + 0.5) * h / 200).astype(int)
+    xs = ((np.arange(320) + 0.5) * w / 320).astype(int)
+    diff = np.abs(frame.image[ys][:, xs] - before.image).max(axis=2)  # each larger pixel against its smaller one
+    nearest = np.full((h, w), np.inf)
+    np.minimum.at(nearest, (ys[:, None].repeat(320, axis=1), xs[None, :].repeat(200, axis=0)), diff)
+    same = nearest < 1e-5
+    assert same.mean() > 0.9, same.mean()
+    after = loop.frame(gaze=(160, 100), t=1.0)  # (the next frame goes on at that size, nothing traced)
+    assert not after.lowered and not after.new_view and after.image.shape == frame.image.shape
+
+
 def test_frames_release_the_gil(box):
     loop = foveal.Loop(box, size=(320, 200), max_rays=400, device="cpu", frame_budget_ms=40)
     ticks = []

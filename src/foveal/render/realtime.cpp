@@ -13,6 +13,7 @@
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_invoke.h>
 
 #include <algorithm>
 #include <array>
@@ -49,6 +50,12 @@ void for_each_pixel(size_t n, const Body& body) {
   tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 4096), [&](const tbb::blocked_range<size_t>& r) {
     for (size_t i = r.begin(); i != r.end(); ++i) body(i);
   });
+}
+
+// The render size at `scale` of the size asked for
+glm::ivec2 scaled_size(const RenderParams& requested, double scale) {
+  return {std::max(1, static_cast<int>(std::lround(requested.width * scale))),
+          std::max(1, static_cast<int>(std::lround(requested.height * scale)))};
 }
 
 // Pixels [b, e)'s unit eye rays in single precision (the maps' input that the gaze leaves alone)
@@ -225,7 +232,7 @@ void RealtimeLoop::keep_rays(bool leaving) {
                      const float own = static_cast<float>(cast_[i]);
                      open = static_cast<float>(open_[i]) + (earlier ? kept_open_[i] : 0.0f);
                      cast = own + (earlier ? kept_cast_[i] : 0.0f);
-                     origin_sum = own * position + (earlier ? kept_origin_[i] : glm::vec3(0.0f));
+                     origin_sum = own * position + (earlier ? kept_origin(i, position) : glm::vec3(0.0f));
                    });
     return;
   }
@@ -238,7 +245,7 @@ void RealtimeLoop::keep_rays(bool leaving) {
     const float own = static_cast<float>(cast_[i]);
     kept.open[i] = static_cast<float>(open_[i]) + (earlier ? kept_open_[i] : 0.0f);
     kept.cast[i] = own + (earlier ? kept_cast_[i] : 0.0f);
-    kept.origin_sum[i] = own * gbuffer_.position[i] + (earlier ? kept_origin_[i] : glm::vec3(0.0f));
+    kept.origin_sum[i] = own * gbuffer_.position[i] + (earlier ? kept_origin(i, gbuffer_.position[i]) : glm::vec3(0.0f));
   });
   history_.store(gbuffer_, camera_, maps_, params_.reuse, kept);
 }
@@ -573,13 +580,17 @@ void SweepCost::swept(double ms) {
   latest_.add(ms);
 }
 
-bool RealtimeLoop::rescale(double fixed_ms) {
+bool RealtimeLoop::rescale(double fixed_ms, bool in_place) {
   const double target = scale_ * std::sqrt(0.5 * settings_.budget_ms / fixed_ms);
   const double scale = std::clamp(target, settings_.min_scale, 1.0);
   if (scale > 0.95 * scale_) return false;
-  set_scale(scale);
+  const glm::ivec2 size = scaled_size(requested_, scale);
+  if (in_place)
+    lower_to_ = scale;
+  else
+    set_scale(scale);
   note_ = fmt::format("the base shading took {:.3g} ms of the {:.3g} ms frame budget at {}x{}: rendering at {}x{} ({:.0f} %) instead",
-                      fixed_ms, settings_.budget_ms, requested_.width, requested_.height, params_.width, params_.height, 100 * scale);
+                      fixed_ms, settings_.budget_ms, requested_.width, requested_.height, size.x, size.y, 100 * scale);
   return true;
 }
 
@@ -589,10 +600,12 @@ std::string RealtimeLoop::size_note(const char* why) const {
 
 void RealtimeLoop::set_scale(double scale) {
   rebuild_.reset();
+  lower_to_.reset();
   const double pixels_before = static_cast<double>(params_.width) * params_.height;
   scale_ = scale;
-  params_.width = std::max(1, static_cast<int>(std::lround(requested_.width * scale)));
-  params_.height = std::max(1, static_cast<int>(std::lround(requested_.height * scale)));
+  const glm::ivec2 size = scaled_size(requested_, scale);
+  params_.width = size.x;
+  params_.height = size.y;
   const double ratio = static_cast<double>(params_.width) * params_.height / pixels_before;  // (as adopt_rebuild)
   plan_ms_ *= ratio;
   sweep_.scale(ratio);
@@ -603,12 +616,118 @@ void RealtimeLoop::set_scale(double scale) {
   ray_z_.clear();
 }
 
+void RealtimeLoop::lower_in_place(uint64_t& kept_pixels) {
+  const double scale = *lower_to_;
+  lower_to_.reset();
+  rebuild_.reset();
+  const size_t big_w = static_cast<size_t>(params_.width), big_n = cast_.size();
+  const glm::ivec2 size = scaled_size(requested_, scale);
+  const size_t w = static_cast<size_t>(size.x), h = static_cast<size_t>(size.y), n = w * h;
+  // Each smaller pixel's source: of the larger pixels whose nearest smaller pixel it is (its
+  // footprint, one to a few), the one with the most rays, else the one nearest its centre. So every
+  // larger pixel with rays that has no better neighbour survives, the coarse grid's included, and
+  // the estimate of the pixels without rays keeps all it was made from (the nearest pixel alone
+  // dropped about half of the grid at 70 % of the size, and the periphery's estimate changed by up
+  // to 0.2 between the two frames). Footprints are disjoint and in pixel order, both axes shrink, so
+  // sources only grow with the index and never fall behind it (source(i) >= i): each array is
+  // gathered in place, front to back, its memory kept (fresh arrays for a view's ~110 bytes a pixel
+  // are tens of milliseconds of page faults)
+  const size_t big_h = big_n / big_w;
+  auto footprints = [](size_t big, size_t small) {  // [first, end) of the larger pixels along an axis for each smaller one
+    std::vector<uint32_t> first(small + 1, static_cast<uint32_t>(big));
+    for (size_t b = big; b-- > 0;)
+      first[std::min(small - 1, static_cast<size_t>((static_cast<double>(b) + 0.5) * static_cast<double>(small) /
+                                                    static_cast<double>(big)))] = static_cast<uint32_t>(b);
+    return first;
+  };
+  const std::vector<uint32_t> columns = footprints(big_w, w), rows = footprints(big_h, h);
+  std::vector<uint32_t>& source = order_;  // (scratch of the view's size: no fresh pages)
+  source.resize(n);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, h, 16), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t y = r.begin(); y != r.end(); ++y)
+      for (size_t x = 0; x < w; ++x) {
+        const size_t cy = std::min(big_h - 1, static_cast<size_t>((static_cast<double>(y) + 0.5) * big_h / static_cast<double>(h)));
+        const size_t cx = std::min(big_w - 1, static_cast<size_t>((static_cast<double>(x) + 0.5) * big_w / static_cast<double>(w)));
+        size_t best = cy * big_w + cx;
+        float most = total_cast(best);
+        for (size_t by = rows[y]; by < rows[y + 1]; ++by)
+          for (size_t bx = columns[x]; bx < columns[x + 1]; ++bx)
+            if (const size_t b = by * big_w + bx; total_cast(b) > most) {
+              most = total_cast(b);
+              best = b;
+            }
+        source[y * w + x] = static_cast<uint32_t>(best);
+      }
+  });
+  auto gather = [&](auto& v) {
+    if (v.size() != big_n) return;  // (not held for this view)
+    for (size_t i = 0; i < n; ++i) v[i] = v[source[i]];
+    v.resize(n);
+  };
+  GBuffer& g = gbuffer_;
+  tbb::parallel_invoke([&] { gather(g.prim); }, [&] { gather(g.position); }, [&] { gather(g.normal); }, [&] { gather(g.geo_normal); },
+                       [&] { gather(g.albedo); }, [&] { gather(g.depth); }, [&] { gather(g.view); }, [&] { gather(lit_); },
+                       [&] { gather(ambient_); }, [&] { gather(ray_x_); }, [&] { gather(ray_y_); }, [&] { gather(ray_z_); },
+                       [&] { gather(cast_); }, [&] { gather(open_); }, [&] { gather(kept_cast_); }, [&] { gather(kept_open_); },
+                       [&] { gather(kept_origin_); });
+  g.width = size.x;
+  g.height = size.y;
+  // The rays so far are kept, as a new view keeps those of the view before: each pixel's own were
+  // another pixel's sequence, and this view's rays go on under a seed of its own. Rays that all left
+  // the pixel's own surface point need no sum of their origins (kept_origin)
+  if (!any_kept()) {
+    kept_cast_.swap(counts_.cast);  // (memory an earlier view's counts left, where there is some)
+    kept_open_.swap(counts_.open);
+    kept_cast_.assign(n, 0.0f);
+    kept_open_.assign(n, 0.0f);
+    kept_origin_.clear();
+  }
+  const bool origins = !kept_origin_.empty();
+  std::atomic<uint64_t> kept{0};
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 4096), [&](const tbb::blocked_range<size_t>& r) {
+    uint64_t with_rays = 0;
+    for (size_t i = r.begin(); i != r.end(); ++i) {
+      const float own = static_cast<float>(cast_[i]);
+      kept_cast_[i] += own;
+      kept_open_[i] += static_cast<float>(open_[i]);
+      if (origins) kept_origin_[i] += own * g.position[i];
+      with_rays += kept_cast_[i] > 0 ? 1 : 0;
+    }
+    kept += with_rays;
+  });
+  kept_pixels = kept;
+  cast_.assign(n, 0);
+  open_.assign(n, 0);
+  ++views_;
+  view_seed_ = scrambled_seed(params_.seed, views_);
+  const double ratio = static_cast<double>(n) / static_cast<double>(big_n);  // (as adopt_rebuild)
+  scale_ = scale;
+  params_.width = size.x;
+  params_.height = size.y;
+  finish_ms_ *= ratio;
+  plan_ms_ *= ratio;
+  sweep_.scale(ratio);
+  ++gbuffer_version_;
+  renderer_.prepare_ao_batches(gbuffer_, gbuffer_version_);
+  estimates_ = false;
+  grid_pending_ = true;
+  all_converged_ = false;
+  prepare_rounds(n);
+  maps_gaze_.reset();                                               // (the frame evaluates them at this size, from the eye rays gathered)
+  if (spare_.channels == 3 && spare_.pixels.capacity() >= 3 * n) {  // a handed-back image's memory, for the frame's
+    spare_.width = size.x;
+    spare_.height = size.y;
+    spare_.pixels.resize(3 * n);
+  }
+}
+
 void RealtimeLoop::start_rebuild(double scale, std::string why) {
   Rebuild r;
   r.scale = scale;
   r.why = std::move(why);
-  r.width = std::max(1, static_cast<int>(std::lround(requested_.width * scale)));
-  r.height = std::max(1, static_cast<int>(std::lround(requested_.height * scale)));
+  const glm::ivec2 size = scaled_size(requested_, scale);
+  r.width = size.x;
+  r.height = size.y;
   // The view's memory reserved, not touched: each step touches only its own rows' pages (a whole
   // view's 70 bytes a pixel at once is tens of milliseconds of page faults)
   const size_t n = static_cast<size_t>(r.width) * static_cast<size_t>(r.height);
@@ -744,7 +863,8 @@ LoopFrame RealtimeLoop::frame(const Camera& camera) {
   out.index = index_++;
   double view_ms = 0;
   const bool moved = have_view_ && !same_camera(camera, camera_);
-  if (moved) rebuild_.reset();  // (a size coming back for the view before)
+  if (moved) rebuild_.reset();                                     // (a size coming back for the view before)
+  if (lower_to_ && (!have_view_ || moved)) set_scale(*lower_to_);  // (a view to trace anyway: at the lower size)
   if (settings_.clock == LoopClock::wall && moved) {
     // The camera moves: where its view at this size would take more than the frame leaves (the
     // view before's cost where views follow one another, else the cost per pixel measured), render
@@ -765,6 +885,11 @@ LoopFrame RealtimeLoop::frame(const Camera& camera) {
     view_ms = view_timer.ms();
     out.new_view = true;
     (carried ? moved_view_ms_per_px_ : fresh_view_ms_per_px_) = view_ms / (static_cast<double>(params_.width) * params_.height);
+  } else if (lower_to_) {
+    const Timer lower_timer;
+    lower_in_place(out.kept_pixels);
+    view_ms = lower_timer.ms();
+    out.new_view = out.lowered = true;
   } else if (rebuild_ && rebuild_->stage == Rebuild::done) {
     adopt_rebuild(out.kept_pixels);
     out.new_view = true;
@@ -901,8 +1026,9 @@ LoopFrame RealtimeLoop::frame(const Camera& camera) {
   // Where the frame's fixed part alone (surfaces, maps, composing) takes most of the budget, the
   // next frames render smaller
   // (a new view counts when views follow one another: a moving camera; a still one pays it once)
-  const bool moving = out.new_view && last_new_view_;
-  last_new_view_ = out.new_view;
+  // (a size lowered in place traces nothing: no view for a camera that moves next to be judged by)
+  const bool moving = out.new_view && !out.lowered && last_new_view_;
+  last_new_view_ = out.new_view && !out.lowered;
   // (planning the periphery is no fixed part either: the loop sweeps it only when the sweep fits, and
   // on a 2-core AMD EPYC VM its 3–5 ms with maps and composing passed 60 % of the budget and
   // lowered the resolution while the fovea was converged)
@@ -914,7 +1040,10 @@ LoopFrame RealtimeLoop::frame(const Camera& camera) {
   // four more late by 80–115 ms each, orbiting the dragon at 840×525 on a 2-core VM)
   const double scale_before = scale_;
   if (fixed_.add(fixed, settings_.budget_ms, wall ? 5 : 1)) {
-    if (rescale(fixed_.median_ms()) && moving && !motion_scale_) motion_scale_ = scale_before;  // the size to return to at rest
+    // (a still view's smaller size is taken from it at the next frame; a moving camera's next view is
+    // traced at that size anyway)
+    if (rescale(fixed_.median_ms(), !moving && have_view_) && moving && !motion_scale_)
+      motion_scale_ = scale_before;  // the size to return to at rest
     fixed_.clear();
   }
   // A moving camera whose frame ran out of work before its deadline grows towards the size it had
