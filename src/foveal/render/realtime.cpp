@@ -1070,8 +1070,11 @@ LoopFrame RealtimeLoop::frame(const Camera& camera) {
   // frame for a few frames, and 840x525 rendered at 85 % for the rest of the session at 8.8 ms.)
   // The grown view's fixed part takes half the budget by its pixels, below the 60 % that lowers it;
   // a part that does not shrink with the pixels makes that estimate high, not low.
+  // On the wall clock the budget is the smallest of the latest frames' (kBudgetFrames).
+  if (wall) budgets_.add(settings_.budget_ms);
   if (!out.new_view && !motion_scale_ && !rebuild_ && scale_ < 1 && fixed_.size() >= (wall ? FixedPartWindow::kFrames : 1)) {
-    const double target = std::min(1.0, scale_ * std::sqrt(0.5 * settings_.budget_ms / fixed_.median_ms()));
+    const double budget = wall ? budgets_.min() : settings_.budget_ms;
+    const double target = std::min(1.0, scale_ * std::sqrt(0.5 * budget / fixed_.median_ms()));
     if (target > scale_ && (target == 1.0 || target >= kGrowth * scale_)) grow_back(target, "the base shading fits the budget again");
   }
   // A camera come to rest gets back the size it had before it moved, and the rays kept at the

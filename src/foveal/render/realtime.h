@@ -132,6 +132,9 @@ class RecentMedian {
   double median() const {  // NaN when empty
     return count_ == 0 ? NAN : foveal::median(std::vector<double>(values_.begin(), values_.begin() + static_cast<std::ptrdiff_t>(count_)));
   }
+  double min() const {  // NaN when empty
+    return count_ == 0 ? NAN : *std::min_element(values_.begin(), values_.begin() + static_cast<std::ptrdiff_t>(count_));
+  }
   void clear() { count_ = next_ = 0; }
 
  private:
@@ -212,6 +215,11 @@ class RealtimeLoop {
   // the renderer's), reuse.tolerance (τ); the mode must be foveated.
   RealtimeLoop(FrameRenderer& renderer, const Scene& scene, const RenderParams& params, const LoopSettings& settings);
 
+  // On the wall clock a still view made smaller grows back only where its fixed part fits the
+  // smallest budget of the latest this many frames (2 s at 60 Hz): a budget that swings (an
+  // experiment's own work varying from flip to flip) made the size go down and back up every second
+  // or so, each time with late frames
+  static constexpr size_t kBudgetFrames = 120;
   // A sample more than this older than the latest is a clock that restarted (a trial clock reset, a
   // tracker reconnected), not a sample out of order
   static constexpr double kClockRestartS = 0.5;
@@ -379,10 +387,11 @@ class RealtimeLoop {
   // since (every view, size and gaze change recomputes them; no ray is traced while all have
   // converged): the next sweep would find the same, so none is made
   bool all_converged_ = false;
-  FixedPartWindow fixed_;               // the latest frames' cost besides their rays, since the last rescale
-  std::optional<double> motion_scale_;  // the size lowered for a moving camera: the scale before
-  int still_frames_ = 0;                // frames since the camera last moved
-  double last_view_cost_ms_ = 0;        // the latest frame's fixed part where it traced a new view (0 where not)
+  FixedPartWindow fixed_;                // the latest frames' cost besides their rays, since the last rescale
+  RecentMedian<kBudgetFrames> budgets_;  // wall clock: the latest frames' budgets
+  std::optional<double> motion_scale_;   // the size lowered for a moving camera: the scale before
+  int still_frames_ = 0;                 // frames since the camera last moved
+  double last_view_cost_ms_ = 0;         // the latest frame's fixed part where it traced a new view (0 where not)
   // What a moved view costs per pixel (wall clock: surfaces, shading, the rays kept), the latest
   // measured; 0 before one. A view without rays to keep (the first) is measured apart: a moved one
   // is estimated from it until one is measured
