@@ -465,7 +465,10 @@ void ViewSession::realtime_frame() {
           : "";
   r.stage = fmt::format("realtime: fovea {} ({:.0f} %){}{}{}{}{}{}", f.fovea_done ? "converged" : "refining", 100 * f.fovea_converged,
                         f.predicted ? ", at the predicted landing" : "",
-                        f.new_view && f.kept_pixels > 0 ? fmt::format(", a new view: {} px kept their rays", f.kept_pixels) : "",
+                        f.lowered                         ? fmt::format(", a smaller size from the view at hand{}",
+                                                f.kept_pixels > 0 ? fmt::format(": {} px kept their rays", f.kept_pixels) : "")
+                        : f.new_view && f.kept_pixels > 0 ? fmt::format(", a new view: {} px kept their rays", f.kept_pixels)
+                                                          : "",
                         loop_->scale() < 1 ? ", " + loop_->note() : "", f.rebuilding ? ", the camera rests: building the full size" : "",
                         gaze_note.empty() ? "" : "; " + gaze_note, budget_note);
   r.gaze = f.gaze_px / loop_->scale();

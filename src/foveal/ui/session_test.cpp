@@ -121,6 +121,25 @@ TEST(ViewSession, RealtimeUpdatesAreFramesOfTheLoop) {
   EXPECT_TRUE(session.wait_until_converged(60, kNone));
 }
 
+// --realtime: a budget the still view's fixed part does not fit lowers its size from the view at
+// hand, and the stage line says so: the size and why
+TEST(ViewSession, ALoweredSizeIsNamedOnTheStageLine) {
+  const Camera camera = default_camera(box());
+  ViewSettings s = small_settings(ViewMode::foveated);
+  s.realtime = true;
+  s.frame_budget_ms = 0.01;  // (composing alone takes more)
+  ViewSession session(box(), box_tracer(), camera, s, fixed({50, 40}));
+  std::string lowered;
+  for (int k = 0; k < 30 && lowered.empty(); ++k) {
+    session.update(kNone);
+    if (const std::string stage = session.status().stage; stage.find("a smaller size from the view at hand") != std::string::npos)
+      lowered = stage;
+  }
+  ASSERT_FALSE(lowered.empty()) << session.status().stage;
+  EXPECT_NE(lowered.find("rendering at"), std::string::npos) << lowered;
+  EXPECT_NE(lowered.find("frame budget"), std::string::npos) << lowered;
+}
+
 // --realtime: a budget longer than the display's refresh makes every frame miss refreshes; the
 // stage line says so, where the window knows the refresh
 TEST(ViewSession, ABudgetLongerThanTheRefreshIsNamed) {
