@@ -119,7 +119,7 @@ struct LoopFrame {
   bool fovea_done = false;     // all of them: the fovea is at full quality
 };
 
-// The median of the latest N values (fewer before N have come).
+// The median, or the least, of the latest N values (fewer before N have come).
 template <size_t N>
 class RecentMedian {
  public:
