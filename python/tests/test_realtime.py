@@ -281,6 +281,7 @@ def test_bench_latency_from_python_equals_the_command_lines(cli, box, tmp_path):
     assert got["clock"] == "model" and got["size"] == [168, 105]
     a, b = got["recordings"][0], expected["recordings"][0]
     assert a["recording"] == b["recording"] and a["tracker_latency_ms"] == b["tracker_latency_ms"]
+    assert a["segment_s"] == b["segment_s"] == [0, 1.5] and a["segment_cut"] is False
     for loop in ("deadline", "deadline+prediction"):
         strip = lambda saccades: [{k: v for k, v in s.items() if k != "ray_bound_ms"} for s in saccades]  # noqa: E731 (measured)
         assert strip(a[loop]["saccades"]) == strip(b[loop]["saccades"]), loop
@@ -290,6 +291,12 @@ def test_bench_latency_from_python_equals_the_command_lines(cli, box, tmp_path):
     again = foveal.bench_latency(foveal.gaze.read(str(recording)), box, size=(168, 105), max_rays=64, duration_s=1.5,
                                  clock="model", model_rays_per_ms=2000, model_fixed_ms=3, min_amplitude_deg=5, loops="deadline")
     assert again["recordings"][0]["deadline"]["timeline"] == a["deadline"]["timeline"]
+    # A segment asked past the recording's end (1.598 s) ends there, and says so
+    longer = foveal.bench_latency(str(recording), box, size=(168, 105), max_rays=64, duration_s=5, clock="model",
+                                  model_rays_per_ms=2000, model_fixed_ms=3, loops="deadline")
+    r = longer["recordings"][0]
+    assert r["segment_cut"] is True and r["segment_s"] == [0, pytest.approx(1.598)]
+    assert r["deadline"]["frames"] <= 97 and ", where the recording ends (5 s asked for from 0 s)" in longer["markdown"]
     with pytest.raises(ValueError, match="loops"):
         foveal.bench_latency(str(recording), box, size=(168, 105), loops=("sometimes",))
     with pytest.raises(TypeError, match=r"recordings\[0\]"):

@@ -93,6 +93,7 @@ struct Segment {
   std::vector<double> t;                      // seconds from the recording's first sample
   std::vector<std::optional<glm::dvec2>> px;  // render pixels
   double begin = 0, end = 0, latency_s = 0;
+  bool cut = false;  // the segment asked for ran past the recording's last sample: it ends there
   std::vector<LatencySaccade> saccades;
   std::vector<FoveaMask> masks;
   Image ref, ref2;
@@ -286,8 +287,11 @@ Segment make_segment(const Recording& rec, const LatencyParams& p) {
   if (rec.samples.empty()) fail("recording {}: no samples", rec.source);
   const double t0 = rec.samples.front().t_s;
   s.begin = p.start_s;
-  s.end = p.start_s + p.duration_s;
   if (s.begin >= rec.duration_s()) fail("start_s: {} s is past the end of {} ({:.1f} s)", p.start_s, rec.source, rec.duration_s());
+  // A segment past the recording's last sample ends there: the frames after it would show a gaze
+  // held where the recording left it, counted as if the eye had stayed
+  s.end = std::min(p.start_s + p.duration_s, rec.duration_s());
+  s.cut = p.start_s + p.duration_s > rec.duration_s();
   const double rate = rec.rate_hz();
   s.latency_s = p.tracker_latency_ms ? *p.tracker_latency_ms / 1000 : (rate > 0 ? 1.0 / rate : 0.0) + 0.002;
   const glm::dvec2 scale(static_cast<double>(p.render.width) / rec.screen_px.x, static_cast<double>(p.render.height) / rec.screen_px.y);
@@ -352,6 +356,12 @@ std::string late_summary(const std::vector<LatencyFramePart>& late) {
 nlohmann::json number_or_null(double v) { return std::isnan(v) ? nlohmann::json(nullptr) : nlohmann::json(v); }
 
 std::string ms_or_dash(std::optional<double> v) { return v ? fmt::format("{:.0f}", *v) : "—"; }
+std::string ms_or_dash(double v) { return std::isfinite(v) ? fmt::format("{:.0f}", v) : "—"; }
+
+// What a segment cut at the recording's end says, after its times ("" where it was not cut).
+std::string cut_note(bool cut, const LatencyParams& p) {
+  return cut ? fmt::format(", where the recording ends ({:g} s asked for from {:g} s)", p.duration_s, p.start_s) : std::string();
+}
 
 nlohmann::json loop_json(const LatencyLoop& l) {
   nlohmann::json j;
@@ -609,13 +619,17 @@ LatencyReport run_latency_bench(const LatencyRun& run, const std::vector<Recordi
     out.model_rays_per_ms = model_rate;
     out.model_fixed_ms = model_fixed;
     out.drawn = s.drawn;
+    out.begin_s = s.begin;
+    out.end_s = s.end;
+    out.cut = s.cut;
     for (size_t i = 0; i < s.t.size(); ++i)
       if (s.t[i] >= s.begin - 0.1 && s.t[i] < s.end && s.px[i]) {
         out.gaze_t.push_back(s.t[i]);
         out.gaze_px.push_back(*s.px[i]);
       }
-    say(fmt::format("{}: {:.0f} Hz, tracker latency {:.1f} ms, {:.1f}–{:.1f} s: {} saccade{} of at least {}°", rec.source, out.sampling_hz,
-                    out.tracker_latency_ms, s.begin, s.end, s.saccades.size(), s.saccades.size() == 1 ? "" : "s", p.min_amplitude_deg));
+    say(fmt::format("{}: {:.0f} Hz, tracker latency {:.1f} ms, {:.1f}–{:.1f} s{}: {} saccade{} of at least {}°", rec.source,
+                    out.sampling_hz, out.tracker_latency_ms, s.begin, s.end, cut_note(s.cut, p), s.saccades.size(),
+                    s.saccades.size() == 1 ? "" : "s", p.min_amplitude_deg));
     if (out.gaze_t.empty())
       say(fmt::format("  (no valid gaze sample in {:.1f}–{:.1f} s: the tracker lost the eye throughout; the loops follow no gaze here)",
                       s.begin, s.end));
@@ -659,11 +673,13 @@ LatencyReport run_latency_bench(const LatencyRun& run, const std::vector<Recordi
     const bool model = p.clock == LoopClock::model;
     const double bound = quantile(model ? model_bounds_ms : bounds_ms, 0.5);
     md += fmt::format(
-        "**{}** ({:.0f} Hz, tracker latency {:.1f} ms; {} saccades ≥ {}°, median duration {:.0f} ms; raw rate {:.0f} rays/ms, "
-        "median ray bound {:.0f} ms{})\n\n",
-        r.recording, r.sampling_hz, r.tracker_latency_ms, bounds_ms.size(), p.min_amplitude_deg, quantile(durations, 0.5),
-        r.raw_rays_per_ms, quantile(bounds_ms, 0.5),
-        model ? fmt::format("; at the model's {:.0f} rays/ms {:.0f} ms", r.model_rays_per_ms, bound) : std::string());
+        "**{}** ({:.1f}–{:.1f} s{}; {:.0f} Hz, tracker latency {:.1f} ms; {} saccades ≥ {}°, median duration {} ms; raw rate {:.0f} "
+        "rays/ms, median ray bound {} ms{})\n\n",
+        r.recording, r.begin_s, r.end_s, cut_note(r.cut, p), r.sampling_hz, r.tracker_latency_ms, bounds_ms.size(), p.min_amplitude_deg,
+        ms_or_dash(durations.empty() ? NAN : quantile(durations, 0.5)), r.raw_rays_per_ms,
+        ms_or_dash(bounds_ms.empty() ? NAN : quantile(bounds_ms, 0.5)),
+        model ? fmt::format("; at the model's {:.0f} rays/ms {} ms", r.model_rays_per_ms, ms_or_dash(bounds_ms.empty() ? NAN : bound))
+              : std::string());
     md += fmt::format(
         "| loop | frames | late | refreshes missed | frame ms p50 | p99 | landing → converged fovea, median ms | × ray bound{} | "
         "converged while the eye stayed |\n",
@@ -671,6 +687,8 @@ LatencyReport run_latency_bench(const LatencyRun& run, const std::vector<Recordi
     md += "|---|---:|---:|---:|---:|---:|---:|---:|---:|\n";
     nlohmann::json jr;
     jr["recording"] = r.recording;
+    jr["segment_s"] = {r.begin_s, r.end_s};  // seconds from its first sample; cut at its last where asked past it
+    jr["segment_cut"] = r.cut;
     jr["sampling_hz"] = r.sampling_hz;
     jr["tracker_latency_ms"] = r.tracker_latency_ms;
     jr["raw_rays_per_ms"] = r.raw_rays_per_ms;
@@ -738,8 +756,8 @@ LatencyReport bench_latency(const Scene& scene, const std::string& scene_name, c
   run.device = fmt::format("{} ({} threads)", renderer->describe(), threads);
   // The raw rate of the device the loops render on: Embree's on the CPU, the GPU's own kernel
   run.raw_rays_per_ms = [&](std::span<const Ray> rays) { return renderer->raw_occlusion_rays_per_ms(rays); };
-  run.say = say;
-  say(fmt::format("foveal bench latency: {} on {}", scene_name, run.device));
+  run.say = say;  // (none: no progress lines)
+  if (say) say(fmt::format("foveal bench latency: {} on {}", scene_name, run.device));
   const CpuTimes before = read_cpu_times();
   LatencyReport report = run_latency_bench(run, recordings, params);
   // What else ran: a frame comes late when another process or the hypervisor takes its core

@@ -128,6 +128,8 @@ struct LatencyLoop {
 
 struct LatencyRecording {
   std::string recording;
+  double begin_s = 0, end_s = 0;  // the segment replayed, seconds from the recording's first sample
+  bool cut = false;               // asked past the recording's last sample, the segment ends there
   double sampling_hz = 0, tracker_latency_ms = 0;
   double raw_rays_per_ms = 0;                        // the raw tracing rate of the run (the ray bound's denominator)
   double model_rays_per_ms = 0, model_fixed_ms = 0;  // the model clock's calibration (0 with the wall clock)

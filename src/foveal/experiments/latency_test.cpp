@@ -242,5 +242,52 @@ TEST(LatencyTimeline, APictureWithoutAWaitNamesTheSaccadeThatWaitedLongest) {
             "landing in rec.asc's segment wait)");
 }
 
+// A segment asked past the recording's last sample ends there, and says so: its frames would have
+// shown the gaze held where the recording left it, judged as if the eye had stayed. A segment with
+// no saccade gives dashes where the medians of its saccades would be, not "nan".
+TEST(LatencySegment, ASegmentPastTheRecordingsEndIsCutThereAndSaysSo) {
+  std::string csv = "t,x,y\n";  // 0.5 s at 500 Hz, a fixation with the tracker's noise
+  for (int i = 0; i < 250; ++i) csv += fmt::format("{},{},{}\n", i / 500.0, 640 + 0.3 * (i % 3), 512 - 0.2 * (i % 2));
+  const Scene scene = make_builtin_scene("box");
+  LatencyParams p;
+  p.render.width = 84;
+  p.render.height = 52;
+  p.render.foveation.max_rays = 16;
+  p.clock = LoopClock::model;
+  p.model_rays_per_ms = 2000;
+  p.model_fixed_ms = 1;
+  p.duration_s = 3;
+  p.loops = {"deadline"};
+  const std::vector<Recording> recordings = {parse_recording(csv, "short.csv")};
+  std::vector<std::string> said;
+  const LatencyReport report = bench_latency(scene, "builtin:box", scene.cameras.front(), ComputeDevice::cpu, 1, recordings, p,
+                                             [&](const std::string& line) { said.push_back(line); });
+  const LatencyRecording& r = report.recordings.front();
+  EXPECT_TRUE(r.cut);
+  EXPECT_DOUBLE_EQ(r.begin_s, 0.0);
+  EXPECT_NEAR(r.end_s, 0.498, 1e-9);
+  // A frame a refresh over the 0.498 s, not over the 3 s asked for
+  ASSERT_EQ(r.loops.size(), 1u);
+  EXPECT_GE(r.loops[0].frames, 29);
+  EXPECT_LE(r.loops[0].frames, 31);
+  const nlohmann::json& j = report.json["recordings"][0];
+  EXPECT_TRUE(j["segment_cut"].get<bool>());
+  EXPECT_NEAR(j["segment_s"][1].get<double>(), 0.498, 1e-9);
+  bool line = false;
+  for (const std::string& l : said)
+    line = line || (l.find("short.csv") != std::string::npos && l.find(", where the recording ends (3 s") != std::string::npos);
+  EXPECT_TRUE(line);
+  EXPECT_NE(report.markdown.find("0.0–0.5 s, where the recording ends (3 s asked for from 0 s);"), std::string::npos) << report.markdown;
+  EXPECT_EQ(report.markdown.find("nan"), std::string::npos) << report.markdown;
+  EXPECT_NE(report.markdown.find("median duration — ms"), std::string::npos) << report.markdown;
+  // Within the recording: not cut, and the note is absent
+  p.duration_s = 0.25;
+  const LatencyReport within = bench_latency(scene, "builtin:box", scene.cameras.front(), ComputeDevice::cpu, 1, recordings, p, {});
+  EXPECT_FALSE(within.recordings.front().cut);
+  EXPECT_DOUBLE_EQ(within.recordings.front().end_s, 0.25);
+  EXPECT_EQ(within.markdown.find("where the recording ends"), std::string::npos);
+  EXPECT_LE(within.recordings.front().loops[0].frames, 16);
+}
+
 }  // namespace
 }  // namespace foveal
