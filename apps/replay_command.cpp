@@ -177,7 +177,7 @@ nlohmann::json replay_stats_json(const ReplayOptions& o, const ReplaySettings& s
 }
 
 void print_replay(const ReplayOptions& o, const ReplaySettings& settings, const ReplaySummary& summary, const RenderParams& params,
-                  const FrameRenderer& renderer, const std::string& csv_path, int threads) {
+                  const FrameRenderer& renderer, const std::string& csv_path, int threads, const Recording* recording) {
   const std::string& source_name = o.source;
   if (settings.realtime)  // every frame is the loop's, its fovea from the raw samples (the filter steers nothing)
     fmt::print(
@@ -188,6 +188,10 @@ void print_replay(const ReplayOptions& o, const ReplaySettings& settings, const 
                source_name, summary.frames, settings.fps, summary.frames - summary.reused, summary.reused, params.width, params.height,
                o.gaze.fixation, threads);
   fmt::print("  device   {}\n", renderer.describe());
+  // A --duration past the recording's last sample: the frames end there (fewer than asked for)
+  if (recording && settings.frames <= 0 && settings.duration_s > 0 && settings.start_s + settings.duration_s > recording->duration_s())
+    fmt::print("  span     {:g}–{:.1f} s: the recording ends there ({:g} s asked for from {:g} s)\n", settings.start_s,
+               recording->duration_s(), settings.duration_s, settings.start_s);
   if (summary.budget_ms)
     fmt::print("  loop     a frame every {:.1f} ms at {:g} Hz, each within {:.1f} ms: {} late of {}\n", 1000 / settings.fps, settings.fps,
                *summary.budget_ms, summary.late, summary.frames);
@@ -242,7 +246,8 @@ int run_replay(const ReplayOptions& o) {
   if (!o.stats.empty())
     write_json_file(o.stats, replay_stats_json(o, settings, summary, params, *renderer, scene, recording, live, threads.threads(), device));
   if (!summary.stopped.empty()) fail("{}", summary.stopped);
-  if (!o.quiet) print_replay(o, settings, summary, params, *renderer, writer.csv_path(), threads.threads());
+  if (!o.quiet)
+    print_replay(o, settings, summary, params, *renderer, writer.csv_path(), threads.threads(), recording ? &*recording : nullptr);
   return 0;
 }
 

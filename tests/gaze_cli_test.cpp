@@ -246,6 +246,19 @@ TEST(GazeCli, RealtimeReplayRunsAtTheDisplaysRefresh) {
   EXPECT_EQ(frames("--realtime --refresh-hz 120 --frame-budget-ms 4", "refresh120"), std::pair(size_t{61}, 120.0));
   EXPECT_EQ(frames("--realtime --fps 30", "refresh30"), std::pair(size_t{16}, 30.0));
   EXPECT_EQ(frames("", "whole30"), std::pair(size_t{16}, 30.0));  // without --realtime, 30 frames a second of gaze
+  // A --duration past the recording's last sample (about a second): its frames end there, and a line says so
+  for (const std::string mode : {"--realtime", ""}) {
+    const CliRun r = foveal_test::foveal(
+        "replay --gaze " + rec + " --screen 480x300 --scene builtin:plane --size 32x20 --max-rays 4 --duration 30 -o refresh_long " + mode);
+    ASSERT_EQ(r.status, 0) << mode << ": " << r.err;
+    EXPECT_NE(r.out.find("  span     0–"), std::string::npos) << mode << ": " << r.out;
+    EXPECT_NE(r.out.find(" s: the recording ends there (30 s asked for from 0 s)"), std::string::npos) << mode << ": " << r.out;
+    EXPECT_LT(read_csv(scratch("refresh_long/frames.csv")).size(), 70u) << mode;
+    fs::remove_all(scratch("refresh_long"));
+    const CliRun within = foveal_test::foveal(base.substr(0, base.size() - 3) + mode + " -o refresh_within");
+    ASSERT_EQ(within.status, 0) << mode << ": " << within.err;
+    EXPECT_EQ(within.out.find("span"), std::string::npos) << mode << ": " << within.out;
+  }
   // Each frame's budget as the loop took it: a refresh, or the one given; none without the loop
   EXPECT_NEAR(stats["refresh60"].at("budget_ms").get<double>(), 1000.0 / 60, 1e-9);
   EXPECT_EQ(stats["refresh120"].at("budget_ms").get<double>(), 4.0);
