@@ -51,6 +51,7 @@ int run_bench_latency(const BenchLatencyOptions& o) {
   p.tracker_latency_ms = o.latency_ms;
   p.margin_ms = o.loop.margin_ms;
   p.periphery_share = o.loop.periphery_share.value_or(kDefaultPeripheryShare);
+  p.rays_ahead = !o.loop.no_rays_ahead;
   p.clock = parse_loop_clock(o.clock);
   p.model_rays_per_ms = o.model_rays_per_ms;
   p.model_fixed_ms = o.model_fixed_ms;

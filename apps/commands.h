@@ -91,11 +91,13 @@ void add_device_option(CLI::App& command, std::string& device);
 // `needs`: what the option goes with, for its help ("" for none).
 void add_landing_option(CLI::App& command, std::string& landing, const std::string& needs = "");
 // --margin-ms and --periphery-share: how a real-time loop's frame keeps clear of the machine's own
-// pauses (render/realtime.h's LoopSettings; docs/realtime.md); unset: the loop's defaults.
+// pauses, and --no-rays-ahead (render/realtime.h's LoopSettings; docs/realtime.md); unset: the loop's defaults.
 // `needs`: what the options go with, for their help.
 struct LoopOptions {
   std::optional<double> margin_ms, periphery_share;
-  bool given() const { return margin_ms || periphery_share; }
+  bool no_rays_ahead = false;  // --no-rays-ahead: a converged view casts nothing (LoopSettings::rays_ahead)
+  bool given() const { return margin_ms || periphery_share || no_rays_ahead; }
+  const char* given_name() const { return margin_ms ? "--margin-ms" : periphery_share ? "--periphery-share" : "--no-rays-ahead"; }
 };
 void add_loop_options(CLI::App& command, LoopOptions& loop, const std::string& needs);
 // The predictor's parameters from --landing's text (the defaults where empty); `predicting`:

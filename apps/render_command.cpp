@@ -136,6 +136,10 @@ void add_loop_options(CLI::App& cmd, LoopOptions& loop, const std::string& needs
                      "the periphery's rays stop once the frame has spent this share of its budget; the fovea's go on to the "
                      "deadline (default 1: the periphery's too; 0.6 had a quarter of the late frames on a busy 2-core machine, "
                      "and a fresh view's landings waited longer: docs/realtime.md)");
+  cmd.add_flag("--no-rays-ahead", loop.no_rays_ahead,
+               needs +
+                   "once every pixel has its n(E), cast nothing more (by default the frames' spare time, up to half of each budget, "
+                   "takes every pixel on to n_max, nearest the gaze first, for where the eye lands next: docs/realtime.md)");
 }
 
 LandingParams resolve_landing(const std::string& text, bool predicting) {

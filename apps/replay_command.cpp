@@ -63,10 +63,10 @@ ReplaySettings replay_settings(const ReplayOptions& o) {
   settings.landing = resolve_landing(o.landing, o.realtime && !o.no_predict);
   settings.orbit_deg_s = o.orbit;
   settings.keep_history = !o.no_history;
-  if (o.loop.given() && !o.realtime)
-    fail("{} needs --realtime (only the real-time loop has a frame deadline)", o.loop.margin_ms ? "--margin-ms" : "--periphery-share");
+  if (o.loop.given() && !o.realtime) fail("{} needs --realtime (only the real-time loop has a frame deadline)", o.loop.given_name());
   settings.margin_ms = o.loop.margin_ms;
   settings.periphery_share = o.loop.periphery_share.value_or(kDefaultPeripheryShare);
+  settings.rays_ahead = !o.loop.no_rays_ahead;
   for (const auto& [option, path] : {std::pair{"--stats", &o.stats}, std::pair{"--video", &o.video}})
     check_output_beside_folder(option, *path, o.output, [](const std::string& name) {
       return name == "frames.csv" || (name.rfind("frame_", 0) == 0 && lower_extension(name) == ".png");
@@ -164,6 +164,7 @@ nlohmann::json replay_stats_json(const ReplayOptions& o, const ReplaySettings& s
       {"budget_ms", summary.budget_ms ? nlohmann::json(*summary.budget_ms) : nlohmann::json(nullptr)},  // --realtime: the loop's
       {"margin_ms", summary.margin_ms ? nlohmann::json(*summary.margin_ms) : nlohmann::json(nullptr)},
       {"periphery_share", summary.budget_ms ? nlohmann::json(summary.periphery_share) : nlohmann::json(nullptr)},
+      {"rays_ahead", summary.budget_ms ? nlohmann::json(summary.rays_ahead) : nlohmann::json(nullptr)},
       {"frames_late", summary.budget_ms ? nlohmann::json(summary.late) : nlohmann::json(nullptr)},
       {"resolution_scale_min", summary.budget_ms ? nlohmann::json(summary.min_scale) : nlohmann::json(nullptr)},
       {"resolution_note", summary.budget_ms ? nlohmann::json(summary.scale_note) : nlohmann::json(nullptr)},

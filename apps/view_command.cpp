@@ -51,10 +51,10 @@ int run_view(const ViewCommandOptions& o) {
   s.frame_budget_ms = o.frame_budget_ms;
   s.predict = !o.no_predict;
   s.landing = resolve_landing(o.landing, o.realtime && !o.no_predict);
-  if (o.loop.given() && !o.realtime)
-    fail("{} needs --realtime (only the real-time loop has a frame deadline)", o.loop.margin_ms ? "--margin-ms" : "--periphery-share");
+  if (o.loop.given() && !o.realtime) fail("{} needs --realtime (only the real-time loop has a frame deadline)", o.loop.given_name());
   s.margin_ms = o.loop.margin_ms;
   s.periphery_share = o.loop.periphery_share.value_or(kDefaultPeripheryShare);
+  s.rays_ahead = !o.loop.no_rays_ahead;
   if (o.realtime && s.mode != ViewMode::foveated) fail("--realtime: the real-time loop shows the foveated mode (--mode foveated)");
   resolve(s);  // (every setting, whatever the mode: a value out of range is a mistake either way)
   WindowOptions w;

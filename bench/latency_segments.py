@@ -15,7 +15,7 @@ within its segment counts as the longest, as in the bench.
     .venv/bin/python bench/latency_segments.py [--recording REC ...] [--segment 10] [--first 2]
         [--count N] [--loops deadline,deadline+prediction] [--clock model] [--model-rays-per-ms 25000]
         [--model-fixed-ms 4] [--size 840x525] [--scene scenes/dragon-box.json] [--landing NAME=VALUE,…]
-        [--periphery-share S] [--json F] [--markdown F]
+        [--periphery-share S] [--no-rays-ahead] [--json F] [--markdown F]
 
 The defaults are BENCHMARKS.md's: the EyeLink recording and IRF S1 and S2, the model clock (the
 same figures on any machine), 10-s segments from 2 s on, as many as each recording holds.
@@ -60,6 +60,8 @@ def main():
     p.add_argument("--landing", default="", help="the prediction loops' landing predictor's parameters, NAME=VALUE,… (as bench latency's)")
     p.add_argument("--periphery-share", type=float, default=None,
                    help="the deadline loops' periphery: its rays until the frame has spent this share of its budget (as bench latency's; the loop's 1)")
+    p.add_argument("--no-rays-ahead", action="store_true",
+                   help="the deadline loops cast nothing once every pixel has its n(E) (as bench latency's)")
     p.add_argument("--json", help="write the pooled figures and every saccade as JSON")
     p.add_argument("--markdown", help="write the table as Markdown")
     a = p.parse_args()
@@ -116,7 +118,8 @@ def main():
               file=sys.stderr, flush=True)
         try:  # (its arguments are checked before any tracing: a bad one stops the first segment at once)
             report = foveal.bench_latency(these, scene, size=(width, height), start_s=start, duration_s=a.segment, clock=a.clock,
-                                          loops=loops, landing=landing, periphery_share=a.periphery_share, **model)
+                                          loops=loops, landing=landing, periphery_share=a.periphery_share,
+                                          rays_ahead=not a.no_rays_ahead, **model)
         except ValueError as error:
             refuse_by_option(p, error, {"size": "--size", "loops": "--loops", "model_rays_per_ms": "--model-rays-per-ms",
                                         "model_fixed_ms": "--model-fixed-ms", "duration_s": "--segment", "start_s": "--first",
@@ -130,7 +133,8 @@ def main():
             durations[r] += [s["duration_ms"] for s in rec["deadline"]["saccades"]]
         start += a.segment
     out = {"clock": a.clock, "segment_s": a.segment, "first_s": a.first, "size": [width, height], "scene": a.scene,
-           "loops": loops, "landing": landing, "periphery_share": a.periphery_share, "recordings": []}
+           "loops": loops, "landing": landing, "periphery_share": a.periphery_share, "rays_ahead": not a.no_rays_ahead,
+           "recordings": []}
     if a.clock == "model":
         out["model"] = {"rays_per_ms": a.model_rays_per_ms, "fixed_ms": a.model_fixed_ms}
     header = "| recording (segments, saccades) | " + " | ".join(f"`{l}` median ms" for l in loops) + \

@@ -58,6 +58,9 @@ def parse_args(argv=None):
     p.add_argument("--periphery-share", type=float, default=1.0,
                    help="the periphery's rays stop once a frame has spent this share of its budget, the fovea's go on to the "
                         "deadline (default 1: the periphery's too; less leaves a busy machine's pauses room; docs/realtime.md)")
+    p.add_argument("--no-rays-ahead", action="store_true",
+                   help="once every pixel has its n(E), render nothing more (by default the spare time of each frame, up to half "
+                        "its budget, takes every pixel on to n_max, nearest the gaze first: docs/realtime.md)")
     p.add_argument("--frames", type=int, default=0, help="stop after this many frames (0: until Escape)")
     p.add_argument("--tracker", default=None, help="ioHub eye-tracker configuration (YAML); default MouseGaze")
     p.add_argument("--move-mouse", action="store_true", help="move the pointer along a path (XTest), for runs without a person")
@@ -185,7 +188,7 @@ def main(argv=None) -> int:
         print(f"gaze_contingent: {refresh_note}")
     loop = foveal.Loop(scene, size=(w, h), camera=args.camera, display=display, max_rays=args.max_rays, gamma=args.gamma,
                        refresh_hz=refresh_hz, predict=not args.no_predict, device=args.device, landing=args.landing_params,
-                       margin_ms=args.margin_ms, periphery_share=args.periphery_share)
+                       margin_ms=args.margin_ms, periphery_share=args.periphery_share, rays_ahead=not args.no_rays_ahead)
     if loop.note:
         print(f"gaze_contingent: {loop.note}")
     io = launchHubServer(window=win, **tracker_config(args.tracker))
@@ -295,6 +298,7 @@ def main(argv=None) -> int:
     summary = {"flips": len(rows), "size": [w, h], "render_size": list(loop.size), "scene": args.scene, "device": loop.device,
                "refresh_hz": refresh_hz, "refresh_measured": args.refresh_hz is None, "refresh_note": refresh_note,
                "budget_ms": loop.budget_ms, "margin_ms": loop.margin_ms, "periphery_share": loop.periphery_share,
+               "rays_ahead": loop.rays_ahead,
                "predict": not args.no_predict,
                "gaze_positions": len({(round(r[0]), round(r[1])) for r in rows}),
                "frames_late": sum(bool(r[5]) for r in rows),

@@ -321,6 +321,13 @@ def perceive(stimulus: Any, eye: str = "healthy", gaze: Any = None, display: Any
     return result[0] if single else list(result)
 
 
+def _flag(value: Any, name: str) -> bool:
+    """A yes/no argument: True or False, not a number or a string that would read as one."""
+    if not isinstance(value, (bool, np.bool_)):
+        raise TypeError(f"{name}: expected True or False, got {type(value).__name__}")
+    return bool(value)
+
+
 def _numbers(value: Any) -> Any:
     """The JSON document's "inf" strings as floats."""
     if isinstance(value, dict):
@@ -358,7 +365,8 @@ def bench_latency(recordings: Any, scene: Scene, camera: Any = None, size: Tuple
                   loops: Sequence[str] = ("whole-frame", "deadline", "deadline+prediction"), min_amplitude_deg: float = 2.0,
                   max_rays: int = 400, tolerance: float = 0.35, seed: int = 1, device: str = "cpu", threads: int = 0,
                   progress: bool = False, timeline: Optional[Union[str, "os.PathLike[str]"]] = None,
-                  timeline_saccade: int = 0, landing: Optional[Union[dict, str]] = None, periphery_share: Optional[float] = None) -> dict:
+                  timeline_saccade: int = 0, landing: Optional[Union[dict, str]] = None, periphery_share: Optional[float] = None,
+                  rays_ahead: bool = True) -> dict:
     """``foveal bench latency`` from Python: gaze-to-photon latency of the display loops on recorded gaze.
 
     ``recordings``: one or a list of recordings — paths (read as the command line reads them, the
@@ -367,7 +375,7 @@ def bench_latency(recordings: Any, scene: Scene, camera: Any = None, size: Tuple
     ``camera`` a camera name or ``Camera`` (its first). The other arguments are the command line's
     options (docs/realtime.md): the segment (``start_s``, ``duration_s``), the display
     (``refresh_hz``, ``frame_budget_ms``), the tracker's ``latency_ms``, the deadline loops'
-    ``margin_ms`` and ``periphery_share`` (None: the loop's default, 1), the ``clock`` (wall or model, with ``model_rays_per_ms`` and
+    ``margin_ms`` and ``periphery_share`` (None: the loop's default, 1) and ``rays_ahead`` (``--no-rays-ahead``: False), the ``clock`` (wall or model, with ``model_rays_per_ms`` and
     ``model_fixed_ms``), the ``loops`` (whole-frame, deadline, deadline+prediction,
     deadline+oracle), the judged saccades' ``min_amplitude_deg``. ``progress`` prints the
     command line's progress lines; ``timeline`` draws a saccade's timeline (.png or .svg);
@@ -402,4 +410,4 @@ def bench_latency(recordings: Any, scene: Scene, camera: Any = None, size: Tuple
         number(model_fixed_ms, "model_fixed_ms"), list(loops), number(min_amplitude_deg, "min_amplitude_deg"), max_rays,
         number(tolerance, "tolerance"), seed, device, threads, progress, "" if timeline is None else os.fspath(timeline),
         timeline_saccade, landing,  # (a dict or --landing's text; the core names anything else)
-        number(periphery_share, "periphery_share")))
+        number(periphery_share, "periphery_share"), _flag(rays_ahead, "rays_ahead")))

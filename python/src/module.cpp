@@ -208,7 +208,7 @@ struct PyLoop {
   PyLoop(const nb::object& s, const std::array<int, 2>& size, const nb::object& camera_arg, std::optional<Display> display, int max_rays,
          double gamma, double refresh_hz, std::optional<double> frame_budget_ms, bool predict, const std::string& device_name, int threads_,
          uint64_t seed, const std::string& clock, double tolerance, double ellipse, bool keep_history, const nb::object& landing,
-         double periphery_share, std::optional<double> margin_ms)
+         double periphery_share, std::optional<double> margin_ms, bool rays_ahead)
       : scene(scene_of(s).scene), threads(threads_) {
     if (threads < 0) fail("threads: must be 0 (all cores) or more, got {}", threads);
     if (!(refresh_hz >= 1 && refresh_hz <= 1000)) fail("refresh_hz: must be in [1, 1000] Hz, got {}", refresh_hz);
@@ -226,6 +226,7 @@ struct PyLoop {
     settings.keep_history = keep_history;
     settings.periphery_share = periphery_share;
     settings.margin_ms = margin_ms;
+    settings.rays_ahead = rays_ahead;
     settings.landing = landing_params_of(landing);
     settings.clock = parse_loop_clock(clock);
     if (settings.clock == LoopClock::model) fail("clock: the model clock is bench latency's; a Loop in Python runs on the wall clock");
@@ -575,12 +576,12 @@ NB_MODULE(_core, m) {
                      "is refined first (docs/realtime.md).")
       .def(nb::init<const nb::object&, const std::array<int, 2>&, const nb::object&, std::optional<Display>, int, double, double,
                     std::optional<double>, bool, const std::string&, int, uint64_t, const std::string&, double, double, bool,
-                    const nb::object&, double, std::optional<double>>(),
+                    const nb::object&, double, std::optional<double>, bool>(),
            "scene"_a, "size"_a = std::array<int, 2>{840, 525}, "camera"_a = nb::none(), "display"_a = nb::none(), "max_rays"_a = 400,
            "gamma"_a = 2.0, "refresh_hz"_a = 60.0, "frame_budget_ms"_a = nb::none(), "predict"_a = true, "device"_a = "auto",
            "threads"_a = 0, "seed"_a = 1, "clock"_a = "wall", "tolerance"_a = foveal::AoReuseParams{}.tolerance, "ellipse"_a = 1.538,
            "keep_history"_a = true, "landing"_a.none() = nb::none(), "periphery_share"_a = kDefaultPeripheryShare,
-           "margin_ms"_a.none() = nb::none(),
+           "margin_ms"_a.none() = nb::none(), "rays_ahead"_a = true,
            "A loop for a view of `scene` (a Scene, or a path or builtin:NAME, loaded then; traced here, once; frame(camera=…) "
            "moves it). `frame_budget_ms` (default: one refresh at "
            "`refresh_hz`) is what each frame() may take; `predict` places the fovea at a saccade's predicted landing while it "
@@ -591,7 +592,9 @@ NB_MODULE(_core, m) {
            "`periphery_share` the share of the budget after which a frame casts no more rays for the periphery (the fovea's go "
            "on to the deadline; 1: the periphery's too); `margin_ms` the least time each frame keeps free for the machine's "
            "pauses (None: 2 ms, or a quarter of a shorter budget; more after frames that ended late, up to a quarter of the "
-           "budget; a budget set later keeps a margin given within half of it).")
+           "budget; a budget set later keeps a margin given within half of it); `rays_ahead`: once every pixel has its n(E), "
+           "the frames' spare time (up to half of each budget) takes every pixel on to n_max, nearest the gaze first, so that "
+           "where the eye lands next its fovea finds those rays (False: a converged view casts nothing).")
       .def("push", &PyLoop::push, "t"_a, "gaze"_a,
            "A tracker sample: its time in seconds (any clock, increasing; None: just after the latest sample) and the gaze "
            "(x, y) in render pixels, or None (or NaN, as many trackers write it) when the tracker lost the eye. Push every sample a fast "
@@ -639,6 +642,9 @@ NB_MODULE(_core, m) {
       .def_prop_ro(
           "periphery_share", [](const PyLoop& l) { return l.loop->settings().periphery_share; },
           "The share of the budget after which a frame casts no more rays for the periphery.")
+      .def_prop_ro(
+          "rays_ahead", [](const PyLoop& l) { return l.loop->settings().rays_ahead; },
+          "Whether a converged view's spare time takes every pixel on to n_max (rays_ahead).")
       .def_prop_ro(
           "device", [](const PyLoop& l) { return l.renderer->describe(); }, "Where the loop renders.");
 
@@ -795,8 +801,8 @@ NB_MODULE(_core, m) {
          std::optional<double> latency_ms, std::optional<double> margin_ms, const std::string& clock,
          std::optional<double> model_rays_per_ms, std::optional<double> model_fixed_ms, const std::vector<std::string>& loops,
          double min_amplitude_deg, int max_rays, double tolerance, uint64_t seed, const std::string& device_name, int threads,
-         bool progress, const std::string& timeline, int timeline_saccade, const nb::object& landing,
-         std::optional<double> periphery_share) {
+         bool progress, const std::string& timeline, int timeline_saccade, const nb::object& landing, std::optional<double> periphery_share,
+         bool rays_ahead) {
         // `bench latency` (apps/bench_latency.cpp) on recordings foveal.gaze hands over as columns
         const PyScene s = scene_of(scene);
         LatencyParams p;
@@ -809,6 +815,7 @@ NB_MODULE(_core, m) {
         p.budget_ms = frame_budget_ms;
         p.tracker_latency_ms = latency_ms;
         p.margin_ms = margin_ms;
+        p.rays_ahead = rays_ahead;
         p.periphery_share = periphery_share.value_or(kDefaultPeripheryShare);
         p.clock = parse_loop_clock(clock);
         p.model_rays_per_ms = model_rays_per_ms;
@@ -861,7 +868,7 @@ NB_MODULE(_core, m) {
       "scene"_a, "recordings"_a, "camera"_a.none(), "size"_a, "display"_a.none(), "start_s"_a, "duration_s"_a, "refresh_hz"_a,
       "frame_budget_ms"_a.none(), "latency_ms"_a.none(), "margin_ms"_a.none(), "clock"_a, "model_rays_per_ms"_a.none(),
       "model_fixed_ms"_a.none(), "loops"_a, "min_amplitude_deg"_a, "max_rays"_a, "tolerance"_a, "seed"_a, "device"_a, "threads"_a,
-      "progress"_a, "timeline"_a, "timeline_saccade"_a, "landing"_a.none(), "periphery_share"_a.none());
+      "progress"_a, "timeline"_a, "timeline_saccade"_a, "landing"_a.none(), "periphery_share"_a.none(), "rays_ahead"_a);
   m.def(
       "device_available", [] { return availability().usable; }, "Whether a usable NVIDIA GPU answered.");
   m.def(

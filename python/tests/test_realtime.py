@@ -37,6 +37,24 @@ def test_a_still_gaze_converges_the_fovea_within_budget(box):
     assert not np.array_equal(first.image, last.image)
 
 
+def test_a_converged_views_spare_time_casts_rays_ahead_of_the_gaze(box):
+    """rays_ahead (the default): once every pixel has its n(E), frames go on tracing, every pixel on to n_max, then
+    stop; False: a converged view casts nothing."""
+    ahead = foveal.Loop(box, size=(84, 52), max_rays=64, device="cpu", predict=False)
+    plain = foveal.Loop(box, size=(84, 52), max_rays=64, device="cpu", predict=False, rays_ahead=False)
+    assert ahead.rays_ahead is True and plain.rays_ahead is False
+    rays = {"ahead": [], "plain": []}
+    for k in range(400):
+        rays["ahead"].append(ahead.frame(gaze=(20, 15), t=k / 60).rays)
+        rays["plain"].append(plain.frame(gaze=(20, 15), t=k / 60).rays)
+    # Both finish: the last frames trace nothing
+    assert rays["ahead"][-20:] == [0] * 20 and rays["plain"][-20:] == [0] * 20
+    # With them every pixel that sees a surface went on to n_max = 64; without, the periphery stopped at its n(E)
+    assert sum(rays["ahead"]) > sum(rays["plain"]) * 1.2
+    with pytest.raises(TypeError):
+        foveal.Loop(box, size=(84, 52), rays_ahead="no")
+
+
 def test_a_saccade_pushed_sample_by_sample_is_predicted(box):
     loop = foveal.Loop(box, size=(200, 125), max_rays=32, device="cpu", predict=True)
     # 1000 Hz samples: a fixation, a saccade across the screen (a smooth bell of velocity), a fixation

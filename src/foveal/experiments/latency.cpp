@@ -217,6 +217,7 @@ LatencyLoop run_deadline(const LatencyRun& run, const Segment& s, const LatencyP
   settings.model_fixed_ms = model_fixed;
   settings.margin_ms = p.margin_ms;
   settings.periphery_share = p.periphery_share;
+  settings.rays_ahead = p.rays_ahead;
   RealtimeLoop rt(*run.renderer, *run.scene, p.render, settings);
   // Samples from a second before the segment: the predictor and the fovea start where the eye is
   size_t next = 0;
@@ -644,10 +645,12 @@ LatencyReport run_latency_bench(const LatencyRun& run, const std::vector<Recordi
     report.recordings.push_back(std::move(out));
   }
   // Markdown and JSON
-  std::string md =
-      fmt::format("Scene {}, {}x{}, n_max {}, device {}, {:.0f} Hz display (budget {:.1f} ms), {} clock{}.\n\n", run.scene_name,
-                  p.render.width, p.render.height, p.render.foveation.max_rays, run.device, p.refresh_hz, budget, to_string(p.clock),
-                  p.periphery_share < 1 ? fmt::format(", the periphery's rays within {:g} % of each budget", 100 * p.periphery_share) : "");
+  std::string md = fmt::format(
+      "Scene {}, {}x{}, n_max {}, device {}, {:.0f} Hz display (budget {:.1f} ms), {} clock{}.\n\n", run.scene_name, p.render.width,
+      p.render.height, p.render.foveation.max_rays, run.device, p.refresh_hz, budget, to_string(p.clock),
+      fmt::format("{}{}",
+                  p.periphery_share < 1 ? fmt::format(", the periphery's rays within {:g} % of each budget", 100 * p.periphery_share) : "",
+                  p.rays_ahead ? "" : ", no rays ahead of the gaze"));
   nlohmann::json j;
   j["scene"] = run.scene_name;
   j["device"] = run.device;
@@ -656,6 +659,7 @@ LatencyReport run_latency_bench(const LatencyRun& run, const std::vector<Recordi
   j["refresh_hz"] = p.refresh_hz;
   j["clock"] = to_string(p.clock);
   j["periphery_share"] = p.periphery_share;  // the deadline loops' (--periphery-share)
+  j["rays_ahead"] = p.rays_ahead;            // the deadline loops' (--no-rays-ahead)
   // the least margin the deadline loops keep (--margin-ms, else the default); the wall clock's alone
   j["margin_ms"] = p.clock == LoopClock::wall ? nlohmann::json(loop_margin_ms(budget, p.margin_ms)) : nlohmann::json(nullptr);
   j["landing"] = nlohmann::json::object();  // the prediction loops' landing predictor (--landing)

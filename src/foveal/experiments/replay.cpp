@@ -19,6 +19,7 @@ LoopSettings replay_loop_settings(const ReplaySettings& s) {
   l.keep_history = s.keep_history;
   l.margin_ms = s.margin_ms;
   l.periphery_share = s.periphery_share;
+  l.rays_ahead = s.rays_ahead;
   return l;
 }
 
@@ -34,8 +35,10 @@ void validate(const ReplaySettings& s) {
   if (s.budget_ms && !s.realtime) fail("frame_budget_ms: is the real-time loop's (realtime)");
   if (s.budget_ms && !(*s.budget_ms > 0 && *s.budget_ms <= 1000 / s.fps))
     fail("frame_budget_ms: must be in (0, {:g}] ms (a frame at {:g} Hz), got {}", 1000 / s.fps, s.fps, *s.budget_ms);
-  if (!s.realtime && (s.margin_ms || s.periphery_share != kDefaultPeripheryShare))
-    fail("{}: is the real-time loop's (realtime)", s.margin_ms ? "margin_ms" : "periphery_share");
+  if (!s.realtime && (s.margin_ms || s.periphery_share != kDefaultPeripheryShare || !s.rays_ahead))
+    fail("{}: is the real-time loop's (realtime)", s.margin_ms                                   ? "margin_ms"
+                                                   : s.periphery_share != kDefaultPeripheryShare ? "periphery_share"
+                                                                                                 : "rays_ahead");
   if (s.realtime) validate(replay_loop_settings(s));
   validate(s.fixation);
 }
@@ -94,6 +97,7 @@ class LoopMaker {
     summary.budget_ms = loop_.settings().budget_ms;
     summary.margin_ms = loop_margin_ms(loop_.settings());
     summary.periphery_share = loop_.settings().periphery_share;
+    summary.rays_ahead = loop_.settings().rays_ahead;
     summary.min_scale = min_scale_;
     summary.scale_note = scale_note_;
     summary.gaze_note = loop_.gaze_note();

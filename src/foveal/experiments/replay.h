@@ -40,6 +40,7 @@ struct ReplaySettings {
   // periphery's rays may run to (LoopSettings' margin_ms and periphery_share; unset: the loop's)
   std::optional<double> margin_ms;
   double periphery_share = kDefaultPeripheryShare;
+  bool rays_ahead = true;  // realtime: LoopSettings::rays_ahead
   // The camera orbits its look point about its up axis at this speed, degrees per second of the
   // sequence (0: still): a moving view, on the renderer's temporal history (params.reuse.temporal)
   // or the real-time loop's kept rays
@@ -80,6 +81,7 @@ struct ReplaySummary {
   // realtime: each frame's budget as the loop took it (unset without the loop), and the frames late
   std::optional<double> budget_ms, margin_ms;  // (margin_ms: what each frame kept free, as the loop took it)
   double periphery_share = kDefaultPeripheryShare;
+  bool rays_ahead = true;
   int late = 0;
   // realtime: the smallest render size the loop chose (a scale of the size asked for) and what it
   // said then (RealtimeLoop::note: why it lowered the size; "" where it never did), and what the

@@ -333,6 +333,7 @@ void RealtimeLoop::update_maps(glm::dvec2 gaze_px, bool predicted) {
       predicted == maps_predicted_)
     return;
   all_converged_ = false;
+  ahead_done_ = false;
   // foveation_maps()'s model in single precision, from the pixels' unit eye rays kept per size
   const size_t n = static_cast<size_t>(params_.width) * static_cast<size_t>(params_.height);
   const FoveationModel model(params_.display, params_.width, params_.height, gaze_px, params_.foveation);
@@ -420,7 +421,23 @@ void RealtimeLoop::prepare_rounds(size_t n) {
   pull_push_.prepare(params_.width, params_.height);  // (estimate_unreached's pyramid)
 }
 
-size_t RealtimeLoop::plan_round(uint64_t ray_limit, uint64_t periphery_limit, bool& swept) {
+// The pixels with a key (0 ≤ key < Keys; −1: none) into `order`, by key and within a key in pixel
+// order (a counting sort: stable, O(n)); returns how many.
+namespace {
+template <size_t Keys>
+size_t sort_by_key(const std::vector<int8_t>& key, std::vector<uint32_t>& order) {
+  std::array<uint32_t, Keys + 1> count{};
+  const size_t n = key.size();
+  for (size_t i = 0; i < n; ++i)
+    if (key[i] >= 0) ++count[static_cast<size_t>(key[i]) + 1];
+  for (size_t b = 1; b < count.size(); ++b) count[b] += count[b - 1];
+  for (size_t i = 0; i < n; ++i)
+    if (key[i] >= 0) order[count[static_cast<size_t>(key[i])]++] = static_cast<uint32_t>(i);
+  return count.back();
+}
+}  // namespace
+
+size_t RealtimeLoop::plan_round(uint64_t ray_limit, uint64_t periphery_limit, uint64_t ahead_limit, bool& swept) {
   tasks_.clear();
   swept = false;
   // What n(E) still lacks, in rounds that double the pixel's rays (kept ones included)
@@ -466,12 +483,16 @@ size_t RealtimeLoop::plan_round(uint64_t ray_limit, uint64_t periphery_limit, bo
     if (rays >= ray_limit) break;
     if (!converged(i)) add(i);
   }
-  if (!tasks_.empty() || periphery_limit == 0 || all_converged_) return tasks_.size();
+  if (!tasks_.empty() || periphery_limit == 0) return tasks_.size();
+  if (all_converged_) {
+    if (ahead_limit == 0 || ahead_done_) return 0;
+    swept = true;
+    return plan_ahead(std::min(ray_limit, ahead_limit));
+  }
   swept = true;
   ray_limit = std::min(ray_limit, periphery_limit);
   // Then the periphery by q²·σ̂²·k/(c + k), in buckets of half powers of two from the highest
   const size_t n = cast_.size();
-  std::array<uint32_t, kBuckets + 2> count{};
   order_.resize(n);
   key_.resize(n);
   for_each_pixel(n, [&](size_t i) {
@@ -491,14 +512,39 @@ size_t RealtimeLoop::plan_round(uint64_t ray_limit, uint64_t periphery_limit, bo
     }
     key_[i] = static_cast<int8_t>(b);
   });
-  for (size_t i = 0; i < n; ++i)
-    if (key_[i] >= 0) ++count[static_cast<size_t>(key_[i]) + 1];
-  for (size_t b = 1; b < count.size(); ++b) count[b] += count[b - 1];
-  const size_t active = count.back();
-  for (size_t i = 0; i < n; ++i)
-    if (key_[i] >= 0) order_[count[static_cast<size_t>(key_[i])]++] = static_cast<uint32_t>(i);
+  const size_t active = sort_by_key<kBuckets + 1>(key_, order_);
   for (size_t k = 0; k < active && rays < ray_limit; ++k) add(order_[k]);
   all_converged_ = active == 0;
+  return tasks_.size();
+}
+
+size_t RealtimeLoop::plan_ahead(uint64_t ray_limit) {
+  // Every pixel that sees a surface towards n_max, in rounds that double its rays, by eccentricity
+  // from the gaze in whole degrees (nearest first: most saccades are short)
+  tasks_.clear();
+  const auto n_max = static_cast<uint32_t>(params_.foveation.max_rays);
+  const size_t n = cast_.size();
+  constexpr int kRings = 64;
+  order_.resize(n);
+  key_.resize(n);
+  for_each_pixel(n, [&](size_t i) {
+    int b = -1;
+    if (gbuffer_.hit(i) && cast_[i] < n_max && total_cast(i) < static_cast<float>(n_max))
+      b = std::clamp(static_cast<int>(maps_.eccentricity[i]), 0, kRings - 1);
+    key_[i] = static_cast<int8_t>(b);
+  });
+  const size_t active = sort_by_key<kRings>(key_, order_);
+  uint64_t rays = 0;
+  for (size_t k = 0; k < active && rays < ray_limit; ++k) {
+    const uint32_t i = order_[k];
+    const float c = total_cast(i);
+    const auto lack = static_cast<uint32_t>(std::max(1.0f, std::ceil(static_cast<float>(n_max) - c)));
+    const uint32_t r = static_cast<uint32_t>(
+        std::min<uint64_t>({lack, n_max - cast_[i], std::max(kFirstRound, static_cast<uint32_t>(std::ceil(c))), ray_limit - rays}));
+    tasks_.push_back({i, cast_[i], r});
+    rays += r;
+  }
+  ahead_done_ = active == 0;
   return tasks_.size();
 }
 
@@ -717,6 +763,7 @@ void RealtimeLoop::lower_in_place(uint64_t& kept_pixels) {
   estimates_ = false;
   grid_pending_ = true;
   all_converged_ = false;
+  ahead_done_ = false;
   prepare_rounds(n);
   maps_gaze_.reset();                                               // (the frame evaluates them at this size, from the eye rays gathered)
   if (spare_.channels == 3 && spare_.pixels.capacity() >= 3 * n) {  // a handed-back image's memory, for the frame's
@@ -830,6 +877,7 @@ void RealtimeLoop::adopt_rebuild(uint64_t& kept_pixels) {
   maps_ = std::move(r.maps);
   maps_gaze_ = r.gaze;
   all_converged_ = false;
+  ahead_done_ = false;
   collect_fovea(r.gaze, false);
   const size_t n = gbuffer_.prim.size();
   cast_.assign(n, 0);
@@ -924,6 +972,8 @@ LoopFrame RealtimeLoop::frame(const Camera& camera) {
   // The periphery's rays stop at their share of the budget (1: at the deadline): a frame that ends
   // early is not made late by a pause of the machine's
   const double periphery_deadline = std::min(deadline, settings_.periphery_share * settings_.budget_ms - finish_ms_);
+  // The rays ahead of the gaze stop at their share of it (plan_ahead)
+  const double ahead_deadline = std::min(periphery_deadline, kAheadShare * settings_.budget_ms - finish_ms_);
   // A size coming back: half of what is left before the deadline builds it (the rest after the
   // rays, if they leave any)
   auto rebuild = [&](double until_ms) {
@@ -940,9 +990,14 @@ LoopFrame RealtimeLoop::frame(const Camera& camera) {
   auto model_rays = [&](double ms) { return static_cast<uint64_t>(std::max(0.0, (ms - model_fixed) * settings_.model_rays_per_ms)); };
   uint64_t allowance = wall ? 0 : model_rays(settings_.budget_ms);
   const uint64_t periphery_allowance = wall ? 0 : model_rays(settings_.periphery_share * settings_.budget_ms);
+  // (not in a new view's frame: a moving camera's next view is another, and its growth judges when
+  // the rays it needs ran out)
+  const bool ahead_allowed = settings_.rays_ahead && !out.new_view;
+  const uint64_t ahead_allowance =
+      wall || !ahead_allowed ? 0 : model_rays(std::min(kAheadShare, settings_.periphery_share) * settings_.budget_ms);
   bool ran_out = false;  // the rays stopped for want of work, not for the deadline
   for (;;) {
-    uint64_t limit = allowance, periphery_limit = 0;  // (0: no periphery this round)
+    uint64_t limit = allowance, periphery_limit = 0, ahead_limit = 0;  // (0: no periphery, no rays ahead this round)
     if (wall) {
       const double left = deadline - timer.ms() - plan_ms_;
       if (left <= 0) break;
@@ -951,14 +1006,18 @@ LoopFrame RealtimeLoop::frame(const Camera& camera) {
       // A periphery round plans over every pixel: only when its planning fits
       const double periphery_left = periphery_deadline - timer.ms() - plan_ms_;
       if (sweep_.fits(periphery_left)) periphery_limit = std::min(limit, rays_in(periphery_left));
+      const double ahead_left = ahead_deadline - timer.ms() - plan_ms_;
+      if (ahead_allowed && sweep_.fits(ahead_left)) ahead_limit = std::min(limit, rays_in(ahead_left));
     } else {
       if (allowance == 0) break;
       periphery_limit = std::min(allowance, periphery_allowance - std::min(periphery_allowance, out.rays));
+      ahead_limit = std::min(allowance, ahead_allowance - std::min(ahead_allowance, out.rays));
     }
     const bool periphery = periphery_limit > 0;
     const Timer plan_timer;
     bool swept;
-    const size_t planned = plan_round(limit, periphery_limit, swept);
+    const size_t planned = plan_round(limit, periphery_limit, ahead_limit, swept);
+    const bool ahead = swept && all_converged_;  // (a round ahead of the gaze: every pixel had its n(E))
     const double plan_ms = plan_timer.ms();
     out.plan_ms += plan_ms;
     if (swept) {  // a pass over every pixel
@@ -986,7 +1045,7 @@ LoopFrame RealtimeLoop::frame(const Camera& camera) {
     batch.blocked = blocked_;
     batch.done = done_;
     batch.slowdown = settings_.slowdown;
-    const double until = swept ? periphery_deadline : deadline;
+    const double until = ahead ? ahead_deadline : swept ? periphery_deadline : deadline;
     if (wall) batch.expired = [&] { return timer.ms() >= until; };
     const Timer trace_timer;
     const uint64_t traced = renderer_.trace_ao_batch(batch);

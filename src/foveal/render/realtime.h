@@ -81,7 +81,14 @@ struct LoopSettings {
   double min_scale = 0.25;   // the smallest resolution scale the loop may choose
   double slowdown = 1;       // tests only: the tracer this many times slower
   bool keep_history = true;  // a new view (the camera moved) keeps the AO of the surfaces it still sees
+  // Once every pixel has its n(E), the frames' spare time raises the pixels towards n_max, nearest
+  // the gaze first, within kAheadShare of each budget: where the eye lands next, its fovea finds
+  // those rays (docs/realtime.md, "Rays ahead of the gaze"). false: a converged view casts nothing
+  bool rays_ahead = true;
 };
+// The share of each frame's budget the rays ahead of the gaze may run to: frames that end early are
+// not made late by the machine's pauses
+inline constexpr double kAheadShare = 0.5;
 inline constexpr double kDefaultMarginMs = 2.0;
 // The margin the settings keep: the given one, else the default within a quarter of the budget
 double loop_margin_ms(const LoopSettings& settings);
@@ -295,7 +302,9 @@ class RealtimeLoop {
   // A round: the fovea's pixels short of their rays, up to `ray_limit` rays; where it has none, the
   // periphery's, up to `periphery_limit` (0: not this round). `swept`: set where the round planned
   // the periphery (a pass over every pixel)
-  size_t plan_round(uint64_t ray_limit, uint64_t periphery_limit, bool& swept);
+  size_t plan_round(uint64_t ray_limit, uint64_t periphery_limit, uint64_t ahead_limit, bool& swept);
+  // A round of rays ahead of the gaze (plan_round, once every pixel has its n(E))
+  size_t plan_ahead(uint64_t ray_limit);
   // The fovea's pixels (q = 1, hit, rays) of the current maps at `gaze_px`; centre-out where predicted
   void collect_fovea(glm::dvec2 gaze_px, bool predicted);
   // Room for a round over all n pixels, its pages touched (where a new view needs more)
@@ -387,6 +396,8 @@ class RealtimeLoop {
   // since (every view, size and gaze change recomputes them; no ray is traced while all have
   // converged): the next sweep would find the same, so none is made
   bool all_converged_ = false;
+  // Likewise for the rays ahead of the gaze: every pixel has n_max (reset with all_converged_)
+  bool ahead_done_ = false;
   FixedPartWindow fixed_;                // the latest frames' cost besides their rays, since the last rescale
   RecentMedian<kBudgetFrames> budgets_;  // wall clock: the latest frames' budgets
   std::optional<double> motion_scale_;   // the size lowered for a moving camera: the scale before

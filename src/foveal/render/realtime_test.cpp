@@ -1208,7 +1208,9 @@ TEST(RealtimeLoop, AFinishedLoopShowsThePapersFrame) {
   const std::unique_ptr<FrameRenderer> renderer = make_frame_renderer(box(), ComputeDevice::cpu);
   RenderParams params = loop_params(160, 100, 64);
   params.reuse.tolerance = 1e-6;  // no early stop: every pixel takes its n(E)
-  RealtimeLoop loop(*renderer, box(), params, model_clock(1e6));
+  LoopSettings settings = model_clock(1e6);
+  settings.rays_ahead = false;  // (with them, the pixels go on to n_max: below)
+  RealtimeLoop loop(*renderer, box(), params, settings);
   loop.push_gaze(0, glm::dvec2(70, 40));
   LoopFrame f;
   for (int k = 0; k < 6; ++k) f = loop.frame(box().cameras.front());
@@ -1230,24 +1232,101 @@ TEST(RealtimeLoop, AFinishedLoopShowsThePapersFrame) {
 }
 
 // A finished image is not swept again (a pass over every pixel that would find nothing to trace)
-// until the gaze moves the maps; its frames stay the same meanwhile.
+// until the gaze moves the maps; its frames stay the same meanwhile. With the rays ahead of the gaze
+// the image is finished once every pixel has n_max.
 TEST(RealtimeLoop, AConvergedImageIsNotSweptAgainUntilTheGazeMoves) {
-  const std::unique_ptr<FrameRenderer> renderer = make_frame_renderer(box(), ComputeDevice::cpu);
-  RealtimeLoop loop(*renderer, box(), loop_params(160, 100, 64), model_clock(1e6));
-  loop.push_gaze(0, glm::dvec2(70, 40));
-  LoopFrame f;
-  for (int k = 0; k < 8; ++k) f = loop.frame(box().cameras.front());
-  ASSERT_EQ(f.rays, 0u);  // finished: nothing left to trace
-  const std::vector<float> finished = f.color.pixels;
-  for (int k = 0; k < 3; ++k) {
+  for (const bool ahead : {false, true}) {
+    SCOPED_TRACE(ahead ? "rays ahead" : "n(E) only");
+    const std::unique_ptr<FrameRenderer> renderer = make_frame_renderer(box(), ComputeDevice::cpu);
+    LoopSettings settings = model_clock(1e6);
+    settings.rays_ahead = ahead;
+    RealtimeLoop loop(*renderer, box(), loop_params(160, 100, 64), settings);
+    loop.push_gaze(0, glm::dvec2(70, 40));
+    LoopFrame f;
+    for (int k = 0; k < 8; ++k) f = loop.frame(box().cameras.front());
+    if (ahead)
+      for (size_t i = 0; i < loop.cast().size(); ++i)
+        if (loop.gbuffer().hit(i)) ASSERT_EQ(loop.cast()[i], 64u) << "pixel " << i;
+    ASSERT_EQ(f.rays, 0u);  // finished: nothing left to trace
+    const std::vector<float> finished = f.color.pixels;
+    for (int k = 0; k < 3; ++k) {
+      f = loop.frame(box().cameras.front());
+      EXPECT_EQ(f.sweeps, 0u) << "frame " << k;
+      EXPECT_TRUE(foveal_test::same_bits(f.color.pixels, finished)) << "frame " << k;
+    }
+    loop.push_gaze(0.5, glm::dvec2(130, 70));  // the maps follow: a new fovea to refine, then the periphery
     f = loop.frame(box().cameras.front());
-    EXPECT_EQ(f.sweeps, 0u) << "frame " << k;
-    EXPECT_TRUE(foveal_test::same_bits(f.color.pixels, finished)) << "frame " << k;
+    EXPECT_EQ(f.rays > 0, !ahead);  // (with the rays ahead, the new fovea had its n_max already)
+    EXPECT_GE(f.sweeps, 1u);
   }
-  loop.push_gaze(0.5, glm::dvec2(130, 70));  // the maps follow: a new fovea to refine, then the periphery
-  f = loop.frame(box().cameras.front());
-  EXPECT_GT(f.rays, 0u);
-  EXPECT_GE(f.sweeps, 1u);
+}
+
+// Once every pixel has its n(E), the frames' spare time goes on: every pixel towards n_max, nearest
+// the gaze first, within kAheadShare of the budget; where the eye then lands, its fovea is converged
+// sooner than without them. No pixel's rays come before the fovea and the periphery have theirs.
+TEST(RealtimeLoop, SpareTimeCastsRaysAheadOfTheGazeNearestFirst) {
+  const std::unique_ptr<FrameRenderer> renderer = make_frame_renderer(box(), ComputeDevice::cpu);
+  const Camera& camera = box().cameras.front();
+  RenderParams params = loop_params(160, 100, 256);
+  const LoopSettings settings = model_clock(20000);  // 126,667 rays a frame ahead: (0.5 × 16.7 ms − 2 ms fixed) × 20,000 / ms
+  const uint64_t ahead_allowance = static_cast<uint64_t>((kAheadShare * settings.budget_ms - settings.model_fixed_ms) * 20000);
+  LoopSettings without = settings;
+  without.rays_ahead = false;
+  RealtimeLoop loop(*renderer, box(), params, settings), plain(*renderer, box(), params, without);
+  for (RealtimeLoop* l : {&loop, &plain}) l->push_gaze(0, glm::dvec2(40, 30));
+  // Both the same until every pixel has its n(E) (the loop without rays ahead casts none then)
+  std::vector<uint32_t> before;
+  LoopFrame f;
+  for (int frames = 0;; ++frames) {
+    ASSERT_LT(frames, 400) << "never converged";
+    before = loop.cast();
+    f = loop.frame(camera);
+    if (plain.frame(camera).rays == 0) break;
+    ASSERT_EQ(loop.cast(), plain.cast()) << "frame " << frames;
+  }
+  ASSERT_EQ(before, plain.cast());
+  const FoveationMaps& maps = loop.maps();
+  // That frame and the next: rays ahead of the gaze, within their share of the budget, nearest first
+  for (int k = 0; k < 3; ++k) {
+    if (k > 0) {
+      before = loop.cast();
+      f = loop.frame(camera);
+      EXPECT_EQ(plain.frame(camera).rays, 0u);
+    }
+    EXPECT_GT(f.rays, ahead_allowance / 2) << "frame " << k;
+    EXPECT_LE(f.rays, ahead_allowance) << "frame " << k;
+    EXPECT_FALSE(f.late);
+    // The pixels that got rays are the nearest of those that lacked n_max: none lies a whole degree
+    // beyond one left without (the frame's rays went out from the gaze in rings of a degree)
+    float nearest_left = 1e9f, farthest_raised = 0;
+    size_t raised = 0;
+    for (size_t i = 0; i < before.size(); ++i) {
+      if (!loop.gbuffer().hit(i)) continue;
+      EXPECT_GE(loop.cast()[i], before[i]);
+      EXPECT_LE(loop.cast()[i], 256u);
+      if (loop.cast()[i] > before[i]) {
+        farthest_raised = std::max(farthest_raised, maps.eccentricity[i]);
+        ++raised;
+      } else if (before[i] < 256u) {
+        nearest_left = std::min(nearest_left, maps.eccentricity[i]);
+      }
+    }
+    EXPECT_GT(raised, 100u) << "frame " << k;
+    EXPECT_LT(farthest_raised, std::floor(nearest_left) + 1.0f) << "frame " << k;
+  }
+  // Until every pixel has n_max; then nothing more is traced
+  int frames = 0;
+  while (loop.frame(camera).rays > 0) ASSERT_LT(++frames, 200) << "the rays ahead never finished";
+  for (size_t i = 0; i < loop.cast().size(); ++i)
+    if (loop.gbuffer().hit(i)) ASSERT_EQ(loop.cast()[i], 256u) << "pixel " << i;
+  EXPECT_EQ(loop.frame(camera).sweeps, 0u);
+  // The eye jumps to the image's far corner: its fovea is converged in the first frame, without a
+  // ray; the loop without rays ahead traces it afresh
+  for (RealtimeLoop* l : {&loop, &plain}) l->push_gaze(1.0, glm::dvec2(140, 85));
+  const LoopFrame jumped = loop.frame(camera), fresh = plain.frame(camera);
+  EXPECT_TRUE(jumped.fovea_done);
+  EXPECT_EQ(jumped.rays, 0u);
+  EXPECT_GT(fresh.rays, 10000u);
 }
 
 }  // namespace

@@ -64,6 +64,7 @@ LoopSettings view_loop_settings(const ViewSettings& s) {
   ls.landing = s.landing;
   ls.margin_ms = s.margin_ms;
   ls.periphery_share = s.periphery_share;
+  ls.rays_ahead = s.rays_ahead;
   return ls;
 }
 
@@ -78,7 +79,8 @@ nlohmann::json settings_json(const ViewSettings& s) {
           {"realtime", s.realtime ? nlohmann::json{{"frame_budget_ms", s.frame_budget_ms},
                                                    {"predict", s.predict},
                                                    {"margin_ms", loop_margin_ms(s.frame_budget_ms, s.margin_ms)},
-                                                   {"periphery_share", s.periphery_share}}
+                                                   {"periphery_share", s.periphery_share},
+                                                   {"rays_ahead", s.rays_ahead}}
                                   : nlohmann::json(false)},
           {"width", r.width},
           {"height", r.height},

@@ -54,6 +54,7 @@ struct ViewSettings {
   // periphery's rays may run to (LoopSettings' margin_ms and periphery_share; unset: the loop's)
   std::optional<double> margin_ms;
   double periphery_share = kDefaultPeripheryShare;
+  bool rays_ahead = true;  // LoopSettings::rays_ahead
 };
 // The real-time loop's settings for the view (realtime)
 LoopSettings view_loop_settings(const ViewSettings& settings);
