@@ -991,7 +991,8 @@ LoopFrame RealtimeLoop::frame(const Camera& camera) {
   uint64_t allowance = wall ? 0 : model_rays(settings_.budget_ms);
   const uint64_t periphery_allowance = wall ? 0 : model_rays(settings_.periphery_share * settings_.budget_ms);
   // (not in a new view's frame: a moving camera's next view is another, and its growth judges when
-  // the rays it needs ran out)
+  // the rays it needs ran out. A frame whose sweep finds every pixel converged ends its rays there,
+  // so the rays ahead begin with the next frame of the same view; this keeps a new view's out too)
   const bool ahead_allowed = settings_.rays_ahead && !out.new_view;
   const uint64_t ahead_allowance =
       wall || !ahead_allowed ? 0 : model_rays(std::min(kAheadShare, settings_.periphery_share) * settings_.budget_ms);

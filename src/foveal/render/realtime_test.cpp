@@ -1329,6 +1329,30 @@ TEST(RealtimeLoop, SpareTimeCastsRaysAheadOfTheGazeNearestFirst) {
   EXPECT_GT(fresh.rays, 10000u);
 }
 
+// A frame that traces a new view casts no rays ahead of the gaze: a moving camera's frames are the
+// same with them and without, even where each view converges within its frame (the frame that finds
+// every pixel converged ends its rays there, and the next is another view).
+TEST(RealtimeLoop, AMovingCamerasFramesCastNoRaysAhead) {
+  const std::unique_ptr<FrameRenderer> renderer = make_frame_renderer(box(), ComputeDevice::cpu);
+  const Camera& camera = box().cameras.front();
+  const RenderParams params = loop_params(84, 52, 16);
+  LoopSettings settings = model_clock(1e6);  // every view converges within its frame, with time to spare
+  LoopSettings without = settings;
+  without.rays_ahead = false;
+  RealtimeLoop loop(*renderer, box(), params, settings), plain(*renderer, box(), params, without);
+  for (RealtimeLoop* l : {&loop, &plain}) l->push_gaze(0, glm::dvec2(30, 20));
+  for (int k = 1; k <= 6; ++k) {
+    const LoopFrame a = loop.frame(orbit_camera(camera, 0.5 * k)), b = plain.frame(orbit_camera(camera, 0.5 * k));
+    ASSERT_TRUE(a.new_view) << "frame " << k;
+    EXPECT_EQ(a.rays, b.rays) << "frame " << k;
+    EXPECT_EQ(loop.cast(), plain.cast()) << "frame " << k;
+  }
+  // At rest the next frame is no new view: its spare time goes ahead
+  const LoopFrame still = loop.frame(orbit_camera(camera, 3.0));
+  EXPECT_FALSE(still.new_view);
+  EXPECT_GT(still.rays, plain.frame(orbit_camera(camera, 3.0)).rays);
+}
+
 }  // namespace
 }  // namespace foveal
 
