@@ -19,6 +19,19 @@
 namespace foveal {
 namespace {
 
+// A small view of the box on the model clock (the same figures on any machine).
+LatencyParams model_clock_params(int width, int height, int max_rays, double fixed_ms, double duration_s) {
+  LatencyParams p;
+  p.render.width = width;
+  p.render.height = height;
+  p.render.foveation.max_rays = max_rays;
+  p.clock = LoopClock::model;
+  p.model_rays_per_ms = 2000;
+  p.model_fixed_ms = fixed_ms;
+  p.duration_s = duration_s;
+  return p;
+}
+
 LatencyFramePart frame(int index, double ms, double maps, double plan, double trace, double compose, double rays_over,
                        double compose_over) {
   return {index, index / 60.0, ms, maps, plan, trace, compose, rays_over, compose_over, ""};
@@ -125,14 +138,7 @@ TEST(LatencyTimeline, EveryFrameJudgesTheDrawnSaccadesFovea) {
     csv += fmt::format("{},{},{}\n", t, 400 + 800 * bell((t - 0.4) / 0.065) - 800 * bell((t - 1.0) / 0.065) + 0.3 * (i % 3), 520);
   }
   const Scene scene = make_builtin_scene("box");
-  LatencyParams p;
-  p.render.width = 168;
-  p.render.height = 105;
-  p.render.foveation.max_rays = 64;
-  p.clock = LoopClock::model;
-  p.model_rays_per_ms = 2000;
-  p.model_fixed_ms = 3;
-  p.duration_s = 1.5;
+  LatencyParams p = model_clock_params(168, 105, 64, 3, 1.5);
   p.min_amplitude_deg = 5;
   p.loops = {"deadline", "deadline+oracle"};
   const std::vector<Recording> recordings = {parse_recording(csv, "saccades.csv")};
@@ -249,14 +255,7 @@ TEST(LatencySegment, ASegmentPastTheRecordingsEndIsCutThereAndSaysSo) {
   std::string csv = "t,x,y\n";  // 0.5 s at 500 Hz, a fixation with the tracker's noise
   for (int i = 0; i < 250; ++i) csv += fmt::format("{},{},{}\n", i / 500.0, 640 + 0.3 * (i % 3), 512 - 0.2 * (i % 2));
   const Scene scene = make_builtin_scene("box");
-  LatencyParams p;
-  p.render.width = 84;
-  p.render.height = 52;
-  p.render.foveation.max_rays = 16;
-  p.clock = LoopClock::model;
-  p.model_rays_per_ms = 2000;
-  p.model_fixed_ms = 1;
-  p.duration_s = 3;
+  LatencyParams p = model_clock_params(84, 52, 16, 1, 3);
   p.loops = {"deadline"};
   const std::vector<Recording> recordings = {parse_recording(csv, "short.csv")};
   std::vector<std::string> said;

@@ -333,7 +333,6 @@ void RealtimeLoop::update_maps(glm::dvec2 gaze_px, bool predicted) {
       predicted == maps_predicted_)
     return;
   all_converged_ = false;
-  ahead_done_ = false;
   // foveation_maps()'s model in single precision, from the pixels' unit eye rays kept per size
   const size_t n = static_cast<size_t>(params_.width) * static_cast<size_t>(params_.height);
   const FoveationModel model(params_.display, params_.width, params_.height, gaze_px, params_.foveation);
@@ -421,9 +420,9 @@ void RealtimeLoop::prepare_rounds(size_t n) {
   pull_push_.prepare(params_.width, params_.height);  // (estimate_unreached's pyramid)
 }
 
+namespace {
 // The pixels with a key (0 ≤ key < Keys; −1: none) into `order`, by key and within a key in pixel
 // order (a counting sort: stable, O(n)); returns how many.
-namespace {
 template <size_t Keys>
 size_t sort_by_key(const std::vector<int8_t>& key, std::vector<uint32_t>& order) {
   std::array<uint32_t, Keys + 1> count{};
@@ -437,16 +436,18 @@ size_t sort_by_key(const std::vector<int8_t>& key, std::vector<uint32_t>& order)
 }
 }  // namespace
 
-size_t RealtimeLoop::plan_round(uint64_t ray_limit, uint64_t periphery_limit, uint64_t ahead_limit, bool& swept) {
+uint32_t RealtimeLoop::round_rays(size_t i, uint32_t target) const {
+  if (!any_kept()) return std::min<uint32_t>(target - cast_[i], std::max(kFirstRound, cast_[i]));
+  const float c = total_cast(i);
+  const auto lack = static_cast<uint32_t>(std::max(1.0f, std::ceil(static_cast<float>(target) - c)));
+  return std::min<uint32_t>({lack, target - cast_[i], std::max(kFirstRound, static_cast<uint32_t>(std::ceil(c)))});
+}
+
+size_t RealtimeLoop::plan_round(uint64_t ray_limit, uint64_t periphery_limit, uint64_t ahead_limit, Round& round) {
   tasks_.clear();
-  swept = false;
+  round = Round::fovea;
   // What n(E) still lacks, in rounds that double the pixel's rays (kept ones included)
-  auto rays_for = [&](size_t i) {
-    if (!any_kept()) return std::min<uint32_t>(maps_.rays[i] - cast_[i], std::max(kFirstRound, cast_[i]));
-    const float c = total_cast(i);
-    const auto lack = static_cast<uint32_t>(std::max(1.0f, std::ceil(static_cast<float>(maps_.rays[i]) - c)));
-    return std::min<uint32_t>({lack, maps_.rays[i] - cast_[i], std::max(kFirstRound, static_cast<uint32_t>(std::ceil(c)))});
-  };
+  auto rays_for = [&](size_t i) { return round_rays(i, maps_.rays[i]); };
   uint64_t rays = 0;
   auto add = [&](uint32_t i) {
     const uint32_t r = static_cast<uint32_t>(std::min<uint64_t>(rays_for(i), ray_limit - rays));
@@ -486,10 +487,10 @@ size_t RealtimeLoop::plan_round(uint64_t ray_limit, uint64_t periphery_limit, ui
   if (!tasks_.empty() || periphery_limit == 0) return tasks_.size();
   if (all_converged_) {
     if (ahead_limit == 0 || ahead_done_) return 0;
-    swept = true;
+    round = Round::ahead;
     return plan_ahead(std::min(ray_limit, ahead_limit));
   }
-  swept = true;
+  round = Round::periphery;
   ray_limit = std::min(ray_limit, periphery_limit);
   // Then the periphery by q²·σ̂²·k/(c + k), in buckets of half powers of two from the highest
   const size_t n = cast_.size();
@@ -515,6 +516,7 @@ size_t RealtimeLoop::plan_round(uint64_t ray_limit, uint64_t periphery_limit, ui
   const size_t active = sort_by_key<kBuckets + 1>(key_, order_);
   for (size_t k = 0; k < active && rays < ray_limit; ++k) add(order_[k]);
   all_converged_ = active == 0;
+  ahead_done_ = false;  // (whatever the rays ahead had reached before, the maps or the view have changed since)
   return tasks_.size();
 }
 
@@ -529,7 +531,7 @@ size_t RealtimeLoop::plan_ahead(uint64_t ray_limit) {
   key_.resize(n);
   for_each_pixel(n, [&](size_t i) {
     int b = -1;
-    if (gbuffer_.hit(i) && cast_[i] < n_max && total_cast(i) < static_cast<float>(n_max))
+    if (gbuffer_.hit(i) && total_cast(i) < static_cast<float>(n_max))
       b = std::clamp(static_cast<int>(maps_.eccentricity[i]), 0, kRings - 1);
     key_[i] = static_cast<int8_t>(b);
   });
@@ -537,10 +539,7 @@ size_t RealtimeLoop::plan_ahead(uint64_t ray_limit) {
   uint64_t rays = 0;
   for (size_t k = 0; k < active && rays < ray_limit; ++k) {
     const uint32_t i = order_[k];
-    const float c = total_cast(i);
-    const auto lack = static_cast<uint32_t>(std::max(1.0f, std::ceil(static_cast<float>(n_max) - c)));
-    const uint32_t r = static_cast<uint32_t>(
-        std::min<uint64_t>({lack, n_max - cast_[i], std::max(kFirstRound, static_cast<uint32_t>(std::ceil(c))), ray_limit - rays}));
+    const auto r = static_cast<uint32_t>(std::min<uint64_t>(round_rays(i, n_max), ray_limit - rays));
     tasks_.push_back({i, cast_[i], r});
     rays += r;
   }
@@ -763,7 +762,6 @@ void RealtimeLoop::lower_in_place(uint64_t& kept_pixels) {
   estimates_ = false;
   grid_pending_ = true;
   all_converged_ = false;
-  ahead_done_ = false;
   prepare_rounds(n);
   maps_gaze_.reset();                                               // (the frame evaluates them at this size, from the eye rays gathered)
   if (spare_.channels == 3 && spare_.pixels.capacity() >= 3 * n) {  // a handed-back image's memory, for the frame's
@@ -877,7 +875,6 @@ void RealtimeLoop::adopt_rebuild(uint64_t& kept_pixels) {
   maps_ = std::move(r.maps);
   maps_gaze_ = r.gaze;
   all_converged_ = false;
-  ahead_done_ = false;
   collect_fovea(r.gaze, false);
   const size_t n = gbuffer_.prim.size();
   cast_.assign(n, 0);
@@ -990,12 +987,11 @@ LoopFrame RealtimeLoop::frame(const Camera& camera) {
   auto model_rays = [&](double ms) { return static_cast<uint64_t>(std::max(0.0, (ms - model_fixed) * settings_.model_rays_per_ms)); };
   uint64_t allowance = wall ? 0 : model_rays(settings_.budget_ms);
   const uint64_t periphery_allowance = wall ? 0 : model_rays(settings_.periphery_share * settings_.budget_ms);
-  // (not in a new view's frame: a moving camera's next view is another, and its growth judges when
-  // the rays it needs ran out. A frame whose sweep finds every pixel converged ends its rays there,
-  // so the rays ahead begin with the next frame of the same view; this keeps a new view's out too)
-  const bool ahead_allowed = settings_.rays_ahead && !out.new_view;
+  // (A new view's frame casts none: a view starts unconverged, and the frame whose sweep finds every
+  // pixel converged ends its rays there, so the rays ahead begin with the next frame of the same
+  // view; a moving camera's next view is another)
   const uint64_t ahead_allowance =
-      wall || !ahead_allowed ? 0 : model_rays(std::min(kAheadShare, settings_.periphery_share) * settings_.budget_ms);
+      wall || !settings_.rays_ahead ? 0 : model_rays(std::min(kAheadShare, settings_.periphery_share) * settings_.budget_ms);
   bool ran_out = false;  // the rays stopped for want of work, not for the deadline
   for (;;) {
     uint64_t limit = allowance, periphery_limit = 0, ahead_limit = 0;  // (0: no periphery, no rays ahead this round)
@@ -1008,7 +1004,7 @@ LoopFrame RealtimeLoop::frame(const Camera& camera) {
       const double periphery_left = periphery_deadline - timer.ms() - plan_ms_;
       if (sweep_.fits(periphery_left)) periphery_limit = std::min(limit, rays_in(periphery_left));
       const double ahead_left = ahead_deadline - timer.ms() - plan_ms_;
-      if (ahead_allowed && sweep_.fits(ahead_left)) ahead_limit = std::min(limit, rays_in(ahead_left));
+      if (settings_.rays_ahead && sweep_.fits(ahead_left)) ahead_limit = std::min(limit, rays_in(ahead_left));
     } else {
       if (allowance == 0) break;
       periphery_limit = std::min(allowance, periphery_allowance - std::min(periphery_allowance, out.rays));
@@ -1016,9 +1012,9 @@ LoopFrame RealtimeLoop::frame(const Camera& camera) {
     }
     const bool periphery = periphery_limit > 0;
     const Timer plan_timer;
-    bool swept;
-    const size_t planned = plan_round(limit, periphery_limit, ahead_limit, swept);
-    const bool ahead = swept && all_converged_;  // (a round ahead of the gaze: every pixel had its n(E))
+    Round round;
+    const size_t planned = plan_round(limit, periphery_limit, ahead_limit, round);
+    const bool swept = round != Round::fovea;
     const double plan_ms = plan_timer.ms();
     out.plan_ms += plan_ms;
     if (swept) {  // a pass over every pixel
@@ -1046,7 +1042,7 @@ LoopFrame RealtimeLoop::frame(const Camera& camera) {
     batch.blocked = blocked_;
     batch.done = done_;
     batch.slowdown = settings_.slowdown;
-    const double until = ahead ? ahead_deadline : swept ? periphery_deadline : deadline;
+    const double until = round == Round::ahead ? ahead_deadline : swept ? periphery_deadline : deadline;
     if (wall) batch.expired = [&] { return timer.ms() >= until; };
     const Timer trace_timer;
     const uint64_t traced = renderer_.trace_ao_batch(batch);

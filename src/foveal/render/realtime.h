@@ -299,12 +299,18 @@ class RealtimeLoop {
   // the view is replaced next, and its surfaces move into the history instead of being copied
   void keep_rays(bool leaving);
   void update_maps(glm::dvec2 gaze_px, bool predicted);  // predicted: the fovea's pixels centre-out
+  // What a round planned: the fovea's rays, the periphery's or the rays ahead of the gaze (each of
+  // the last two a pass over every pixel)
+  enum class Round { fovea, periphery, ahead };
   // A round: the fovea's pixels short of their rays, up to `ray_limit` rays; where it has none, the
-  // periphery's, up to `periphery_limit` (0: not this round). `swept`: set where the round planned
-  // the periphery (a pass over every pixel)
-  size_t plan_round(uint64_t ray_limit, uint64_t periphery_limit, uint64_t ahead_limit, bool& swept);
+  // periphery's, up to `periphery_limit` (0: not this round); where every pixel has its n(E), rays
+  // ahead of the gaze, up to `ahead_limit` (0: not this round). `round`: which it planned
+  size_t plan_round(uint64_t ray_limit, uint64_t periphery_limit, uint64_t ahead_limit, Round& round);
   // A round of rays ahead of the gaze (plan_round, once every pixel has its n(E))
   size_t plan_ahead(uint64_t ray_limit);
+  // Pixel i's next round towards `target` rays: what it lacks, at most doubling its count (kept
+  // rays included)
+  uint32_t round_rays(size_t i, uint32_t target) const;
   // The fovea's pixels (q = 1, hit, rays) of the current maps at `gaze_px`; centre-out where predicted
   void collect_fovea(glm::dvec2 gaze_px, bool predicted);
   // Room for a round over all n pixels, its pages touched (where a new view needs more)
@@ -396,7 +402,8 @@ class RealtimeLoop {
   // since (every view, size and gaze change recomputes them; no ray is traced while all have
   // converged): the next sweep would find the same, so none is made
   bool all_converged_ = false;
-  // Likewise for the rays ahead of the gaze: every pixel has n_max (reset with all_converged_)
+  // Likewise for the rays ahead of the gaze: every pixel has n_max (meaningful while all_converged_,
+  // cleared as it is set)
   bool ahead_done_ = false;
   FixedPartWindow fixed_;                // the latest frames' cost besides their rays, since the last rescale
   RecentMedian<kBudgetFrames> budgets_;  // wall clock: the latest frames' budgets
