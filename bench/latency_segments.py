@@ -12,6 +12,13 @@ with `deadline+oracle`) gains over the loop without it, beside a third of the po
 saccade, and how many saccades each made better or worse. A saccade whose fovea did not converge
 within its segment counts as the longest, as in the bench.
 
+How far the median's gain can be trusted: the landings of a segment share one loop, so the
+interval resamples whole segments (a cluster bootstrap, Davison & Hinkley 1997, "Bootstrap Methods
+and their Application", section 3.8), 2,000 times with a fixed seed, and gives the 2.5th and 97.5th
+percentiles of the gain in the median (`gain_interval_ms` in the JSON). Landing → converged times
+cluster at 0 ms (a place already converged) and at hundreds of ms (a fresh fovea), so the median
+can sit in a sparse middle where one landing decides it: the interval says how far it could move.
+
     .venv/bin/python bench/latency_segments.py [--recording REC ...] [--segment 10] [--first 2]
         [--count N] [--loops deadline,deadline+prediction] [--clock model] [--model-rays-per-ms 25000]
         [--model-fixed-ms 4] [--size 840x525] [--scene scenes/dragon-box.json] [--landing NAME=VALUE,…]
@@ -41,6 +48,38 @@ def pooled_median(values):
         return None
     m = statistics.median(keyed)
     return None if math.isinf(m) else m
+
+
+def bootstrap_gain(base, other, segment_of, resamples=2000, seed=1):
+    """The 2.5th and 97.5th percentiles of median(base) − median(other) over resamples of whole segments.
+
+    base and other: each saccade's landing → converged ms in the two loops (None: never converged);
+    segment_of: each saccade's segment. Segments are drawn with replacement, as many as there are,
+    and each draw takes every saccade of its segment in both loops (paired). None, or an interval
+    of ±inf where a resample's median is a saccade never converged in one loop only.
+    """
+    import random
+    segments = sorted(set(segment_of))
+    if not segments:
+        return None
+    members = {g: [i for i, s in enumerate(segment_of) if s == g] for g in segments}
+    rng = random.Random(seed)
+    key = lambda v: math.inf if v is None else v
+    gains = []
+    for _ in range(resamples):
+        picked = [i for g in (rng.choice(segments) for _ in segments) for i in members[g]]
+        a = statistics.median(sorted(key(base[i]) for i in picked))
+        b = statistics.median(sorted(key(other[i]) for i in picked))
+        gains.append(0.0 if a == b else a - b)  # (two medians never converged: no gain either way)
+    gains.sort()
+    return [gains[int(0.025 * (resamples - 1))], gains[int(math.ceil(0.975 * (resamples - 1)))]]
+
+
+def interval_text(interval):
+    if interval is None:
+        return ""
+    show = lambda v: "∞" if v == math.inf else "−∞" if v == -math.inf else f"{v:.0f}".replace("-", "−")
+    return f" (95 %: {show(interval[0])} to {show(interval[1])})"
 
 
 def main():
@@ -145,7 +184,9 @@ def main():
         medians = {l: pooled_median([s["landing_to_converged_ms"] for s in pooled[r][l]]) for l in loops}
         third = statistics.median(durations[r]) / 3 if durations[r] else None
         entry = {"recording": r, "segments": segments[r], "saccades": len(base), "median_landing_to_converged_ms": medians,
-                 "third_of_median_saccade_ms": third, "gain_ms": {}, "better": {}, "worse": {}, "saccade_list": pooled[r]}
+                 "third_of_median_saccade_ms": third, "gain_ms": {}, "gain_interval_ms": {}, "better": {}, "worse": {},
+                 "saccade_list": pooled[r]}
+        segment_of = [s["segment_start_s"] for s in pooled[r]["deadline"]]
         gains, counts = [], []
         for l in loops[1:] if loops[0] == "deadline" else [x for x in loops if x != "deadline"]:
             gain = None if medians["deadline"] is None or medians[l] is None else medians["deadline"] - medians[l]
@@ -153,8 +194,10 @@ def main():
             key = lambda v: math.inf if v is None else v
             better = sum(key(o) < key(b) - 0.5 for b, o in zip(base, other))
             worse = sum(key(o) > key(b) + 0.5 for b, o in zip(base, other))
+            interval = bootstrap_gain(base, other, segment_of)
             entry["gain_ms"][l], entry["better"][l], entry["worse"][l] = gain, better, worse
-            gains.append(f"{l}: {'—' if gain is None else f'{gain:.0f} ms'}")
+            entry["gain_interval_ms"][l] = None if interval is None else [v if math.isfinite(v) else None for v in interval]
+            gains.append(f"{l}: {'—' if gain is None else f'{gain:.0f} ms'}{interval_text(interval)}")
             counts.append(f"{l}: {better} / {worse}")
         out["recordings"].append(entry)
         cells = " | ".join("—" if medians[l] is None else f"{medians[l]:.0f}" for l in loops)

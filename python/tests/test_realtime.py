@@ -1,6 +1,7 @@
 """foveal.Loop: frames within the budget, the fovea refined and converged, the saccade predictor fed
 sample by sample, the GIL released while rendering, and clear errors."""
 import json
+import math
 import os
 import subprocess
 import sys
@@ -304,6 +305,10 @@ def test_bench_latency_from_python_equals_the_command_lines(cli, box, tmp_path):
         strip = lambda saccades: [{k: v for k, v in s.items() if k != "ray_bound_ms"} for s in saccades]  # noqa: E731 (measured)
         assert strip(a[loop]["saccades"]) == strip(b[loop]["saccades"]), loop
         assert a[loop]["timeline"] == b[loop]["timeline"], loop
+        # Each frame's own account: rays, size, the fovea's converged share (the model clock times no part)
+        frame = a[loop]["timeline"][-1]
+        assert frame["scale"] == 1 and 0 <= frame["fovea_converged"] <= 1 and frame["maps_ms"] is None and frame["trace_ms"] is None
+        assert sum(f["rays"] for f in a[loop]["timeline"]) > 0
         assert len(a[loop]["saccades"]) == 2 and a[loop]["frames_late"] == 0
     # A Recording object does as well as its path; bad arguments are named
     again = foveal.bench_latency(foveal.gaze.read(str(recording)), box, size=(168, 105), max_rays=64, duration_s=1.5,
@@ -414,6 +419,8 @@ def test_the_segments_script_pools_every_judged_saccade(tmp_path):
     gain = pooled["gain_ms"]["deadline+prediction"]
     medians = pooled["median_landing_to_converged_ms"]
     assert gain == pytest.approx(medians["deadline"] - medians["deadline+prediction"])
+    low, high = pooled["gain_interval_ms"]["deadline+prediction"]  # (the segments resampled: bootstrap_gain's test below)
+    assert low <= high and "(95 %: " in run.stdout
     assert "lookAtPoint_EL_S1.csv (2, " in run.stdout
     bad = subprocess.run([sys.executable, script, "--recording", str(recording), "--loops", "deadline+prediction"],
                          capture_output=True, text=True)
@@ -436,6 +443,36 @@ def test_the_segments_script_pools_every_judged_saccade(tmp_path):
     bad = subprocess.run([sys.executable, script, "--recording", str(recording), "--json", str(both), "--markdown",
                           str(tmp_path / "." / "both.txt")], capture_output=True, text=True, timeout=60)
     assert bad.returncode != 0 and "two outputs into one file" in bad.stderr and not both.exists()
+
+
+def test_the_segments_scripts_interval_resamples_whole_segments():
+    # bench/latency_segments.py's 95 % interval of the gain in the median: a cluster bootstrap over segments
+    sys.path.insert(0, os.path.join(os.path.dirname(__file__), "..", "..", "bench"))
+    try:
+        import latency_segments
+    finally:
+        sys.path.pop(0)
+    gain = latency_segments.bootstrap_gain
+    rng = np.random.default_rng(5)
+    base = list(rng.choice([0.0, 50.0, 400.0, 900.0], 60))
+    segment_of = [k // 10 for k in range(60)]
+    # The same loop gains nothing, in every resample; a loop 30 ms sooner at every landing, exactly 30
+    assert gain(base, base, segment_of) == [0.0, 0.0]
+    assert gain(base, [b - 30 for b in base], segment_of) == pytest.approx([30, 30])
+    # Reproducible (a fixed seed), and wider where the gain differs from segment to segment
+    mixed = [b - (120 if k // 10 % 2 else 0) for k, b in enumerate(base)]
+    assert gain(base, mixed, segment_of) == gain(base, mixed, segment_of)
+    low, high = gain(base, mixed, segment_of)
+    assert low < high and low >= 0 and high <= 120
+    # Whole segments are drawn: two that trade places between the loops have the same pooled median (no
+    # gain), but a resample of one of them twice gains or loses all of it
+    assert gain([0, 0, 500, 500], [500, 500, 0, 0], [0, 0, 1, 1]) == [-500, 500]
+    assert gain([0, 500], [0, 500], [0, 1]) == [0.0, 0.0]
+    # A landing never converged (None) counts as the longest; one never converged in one loop only is an unbounded gain
+    assert gain([None, None, None], [None, None, None], [0, 1, 2]) == [0.0, 0.0]
+    assert gain([None, None, None], [10, 10, 10], [0, 1, 2]) == [math.inf, math.inf]
+    assert latency_segments.interval_text([-12.4, math.inf]) == " (95 %: −12 to ∞)"
+    assert gain([], [], []) is None
 
 
 def _min_jerk(t, t0, duration, amplitude):

@@ -266,6 +266,13 @@ LatencyLoop run_deadline(const LatencyRun& run, const Segment& s, const LatencyP
     lf.shown_s = shown_at(t, f.cost_ms, period, loop.refreshes_missed);
     lf.gaze_px = f.gaze_px / rt.scale();
     lf.predicted = f.predicted;
+    lf.rays = f.rays;
+    lf.scale = rt.scale();
+    lf.fovea_converged = f.fovea_converged;
+    if (wall) {
+      lf.maps_ms = f.maps_ms;
+      lf.trace_ms = f.trace_ms;
+    }
     if (f.predicted) predictions.emplace_back(t, lf.gaze_px);
     loop.timeline.push_back(lf);
     rt.recycle(screen.show(s, loop, std::move(f.color), lf.shown_s, rt.scale() == 1.0));
@@ -389,12 +396,18 @@ nlohmann::json loop_json(const LatencyLoop& l) {
   }
   j["timeline"] = nlohmann::json::array();
   for (const LatencyFrame& f : l.timeline)
-    j["timeline"].push_back({{"start_s", f.start_s},
-                             {"shown_s", f.shown_s},
-                             {"cost_ms", f.cost_ms},
-                             {"fovea_px", {f.gaze_px.x, f.gaze_px.y}},
-                             {"predicted", f.predicted},
-                             {"fovea_error", std::isfinite(f.fovea_error) ? nlohmann::json(f.fovea_error) : nlohmann::json(nullptr)}});
+    j["timeline"].push_back(
+        {{"start_s", f.start_s},
+         {"shown_s", f.shown_s},
+         {"cost_ms", f.cost_ms},
+         {"fovea_px", {f.gaze_px.x, f.gaze_px.y}},
+         {"predicted", f.predicted},
+         {"rays", f.rays},
+         {"scale", f.scale},
+         {"fovea_converged", std::isfinite(f.fovea_converged) ? nlohmann::json(f.fovea_converged) : nlohmann::json(nullptr)},
+         {"maps_ms", std::isfinite(f.maps_ms) ? nlohmann::json(f.maps_ms) : nlohmann::json(nullptr)},
+         {"trace_ms", std::isfinite(f.trace_ms) ? nlohmann::json(f.trace_ms) : nlohmann::json(nullptr)},
+         {"fovea_error", std::isfinite(f.fovea_error) ? nlohmann::json(f.fovea_error) : nlohmann::json(nullptr)}});
   const auto median = l.median_converged_ms();
   j["median_landing_to_converged_ms"] = median ? nlohmann::json(*median) : nlohmann::json(nullptr);
   if (l.name != "whole-frame") {

@@ -76,6 +76,12 @@ struct LatencyFrame {  // one shown frame, for the timeline picture
   double cost_ms = 0;     // what the frame cost on the clock
   glm::dvec2 gaze_px{0};  // where the fovea was placed
   bool predicted = false;
+  // The loop's own account (deadline loops): the AO rays it traced, its size (a share of the
+  // references' width; a frame below 1 is not judged), its fovea's converged share, and on the wall
+  // clock the time its foveation maps (with the estimate of the pixels without rays) and its rays took
+  uint64_t rays = 0;
+  double scale = 1, fovea_converged = NAN;
+  double maps_ms = NAN, trace_ms = NAN;
   double fovea_error = NAN;  // RMSE in the fovea of the saccade being followed, over the reference noise (NaN: none)
   // The same for the timeline picture's saccade (LatencyParams::timeline_saccade; NaN without one),
   // in every frame: before its landing the followed fovea is the saccade before's, another place
