@@ -147,6 +147,9 @@ class FoveationModel {
                                 uint16_t* rays, float* blend) const;
 
   double max_cpd() const { return max_cpd_; }
+  // The effective eccentricity up to which q = 1, degrees: 0 where the display resolves the
+  // fovea's acuity (q falls from the gaze on), else where acuity falls to the display's limit
+  double fovea_reach_deg() const { return foveal_cpd_ < kAcuityFovealCpd ? kAcuityE2Deg * (kAcuityFovealCpd / foveal_cpd_ - 1.0) : 0.0; }
   const FoveationParams& params() const { return params_; }
 
  private:

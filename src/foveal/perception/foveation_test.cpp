@@ -131,6 +131,15 @@ TEST(Foveation, FoveaRadiusMatchesTheDisplayLimit) {
   EXPECT_EQ(m.evaluate_at(840, below(limit - 0.01)).quality, 1.0);
   EXPECT_LT(m.evaluate_at(840, below(limit + 0.01)).quality, 1.0);
   EXPECT_NEAR(m.evaluate_at(840, below(limit + 1.0)).effective_deg, limit + 1.0, 1e-9);
+  // The model says how far its fovea reaches (3.8° here); a display that resolves 43.1 cycles/degree has none
+  EXPECT_DOUBLE_EQ(m.fovea_reach_deg(), limit);
+  EXPECT_NEAR(limit, 3.79, 0.01);
+  Display sharp;
+  sharp.res_x = 1680 * 5;
+  sharp.res_y = 1050 * 5;
+  const FoveationModel fine(sharp, sharp.res_x, sharp.res_y, {sharp.res_x / 2.0, sharp.res_y / 2.0}, FoveationParams{1.0});
+  EXPECT_EQ(fine.fovea_reach_deg(), 0.0);
+  EXPECT_LT(fine.evaluate_at(sharp.res_x / 2.0, sharp.res_y / 2.0 + 5).quality, 1.0);
 }
 
 TEST(Foveation, TheSinglePrecisionModelAgreesWithTheDoubleOne) {

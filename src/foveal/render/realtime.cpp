@@ -19,6 +19,7 @@
 #include <array>
 #include <atomic>
 #include <cmath>
+#include <limits>
 
 namespace foveal {
 
@@ -35,6 +36,13 @@ constexpr double kGrowthShare = 0.75;  // … to where its frame's work would ta
 // dragon at 840×525 while the surfaces were copied into the history (less now that they move)
 constexpr double kCarryCost = 1.6;
 constexpr int kEstimateEvery = 4;  // frames between estimates of the pixels without rays (estimate_unreached)
+// The maps follow the gaze (update_maps) in a box around the fovea, kMapsBoxBeyondDeg of effective
+// eccentricity beyond the fovea's reach up and down from the gaze, at least kMapsBoxDeg (times the
+// ellipse's ratio across); outside it they are evaluated again once the gaze is kMapsStaleDeg from
+// where they last were everywhere
+constexpr double kMapsBoxDeg = 6.0;
+constexpr double kMapsBoxBeyondDeg = 3.0;
+constexpr double kMapsStaleDeg = 0.5;
 // A view's first rays include a coarse grid, every kCoarseGrid-th pixel in each direction
 // (plan_round): spread over the view, they make the estimate of the pixels still without
 // rays an interpolation of measured values rather than the fovea's carried outwards
@@ -329,20 +337,18 @@ void RealtimeLoop::update_maps(glm::dvec2 gaze_px, bool predicted) {
   // tracker's noise move it less; recomputing the model at every pixel costs milliseconds)
   const double ppd = pixels_per_degree(params_.display) * params_.width / params_.display.res_x;
   const double threshold_px = std::max(0.5, 0.1 * ppd);
-  if (maps_gaze_ && glm::length(*maps_gaze_ - gaze_px) < threshold_px && maps_.width == params_.width && maps_.height == params_.height &&
-      predicted == maps_predicted_)
-    return;
+  const bool same_size = maps_.width == params_.width && maps_.height == params_.height;
+  if (maps_gaze_ && glm::length(*maps_gaze_ - gaze_px) < threshold_px && same_size && predicted == maps_predicted_) return;
   all_converged_ = false;
   // foveation_maps()'s model in single precision, from the pixels' unit eye rays kept per size
   const size_t n = static_cast<size_t>(params_.width) * static_cast<size_t>(params_.height);
   const FoveationModel model(params_.display, params_.width, params_.height, gaze_px, params_.foveation);
-  const size_t w = static_cast<size_t>(params_.width);
   if (ray_x_.size() != n) {  // the unit eye rays, as three arrays (the maps' loop vectorises over each)
     ray_x_.resize(n);
     ray_y_.resize(n);
     ray_z_.resize(n);
     tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 4096), [&](const tbb::blocked_range<size_t>& r) {
-      eye_rays(model, w, r.begin(), r.end(), ray_x_.data(), ray_y_.data(), ray_z_.data());
+      eye_rays(model, static_cast<size_t>(params_.width), r.begin(), r.end(), ray_x_.data(), ray_y_.data(), ray_z_.data());
     });
   }
   maps_.width = params_.width;
@@ -352,9 +358,59 @@ void RealtimeLoop::update_maps(glm::dvec2 gaze_px, bool predicted) {
   maps_.rays.resize(n);
   maps_.blend.resize(n);
   const bool foveated = params_.mode == RenderMode::foveated;
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 4096), [&](const tbb::blocked_range<size_t>& r) {
-    evaluate_maps(model, params_.foveation, foveated, ray_x_.data(), ray_y_.data(), ray_z_.data(), r.begin(), r.end(), maps_);
-  });
+  // Within a fixation (the gaze within kMapsStaleDeg of where the maps were last evaluated
+  // everywhere, no prediction on either side) only a box around the fovea, where q(E) is steep;
+  // outside it the maps keep a gaze at most a degree from this one (two gazes each within
+  // kMapsStaleDeg of the same one), less than a tracker's accuracy moves it. At the papers' display
+  // the fovea reaches 3.8° (q = 1), the box 6.8° (q ≈ 0.6, n(E) changing by 28 rays a degree of 400,
+  // less further out) and holds a quarter of the pixels. The model at every pixel took 1.2–2.6 ms
+  // of a 16.7-ms frame at 840×525 on two cores, and a tracker's noise moved the gaze a tenth of a
+  // degree in most frames of a fixation.
+  const int w = params_.width, h = params_.height;
+  const double reach = model.fovea_reach_deg(), box_deg = std::max(kMapsBoxDeg, reach + kMapsBoxBeyondDeg);
+  const int half_y = static_cast<int>(std::ceil(box_deg * ppd));
+  const int half_x = static_cast<int>(std::ceil(box_deg * params_.foveation.ellipse_ratio * ppd));
+  const glm::ivec4 box(std::max(0, static_cast<int>(gaze_px.x) - half_x), std::max(0, static_cast<int>(gaze_px.y) - half_y),
+                       std::min(w, static_cast<int>(gaze_px.x) + half_x + 1), std::min(h, static_cast<int>(gaze_px.y) + half_y + 1));
+  const bool in_box = foveated && maps_gaze_ && maps_full_gaze_ && same_size && !predicted && !maps_predicted_ &&
+                      glm::length(*maps_full_gaze_ - gaze_px) <= kMapsStaleDeg * ppd && box.x < box.z && box.y < box.w;
+  // (The box's pixels span fewer degrees away from the screen's centre, more so on a wide display:
+  // where its edge comes within the fovea's reach and the maps' staleness, plus half a degree,
+  // every pixel is evaluated after all; eccentricity grows outwards from the gaze, so its edge holds
+  // the least of all the pixels outside it)
+  bool boxed = false;
+  if (in_box) {
+    tbb::parallel_for(tbb::blocked_range<int>(box.y, box.w, 8), [&](const tbb::blocked_range<int>& r) {
+      for (int y = r.begin(); y != r.end(); ++y) {
+        const size_t row = static_cast<size_t>(y) * static_cast<size_t>(w);
+        evaluate_maps(model, params_.foveation, foveated, ray_x_.data(), ray_y_.data(), ray_z_.data(), row + static_cast<size_t>(box.x),
+                      row + static_cast<size_t>(box.z), maps_);
+      }
+    });
+    const auto e = [&](int x, int y) {
+      return maps_.eccentricity[static_cast<size_t>(y) * static_cast<size_t>(w) + static_cast<size_t>(x)];
+    };
+    float edge = std::numeric_limits<float>::infinity();
+    for (int x = box.x; x < box.z; ++x) {
+      if (box.y > 0) edge = std::min(edge, e(x, box.y));
+      if (box.w < h) edge = std::min(edge, e(x, box.w - 1));
+    }
+    for (int y = box.y; y < box.w; ++y) {
+      if (box.x > 0) edge = std::min(edge, e(box.x, y));
+      if (box.z < w) edge = std::min(edge, e(box.z - 1, y));
+    }
+    boxed = edge >= reach + 2 * kMapsStaleDeg + 0.5;
+  }
+  if (boxed) {
+    maps_box_ = box;
+  } else {
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 4096), [&](const tbb::blocked_range<size_t>& r) {
+      evaluate_maps(model, params_.foveation, foveated, ray_x_.data(), ray_y_.data(), ray_z_.data(), r.begin(), r.end(), maps_);
+    });
+    maps_full_gaze_ = gaze_px;
+    maps_box_ = glm::ivec4(0, 0, w, h);
+    reached_ = true;  // (n(E) changed everywhere: a pixel may now lack rays it did not need)
+  }
   maps_gaze_ = gaze_px;
   collect_fovea(gaze_px, predicted);
 }
@@ -362,10 +418,13 @@ void RealtimeLoop::update_maps(glm::dvec2 gaze_px, bool predicted) {
 void RealtimeLoop::collect_fovea(glm::dvec2 gaze_px, bool predicted) {
   // The fovea's pixels, in pixel order (centre-out measured slower to converge the whole fovea on
   // IRF S1, 151–170 ms against 101–117 ms: the rim waited while the centre followed the drift)
-  const size_t n = maps_.quality.size();
+  // (q = 1 lies inside the box the maps were evaluated in, which reaches kMapsBoxBeyondDeg
+  // beyond it; outside it the maps' gaze is at most a degree off: update_maps)
+  const auto w = static_cast<size_t>(maps_.width);
   fovea_.clear();
-  for (size_t i = 0; i < n; ++i)
-    if (maps_.quality[i] >= 1.0f && gbuffer_.hit(i) && maps_.rays[i] > 0) fovea_.push_back(static_cast<uint32_t>(i));
+  for (auto y = static_cast<size_t>(maps_box_.y); y < static_cast<size_t>(maps_box_.w); ++y)
+    for (size_t i = y * w + static_cast<size_t>(maps_box_.x), e = y * w + static_cast<size_t>(maps_box_.z); i < e; ++i)
+      if (maps_.quality[i] >= 1.0f && gbuffer_.hit(i) && maps_.rays[i] > 0) fovea_.push_back(static_cast<uint32_t>(i));
   // A predicted landing's fovea centre-out instead: a frame's rays rarely cover a fresh fovea, and
   // pixel order spent them on its top rows, the part a prediction off by a degree or two most
   // often misses (measured: a 10.3° saccade predicted 22 px too high got none of its landed
@@ -374,7 +433,6 @@ void RealtimeLoop::collect_fovea(glm::dvec2 gaze_px, bool predicted) {
   maps_predicted_ = predicted;
   unreached_possible_ = true;  // (new maps, a new view: estimate_unreached looks for pixels without rays)
   if (predicted) {
-    const size_t w = static_cast<size_t>(params_.width);
     auto ring = [&](uint32_t i) {
       const double dx = static_cast<double>(i % w) + 0.5 - gaze_px.x, dy = static_cast<double>(i / w) + 0.5 - gaze_px.y;
       return static_cast<size_t>(std::sqrt(dx * dx + dy * dy));
@@ -597,9 +655,15 @@ void RealtimeLoop::estimate_unreached() {
   // The pixels without rays take their visibility from those around them that have rays (pull-push,
   // pull_push.h), estimated from the rays so far before a frame casts its own: while pixels lack
   // their rays (after a new view, or new maps), every kEstimateEvery frames, and at once where
-  // there was no estimate yet. A pass over every pixel and the pyramid: 1.0–1.5 ms at 840×525 on two
-  // cores, so not every frame; between, a pixel reached meanwhile shows its own rays.
-  if (!unreached_possible_ || (estimates_ && ++estimate_age_ < kEstimateEvery)) return;
+  // there was no estimate yet. A pass over every pixel and the pyramid: 1.0–2.5 ms at 840×525 on two
+  // cores, so not every frame; between, a pixel reached meanwhile shows its own rays. And only once a
+  // pixel outside the fovea has got its first rays since the last (or the maps changed everywhere):
+  // while the rays go to the fovea alone the estimate would hardly change, and a fovea that follows
+  // a fixation's drift reaches a rim of new pixels every few frames, which made it run every fourth
+  // frame of the fixation. (bench/latency_segments.py under the model clock gave every landing of
+  // IRF S1 and S2 the same time with this rule as without it.)
+  if (!unreached_possible_ || (estimates_ && (++estimate_age_ < kEstimateEvery || !reached_))) return;
+  reached_ = false;
   std::atomic<bool> unreached{false};
   pull_push_.pull(params_.width, params_.height, [&](size_t i) {
     const float rays = total_cast(i);
@@ -611,6 +675,7 @@ void RealtimeLoop::estimate_unreached() {
   unreached_possible_ = unreached;
   estimates_ = unreached && pull_push_.push();
   estimate_age_ = 0;
+  ++estimates_made_;
 }
 
 bool FixedPartWindow::add(double fixed_ms, double budget_ms, size_t min_frames) {
@@ -873,7 +938,9 @@ void RealtimeLoop::adopt_rebuild(uint64_t& kept_pixels) {
   ray_y_ = std::move(r.ray_y);
   ray_z_ = std::move(r.ray_z);
   maps_ = std::move(r.maps);
-  maps_gaze_ = r.gaze;
+  maps_gaze_ = maps_full_gaze_ = r.gaze;
+  maps_box_ = glm::ivec4(0, 0, r.width, r.height);
+  reached_ = true;
   all_converged_ = false;
   collect_fovea(r.gaze, false);
   const size_t n = gbuffer_.prim.size();
@@ -1051,6 +1118,7 @@ LoopFrame RealtimeLoop::frame(const Camera& camera) {
     out.rays += traced;
     for (size_t t = 0; t < tasks_.size(); ++t)
       if (done_[t]) {
+        if (!reached_ && tasks_[t].count > 0 && maps_.quality[tasks_[t].pixel] < 1.0f && total_cast(tasks_[t].pixel) == 0) reached_ = true;
         cast_[tasks_[t].pixel] += tasks_[t].count;
         open_[tasks_[t].pixel] += tasks_[t].count - blocked_[t];
       }

@@ -280,6 +280,8 @@ class RealtimeLoop {
   const std::vector<float>& kept_open() const { return kept_open_; }
   const FoveationMaps& maps() const { return maps_; }
   const GBuffer& gbuffer() const { return gbuffer_; }
+  // How many estimates of the pixels without rays the loop has made (estimate_unreached; tests)
+  uint64_t estimates_made() const { return estimates_made_; }
   // Whether pixel i's AO is converged (τ(E) or n(E) reached).
   bool converged(size_t i) const;
 
@@ -368,6 +370,8 @@ class RealtimeLoop {
   FoveationMaps maps_;
   std::vector<float> ray_x_, ray_y_, ray_z_;  // each pixel's unit eye ray (the maps' input that the gaze leaves alone)
   std::optional<glm::dvec2> maps_gaze_;
+  std::optional<glm::dvec2> maps_full_gaze_;  // where the maps were last evaluated at every pixel (update_maps)
+  glm::ivec4 maps_box_{0};                    // the pixels [x0, x1) × [y0, y1) the latest update evaluated
   bool maps_predicted_ = false;               // the maps are at a predicted landing
   std::vector<uint32_t> cast_, open_;         // rays of this view: pixel i's sequence [0, cast_[i]) under view_seed_
   std::vector<float> kept_cast_, kept_open_;  // rays kept from the views before (reprojected; empty: none)
@@ -384,6 +388,8 @@ class RealtimeLoop {
   bool estimates_ = false;          // pull_push_ holds estimates for this view
   bool grid_pending_ = false;       // the view's coarse grid is still to be planned (plan_round)
   int estimate_age_ = 0;            // frames since they were made
+  uint64_t estimates_made_ = 0;
+  bool reached_ = true;             // a pixel outside the fovea got its first rays, or the maps changed everywhere, since then
   std::vector<AoRayTask> tasks_;
   std::vector<uint32_t> blocked_;
   std::vector<uint8_t> done_;

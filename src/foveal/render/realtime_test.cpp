@@ -14,6 +14,7 @@
 
 #include <algorithm>
 #include <numeric>
+#include <numbers>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -1162,6 +1163,125 @@ TEST(RealtimeLoop, APixelWithoutRaysYetShowsTheVisibilityOfThePixelsAroundIt) {
   EXPECT_LT(near_error / near, 0.04);  // within 3 px of measured pixels: the plane's AO, near enough
   EXPECT_LT(worst_near, 0.15);
   EXPECT_GT(off_constant / without, 0.3);  // the plane is mostly open (V ≈ 0.9), far from the constant 0.5
+}
+
+// Within a fixation the maps follow the gaze in a box around the fovea (3° of effective
+// eccentricity beyond its reach, 3.8° here, up and down from the gaze): there they are the model's at
+// the gaze, the fovea's pixels among them; outside it they keep the gaze they were last evaluated at
+// everywhere until the gaze is half a degree from it. A larger move, or a predicted landing,
+// evaluates them everywhere.
+TEST(RealtimeLoop, WithinAFixationTheMapsFollowTheGazeInABoxAroundTheFovea) {
+  const std::unique_ptr<FrameRenderer> renderer = make_frame_renderer(box(), ComputeDevice::cpu);
+  const Camera& camera = box().cameras.front();
+  const RenderParams params = loop_params(420, 262, 64);
+  const double ppd = pixels_per_degree(params.display) * params.width / params.display.res_x;
+  RealtimeLoop loop(*renderer, box(), params, model_clock(2000));
+  // The model's maps at a gaze, and how many pixels' n(E) the loop's differ from them by more than a
+  // ray (the loop's are in single precision: n(E) may differ by one) in a set of pixels
+  auto differ = [&](const FoveationMaps& maps, glm::dvec2 gaze, auto&& which) {
+    const FoveationMaps model = foveation_maps(loop.params(), gaze);
+    size_t n = 0, off = 0;
+    for (size_t i = 0; i < model.rays.size(); ++i)
+      if (which(model, i)) {
+        ++n;
+        off += std::abs(int(maps.rays[i]) - int(model.rays[i])) > 1 || (maps.quality[i] >= 1.0f) != (model.quality[i] >= 1.0f) ? 1 : 0;
+      }
+    return std::pair{n, off};
+  };
+  const auto everywhere = [](const FoveationMaps&, size_t) { return true; };
+  const glm::dvec2 start(150, 120);
+  loop.push_gaze(0, start);
+  loop.frame(camera);
+  const FoveationMaps first = loop.maps();
+  EXPECT_LT(differ(first, start, everywhere).second, first.rays.size() / 100);
+  // A drift of 0.3°: within 5° of it the model's at the new gaze (the fovea among them), beyond 10.5°
+  // (outside the box, whose corners reach 9.7°) the first gaze's, to the bit
+  const glm::dvec2 drift = start + glm::dvec2(0.3 * ppd, 0.1 * ppd);
+  loop.push_gaze(0.1, drift);
+  loop.frame(camera);
+  const FoveationMaps drifted = loop.maps();
+  const auto [near, near_off] = differ(drifted, drift, [](const FoveationMaps& m, size_t i) { return m.eccentricity[i] < 5.0f; });
+  EXPECT_GT(near, 5000u);
+  EXPECT_LE(near_off, near / 100);
+  size_t far = 0, kept = 0;
+  const FoveationMaps model = foveation_maps(loop.params(), drift);
+  for (size_t i = 0; i < model.rays.size(); ++i)
+    if (model.eccentricity[i] > 10.5f) {
+      ++far;
+      kept +=
+          drifted.rays[i] == first.rays[i] && drifted.quality[i] == first.quality[i] && drifted.eccentricity[i] == first.eccentricity[i];
+      EXPECT_NEAR(drifted.eccentricity[i], model.eccentricity[i], 0.5) << "pixel " << i;  // a gaze 0.3° off
+    }
+  EXPECT_GT(far, 10000u);
+  EXPECT_EQ(kept, far);
+  // The loop's fovea is the model's fovea at the gaze: no pixel outside the box keeps q = 1
+  size_t fovea = 0, model_fovea = 0;
+  for (size_t i = 0; i < model.quality.size(); ++i) {
+    fovea += drifted.quality[i] >= 1.0f;
+    model_fovea += model.quality[i] >= 1.0f;
+  }
+  EXPECT_GT(model_fovea, 1000u);
+  EXPECT_NEAR(static_cast<double>(fovea), static_cast<double>(model_fovea), 0.01 * model_fovea);
+  // 0.7° from where they were last evaluated everywhere: everywhere again
+  const glm::dvec2 moved = start + glm::dvec2(0.7 * ppd, 0);
+  loop.push_gaze(0.2, moved);
+  loop.frame(camera);
+  EXPECT_LT(differ(loop.maps(), moved, everywhere).second, first.rays.size() / 100);
+  // A predicted landing's maps are the model's everywhere, however near the gaze before
+  LoopSettings predicting = model_clock(2000);
+  predicting.predict = true;
+  RealtimeLoop predicted(*renderer, box(), params, predicting);
+  for (int k = 0; k <= 100; ++k) predicted.push_gaze(k * 0.001, start);  // a fixation at 1000 Hz …
+  predicted.frame(camera);
+  int predicted_frames = 0;
+  for (int k = 1; k <= 40; ++k) {  // … then a 10° saccade of 40 ms, with a frame every 8 ms while it flies
+    const double tau = k / 40.0;
+    predicted.push_gaze(0.1 + k * 0.001,
+                        start + glm::dvec2(10 * ppd * (tau - std::sin(2 * std::numbers::pi * tau) / (2 * std::numbers::pi)), 0));
+    if (k % 8 != 0) continue;
+    const LoopFrame f = predicted.frame(camera);
+    if (!f.predicted) continue;
+    ++predicted_frames;
+    EXPECT_LT(differ(predicted.maps(), f.gaze_px, everywhere).second, first.rays.size() / 100) << "frame at " << k << " ms";
+  }
+  EXPECT_GT(predicted_frames, 1);
+}
+
+// The estimate of the pixels without rays is made again only once a pixel outside the fovea has
+// got its first rays (or the maps changed everywhere): while a fovea that follows a fixation's
+// drift is refined it would hardly change, and it is a pass over every pixel and a pyramid.
+TEST(RealtimeLoop, TheEstimateWaitsWhileOnlyTheFoveaGetsRays) {
+  const std::unique_ptr<FrameRenderer> renderer = make_frame_renderer(sphere_plane(), ComputeDevice::cpu);
+  const Camera& camera = sphere_plane().cameras.front();
+  const RenderParams params = loop_params(200, 125, 64);
+  RealtimeLoop loop(*renderer, sphere_plane(), params, model_clock(300));  // ~4,000 rays a frame: the fovea takes many
+  const double ppd = pixels_per_degree(params.display) * params.width / params.display.res_x;
+  glm::dvec2 gaze(100, 62);
+  loop.push_gaze(0, gaze);
+  LoopFrame f = loop.frame(camera);  // the view, its grid
+  f = loop.frame(camera);            // the first estimate, from the grid's rays
+  const uint64_t first = loop.estimates_made();
+  ASSERT_GE(first, 1u);
+  // A fixation's drift, 0.15° a frame back and forth: the fovea follows, reaching a rim of new
+  // pixels, until a frame gives a pixel outside it its first rays (the fovea converged)
+  int frames = 0, fovea_rim = 0, outside = 0;
+  uint64_t made = 0;
+  for (; frames < 60 && !outside; ++frames) {
+    gaze.x += (frames % 2 ? -0.15 : 0.15) * ppd;
+    const std::vector<uint32_t> before = loop.cast();
+    made = loop.estimates_made();
+    loop.push_gaze(0.01 * (frames + 1), gaze);
+    f = loop.frame(camera);
+    for (size_t i = 0; i < before.size(); ++i)
+      if (before[i] == 0 && loop.cast()[i] > 0) (loop.maps().quality[i] >= 1.0f ? fovea_rim : outside) += 1;
+  }
+  ASSERT_GT(outside, 0) << "the fovea did not converge in 60 frames";
+  ASSERT_GT(frames, 12) << "the fovea converged too soon to see the estimate wait";
+  EXPECT_GT(fovea_rim, 0);  // (the fovea reached new pixels as it followed)
+  EXPECT_EQ(made, first);   // no estimate until then (each made before its frame's rays)
+  // Then it follows within four frames
+  for (int k = 0; k < 5; ++k) loop.frame(camera);
+  EXPECT_GT(loop.estimates_made(), first);
 }
 
 // A new view's first rays include a coarse grid outside the fovea (every 16th pixel in each
