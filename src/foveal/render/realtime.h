@@ -389,7 +389,7 @@ class RealtimeLoop {
   bool grid_pending_ = false;       // the view's coarse grid is still to be planned (plan_round)
   int estimate_age_ = 0;            // frames since they were made
   uint64_t estimates_made_ = 0;
-  bool reached_ = true;             // a pixel outside the fovea got its first rays, or the maps changed everywhere, since then
+  bool reached_ = true;  // a pixel outside the fovea got its first rays, or the maps changed everywhere, since then
   std::vector<AoRayTask> tasks_;
   std::vector<uint32_t> blocked_;
   std::vector<uint8_t> done_;
