@@ -31,6 +31,7 @@ import argparse
 import json
 import math
 import os
+import random
 import statistics
 import sys
 import time
@@ -41,12 +42,16 @@ from outputs import check_outputs, refuse_by_option, write_output
 
 
 
+def as_ms(value):
+    """A landing → converged time, with a saccade never converged (None) as the longest, as the bench counts it."""
+    return math.inf if value is None else value
+
+
 def pooled_median(values):
     """The median with a saccade never converged (None) counted as the longest, as the bench counts it."""
-    keyed = sorted(math.inf if v is None else v for v in values)
-    if not keyed:
+    if not values:
         return None
-    m = statistics.median(keyed)
+    m = statistics.median(as_ms(v) for v in values)
     return None if math.isinf(m) else m
 
 
@@ -58,18 +63,16 @@ def bootstrap_gain(base, other, segment_of, resamples=2000, seed=1):
     and each draw takes every saccade of its segment in both loops (paired). None, or an interval
     of ±inf where a resample's median is a saccade never converged in one loop only.
     """
-    import random
     segments = sorted(set(segment_of))
     if not segments:
         return None
     members = {g: [i for i, s in enumerate(segment_of) if s == g] for g in segments}
     rng = random.Random(seed)
-    key = lambda v: math.inf if v is None else v
     gains = []
     for _ in range(resamples):
         picked = [i for g in (rng.choice(segments) for _ in segments) for i in members[g]]
-        a = statistics.median(sorted(key(base[i]) for i in picked))
-        b = statistics.median(sorted(key(other[i]) for i in picked))
+        a = statistics.median(as_ms(base[i]) for i in picked)
+        b = statistics.median(as_ms(other[i]) for i in picked)
         gains.append(0.0 if a == b else a - b)  # (two medians never converged: no gain either way)
     gains.sort()
     return [gains[int(0.025 * (resamples - 1))], gains[int(math.ceil(0.975 * (resamples - 1)))]]
@@ -191,9 +194,8 @@ def main():
         for l in loops[1:] if loops[0] == "deadline" else [x for x in loops if x != "deadline"]:
             gain = None if medians["deadline"] is None or medians[l] is None else medians["deadline"] - medians[l]
             other = [s["landing_to_converged_ms"] for s in pooled[r][l]]
-            key = lambda v: math.inf if v is None else v
-            better = sum(key(o) < key(b) - 0.5 for b, o in zip(base, other))
-            worse = sum(key(o) > key(b) + 0.5 for b, o in zip(base, other))
+            better = sum(as_ms(o) < as_ms(b) - 0.5 for b, o in zip(base, other))
+            worse = sum(as_ms(o) > as_ms(b) + 0.5 for b, o in zip(base, other))
             interval = bootstrap_gain(base, other, segment_of)
             entry["gain_ms"][l], entry["better"][l], entry["worse"][l] = gain, better, worse
             entry["gain_interval_ms"][l] = None if interval is None else [v if math.isfinite(v) else None for v in interval]

@@ -396,18 +396,17 @@ nlohmann::json loop_json(const LatencyLoop& l) {
   }
   j["timeline"] = nlohmann::json::array();
   for (const LatencyFrame& f : l.timeline)
-    j["timeline"].push_back(
-        {{"start_s", f.start_s},
-         {"shown_s", f.shown_s},
-         {"cost_ms", f.cost_ms},
-         {"fovea_px", {f.gaze_px.x, f.gaze_px.y}},
-         {"predicted", f.predicted},
-         {"rays", f.rays},
-         {"scale", f.scale},
-         {"fovea_converged", std::isfinite(f.fovea_converged) ? nlohmann::json(f.fovea_converged) : nlohmann::json(nullptr)},
-         {"maps_ms", std::isfinite(f.maps_ms) ? nlohmann::json(f.maps_ms) : nlohmann::json(nullptr)},
-         {"trace_ms", std::isfinite(f.trace_ms) ? nlohmann::json(f.trace_ms) : nlohmann::json(nullptr)},
-         {"fovea_error", std::isfinite(f.fovea_error) ? nlohmann::json(f.fovea_error) : nlohmann::json(nullptr)}});
+    j["timeline"].push_back({{"start_s", f.start_s},
+                             {"shown_s", f.shown_s},
+                             {"cost_ms", f.cost_ms},
+                             {"fovea_px", {f.gaze_px.x, f.gaze_px.y}},
+                             {"predicted", f.predicted},
+                             {"rays", f.rays},
+                             {"scale", f.scale},
+                             {"fovea_converged", number_or_null(f.fovea_converged)},
+                             {"maps_ms", number_or_null(f.maps_ms)},
+                             {"trace_ms", number_or_null(f.trace_ms)},
+                             {"fovea_error", number_or_null(f.fovea_error)}});
   const auto median = l.median_converged_ms();
   j["median_landing_to_converged_ms"] = median ? nlohmann::json(*median) : nlohmann::json(nullptr);
   if (l.name != "whole-frame") {

@@ -359,7 +359,7 @@ void RealtimeLoop::update_maps(glm::dvec2 gaze_px, bool predicted) {
   maps_.blend.resize(n);
   const bool foveated = params_.mode == RenderMode::foveated;
   // Within a fixation (the gaze within kMapsStaleDeg of where the maps were last evaluated
-  // everywhere, no prediction on either side) only a box around the fovea, where q(E) is steep;
+  // everywhere) only a box around the fovea, where q(E) is steep;
   // outside it the maps keep a gaze at most a degree from this one (two gazes each within
   // kMapsStaleDeg of the same one), less than a tracker's accuracy moves it. At the papers' display
   // the fovea reaches 3.8° (q = 1), the box 6.8° (q ≈ 0.6, n(E) changing by 28 rays a degree of 400,
@@ -372,7 +372,7 @@ void RealtimeLoop::update_maps(glm::dvec2 gaze_px, bool predicted) {
   const int half_x = static_cast<int>(std::ceil(box_deg * params_.foveation.ellipse_ratio * ppd));
   const glm::ivec4 box(std::max(0, static_cast<int>(gaze_px.x) - half_x), std::max(0, static_cast<int>(gaze_px.y) - half_y),
                        std::min(w, static_cast<int>(gaze_px.x) + half_x + 1), std::min(h, static_cast<int>(gaze_px.y) + half_y + 1));
-  const bool in_box = foveated && maps_gaze_ && maps_full_gaze_ && same_size && !predicted && !maps_predicted_ &&
+  const bool in_box = foveated && maps_gaze_ && maps_full_gaze_ && same_size &&
                       glm::length(*maps_full_gaze_ - gaze_px) <= kMapsStaleDeg * ppd && box.x < box.z && box.y < box.w;
   // (The box's pixels span fewer degrees away from the screen's centre, more so on a wide display:
   // where its edge comes within the fovea's reach and the maps' staleness, plus half a degree,

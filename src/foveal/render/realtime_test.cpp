@@ -1168,8 +1168,8 @@ TEST(RealtimeLoop, APixelWithoutRaysYetShowsTheVisibilityOfThePixelsAroundIt) {
 // Within a fixation the maps follow the gaze in a box around the fovea (3° of effective
 // eccentricity beyond its reach, 3.8° here, up and down from the gaze): there they are the model's at
 // the gaze, the fovea's pixels among them; outside it they keep the gaze they were last evaluated at
-// everywhere until the gaze is half a degree from it. A larger move, or a predicted landing,
-// evaluates them everywhere.
+// everywhere until the gaze is half a degree from it. A larger move (a saccade's predicted landing
+// among them) evaluates them everywhere.
 TEST(RealtimeLoop, WithinAFixationTheMapsFollowTheGazeInABoxAroundTheFovea) {
   const std::unique_ptr<FrameRenderer> renderer = make_frame_renderer(box(), ComputeDevice::cpu);
   const Camera& camera = box().cameras.front();
@@ -1227,7 +1227,8 @@ TEST(RealtimeLoop, WithinAFixationTheMapsFollowTheGazeInABoxAroundTheFovea) {
   loop.push_gaze(0.2, moved);
   loop.frame(camera);
   EXPECT_LT(differ(loop.maps(), moved, everywhere).second, first.rays.size() / 100);
-  // A predicted landing's maps are the model's everywhere, however near the gaze before
+  // A saccade's predicted landings, degrees from where the maps were evaluated everywhere: the
+  // model's everywhere
   LoopSettings predicting = model_clock(2000);
   predicting.predict = true;
   RealtimeLoop predicted(*renderer, box(), params, predicting);
