@@ -269,8 +269,10 @@ LatencyLoop run_deadline(const LatencyRun& run, const Segment& s, const LatencyP
     lf.rays = f.rays;
     lf.scale = rt.scale();
     lf.fovea_converged = f.fovea_converged;
+    lf.sweeps = f.sweeps;
     if (wall) {
       lf.maps_ms = f.maps_ms;
+      lf.plan_ms = f.plan_ms;
       lf.trace_ms = f.trace_ms;
     }
     if (f.predicted) predictions.emplace_back(t, lf.gaze_px);
@@ -405,6 +407,8 @@ nlohmann::json loop_json(const LatencyLoop& l) {
                              {"scale", f.scale},
                              {"fovea_converged", number_or_null(f.fovea_converged)},
                              {"maps_ms", number_or_null(f.maps_ms)},
+                             {"plan_ms", number_or_null(f.plan_ms)},
+                             {"sweeps", f.sweeps},
                              {"trace_ms", number_or_null(f.trace_ms)},
                              {"fovea_error", number_or_null(f.fovea_error)}});
   const auto median = l.median_converged_ms();

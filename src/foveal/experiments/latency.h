@@ -78,10 +78,13 @@ struct LatencyFrame {  // one shown frame, for the timeline picture
   bool predicted = false;
   // The loop's own account (deadline loops): the AO rays it traced, its size (a share of the
   // references' width; a frame below 1 is not judged), its fovea's converged share, and on the wall
-  // clock the time its foveation maps (with the estimate of the pixels without rays) and its rays took
+  // clock the time its foveation maps (with the estimate of the pixels without rays), its planning
+  // (choosing the fovea's rays, and its sweeps over every pixel for the periphery's or those ahead)
+  // and its rays took
   uint64_t rays = 0;
   double scale = 1, fovea_converged = NAN;
-  double maps_ms = NAN, trace_ms = NAN;
+  double maps_ms = NAN, plan_ms = NAN, trace_ms = NAN;
+  uint32_t sweeps = 0;
   double fovea_error = NAN;  // RMSE in the fovea of the saccade being followed, over the reference noise (NaN: none)
   // The same for the timeline picture's saccade (LatencyParams::timeline_saccade; NaN without one),
   // in every frame: before its landing the followed fovea is the saccade before's, another place

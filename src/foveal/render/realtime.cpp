@@ -27,6 +27,7 @@ namespace {
 
 constexpr uint32_t kFirstRound = 16;   // a pixel's first round of rays (adaptive sampling's)
 constexpr int kBuckets = 64;           // priority buckets of the periphery (half powers of two)
+constexpr int kRings = 64;             // the rays ahead's rings of a degree of eccentricity
 constexpr double kSlipDecay = 0.995;   // per frame: the margin's memory of a late end
 constexpr double kSlipPad = 0.5;       // ms kept beyond the latest slip
 constexpr double kRestMs = 500;        // a camera still this long is at rest: a size lowered for its motion comes back
@@ -159,6 +160,7 @@ RealtimeLoop::RealtimeLoop(FrameRenderer& renderer, const Scene& scene, const Re
   // τ where q = 1: the reference's worst-case noise at n_max rays, times the tolerance
   tau_fovea_ = static_cast<float>(params.reuse.tolerance * 0.5 / std::sqrt(std::max(1, params.foveation.max_rays)));
   sweep_.set_budget(settings.budget_ms);
+  narrow_sweep_.set_budget(settings.budget_ms);
 }
 
 glm::dvec2 RealtimeLoop::px_to_deg(glm::dvec2 px) const {
@@ -223,6 +225,7 @@ void RealtimeLoop::set_budget_ms(double budget_ms) {
   validate(s);
   settings_ = s;
   sweep_.set_budget(budget_ms);
+  narrow_sweep_.set_budget(budget_ms);
 }
 
 void RealtimeLoop::reset() {
@@ -403,6 +406,8 @@ void RealtimeLoop::update_maps(glm::dvec2 gaze_px, bool predicted) {
   }
   if (boxed) {
     maps_box_ = box;
+    periphery_keys_.stale_box(box, static_cast<size_t>(w));
+    ahead_keys_.stale_box(box, static_cast<size_t>(w));
   } else {
     tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 4096), [&](const tbb::blocked_range<size_t>& r) {
       evaluate_maps(model, params_.foveation, foveated, ray_x_.data(), ray_y_.data(), ray_z_.data(), r.begin(), r.end(), maps_);
@@ -410,6 +415,8 @@ void RealtimeLoop::update_maps(glm::dvec2 gaze_px, bool predicted) {
     maps_full_gaze_ = gaze_px;
     maps_box_ = glm::ivec4(0, 0, w, h);
     reached_ = true;  // (n(E) changed everywhere: a pixel may now lack rays it did not need)
+    periphery_keys_.stale_all();
+    ahead_keys_.stale_all();
   }
   maps_gaze_ = gaze_px;
   collect_fovea(gaze_px, predicted);
@@ -474,31 +481,44 @@ void RealtimeLoop::prepare_rounds(size_t n) {
   grow(blocked_);
   grow(done_);
   grow(order_);
-  grow(key_);
+  periphery_keys_.reset(n);
+  ahead_keys_.reset(n);
   pull_push_.prepare(params_.width, params_.height);  // (estimate_unreached's pyramid)
 }
-
-namespace {
-// The pixels with a key (0 ≤ key < Keys; −1: none) into `order`, by key and within a key in pixel
-// order (a counting sort: stable, O(n)); returns how many.
-template <size_t Keys>
-size_t sort_by_key(const std::vector<int8_t>& key, std::vector<uint32_t>& order) {
-  std::array<uint32_t, Keys + 1> count{};
-  const size_t n = key.size();
-  for (size_t i = 0; i < n; ++i)
-    if (key[i] >= 0) ++count[static_cast<size_t>(key[i]) + 1];
-  for (size_t b = 1; b < count.size(); ++b) count[b] += count[b - 1];
-  for (size_t i = 0; i < n; ++i)
-    if (key[i] >= 0) order[count[static_cast<size_t>(key[i])]++] = static_cast<uint32_t>(i);
-  return count.back();
-}
-}  // namespace
 
 uint32_t RealtimeLoop::round_rays(size_t i, uint32_t target) const {
   if (!any_kept()) return std::min<uint32_t>(target - cast_[i], std::max(kFirstRound, cast_[i]));
   const float c = total_cast(i);
   const auto lack = static_cast<uint32_t>(std::max(1.0f, std::ceil(static_cast<float>(target) - c)));
   return std::min<uint32_t>({lack, target - cast_[i], std::max(kFirstRound, static_cast<uint32_t>(std::ceil(c)))});
+}
+
+int RealtimeLoop::periphery_key(size_t i) const {
+  if (converged(i)) return SweepKeys::kNone;
+  // A pixel on the coarse grid still without rays goes first: its rays stand for its unreached
+  // neighbours too (their estimate), so the periphery's first rays span the view
+  const float c = total_cast(i);
+  const auto width = static_cast<size_t>(params_.width);
+  if (c == 0 && i % width % kCoarseGrid == 0 && i / width % kCoarseGrid == 0) return 0;
+  const float q = maps_.quality[i], k = static_cast<float>(round_rays(i, maps_.rays[i]));
+  const float p = (total_open(i) + 0.5f) / (c + 1.0f);
+  const float gain = q * q * p * (1 - p) * k / (c + k);
+  return gain > 0 ? std::clamp(static_cast<int>(-2.0f * std::log2(gain)), 0, kBuckets - 1) : kBuckets;
+}
+
+int RealtimeLoop::ahead_key(size_t i) const {
+  if (!gbuffer_.hit(i) || total_cast(i) >= static_cast<float>(params_.foveation.max_rays)) return SweepKeys::kNone;
+  return std::clamp(static_cast<int>(maps_.eccentricity[i]), 0, kRings - 1);
+}
+
+size_t RealtimeLoop::sweep_keys_out_of_date() const {
+  size_t wrong = 0;
+  for (const auto& [keys, key] : {std::pair{&periphery_keys_, &RealtimeLoop::periphery_key}, std::pair{&ahead_keys_, &RealtimeLoop::ahead_key}}) {
+    if (keys->size() != cast_.size()) continue;  // (no sweep at this size yet: all stale)
+    for (size_t i = 0; i < keys->size(); ++i)
+      if (const int8_t k = keys->keys()[i]; k != SweepKeys::kStale && k != (this->*key)(i)) ++wrong;
+  }
+  return wrong;
 }
 
 size_t RealtimeLoop::plan_round(uint64_t ray_limit, uint64_t periphery_limit, uint64_t ahead_limit, Round& round) {
@@ -513,7 +533,6 @@ size_t RealtimeLoop::plan_round(uint64_t ray_limit, uint64_t periphery_limit, ui
     rays += r;
   };
   const auto width = static_cast<size_t>(params_.width), height = static_cast<size_t>(params_.height);
-  auto on_grid = [&](size_t i) { return i % width % kCoarseGrid == 0 && i / width % kCoarseGrid == 0; };
   // A new view's coarse grid first, outside the fovea: every kCoarseGrid-th pixel, kCoarseRound
   // rays each (at 840×525 some 1,400 pixels that see a surface, 90,000 rays: under a third of a
   // frame's on two cores). Until the fovea has converged and the periphery's sweep reaches them,
@@ -550,28 +569,9 @@ size_t RealtimeLoop::plan_round(uint64_t ray_limit, uint64_t periphery_limit, ui
   }
   round = Round::periphery;
   ray_limit = std::min(ray_limit, periphery_limit);
-  // Then the periphery by q²·σ̂²·k/(c + k), in buckets of half powers of two from the highest
-  const size_t n = cast_.size();
-  order_.resize(n);
-  key_.resize(n);
-  for_each_pixel(n, [&](size_t i) {
-    int b = -1;
-    if (!converged(i)) {
-      const float q = maps_.quality[i];
-      const float c = total_cast(i), k = static_cast<float>(rays_for(i));
-      const float p = (total_open(i) + 0.5f) / (c + 1.0f);
-      const float gain = q * q * p * (1 - p) * k / (c + k);
-      // A pixel on the coarse grid still without rays goes first: its rays stand for its unreached
-      // neighbours too (their estimate), so the periphery's first rays span the view
-      if (c == 0 && on_grid(i)) {
-        key_[i] = 0;
-        return;
-      }
-      b = gain > 0 ? std::clamp(static_cast<int>(-2.0f * std::log2(gain)), 0, kBuckets - 1) : kBuckets;
-    }
-    key_[i] = static_cast<int8_t>(b);
-  });
-  const size_t active = sort_by_key<kBuckets + 1>(key_, order_);
+  // Then the periphery by q²·σ̂²·k/(c + k), in buckets of half powers of two from the highest (a
+  // pixel's bucket is computed again only where its rays or its maps changed: sweep_keys.h)
+  const size_t active = periphery_keys_.sweep<kBuckets + 1>([&](size_t i) { return periphery_key(i); }, order_);
   for (size_t k = 0; k < active && rays < ray_limit; ++k) add(order_[k]);
   all_converged_ = active == 0;
   ahead_done_ = false;  // (whatever the rays ahead had reached before, the maps or the view have changed since)
@@ -583,17 +583,7 @@ size_t RealtimeLoop::plan_ahead(uint64_t ray_limit) {
   // from the gaze in whole degrees (nearest first: most saccades are short)
   tasks_.clear();
   const auto n_max = static_cast<uint32_t>(params_.foveation.max_rays);
-  const size_t n = cast_.size();
-  constexpr int kRings = 64;
-  order_.resize(n);
-  key_.resize(n);
-  for_each_pixel(n, [&](size_t i) {
-    int b = -1;
-    if (gbuffer_.hit(i) && total_cast(i) < static_cast<float>(n_max))
-      b = std::clamp(static_cast<int>(maps_.eccentricity[i]), 0, kRings - 1);
-    key_[i] = static_cast<int8_t>(b);
-  });
-  const size_t active = sort_by_key<kRings>(key_, order_);
+  const size_t active = ahead_keys_.sweep<kRings>([&](size_t i) { return ahead_key(i); }, order_);
   uint64_t rays = 0;
   for (size_t k = 0; k < active && rays < ray_limit; ++k) {
     const uint32_t i = order_[k];
@@ -719,6 +709,7 @@ void RealtimeLoop::set_scale(double scale) {
   const double ratio = static_cast<double>(params_.width) * params_.height / pixels_before;  // (as adopt_rebuild)
   plan_ms_ *= ratio;
   sweep_.scale(ratio);
+  narrow_sweep_.scale(ratio);
   have_view_ = false;
   maps_gaze_.reset();
   ray_x_.clear();
@@ -822,6 +813,7 @@ void RealtimeLoop::lower_in_place(uint64_t& kept_pixels) {
   finish_ms_ *= ratio;
   plan_ms_ *= ratio;
   sweep_.scale(ratio);
+  narrow_sweep_.scale(ratio);
   ++gbuffer_version_;
   renderer_.prepare_ao_batches(gbuffer_, gbuffer_version_);
   estimates_ = false;
@@ -968,6 +960,7 @@ void RealtimeLoop::adopt_rebuild(uint64_t& kept_pixels) {
   finish_ms_ *= ratio;
   plan_ms_ *= ratio;
   sweep_.scale(ratio);
+  narrow_sweep_.scale(ratio);
   note_ = size_note(r.why.c_str());
   motion_scale_.reset();
   fixed_.clear();
@@ -1067,17 +1060,18 @@ LoopFrame RealtimeLoop::frame(const Camera& camera) {
       if (left <= 0) break;
       auto rays_in = [&](double ms) { return rays_per_ms_ > 0 ? static_cast<uint64_t>(rays_per_ms_ * ms * 1.5) + 1024 : 65536; };
       limit = rays_in(left);
-      // A periphery round plans over every pixel: only when its planning fits
+      // A periphery round sweeps every pixel: only when its planning fits
       const double periphery_left = periphery_deadline - timer.ms() - plan_ms_;
-      if (sweep_.fits(periphery_left)) periphery_limit = std::min(limit, rays_in(periphery_left));
+      if (next_sweep().fits(periphery_left)) periphery_limit = std::min(limit, rays_in(periphery_left));
       const double ahead_left = ahead_deadline - timer.ms() - plan_ms_;
-      if (settings_.rays_ahead && sweep_.fits(ahead_left)) ahead_limit = std::min(limit, rays_in(ahead_left));
+      if (settings_.rays_ahead && next_sweep().fits(ahead_left)) ahead_limit = std::min(limit, rays_in(ahead_left));
     } else {
       if (allowance == 0) break;
       periphery_limit = std::min(allowance, periphery_allowance - std::min(periphery_allowance, out.rays));
       ahead_limit = std::min(allowance, ahead_allowance - std::min(ahead_allowance, out.rays));
     }
     const bool periphery = periphery_limit > 0;
+    SweepCost& sweep_cost = next_sweep();  // (what a sweep in this round costs: wide or narrow)
     const Timer plan_timer;
     Round round;
     const size_t planned = plan_round(limit, periphery_limit, ahead_limit, round);
@@ -1086,14 +1080,14 @@ LoopFrame RealtimeLoop::frame(const Camera& camera) {
     out.plan_ms += plan_ms;
     if (swept) {  // a pass over every pixel
       ++out.sweeps;
-      sweep_.swept(plan_ms);
+      sweep_cost.swept(plan_ms);
       sweep_ms += plan_ms;
     } else {
       plan_ms_ = 0.7 * plan_ms_ + 0.3 * plan_ms;
     }
     if (planned == 0) {
       // (nothing for the fovea, and the periphery's sweep did not fit: try it again a little sooner)
-      if (wall && !periphery && periphery_deadline - timer.ms() > 0) sweep_.skipped();
+      if (wall && !periphery && periphery_deadline - timer.ms() > 0) sweep_cost.skipped();
       ran_out = periphery;  // every pixel had its rays
       break;
     }
@@ -1121,6 +1115,8 @@ LoopFrame RealtimeLoop::frame(const Camera& camera) {
         if (!reached_ && tasks_[t].count > 0 && maps_.quality[tasks_[t].pixel] < 1.0f && total_cast(tasks_[t].pixel) == 0) reached_ = true;
         cast_[tasks_[t].pixel] += tasks_[t].count;
         open_[tasks_[t].pixel] += tasks_[t].count - blocked_[t];
+        periphery_keys_.stale(tasks_[t].pixel);
+        ahead_keys_.stale(tasks_[t].pixel);
       }
     if (wall && traced > 0 && ms > 0.2) {
       const double rate = static_cast<double>(traced) / ms;

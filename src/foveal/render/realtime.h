@@ -44,6 +44,7 @@
 #include "foveal/render/pull_push.h"
 #include "foveal/render/render.h"
 #include "foveal/render/reuse.h"
+#include "foveal/render/sweep_keys.h"
 #include "foveal/util/stats.h"
 #include "foveal/util/timer.h"
 
@@ -284,8 +285,14 @@ class RealtimeLoop {
   uint64_t estimates_made() const { return estimates_made_; }
   // Whether pixel i's AO is converged (τ(E) or n(E) reached).
   bool converged(size_t i) const;
+  // How many pixels' sweep buckets, kept between sweeps, differ from what they would be now (those
+  // marked to be computed again aside; tests: they are marked wherever a pixel's rays or maps change)
+  size_t sweep_keys_out_of_date() const;
 
  private:
+  // Pixel i's bucket in the periphery's sweep (SweepKeys::kNone where converged) and in the rays ahead's
+  int periphery_key(size_t i) const;
+  int ahead_key(size_t i) const;
   // Pixel i's rays: this view's and those kept from the views before
   bool any_kept() const { return !kept_cast_.empty(); }
   float total_cast(size_t i) const { return static_cast<float>(cast_[i]) + (any_kept() ? kept_cast_[i] : 0.0f); }
@@ -396,14 +403,19 @@ class RealtimeLoop {
   std::vector<uint32_t> order_;          // scratch: pixels by priority bucket
   std::vector<uint32_t> fovea_;          // the fovea's pixels (q = 1, hit, rays) for the current maps
   std::vector<uint32_t> fovea_scratch_;  // scratch: a predicted fovea's centre-out order
-  std::vector<int8_t> key_;              // scratch: each pixel's bucket (−1: converged)
+  SweepKeys periphery_keys_;             // each pixel's bucket in the periphery's sweep (plan_round)
+  SweepKeys ahead_keys_;                 // … in the sweep of the rays ahead of the gaze (plan_ahead)
   bool last_new_view_ = false;           // the previous frame traced a new view
   float ao_distance_ = 0, epsilon_ = 0, tau_fovea_ = 0;
   double rays_per_ms_ = 0;  // wall clock: measured, smoothed
   double finish_ms_ = 1;    // wall clock: composing and the fovea's state at a frame's end, measured
   double slip_ms_ = 0;      // wall clock: how much later than planned frames ended, a decaying maximum
   double plan_ms_ = 0.5;    // wall clock: a round's planning, measured, smoothed
-  SweepCost sweep_;         // wall clock: a periphery round's planning (a pass over every pixel)
+  // Wall clock: what a sweep's planning costs, where it computes buckets over a wide area (after new
+  // maps everywhere or in their box: a pass over those pixels) and where only over the pixels
+  // traced since the last (the sort alone, about a third of a full sweep at 840×525)
+  SweepCost sweep_, narrow_sweep_;
+  SweepCost& next_sweep() { return (all_converged_ ? ahead_keys_ : periphery_keys_).wide() ? sweep_ : narrow_sweep_; }
   // The last periphery sweep found every pixel converged and the maps have not been recomputed
   // since (every view, size and gaze change recomputes them; no ray is traced while all have
   // converged): the next sweep would find the same, so none is made

@@ -1450,6 +1450,53 @@ TEST(RealtimeLoop, SpareTimeCastsRaysAheadOfTheGazeNearestFirst) {
   EXPECT_GT(fresh.rays, 10000u);
 }
 
+// A sweep's buckets are kept between sweeps and computed again only where a pixel's rays or maps
+// changed (sweep_keys.h): through a view's first frames, a fixation's drift (the maps in a box), a
+// jump (the maps everywhere), the rays ahead and a new view, every kept bucket is what the pixel's
+// state gives now, and the frames are those of a loop that computes every bucket at every sweep
+// (the same rays at the same pixels: a loop left to finish shows the paper's frame, below).
+TEST(RealtimeLoop, TheSweepsBucketsAreComputedAgainWhereverTheyMayHaveChanged) {
+  const std::unique_ptr<FrameRenderer> renderer = make_frame_renderer(box(), ComputeDevice::cpu);
+  const Camera& camera = box().cameras.front();
+  const RenderParams params = loop_params(320, 200, 64);
+  const double ppd = pixels_per_degree(params.display) * params.width / params.display.res_x;
+  RealtimeLoop loop(*renderer, box(), params, model_clock(4000));  // ~59,000 rays a frame: many sweeps
+  glm::dvec2 gaze(100, 80);
+  double t = 0;
+  uint32_t sweeps = 0;
+  auto frames = [&](int count, const char* what) {
+    for (int k = 0; k < count; ++k) {
+      loop.push_gaze(t += 1.0 / 60, gaze);
+      const LoopFrame f = loop.frame(camera);
+      sweeps += f.sweeps;
+      ASSERT_EQ(loop.sweep_keys_out_of_date(), 0u) << what << ", frame " << k;
+    }
+  };
+  frames(30, "a new view");
+  for (int k = 0; k < 6; ++k) {  // a drift of 0.2° a frame and back: the maps in a box
+    gaze.x += (k < 3 ? 0.2 : -0.2) * ppd;
+    frames(2, "a drift");
+  }
+  gaze = glm::dvec2(250, 150);  // a jump: the maps everywhere
+  frames(40, "after a jump");
+  EXPECT_GT(sweeps, 20u);
+  // On until the rays ahead (every pixel has its n(E)), and with them: pixels beyond their n(E)
+  frames(150, "the rays ahead");
+  size_t ahead = 0;
+  for (size_t i = 0; i < loop.cast().size(); ++i) ahead += loop.cast()[i] > loop.maps().rays[i];
+  EXPECT_GT(ahead, 1000u) << "no rays ahead of the gaze";
+  Camera moved = camera;  // a new view, which keeps rays of the one before
+  moved.eye += glm::vec3(0.05f, 0, 0);
+  loop.push_gaze(t += 1.0 / 60, gaze);
+  loop.frame(moved);
+  EXPECT_EQ(loop.sweep_keys_out_of_date(), 0u);
+  for (int k = 0; k < 10; ++k) {
+    loop.push_gaze(t += 1.0 / 60, gaze);
+    loop.frame(moved);
+    ASSERT_EQ(loop.sweep_keys_out_of_date(), 0u) << "the new view, frame " << k;
+  }
+}
+
 // A frame that traces a new view casts no rays ahead of the gaze: a moving camera's frames are the
 // same with them and without, even where each view converges within its frame (the frame that finds
 // every pixel converged ends its rays there, and the next is another view).
