@@ -332,6 +332,14 @@ bool RealtimeLoop::new_view(const Camera& camera, uint64_t& kept_pixels) {
   const Timer compose_timer;
   compose(scratch);
   finish_ms_ = compose_timer.ms();
+  // Two images in hand for the view's first frames, their memory touched here: the first frame is
+  // composed into one, the second into the other while the first is shown (a caller hands an image
+  // back once the next is on screen). The second frame of every loop used to compose into a fresh
+  // 5 MB image at 840×525: 1,245 page faults, composing 2.5 ms over its plan, and late in 2 of 6
+  // runs of bench latency (IRF S1 and the EyeLink recording, 10 s each, the 2-core AMD EPYC VM)
+  recycle(std::move(scratch));
+  if (std::count_if(spares_.begin(), spares_.end(), [&](const Image& i) { return fits_view(i); }) < 2)
+    recycle(Image(params_.width, params_.height, 3));
   return carry;
 }
 
@@ -513,7 +521,8 @@ int RealtimeLoop::ahead_key(size_t i) const {
 
 size_t RealtimeLoop::sweep_keys_out_of_date() const {
   size_t wrong = 0;
-  for (const auto& [keys, key] : {std::pair{&periphery_keys_, &RealtimeLoop::periphery_key}, std::pair{&ahead_keys_, &RealtimeLoop::ahead_key}}) {
+  for (const auto& [keys, key] :
+       {std::pair{&periphery_keys_, &RealtimeLoop::periphery_key}, std::pair{&ahead_keys_, &RealtimeLoop::ahead_key}}) {
     if (keys->size() != cast_.size()) continue;  // (no sweep at this size yet: all stale)
     for (size_t i = 0; i < keys->size(); ++i)
       if (const int8_t k = keys->keys()[i]; k != SweepKeys::kStale && k != (this->*key)(i)) ++wrong;
@@ -595,18 +604,30 @@ size_t RealtimeLoop::plan_ahead(uint64_t ray_limit) {
   return tasks_.size();
 }
 
+bool RealtimeLoop::fits_view(const Image& image) const {
+  return image.width == params_.width && image.height == params_.height && image.channels == 3;
+}
+
 void RealtimeLoop::recycle(Image&& image) {
-  if (image.width == params_.width && image.height == params_.height && image.channels == 3) spare_ = std::move(image);
+  if (!fits_view(image)) return;
+  for (Image& spare : spares_)
+    if (!fits_view(spare)) {
+      spare = std::move(image);
+      return;
+    }
 }
 
 void RealtimeLoop::compose(Image& color) {
   // Into a handed-back image where there is one: a fresh 5 MB image costs its page faults, which
   // measured 1–5 ms on a shared VM (the frames that came late), against ~1 ms reused
-  if (spare_.width == params_.width && spare_.height == params_.height && spare_.channels == 3)
-    color = std::move(spare_);
-  else
-    color = Image(params_.width, params_.height, 3);
-  spare_ = Image();
+  color = Image();
+  for (Image& spare : spares_)
+    if (fits_view(spare)) {
+      color = std::move(spare);
+      spare = Image();
+      break;
+    }
+  if (color.empty()) color = Image(params_.width, params_.height, 3);
   // The constant ambient term, for pixels without AO (n(E) = 0, or no ray yet): as given, or, unset,
   // the renderer's auto constant — the mean visibility of the fovea's pixels (here of those with
   // rays so far; a finished fovea gives the paper's value). A pixel without a ray used to show
@@ -820,12 +841,13 @@ void RealtimeLoop::lower_in_place(uint64_t& kept_pixels) {
   grid_pending_ = true;
   all_converged_ = false;
   prepare_rounds(n);
-  maps_gaze_.reset();                                               // (the frame evaluates them at this size, from the eye rays gathered)
-  if (spare_.channels == 3 && spare_.pixels.capacity() >= 3 * n) {  // a handed-back image's memory, for the frame's
-    spare_.width = size.x;
-    spare_.height = size.y;
-    spare_.pixels.resize(3 * n);
-  }
+  maps_gaze_.reset();  // (the frame evaluates them at this size, from the eye rays gathered)
+  for (Image& spare : spares_)
+    if (spare.channels == 3 && spare.pixels.capacity() >= 3 * n) {  // a handed-back image's memory, for the frame's
+      spare.width = size.x;
+      spare.height = size.y;
+      spare.pixels.resize(3 * n);
+    }
 }
 
 void RealtimeLoop::start_rebuild(double scale, std::string why) {
@@ -953,7 +975,7 @@ void RealtimeLoop::adopt_rebuild(uint64_t& kept_pixels) {
   }
   ++views_;
   view_seed_ = any_kept() ? scrambled_seed(params_.seed, views_) : params_.seed;
-  spare_ = std::move(r.image);
+  spares_ = {std::move(r.image), Image()};
   // What composing, planning the fovea and sweeping the periphery take goes with the pixels (the
   // smaller view's sweep estimate let the first full-size sweep run 4 ms past the deadline)
   const double ratio = static_cast<double>(n) / pixels_before;

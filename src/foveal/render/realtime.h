@@ -388,7 +388,8 @@ class RealtimeLoop {
   bool forget_ = false;                       // reset(): the next view starts afresh
   uint64_t view_seed_ = 0;                    // the AO seed of this view's rays
   uint32_t views_ = 0;                        // views traced so far
-  Image spare_;                               // a shown frame's image handed back (recycle)
+  std::array<Image, 2> spares_;               // shown frames' images handed back (recycle), or made for a view's first frames
+  bool fits_view(const Image& image) const;   // an image of the view's size and three channels
   // The visibility of the pixels without rays yet, from those around them (estimate_unreached)
   PullPush pull_push_;
   bool unreached_possible_ = true;  // some pixel may lack the rays its n(E) asks for
