@@ -6,7 +6,7 @@
 // remove) or for the rays ahead of the gaze (by eccentricity). A pixel's bucket depends on its own
 // rays and its own foveation maps alone, so between two sweeps it changes only for the pixels
 // that were traced and where the maps were evaluated again. Computed at every pixel, the buckets
-// took 1.6–1.9 ms of a periphery sweep's 2.8 ms at 840×525 on two cores (bench latency, IRF S1,
+// took 1.6–1.9 ms of a periphery sweep's 2.4–2.8 ms at 840×525 on two cores (bench latency, IRF S1,
 // the dragon box), every frame while a view's periphery filled in; the sort took the rest, one
 // thread's pass over every pixel twice, and now runs on all of them.
 #include <algorithm>
