@@ -242,8 +242,9 @@ class RealtimeLoop {
   std::optional<double> latest_sample_s() const { return last_pushed_s_; }
   // The next frame for `camera`, within the budget.
   LoopFrame frame(const Camera& camera);
-  // Hand back a frame's image once it is no longer shown: the next frame is composed into it
-  // instead of a new one (fewer page faults, steadier frame times). Optional.
+  // Hand back a frame's image once it is no longer shown: a later frame is composed into it instead
+  // of a new one (fewer page faults, steadier frame times; the loop holds up to two, and has two
+  // ready when a view starts, for its first frames). Optional.
   void recycle(Image&& image);
   // A landing known in advance, render pixels (bench latency's "deadline+oracle": each saccade's
   // true landing, for the most any predictor could gain): while a saccade is in flight and
