@@ -569,6 +569,14 @@ NB_MODULE(_core, m) {
       .def_prop_ro(
           "kept_pixels", [](const PyLoopFrame& f) { return f.frame.kept_pixels; },
           "A new view: the pixels that kept AO rays from the view before (0 with keep_history=False).")
+      .def_prop_ro(
+          "chunks_left_behind", [](const PyLoopFrame& f) { return f.frame.chunks_left_behind; },
+          "Wall clock: chunks of this frame's rays (about a hundredth of a millisecond each) left to threads the machine had "
+          "paused, their rays dropped and cast again later, rather than waited for (docs/realtime.md).")
+      .def_prop_ro(
+          "left_behind_ms", [](const PyLoopFrame& f) { return f.frame.left_behind_ms; },
+          "Where the frame before left chunks behind: how long after its rays stopped the last of them ended, how much later "
+          "it would have ended had it waited for them (NaN where it left none).")
       .def_prop_ro("index", [](const PyLoopFrame& f) { return f.frame.index; });
 
   nb::class_<PyLoop>(m, "Loop",

@@ -36,6 +36,9 @@ def test_a_still_gaze_converges_the_fovea_within_budget(box):
     assert sum(f.ms <= f.budget_ms + 1 for f in frames) >= 0.8 * len(frames)
     # The image changes as rays arrive
     assert not np.array_equal(first.image, last.image)
+    # A frame that left chunks to a paused thread is followed by one that says when they ended
+    for before, after in zip(frames, frames[1:]):
+        assert (before.chunks_left_behind > 0) == (not np.isnan(after.left_behind_ms))
 
 
 def test_a_converged_views_spare_time_casts_rays_ahead_of_the_gaze(box):
@@ -311,6 +314,7 @@ def test_bench_latency_from_python_equals_the_command_lines(cli, box, tmp_path):
         assert frame["maps_ms"] is None and frame["plan_ms"] is None and frame["trace_ms"] is None
         assert sum(f["rays"] for f in a[loop]["timeline"]) > 0 and sum(f["sweeps"] for f in a[loop]["timeline"]) > 0
         assert len(a[loop]["saccades"]) == 2 and a[loop]["frames_late"] == 0
+        assert a[loop]["frames_left_behind"] == a[loop]["late_had_they_waited"] == 0  # (the model clock waits for every chunk)
     # A Recording object does as well as its path; bad arguments are named
     again = foveal.bench_latency(foveal.gaze.read(str(recording)), box, size=(168, 105), max_rays=64, duration_s=1.5,
                                  clock="model", model_rays_per_ms=2000, model_fixed_ms=3, min_amplitude_deg=5, loops="deadline")

@@ -11,8 +11,11 @@
 #include "foveal/render/render.h"
 #include "foveal/util/device.h"
 
+#include <chrono>
+#include <cstdint>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <span>
 #include <string>
 
@@ -46,6 +49,33 @@ struct AoRayTask {
   uint32_t first = 0;  // index of the first ray in the pixel's sequence
   uint32_t count = 0;  // rays to cast
 };
+// The chunks of a batch that its call left behind rather than wait for
+// (AoRayBatch::leave_behind_after_ms): still running on threads the machine had paused, their rays
+// dropped. finish() — and the destructor — waits for them; until then the batch's tasks, outputs
+// and surfaces must stay as they were.
+struct AoBatchWork;  // the backend's (render.cpp)
+class AoLeftBehind {
+ public:
+  AoLeftBehind();
+  ~AoLeftBehind();
+  AoLeftBehind(const AoLeftBehind&) = delete;
+  AoLeftBehind& operator=(const AoLeftBehind&) = delete;
+  struct Finished {
+    uint32_t chunks = 0;                           // chunks that had been left behind (0: none, nothing waited for)
+    std::chrono::steady_clock::time_point last{};  // when the last of them ended
+  };
+  // Wait for the chunks left behind, if any
+  Finished finish();
+  // Chunks left behind and not yet finished with
+  uint32_t pending() const { return chunks_; }
+  // The backend's: keep a batch's work with `chunks` left behind
+  void hold(std::unique_ptr<AoBatchWork> work, uint32_t chunks);
+
+ private:
+  std::unique_ptr<AoBatchWork> work_;
+  uint32_t chunks_ = 0;
+};
+
 struct AoRayBatch {
   const GBuffer* gbuffer = nullptr;  // the surfaces the rays leave from
   uint64_t gbuffer_version = 0;      // changes whenever *gbuffer does (a backend may keep a copy until then)
@@ -58,6 +88,16 @@ struct AoRayBatch {
   // two million rays; each launch is then waited for): true stops the batch there.
   std::function<bool()> expired;
   double slowdown = 1;  // tests only: each chunk takes this many times as long (a slower tracer)
+  // The CPU: once the batch has expired (expired() said so), wait at most this long (ms) for the
+  // chunks other threads are still tracing, then return without them; unset: wait for every chunk
+  // taken. A chunk left behind is one whose thread the machine paused mid-chunk (another process
+  // took its core): it ends in the background with its rays dropped (its tasks stay not done), held
+  // in *left_behind, which must then be set. Waiting for such a thread made a frame late by the
+  // length of its pause (docs/realtime.md, "A thread the machine pauses"). The GPU waits for its
+  // launches and leaves nothing behind.
+  std::optional<double> leave_behind_after_ms;
+  AoLeftBehind* left_behind = nullptr;
+  std::function<void()> chunk_hook;  // tests only: run by every chunk before its rays (a thread's pause)
 };
 
 class FrameRenderer {

@@ -9,8 +9,13 @@
 
 #include <gtest/gtest.h>
 
+#include <tbb/task_arena.h>
+
+#include <algorithm>
 #include <atomic>
+#include <chrono>
 #include <span>
+#include <thread>
 
 using namespace foveal;
 
@@ -340,5 +345,71 @@ TEST(FrameRenderer, ABatchStopsAtItsDeadlineWithAPrefixOfItsTasks) {
       }
     }
     EXPECT_EQ(part, rays) << to_string(device);
+  }
+}
+
+// A thread the machine pauses mid-chunk (another process took its core) does not hold a batch that
+// may leave it behind: the call returns once the batch has expired and the other threads' chunks
+// are done, that chunk's rays dropped (its tasks not done, nothing written after the call), the
+// rest as a whole batch gives them; finishing waits for it. A batch that may not leave it waits for
+// the whole pause.
+TEST(FrameRenderer, AChunkOfAPausedThreadIsLeftBehindOnceTheBatchHasExpired) {
+  const Scene& scene = foveal_test::sphere_plane();
+  const std::unique_ptr<FrameRenderer> cpu = make_frame_renderer(scene, ComputeDevice::cpu);
+  const GBuffer g = cpu->surfaces(scene.cameras.front(), 200, 125);
+  std::vector<AoRayTask> tasks;
+  for (uint32_t i = 0; i < g.prim.size(); ++i) tasks.push_back({i, 0, 400});  // ~10 million rays: far more than the deadline allows
+  std::vector<uint32_t> whole_blocked;
+  std::vector<uint8_t> whole_done;
+  cpu->trace_ao_batch(task_batch(scene, g, tasks, whole_blocked, whole_done));
+  using clock = std::chrono::steady_clock;
+  constexpr auto kPause = std::chrono::milliseconds(400);
+  tbb::task_arena arena(2);  // the caller and one more thread
+  for (const bool leave : {true, false}) {
+    std::vector<uint32_t> blocked;
+    std::vector<uint8_t> done;
+    AoRayBatch batch = task_batch(scene, g, tasks, blocked, done);
+    AoLeftBehind left;
+    const auto caller = std::this_thread::get_id();
+    std::atomic<bool> paused{false};
+    // The first chunk of the other thread pauses; the batch expires 10 ms in
+    batch.chunk_hook = [&] {
+      if (std::this_thread::get_id() != caller && !paused.exchange(true)) std::this_thread::sleep_for(kPause);
+    };
+    const auto start = clock::now();
+    batch.expired = [&] { return clock::now() - start >= std::chrono::milliseconds(10); };
+    if (leave) {
+      batch.leave_behind_after_ms = 0.25;
+      batch.left_behind = &left;
+    }
+    uint64_t traced = 0;
+    arena.execute([&] { traced = cpu->trace_ao_batch(batch); });
+    const auto returned = clock::now();
+    if (!paused) GTEST_SKIP() << "skipped: no second thread took a chunk (a single core?)";
+    const std::vector<uint32_t> blocked_then = blocked;
+    const std::vector<uint8_t> done_then = done;
+    if (!leave) {  // waited for the paused thread
+      EXPECT_GE(returned - start, kPause);
+      EXPECT_EQ(left.pending(), 0u);
+      continue;
+    }
+    EXPECT_LT(returned - start, kPause / 2);
+    EXPECT_EQ(left.pending(), 1u);
+    const AoLeftBehind::Finished f = left.finish();
+    EXPECT_EQ(f.chunks, 1u);
+    EXPECT_GT(f.last, returned);  // it ended after the call had returned …
+    EXPECT_EQ(left.pending(), 0u);
+    EXPECT_EQ(blocked, blocked_then);  // … and wrote nothing
+    EXPECT_EQ(done, done_then);
+    const auto n_done = static_cast<size_t>(std::count(done.begin(), done.end(), uint8_t{1}));
+    EXPECT_GT(n_done, 0u);
+    EXPECT_LT(n_done, tasks.size());
+    uint64_t rays = 0;
+    for (size_t t = 0; t < tasks.size(); ++t)
+      if (done[t]) {
+        EXPECT_EQ(blocked[t], whole_blocked[t]) << "task " << t;
+        rays += g.hit(tasks[t].pixel) ? tasks[t].count : 0;
+      }
+    EXPECT_EQ(traced, rays);
   }
 }

@@ -993,6 +993,10 @@ LoopFrame RealtimeLoop::frame(const Camera& camera) {
   const Timer timer;
   LoopFrame out;
   out.index = index_++;
+  // The chunks the frame before left to paused threads: ended by now, most often (its tasks and
+  // surfaces change from here on)
+  if (const AoLeftBehind::Finished left = left_behind_.finish(); left.chunks > 0)
+    out.left_behind_ms = std::max(0.0, std::chrono::duration<double, std::milli>(left.last - left_at_).count());
   double view_ms = 0;
   const bool moved = have_view_ && !same_camera(camera, camera_);
   if (moved) rebuild_.reset();                                     // (a size coming back for the view before)
@@ -1126,9 +1130,17 @@ LoopFrame RealtimeLoop::frame(const Camera& camera) {
     batch.done = done_;
     batch.slowdown = settings_.slowdown;
     const double until = round == Round::ahead ? ahead_deadline : swept ? periphery_deadline : deadline;
-    if (wall) batch.expired = [&] { return timer.ms() >= until; };
+    if (wall) {
+      batch.expired = [&] { return timer.ms() >= until; };
+      batch.leave_behind_after_ms = kLeaveBehindAfterMs;
+      batch.left_behind = &left_behind_;
+    }
     const Timer trace_timer;
     const uint64_t traced = renderer_.trace_ao_batch(batch);
+    if (left_behind_.pending() > 0) {
+      out.chunks_left_behind += left_behind_.pending();
+      left_at_ = std::chrono::steady_clock::now();
+    }
     const double ms = trace_timer.ms();
     trace_ms += ms;
     out.rays += traced;
@@ -1145,7 +1157,7 @@ LoopFrame RealtimeLoop::frame(const Camera& camera) {
       rays_per_ms_ = rays_per_ms_ > 0 ? 0.7 * rays_per_ms_ + 0.3 * rate : rate;
     }
     if (!wall) allowance -= std::min(allowance, traced);
-    if (traced == 0) break;
+    if (traced == 0 || left_behind_.pending() > 0) break;  // (planning another round would change the tasks those chunks read)
   }
   if (wall && rebuild_ && timer.ms() < deadline - 1) rebuild(deadline);
   // The image, and the fovea's state

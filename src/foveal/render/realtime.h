@@ -52,6 +52,7 @@
 
 #include <algorithm>
 #include <array>
+#include <chrono>
 #include <cmath>
 #include <optional>
 #include <string>
@@ -90,6 +91,10 @@ struct LoopSettings {
 // The share of each frame's budget the rays ahead of the gaze may run to: frames that end early are
 // not made late by the machine's pauses
 inline constexpr double kAheadShare = 0.5;
+// Wall clock: once a frame's rays are to stop, how long it waits for the chunks other threads are
+// tracing (about a hundredth of a millisecond each) before it leaves them behind: only a thread the
+// machine has paused takes longer (AoRayBatch::leave_behind_after_ms)
+inline constexpr double kLeaveBehindAfterMs = 0.25;
 inline constexpr double kDefaultMarginMs = 2.0;
 // The margin the settings keep: the given one, else the default within a quarter of the budget
 double loop_margin_ms(const LoopSettings& settings);
@@ -125,6 +130,13 @@ struct LoopFrame {
   double rebuild_ms = 0;       // … in this much of the frame
   double fovea_converged = 0;  // fraction of the fovea's (q = 1, hit) pixels whose AO is converged
   bool fovea_done = false;     // all of them: the fovea is at full quality
+  // Wall clock: chunks of this frame's rays left to threads the machine had paused, their rays
+  // dropped, rather than waited for (kLeaveBehindAfterMs); and where the frame before left some,
+  // how long after its rays stopped the last of them ended — how much later it would have ended had
+  // it waited (NaN where it left none). This frame waited for any still running at its start, within
+  // its own time
+  uint32_t chunks_left_behind = 0;
+  double left_behind_ms = NAN;
 };
 
 // The median, or the least, of the latest N values (fewer before N have come).
@@ -452,6 +464,11 @@ class RealtimeLoop {
   };
   std::optional<Rebuild> rebuild_;
   int index_ = 0;
+  // Wall clock: the chunks a frame's rays left to threads the machine had paused (AoRayBatch::
+  // leave_behind_after_ms), waited for at the next frame's start; and when its rays left them.
+  // (Last: destroyed first, before the tasks and surfaces those chunks read)
+  std::chrono::steady_clock::time_point left_at_{};
+  AoLeftBehind left_behind_;
 };
 
 }  // namespace foveal

@@ -12,12 +12,16 @@
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
+#include <tbb/task_group.h>
 
 #include <algorithm>
 #include <atomic>
+#include <chrono>
 #include <cmath>
 #include <limits>
 #include <mutex>
+#include <optional>
+#include <thread>
 #include <type_traits>
 
 #include <time.h>
@@ -396,70 +400,201 @@ double thread_cpu_ms() {
 
 }  // namespace
 
-uint64_t trace_ao_tasks(const Tracer& tracer, const AoRayBatch& batch) {
-  const GBuffer& g = *batch.gbuffer;
-  const auto tasks = batch.tasks;
-  if (batch.blocked.size() < tasks.size() || batch.done.size() < tasks.size()) fail("trace_ao_tasks: output spans shorter than the tasks");
-  std::fill(batch.done.begin(), batch.done.begin() + static_cast<std::ptrdiff_t>(tasks.size()), uint8_t{0});
-  // Chunks of whole tasks, about 128 rays each (a few hundredths of a millisecond: the deadline's
-  // resolution), in task order
-  std::vector<size_t> chunk_start{0};
-  for (size_t t = 0, rays = 0; t < tasks.size(); ++t) {
-    rays += tasks[t].count;
-    if (rays >= kAoBatch / 8) {
-      chunk_start.push_back(t + 1);
-      rays = 0;
-    }
-  }
-  if (chunk_start.back() != tasks.size()) chunk_start.push_back(tasks.size());
-  const size_t chunks = chunk_start.size() - 1;
-  std::atomic<size_t> next{0};
+// One batch's work on the CPU: its chunks, what the threads share, and the tasks that run them.
+// It outlives the call where chunks are left behind (AoLeftBehind holds it), so it keeps copies of
+// what the threads read from the batch; the tasks, outputs and surfaces it points to stay the caller's.
+struct AoBatchWork {
+  static constexpr uint32_t kClosed = 1u << 31;
+  const Tracer* tracer = nullptr;
+  const GBuffer* gbuffer = nullptr;
+  std::span<const AoRayTask> tasks;
+  std::span<uint32_t> blocked;
+  std::span<uint8_t> done;
+  float ao_distance = 0, epsilon = 0;
+  uint64_t seed = 1;
+  double slowdown = 1;
+  std::function<bool()> expired;
+  std::function<void()> chunk_hook;
+  std::vector<size_t> chunk_start;
+  size_t chunks = 0;
+  std::atomic<size_t> next{0};      // the next chunk to take
+  std::atomic<size_t> finished{0};  // chunks taken and ended (traced, or skipped at the deadline)
   std::atomic<bool> stopped{false};
   std::atomic<uint64_t> traced{0};
-  const int threads = std::max(1, tbb::this_task_arena::max_concurrency());
-  tbb::parallel_for(0, threads, [&](int) {
+  // The results' gate: the threads inside it (low bits), and whether the call has returned without
+  // waiting for them (kClosed). Results are written, and expired() asked, only inside: once closed,
+  // a chunk still tracing drops its rays, and nothing of the caller's is touched again.
+  std::atomic<uint32_t> gate{0};
+  std::atomic<int64_t> last_dropped_ns{0};  // steady clock: when the latest chunk left behind ended
+  tbb::task_group group;                    // (last: destroyed first, waiting for its tasks while the rest is alive)
+
+  bool enter() {
+    if (gate.fetch_add(1, std::memory_order_acquire) & kClosed) {
+      gate.fetch_sub(1, std::memory_order_release);
+      return false;
+    }
+    return true;
+  }
+  void leave() { gate.fetch_sub(1, std::memory_order_release); }
+  void close() {
+    gate.fetch_or(kClosed, std::memory_order_acq_rel);
+    while ((gate.load(std::memory_order_acquire) & ~kClosed) != 0) std::this_thread::yield();  // results being written: microseconds
+  }
+  size_t taken() const { return std::min(next.load(std::memory_order_acquire), chunks); }
+
+  // One thread's share: chunks in turn until none is left, the batch expires or the call returned
+  void run() {
     // Each thread's buffers outlive the call: a frame's rounds allocate nothing
     thread_local std::vector<Ray> rays;
     thread_local std::vector<uint8_t> occluded;
+    thread_local std::vector<uint32_t> chunk_blocked;
+    const GBuffer& g = *gbuffer;
     while (!stopped.load(std::memory_order_relaxed)) {
-      const size_t c = next.fetch_add(1);
-      if (c >= chunks) break;
-      if (batch.expired && batch.expired()) {
-        stopped = true;
-        break;
+      if (!enter()) return;
+      const size_t c = next.fetch_add(1, std::memory_order_acq_rel);
+      if (c >= chunks) {
+        leave();
+        return;
       }
+      if (expired && expired()) {
+        stopped = true;
+        finished.fetch_add(1, std::memory_order_release);
+        leave();
+        return;
+      }
+      leave();
+      if (chunk_hook) chunk_hook();
       const Timer chunk_timer;
       // (the thread's CPU clock is a system call: read only for the tests' slower tracer)
-      const double cpu_start = batch.slowdown > 1 ? thread_cpu_ms() : 0.0;
+      const double cpu_start = slowdown > 1 ? thread_cpu_ms() : 0.0;
       rays.clear();
       for (size_t t = chunk_start[c]; t < chunk_start[c + 1]; ++t) {
         const AoRayTask& task = tasks[t];
         const size_t i = task.pixel;
         if (i >= g.prim.size() || !g.hit(i)) continue;
-        const AoPixelRays pixel(g.position[i], g.geo_normal[i], batch.epsilon, batch.ao_distance, batch.seed,
+        const AoPixelRays pixel(g.position[i], g.geo_normal[i], epsilon, ao_distance, seed,
                                 static_cast<uint32_t>(i % static_cast<size_t>(g.width)),
                                 static_cast<uint32_t>(i / static_cast<size_t>(g.width)), sobol_table_2d());
         for (uint32_t k = 0; k < task.count; ++k) rays.push_back(pixel(task.first + k));
       }
       occluded.resize(rays.size());
-      tracer.occluded(rays, occluded);
+      tracer->occluded(rays, occluded);
+      chunk_blocked.clear();
       size_t r = 0;
       for (size_t t = chunk_start[c]; t < chunk_start[c + 1]; ++t) {
         const AoRayTask& task = tasks[t];
-        uint32_t blocked = 0;
+        uint32_t n = 0;
         if (task.pixel < g.prim.size() && g.hit(task.pixel))
-          for (uint32_t k = 0; k < task.count; ++k) blocked += occluded[r++];
-        batch.blocked[t] = blocked;
-        batch.done[t] = 1;
+          for (uint32_t k = 0; k < task.count; ++k) n += occluded[r++];
+        chunk_blocked.push_back(n);
       }
-      traced += rays.size();
-      if (batch.slowdown > 1) {  // tests: a slower tracer: the chunk's CPU time stretched (not the OS's pauses)
-        const double target = (thread_cpu_ms() - cpu_start) * batch.slowdown;
+      if (slowdown > 1) {  // tests: a slower tracer: the chunk's CPU time stretched (not the OS's pauses)
+        const double target = (thread_cpu_ms() - cpu_start) * slowdown;
         while (chunk_timer.ms() < target) {}
       }
+      if (!enter()) {  // left behind: the call has returned
+        last_dropped_ns.store(std::chrono::steady_clock::now().time_since_epoch().count(), std::memory_order_release);
+        return;
+      }
+      for (size_t t = chunk_start[c], k = 0; t < chunk_start[c + 1]; ++t, ++k) {
+        blocked[t] = chunk_blocked[k];
+        done[t] = 1;
+      }
+      traced.fetch_add(rays.size(), std::memory_order_relaxed);
+      finished.fetch_add(1, std::memory_order_release);
+      leave();
     }
-  });
-  return traced.load();
+  }
+};
+
+AoLeftBehind::AoLeftBehind() = default;
+AoLeftBehind::~AoLeftBehind() {
+  try {
+    finish();
+  } catch (...) {  // (a chunk left behind that failed: its rays were dropped anyway)
+  }
+}
+
+void AoLeftBehind::hold(std::unique_ptr<AoBatchWork> work, uint32_t chunks) {
+  finish();
+  work_ = std::move(work);
+  chunks_ = chunks;
+}
+
+AoLeftBehind::Finished AoLeftBehind::finish() {
+  Finished f;
+  if (!work_) return f;
+  work_->group.wait();
+  f.chunks = chunks_;
+  f.last = std::chrono::steady_clock::time_point(std::chrono::steady_clock::duration(work_->last_dropped_ns.load()));
+  work_.reset();
+  chunks_ = 0;
+  return f;
+}
+
+uint64_t trace_ao_tasks(const Tracer& tracer, const AoRayBatch& batch) {
+  const auto tasks = batch.tasks;
+  if (batch.blocked.size() < tasks.size() || batch.done.size() < tasks.size()) fail("trace_ao_tasks: output spans shorter than the tasks");
+  if (batch.leave_behind_after_ms && (!batch.left_behind || !(*batch.leave_behind_after_ms >= 0)))
+    fail("trace_ao_tasks: leave_behind_after_ms needs left_behind and a time >= 0");
+  if (batch.left_behind) batch.left_behind->finish();  // (the caller's, if it has not)
+  std::fill(batch.done.begin(), batch.done.begin() + static_cast<std::ptrdiff_t>(tasks.size()), uint8_t{0});
+  auto work = std::make_unique<AoBatchWork>();
+  AoBatchWork& w = *work;
+  w.tracer = &tracer;
+  w.gbuffer = batch.gbuffer;
+  w.tasks = tasks;
+  w.blocked = batch.blocked;
+  w.done = batch.done;
+  w.ao_distance = batch.ao_distance;
+  w.epsilon = batch.epsilon;
+  w.seed = batch.seed;
+  w.slowdown = batch.slowdown;
+  w.expired = batch.expired;
+  w.chunk_hook = batch.chunk_hook;
+  // Chunks of whole tasks, about 128 rays each (a few hundredths of a millisecond: the deadline's
+  // resolution), in task order
+  w.chunk_start.push_back(0);
+  for (size_t t = 0, rays = 0; t < tasks.size(); ++t) {
+    rays += tasks[t].count;
+    if (rays >= kAoBatch / 8) {
+      w.chunk_start.push_back(t + 1);
+      rays = 0;
+    }
+  }
+  if (w.chunk_start.back() != tasks.size()) w.chunk_start.push_back(tasks.size());
+  w.chunks = w.chunk_start.size() - 1;
+  const int threads = std::max(1, tbb::this_task_arena::max_concurrency());
+  for (int k = 1; k < threads; ++k) w.group.run([&w] { w.run(); });
+  w.run();  // the caller's share
+  if (!batch.leave_behind_after_ms || threads == 1) {
+    w.group.wait();
+    return w.traced.load();
+  }
+  // The chunks the other threads took: waited for, once the batch has expired at most
+  // leave_behind_after_ms (a thread the machine paused mid-chunk would hold the frame for its pause)
+  using clock = std::chrono::steady_clock;
+  std::optional<clock::time_point> stopped_at;
+  const auto grace = std::chrono::duration<double, std::milli>(*batch.leave_behind_after_ms);
+  while (w.finished.load(std::memory_order_acquire) < w.taken()) {
+    if (!w.stopped.load(std::memory_order_relaxed) && batch.expired && batch.expired()) w.stopped = true;
+    if (w.stopped.load(std::memory_order_relaxed)) {
+      const auto now = clock::now();
+      if (!stopped_at)
+        stopped_at = now;
+      else if (now - *stopped_at >= grace)
+        break;
+    }
+    std::this_thread::yield();
+  }
+  w.close();
+  const uint64_t traced = w.traced.load();
+  const size_t left = w.taken() - w.finished.load(std::memory_order_acquire);
+  if (left > 0)
+    batch.left_behind->hold(std::move(work), static_cast<uint32_t>(left));
+  else
+    w.group.wait();  // (threads yet to start find the gate closed)
+  return traced;
 }
 
 void collect_ao_rays(const GBuffer& g, const FoveationMaps& maps, float ao_distance, float epsilon, uint64_t seed, size_t stride,
