@@ -229,6 +229,7 @@ LatencyLoop run_deadline(const LatencyRun& run, const Segment& s, const LatencyP
   std::vector<std::pair<double, glm::dvec2>> predictions;  // frame start, predicted landing
   Screen screen;
   std::vector<LatencyFramePart> parts;
+  double left_frame_ms = NAN;  // the latest frame's time where its rays left chunks behind
   for (double t = s.begin; t < s.end;) {
     for (; next < s.t.size() && s.t[next] + s.latency_s <= t; ++next) rt.push_gaze(s.t[next], s.px[next]);
     if (oracle) {  // a flight the predictor has detected goes to its saccade's true landing (one of at least --min-amplitude)
@@ -248,6 +249,13 @@ LatencyLoop run_deadline(const LatencyRun& run, const Segment& s, const LatencyP
     LoopFrame f = rt.frame(run.camera);
     frame_ms.push_back(f.cost_ms);
     loop.frames_late += f.late ? 1 : 0;
+    if (std::isfinite(left_frame_ms) && std::isfinite(f.left_behind_ms)) {  // had the frame before waited for them
+      const bool late = left_frame_ms + f.left_behind_ms > budget_ms;
+      loop.late_had_they_waited += late ? 1 : 0;
+      if (late) loop.most_saved_ms = std::max(loop.most_saved_ms, f.left_behind_ms);
+    }
+    left_frame_ms = f.chunks_left_behind > 0 ? f.ms : NAN;
+    loop.frames_left_behind += f.chunks_left_behind > 0 ? 1 : 0;
     if (wall) {
       const double faults_after = page_faults();
       const ThreadTimes threads_after = read_thread_times();
@@ -414,6 +422,8 @@ nlohmann::json loop_json(const LatencyLoop& l) {
   const auto median = l.median_converged_ms();
   j["median_landing_to_converged_ms"] = median ? nlohmann::json(*median) : nlohmann::json(nullptr);
   if (l.name != "whole-frame") {
+    j["frames_left_behind"] = l.frames_left_behind;
+    j["late_had_they_waited"] = l.late_had_they_waited;
     j["late_frames"] = nlohmann::json::array();
     for (const LatencyFramePart& f : l.late)
       j["late_frames"].push_back({{"index", f.index},
@@ -754,6 +764,15 @@ LatencyReport run_latency_bench(const LatencyRun& run, const std::vector<Recordi
       const std::string w = late_threads_summary(l.late, l.budget_ms);
       if (!w.empty()) waits += fmt::format("{}{}: {}", waits.empty() ? "" : "; ", l.name, w);
     }
+    std::string left;
+    for (const LatencyLoop& l : r.loops)
+      if (l.frames_left_behind > 0)
+        left += fmt::format("{}{}: {} frame{}, {} of which would have been late had {} waited{}", left.empty() ? "" : "; ", l.name,
+                            l.frames_left_behind, l.frames_left_behind == 1 ? "" : "s", l.late_had_they_waited,
+                            l.frames_left_behind == 1 ? "it" : "they",
+                            l.late_had_they_waited > 0 ? fmt::format(" (up to {:.1f} ms longer)", l.most_saved_ms) : "");
+    if (!left.empty())
+      md += fmt::format("Chunks of rays left to threads the machine had paused, rather than waited for (docs/realtime.md): {}.\n\n", left);
     if (!late.empty()) md += fmt::format("Late frames, where the pause fell (docs/realtime.md): {}.\n\n", late);
     if (!waits.empty()) md += fmt::format("The late frames' threads (docs/realtime.md): {}.\n\n", waits);
     j["recordings"].push_back(jr);

@@ -133,6 +133,11 @@ struct LatencyLoop {
   std::vector<LatencySaccade> saccades;
   std::vector<LatencyFrame> timeline;
   std::vector<LatencyFramePart> late;  // the deadline loops' late frames with where their pause fell (wall clock)
+  // Wall clock, the deadline loops: frames whose rays left chunks to threads the machine had paused
+  // rather than wait for them (LoopFrame::chunks_left_behind), and of those the ones that would have
+  // been late had they waited (their time + LoopFrame::left_behind_ms over the budget), by up to
+  int frames_left_behind = 0, late_had_they_waited = 0;
+  double most_saved_ms = 0;
   std::optional<double> median_converged_ms() const;
 };
 

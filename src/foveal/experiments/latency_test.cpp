@@ -197,6 +197,12 @@ TEST(LatencyTimeline, EveryFrameJudgesTheDrawnSaccadesFovea) {
     }
     EXPECT_GT(traced, 0u);
     EXPECT_GT(swept, 0u);
+    // … and the frames that left chunks to paused threads are counted, with those waiting would have made late
+    const LatencyLoop& loop = timed.recordings.front().loops.front();
+    EXPECT_LE(loop.late_had_they_waited, loop.frames_left_behind);
+    const nlohmann::json& j = timed.json["recordings"][0]["deadline"];
+    EXPECT_EQ(j.at("frames_left_behind"), loop.frames_left_behind);
+    EXPECT_EQ(j.at("late_had_they_waited"), loop.late_had_they_waited);
   }
   // Before the second landing the drawn fovea is not the followed one (the first saccade's,
   // elsewhere)
