@@ -368,32 +368,42 @@ TEST(RealtimeLoop, ASizeComingBackIsForgottenWhenTheCameraMovesAgain) {
   EXPECT_EQ(loop.scale(), 1.0);
 }
 
-// A CPU renderer whose first view costs `first_ms` more, as a loop's first view pays its first
-// allocations: what a camera that starts to move is sized from says too much.
-class FirstViewSlow final : public FrameRenderer {
+// A renderer that hands every call to another: the tests' wrappers override what they watch or change
+class ForwardingRenderer : public FrameRenderer {
  public:
-  FirstViewSlow(const Scene& scene, double first_ms) : cpu_(make_frame_renderer(scene, ComputeDevice::cpu)), first_ms_(first_ms) {}
+  explicit ForwardingRenderer(FrameRenderer& inner) : inner_(inner) {}
   Frame render(const Camera& camera, const RenderParams& params, const FrameOptions& options) override {
-    return cpu_->render(camera, params, options);
+    return inner_.render(camera, params, options);
   }
-  void reset_history() override { cpu_->reset_history(); }
-  uint32_t history_frames() const override { return cpu_->history_frames(); }
-  uint64_t trace_ao_batch(const AoRayBatch& batch) override { return cpu_->trace_ao_batch(batch); }
+  void reset_history() override { inner_.reset_history(); }
+  uint32_t history_frames() const override { return inner_.history_frames(); }
+  uint64_t trace_ao_batch(const AoRayBatch& batch) override { return inner_.trace_ao_batch(batch); }
+  void prepare_ao_batches(const GBuffer& surfaces, uint64_t version) override { inner_.prepare_ao_batches(surfaces, version); }
+  GBuffer surfaces(const Camera& camera, int width, int height) override { return inner_.surfaces(camera, width, height); }
+  GBuffer surfaces_rows(const Camera& camera, int width, int height, int y0, int y1) override {
+    return inner_.surfaces_rows(camera, width, height, y0, y1);
+  }
+  double raw_occlusion_rays_per_ms(std::span<const Ray> rays) override { return inner_.raw_occlusion_rays_per_ms(rays); }
+  ComputeDevice device() const override { return inner_.device(); }
+  size_t triangles() const override { return inner_.triangles(); }
+  double build_ms() const override { return inner_.build_ms(); }
+  std::string trace_api() const override { return inner_.trace_api(); }
+
+ protected:
+  FrameRenderer& inner_;
+};
+
+// A renderer whose first view costs `first_ms` more, as a loop's first view pays its first
+// allocations: what a camera that starts to move is sized from says too much.
+class FirstViewSlow final : public ForwardingRenderer {
+ public:
+  FirstViewSlow(FrameRenderer& inner, double first_ms) : ForwardingRenderer(inner), first_ms_(first_ms) {}
   GBuffer surfaces(const Camera& camera, int width, int height) override {
     if (views_++ == 0) std::this_thread::sleep_for(std::chrono::duration<double, std::milli>(first_ms_));
-    return cpu_->surfaces(camera, width, height);
+    return inner_.surfaces(camera, width, height);
   }
-  GBuffer surfaces_rows(const Camera& camera, int width, int height, int y0, int y1) override {
-    return cpu_->surfaces_rows(camera, width, height, y0, y1);
-  }
-  double raw_occlusion_rays_per_ms(std::span<const Ray> rays) override { return cpu_->raw_occlusion_rays_per_ms(rays); }
-  ComputeDevice device() const override { return ComputeDevice::cpu; }
-  size_t triangles() const override { return cpu_->triangles(); }
-  double build_ms() const override { return cpu_->build_ms(); }
-  std::string trace_api() const override { return cpu_->trace_api(); }
 
  private:
-  std::unique_ptr<FrameRenderer> cpu_;
   double first_ms_;
   int views_ = 0;
 };
@@ -406,7 +416,8 @@ TEST(RealtimeLoop, AMovingCamerasCheapViewsGrowBackWhileItMoves) {
   // tests on two cores: a step of growth needs a frame whose rays ran out early enough, and at a
   // 100-ms budget there 12 frames once left the view at 87 %, and 40 at 91 %. Frames end when their
   // rays run out, so the budget costs no time.)
-  FirstViewSlow renderer(sphere_plane(), 1500);
+  const std::unique_ptr<FrameRenderer> cpu = make_frame_renderer(sphere_plane(), ComputeDevice::cpu);
+  FirstViewSlow renderer(*cpu, 1500);
   LoopSettings settings;
   settings.budget_ms = 300;
   RealtimeLoop loop{renderer, sphere_plane(), loop_params(320, 200, 16), settings};
@@ -589,16 +600,9 @@ TEST(RealtimeLoop, ASmallerStillViewGrowsBackWhenTheBudgetLeavesItRoom) {
 }
 
 // A renderer that counts the surfaces it is asked to trace
-class SurfaceCounter : public FrameRenderer {
+class SurfaceCounter final : public ForwardingRenderer {
  public:
-  explicit SurfaceCounter(FrameRenderer& inner) : inner_(inner) {}
-  Frame render(const Camera& camera, const RenderParams& params, const FrameOptions& options) override {
-    return inner_.render(camera, params, options);
-  }
-  void reset_history() override { inner_.reset_history(); }
-  uint32_t history_frames() const override { return inner_.history_frames(); }
-  uint64_t trace_ao_batch(const AoRayBatch& batch) override { return inner_.trace_ao_batch(batch); }
-  void prepare_ao_batches(const GBuffer& surfaces, uint64_t version) override { inner_.prepare_ao_batches(surfaces, version); }
+  using ForwardingRenderer::ForwardingRenderer;
   GBuffer surfaces(const Camera& camera, int width, int height) override {
     ++traced;
     return inner_.surfaces(camera, width, height);
@@ -607,15 +611,7 @@ class SurfaceCounter : public FrameRenderer {
     ++traced;
     return inner_.surfaces_rows(camera, width, height, y0, y1);
   }
-  double raw_occlusion_rays_per_ms(std::span<const Ray> rays) override { return inner_.raw_occlusion_rays_per_ms(rays); }
-  ComputeDevice device() const override { return inner_.device(); }
-  size_t triangles() const override { return inner_.triangles(); }
-  double build_ms() const override { return inner_.build_ms(); }
-  std::string trace_api() const override { return inner_.trace_api(); }
   int traced = 0;
-
- private:
-  FrameRenderer& inner_;
 };
 
 // A still view whose fixed part outgrows the budget (an experiment that leaves the loop less of the
@@ -1356,16 +1352,11 @@ TEST(RealtimeLoop, AFinishedLoopShowsThePapersFrame) {
   EXPECT_LT(differ, paper.visibility.size() / 100);
 }
 
-// A CPU renderer whose next batch has the first chunk of a thread other than the caller's pause
-// for `pause` (the machine giving that thread's core to another process)
-class PausingRenderer : public FrameRenderer {
+// A renderer whose next batch has the first chunk of a thread other than the caller's pause for
+// `pause` (the machine giving that thread's core to another process)
+class PausingRenderer final : public ForwardingRenderer {
  public:
-  explicit PausingRenderer(FrameRenderer& inner) : inner_(inner) {}
-  Frame render(const Camera& camera, const RenderParams& params, const FrameOptions& options) override {
-    return inner_.render(camera, params, options);
-  }
-  void reset_history() override { inner_.reset_history(); }
-  uint32_t history_frames() const override { return inner_.history_frames(); }
+  using ForwardingRenderer::ForwardingRenderer;
   uint64_t trace_ao_batch(const AoRayBatch& batch) override {
     if (!armed) return inner_.trace_ao_batch(batch);
     AoRayBatch b = batch;
@@ -1378,20 +1369,8 @@ class PausingRenderer : public FrameRenderer {
     };
     return inner_.trace_ao_batch(b);
   }
-  GBuffer surfaces(const Camera& camera, int width, int height) override { return inner_.surfaces(camera, width, height); }
-  GBuffer surfaces_rows(const Camera& camera, int width, int height, int y0, int y1) override {
-    return inner_.surfaces_rows(camera, width, height, y0, y1);
-  }
-  double raw_occlusion_rays_per_ms(std::span<const Ray> rays) override { return inner_.raw_occlusion_rays_per_ms(rays); }
-  ComputeDevice device() const override { return inner_.device(); }
-  size_t triangles() const override { return inner_.triangles(); }
-  double build_ms() const override { return inner_.build_ms(); }
-  std::string trace_api() const override { return inner_.trace_api(); }
   std::atomic<bool> armed{false}, paused{false};
   std::chrono::milliseconds pause{300};
-
- private:
-  FrameRenderer& inner_;
 };
 
 // On the wall clock a frame does not wait for a thread the machine paused mid-chunk (the loop's
