@@ -372,12 +372,16 @@ TEST(FrameRenderer, AChunkOfAPausedThreadIsLeftBehindOnceTheBatchHasExpired) {
     AoLeftBehind left;
     const auto caller = std::this_thread::get_id();
     std::atomic<bool> paused{false};
-    // The first chunk of the other thread pauses; the batch expires 10 ms in
+    std::atomic<clock::time_point> pause_start{};
+    // The first chunk of the other thread pauses; the batch expires 10 ms later (however long that
+    // thread took to start: on a busy machine, longer than a fixed deadline once allowed)
     batch.chunk_hook = [&] {
-      if (std::this_thread::get_id() != caller && !paused.exchange(true)) std::this_thread::sleep_for(kPause);
+      if (std::this_thread::get_id() != caller && !paused.exchange(true)) {
+        pause_start = clock::now();
+        std::this_thread::sleep_for(kPause);
+      }
     };
-    const auto start = clock::now();
-    batch.expired = [&] { return clock::now() - start >= std::chrono::milliseconds(10); };
+    batch.expired = [&] { return paused && clock::now() - pause_start.load() >= std::chrono::milliseconds(10); };
     if (leave) {
       batch.leave_behind_after_ms = 0.25;
       batch.left_behind = &left;
@@ -389,11 +393,11 @@ TEST(FrameRenderer, AChunkOfAPausedThreadIsLeftBehindOnceTheBatchHasExpired) {
     const std::vector<uint32_t> blocked_then = blocked;
     const std::vector<uint8_t> done_then = done;
     if (!leave) {  // waited for the paused thread
-      EXPECT_GE(returned - start, kPause);
+      EXPECT_GE(returned - pause_start.load(), kPause);
       EXPECT_EQ(left.pending(), 0u);
       continue;
     }
-    EXPECT_LT(returned - start, kPause / 2);
+    EXPECT_LT(returned - pause_start.load(), kPause / 2);
     EXPECT_EQ(left.pending(), 1u);
     const AoLeftBehind::Finished f = left.finish();
     EXPECT_EQ(f.chunks, 1u);
