@@ -1386,7 +1386,7 @@ TEST(RealtimeLoop, AFrameDoesNotWaitForAThreadPausedMidChunk) {
   RealtimeLoop loop(renderer, box(), params, settings);
   loop.push_gaze(0, glm::dvec2(70, 40));
   const Camera& camera = box().cameras.front();
-  loop.frame(camera);  // the view
+  loop.frame(camera);     // the view
   renderer.armed = true;  // (until a thread other than the caller takes a chunk: on a busy machine not always in the first frame)
   LoopFrame paused;
   for (int k = 0; k < 60 && !renderer.paused; ++k) paused = loop.frame(camera);
