@@ -767,10 +767,13 @@ LatencyReport run_latency_bench(const LatencyRun& run, const std::vector<Recordi
     std::string left;
     for (const LatencyLoop& l : r.loops)
       if (l.frames_left_behind > 0)
-        left += fmt::format("{}{}: {} frame{}, {} of which would have been late had {} waited{}", left.empty() ? "" : "; ", l.name,
-                            l.frames_left_behind, l.frames_left_behind == 1 ? "" : "s", l.late_had_they_waited,
-                            l.frames_left_behind == 1 ? "it" : "they",
-                            l.late_had_they_waited > 0 ? fmt::format(" (up to {:.1f} ms longer)", l.most_saved_ms) : "");
+        left +=
+            fmt::format("{}{}: {}{}", left.empty() ? "" : "; ", l.name,
+                        l.frames_left_behind == 1
+                            ? fmt::format("1 frame, which would{} have been late had it waited", l.late_had_they_waited == 1 ? "" : " not")
+                            : fmt::format("{} frames, {} of which would have been late had they waited", l.frames_left_behind,
+                                          l.late_had_they_waited == 0 ? std::string("none") : std::to_string(l.late_had_they_waited)),
+                        l.late_had_they_waited > 0 ? fmt::format(" (up to {:.1f} ms longer)", l.most_saved_ms) : "");
     if (!left.empty())
       md += fmt::format("Chunks of rays left to threads the machine had paused, rather than waited for (docs/realtime.md): {}.\n\n", left);
     if (!late.empty()) md += fmt::format("Late frames, where the pause fell (docs/realtime.md): {}.\n\n", late);
