@@ -218,6 +218,7 @@ def main(argv=None) -> int:
     writer = None
     # The numbers the summary needs, per flip (a tuple each: an hour at 60 Hz is 216,000 of them)
     rows = []  # (gaze x, gaze y, sample time, converged, render ms, late, gaze-to-flip ms)
+    frames_left_behind = 0  # frames whose rays left chunks to threads the machine had paused
     session = foveal.machine_snapshot()  # what else runs on the machine during the session (named at its end)
     own_ms = 0.0
     texture = None  # the image PsychoPy is given, in its float format: one buffer, written every frame
@@ -270,7 +271,9 @@ def main(argv=None) -> int:
                    "render_start_s": start, "render_ms": 1000 * (rendered - start), "library_ms": frame.ms,
                    "late": int(frame.late), "flip_time_s": flip, "gaze_to_flip_ms": 1000 * (flip - sample_time),
                    # (appended: readers by column index keep theirs)
-                   "budget_ms": frame.budget_ms, "width": frame.image.shape[1], "height": frame.image.shape[0]}
+                   "budget_ms": frame.budget_ms, "width": frame.image.shape[1], "height": frame.image.shape[0],
+                   # chunks of the frame's rays left to threads the machine had paused rather than waited for
+                   "chunks_left_behind": frame.chunks_left_behind}
             if writer is None:
                 writer = csv.DictWriter(log_file, fieldnames=list(row))
                 writer.writeheader()
@@ -278,6 +281,7 @@ def main(argv=None) -> int:
             if flip_index % max(1, round(refresh_hz)) == 0:
                 log_file.flush()
             rows.append((gaze_px[0], gaze_px[1], sample_time, frame.fovea == "converged", row["render_ms"], frame.late, row["gaze_to_flip_ms"]))
+            frames_left_behind += frame.chunks_left_behind > 0
             flip_index += 1
         completed = True
     finally:
@@ -302,6 +306,7 @@ def main(argv=None) -> int:
                "predict": not args.no_predict,
                "gaze_positions": len({(round(r[0]), round(r[1])) for r in rows}),
                "frames_late": sum(bool(r[5]) for r in rows),
+               "frames_left_behind": frames_left_behind,
                "flips_converged": sum(r[3] for r in rows),
                "gaze_to_flip_ms_median": float(np.median(latencies)) if len(latencies) else None,
                "gaze_to_flip_ms_p95": float(np.percentile(latencies, 95)) if len(latencies) else None,

@@ -58,6 +58,8 @@ def test_gaze_contingent_follows_the_mouse_gaze_and_logs_latency(tmp_path):
     sizes = [(int(r["width"]), int(r["height"])) for r in rows]
     assert all(0 < w <= 320 and 0 < h <= 200 and abs(w / h - 1.6) < 0.05 for w, h in sizes)
     assert sizes[-1] == tuple(summary["render_size"])
+    # Chunks of rays left to threads the machine paused, per flip, and the flips that left any
+    assert summary["frames_left_behind"] == sum(int(r["chunks_left_behind"]) > 0 for r in rows)
     # The loop answers within what the script's own work leaves of the 60 Hz refresh, so the image
     # shown is at most two refreshes behind the gaze
     assert summary["refresh_hz"] == 60 and 0 < summary["budget_ms"] <= 1000 / 60
