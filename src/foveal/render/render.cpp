@@ -423,7 +423,8 @@ struct AoBatchWork {
   std::atomic<uint64_t> traced{0};
   // The results' gate: the threads inside it (low bits), and whether the call has returned without
   // waiting for them (kClosed). Results are written, and expired() asked, only inside: once closed,
-  // a chunk still tracing drops its rays, and nothing of the caller's is touched again.
+  // a chunk still tracing drops its rays and writes nothing of the caller's (it reads the tasks and
+  // surfaces until it ends, which the caller keeps as they are until AoLeftBehind::finish()).
   std::atomic<uint32_t> gate{0};
   std::atomic<int64_t> last_dropped_ns{0};  // steady clock: when the latest chunk left behind ended
   tbb::task_group group;                    // (last: destroyed first, waiting for its tasks while the rest is alive)
