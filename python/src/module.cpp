@@ -571,7 +571,7 @@ NB_MODULE(_core, m) {
           "A new view: the pixels that kept AO rays from the view before (0 with keep_history=False).")
       .def_prop_ro(
           "chunks_left_behind", [](const PyLoopFrame& f) { return f.frame.chunks_left_behind; },
-          "Wall clock: chunks of this frame's rays (about a hundredth of a millisecond each) left to threads the machine had "
+          "Wall clock: chunks of this frame's rays (normally 10–40 µs each) left to threads the machine had "
           "paused, their rays dropped and cast again later, rather than waited for (docs/realtime.md).")
       .def_prop_ro(
           "left_behind_ms", [](const PyLoopFrame& f) { return f.frame.left_behind_ms; },

@@ -92,7 +92,7 @@ struct LoopSettings {
 // not made late by the machine's pauses
 inline constexpr double kAheadShare = 0.5;
 // Wall clock: once a frame's rays are to stop, how long it waits for the chunks other threads are
-// tracing (about a hundredth of a millisecond each) before it leaves them behind: only a thread the
+// tracing (normally 10–40 µs each) before it leaves them behind: only a thread the
 // machine has paused takes longer (AoRayBatch::leave_behind_after_ms)
 inline constexpr double kLeaveBehindAfterMs = 0.25;
 inline constexpr double kDefaultMarginMs = 2.0;
