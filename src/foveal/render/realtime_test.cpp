@@ -1388,15 +1388,20 @@ TEST(RealtimeLoop, AFrameDoesNotWaitForAThreadPausedMidChunk) {
   const Camera& camera = box().cameras.front();
   loop.frame(camera);     // the view
   renderer.armed = true;  // (until a thread other than the caller takes a chunk: on a busy machine not always in the first frame)
-  LoopFrame paused;
-  for (int k = 0; k < 60 && !renderer.paused; ++k) paused = loop.frame(camera);
+  // (The machine may pause a thread of its own accord too, on a busy one: each frame says when the
+  // frame before left chunks behind, whichever)
+  LoopFrame before, paused;
+  for (int k = 0; k < 60 && !renderer.paused; ++k) {
+    before = paused;
+    paused = loop.frame(camera);
+  }
   if (!renderer.paused) GTEST_SKIP() << "skipped: no second thread took a chunk (a single core?)";
   EXPECT_LT(paused.ms, 150.0);  // not the 300 ms pause
-  EXPECT_EQ(paused.chunks_left_behind, 1u);
-  EXPECT_TRUE(std::isnan(paused.left_behind_ms));
+  EXPECT_GE(paused.chunks_left_behind, 1u);
+  EXPECT_EQ(std::isnan(paused.left_behind_ms), before.chunks_left_behind == 0);
   const LoopFrame next = loop.frame(camera);  // waits for that chunk at its start
-  EXPECT_GT(next.left_behind_ms, 0.0);
-  EXPECT_EQ(next.chunks_left_behind, 0u);
+  // It ended about 300 ms after its pause began, at least 150 ms after the frame's rays stopped
+  EXPECT_GT(next.left_behind_ms, 100.0);
   const size_t n = static_cast<size_t>(params.width) * static_cast<size_t>(params.height);
   auto finished = [&] {
     for (size_t i = 0; i < n; ++i)
@@ -1404,7 +1409,11 @@ TEST(RealtimeLoop, AFrameDoesNotWaitForAThreadPausedMidChunk) {
     return true;
   };
   LoopFrame f = next;
-  for (int k = 0; k < 2000 && !finished(); ++k) f = loop.frame(camera);  // every pixel its n(E)
+  for (int k = 0; k < 2000 && !finished(); ++k) {  // every pixel its n(E)
+    const LoopFrame g = loop.frame(camera);
+    EXPECT_EQ(std::isnan(g.left_behind_ms), f.chunks_left_behind == 0) << "frame " << g.index;
+    f = g;
+  }
   ASSERT_TRUE(finished());
   f = loop.frame(camera);
   params.gaze_px = glm::dvec2(70, 40);

@@ -401,20 +401,13 @@ double thread_cpu_ms() {
 }  // namespace
 
 // One batch's work on the CPU: its chunks, what the threads share, and the tasks that run them.
-// It outlives the call where chunks are left behind (AoLeftBehind holds it), so it keeps copies of
-// what the threads read from the batch; the tasks, outputs and surfaces it points to stay the caller's.
+// It outlives the call where chunks are left behind (AoLeftBehind holds it), so it keeps a copy of
+// the batch; the tasks, outputs and surfaces that copy points to stay the caller's.
 struct AoBatchWork {
   static constexpr uint32_t kClosed = 1u << 31;
-  const Tracer* tracer = nullptr;
-  const GBuffer* gbuffer = nullptr;
-  std::span<const AoRayTask> tasks;
-  std::span<uint32_t> blocked;
-  std::span<uint8_t> done;
-  float ao_distance = 0, epsilon = 0;
-  uint64_t seed = 1;
-  double slowdown = 1;
-  std::function<bool()> expired;
-  std::function<void()> chunk_hook;
+  AoBatchWork(const Tracer& t, const AoRayBatch& b) : tracer(t), batch(b) {}
+  const Tracer& tracer;
+  const AoRayBatch batch;
   std::vector<size_t> chunk_start;
   size_t chunks = 0;
   std::atomic<size_t> next{0};      // the next chunk to take
@@ -449,7 +442,8 @@ struct AoBatchWork {
     thread_local std::vector<Ray> rays;
     thread_local std::vector<uint8_t> occluded;
     thread_local std::vector<uint32_t> chunk_blocked;
-    const GBuffer& g = *gbuffer;
+    const GBuffer& g = *batch.gbuffer;
+    const auto tasks = batch.tasks;
     while (!stopped.load(std::memory_order_relaxed)) {
       if (!enter()) return;
       const size_t c = next.fetch_add(1, std::memory_order_acq_rel);
@@ -457,29 +451,29 @@ struct AoBatchWork {
         leave();
         return;
       }
-      if (expired && expired()) {
+      if (batch.expired && batch.expired()) {
         stopped = true;
         finished.fetch_add(1, std::memory_order_release);
         leave();
         return;
       }
       leave();
-      if (chunk_hook) chunk_hook();
+      if (batch.chunk_hook) batch.chunk_hook();
       const Timer chunk_timer;
       // (the thread's CPU clock is a system call: read only for the tests' slower tracer)
-      const double cpu_start = slowdown > 1 ? thread_cpu_ms() : 0.0;
+      const double cpu_start = batch.slowdown > 1 ? thread_cpu_ms() : 0.0;
       rays.clear();
       for (size_t t = chunk_start[c]; t < chunk_start[c + 1]; ++t) {
         const AoRayTask& task = tasks[t];
         const size_t i = task.pixel;
         if (i >= g.prim.size() || !g.hit(i)) continue;
-        const AoPixelRays pixel(g.position[i], g.geo_normal[i], epsilon, ao_distance, seed,
+        const AoPixelRays pixel(g.position[i], g.geo_normal[i], batch.epsilon, batch.ao_distance, batch.seed,
                                 static_cast<uint32_t>(i % static_cast<size_t>(g.width)),
                                 static_cast<uint32_t>(i / static_cast<size_t>(g.width)), sobol_table_2d());
         for (uint32_t k = 0; k < task.count; ++k) rays.push_back(pixel(task.first + k));
       }
       occluded.resize(rays.size());
-      tracer->occluded(rays, occluded);
+      tracer.occluded(rays, occluded);
       chunk_blocked.clear();
       size_t r = 0;
       for (size_t t = chunk_start[c]; t < chunk_start[c + 1]; ++t) {
@@ -489,8 +483,8 @@ struct AoBatchWork {
           for (uint32_t k = 0; k < task.count; ++k) n += occluded[r++];
         chunk_blocked.push_back(n);
       }
-      if (slowdown > 1) {  // tests: a slower tracer: the chunk's CPU time stretched (not the OS's pauses)
-        const double target = (thread_cpu_ms() - cpu_start) * slowdown;
+      if (batch.slowdown > 1) {  // tests: a slower tracer: the chunk's CPU time stretched (not the OS's pauses)
+        const double target = (thread_cpu_ms() - cpu_start) * batch.slowdown;
         while (chunk_timer.ms() < target) {}
       }
       if (!enter()) {  // left behind: the call has returned
@@ -498,8 +492,8 @@ struct AoBatchWork {
         return;
       }
       for (size_t t = chunk_start[c], k = 0; t < chunk_start[c + 1]; ++t, ++k) {
-        blocked[t] = chunk_blocked[k];
-        done[t] = 1;
+        batch.blocked[t] = chunk_blocked[k];
+        batch.done[t] = 1;
       }
       traced.fetch_add(rays.size(), std::memory_order_relaxed);
       finished.fetch_add(1, std::memory_order_release);
@@ -540,19 +534,8 @@ uint64_t trace_ao_tasks(const Tracer& tracer, const AoRayBatch& batch) {
     fail("trace_ao_tasks: leave_behind_after_ms needs left_behind and a time >= 0");
   if (batch.left_behind) batch.left_behind->finish();  // (the caller's, if it has not)
   std::fill(batch.done.begin(), batch.done.begin() + static_cast<std::ptrdiff_t>(tasks.size()), uint8_t{0});
-  auto work = std::make_unique<AoBatchWork>();
+  auto work = std::make_unique<AoBatchWork>(tracer, batch);
   AoBatchWork& w = *work;
-  w.tracer = &tracer;
-  w.gbuffer = batch.gbuffer;
-  w.tasks = tasks;
-  w.blocked = batch.blocked;
-  w.done = batch.done;
-  w.ao_distance = batch.ao_distance;
-  w.epsilon = batch.epsilon;
-  w.seed = batch.seed;
-  w.slowdown = batch.slowdown;
-  w.expired = batch.expired;
-  w.chunk_hook = batch.chunk_hook;
   // Chunks of whole tasks, about 128 rays each (a few hundredths of a millisecond: the deadline's
   // resolution), in task order
   w.chunk_start.push_back(0);
