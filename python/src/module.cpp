@@ -577,6 +577,11 @@ NB_MODULE(_core, m) {
           "left_behind_ms", [](const PyLoopFrame& f) { return f.frame.left_behind_ms; },
           "Where the frame before left chunks behind: how long after its rays stopped the last of them ended, how much later "
           "it would have ended had it waited for them (NaN where it left none).")
+      .def_prop_ro(
+          "estimate_deferred", [](const PyLoopFrame& f) { return f.frame.estimate_deferred; },
+          "Wall clock: the estimate of the pixels without rays was due, but this frame had no room for it before its rays' "
+          "deadline (most often one that evaluated the foveation maps at every pixel), and it waits for a frame that has: "
+          "meanwhile those pixels show the estimate before (docs/realtime.md).")
       .def_prop_ro("index", [](const PyLoopFrame& f) { return f.frame.index; });
 
   nb::class_<PyLoop>(m, "Loop",

@@ -140,6 +140,7 @@ void validate(const LoopSettings& s) {
     fail("periphery_share: must be in (0, 1] (the share of the frame budget the periphery's rays may run to), got {}", s.periphery_share);
   if (!(s.min_scale > 0 && s.min_scale <= 1)) fail("min_scale: must be in (0, 1], got {}", s.min_scale);
   if (!(s.slowdown >= 1) || !std::isfinite(s.slowdown)) fail("slowdown: must be >= 1, got {}", s.slowdown);
+  if (s.estimate_cost_ms && !(*s.estimate_cost_ms >= 0)) fail("estimate_cost_ms: must be >= 0, got {}", *s.estimate_cost_ms);
   validate(s.landing);
 }
 
@@ -662,7 +663,7 @@ void RealtimeLoop::compose(Image& color) {
   });
 }
 
-void RealtimeLoop::estimate_unreached() {
+bool RealtimeLoop::estimate_unreached(double left_ms) {
   // The pixels without rays take their visibility from those around them that have rays (pull-push,
   // pull_push.h), estimated from the rays so far before a frame casts its own: while pixels lack
   // their rays (after a new view, or new maps), every kEstimateEvery frames, and at once where
@@ -673,7 +674,16 @@ void RealtimeLoop::estimate_unreached() {
   // a fixation's drift reaches a rim of new pixels every few frames, which made it run every fourth
   // frame of the fixation. (bench/latency_segments.py under the model clock gave every landing of
   // IRF S1 and S2 the same time with this rule as without it.)
-  if (!unreached_possible_ || (estimates_ && (++estimate_age_ < kEstimateEvery || !reached_))) return;
+  if (!unreached_possible_ || (estimates_ && (++estimate_age_ < kEstimateEvery || !reached_))) return false;
+  // Due. Where the frame has no room for it before its rays' deadline (wall clock), it waits for a
+  // frame that has: meanwhile its pixels show the estimate before, or their own rays. A frame that
+  // evaluated the maps at every pixel (every half degree of gaze) and made the estimate too spent
+  // 2.6 ms on both at 840×525 on two cores, and with a budget of 4 ms (what an experiment's own
+  // drawing may leave the loop) ended late, every such frame (BENCHMARKS.md). (Made at most four
+  // frames late, it still came in the fourth frame of a saccade, whose frames each evaluate the maps
+  // everywhere.) A view's first estimate is made at once: there is none to show before it.
+  if (estimates_ && settings_.estimate_cost_ms.value_or(estimate_ms_) > left_ms) return true;
+  const Timer estimate_timer;
   reached_ = false;
   std::atomic<bool> unreached{false};
   pull_push_.pull(params_.width, params_.height, [&](size_t i) {
@@ -687,6 +697,8 @@ void RealtimeLoop::estimate_unreached() {
   estimates_ = unreached && pull_push_.push();
   estimate_age_ = 0;
   ++estimates_made_;
+  estimate_ms_ = std::max(0.8 * estimate_ms_ + 0.2 * estimate_timer.ms(), estimate_timer.ms());
+  return false;
 }
 
 bool FixedPartWindow::add(double fixed_ms, double budget_ms, size_t min_frames) {
@@ -1042,16 +1054,16 @@ LoopFrame RealtimeLoop::frame(const Camera& camera) {
     out.predicted = true;
   }
   out.gaze_px = gaze * scale_;
-  const Timer maps_timer;
-  update_maps(out.gaze_px, out.predicted);
-  estimate_unreached();
-  out.maps_ms = maps_timer.ms();
-  // AO rays, in rounds, within what the frame may spend on them
-  double trace_ms = 0, sweep_ms = 0;
   const bool wall = settings_.clock == LoopClock::wall;
   // The margin: at least the settings', more where frames have lately ended later than planned
   const double margin = std::max(loop_margin_ms(settings_), slip_ms_);  // (slip_ms_ at most a quarter of the budget)
   const double deadline = settings_.budget_ms - margin - finish_ms_;
+  const Timer maps_timer;
+  update_maps(out.gaze_px, out.predicted);
+  out.estimate_deferred = estimate_unreached(wall ? deadline - timer.ms() : std::numeric_limits<double>::infinity());
+  out.maps_ms = maps_timer.ms();
+  // AO rays, in rounds, within what the frame may spend on them
+  double trace_ms = 0, sweep_ms = 0;
   // The periphery's rays stop at their share of the budget (1: at the deadline): a frame that ends
   // early is not made late by a pause of the machine's
   const double periphery_deadline = std::min(deadline, settings_.periphery_share * settings_.budget_ms - finish_ms_);

@@ -82,6 +82,10 @@ struct LoopSettings {
   double periphery_share = kDefaultPeripheryShare;
   double min_scale = 0.25;   // the smallest resolution scale the loop may choose
   double slowdown = 1;       // tests only: the tracer this many times slower
+  // Tests only: what an estimate of the pixels without rays is taken to cost on the wall clock,
+  // instead of its measured time (RealtimeLoop::frame() leaves one that would pass the rays'
+  // deadline to a later frame)
+  std::optional<double> estimate_cost_ms;
   bool keep_history = true;  // a new view (the camera moved) keeps the AO of the surfaces it still sees
   // Once every pixel has its n(E), the frames' spare time raises the pixels towards n_max, nearest
   // the gaze first, within kAheadShare of each budget: where the eye lands next, its fovea finds
@@ -137,6 +141,10 @@ struct LoopFrame {
   // its own time
   uint32_t chunks_left_behind = 0;
   double left_behind_ms = NAN;
+  // Wall clock: the estimate of the pixels without rays (pull-push) was due, but this frame had
+  // no room for it before its rays' deadline — most often a frame that evaluated the maps at every
+  // pixel — and it was left to a later frame that has room
+  bool estimate_deferred = false;
 };
 
 // The median, or the least, of the latest N values (fewer before N have come).
@@ -338,7 +346,9 @@ class RealtimeLoop {
   // Room for a round over all n pixels, its pages touched (where a new view needs more)
   void prepare_rounds(size_t n);
   void compose(Image& color);
-  void estimate_unreached();
+  // The estimate, where due and where it fits the `left_ms` the frame has before its rays'
+  // deadline (else deferred); true where deferred
+  bool estimate_unreached(double left_ms);
   // Whether it lowered the size; `in_place`: a still view's, which lower_in_place takes from the
   // view at hand at the next frame (set_scale otherwise: the next frame traces its view at that size)
   bool rescale(double fixed_ms, bool in_place = false);
@@ -409,6 +419,7 @@ class RealtimeLoop {
   bool estimates_ = false;          // pull_push_ holds estimates for this view
   bool grid_pending_ = false;       // the view's coarse grid is still to be planned (plan_round)
   int estimate_age_ = 0;            // frames since they were made
+  double estimate_ms_ = 0;          // wall clock: what it takes (the latest, or more: as finish_ms_)
   uint64_t estimates_made_ = 0;
   bool reached_ = true;  // a pixel outside the fovea got its first rays, or the maps changed everywhere, since then
   std::vector<AoRayTask> tasks_;

@@ -1285,6 +1285,50 @@ TEST(RealtimeLoop, TheEstimateWaitsWhileOnlyTheFoveaGetsRays) {
   EXPECT_GT(loop.estimates_made(), first);
 }
 
+// On the wall clock an estimate that would pass the frame's rays' deadline waits for a frame with
+// room (a frame that evaluated the maps everywhere and made the estimate too was late at a budget
+// of 4 ms): its pixels keep the estimate before. A view's first is made at once. The estimate's
+// cost is set (test-only) so that the rule, not the machine, decides: a cost no frame has room for,
+// and none.
+TEST(RealtimeLoop, AnEstimateWithoutRoomBeforeTheDeadlineWaitsForAFrameWithRoom) {
+  const std::unique_ptr<FrameRenderer> renderer = make_frame_renderer(sphere_plane(), ComputeDevice::cpu);
+  const Camera& camera = sphere_plane().cameras.front();
+  const RenderParams params = loop_params(320, 200, 400);  // (pixels left without rays for many frames)
+  const double ppd = pixels_per_degree(params.display) * params.width / params.display.res_x;
+  struct Run {
+    uint64_t first = 0, made = 0;
+    int deferred = 0;
+  };
+  auto run = [&](double cost_ms) {
+    LoopSettings settings;  // (the wall clock)
+    settings.estimate_cost_ms = cost_ms;
+    RealtimeLoop loop(*renderer, sphere_plane(), params, settings);
+    Run r;
+    glm::dvec2 gaze(40, 62);
+    loop.push_gaze(0, gaze);
+    loop.frame(camera);  // the view, its grid
+    loop.frame(camera);  // its first estimate, from the grid's rays
+    r.first = loop.estimates_made();
+    // Saccades of 2° across the view: the maps change everywhere, and pixels outside the fovea get
+    // their first rays
+    for (int k = 0; k < 40; ++k) {
+      gaze.x = 40 + (k / 4 % 5) * 2 * ppd;
+      loop.push_gaze(0.02 * (k + 1), gaze);
+      const LoopFrame f = loop.frame(camera);
+      r.deferred += f.estimate_deferred ? 1 : 0;
+    }
+    r.made = loop.estimates_made();
+    return r;
+  };
+  const Run none = run(0), never = run(1e6);
+  ASSERT_GE(none.first, 1u);
+  EXPECT_GT(none.made, none.first + 2);  // made again and again, as due
+  EXPECT_EQ(none.deferred, 0);
+  EXPECT_EQ(never.first, none.first);  // the view's first, at once
+  EXPECT_EQ(never.made, never.first);  // none since: no frame had room
+  EXPECT_GT(never.deferred, 10);       // due, and waiting
+}
+
 // A new view's first rays include a coarse grid outside the fovea (every 16th pixel in each
 // direction, 64 rays each), so that while the fovea converges the pixels without rays show the
 // view's AO measured across it (their estimate, pull-push), not the fovea's carried outwards:
