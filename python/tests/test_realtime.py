@@ -177,6 +177,29 @@ def test_frames_release_the_gil(box):
     assert len(ticks) > 50  # ~200 ms of frames: the other thread ran meanwhile
 
 
+def test_an_image_held_is_never_composed_into(box):
+    """A frame's buffer goes back to the loop once neither the frame nor a view of its image is held:
+    an image still viewed keeps what it showed while later frames are made, whether its frame is held
+    or only the view; the loop goes on with buffers handed back and with new ones."""
+    loop = foveal.Loop(box, size=(160, 100), max_rays=400, device="cpu", predict=False)
+    kept_frame = loop.frame(gaze=(40, 50), t=0.0)
+    view_only = loop.frame(gaze=(120, 50), t=0.1).image  # its frame released, the view held
+    kept = np.array(kept_frame.image)
+    viewed = np.array(view_only)
+    for k in range(12):  # frames released as they come: their buffers go back to the loop
+        f = loop.frame(gaze=(40 + 8 * k, 50), t=0.2 + 0.1 * k)
+        assert f.image.shape == (100, 160, 3) and np.isfinite(f.image).all()
+        del f
+    assert np.array_equal(kept_frame.image, kept)
+    assert np.array_equal(view_only, viewed)
+    assert not np.array_equal(kept, viewed)  # (two frames of different gazes, so each check could fail)
+    # Frames outliving their loop keep their images too
+    last = loop.frame(gaze=(80, 50), t=2.0)
+    shown = np.array(last.image)
+    del loop
+    assert np.array_equal(last.image, shown)
+
+
 def test_bad_arguments_are_clear_errors(box):
     with pytest.raises(ValueError, match="refresh_hz"):
         foveal.Loop(box, refresh_hz=0)
@@ -384,6 +407,13 @@ def test_the_paced_loop_script_reports_every_frame(tmp_path):
     assert figures["frames"] == 30 and figures["budget_ms"] == pytest.approx(1000 / 60)
     assert 0 <= figures["frames_late"] <= 30 and figures["frame_ms_p50"] > 0
     assert "30 frames at 60 Hz" in run.stdout and figures["device"].startswith("cpu")
+    assert figures["rays_per_frame"] >= 0 and "AO rays a frame" in run.stdout
+    # --frame-budget-ms: what an experiment's own drawing leaves the loop of each refresh
+    short = subprocess.run([sys.executable, script, "--recording", str(recording), "--scene", "builtin:box", "--size", "64x40",
+                            "--duration", "0.2", "--max-rays", "16", "--frame-budget-ms", "8", "--json", str(tmp_path / "short.json")],
+                           capture_output=True, text=True, timeout=120)
+    assert short.returncode == 0, short.stderr
+    assert json.loads((tmp_path / "short.json").read_text())["budget_ms"] == pytest.approx(8)
     # --device: what foveal.Loop takes, an unknown one refused by name before any frame
     unknown = subprocess.run([sys.executable, script, "--recording", str(recording), "--device", "gpu"], capture_output=True, text=True)
     assert unknown.returncode != 0 and "--device" in unknown.stderr and "unknown device 'gpu'" in unknown.stderr
@@ -392,6 +422,7 @@ def test_the_paced_loop_script_reports_every_frame(tmp_path):
     # Each refusal names the option that set it (a bad size was said to be --device's), in one line, no traceback
     for args, said in ((["--size", "0x0"], "--size: width and height must be in 1..16384"),
                        (["--max-rays", "-1"], "--max-rays: must be in [0, 65535]"),
+                       (["--frame-budget-ms", "0"], "--frame-budget-ms: must be in (0, 10000] ms"),
                        (["--scene", str(tmp_path / "none.obj")], "--scene: "),
                        (["--scene", script], "--scene: "), (["--recording", script], "--recording: ")):
         bad = subprocess.run([sys.executable, script, "--recording", str(recording)] + args, capture_output=True, text=True)

@@ -36,6 +36,12 @@ constexpr double kGrowthShare = 0.75;  // … to where its frame's work would ta
 // A moved view's cost over a fresh one's until one is measured: the rays kept, 1.4–1.6 on the
 // dragon at 840×525 while the surfaces were copied into the history (less now that they move)
 constexpr double kCarryCost = 1.6;
+// A still view lowered again within kFlapFrames (10 s at 60 Hz) of growing back waits that long
+// before it grows again, then twice as long each time, up to kMaxHoldFrames (2
+// minutes at 60 Hz), unless the budget grows by kHoldBudgetRise (lowered_still)
+constexpr int kFlapFrames = 600;
+constexpr int kMaxHoldFrames = 7200;
+constexpr double kHoldBudgetRise = 1.25;
 constexpr int kEstimateEvery = 4;  // frames between estimates of the pixels without rays (estimate_unreached)
 // The maps follow the gaze (update_maps) in a box around the fovea, kMapsBoxBeyondDeg of effective
 // eccentricity beyond the fovea's reach up and down from the gaze, at least kMapsBoxDeg (times the
@@ -236,30 +242,20 @@ void RealtimeLoop::reset() {
   maps_gaze_.reset();
 }
 
-void RealtimeLoop::keep_rays(bool leaving) {
+void RealtimeLoop::pixel_counts(size_t i, glm::vec3 position, float& open, float& cast, glm::vec3& origin_sum) const {
   const bool earlier = any_kept();
-  if (leaving) {  // the view is replaced next: its surfaces move into the history, its counts are read where they are
-    history_.store(std::move(gbuffer_), camera_, maps_, params_.reuse,
-                   [&](size_t i, glm::vec3 position, float& open, float& cast, glm::vec3& origin_sum) {
-                     const float own = static_cast<float>(cast_[i]);
-                     open = static_cast<float>(open_[i]) + (earlier ? kept_open_[i] : 0.0f);
-                     cast = own + (earlier ? kept_cast_[i] : 0.0f);
-                     origin_sum = own * position + (earlier ? kept_origin(i, position) : glm::vec3(0.0f));
-                   });
-    return;
-  }
-  const size_t n = cast_.size();
-  AoCounts& kept = counts_;  // (its memory reused from view to view)
-  kept.open.resize(n);
-  kept.cast.resize(n);
-  kept.origin_sum.resize(n);
-  for_each_pixel(n, [&](size_t i) {
-    const float own = static_cast<float>(cast_[i]);
-    kept.open[i] = static_cast<float>(open_[i]) + (earlier ? kept_open_[i] : 0.0f);
-    kept.cast[i] = own + (earlier ? kept_cast_[i] : 0.0f);
-    kept.origin_sum[i] = own * gbuffer_.position[i] + (earlier ? kept_origin(i, gbuffer_.position[i]) : glm::vec3(0.0f));
-  });
-  history_.store(gbuffer_, camera_, maps_, params_.reuse, kept);
+  const float own = static_cast<float>(cast_[i]);
+  open = static_cast<float>(open_[i]) + (earlier ? kept_open_[i] : 0.0f);
+  cast = own + (earlier ? kept_cast_[i] : 0.0f);
+  origin_sum = own * position + (earlier ? kept_origin(i, position) : glm::vec3(0.0f));
+}
+
+void RealtimeLoop::keep_rays() {
+  // The view is replaced next: its surfaces move into the history, its counts are read where they are
+  history_.store(std::move(gbuffer_), camera_, maps_, params_.reuse,
+                 [&](size_t i, glm::vec3 position, float& open, float& cast, glm::vec3& origin_sum) {
+                   pixel_counts(i, position, open, cast, origin_sum);
+                 });
 }
 
 void RealtimeLoop::shade(const GBuffer& g, const Camera& camera, size_t b, size_t e, std::vector<glm::vec3>& lit,
@@ -287,7 +283,7 @@ bool RealtimeLoop::new_view(const Camera& camera, uint64_t& kept_pixels) {
   const size_t before = gbuffer_.prim.size();
   const bool carry = settings_.keep_history && !forget_ && before > 0 && cast_.size() == before && maps_.quality.size() == before;
   if (carry)
-    keep_rays(true);
+    keep_rays();
   else
     history_.clear();
   forget_ = false;
@@ -878,7 +874,9 @@ void RealtimeLoop::start_rebuild(double scale, std::string why) {
     v->reserve(n);
   r.gbuffer.prim.reserve(n);
   r.gbuffer.depth.reserve(n);
-  for (auto* v : {&r.ray_x, &r.ray_y, &r.ray_z, &r.maps.quality, &r.maps.eccentricity, &r.maps.blend}) v->reserve(n);
+  for (auto* v : {&r.ray_x, &r.ray_y, &r.ray_z, &r.maps.quality, &r.maps.eccentricity, &r.maps.blend, &r.kept.open, &r.kept.cast})
+    v->reserve(n);
+  r.kept.origin_sum.reserve(n);  // (grown row by row without it, its reallocations took 2–3 ms of a step, 1,500 page faults)
   r.maps.rays.reserve(n);
   r.maps.width = r.width;
   r.maps.height = r.height;
@@ -893,24 +891,19 @@ void RealtimeLoop::start_rebuild(double scale, std::string why) {
 void RealtimeLoop::advance_rebuild(const Timer& frame_timer, double until_ms) {
   Rebuild& r = *rebuild_;
   const size_t w = static_cast<size_t>(r.width);
-  const bool keep = settings_.keep_history;
   for (bool first = true; r.stage != Rebuild::done; first = false) {
     const double left = until_ms - frame_timer.ms();
     if (left <= 0 && !first) return;  // (a step a frame at least)
-    if (r.stage == Rebuild::keep) {
-      // A step that cannot be split, where a frame's time allows: the smaller view's rays kept for
-      // the view to take over (0.4–0.5 ms at 210×131 on two cores)
-      if (left < 2 && !first) return;
-      if (keep) keep_rays(false);
-      r.stage = keep ? Rebuild::reproject : Rebuild::done;
-      r.row = 0;
-      r.rows_per_ms = 0;
-      continue;
+    if (r.stage == Rebuild::keep && !settings_.keep_history) {
+      r.stage = Rebuild::done;
+      break;
     }
     // Rows for half a millisecond, or half of what is left of the time (one row at a stage's
     // start): a step's pace varies with what its rows hold (a reprojection step measured up to
-    // 2.5× its estimate), and a step started near the deadline would end past it
-    const int rows_left = r.height - r.row;
+    // 2.5× its estimate), and a step started near the deadline would end past it. The rays kept are
+    // the view at hand's rows, the other stages the view built's
+    const int height = r.stage == Rebuild::keep ? params_.height : r.height;
+    const int rows_left = height - r.row;
     const int rows = std::clamp(r.rows_per_ms > 0 ? static_cast<int>(r.rows_per_ms * std::clamp(0.5 * left, 0.0, 0.5)) : 1, 1, rows_left);
     const Timer step;
     const size_t b = static_cast<size_t>(r.row) * w;
@@ -932,6 +925,17 @@ void RealtimeLoop::advance_rebuild(const Timer& frame_timer, double until_ms) {
         evaluate_maps(model, params_.foveation, params_.mode == RenderMode::foveated, r.ray_x.data(), r.ray_y.data(), r.ray_z.data(),
                       range.begin(), range.end(), r.maps);
       });
+    } else if (r.stage == Rebuild::keep) {
+      // The view at hand's rays, kept for the view built to take over, row by row: at once, its
+      // surfaces and counts copied (about 45 bytes a pixel), they took 6–17 ms of a frame at 616×385
+      // on two cores, page faults included, where the budget was 8 ms
+      if (r.row == 0) history_.begin_rows(params_.width, params_.height, camera_);
+      history_.store_rows(
+          gbuffer_, maps_, params_.reuse,
+          [&](size_t i, glm::vec3 position, float& open, float& cast, glm::vec3& origin_sum) {
+            pixel_counts(i, position, open, cast, origin_sum);
+          },
+          r.row, r.row + rows);
     } else {  // reproject: the rays kept, row by row
       const size_t e = b + static_cast<size_t>(rows) * w;
       r.kept.open.resize(e);
@@ -942,10 +946,13 @@ void RealtimeLoop::advance_rebuild(const Timer& frame_timer, double until_ms) {
     const double ms = step.ms();
     if (ms > 0.05) r.rows_per_ms = r.rows_per_ms > 0 ? 0.5 * r.rows_per_ms + 0.5 * got / ms : got / ms;
     r.row += got;
-    if (r.row < r.height) continue;
+    if (r.row < height) continue;
     r.row = 0;
     r.rows_per_ms = 0;
-    r.stage = r.stage == Rebuild::surfaces ? Rebuild::shading : r.stage == Rebuild::shading ? Rebuild::keep : Rebuild::done;
+    r.stage = r.stage == Rebuild::surfaces  ? Rebuild::shading
+              : r.stage == Rebuild::shading ? Rebuild::keep
+              : r.stage == Rebuild::keep    ? Rebuild::reproject
+                                            : Rebuild::done;
   }
 }
 
@@ -1213,7 +1220,10 @@ LoopFrame RealtimeLoop::frame(const Camera& camera) {
   if (fixed_.add(fixed, settings_.budget_ms, wall ? 5 : 1)) {
     // (a still view's smaller size is taken from it at the next frame; a moving camera's next view is
     // traced at that size anyway)
-    if (rescale(fixed_.median_ms(), !moving) && moving && !motion_scale_) motion_scale_ = scale_before;  // the size to return to at rest
+    if (rescale(fixed_.median_ms(), !moving)) {
+      if (moving && !motion_scale_) motion_scale_ = scale_before;  // the size to return to at rest
+      if (!moving) lowered_still(out.index);
+    }
     fixed_.clear();
   }
   // A moving camera whose frame ran out of work before its deadline grows towards the size it had
@@ -1245,7 +1255,14 @@ LoopFrame RealtimeLoop::frame(const Camera& camera) {
   if (!out.new_view && !motion_scale_ && !rebuild_ && scale_ < 1 && fixed_.size() >= (wall ? FixedPartWindow::kFrames : 1)) {
     const double budget = wall ? budgets_.min() : settings_.budget_ms;
     const double target = std::min(1.0, scale_ * std::sqrt(0.5 * budget / fixed_.median_ms()));
-    if (target > scale_ && (target == 1.0 || target >= kGrowth * scale_)) grow_back(target, "the base shading fits the budget again");
+    // (not while a size lowered again soon after it came back is held, the budget not grown: see
+    // lowered_still)
+    const bool held =
+        lowered_still_ && out.index - lowered_still_->index < grow_hold_frames_ && budget < kHoldBudgetRise * lowered_still_->budget_ms;
+    if (target > scale_ && (target == 1.0 || target >= kGrowth * scale_) && !held) {
+      grow_back(target, "the base shading fits the budget again");
+      grown_index_ = out.index;
+    }
   }
   // A camera come to rest gets back the size it had before it moved, and the rays kept at the
   // smaller size carry over (a view stayed small for good once a camera had moved). On the wall
@@ -1255,6 +1272,18 @@ LoopFrame RealtimeLoop::frame(const Camera& camera) {
   if (motion_scale_ && !rebuild_ && static_cast<double>(still_frames_) * settings_.budget_ms >= kRestMs)
     grow_back(*motion_scale_, "the size before the camera moved");
   return out;
+}
+
+void RealtimeLoop::lowered_still(int index) {
+  // A still view lowered again within kFlapFrames of growing back waits longer before it grows
+  // again (kFlapFrames, then twice as long each time, up to kMaxHoldFrames), unless the
+  // budget grows by a quarter: with a budget of 4 ms at 840×525 on two cores the fixed part's median
+  // sat about the 60 % that lowers the size, and the view came back and was lowered again every
+  // 1.5–3 s, each time with a frame or two late (the one that lowers it, the one that takes the
+  // larger view over)
+  if (grown_index_ && index - *grown_index_ < kFlapFrames)
+    grow_hold_frames_ = grow_hold_frames_ == 0 ? kFlapFrames : std::min(2 * grow_hold_frames_, kMaxHoldFrames);
+  lowered_still_ = LoweredStill{index, settings_.budget_ms};
 }
 
 void RealtimeLoop::grow_back(double scale, const char* why) {

@@ -80,8 +80,8 @@ struct LoopSettings {
   // cost of the periphery's pace (docs/realtime.md). 1: the periphery's too go on to the deadline.
   // Both clocks (the model's: its rays up to the share)
   double periphery_share = kDefaultPeripheryShare;
-  double min_scale = 0.25;   // the smallest resolution scale the loop may choose
-  double slowdown = 1;       // tests only: the tracer this many times slower
+  double min_scale = 0.25;  // the smallest resolution scale the loop may choose
+  double slowdown = 1;      // tests only: the tracer this many times slower
   // Tests only: what an estimate of the pixels without rays is taken to cost on the wall clock,
   // instead of its measured time (RealtimeLoop::frame() leaves one that would pass the rays'
   // deadline to a later frame)
@@ -304,6 +304,7 @@ class RealtimeLoop {
   const GBuffer& gbuffer() const { return gbuffer_; }
   // How many estimates of the pixels without rays the loop has made (estimate_unreached; tests)
   uint64_t estimates_made() const { return estimates_made_; }
+  int frame_index() const { return index_; }  // the next frame's index: the frames made so far
   // Whether pixel i's AO is converged (τ(E) or n(E) reached).
   bool converged(size_t i) const;
   // How many pixels' sweep buckets, kept between sweeps, differ from what they would be now (those
@@ -325,9 +326,12 @@ class RealtimeLoop {
   // S and A of the colour S + k_a·A for pixels [b, e) of surfaces `g` seen from `camera`
   void shade(const GBuffer& g, const Camera& camera, size_t b, size_t e, std::vector<glm::vec3>& lit,
              std::vector<glm::vec3>& ambient) const;
-  // Every pixel's rays so far, as counts the view's successor can take over (reuse.h); `leaving`:
-  // the view is replaced next, and its surfaces move into the history instead of being copied
-  void keep_rays(bool leaving);
+  // Every pixel's rays so far, as counts the view's successor can take over (reuse.h): the view is
+  // replaced next, and its surfaces move into the history (a view that stays is kept by rows:
+  // advance_rebuild)
+  void keep_rays();
+  // Pixel i's rays so far (its own and those kept from views before), as the history keeps them
+  void pixel_counts(size_t i, glm::vec3 position, float& open, float& cast, glm::vec3& origin_sum) const;
   void update_maps(glm::dvec2 gaze_px, bool predicted);  // predicted: the fovea's pixels centre-out
   // What a round planned: the fovea's rays, the periphery's or the rays ahead of the gaze (each of
   // the last two a pass over every pixel)
@@ -474,6 +478,16 @@ class RealtimeLoop {
     Image image;  // the memory its first frame is composed into (touched row by row with the shading)
   };
   std::optional<Rebuild> rebuild_;
+  // A still view lowered (at frame `index`, with that budget): its growing back is held for
+  // grow_hold_frames_ where it was lowered again soon after it came back (lowered_still)
+  struct LoweredStill {
+    int index = 0;
+    double budget_ms = 0;
+  };
+  std::optional<LoweredStill> lowered_still_;
+  std::optional<int> grown_index_;  // the frame a still view's size last began to come back
+  int grow_hold_frames_ = 0;
+  void lowered_still(int index);
   int index_ = 0;
   // Wall clock: the chunks a frame's rays left to threads the machine had paused (AoRayBatch::
   // leave_behind_after_ms), waited for at the next frame's start; and when its rays left them.

@@ -546,6 +546,63 @@ TEST(RealtimeLoop, WhereTheBaseShadingCannotFitTheResolutionScalesDownAndSaysSo)
   EXPECT_FALSE(next.late);
 }
 
+// A still view lowered again soon after its size came back waits 600 frames (10 s at 60 Hz) before
+// it grows again, then twice as long each time, unless the budget grows by a quarter: a budget whose
+// fixed part sat about the 60 % that lowers the size made it come back and be lowered again every
+// few seconds, with a frame or two late each time. The model clock: the fixed part is 10 ms at the
+// full size, and scales with the pixels.
+TEST(RealtimeLoop, AStillViewLoweredAgainSoonAfterItGrewWaitsLongerBeforeItGrows) {
+  const std::unique_ptr<FrameRenderer> renderer = make_frame_renderer(box(), ComputeDevice::cpu);
+  const Camera& camera = box().cameras.front();
+  LoopSettings settings = model_clock(1000);
+  settings.model_fixed_ms = 10;
+  settings.budget_ms = 20;  // 10 ms of 20: the full size
+  RealtimeLoop loop(*renderer, box(), loop_params(160, 100, 16), settings);
+  loop.frame(camera);
+  ASSERT_EQ(loop.scale(), 1.0);
+  // Frames until the scale changes (at most `limit`); how many
+  auto until_change = [&](int limit) {
+    const double before = loop.scale();
+    int k = 0;
+    while (k < limit && loop.scale() == before) {
+      loop.frame(camera);
+      ++k;
+    }
+    return k;
+  };
+  const double lowered = std::sqrt(0.5 * 12 / 10.0);  // where 12 ms leaves the fixed part half of it
+  loop.set_budget_ms(12);
+  ASSERT_LT(until_change(20), 20);
+  ASSERT_NEAR(loop.scale(), lowered, 1e-9);
+  // The first time, a budget a little larger grows it back at once (to 0.86 of the size, 1.11× 0.77)
+  loop.set_budget_ms(14.9);
+  ASSERT_LT(until_change(20), 20);
+  EXPECT_GT(loop.scale(), lowered);
+  // Lowered again soon after (the budget of 12 once more): now held
+  loop.set_budget_ms(12);
+  ASSERT_LT(until_change(20), 20);
+  const int lowered_at = loop.frame_index();
+  const double held = loop.scale();
+  loop.set_budget_ms(14.9);
+  const int waited = until_change(2000);
+  EXPECT_GT(loop.scale(), held);
+  EXPECT_GE(loop.frame_index() - lowered_at, 590) << "grew after " << waited << " frames";
+  EXPECT_LE(loop.frame_index() - lowered_at, 610);
+  // And again: twice as long
+  loop.set_budget_ms(12);
+  ASSERT_LT(until_change(20), 20);
+  const int again_at = loop.frame_index();
+  loop.set_budget_ms(14.9);
+  until_change(3000);
+  EXPECT_GE(loop.frame_index() - again_at, 1190);
+  EXPECT_LE(loop.frame_index() - again_at, 1210);
+  // A budget grown by a quarter or more is no reason to wait
+  loop.set_budget_ms(12);
+  ASSERT_LT(until_change(20), 20);
+  loop.set_budget_ms(15.5);  // 1.29 × 12
+  EXPECT_LT(until_change(20), 20);
+}
+
 // A still view made smaller for its fixed part grows back once the budget leaves that part room: at
 // once on the model clock (to where it takes half the budget), over a few frames on the wall clock,
 // where the larger view is built while the smaller one is shown, none of them late, once the latest

@@ -55,6 +55,7 @@ HistoryView AoHistory::view() const {
 
 void AoHistory::store(const GBuffer& g, const Camera& camera, const FoveationMaps& maps, const AoReuseParams& reuse,
                       const AoCounts& counts) {
+  rows_width_ = rows_height_ = rows_ = 0;  // (a store by rows under way is abandoned)
   width_ = g.width;
   height_ = g.height;
   camera_ = camera;
@@ -75,6 +76,7 @@ void AoHistory::store(const GBuffer& g, const Camera& camera, const FoveationMap
 }
 
 void AoHistory::store(GBuffer&& g, const Camera& camera, const FoveationMaps& maps, const AoReuseParams& reuse, const PixelCounts& counts) {
+  rows_width_ = rows_height_ = rows_ = 0;
   width_ = g.width;
   height_ = g.height;
   camera_ = camera;
@@ -86,16 +88,70 @@ void AoHistory::store(GBuffer&& g, const Camera& camera, const FoveationMaps& ma
   cast_.resize(pixels);
   origin_.resize(pixels);
   tbb::parallel_for(tbb::blocked_range<size_t>(0, pixels, 4096), [&](const tbb::blocked_range<size_t>& r) {
-    for (size_t i = r.begin(); i != r.end(); ++i) {
-      hit_[i] = g.hit(i) ? 1 : 0;
-      float open = 0, cast = 0;
-      glm::vec3 origin_sum(0.0f);
-      counts(i, position_[i], open, cast, origin_sum);
-      history_of_pixel(history_cap_rays(maps.rays[i], maps.quality[i], reuse), open, cast, &origin_sum, 0, position_[i], open_[i], cast_[i],
-                       origin_[i]);
-    }
+    for (size_t i = r.begin(); i != r.end(); ++i) keep_pixel(i, g.hit(i), maps, reuse, counts);
   });
   ++frames_;
+}
+
+void AoHistory::keep_pixel(size_t i, bool hit, const FoveationMaps& maps, const AoReuseParams& reuse, const PixelCounts& counts) {
+  hit_[i] = hit ? 1 : 0;
+  float open = 0, cast = 0;
+  glm::vec3 origin_sum(0.0f);
+  counts(i, position_[i], open, cast, origin_sum);
+  history_of_pixel(history_cap_rays(maps.rays[i], maps.quality[i], reuse), open, cast, &origin_sum, 0, position_[i], open_[i], cast_[i],
+                   origin_[i]);
+}
+
+void AoHistory::begin_rows(int width, int height, const Camera& camera) {
+  if (width <= 0 || height <= 0) fail("AoHistory::begin_rows: a {}x{} view", width, height);
+  width_ = height_ = 0;  // (empty until the last row is stored)
+  rows_width_ = width;
+  rows_height_ = height;
+  rows_ = 0;
+  camera_ = camera;
+  const size_t pixels = static_cast<size_t>(width) * static_cast<size_t>(height);
+  position_.clear();
+  normal_.clear();
+  hit_.clear();
+  open_.clear();
+  cast_.clear();
+  origin_.clear();
+  position_.reserve(pixels);
+  normal_.reserve(pixels);
+  hit_.reserve(pixels);
+  open_.reserve(pixels);
+  cast_.reserve(pixels);
+  origin_.reserve(pixels);
+}
+
+void AoHistory::store_rows(const GBuffer& g, const FoveationMaps& maps, const AoReuseParams& reuse, const PixelCounts& counts, int y0,
+                           int y1) {
+  if (g.width != rows_width_ || g.height != rows_height_ || y0 != rows_ || y1 < y0 || y1 > rows_height_)
+    fail("AoHistory::store_rows: rows [{}, {}) of a {}x{} view, where {} rows of a {}x{} one are stored", y0, y1, g.width, g.height, rows_,
+         rows_width_, rows_height_);
+  const size_t w = static_cast<size_t>(g.width), b = static_cast<size_t>(y0) * w, e = static_cast<size_t>(y1) * w;
+  if (maps.rays.size() < e || maps.quality.size() < e || g.position.size() < e)
+    fail("AoHistory::store_rows: rows [{}, {}) are not all held by the view and its maps", y0, y1);
+  // (within the memory reserved: only these rows' pages are touched)
+  position_.resize(e);
+  normal_.resize(e);
+  hit_.resize(e);
+  open_.resize(e);
+  cast_.resize(e);
+  origin_.resize(e);
+  tbb::parallel_for(tbb::blocked_range<size_t>(b, e, 1024), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t i = r.begin(); i != r.end(); ++i) {
+      position_[i] = g.position[i];
+      normal_[i] = g.geo_normal[i];
+      keep_pixel(i, g.hit(i), maps, reuse, counts);
+    }
+  });
+  rows_ = y1;
+  if (rows_ == rows_height_) {
+    width_ = rows_width_;
+    height_ = rows_height_;
+    ++frames_;
+  }
 }
 
 uint64_t denoise_visibility(const GBuffer& g, const FoveationMaps& maps, const AoCounts& c, const AoReuseParams& reuse, float fov_deg,

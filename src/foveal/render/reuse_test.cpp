@@ -351,26 +351,48 @@ TEST(Reuse, SameFramesForAnyThreadCount) {
   }
 }
 
+// Two views of the box a little to the side of each other, with counts for every pixel of the
+// first (the history's tests)
+struct TwoViews {
+  const Scene& s = scene("box");
+  const Tracer tracer{s};
+  RenderParams p = [] {
+    RenderParams r;
+    r.width = 80;
+    r.height = 50;
+    r.foveation.max_rays = 64;
+    return r;
+  }();
+  Camera a = s.cameras.front(), b = moved(a);
+  GBuffer ga = trace_primary(tracer, s, a, p.width, p.height), gb = trace_primary(tracer, s, b, p.width, p.height);
+  FoveationMaps ma = foveation_maps(p, {40, 25}), mb = foveation_maps(p, {44, 25});
+  size_t n = ga.prim.size();
+  AoCounts counts = counts_of(ga);
+  static Camera moved(Camera c) {
+    c.eye += 0.02f * glm::cross(c.look - c.eye, c.up);
+    return c;
+  }
+  static AoCounts counts_of(const GBuffer& g) {
+    AoCounts c;
+    for (size_t i = 0; i < g.prim.size(); ++i) {
+      c.cast.push_back(16.0f + static_cast<float>(i % 5));
+      c.open.push_back(static_cast<float>(i % 13));
+      c.origin_sum.push_back(c.cast.back() * g.position[i] + glm::vec3(0.001f * static_cast<float>(i % 3)));
+    }
+    return c;
+  }
+};
+
 TEST(Reuse, ReprojectingInRowsIsReprojectingTheView) {
   // A history of one view, reprojected into a view a little to the side: row by row in uneven
   // steps (what the real-time loop does while a size comes back) or at once, the same counts
-  const Scene& s = scene("box");
-  const Tracer tracer(s);
-  RenderParams p;
-  p.width = 80;
-  p.height = 50;
-  p.foveation.max_rays = 64;
-  Camera a = s.cameras.front(), b = a;
-  b.eye += 0.02f * glm::cross(b.look - b.eye, b.up);
-  const GBuffer ga = trace_primary(tracer, s, a, p.width, p.height), gb = trace_primary(tracer, s, b, p.width, p.height);
-  const FoveationMaps ma = foveation_maps(p, {40, 25}), mb = foveation_maps(p, {44, 25});
-  const size_t n = ga.prim.size();
-  AoCounts counts;
-  for (size_t i = 0; i < n; ++i) {
-    counts.cast.push_back(16.0f + static_cast<float>(i % 5));
-    counts.open.push_back(static_cast<float>(i % 13));
-    counts.origin_sum.push_back(counts.cast.back() * ga.position[i]);
-  }
+  TwoViews v;
+  const Camera& a = v.a;
+  const RenderParams& p = v.p;
+  const GBuffer &ga = v.ga, &gb = v.gb;
+  const FoveationMaps &ma = v.ma, &mb = v.mb;
+  const size_t n = v.n;
+  const AoCounts& counts = v.counts;
   AoHistory history;
   history.store(ga, a, ma, p.reuse, counts);
   AoCounts whole, rows;
@@ -394,6 +416,47 @@ TEST(Reuse, ReprojectingInRowsIsReprojectingTheView) {
   EXPECT_NO_THROW(history.reproject_rows(gb, mb, p.reuse, short_counts, 0, p.height / 2));
   EXPECT_THROW(history.reproject_rows(gb, mb, p.reuse, short_counts, 0, p.height), Error);
   EXPECT_THROW(history.reproject_rows(gb, mb, p.reuse, rows, 3, 2), Error);
+}
+
+TEST(Reuse, StoringInRowsIsStoringTheView) {
+  // A view kept a few rows at a time (what the real-time loop does while a size comes back) or at
+  // once: reprojected into a view a little to the side, the same counts. Empty until the last row.
+  const TwoViews v;
+  AoHistory whole, rows;
+  whole.store(v.ga, v.a, v.ma, v.p.reuse, v.counts);
+  const AoHistory::PixelCounts pixel = [&](size_t i, glm::vec3, float& open, float& cast, glm::vec3& origin_sum) {
+    open = v.counts.open[i];
+    cast = v.counts.cast[i];
+    origin_sum = v.counts.origin_sum[i];
+  };
+  rows.begin_rows(v.p.width, v.p.height, v.a);
+  for (int y = 0; y < v.p.height; y += 1 + y % 4) {
+    EXPECT_TRUE(rows.empty()) << "row " << y;
+    rows.store_rows(v.ga, v.ma, v.p.reuse, pixel, y, std::min(v.p.height, y + 1 + y % 4));
+  }
+  ASSERT_FALSE(rows.empty());
+  EXPECT_EQ(rows.rows_stored(), v.p.height);
+  EXPECT_EQ(rows.frames(), whole.frames());
+  AoCounts from_whole, from_rows;
+  const uint64_t kept = whole.reproject(v.gb, v.mb, v.p.reuse, from_whole);
+  EXPECT_GT(kept, v.n / 2);
+  EXPECT_EQ(rows.reproject(v.gb, v.mb, v.p.reuse, from_rows), kept);
+  EXPECT_TRUE(same_bits(from_rows.open, from_whole.open));
+  EXPECT_TRUE(same_bits(from_rows.cast, from_whole.cast));
+  for (size_t i = 0; i < v.n; ++i) ASSERT_EQ(from_rows.origin_sum[i], from_whole.origin_sum[i]) << i;
+  // Rows out of order, past the view, or of another view are refused, the rows named
+  AoHistory bad;
+  bad.begin_rows(v.p.width, v.p.height, v.a);
+  EXPECT_THROW(bad.store_rows(v.ga, v.ma, v.p.reuse, pixel, 2, 4), Error);
+  bad.store_rows(v.ga, v.ma, v.p.reuse, pixel, 0, 2);
+  EXPECT_THROW(bad.store_rows(v.ga, v.ma, v.p.reuse, pixel, 2, v.p.height + 1), Error);
+  EXPECT_THROW(bad.store_rows(v.gb, v.ma, v.p.reuse, pixel, 2, 1), Error);
+  const GBuffer small = trace_primary(v.tracer, v.s, v.a, v.p.width / 2, v.p.height / 2);
+  EXPECT_THROW(bad.store_rows(small, v.ma, v.p.reuse, pixel, 2, 3), Error);
+  EXPECT_THROW(bad.begin_rows(0, 10, v.a), Error);
+  // A whole store meanwhile abandons the rows
+  bad.store(v.ga, v.a, v.ma, v.p.reuse, v.counts);
+  EXPECT_THROW(bad.store_rows(v.ga, v.ma, v.p.reuse, pixel, 2, 3), Error);
 }
 
 TEST(Reuse, RejectsBadParameters) {

@@ -450,9 +450,10 @@ void ViewSession::realtime_frame() {
     if (raw_gaze_) loop_->push_gaze(loop_t_ += 1e-3, raw_gaze_);
   }
   if (!gaze_.source && raw_gaze_) loop_->push_gaze(loop_t_ += 1e-3, raw_gaze_);  // a fixed gaze
-  LoopFrame f = loop_->frame(camera_);
   Shown& sh = *shown_state_;
   Result& r = sh.result;
+  loop_->recycle(std::move(r.fov));  // the image shown before: this frame is composed into it (a fresh one costs its page faults)
+  LoopFrame f = loop_->frame(camera_);
   r = Result{};
   r.generation = generation_;
   r.last = f.fovea_done;
