@@ -168,6 +168,7 @@ RealtimeLoop::RealtimeLoop(FrameRenderer& renderer, const Scene& scene, const Re
   tau_fovea_ = static_cast<float>(params.reuse.tolerance * 0.5 / std::sqrt(std::max(1, params.foveation.max_rays)));
   sweep_.set_budget(settings.budget_ms);
   narrow_sweep_.set_budget(settings.budget_ms);
+  estimate_cost_.set_budget(settings.budget_ms);
 }
 
 glm::dvec2 RealtimeLoop::px_to_deg(glm::dvec2 px) const {
@@ -233,6 +234,7 @@ void RealtimeLoop::set_budget_ms(double budget_ms) {
   settings_ = s;
   sweep_.set_budget(budget_ms);
   narrow_sweep_.set_budget(budget_ms);
+  estimate_cost_.set_budget(budget_ms);
 }
 
 void RealtimeLoop::reset() {
@@ -678,7 +680,12 @@ bool RealtimeLoop::estimate_unreached(double left_ms) {
   // drawing may leave the loop) ended late, every such frame (BENCHMARKS.md). (Made at most four
   // frames late, it still came in the fourth frame of a saccade, whose frames each evaluate the maps
   // everywhere.) A view's first estimate is made at once: there is none to show before it.
-  if (estimates_ && settings_.estimate_cost_ms.value_or(estimate_ms_) > left_ms) return true;
+  // (Its cost falls a little with each frame that waits, so that one estimate a pause lengthened
+  // does not stop them for good: SweepCost.)
+  if (estimates_ && settings_.estimate_cost_ms.value_or(estimate_cost_.estimate_ms()) > left_ms) {
+    estimate_cost_.skipped();
+    return true;
+  }
   const Timer estimate_timer;
   reached_ = false;
   std::atomic<bool> unreached{false};
@@ -693,7 +700,7 @@ bool RealtimeLoop::estimate_unreached(double left_ms) {
   estimates_ = unreached && pull_push_.push();
   estimate_age_ = 0;
   ++estimates_made_;
-  estimate_ms_ = std::max(0.8 * estimate_ms_ + 0.2 * estimate_timer.ms(), estimate_timer.ms());
+  estimate_cost_.swept(estimate_timer.ms());
   return false;
 }
 
@@ -739,6 +746,7 @@ void RealtimeLoop::set_scale(double scale) {
   plan_ms_ *= ratio;
   sweep_.scale(ratio);
   narrow_sweep_.scale(ratio);
+  estimate_cost_.scale(ratio);
   have_view_ = false;
   maps_gaze_.reset();
   ray_x_.clear();
@@ -843,6 +851,7 @@ void RealtimeLoop::lower_in_place(uint64_t& kept_pixels) {
   plan_ms_ *= ratio;
   sweep_.scale(ratio);
   narrow_sweep_.scale(ratio);
+  estimate_cost_.scale(ratio);
   ++gbuffer_version_;
   renderer_.prepare_ao_batches(gbuffer_, gbuffer_version_);
   estimates_ = false;
@@ -1002,6 +1011,7 @@ void RealtimeLoop::adopt_rebuild(uint64_t& kept_pixels) {
   plan_ms_ *= ratio;
   sweep_.scale(ratio);
   narrow_sweep_.scale(ratio);
+  estimate_cost_.scale(ratio);
   note_ = size_note(r.why.c_str());
   motion_scale_.reset();
   fixed_.clear();
@@ -1281,8 +1291,11 @@ void RealtimeLoop::lowered_still(int index) {
   // sat about the 60 % that lowers the size, and the view came back and was lowered again every
   // 1.5–3 s, each time with a frame or two late (the one that lowers it, the one that takes the
   // larger view over)
+  // (A view that stayed grown for kFlapFrames or longer was no flap: its hold starts afresh.)
   if (grown_index_ && index - *grown_index_ < kFlapFrames)
     grow_hold_frames_ = grow_hold_frames_ == 0 ? kFlapFrames : std::min(2 * grow_hold_frames_, kMaxHoldFrames);
+  else
+    grow_hold_frames_ = 0;
   lowered_still_ = LoweredStill{index, settings_.budget_ms};
 }
 

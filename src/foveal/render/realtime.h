@@ -202,6 +202,9 @@ class FixedPartWindow {
 // 1 ms, the first sweep at 840×525 took 3.3–4.8 ms on a 2-core Intel Xeon VM: in 7 of 18 loops of
 // `bench latency` on the dragon box it ended past the deadline, by up to 2.8 ms, and in 2 past the
 // 2-ms margin too — that VM's only late frames while it was quiet.)
+//
+// The loop's estimate of the pixels without rays (estimate_unreached), another pass over every
+// pixel that a frame without room leaves to a later one, keeps its cost the same way.
 class SweepCost {
  public:
   static constexpr double kSkipDecay = 0.95;    // per frame that skips: from a pause's 30 ms to 12 in ~18 frames
@@ -424,7 +427,6 @@ class RealtimeLoop {
   bool estimates_ = false;          // pull_push_ holds estimates for this view
   bool grid_pending_ = false;       // the view's coarse grid is still to be planned (plan_round)
   int estimate_age_ = 0;            // frames since they were made
-  double estimate_ms_ = 0;          // wall clock: what it takes (the latest, or more: as finish_ms_)
   uint64_t estimates_made_ = 0;
   bool reached_ = true;  // a pixel outside the fovea got its first rays, or the maps changed everywhere, since then
   std::vector<AoRayTask> tasks_;
@@ -445,6 +447,9 @@ class RealtimeLoop {
   // maps everywhere or in their box: a pass over those pixels) and where only over the pixels
   // traced since the last (the sort alone, about a third of a full sweep at 840×525)
   SweepCost sweep_, narrow_sweep_;
+  // What an estimate of the pixels without rays costs (wall clock; a view's first is made at once,
+  // so it is timed before it is asked)
+  SweepCost estimate_cost_;
   SweepCost& next_sweep() { return (all_converged_ ? ahead_keys_ : periphery_keys_).wide() ? sweep_ : narrow_sweep_; }
   // The last periphery sweep found every pixel converged and the maps have not been recomputed
   // since (every view, size and gaze change recomputes them; no ray is traced while all have
