@@ -593,8 +593,9 @@ NB_MODULE(_core, m) {
           "pixel one of the larger pixels nearest it, the one with the most rays, with its rays so far; no surface traced.")
       .def_prop_ro(
           "rebuilding", [](const PyLoopFrame& f) { return f.frame.rebuilding; },
-          "Part of this frame built, a few rows at a time, the full-size view a camera at rest gets back (the smaller one is shown "
-          "meanwhile).")
+          "Part of this frame built, a few rows at a time, the view at another size (the view at hand is shown meanwhile): a "
+          "larger one (the size a camera at rest gets back, or a still view's once its fixed part fits again), or a still view's "
+          "lower size, taken from the view at hand (`lowered` once it is shown).")
       .def_prop_ro(
           "kept_pixels", [](const PyLoopFrame& f) { return f.frame.kept_pixels; },
           "A new view: the pixels that kept AO rays from the view before (0 with keep_history=False).")

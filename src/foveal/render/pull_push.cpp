@@ -23,6 +23,19 @@ void PullPush::prepare(int width, int height) {
   pixels_.resize(static_cast<size_t>(width) * static_cast<size_t>(height));
 }
 
+void PullPush::pull_levels() {
+  // Each coarser level from the level below
+  for (size_t l = 1; l < sizes_.size(); ++l) {
+    const std::vector<float>&s = sum_[l - 1], &c = cover_[l - 1];
+    pull_level(
+        sizes_[l - 1].width, sizes_[l - 1].height,
+        [&](size_t i) {
+          return std::pair{s[i], c[i]};
+        },
+        sizes_[l], sum_[l].data(), cover_[l].data(), 0, sizes_[l].height);
+  }
+}
+
 bool PullPush::push() {
   // The coarsest cell's mean, then at each finer level a cell's own mean in proportion to its
   // weight, the coarser estimate (upsampled bilinearly) for the rest

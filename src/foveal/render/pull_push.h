@@ -29,6 +29,13 @@ class PullPush {
   // memory between calls (none fresh for the same size).
   template <class At>
   void pull(int width, int height, const At& at);
+  // The same pull in parts, a few rows a step (the real-time loop's view built over frames): after
+  // prepare(width, height), the first level's rows [y0, y1) of first_rows() (each from two rows of
+  // pixels), in any order; then, once every row is pulled, the coarser levels
+  template <class At>
+  void pull_rows(int width, int height, const At& at, int y0, int y1);
+  void pull_levels();
+  int first_rows() const { return sizes_.empty() ? 0 : sizes_[0].height; }
   // The memory of a width×height field's pyramid, written (so that its pages are touched) before
   // a pull needs it; a field no larger than one before costs nothing
   void prepare(int width, int height);
@@ -43,9 +50,10 @@ class PullPush {
   struct Size {
     int width, height;
   };
-  // One level of the pull from the level below, `in(i)` its cells' weight × value and weight
+  // One level of the pull from the level below, `in(i)` its cells' weight × value and weight: its
+  // cell rows [y0, y1)
   template <class In>
-  static void pull_level(int in_width, int in_height, const In& in, Size out, float* sum, float* cover);
+  static void pull_level(int in_width, int in_height, const In& in, Size out, float* sum, float* cover, int y0, int y1);
 
   Size pixels_size_{0, 0};
   std::vector<Size> sizes_;  // the levels from the first halving (rounded up) to a single cell
@@ -56,13 +64,13 @@ class PullPush {
 };
 
 template <class In>
-void PullPush::pull_level(int in_width, int in_height, const In& in, Size out, float* sum, float* cover) {
+void PullPush::pull_level(int in_width, int in_height, const In& in, Size out, float* sum, float* cover, int y0, int y1) {
   // Each cell: the means over its 2×2 children (fewer at an odd edge), clamped — a cell is as
   // covered as its children together, at most fully (Gortler et al.'s clamp): one known child of
   // four makes it known, with that child's value, so that an estimate comes from the finest level
   // that has known pixels near it rather than from a mean diluted over coarser ones. (By hand
   // rather than cv::resize's INTER_AREA, whose odd sizes take a general path fifteen times slower.)
-  tbb::parallel_for(tbb::blocked_range<int>(0, out.height, 16), [&](const tbb::blocked_range<int>& rows) {
+  tbb::parallel_for(tbb::blocked_range<int>(y0, y1, 16), [&](const tbb::blocked_range<int>& rows) {
     for (int by = rows.begin(); by != rows.end(); ++by)
       for (int bx = 0; bx < out.width; ++bx) {
         float s = 0, c = 0;
@@ -83,24 +91,20 @@ void PullPush::pull_level(int in_width, int in_height, const In& in, Size out, f
 template <class At>
 void PullPush::pull(int width, int height, const At& at) {
   prepare(width, height);
-  const size_t levels = sizes_.size();
-  // The first level from the pixels, each coarser one from the level below
+  pull_rows(width, height, at, 0, first_rows());
+  pull_levels();
+}
+
+template <class At>
+void PullPush::pull_rows(int width, int height, const At& at, int y0, int y1) {
+  // The first level from the pixels
   pull_level(
       width, height,
       [&](size_t i) {
         const auto [known, value] = at(i);
         return std::pair{known ? value : 0.0f, known ? 1.0f : 0.0f};
       },
-      sizes_[0], sum_[0].data(), cover_[0].data());
-  for (size_t l = 1; l < levels; ++l) {
-    const std::vector<float>&s = sum_[l - 1], &c = cover_[l - 1];
-    pull_level(
-        sizes_[l - 1].width, sizes_[l - 1].height,
-        [&](size_t i) {
-          return std::pair{s[i], c[i]};
-        },
-        sizes_[l], sum_[l].data(), cover_[l].data());
-  }
+      sizes_[0], sum_[0].data(), cover_[0].data(), y0, y1);
 }
 
 }  // namespace foveal

@@ -85,6 +85,48 @@ TEST(PullPush, EveryEstimateLiesWithinTheKnownValuesRange) {
   EXPECT_EQ(again, f.out);
 }
 
+// Pulled a few rows a step, in any order (the real-time loop builds a view over frames), the
+// estimate is the whole pull's, to the bit
+TEST(PullPush, PullingInRowsIsTheWholePull) {
+  Field f(203, 121);  // (odd sizes: the first level's last row and column from one row or column of pixels)
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<float> u(0.0f, 1.0f);
+  for (size_t i = 0; i < f.value.size(); ++i) {
+    f.known[i] = rng() % 7 == 0;
+    f.value[i] = u(rng);
+  }
+  auto at = [&](size_t i) { return std::pair{f.known[i] != 0, f.value[i]}; };
+  PullPush whole, rows;
+  whole.pull(f.width, f.height, at);
+  ASSERT_TRUE(whole.push());
+  rows.prepare(f.width, f.height);
+  const int n = rows.first_rows();
+  ASSERT_EQ(n, 61);
+  // the rows in steps of 1 to 7, the later half first
+  for (int y = n / 2; y < n;) {
+    const int e = std::min(n, y + 1 + static_cast<int>(rng() % 7));
+    rows.pull_rows(f.width, f.height, at, y, e);
+    y = e;
+  }
+  for (int y = 0; y < n / 2;) {
+    const int e = std::min(n / 2, y + 1 + static_cast<int>(rng() % 7));
+    rows.pull_rows(f.width, f.height, at, y, e);
+    y = e;
+  }
+  rows.pull_levels();
+  ASSERT_TRUE(rows.push());
+  for (size_t i = 0; i < f.value.size(); ++i) ASSERT_EQ(rows.estimate(i), whole.estimate(i)) << i;
+  // A row left out changes the estimate
+  PullPush missing;
+  missing.prepare(f.width, f.height);
+  missing.pull_rows(f.width, f.height, at, 0, n - 1);
+  missing.pull_levels();
+  missing.push();
+  size_t differ = 0;
+  for (size_t i = 0; i < f.value.size(); ++i) differ += missing.estimate(i) != whole.estimate(i) ? 1 : 0;
+  EXPECT_GT(differ, 0u);
+}
+
 // The known region's values carry on past its edge, where a constant would jump: a disc known to be
 // 0.4 on the left half of the image and 0.8 on the right leaves, just outside each half's edge,
 // nearly that half's value, and a smooth passage between them

@@ -147,6 +147,9 @@ void validate(const LoopSettings& s) {
   if (!(s.min_scale > 0 && s.min_scale <= 1)) fail("min_scale: must be in (0, 1], got {}", s.min_scale);
   if (!(s.slowdown >= 1) || !std::isfinite(s.slowdown)) fail("slowdown: must be >= 1, got {}", s.slowdown);
   if (s.estimate_cost_ms && !(*s.estimate_cost_ms >= 0)) fail("estimate_cost_ms: must be >= 0, got {}", *s.estimate_cost_ms);
+  if (s.fixed_part_ms && !(*s.fixed_part_ms >= 0)) fail("fixed_part_ms: must be >= 0, got {}", *s.fixed_part_ms);
+  if (s.rebuild_rows_per_frame && *s.rebuild_rows_per_frame < 1)
+    fail("rebuild_rows_per_frame: must be >= 1, got {}", *s.rebuild_rows_per_frame);
   validate(s.landing);
 }
 
@@ -421,6 +424,7 @@ void RealtimeLoop::update_maps(glm::dvec2 gaze_px, bool predicted) {
     });
     maps_full_gaze_ = gaze_px;
     maps_box_ = glm::ivec4(0, 0, w, h);
+    ++maps_everywhere_;
     reached_ = true;  // (n(E) changed everywhere: a pixel may now lack rays it did not need)
     periphery_keys_.stale_all();
     ahead_keys_.stale_all();
@@ -721,12 +725,25 @@ bool RealtimeLoop::rescale(double fixed_ms, bool in_place) {
   const double scale = std::clamp(target, settings_.min_scale, 1.0);
   if (scale > 0.95 * scale_) return false;
   const glm::ivec2 size = scaled_size(requested_, scale);
+  std::string note =
+      fmt::format("the base shading took {:.3g} ms of the {:.3g} ms frame budget at {}x{}: rendering at {}x{} ({:.0f} %) instead", fixed_ms,
+                  settings_.budget_ms, requested_.width, requested_.height, size.x, size.y, 100 * scale);
+  // A still view whose frames at this size still end in time (their fixed part within the budget:
+  // their rays stop at the deadline) takes its smaller size a few rows a frame: at once, in one
+  // frame, taking it cost 4–7.5 ms at 840×525 on two cores, and with its maps and first estimate
+  // made that frame take 8–12 ms at a budget of 4 ms. One whose frames are late anyway takes it at
+  // once (lower_in_place). (Within the margin of the budget, where the frames had 3.0–3.4 ms of
+  // fixed part at 4 ms and ended in time, taking it at once made the next frame late by 4–8 ms.)
+  if (in_place && settings_.clock == LoopClock::wall && fixed_ms < settings_.budget_ms) {
+    if (rebuild_ && rebuild_->lowering && scale >= 0.95 * rebuild_->scale) return false;  // (under way)
+    start_rebuild(scale, std::move(note), true);
+    return true;
+  }
   if (in_place)
     lower_to_ = scale;
   else
     set_scale(scale);
-  note_ = fmt::format("the base shading took {:.3g} ms of the {:.3g} ms frame budget at {}x{}: rendering at {}x{} ({:.0f} %) instead",
-                      fixed_ms, settings_.budget_ms, requested_.width, requested_.height, size.x, size.y, 100 * scale);
+  note_ = std::move(note);
   return true;
 }
 
@@ -754,6 +771,34 @@ void RealtimeLoop::set_scale(double scale) {
   ray_z_.clear();
 }
 
+RealtimeLoop::Footprints::Footprints(size_t big_w, size_t big_h, size_t w, size_t h) : big_width(big_w) {
+  auto axis = [](size_t big, size_t small) {
+    Axis a{std::vector<uint32_t>(small + 1, static_cast<uint32_t>(big)), std::vector<uint32_t>(small)};
+    for (size_t b = big; b-- > 0;)
+      a.first[std::min(small - 1, static_cast<size_t>((static_cast<double>(b) + 0.5) * static_cast<double>(small) /
+                                                      static_cast<double>(big)))] = static_cast<uint32_t>(b);
+    for (size_t k = 0; k < small; ++k)
+      a.nearest[k] = static_cast<uint32_t>(
+          std::min(big - 1, static_cast<size_t>((static_cast<double>(k) + 0.5) * static_cast<double>(big) / static_cast<double>(small))));
+    return a;
+  };
+  columns = axis(big_w, w);
+  rows = axis(big_h, h);
+}
+
+template <class Rays>
+uint32_t RealtimeLoop::Footprints::source(size_t x, size_t y, const Rays& rays) const {
+  size_t best = rows.nearest[y] * big_width + columns.nearest[x];
+  float most = rays.total_cast(best);
+  for (size_t by = rows.first[y]; by < rows.first[y + 1]; ++by)
+    for (size_t bx = columns.first[x]; bx < columns.first[x + 1]; ++bx)
+      if (const size_t b = by * big_width + bx; rays.total_cast(b) > most) {
+        most = rays.total_cast(b);
+        best = b;
+      }
+  return static_cast<uint32_t>(best);
+}
+
 void RealtimeLoop::lower_in_place(uint64_t& kept_pixels) {
   const double scale = *lower_to_;
   lower_to_.reset();
@@ -770,37 +815,12 @@ void RealtimeLoop::lower_in_place(uint64_t& kept_pixels) {
   // order, and both axes shrink, so sources only grow with the index and never fall behind it
   // (source(i) >= i): each array is gathered in place, front to back, its memory kept (fresh arrays
   // for a view's ~110 bytes a pixel are tens of milliseconds of page faults)
-  const size_t big_h = big_n / big_w;
-  struct Axis {
-    std::vector<uint32_t> first;    // [first[k], first[k + 1]): the larger pixels whose nearest smaller one is k
-    std::vector<uint32_t> nearest;  // the larger pixel nearest the centre of smaller pixel k
-  };
-  auto axis = [](size_t big, size_t small) {
-    Axis a{std::vector<uint32_t>(small + 1, static_cast<uint32_t>(big)), std::vector<uint32_t>(small)};
-    for (size_t b = big; b-- > 0;)
-      a.first[std::min(small - 1, static_cast<size_t>((static_cast<double>(b) + 0.5) * static_cast<double>(small) /
-                                                      static_cast<double>(big)))] = static_cast<uint32_t>(b);
-    for (size_t k = 0; k < small; ++k)
-      a.nearest[k] = static_cast<uint32_t>(
-          std::min(big - 1, static_cast<size_t>((static_cast<double>(k) + 0.5) * static_cast<double>(big) / static_cast<double>(small))));
-    return a;
-  };
-  const Axis columns = axis(big_w, w), rows = axis(big_h, h);
+  const Footprints footprints(big_w, big_n / big_w, w, h);
   std::vector<uint32_t>& source = order_;  // (scratch of the view's size: no fresh pages)
   source.resize(n);
   tbb::parallel_for(tbb::blocked_range<size_t>(0, h, 16), [&](const tbb::blocked_range<size_t>& r) {
     for (size_t y = r.begin(); y != r.end(); ++y)
-      for (size_t x = 0; x < w; ++x) {
-        size_t best = rows.nearest[y] * big_w + columns.nearest[x];
-        float most = total_cast(best);
-        for (size_t by = rows.first[y]; by < rows.first[y + 1]; ++by)
-          for (size_t bx = columns.first[x]; bx < columns.first[x + 1]; ++bx)
-            if (const size_t b = by * big_w + bx; total_cast(b) > most) {
-              most = total_cast(b);
-              best = b;
-            }
-        source[y * w + x] = static_cast<uint32_t>(best);
-      }
+      for (size_t x = 0; x < w; ++x) source[y * w + x] = footprints.source(x, y, *this);
   });
   auto gather = [&](auto& v) {
     if (v.size() != big_n) return;  // (not held for this view)
@@ -867,10 +887,11 @@ void RealtimeLoop::lower_in_place(uint64_t& kept_pixels) {
     }
 }
 
-void RealtimeLoop::start_rebuild(double scale, std::string why) {
+void RealtimeLoop::start_rebuild(double scale, std::string why, bool lowering) {
   Rebuild r;
   r.scale = scale;
   r.why = std::move(why);
+  r.lowering = lowering;
   const glm::ivec2 size = scaled_size(requested_, scale);
   r.width = size.x;
   r.height = size.y;
@@ -889,18 +910,35 @@ void RealtimeLoop::start_rebuild(double scale, std::string why) {
   r.maps.rays.reserve(n);
   r.maps.width = r.width;
   r.maps.height = r.height;
-  r.image.width = r.width;
-  r.image.height = r.height;
-  r.image.channels = 3;
-  r.image.pixels.reserve(3 * n);
+  for (Image& image : r.images) {
+    image.width = r.width;
+    image.height = r.height;
+    image.channels = 3;
+    image.pixels.reserve(3 * n);
+  }
   r.gaze = measured_px_.value_or(glm::dvec2(requested_.width * 0.5, requested_.height * 0.5)) * scale;
+  if (lowering) {
+    r.stage = Rebuild::gather;
+    r.footprints = Footprints(static_cast<size_t>(params_.width), static_cast<size_t>(params_.height), static_cast<size_t>(r.width),
+                              static_cast<size_t>(r.height));
+    r.source.reserve(n);
+  }
   rebuild_ = std::move(r);
 }
 
-void RealtimeLoop::advance_rebuild(const Timer& frame_timer, double until_ms) {
+void RealtimeLoop::advance_rebuild(const Timer& frame_timer, double until_ms, int& rows_left, glm::dvec2 gaze_px) {
   Rebuild& r = *rebuild_;
   const size_t w = static_cast<size_t>(r.width);
-  for (bool first = true; r.stage != Rebuild::done; first = false) {
+  for (bool first = true; r.stage != Rebuild::done && rows_left > 0; first = false) {
+    if (r.stage == Rebuild::refresh_maps && r.row == 0) {  // (the gaze the maps are evaluated at, where it has moved far enough)
+      const glm::dvec2 gaze = gaze_px * r.scale;
+      const double ppd = pixels_per_degree(params_.display) * r.width / params_.display.res_x;
+      if (glm::length(gaze - r.gaze) <= kMapsStaleDeg * ppd) {
+        r.stage = Rebuild::done;
+        break;
+      }
+      r.gaze = gaze;
+    }
     const double left = until_ms - frame_timer.ms();
     if (left <= 0 && !first) return;  // (a step a frame at least)
     if (r.stage == Rebuild::keep && !settings_.keep_history) {
@@ -911,9 +949,12 @@ void RealtimeLoop::advance_rebuild(const Timer& frame_timer, double until_ms) {
     // start): a step's pace varies with what its rows hold (a reprojection step measured up to
     // 2.5× its estimate), and a step started near the deadline would end past it. The rays kept are
     // the view at hand's rows, the other stages the view built's
-    const int height = r.stage == Rebuild::keep ? params_.height : r.height;
-    const int rows_left = height - r.row;
-    const int rows = std::clamp(r.rows_per_ms > 0 ? static_cast<int>(r.rows_per_ms * std::clamp(0.5 * left, 0.0, 0.5)) : 1, 1, rows_left);
+    const int height = r.stage == Rebuild::keep            ? params_.height
+                       : r.stage == Rebuild::estimate      ? (r.height + 1) / 2  // (the pyramid's first level)
+                       : r.stage == Rebuild::estimate_push ? 1
+                                                           : r.height;
+    const int rows = std::clamp(r.rows_per_ms > 0 ? static_cast<int>(r.rows_per_ms * std::clamp(0.5 * left, 0.0, 0.5)) : 1, 1,
+                                std::min(height - r.row, rows_left));
     const Timer step;
     const size_t b = static_cast<size_t>(r.row) * w;
     int got = rows;
@@ -924,7 +965,7 @@ void RealtimeLoop::advance_rebuild(const Timer& frame_timer, double until_ms) {
     } else if (r.stage == Rebuild::shading) {  // the shading, the eye rays and the maps at the gaze
       const size_t e = b + static_cast<size_t>(rows) * w;
       for (auto* v : {&r.lit, &r.ambient}) v->resize(e);
-      r.image.pixels.resize(3 * e);  // (its pages touched here, a few at a time: 5 MB at once took 2.5 ms)
+      for (Image& image : r.images) image.pixels.resize(3 * e);  // (their pages touched here, a few at a time: 5 MB at once took 2.5 ms)
       for (auto* v : {&r.ray_x, &r.ray_y, &r.ray_z, &r.maps.quality, &r.maps.eccentricity, &r.maps.blend}) v->resize(e);
       r.maps.rays.resize(e);
       shade(r.gbuffer, camera_, b, e, r.lit, r.ambient);
@@ -934,6 +975,85 @@ void RealtimeLoop::advance_rebuild(const Timer& frame_timer, double until_ms) {
         evaluate_maps(model, params_.foveation, params_.mode == RenderMode::foveated, r.ray_x.data(), r.ray_y.data(), r.ray_z.data(),
                       range.begin(), range.end(), r.maps);
       });
+    } else if (r.stage == Rebuild::gather) {
+      // A lowered size's rows, from the view at hand (lower_in_place's rule): each pixel's surface
+      // point, shading and eye ray its larger pixel's, the maps evaluated at the gaze
+      const size_t e = b + static_cast<size_t>(rows) * w;
+      r.source.resize(e);
+      GBuffer& g = r.gbuffer;
+      g.prim.resize(e);
+      g.depth.resize(e);
+      for (auto* v : {&g.position, &g.normal, &g.geo_normal, &g.albedo, &g.view, &r.lit, &r.ambient}) v->resize(e);
+      for (Image& image : r.images) image.pixels.resize(3 * e);
+      for (auto* v : {&r.ray_x, &r.ray_y, &r.ray_z, &r.maps.quality, &r.maps.eccentricity, &r.maps.blend}) v->resize(e);
+      r.maps.rays.resize(e);
+      const FoveationModel model(params_.display, r.width, r.height, r.gaze, params_.foveation);
+      tbb::parallel_for(tbb::blocked_range<size_t>(b, e, 2048), [&](const tbb::blocked_range<size_t>& range) {
+        for (size_t i = range.begin(); i != range.end(); ++i) {
+          const uint32_t from = r.footprints.source(i % w, i / w, *this);
+          r.source[i] = from;
+          g.prim[i] = gbuffer_.prim[from];
+          g.position[i] = gbuffer_.position[from];
+          g.normal[i] = gbuffer_.normal[from];
+          g.geo_normal[i] = gbuffer_.geo_normal[from];
+          g.albedo[i] = gbuffer_.albedo[from];
+          g.depth[i] = gbuffer_.depth[from];
+          g.view[i] = gbuffer_.view[from];
+          r.lit[i] = lit_[from];
+          r.ambient[i] = ambient_[from];
+          r.ray_x[i] = ray_x_[from];
+          r.ray_y[i] = ray_y_[from];
+          r.ray_z[i] = ray_z_[from];
+        }
+        evaluate_maps(model, params_.foveation, params_.mode == RenderMode::foveated, r.ray_x.data(), r.ray_y.data(), r.ray_z.data(),
+                      range.begin(), range.end(), r.maps);
+      });
+    } else if (r.stage == Rebuild::gather_rays) {
+      // … and their rays so far, kept as a new view keeps the view before's (lower_in_place): as late
+      // as the view is built, since the larger view's frames go on casting them
+      const size_t e = b + static_cast<size_t>(rows) * w;
+      r.kept.open.resize(e);
+      r.kept.cast.resize(e);
+      r.kept.origin_sum.resize(e);
+      std::atomic<uint64_t> kept{0};
+      tbb::parallel_for(tbb::blocked_range<size_t>(b, e, 4096), [&](const tbb::blocked_range<size_t>& range) {
+        uint64_t with_rays = 0;
+        for (size_t i = range.begin(); i != range.end(); ++i) {
+          pixel_counts(r.source[i], r.gbuffer.position[i], r.kept.open[i], r.kept.cast[i], r.kept.origin_sum[i]);
+          with_rays += r.kept.cast[i] > 0 ? 1 : 0;
+        }
+        kept += with_rays;
+      });
+      r.kept_pixels += kept;
+    } else if (r.stage == Rebuild::estimate) {
+      // The pixels without rays, estimated from the rays kept (as estimate_unreached does, where
+      // this view's own are none yet): the pyramid's first level, by rows of it
+      if (r.row == 0) r.pull_push.prepare(r.width, r.height);
+      const bool kept = r.kept_pixels > 0;
+      std::atomic<bool> unreached{false};
+      r.pull_push.pull_rows(
+          r.width, r.height,
+          [&](size_t i) {
+            const float rays = kept ? r.kept.cast[i] : 0.0f;
+            const bool hit = r.gbuffer.hit(i);
+            if (rays == 0 && hit && r.maps.rays[i] > 0 && !unreached.load(std::memory_order_relaxed))
+              unreached.store(true, std::memory_order_relaxed);
+            return std::pair{rays > 0 && hit, rays > 0 ? r.kept.open[i] / rays : 0.0f};
+          },
+          r.row, r.row + rows);
+      r.unreached = r.unreached || unreached;
+    } else if (r.stage == Rebuild::refresh_maps) {
+      const size_t e = b + static_cast<size_t>(rows) * w;
+      const FoveationModel model(params_.display, r.width, r.height, r.gaze, params_.foveation);
+      tbb::parallel_for(tbb::blocked_range<size_t>(b, e, 4096), [&](const tbb::blocked_range<size_t>& range) {
+        evaluate_maps(model, params_.foveation, params_.mode == RenderMode::foveated, r.ray_x.data(), r.ray_y.data(), r.ray_z.data(),
+                      range.begin(), range.end(), r.maps);
+      });
+    } else if (r.stage == Rebuild::estimate_push) {
+      r.pull_push.pull_levels();
+      r.estimated = true;
+      r.pushed = r.unreached && r.pull_push.push();
+      ++estimates_made_;
     } else if (r.stage == Rebuild::keep) {
       // The view at hand's rays, kept for the view built to take over, row by row: at once, its
       // surfaces and counts copied (about 45 bytes a pixel), they took 6–17 ms of a frame at 616×385
@@ -955,13 +1075,18 @@ void RealtimeLoop::advance_rebuild(const Timer& frame_timer, double until_ms) {
     const double ms = step.ms();
     if (ms > 0.05) r.rows_per_ms = r.rows_per_ms > 0 ? 0.5 * r.rows_per_ms + 0.5 * got / ms : got / ms;
     r.row += got;
+    rows_left -= got;
     if (r.row < height) continue;
     r.row = 0;
     r.rows_per_ms = 0;
-    r.stage = r.stage == Rebuild::surfaces  ? Rebuild::shading
-              : r.stage == Rebuild::shading ? Rebuild::keep
-              : r.stage == Rebuild::keep    ? Rebuild::reproject
-                                            : Rebuild::done;
+    r.stage = r.stage == Rebuild::surfaces        ? Rebuild::shading
+              : r.stage == Rebuild::shading       ? Rebuild::keep
+              : r.stage == Rebuild::keep          ? Rebuild::reproject
+              : r.stage == Rebuild::gather        ? Rebuild::gather_rays
+              : r.stage == Rebuild::estimate      ? Rebuild::estimate_push
+              : r.stage == Rebuild::estimate_push ? Rebuild::refresh_maps
+              : r.stage == Rebuild::refresh_maps  ? Rebuild::done
+                                                  : Rebuild::estimate;
   }
 }
 
@@ -989,8 +1114,16 @@ void RealtimeLoop::adopt_rebuild(uint64_t& kept_pixels) {
   cast_.assign(n, 0);
   open_.assign(n, 0);
   estimates_ = false;  // (those of the view before)
+  unreached_possible_ = true;
+  if (r.estimated) {  // (made by rows: estimate_unreached makes the next when due)
+    std::swap(pull_push_, r.pull_push);
+    unreached_possible_ = r.unreached;
+    estimates_ = r.pushed;
+    estimate_age_ = 0;
+    reached_ = false;
+  }
   grid_pending_ = true;
-  prepare_rounds(n);
+  prepare_rounds(n);  // (the pyramid's memory: already this size where the estimate was made)
   kept_pixels = r.kept_pixels;
   if (kept_pixels > 0) {
     kept_open_ = std::move(r.kept.open);
@@ -1003,7 +1136,7 @@ void RealtimeLoop::adopt_rebuild(uint64_t& kept_pixels) {
   }
   ++views_;
   view_seed_ = any_kept() ? scrambled_seed(params_.seed, views_) : params_.seed;
-  spares_ = {std::move(r.image), Image()};
+  spares_ = std::move(r.images);
   // What composing, planning the fovea and sweeping the periphery take goes with the pixels (the
   // smaller view's sweep estimate let the first full-size sweep run 4 ms past the deadline)
   const double ratio = static_cast<double>(n) / pixels_before;
@@ -1012,8 +1145,12 @@ void RealtimeLoop::adopt_rebuild(uint64_t& kept_pixels) {
   sweep_.scale(ratio);
   narrow_sweep_.scale(ratio);
   estimate_cost_.scale(ratio);
-  note_ = size_note(r.why.c_str());
-  motion_scale_.reset();
+  if (r.lowering) {
+    note_ = r.why;  // (rescale's; a size lowered for a still view is no size a camera at rest gets back)
+  } else {
+    note_ = size_note(r.why.c_str());
+    motion_scale_.reset();
+  }
   fixed_.clear();
   rebuild_.reset();
 }
@@ -1056,6 +1193,7 @@ LoopFrame RealtimeLoop::frame(const Camera& camera) {
     view_ms = lower_timer.ms();
     out.new_view = out.lowered = true;
   } else if (rebuild_ && rebuild_->stage == Rebuild::done) {
+    out.lowered = rebuild_->lowering;
     adopt_rebuild(out.kept_pixels);
     out.new_view = true;
   }
@@ -1088,12 +1226,15 @@ LoopFrame RealtimeLoop::frame(const Camera& camera) {
   const double ahead_deadline = std::min(periphery_deadline, kAheadShare * settings_.budget_ms - finish_ms_);
   // A size coming back: half of what is left before the deadline builds it (the rest after the
   // rays, if they leave any)
+  int rebuild_rows = settings_.rebuild_rows_per_frame.value_or(std::numeric_limits<int>::max());
   auto rebuild = [&](double until_ms) {
-    if (!rebuild_ || rebuild_->stage == Rebuild::done) return;
+    if (!rebuild_ || rebuild_->stage == Rebuild::done || rebuild_rows <= 0) return;
     const Timer rebuild_timer;
-    advance_rebuild(timer, until_ms);
+    advance_rebuild(timer, until_ms, rebuild_rows, gaze);
     out.rebuilding = true;
     out.rebuild_ms += rebuild_timer.ms();
+    out.rebuild_width = rebuild_->width;
+    out.rebuild_height = rebuild_->height;
   };
   if (wall) rebuild(timer.ms() + 0.5 * (deadline - timer.ms()));
   out.deadline_ms = deadline;
@@ -1220,7 +1361,9 @@ LoopFrame RealtimeLoop::frame(const Camera& camera) {
   // (planning the periphery is no fixed part either: the loop sweeps it only when the sweep fits, and
   // on a 2-core AMD EPYC VM its 3–5 ms with maps and composing passed 60 % of the budget and
   // lowered the resolution while the fovea was converged)
-  const double fixed = wall ? out.ms - trace_ms - sweep_ms - out.rebuild_ms - (moving ? 0.0 : view_ms) : model_fixed;
+  const double fixed = !wall                     ? model_fixed
+                       : settings_.fixed_part_ms ? *settings_.fixed_part_ms * scale_ * scale_
+                                                 : out.ms - trace_ms - sweep_ms - out.rebuild_ms - (moving ? 0.0 : view_ms);
   last_view_cost_ms_ = out.new_view ? out.ms - trace_ms - sweep_ms - out.rebuild_ms : 0;  // a new view's fixed part, its surfaces included
   // (on the wall clock over five frames at least: a first frame's page faults, one frame's pause,
   // are no reason. A camera that moves on after a view costlier than the whole budget is, at once:
@@ -1235,6 +1378,14 @@ LoopFrame RealtimeLoop::frame(const Camera& camera) {
       if (!moving) lowered_still(out.index);
     }
     fixed_.clear();
+  } else if (wall && rebuild_ && rebuild_->lowering && fixed > settings_.budget_ms) {
+    // A lower size under way whose larger view's frame was late for its fixed part alone (the budget
+    // fell since: an experiment's own work took more of the refresh) is taken at the next frame, at
+    // once: in the PsychoPy example under Xvfb the budget fell from 5–6 to 4 ms while it was built,
+    // and four frames at the larger size came late by 0.3–1.8 ms before it was shown
+    lower_to_ = rebuild_->scale;
+    note_ = std::move(rebuild_->why);
+    rebuild_.reset();
   }
   // A moving camera whose frame ran out of work before its deadline grows towards the size it had
   // before it moved. The first moved view's size comes from an estimate (the first view's cost,

@@ -86,6 +86,12 @@ struct LoopSettings {
   // instead of its measured time (RealtimeLoop::frame() leaves one that would pass the rays'
   // deadline to a later frame)
   std::optional<double> estimate_cost_ms;
+  // Tests only: a frame's fixed part (what it costs besides its rays) taken to be this on the wall
+  // clock at the full size, and less with the pixels, instead of its measured time
+  std::optional<double> fixed_part_ms;
+  // Tests only: the rows a frame may build of a view at another size at most (wall clock), so that
+  // building it takes frames on any machine
+  std::optional<int> rebuild_rows_per_frame;
   bool keep_history = true;  // a new view (the camera moved) keeps the AO of the surfaces it still sees
   // Once every pixel has its n(E), the frames' spare time raises the pixels towards n_max, nearest
   // the gaze first, within kAheadShare of each budget: where the eye lands next, its fovea finds
@@ -124,16 +130,17 @@ struct LoopFrame {
   // frame's pause fell before rays stopped (rays_end_ms > deadline_ms) or into its end
   // (ms − rays_end_ms > compose_planned_ms)
   double deadline_ms = 0, rays_end_ms = 0, compose_planned_ms = 0;
-  double cost_ms = 0;          // the frame's cost on the loop's clock (wall: ms; model: the model's)
-  bool late = false;           // cost_ms > the budget
-  bool new_view = false;       // the camera changed, or a size came back: surfaces traced (and AO kept where the view still sees them);
-                               // or a still view's size was lowered (`lowered`)
-  bool lowered = false;        // a still view's size lowered, taken from the view at hand: no surface traced (lower_in_place)
-  uint64_t kept_pixels = 0;    // a new view: the pixels that kept AO rays from the view before
-  bool rebuilding = false;     // part of the frame built the view at the size a camera at rest gets back
-  double rebuild_ms = 0;       // … in this much of the frame
-  double fovea_converged = 0;  // fraction of the fovea's (q = 1, hit) pixels whose AO is converged
-  bool fovea_done = false;     // all of them: the fovea is at full quality
+  double cost_ms = 0;        // the frame's cost on the loop's clock (wall: ms; model: the model's)
+  bool late = false;         // cost_ms > the budget
+  bool new_view = false;     // the camera changed, or a size came back: surfaces traced (and AO kept where the view still sees them);
+                             // or a still view's size was lowered (`lowered`)
+  bool lowered = false;      // a still view's size lowered, taken from the view at hand: no surface traced (lower_in_place)
+  uint64_t kept_pixels = 0;  // a new view: the pixels that kept AO rays from the view before
+  bool rebuilding = false;   // part of the frame built the view at another size (larger, or lowered over frames)
+  double rebuild_ms = 0;     // … in this much of the frame
+  int rebuild_width = 0, rebuild_height = 0;  // … that size
+  double fovea_converged = 0;                 // fraction of the fovea's (q = 1, hit) pixels whose AO is converged
+  bool fovea_done = false;                    // all of them: the fovea is at full quality
   // Wall clock: chunks of this frame's rays left to threads the machine had paused, their rays
   // dropped, rather than waited for (kLeaveBehindAfterMs); and where the frame before left some,
   // how long after its rays stopped the last of them ended — how much later it would have ended had
@@ -307,8 +314,11 @@ class RealtimeLoop {
   const GBuffer& gbuffer() const { return gbuffer_; }
   // How many estimates of the pixels without rays the loop has made (estimate_unreached; tests)
   uint64_t estimates_made() const { return estimates_made_; }
-  bool has_estimate() const { return estimates_; }  // an estimate for the pixels without rays is held (from rays so far)
-  int frame_index() const { return index_; }        // the next frame's index: the frames made so far
+  // How many times a frame evaluated the maps at every pixel (update_maps; tests)
+  uint64_t maps_everywhere() const { return maps_everywhere_; }
+  bool has_estimate() const { return estimates_; }                   // an estimate for the pixels without rays is held (from rays so far)
+  float estimate(size_t i) const { return pull_push_.estimate(i); }  // … pixel i's (where has_estimate())
+  int frame_index() const { return index_; }                         // the next frame's index: the frames made so far
   // Whether pixel i's AO is converged (τ(E) or n(E) reached).
   bool converged(size_t i) const;
   // How many pixels' sweep buckets, kept between sweeps, differ from what they would be now (those
@@ -365,8 +375,26 @@ class RealtimeLoop {
   // one of the larger pixels nearest it, the one with the most rays — its surface point and shading,
   // its eye ray, and its rays so far, kept as the views before's are. (Traced afresh, the smaller
   // view made that frame late by 34–49 ms at 840×525 on two cores.) kept_pixels: the pixels that
-  // kept rays
+  // kept rays. At once, in one frame: where the frames at the larger size are late anyway (their
+  // fixed part alone passes the budget) and on the model clock; else taken a few rows at a time
+  // while the larger view is still shown (start_rebuild's `lowering`)
   void lower_in_place(uint64_t& kept_pixels);
+  // Which larger pixels each smaller pixel of a lowered size stands for: its footprint, those whose
+  // nearest smaller pixel it is (one to a few along each axis), and the one nearest its centre
+  struct Footprints {
+    struct Axis {
+      std::vector<uint32_t> first;    // [first[k], first[k + 1]): the larger pixels whose nearest smaller one is k
+      std::vector<uint32_t> nearest;  // the larger pixel nearest the centre of smaller pixel k
+    };
+    Axis columns, rows;
+    size_t big_width = 0;
+    Footprints() = default;
+    Footprints(size_t big_w, size_t big_h, size_t w, size_t h);
+    // Smaller pixel (x, y)'s larger pixel: of its footprint, the one with the most rays, else the one
+    // nearest its centre
+    template <class Rays>
+    uint32_t source(size_t x, size_t y, const Rays& rays) const;
+  };
   // "rendering at WxH (P %)" and why, where the size is below the one asked for; "" at full size
   std::string size_note(const char* why) const;
   // A camera at rest gets back the size it had before it moved, and a still view made smaller for
@@ -375,11 +403,15 @@ class RealtimeLoop {
   // maps, the rays it keeps) while the smaller one is still shown, and taken over once complete: the
   // full-size surfaces at once made that frame late by 50–90 ms at 840×525 on two cores. (On the wall
   // clock; the model clock takes the size at once.)
-  void start_rebuild(double scale, std::string why);
+  // `lowering`: a still view's lower size, taken from the view at hand (lower_in_place's rule) rather
+  // than traced; `why` is then the whole note
+  void start_rebuild(double scale, std::string why, bool lowering = false);
   // A larger size for a still view (a camera come to rest, a fixed part that fits again): built
   // over frames on the wall clock (start_rebuild), at once on the model clock; `why`: the note then.
   void grow_back(double scale, const char* why);
-  void advance_rebuild(const Timer& frame_timer, double until_ms);  // steps of ~1 ms until then (frame's clock)
+  // Steps of ~1 ms until then (frame's clock), of at most `rows_left` rows in all (counted down);
+  // `gaze_px`: where the frame's fovea is (the size asked for's pixels)
+  void advance_rebuild(const Timer& frame_timer, double until_ms, int& rows_left, glm::dvec2 gaze_px);
   void adopt_rebuild(uint64_t& kept_pixels);
   glm::dvec2 px_to_deg(glm::dvec2 px) const;
   glm::dvec2 deg_to_px(glm::dvec2 deg) const;
@@ -428,6 +460,7 @@ class RealtimeLoop {
   bool grid_pending_ = false;       // the view's coarse grid is still to be planned (plan_round)
   int estimate_age_ = 0;            // frames since they were made
   uint64_t estimates_made_ = 0;
+  uint64_t maps_everywhere_ = 0;
   bool reached_ = true;  // a pixel outside the fovea got its first rays, or the maps changed everywhere, since then
   std::vector<AoRayTask> tasks_;
   std::vector<uint32_t> blocked_;
@@ -471,7 +504,23 @@ class RealtimeLoop {
     double scale = 1;
     std::string why;  // the note's reason once it is shown
     int width = 0, height = 0;
-    enum Stage { surfaces, shading, keep, reproject, done } stage = surfaces;
+    // A larger size: surfaces, shading, keep, reproject. A lowered one: gather (its pixels' surfaces,
+    // shading, eye rays and maps, from their larger pixels), gather_rays (their rays so far, kept).
+    // Then both: estimate (the pull of the pixels without rays, by rows), estimate_push (the
+    // pyramid's coarser levels and the push), and refresh_maps (the maps evaluated again at the gaze, where it has
+    // moved kMapsStaleDeg since they were: else the frame that takes the view over evaluates them
+    // everywhere, and with them it took 4.0–4.2 ms where the budget was 4)
+    enum Stage { surfaces, shading, keep, reproject, gather, gather_rays, estimate, estimate_push, refresh_maps, done } stage = surfaces;
+    bool lowering = false;
+    Footprints footprints;         // (lowering)
+    std::vector<uint32_t> source;  // (lowering) each pixel's larger pixel, row by row
+    // The view's first estimate of its pixels without rays (estimate_unreached's), from the rays it
+    // keeps, made by rows: made as the view was taken over, with the maps evaluated everywhere, it
+    // made that frame late at a budget of 4 ms (4.1–6.6 ms at 840×525 on two cores)
+    PullPush pull_push;
+    bool unreached = false;  // … some pixel that asks for rays has none
+    bool pushed = false;     // … and some pixel has rays: pull_push holds the estimate
+    bool estimated = false;  // … made (estimate_push)
     int row = 0;             // the stage's next row
     double rows_per_ms = 0;  // the stage's pace, measured (0: not yet)
     GBuffer gbuffer;         // rows traced so far (memory reserved for the whole view, touched row by row)
@@ -481,7 +530,9 @@ class RealtimeLoop {
     glm::dvec2 gaze{0};  // where the maps are
     AoCounts kept;       // the rays the view takes over from the smaller one
     uint64_t kept_pixels = 0;
-    Image image;  // the memory its first frame is composed into (touched row by row with the shading)
+    // The memory its first two frames are composed into (touched row by row with the shading; the
+    // second frame's, made afresh, took 5.4 ms with 1,200 page faults at 820×513 where the budget was 4)
+    std::array<Image, 2> images;
   };
   std::optional<Rebuild> rebuild_;
   // A still view lowered (at frame `index`, with that budget): its growing back is held for
