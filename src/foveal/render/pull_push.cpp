@@ -7,7 +7,7 @@ namespace foveal {
 
 void PullPush::prepare(int width, int height) {
   pixels_size_ = Size{width, height};
-  sizes_.assign(1, Size{(width + 1) / 2, (height + 1) / 2});
+  sizes_.assign(1, Size{(width + 1) / 2, first_rows(height)});
   while (sizes_.back().width > 1 || sizes_.back().height > 1)
     sizes_.push_back(Size{(sizes_.back().width + 1) / 2, (sizes_.back().height + 1) / 2});
   const size_t levels = sizes_.size();

@@ -30,12 +30,12 @@ class PullPush {
   template <class At>
   void pull(int width, int height, const At& at);
   // The same pull in parts, a few rows a step (the real-time loop's view built over frames): after
-  // prepare(width, height), the first level's rows [y0, y1) of first_rows() (each from two rows of
-  // pixels), in any order; then, once every row is pulled, the coarser levels
+  // prepare(width, height), the first level's rows [y0, y1) of first_rows(height) (each from two
+  // rows of pixels), in any order; then, once every row is pulled, the coarser levels
   template <class At>
   void pull_rows(int width, int height, const At& at, int y0, int y1);
   void pull_levels();
-  int first_rows() const { return sizes_.empty() ? 0 : sizes_[0].height; }
+  static int first_rows(int height) { return (height + 1) / 2; }
   // The memory of a width×height field's pyramid, written (so that its pages are touched) before
   // a pull needs it; a field no larger than one before costs nothing
   void prepare(int width, int height);
@@ -91,7 +91,7 @@ void PullPush::pull_level(int in_width, int in_height, const In& in, Size out, f
 template <class At>
 void PullPush::pull(int width, int height, const At& at) {
   prepare(width, height);
-  pull_rows(width, height, at, 0, first_rows());
+  pull_rows(width, height, at, 0, first_rows(height));
   pull_levels();
 }
 

@@ -100,7 +100,7 @@ TEST(PullPush, PullingInRowsIsTheWholePull) {
   whole.pull(f.width, f.height, at);
   ASSERT_TRUE(whole.push());
   rows.prepare(f.width, f.height);
-  const int n = rows.first_rows();
+  const int n = PullPush::first_rows(f.height);
   ASSERT_EQ(n, 61);
   // the rows in steps of 1 to 7, the later half first
   for (int y = n / 2; y < n;) {

@@ -95,6 +95,26 @@ void evaluate_maps(const FoveationModel& model, const FoveationParams& f, bool f
   std::fill_n(maps.blend.data() + b, e - b, f.max_rays > 0 ? 1.0f : 0.0f);
 }
 
+// The estimate of the pixels without rays (RealtimeLoop::estimate_unreached), the pull of rows
+// [y0, y1) of the pyramid's first level: a pixel is known where it sees a surface and has rays, its
+// value the share of them found open (`cast(i)`, `open(i)`). True where a pixel that sees a surface
+// and asks for rays (n(E) > 0) has none
+template <class Cast, class Open>
+bool pull_unreached(PullPush& p, const GBuffer& g, const FoveationMaps& maps, const Cast& cast, const Open& open, int y0, int y1) {
+  std::atomic<bool> unreached{false};
+  p.pull_rows(
+      g.width, g.height,
+      [&](size_t i) {
+        const float rays = cast(i);
+        const bool hit = g.hit(i);
+        if (rays == 0 && hit && maps.rays[i] > 0 && !unreached.load(std::memory_order_relaxed))
+          unreached.store(true, std::memory_order_relaxed);
+        return std::pair{rays > 0 && hit, rays > 0 ? open(i) / rays : 0.0f};
+      },
+      y0, y1);
+  return unreached;
+}
+
 // Every vector of `rows` appended to `g`'s (rows that follow those `g` holds)
 void append_rows(GBuffer& g, const GBuffer& rows) {
   auto append = [](auto& to, const auto& from) { to.insert(to.end(), from.begin(), from.end()); };
@@ -692,14 +712,11 @@ bool RealtimeLoop::estimate_unreached(double left_ms) {
   }
   const Timer estimate_timer;
   reached_ = false;
-  std::atomic<bool> unreached{false};
-  pull_push_.pull(params_.width, params_.height, [&](size_t i) {
-    const float rays = total_cast(i);
-    const bool hit = gbuffer_.hit(i);
-    if (rays == 0 && hit && maps_.rays[i] > 0 && !unreached.load(std::memory_order_relaxed))
-      unreached.store(true, std::memory_order_relaxed);
-    return std::pair{rays > 0 && hit, rays > 0 ? total_open(i) / rays : 0.0f};
-  });
+  pull_push_.prepare(params_.width, params_.height);
+  const bool unreached = pull_unreached(
+      pull_push_, gbuffer_, maps_, [&](size_t i) { return total_cast(i); }, [&](size_t i) { return total_open(i); }, 0,
+      PullPush::first_rows(params_.height));
+  pull_push_.pull_levels();
   unreached_possible_ = unreached;
   estimates_ = unreached && pull_push_.push();
   estimate_age_ = 0;
@@ -950,7 +967,7 @@ void RealtimeLoop::advance_rebuild(const Timer& frame_timer, double until_ms, in
     // 2.5× its estimate), and a step started near the deadline would end past it. The rays kept are
     // the view at hand's rows, the other stages the view built's
     const int height = r.stage == Rebuild::keep            ? params_.height
-                       : r.stage == Rebuild::estimate      ? (r.height + 1) / 2  // (the pyramid's first level)
+                       : r.stage == Rebuild::estimate      ? PullPush::first_rows(r.height)  // (the pyramid's first level)
                        : r.stage == Rebuild::estimate_push ? 1
                                                            : r.height;
     const int rows = std::clamp(r.rows_per_ms > 0 ? static_cast<int>(r.rows_per_ms * std::clamp(0.5 * left, 0.0, 0.5)) : 1, 1,
@@ -1030,18 +1047,10 @@ void RealtimeLoop::advance_rebuild(const Timer& frame_timer, double until_ms, in
       // this view's own are none yet): the pyramid's first level, by rows of it
       if (r.row == 0) r.pull_push.prepare(r.width, r.height);
       const bool kept = r.kept_pixels > 0;
-      std::atomic<bool> unreached{false};
-      r.pull_push.pull_rows(
-          r.width, r.height,
-          [&](size_t i) {
-            const float rays = kept ? r.kept.cast[i] : 0.0f;
-            const bool hit = r.gbuffer.hit(i);
-            if (rays == 0 && hit && r.maps.rays[i] > 0 && !unreached.load(std::memory_order_relaxed))
-              unreached.store(true, std::memory_order_relaxed);
-            return std::pair{rays > 0 && hit, rays > 0 ? r.kept.open[i] / rays : 0.0f};
-          },
-          r.row, r.row + rows);
-      r.unreached = r.unreached || unreached;
+      r.unreached = pull_unreached(
+                        r.pull_push, r.gbuffer, r.maps, [&](size_t i) { return kept ? r.kept.cast[i] : 0.0f; },
+                        [&](size_t i) { return r.kept.open[i]; }, r.row, r.row + rows) ||
+                    r.unreached;
     } else if (r.stage == Rebuild::refresh_maps) {
       const size_t e = b + static_cast<size_t>(rows) * w;
       const FoveationModel model(params_.display, r.width, r.height, r.gaze, params_.foveation);
@@ -1082,11 +1091,12 @@ void RealtimeLoop::advance_rebuild(const Timer& frame_timer, double until_ms, in
     r.stage = r.stage == Rebuild::surfaces        ? Rebuild::shading
               : r.stage == Rebuild::shading       ? Rebuild::keep
               : r.stage == Rebuild::keep          ? Rebuild::reproject
+              : r.stage == Rebuild::reproject     ? Rebuild::estimate
               : r.stage == Rebuild::gather        ? Rebuild::gather_rays
+              : r.stage == Rebuild::gather_rays   ? Rebuild::estimate
               : r.stage == Rebuild::estimate      ? Rebuild::estimate_push
               : r.stage == Rebuild::estimate_push ? Rebuild::refresh_maps
-              : r.stage == Rebuild::refresh_maps  ? Rebuild::done
-                                                  : Rebuild::estimate;
+                                                  : Rebuild::done;
   }
 }
 
