@@ -342,6 +342,15 @@ def test_bench_latency_from_python_equals_the_command_lines(cli, box, tmp_path):
         assert sum(f["rays"] for f in a[loop]["timeline"]) > 0 and sum(f["sweeps"] for f in a[loop]["timeline"]) > 0
         assert len(a[loop]["saccades"]) == 2 and a[loop]["frames_late"] == 0
         assert a[loop]["frames_left_behind"] == a[loop]["late_had_they_waited"] == 0  # (the model clock waits for every chunk)
+        # (every frame at the full size: none left unjudged)
+        assert a[loop]["frames_lowered"] == 0 and all(s["frames_not_judged"] == 0 for s in a[loop]["saccades"])
+    # A fixed part past the budget: frames at a lowered size, counted and not judged (docs/realtime.md)
+    lowered = foveal.bench_latency(str(recording), box, size=(168, 105), max_rays=64, duration_s=1.5, clock="model",
+                                   model_rays_per_ms=2000, model_fixed_ms=30, min_amplitude_deg=5, loops="deadline")
+    low = lowered["recordings"][0]["deadline"]
+    assert low["frames_lowered"] == sum(f["scale"] < 1 for f in low["timeline"]) > 0
+    assert all(f["fovea_error"] is None for f in low["timeline"] if f["scale"] < 1)
+    assert sum(s["frames_not_judged"] for s in low["saccades"]) > 0 and "Frames at a lowered size" in lowered["markdown"]
     # A Recording object does as well as its path; bad arguments are named
     again = foveal.bench_latency(foveal.gaze.read(str(recording)), box, size=(168, 105), max_rays=64, duration_s=1.5,
                                  clock="model", model_rays_per_ms=2000, model_fixed_ms=3, min_amplitude_deg=5, loops="deadline")

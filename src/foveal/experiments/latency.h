@@ -69,6 +69,9 @@ struct LatencySaccade {
   double model_ray_bound_ms = NAN;            // model clock: … / the model's rate (the rays it allows)
   double fixation_ms = 0;                     // landing → the eye's next saccade or blink (any size), or the recording's end
   std::optional<double> predicted_error_deg;  // deadline+prediction: the last prediction shown before the landing, from it
+  // Frames on screen after the landing, before its fovea converged, at a lowered size: not judged
+  // (the references are at the full size), so converged_ms may be later than the eye saw it
+  int frames_not_judged = 0;
 };
 
 struct LatencyFrame {  // one shown frame, for the timeline picture
@@ -129,7 +132,8 @@ struct LatencyLoop {
   double budget_ms = 0;
   int frames = 0, frames_late = 0, refreshes_missed = 0;
   double frame_ms_p50 = 0, frame_ms_p99 = 0;
-  double scale = 1;  // the deadline loops' resolution scale
+  double scale = 1;        // the deadline loops' resolution scale
+  int frames_lowered = 0;  // shown at a lowered size, so not judged (LatencySaccade::frames_not_judged)
   std::vector<LatencySaccade> saccades;
   std::vector<LatencyFrame> timeline;
   std::vector<LatencyFramePart> late;  // the deadline loops' late frames with where their pause fell (wall clock)

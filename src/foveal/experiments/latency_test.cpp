@@ -239,6 +239,57 @@ TEST(LatencyTimeline, EveryFrameJudgesTheDrawnSaccadesFovea) {
   EXPECT_THROW(write_latency_timeline(plain, 5, path), Error);
 }
 
+// A deadline loop whose fixed part does not fit the budget shows frames at a lowered size; they are
+// not judged against the full-size references, and the report counts them: per loop, and per
+// saccade those on screen after its landing, before its fovea converged.
+TEST(LatencyTimeline, FramesAtALoweredSizeAreCountedAndNotJudged) {
+  std::string csv = "t,x,y\n";  // 500 Hz: 800 px right at 0.4 s (a 65 ms saccade)
+  auto bell = [](double tau) { return tau <= 0 ? 0.0 : tau >= 1 ? 1.0 : tau - std::sin(2 * M_PI * tau) / (2 * M_PI); };
+  for (int i = 0; i < 600; ++i) {
+    const double t = i / 500.0;
+    csv += fmt::format("{},{},{}\n", t, 400 + 800 * bell((t - 0.4) / 0.065) + 0.3 * (i % 3), 520);
+  }
+  const Scene scene = make_builtin_scene("box");
+  const std::vector<Recording> recordings = {parse_recording(csv, "saccade.csv")};
+  const auto run = [&](double fixed_ms) {
+    LatencyParams p = model_clock_params(168, 105, 64, fixed_ms, 1.2);
+    p.min_amplitude_deg = 5;
+    p.loops = {"deadline"};
+    return bench_latency(scene, "builtin:box", scene.cameras.front(), ComputeDevice::cpu, 1, recordings, p, [](const std::string&) {});
+  };
+  const LatencyReport slow = run(30);  // (the budget is 16.7 ms: the loop lowers its size)
+  const LatencyLoop& loop = slow.recordings.front().loops.front();
+  ASSERT_EQ(loop.saccades.size(), 1u);
+  int lowered = 0, after_landing = 0;
+  for (const LatencyFrame& f : loop.timeline) {
+    if (f.scale < 1) {
+      ++lowered;
+      EXPECT_TRUE(std::isnan(f.fovea_error)) << f.shown_s;  // not judged
+    } else {
+      EXPECT_TRUE(std::isfinite(f.fovea_error)) << f.shown_s;
+    }
+  }
+  // (the frame shown at `shown_s` stays until the next's: the one on screen at the landing counts)
+  for (size_t k = 0; k < loop.timeline.size(); ++k) {
+    const double until = k + 1 < loop.timeline.size() ? loop.timeline[k + 1].shown_s : INFINITY;
+    const double converged_s = loop.saccades[0].landing_s + loop.saccades[0].converged_ms.value_or(INFINITY) / 1000;
+    after_landing += loop.timeline[k].scale < 1 && until > loop.saccades[0].landing_s && loop.timeline[k].shown_s < converged_s ? 1 : 0;
+  }
+  EXPECT_GT(lowered, 0);
+  EXPECT_EQ(loop.frames_lowered, lowered);
+  EXPECT_GT(loop.saccades[0].frames_not_judged, 0);
+  EXPECT_EQ(loop.saccades[0].frames_not_judged, after_landing);
+  const nlohmann::json& j = slow.json["recordings"][0]["deadline"];
+  EXPECT_EQ(j.at("frames_lowered"), lowered);
+  EXPECT_EQ(j.at("saccades")[0].at("frames_not_judged"), after_landing);
+  EXPECT_NE(slow.markdown.find("Frames at a lowered size"), std::string::npos);
+  // A loop that keeps its size: none, and no such sentence
+  const LatencyReport fits = run(3);
+  EXPECT_EQ(fits.recordings.front().loops.front().frames_lowered, 0);
+  EXPECT_EQ(fits.recordings.front().loops.front().saccades.at(0).frames_not_judged, 0);
+  EXPECT_EQ(fits.markdown.find("Frames at a lowered size"), std::string::npos);
+}
+
 // A drawn saccade whose fovea every deadline loop had ready at its landing shows no wait: the note
 // names the saccade the first deadline loop waited longest for (one never converged counts as
 // longest); no note where the drawn one shows a wait, or where nothing was drawn.
