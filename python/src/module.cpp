@@ -588,6 +588,10 @@ NB_MODULE(_core, m) {
           "The camera had moved, or the size it had before moving came back: the view's surfaces were traced; or a still "
           "view's size was lowered (`lowered`).")
       .def_prop_ro(
+          "scale", [](const PyLoopFrame& f) { return f.frame.scale; },
+          "The image's size as a share of the size asked for (1, or less where the loop lowered it: Loop.note says why; "
+          "Loop.scale may already be the next frame's).")
+      .def_prop_ro(
           "lowered", [](const PyLoopFrame& f) { return f.frame.lowered; },
           "A still view's size was lowered for its fixed part (Loop.note says why), taken from the view at hand: each smaller "
           "pixel one of the larger pixels nearest it, the one with the most rays, with its rays so far; no surface traced.")

@@ -17,6 +17,8 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <functional>
+#include <map>
 #include <memory>
 
 namespace foveal {
@@ -79,6 +81,57 @@ std::pair<double, bool> fovea_error(const FoveaMask& m, const Image& image, cons
   return {ratio, ratio <= 1.0 + 2.0 * se};
 }
 
+// A view at a lowered size whose pixel j shows the surface of pixel (*pixels)[j] of the view traced
+// last (RealtimeLoop::traced_pixels), and, per fovea mask, the pairs (j, that pixel) within it:
+// made once a view (each frame's search of every pixel had taken tens of milliseconds).
+struct LoweredView {
+  std::shared_ptr<const std::vector<uint32_t>> pixels;
+  std::vector<int32_t> inverse;  // the references' pixel i: the view's pixel showing it, or -1
+  std::vector<std::optional<std::vector<std::pair<uint32_t, uint32_t>>>> fovea;  // per mask
+  void show(std::shared_ptr<const std::vector<uint32_t>> next, size_t full_pixels, size_t masks) {
+    if (next == pixels) return;
+    pixels = std::move(next);
+    inverse.assign(pixels ? full_pixels : 0, -1);
+    if (pixels)
+      for (size_t j = 0; j < pixels->size(); ++j)
+        if ((*pixels)[j] < inverse.size()) inverse[(*pixels)[j]] = static_cast<int32_t>(j);
+    fovea.assign(masks, std::nullopt);
+  }
+  const std::vector<std::pair<uint32_t, uint32_t>>& of(const FoveaMask& m, size_t k) {
+    if (!fovea[k]) {
+      fovea[k].emplace();
+      for (uint32_t i : m.pixels)
+        if (i < inverse.size() && inverse[i] >= 0) fovea[k]->emplace_back(static_cast<uint32_t>(inverse[i]), i);
+    }
+    return *fovea[k];
+  }
+};
+
+// The same for a frame at a lowered size: over the fovea's pixels it shows (`pairs`: its pixel j
+// showing the references' pixel i), each against the references at the pixel it shows, the noise
+// over the same pixels.
+std::pair<double, bool> lowered_fovea_error(const std::vector<std::pair<uint32_t, uint32_t>>& pairs, const Image& image, const Image& ref,
+                                            const Image& ref2) {
+  std::vector<double> e, noise;
+  e.reserve(pairs.size());
+  noise.reserve(pairs.size());
+  for (const auto& [j, i] : pairs) {
+    double sq = 0;
+    for (size_t c = 0; c < 3; ++c) {
+      const double d = static_cast<double>(image.pixels[size_t{j} * 3 + c]) - ref.pixels[size_t{i} * 3 + c];
+      sq += d * d;
+    }
+    e.push_back(sq / 3);
+    noise.push_back(pixel_squared_error(ref2, ref, i));
+  }
+  const auto [noise_mse, noise_rel_se] = mse_and_rel_se(noise);
+  if (e.empty() || !(noise_mse > 0)) return {NAN, false};
+  const auto [mse, rel_se] = mse_and_rel_se(e);
+  const double ratio = std::sqrt(mse / noise_mse);
+  const double se = ratio * std::hypot(rel_se, noise_rel_se);
+  return {ratio, ratio <= 1.0 + 2.0 * se};
+}
+
 // Angle between two render positions as seen on the display, degrees.
 double render_angle_deg(const RenderParams& p, glm::dvec2 a, glm::dvec2 b) {
   auto dir = [&](glm::dvec2 px) {
@@ -88,6 +141,33 @@ double render_angle_deg(const RenderParams& p, glm::dvec2 a, glm::dvec2 b) {
   return angle_between_deg(dir(a), dir(b));
 }
 
+// References traced at one size (n_max rays everywhere, two seeds other than the loops'): the size
+// asked for's, or that of a view a deadline loop traced smaller (a size growing back).
+struct References {
+  Image ref, ref2;
+  GBuffer g;
+};
+
+References trace_references(const LatencyRun& run, const LatencyParams& p, glm::ivec2 size) {
+  RenderParams full = p.render;
+  full.width = size.x;
+  full.height = size.y;
+  full.mode = RenderMode::full;
+  full.gaze_px.reset();
+  FrameOptions apart;
+  apart.outputs = {false, false, true};
+  apart.use_history = false;
+  References r;
+  full.seed = p.render.seed + 1000;
+  Frame first = run.renderer->render(run.camera, full, apart);
+  r.ref = std::move(first.color);
+  r.g = std::move(first.gbuffer);
+  full.seed = p.render.seed + 2000;
+  apart.outputs = FrameOutputs::colour_only();
+  r.ref2 = run.renderer->render(run.camera, full, apart).color;
+  return r;
+}
+
 // What the three loops share: the segment's samples, the saccades, the references and masks.
 struct Segment {
   std::vector<double> t;                      // seconds from the recording's first sample
@@ -95,10 +175,36 @@ struct Segment {
   double begin = 0, end = 0, latency_s = 0;
   bool cut = false;  // the segment asked for ran past the recording's last sample: it ends there
   std::vector<LatencySaccade> saccades;
-  std::vector<FoveaMask> masks;
+  std::vector<FoveaMask> masks;  // at the size asked for
   Image ref, ref2;
   std::optional<size_t> drawn;  // the timeline picture's saccade
+  // Sizes a deadline loop traced its view at, smaller: the references there (traced on first use,
+  // kept for every segment), and the masks of this segment's saccades at them
+  RenderParams render;
+  std::function<const References&(glm::ivec2)> references_at;
+  mutable std::map<std::pair<int, int>, std::vector<FoveaMask>> masks_at;
 };
+
+// The references a frame is judged against, by the size of the view it comes from, with the masks.
+struct Judged {
+  const Image& ref;
+  const Image& ref2;
+  const std::vector<FoveaMask>& masks;
+};
+
+Judged judged_at(const Segment& s, glm::ivec2 size) {
+  if (size == glm::ivec2(s.ref.width, s.ref.height) || !s.references_at) return {s.ref, s.ref2, s.masks};
+  const References& r = s.references_at(size);
+  auto [at, fresh] = s.masks_at.try_emplace({size.x, size.y});
+  if (fresh) {
+    RenderParams params = s.render;
+    params.width = size.x;
+    params.height = size.y;
+    const glm::dvec2 ratio(static_cast<double>(size.x) / s.ref.width, static_cast<double>(size.y) / s.ref.height);
+    for (const LatencySaccade& sac : s.saccades) at->second.push_back(fovea_mask(params, r.g, sac.landing_px * ratio, r.ref, r.ref2));
+  }
+  return {r.ref, r.ref2, at->second};
+}
 
 // Which saccade's fovea a frame shown at `t` is judged against: the latest landed one (or, before
 // any, the first).
@@ -112,43 +218,58 @@ size_t followed_saccade(const Segment& s, double t) {
 // Judge a shown frame, on screen from `shown_s` until the next frame's refresh `until_s`: every
 // saccade that lands before `until_s` and whose fovea has not converged yet is judged on it. The
 // frame on screen when the eye lands counts too: one made ready before the landing (at the
-// predicted landing) shows a converged fovea 0 ms after it. Also the timeline's error.
-void judge_frame(const Segment& s, const Image& image, double shown_s, double until_s, LatencyLoop& loop, LatencyFrame& frame) {
+// predicted landing) shows a converged fovea 0 ms after it. Also the timeline's error. `judged`:
+// the references at the size of the view the frame comes from; a frame lowered from that view
+// (`lowered`: its pixels there) is judged on the pixels it shows.
+void judge_frame(const Segment& s, const Judged& judged, const Image& image, LoweredView* lowered, double shown_s, double until_s,
+                 LatencyLoop& loop, LatencyFrame& frame) {
+  const auto error = [&](size_t k) {
+    return lowered ? lowered_fovea_error(lowered->of(judged.masks[k], k), image, judged.ref, judged.ref2)
+                   : fovea_error(judged.masks[k], image, judged.ref);
+  };
   for (size_t j = 0; j < s.saccades.size(); ++j) {
     LatencySaccade& sac = loop.saccades[j];
     if (sac.converged_ms || sac.landing_s >= until_s) continue;
-    if (fovea_error(s.masks[j], image, s.ref).second) sac.converged_ms = std::max(0.0, shown_s - sac.landing_s) * 1000;
+    if (error(j).second) sac.converged_ms = std::max(0.0, shown_s - sac.landing_s) * 1000;
   }
-  if (!s.saccades.empty()) frame.fovea_error = fovea_error(s.masks[followed_saccade(s, shown_s)], image, s.ref).first;
-  if (s.drawn) frame.drawn_error = fovea_error(s.masks[*s.drawn], image, s.ref).first;
+  if (!s.saccades.empty()) frame.fovea_error = error(followed_saccade(s, shown_s)).first;
+  if (s.drawn) frame.drawn_error = error(*s.drawn).first;
 }
 
 // The display: the frame on screen, judged once the next frame's refresh is known.
 struct Screen {
   Image image;
   double shown_s = 0;
-  size_t frame = 0;        // its index in the loop's timeline
-  bool full_size = false;  // at the references' size (a deadline loop that lowered its resolution is not judged)
+  size_t frame = 0;      // its index in the loop's timeline
+  glm::ivec2 traced{0};  // the size of the view it comes from, the one traced last (RealtimeLoop::traced_size)
+  LoweredView lowered;   // where it was lowered from that view: its pixels there
   bool any = false;
   // A new frame shown at `shown_s`: the one it replaces is judged over the time it was on screen,
   // and returned (for the loop to compose into again)
-  Image show(const Segment& s, LatencyLoop& loop, Image next, double next_shown_s, bool next_full_size) {
+  Image show(const Segment& s, LatencyLoop& loop, Image next, double next_shown_s, glm::ivec2 next_traced,
+             std::shared_ptr<const std::vector<uint32_t>> next_pixels = nullptr) {
     finish(s, loop, next_shown_s);
     Image old = std::move(image);
     image = std::move(next);
     shown_s = next_shown_s;
     frame = loop.timeline.size() - 1;
-    full_size = next_full_size;
+    traced = next_traced;
+    if (next_pixels && next_pixels->size() * 3 != image.pixels.size()) next_pixels.reset();  // (not this image's)
+    lowered.show(std::move(next_pixels), static_cast<size_t>(traced.x) * static_cast<size_t>(traced.y), s.saccades.size());
     any = true;
     return old;
   }
   void finish(const Segment& s, LatencyLoop& loop, double until_s) {
-    if (any && full_size) judge_frame(s, image, shown_s, until_s, loop, loop.timeline[frame]);
-    if (any && !full_size) {  // (counted, for the report to say which landings' times it may have lengthened)
-      ++loop.frames_lowered;
-      for (LatencySaccade& sac : loop.saccades) sac.frames_not_judged += !sac.converged_ms && sac.landing_s < until_s ? 1 : 0;
-    }
+    if (!any) return;
     any = false;
+    if (image.width != s.ref.width || image.height != s.ref.height) ++loop.frames_lowered;
+    if (lowered.pixels || (image.width == traced.x && image.height == traced.y)) {
+      judge_frame(s, judged_at(s, traced), image, lowered.pixels ? &lowered : nullptr, shown_s, until_s, loop, loop.timeline[frame]);
+      return;
+    }
+    // (counted, for the report to say which landings' times it may have lengthened)
+    ++loop.frames_not_judged;
+    for (LatencySaccade& sac : loop.saccades) sac.frames_not_judged += !sac.converged_ms && sac.landing_s < until_s ? 1 : 0;
   }
 };
 
@@ -196,7 +317,7 @@ LatencyLoop run_whole_frame(const LatencyRun& run, const Segment& s, const Laten
     lf.shown_s = shown_at(t, cost, period, loop.refreshes_missed);
     lf.gaze_px = f.gaze_px;
     loop.timeline.push_back(lf);
-    screen.show(s, loop, std::move(f.color), lf.shown_s, true);
+    screen.show(s, loop, std::move(f.color), lf.shown_s, glm::ivec2(p.render.width, p.render.height));
     t = lf.shown_s;
   }
   screen.finish(s, loop, INFINITY);
@@ -250,6 +371,7 @@ LatencyLoop run_deadline(const LatencyRun& run, const Segment& s, const LatencyP
     const ThreadTimes threads_before = wall ? read_thread_times() : ThreadTimes{};
     const ThreadTimes others_before = wall ? read_watched(watch) : ThreadTimes{};
     const double faults_before = wall ? page_faults() : NAN;
+    if (p.before_frame) p.before_frame(rt, static_cast<int>(frame_ms.size()));
     LoopFrame f = rt.frame(run.camera);
     frame_ms.push_back(f.cost_ms);
     loop.frames_late += f.late ? 1 : 0;
@@ -276,10 +398,10 @@ LatencyLoop run_deadline(const LatencyRun& run, const Segment& s, const LatencyP
     lf.start_s = t;
     lf.cost_ms = f.cost_ms;
     lf.shown_s = shown_at(t, f.cost_ms, period, loop.refreshes_missed);
-    lf.gaze_px = f.gaze_px / rt.scale();
+    lf.gaze_px = f.gaze_px / f.scale;
     lf.predicted = f.predicted;
     lf.rays = f.rays;
-    lf.scale = rt.scale();
+    lf.scale = f.scale;  // (rt.scale() may be the next frame's, a lower size decided)
     lf.fovea_converged = f.fovea_converged;
     lf.sweeps = f.sweeps;
     if (wall) {
@@ -289,7 +411,7 @@ LatencyLoop run_deadline(const LatencyRun& run, const Segment& s, const LatencyP
     }
     if (f.predicted) predictions.emplace_back(t, lf.gaze_px);
     loop.timeline.push_back(lf);
-    rt.recycle(screen.show(s, loop, std::move(f.color), lf.shown_s, rt.scale() == 1.0));
+    rt.recycle(screen.show(s, loop, std::move(f.color), lf.shown_s, rt.traced_size(), rt.traced_pixels()));
     t = lf.shown_s;
   }
   screen.finish(s, loop, INFINITY);
@@ -395,6 +517,7 @@ nlohmann::json loop_json(const LatencyLoop& l) {
   j["frame_ms_p99"] = l.frame_ms_p99;
   j["resolution_scale"] = l.scale;
   j["frames_lowered"] = l.frames_lowered;
+  j["frames_not_judged"] = l.frames_not_judged;
   j["saccades"] = nlohmann::json::array();
   for (const LatencySaccade& s : l.saccades) {
     nlohmann::json js;
@@ -588,17 +711,21 @@ LatencyReport run_latency_bench(const LatencyRun& run, const std::vector<Recordi
   RenderParams full = p.render;
   full.mode = RenderMode::full;
   full.gaze_px.reset();
-  FrameOptions apart;
-  apart.outputs = {false, false, true};
-  apart.use_history = false;
   say(fmt::format("references: two full frames of {} rays per pixel at {}x{}", p.render.foveation.max_rays, p.render.width,
                   p.render.height));
-  full.seed = p.render.seed + 1000;
-  const Frame reference = run.renderer->render(run.camera, full, apart);
-  full.seed = p.render.seed + 2000;
-  apart.outputs = FrameOutputs::colour_only();
-  const Image ref2 = run.renderer->render(run.camera, full, apart).color;
-  const GBuffer& g = reference.gbuffer;
+  const References reference = trace_references(run, p, glm::ivec2(p.render.width, p.render.height));
+  const GBuffer& g = reference.g;
+  // … and at the smaller sizes a deadline loop traces its view at (a size growing back), on first use
+  std::map<std::pair<int, int>, References> smaller;
+  const auto references_at = [&](glm::ivec2 size) -> const References& {
+    auto [at, fresh] = smaller.try_emplace({size.x, size.y});
+    if (fresh) {
+      say(fmt::format("references at {}x{}, a size a deadline loop traced its view at: two full frames of {} rays per pixel", size.x,
+                      size.y, p.render.foveation.max_rays));
+      at->second = trace_references(run, p, size);
+    }
+    return at->second;
+  };
   const Bounds bounds = run.scene->bounds();
   FoveationMaps all = foveation_maps(full, glm::dvec2(p.render.width * 0.5, p.render.height * 0.5));
   std::vector<Ray> sample;
@@ -636,8 +763,10 @@ LatencyReport run_latency_bench(const LatencyRun& run, const std::vector<Recordi
     Segment s = make_segment(rec, p);
     if (p.timeline_saccade && &rec == &recordings.front() && !s.saccades.empty())
       s.drawn = std::min(*p.timeline_saccade, s.saccades.size() - 1);
-    s.ref = reference.color;
-    s.ref2 = ref2;
+    s.ref = reference.ref;
+    s.ref2 = reference.ref2;
+    s.render = p.render;
+    s.references_at = references_at;
     for (LatencySaccade& sac : s.saccades) {
       s.masks.push_back(fovea_mask(p.render, g, sac.landing_px, s.ref, s.ref2));
       const double rays = static_cast<double>(s.masks.back().pixels.size()) * p.render.foveation.max_rays;
@@ -671,7 +800,10 @@ LatencyReport run_latency_bench(const LatencyRun& run, const std::vector<Recordi
       LatencyLoop loop = name == "whole-frame" ? run_whole_frame(run, s, p, budget, model_rate, model_fixed)
                                                : run_deadline(run, s, p, budget, name, model_rate, model_fixed, watch);
       say(fmt::format("  {}: {} frames ({} late{}), median landing → converged fovea {} ms ({:.1f} s)", name, loop.frames, loop.frames_late,
-                      loop.frames_lowered > 0 ? fmt::format(", {} at a lowered size, not judged", loop.frames_lowered) : "",
+                      loop.frames_lowered > 0
+                          ? fmt::format(", {} at a lowered size{}", loop.frames_lowered,
+                                        loop.frames_not_judged > 0 ? fmt::format(", {} of them not judged", loop.frames_not_judged) : "")
+                          : "",
                       ms_or_dash(loop.median_converged_ms()), timer.ms() / 1000));
       out.loops.push_back(std::move(loop));
     }
@@ -740,22 +872,27 @@ LatencyReport run_latency_bench(const LatencyRun& run, const std::vector<Recordi
       jr[l.name] = loop_json(l);
     }
     md += "\n";
-    // Frames at a lowered size are not judged: a landing that waited through them may have had its
-    // fovea within noise sooner than its figure says
+    // Frames at a lowered size: judged against references traced at the size of the view each comes
+    // from, on the pixels it shows; any not judged (a frame whose pixels the loop did not say) are
+    // counted, and a landing that waited through them may have had its fovea within noise sooner
+    // than its figure says
     std::string lowered;
     for (const LatencyLoop& l : r.loops) {
       if (l.frames_lowered == 0) continue;
       size_t waited = 0;
       for (const LatencySaccade& sac : l.saccades) waited += sac.frames_not_judged > 0 ? 1 : 0;
-      lowered += fmt::format("{}{}: {} of {} frames, {} landing{} waiting through them", lowered.empty() ? "" : "; ", l.name,
-                             l.frames_lowered, l.frames, waited, waited == 1 ? "" : "s");
+      lowered += fmt::format("{}{}: {} of {} frames{}", lowered.empty() ? "" : "; ", l.name, l.frames_lowered, l.frames,
+                             l.frames_not_judged > 0 ? fmt::format(" ({} not judged, {} landing{} waiting through them)",
+                                                                   l.frames_not_judged, waited, waited == 1 ? "" : "s")
+                                                     : std::string());
     }
     if (!lowered.empty())
       md += fmt::format(
-          "Frames at a lowered size, where the loop's fixed part did not fit the budget, are not judged (the references are {}x{}; "
-          "`frames_not_judged` per saccade in the JSON): {}. Those landings' times count from the first full-size frame with the fovea "
-          "within noise (docs/realtime.md).\n\n",
-          p.render.width, p.render.height, lowered);
+          "Frames at a lowered size, where the loop's fixed part did not fit the budget: {}. Each is judged against references traced "
+          "at the size of the view it comes from ({}x{}, or a smaller size the loop traced a view at, growing back: traced for them), "
+          "on the pixels it shows, each against the references at the pixel of that view whose surface it shows (`frames_lowered`, "
+          "`frames_not_judged` in the JSON; docs/realtime.md).\n\n",
+          lowered, p.render.width, p.render.height);
     // What a predictor gains in the median over the loop without one, beside a third of the median
     // saccade (the gain the real-time issue asks for: docs/realtime.md), and a perfect one's
     const auto median_of = [&](const char* name) -> std::optional<double> {

@@ -55,6 +55,9 @@ struct LatencyParams {
   // The first recording's judged saccade a timeline picture will draw (the last where there are
   // fewer): each frame also judges its fovea (LatencyFrame::drawn_error). Unset: no picture
   std::optional<size_t> timeline_saccade;
+  // (tests) Called before each frame of a deadline loop with the frame's index in its segment: a
+  // budget changed mid-segment, as an application's own work changes what it leaves the loop
+  std::function<void(RealtimeLoop&, int)> before_frame;
 };
 // Check the parameters; throws Error naming the option.
 void validate(const LatencyParams& params);
@@ -69,8 +72,8 @@ struct LatencySaccade {
   double model_ray_bound_ms = NAN;            // model clock: … / the model's rate (the rays it allows)
   double fixation_ms = 0;                     // landing → the eye's next saccade or blink (any size), or the recording's end
   std::optional<double> predicted_error_deg;  // deadline+prediction: the last prediction shown before the landing, from it
-  // Frames on screen after the landing, before its fovea converged, at a lowered size: not judged
-  // (the references are at the full size), so converged_ms may be later than the eye saw it
+  // Frames on screen after the landing, before its fovea converged, that were not judged
+  // (LatencyLoop::frames_not_judged), so that converged_ms may be later than the eye saw it
   int frames_not_judged = 0;
 };
 
@@ -80,7 +83,8 @@ struct LatencyFrame {  // one shown frame, for the timeline picture
   glm::dvec2 gaze_px{0};  // where the fovea was placed
   bool predicted = false;
   // The loop's own account (deadline loops): the AO rays it traced, its size (a share of the
-  // references' width; a frame below 1 is not judged), its fovea's converged share, and on the wall
+  // references' width; a frame below 1 is judged as LatencyLoop::frames_lowered says), its fovea's
+  // converged share, and on the wall
   // clock the time its foveation maps (with the estimate of the pixels without rays), its planning
   // (choosing the fovea's rays, and its sweeps over every pixel for the periphery's or those ahead)
   // and its rays took
@@ -132,8 +136,13 @@ struct LatencyLoop {
   double budget_ms = 0;
   int frames = 0, frames_late = 0, refreshes_missed = 0;
   double frame_ms_p50 = 0, frame_ms_p99 = 0;
-  double scale = 1;        // the deadline loops' resolution scale
-  int frames_lowered = 0;  // shown at a lowered size, so not judged (LatencySaccade::frames_not_judged)
+  double scale = 1;  // the deadline loops' resolution scale
+  // Frames shown at a lowered size: each judged against references traced at the size of the view
+  // it comes from (the view traced last: RealtimeLoop::traced_size; at a smaller one, references are
+  // traced there on first use), on the pixels it shows, each against the references at the pixel
+  // of that view whose surface it shows (RealtimeLoop::traced_pixels). Frames not judged: those
+  // whose pixels the loop did not say (none expected; counted so that none goes unsaid)
+  int frames_lowered = 0, frames_not_judged = 0;
   std::vector<LatencySaccade> saccades;
   std::vector<LatencyFrame> timeline;
   std::vector<LatencyFramePart> late;  // the deadline loops' late frames with where their pause fell (wall clock)

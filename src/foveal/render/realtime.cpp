@@ -314,6 +314,8 @@ bool RealtimeLoop::new_view(const Camera& camera, uint64_t& kept_pixels) {
   forget_ = false;
   gbuffer_ = renderer_.surfaces(camera, params_.width, params_.height);
   ++gbuffer_version_;
+  traced_size_ = glm::ivec2(params_.width, params_.height);
+  traced_pixels_.reset();
   // What the view's first rays would otherwise pay in the frame after it: the device's copy of the
   // surfaces, and room for a task per pixel
   renderer_.prepare_ao_batches(gbuffer_, gbuffer_version_);
@@ -816,6 +818,12 @@ uint32_t RealtimeLoop::Footprints::source(size_t x, size_t y, const Rays& rays) 
   return static_cast<uint32_t>(best);
 }
 
+std::shared_ptr<const std::vector<uint32_t>> RealtimeLoop::lowered_pixels(std::vector<uint32_t> source) const {
+  if (traced_pixels_)
+    for (uint32_t& i : source) i = (*traced_pixels_)[i];
+  return std::make_shared<const std::vector<uint32_t>>(std::move(source));
+}
+
 void RealtimeLoop::lower_in_place(uint64_t& kept_pixels) {
   const double scale = *lower_to_;
   lower_to_.reset();
@@ -839,6 +847,7 @@ void RealtimeLoop::lower_in_place(uint64_t& kept_pixels) {
     for (size_t y = r.begin(); y != r.end(); ++y)
       for (size_t x = 0; x < w; ++x) source[y * w + x] = footprints.source(x, y, *this);
   });
+  traced_pixels_ = lowered_pixels(source);  // (a copy: the scratch is the loop's)
   auto gather = [&](auto& v) {
     if (v.size() != big_n) return;  // (not held for this view)
     for (size_t i = 0; i < n; ++i) v[i] = v[source[i]];
@@ -939,6 +948,7 @@ void RealtimeLoop::start_rebuild(double scale, std::string why, bool lowering) {
     r.footprints = Footprints(static_cast<size_t>(params_.width), static_cast<size_t>(params_.height), static_cast<size_t>(r.width),
                               static_cast<size_t>(r.height));
     r.source.reserve(n);
+    if (traced_pixels_) r.traced.reserve(n);
   }
   rebuild_ = std::move(r);
 }
@@ -997,6 +1007,7 @@ void RealtimeLoop::advance_rebuild(const Timer& frame_timer, double until_ms, in
       // point, shading and eye ray its larger pixel's, the maps evaluated at the gaze
       const size_t e = b + static_cast<size_t>(rows) * w;
       r.source.resize(e);
+      if (traced_pixels_) r.traced.resize(e);
       GBuffer& g = r.gbuffer;
       g.prim.resize(e);
       g.depth.resize(e);
@@ -1009,6 +1020,7 @@ void RealtimeLoop::advance_rebuild(const Timer& frame_timer, double until_ms, in
         for (size_t i = range.begin(); i != range.end(); ++i) {
           const uint32_t from = r.footprints.source(i % w, i / w, *this);
           r.source[i] = from;
+          if (traced_pixels_) r.traced[i] = (*traced_pixels_)[from];
           g.prim[i] = gbuffer_.prim[from];
           g.position[i] = gbuffer_.position[from];
           g.normal[i] = gbuffer_.normal[from];
@@ -1109,6 +1121,13 @@ void RealtimeLoop::adopt_rebuild(uint64_t& kept_pixels) {
   gbuffer_ = std::move(r.gbuffer);
   ++gbuffer_version_;
   renderer_.prepare_ao_batches(gbuffer_, gbuffer_version_);
+  // A size grown back was traced; a lowered one's pixels of the view traced last were gathered with it
+  if (!r.lowering) {
+    traced_size_ = glm::ivec2(r.width, r.height);
+    traced_pixels_.reset();
+  } else {
+    traced_pixels_ = std::make_shared<const std::vector<uint32_t>>(traced_pixels_ ? std::move(r.traced) : std::move(r.source));
+  }
   lit_ = std::move(r.lit);
   ambient_ = std::move(r.ambient);
   ray_x_ = std::move(r.ray_x);
@@ -1344,6 +1363,7 @@ LoopFrame RealtimeLoop::frame(const Camera& camera) {
   out.rays_end_ms = timer.ms();
   const Timer finish_timer;
   compose(out.color);
+  out.scale = scale_;
   out.compose_ms = finish_timer.ms();
   size_t done = 0;
   for (const uint32_t i : fovea_) done += converged(i) ? 1 : 0;

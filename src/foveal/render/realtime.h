@@ -54,6 +54,7 @@
 #include <array>
 #include <chrono>
 #include <cmath>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -116,6 +117,7 @@ void validate(const LoopSettings& settings);
 struct LoopFrame {
   int index = 0;
   Image color;                                      // linear RGB at the loop's render size (params().width × height)
+  double scale = 1;                                 // that size as a share of the size asked for (scale() may be a next frame's)
   glm::dvec2 gaze_px{0};                            // where the fovea was placed, render pixels
   glm::dvec2 measured_px{0};                        // the latest measured gaze (render pixels; the image centre before any)
   bool predicted = false;                           // gaze_px is a predicted landing
@@ -312,6 +314,14 @@ class RealtimeLoop {
   const std::vector<float>& kept_open() const { return kept_open_; }
   const FoveationMaps& maps() const { return maps_; }
   const GBuffer& gbuffer() const { return gbuffer_; }
+  // The view whose surfaces were traced last (for a new camera, a size grown back): its size, and
+  // where the view in use was lowered from it (in place or over frames, each smaller pixel one of its
+  // footprint's larger pixels: lower_in_place), the pixel of it whose surface point, shading and eye
+  // ray each of its pixels shows (a view lowered again maps through the first); null where the view
+  // in use is the one traced. (bench latency judges a frame against references traced at that size,
+  // on the pixels it shows.)
+  glm::ivec2 traced_size() const { return traced_size_; }
+  std::shared_ptr<const std::vector<uint32_t>> traced_pixels() const { return traced_pixels_; }
   // How many estimates of the pixels without rays the loop has made (estimate_unreached; tests)
   uint64_t estimates_made() const { return estimates_made_; }
   // How many times a frame evaluated the maps at every pixel (update_maps; tests)
@@ -379,6 +389,8 @@ class RealtimeLoop {
   // fixed part alone passes the budget) and on the model clock; else taken a few rows at a time
   // while the larger view is still shown (start_rebuild's `lowering`)
   void lower_in_place(uint64_t& kept_pixels);
+  // traced_pixels() of a view lowered from the one in use, whose pixel i is its pixel source[i]
+  std::shared_ptr<const std::vector<uint32_t>> lowered_pixels(std::vector<uint32_t> source) const;
   // Which larger pixels each smaller pixel of a lowered size stands for: its footprint, those whose
   // nearest smaller pixel it is (one to a few along each axis), and the one nearest its centre
   struct Footprints {
@@ -422,7 +434,9 @@ class RealtimeLoop {
   LoopSettings settings_;
   std::optional<double> given_margin_ms_;  // the margin the settings gave, before a later budget's half bounded it
   double scale_ = 1;
-  std::optional<double> lower_to_;  // a still view's lower size, for the next frame to take (lower_in_place)
+  glm::ivec2 traced_size_{0};                                   // (traced_size())
+  std::shared_ptr<const std::vector<uint32_t>> traced_pixels_;  // (traced_pixels())
+  std::optional<double> lower_to_;                              // a still view's lower size, for the next frame to take (lower_in_place)
   std::string note_;
   LandingPredictor predictor_;
   std::optional<glm::dvec2> measured_px_;
@@ -514,6 +528,8 @@ class RealtimeLoop {
     bool lowering = false;
     Footprints footprints;         // (lowering)
     std::vector<uint32_t> source;  // (lowering) each pixel's larger pixel, row by row
+    // (lowering a view itself lowered) each pixel's pixel of the view traced last (traced_pixels())
+    std::vector<uint32_t> traced;
     // The view's first estimate of its pixels without rays (estimate_unreached's), from the rays it
     // keeps, made by rows: made as the view was taken over, with the maps evaluated everywhere, it
     // made that frame late at a budget of 4 ms (4.1–6.6 ms at 840×525 on two cores)

@@ -646,7 +646,9 @@ TEST(RealtimeLoop, ASmallerStillViewGrowsBackWhenTheBudgetLeavesItRoom) {
   ASSERT_NEAR(model.scale(), std::sqrt(0.5 * settings.budget_ms / 40), 1e-9);
   for (int k = 0; k < 5; ++k) model.frame(camera);
   EXPECT_NEAR(model.scale(), std::sqrt(0.5 * settings.budget_ms / 40), 1e-9);  // the budget as it was: no growth
-  model.set_budget_ms(40);                                                     // room for 0.707 of it
+  EXPECT_TRUE(model.traced_pixels());                                          // (lowered from the view traced at 320x200)
+  EXPECT_EQ(model.traced_size(), glm::ivec2(320, 200));
+  model.set_budget_ms(40);  // room for 0.707 of it
   model.frame(camera);
   EXPECT_NEAR(model.scale(), std::sqrt(0.5), 1e-9);
   EXPECT_NE(model.note().find("fits the budget again"), std::string::npos) << model.note();
@@ -657,6 +659,8 @@ TEST(RealtimeLoop, ASmallerStillViewGrowsBackWhenTheBudgetLeavesItRoom) {
   EXPECT_TRUE(model.note().empty()) << model.note();
   EXPECT_EQ(model.frame(camera).color.width, 320);
   EXPECT_FALSE(grown.late);
+  EXPECT_FALSE(model.traced_pixels());  // (the view traced at the size grown to)
+  EXPECT_EQ(model.traced_size(), glm::ivec2(320, 200));
 
   // The wall clock: a budget of 10 µs lowers the size at once (a still frame's fixed part, composing,
   // takes about 0.08 ms at 320x200); 200 ms brings it back, built over frames
@@ -677,6 +681,8 @@ TEST(RealtimeLoop, ASmallerStillViewGrowsBackWhenTheBudgetLeavesItRoom) {
     EXPECT_FALSE(f.late) << "frame " << frames << ": " << f.ms << " ms";
   }
   EXPECT_EQ(loop.scale(), 1.0) << "after " << frames << " frames";
+  EXPECT_FALSE(loop.traced_pixels());  // (built over frames: traced at the size grown to)
+  EXPECT_EQ(loop.traced_size(), glm::ivec2(320, 200));
   // The view grows back only once the small budgets have left the latest kBudgetFrames (a budget
   // that swings lowered the size and grew it back every second or so, with late frames each time)
   EXPECT_GE(frames, static_cast<int>(RealtimeLoop::kBudgetFrames) - small_budget);
@@ -722,6 +728,12 @@ void expect_taken_from_view(const RealtimeLoop& loop, const LoopFrame& lowered, 
       any[i] |= cast[b] > 0 ? 1 : 0;
       if (cast[b] > cast[sources[i]]) sources[i] = b;
     }
+  // … and says which: each pixel's pixel of the view before, the view traced last
+  EXPECT_EQ(loop.traced_size(), glm::ivec2(big_w, big_h));
+  const auto full = loop.traced_pixels();
+  ASSERT_TRUE(full);
+  ASSERT_EQ(full->size(), sources.size());
+  for (size_t i = 0; i < sources.size(); ++i) ASSERT_EQ((*full)[i], sources[i]) << i;
   size_t with_rays = 0, footprints_with_rays = 0, fovea = 0, same_colour = 0;
   double colour_diff = 0;
   for (int y = 0; y < h; ++y)
@@ -751,6 +763,23 @@ void expect_taken_from_view(const RealtimeLoop& loop, const LoopFrame& lowered, 
   EXPECT_GT(lowered.fovea_converged, 0.99);
 }
 
+// A view lowered twice from `before` (the view traced last): each of its pixels names the one of
+// `before` whose surface it shows, a different one each
+void expect_traced_pixels(const RealtimeLoop& loop, const GBuffer& before) {
+  EXPECT_EQ(loop.traced_size(), glm::ivec2(before.width, before.height));
+  const auto full = loop.traced_pixels();
+  ASSERT_TRUE(full);
+  ASSERT_EQ(full->size(), loop.gbuffer().prim.size());
+  for (size_t i = 0; i < full->size(); ++i) {
+    ASSERT_LT((*full)[i], before.prim.size());
+    ASSERT_EQ(loop.gbuffer().prim[i], before.prim[(*full)[i]]) << i;
+    if (before.hit((*full)[i])) ASSERT_EQ(loop.gbuffer().position[i], before.position[(*full)[i]]) << i;
+  }
+  std::vector<uint32_t> distinct = *full;  // (disjoint footprints: one pixel each)
+  std::sort(distinct.begin(), distinct.end());
+  EXPECT_EQ(std::adjacent_find(distinct.begin(), distinct.end()), distinct.end());
+}
+
 // A still view whose fixed part outgrows the budget (an experiment that leaves the loop less of the
 // refresh) is made smaller from the view at hand: no surface traced (traced, that frame was late by
 // 34–47 ms at 840×525 on two cores), each smaller pixel one of the larger pixels nearest it — its
@@ -777,11 +806,13 @@ TEST(RealtimeLoop, AStillViewsSizeIsLoweredFromTheViewAtHandWithoutTracingIt) {
   const GBuffer before = loop.gbuffer();
   const std::vector<uint32_t> cast = loop.cast(), open = loop.open();
   const double scale = loop.scale();
+  EXPECT_EQ(last_big.scale, 1.0);  // (the frame's own size: the loop's scale() is the next frame's)
   ASSERT_NEAR(scale, std::sqrt(0.5 * 5 / 4.0), 1e-9);
   EXPECT_NE(loop.note().find("frame budget"), std::string::npos) << loop.note();
   const LoopFrame lowered = loop.frame(camera);
   EXPECT_TRUE(lowered.lowered);
   EXPECT_TRUE(lowered.new_view);
+  EXPECT_EQ(lowered.scale, scale);
   EXPECT_EQ(renderer.traced, traced) << "the smaller view was traced";
   const int w = lowered.color.width, h = lowered.color.height;
   EXPECT_EQ(w, static_cast<int>(std::lround(320 * scale)));
@@ -796,6 +827,15 @@ TEST(RealtimeLoop, AStillViewsSizeIsLoweredFromTheViewAtHandWithoutTracingIt) {
     EXPECT_EQ(f.color.width, w);
   }
   EXPECT_EQ(renderer.traced, traced);
+  // Lowered again, from the smaller view: each pixel still names the pixel of the view traced last
+  // whose surface it shows (through the first lowering)
+  loop.set_budget_ms(3);  // (the fixed part, 4 ms × the pixels' share: over 60 % of it)
+  loop.frame(camera);
+  const LoopFrame again = loop.frame(camera);
+  ASSERT_TRUE(again.lowered);
+  ASSERT_LT(again.color.width, w);
+  EXPECT_EQ(renderer.traced, traced);
+  expect_traced_pixels(loop, before);
   // A camera that moves while a lowering waits traces its view at the lower size
   RealtimeLoop moving(renderer, box(), loop_params(320, 200, 64), settings);
   for (int k = 0; k < 3; ++k) moving.frame(camera);
@@ -810,6 +850,8 @@ TEST(RealtimeLoop, AStillViewsSizeIsLoweredFromTheViewAtHandWithoutTracingIt) {
   EXPECT_TRUE(f.new_view);
   EXPECT_EQ(renderer.traced, traced_before_move + 1);
   EXPECT_EQ(f.color.width, static_cast<int>(std::lround(320 * moving.scale())));
+  EXPECT_FALSE(moving.traced_pixels());  // (the view traced last itself, at the lower size)
+  EXPECT_EQ(moving.traced_size(), glm::ivec2(f.color.width, f.color.height));
 }
 
 // On the wall clock, a still view whose frames at the larger size still end in time (their fixed part
@@ -858,6 +900,21 @@ TEST(RealtimeLoop, AStillViewWhoseFramesStillFitTakesItsLowerSizeOverFrames) {
   expect_taken_from_view(loop, f, last_big, before, cast, open);
   for (int k = 0; k < 3; ++k) EXPECT_FALSE(loop.frame(camera).new_view);  // (the smaller view's fixed part fits)
   EXPECT_EQ(renderer.traced, traced);
+  // Lowered again over frames, from the smaller view (its fixed part, 12 ms × the pixels' share, over
+  // 60 % of 12 ms, within it less the margin): each pixel still names the pixel of the view traced
+  // last whose surface it shows, through the first lowering
+  loop.set_budget_ms(12);
+  int built_again = 0;
+  f = LoopFrame();
+  for (int k = 0; k < 200 && !f.lowered; ++k) {
+    f = loop.frame(camera);
+    built_again += f.rebuilding && !f.lowered ? 1 : 0;
+  }
+  ASSERT_TRUE(f.lowered);
+  EXPECT_GE(built_again, 1);
+  EXPECT_LT(loop.scale(), scale);
+  EXPECT_EQ(renderer.traced, traced);
+  expect_traced_pixels(loop, before);
 
   // The loops below: three frames with room for their fixed part, then 16.7 ms
   const auto start = [&](RealtimeLoop& l) {
