@@ -265,7 +265,7 @@ def main(argv=None) -> int:
                 own_ms = overhead * 1000 if len(rows) == 1 else 0.8 * own_ms + 0.2 * overhead * 1000
                 loop.budget_ms = max(4.0, 1000.0 / refresh_hz - own_ms - 1.0)
             row = {"flip": flip_index, "gaze_x": gaze_px[0], "gaze_y": gaze_px[1], "sample_time_s": sample_time,
-                   "fovea_x": frame.gaze[0] / loop.scale, "fovea_y": frame.gaze[1] / loop.scale,
+                   "fovea_x": frame.gaze[0] / frame.scale, "fovea_y": frame.gaze[1] / frame.scale,
                    "predicted": int(frame.predicted), "fovea": frame.fovea,
                    "fovea_converged": round(frame.fovea_converged, 4), "rays": frame.rays,
                    "render_start_s": start, "render_ms": 1000 * (rendered - start), "library_ms": frame.ms,

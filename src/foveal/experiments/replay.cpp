@@ -106,7 +106,7 @@ class LoopMaker {
   const Frame& make(const Camera& view, ReplayFrame& info) {
     loop_.recycle(std::move(frame_.color));  // the last frame is written: composed into again
     LoopFrame f = loop_.frame(view);
-    info.render_gaze = f.gaze_px / loop_.scale();
+    info.render_gaze = f.gaze_px / f.scale;  // (the frame's own size: the loop's scale() may be the next frame's)
     info.ao_rays = f.rays;
     info.ms = f.ms;
     info.fovea_converged = f.fovea_converged;
@@ -115,7 +115,7 @@ class LoopMaker {
     info.predicted = f.predicted;
     // Every frame at the size asked for (a video needs one size; the gaze columns are in its
     // pixels): where the loop rendered smaller, scaled up as a display would show it
-    info.scale = loop_.scale();
+    info.scale = f.scale;
     if (info.scale < min_scale_) {
       min_scale_ = info.scale;
       scale_note_ = loop_.note();

@@ -106,11 +106,15 @@ TEST(Replay, RealtimeSummarySaysTheSmallestSizeAndWhy) {
   s.duration_s = 0.5;
   const Display display;
   const std::unique_ptr<FrameRenderer> renderer = make_frame_renderer(box, ComputeDevice::cpu);
+  std::vector<ReplayFrame> frames;
   const auto run = [&](const Recording& recording) {
     double smallest = 1;
+    frames.clear();
     const ReplaySummary summary =
-        replay_recording_realtime(recording, display, *renderer, box, box.cameras.front(), p, s,
-                                  [&](const ReplayFrame& f, const Frame&) { smallest = std::min(smallest, f.scale); });
+        replay_recording_realtime(recording, display, *renderer, box, box.cameras.front(), p, s, [&](const ReplayFrame& f, const Frame&) {
+          smallest = std::min(smallest, f.scale);
+          frames.push_back(f);
+        });
     EXPECT_EQ(summary.min_scale, smallest);
     return summary;
   };
@@ -125,6 +129,10 @@ TEST(Replay, RealtimeSummarySaysTheSmallestSizeAndWhy) {
   EXPECT_LT(lowered.min_scale, 1);
   EXPECT_NE(lowered.scale_note.find("of the 0.02 ms frame budget at 168x105: rendering at"), std::string::npos) << lowered.scale_note;
   EXPECT_GT(lowered.late, 0);
+  // … and each frame's fovea is where the gaze was, at the size asked for, the frame that chose the
+  // smaller size included (its own size, not the next frame's: 50 px read as 50 / 0.6)
+  for (const ReplayFrame& f : frames)
+    if (f.t_s < 0.55) EXPECT_NEAR(f.render_gaze.x, 50, 1.5) << f.t_s << " at scale " << f.scale;
   // 60-Hz samples: the predictor's note reaches the summary
   s.budget_ms.reset();
   const ReplaySummary slow = run(two_fixations(60));

@@ -472,10 +472,10 @@ void ViewSession::realtime_frame() {
                                                 f.kept_pixels > 0 ? fmt::format(": {} px kept their rays", f.kept_pixels) : "")
                         : f.new_view && f.kept_pixels > 0 ? fmt::format(", a new view: {} px kept their rays", f.kept_pixels)
                                                           : "",
-                        loop_->scale() < 1 ? ", " + loop_->note() : "",
+                        f.scale < 1 ? ", " + loop_->note() : "",
                         f.rebuilding ? fmt::format(", building the view at {}x{}", f.rebuild_width, f.rebuild_height) : "",
                         gaze_note.empty() ? "" : "; " + gaze_note, budget_note);
-  r.gaze = f.gaze_px / loop_->scale();
+  r.gaze = f.gaze_px / f.scale;  // (the frame's own size: the loop's scale() may be the next frame's)
   r.stats.ao_rays = f.rays;
   r.stats.ao_ms = f.trace_ms;
   r.stats.total_ms = f.ms;
