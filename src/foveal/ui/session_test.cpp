@@ -134,6 +134,10 @@ TEST(ViewSession, ALoweredSizeIsNamedOnTheStageLine) {
     session.update(kNone);
     if (const std::string stage = session.status().stage; stage.find("a smaller size from the view at hand") != std::string::npos)
       lowered = stage;
+    // the shown image's gaze at the size asked for, the frame that chose the smaller size included
+    // (read at its own size, not the next frame's)
+    EXPECT_NEAR(session.status().render_gaze.x, 50, 1e-6) << k;
+    EXPECT_NEAR(session.status().render_gaze.y, 40, 1e-6) << k;
   }
   ASSERT_FALSE(lowered.empty()) << session.status().stage;
   EXPECT_NE(lowered.find("rendering at"), std::string::npos) << lowered;
