@@ -36,10 +36,13 @@ struct FoveaMask {
   double noise_mse = 0, noise_rel_se = 0;
 };
 
-double pixel_squared_error(const Image& a, const Image& b, size_t i) {
+// Pixel i of `a` against pixel j of `b` (the same pixel where j is not given): mean squared error
+// over the channels.
+double pixel_squared_error(const Image& a, const Image& b, size_t i, std::optional<size_t> j = std::nullopt) {
+  const size_t bi = j.value_or(i);
   double sq = 0;
-  for (int c = 0; c < 3; ++c) {
-    const double d = static_cast<double>(a.pixels[i * 3 + static_cast<size_t>(c)]) - b.pixels[i * 3 + static_cast<size_t>(c)];
+  for (size_t c = 0; c < 3; ++c) {
+    const double d = static_cast<double>(a.pixels[i * 3 + c]) - b.pixels[bi * 3 + c];
     sq += d * d;
   }
   return sq / 3;
@@ -68,17 +71,24 @@ FoveaMask fovea_mask(const RenderParams& params, const GBuffer& g, glm::dvec2 la
   return m;
 }
 
-// The fovea's RMSE against the reference as a multiple of the reference's noise, and whether it
-// is within it (ratio ≤ 1 + 2 standard errors).
+// The fovea's RMSE as a multiple of the reference's noise over the same pixels (squared errors
+// `e`; the noise's mean and relative standard error), and whether it is within it (ratio ≤ 1 + 2
+// standard errors).
+std::pair<double, bool> within_noise(const std::vector<double>& e, double noise_mse, double noise_rel_se) {
+  if (e.empty() || !(noise_mse > 0)) return {NAN, false};
+  const auto [mse, rel_se] = mse_and_rel_se(e);
+  const double ratio = std::sqrt(mse / noise_mse);
+  const double se = ratio * std::hypot(rel_se, noise_rel_se);
+  return {ratio, ratio <= 1.0 + 2.0 * se};
+}
+
+// … of a frame at the references' size, over the mask's pixels.
 std::pair<double, bool> fovea_error(const FoveaMask& m, const Image& image, const Image& ref) {
-  if (m.pixels.empty() || !(m.noise_mse > 0) || image.width != ref.width || image.height != ref.height) return {NAN, false};
+  if (image.width != ref.width || image.height != ref.height) return {NAN, false};
   std::vector<double> e;
   e.reserve(m.pixels.size());
   for (uint32_t i : m.pixels) e.push_back(pixel_squared_error(image, ref, i));
-  const auto [mse, rel_se] = mse_and_rel_se(e);
-  const double ratio = std::sqrt(mse / m.noise_mse);
-  const double se = ratio * std::hypot(rel_se, m.noise_rel_se);
-  return {ratio, ratio <= 1.0 + 2.0 * se};
+  return within_noise(e, m.noise_mse, m.noise_rel_se);
 }
 
 // A view at a lowered size whose pixel j shows the surface of pixel (*pixels)[j] of the view traced
@@ -116,20 +126,11 @@ std::pair<double, bool> lowered_fovea_error(const std::vector<std::pair<uint32_t
   e.reserve(pairs.size());
   noise.reserve(pairs.size());
   for (const auto& [j, i] : pairs) {
-    double sq = 0;
-    for (size_t c = 0; c < 3; ++c) {
-      const double d = static_cast<double>(image.pixels[size_t{j} * 3 + c]) - ref.pixels[size_t{i} * 3 + c];
-      sq += d * d;
-    }
-    e.push_back(sq / 3);
+    e.push_back(pixel_squared_error(image, ref, j, i));
     noise.push_back(pixel_squared_error(ref2, ref, i));
   }
   const auto [noise_mse, noise_rel_se] = mse_and_rel_se(noise);
-  if (e.empty() || !(noise_mse > 0)) return {NAN, false};
-  const auto [mse, rel_se] = mse_and_rel_se(e);
-  const double ratio = std::sqrt(mse / noise_mse);
-  const double se = ratio * std::hypot(rel_se, noise_rel_se);
-  return {ratio, ratio <= 1.0 + 2.0 * se};
+  return within_noise(e, noise_mse, noise_rel_se);
 }
 
 // Angle between two render positions as seen on the display, degrees.
