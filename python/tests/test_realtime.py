@@ -339,7 +339,7 @@ def test_bench_latency_from_python_equals_the_command_lines(cli, box, tmp_path):
         # Each frame's own account: rays, size, the fovea's converged share (the model clock times no part)
         frame = a[loop]["timeline"][-1]
         assert frame["scale"] == 1 and 0 <= frame["fovea_converged"] <= 1
-        assert frame["maps_ms"] is None and frame["plan_ms"] is None and frame["trace_ms"] is None
+        assert frame["maps_ms"] is None and frame["plan_ms"] is None and frame["trace_ms"] is None and frame["compose_ms"] is None
         assert sum(f["rays"] for f in a[loop]["timeline"]) > 0 and sum(f["sweeps"] for f in a[loop]["timeline"]) > 0
         assert len(a[loop]["saccades"]) == 2 and a[loop]["frames_late"] == 0
         assert a[loop]["frames_left_behind"] == a[loop]["late_had_they_waited"] == 0  # (the model clock waits for every chunk)

@@ -409,6 +409,7 @@ LatencyLoop run_deadline(const LatencyRun& run, const Segment& s, const LatencyP
       lf.maps_ms = f.maps_ms;
       lf.plan_ms = f.plan_ms;
       lf.trace_ms = f.trace_ms;
+      lf.compose_ms = f.compose_ms;
     }
     if (f.predicted) predictions.emplace_back(t, lf.gaze_px);
     loop.timeline.push_back(lf);
@@ -548,6 +549,7 @@ nlohmann::json loop_json(const LatencyLoop& l) {
                              {"plan_ms", number_or_null(f.plan_ms)},
                              {"sweeps", f.sweeps},
                              {"trace_ms", number_or_null(f.trace_ms)},
+                             {"compose_ms", number_or_null(f.compose_ms)},
                              {"fovea_error", number_or_null(f.fovea_error)}});
   const auto median = l.median_converged_ms();
   j["median_landing_to_converged_ms"] = median ? nlohmann::json(*median) : nlohmann::json(nullptr);

@@ -86,11 +86,11 @@ struct LatencyFrame {  // one shown frame, for the timeline picture
   // references' width; a frame below 1 is judged as LatencyLoop::frames_lowered says), its fovea's
   // converged share, and on the wall
   // clock the time its foveation maps (with the estimate of the pixels without rays), its planning
-  // (choosing the fovea's rays, and its sweeps over every pixel for the periphery's or those ahead)
-  // and its rays took
+  // (choosing the fovea's rays, and its sweeps over every pixel for the periphery's or those ahead),
+  // its rays and composing its image (with the fovea's state) took
   uint64_t rays = 0;
   double scale = 1, fovea_converged = NAN;
-  double maps_ms = NAN, plan_ms = NAN, trace_ms = NAN;
+  double maps_ms = NAN, plan_ms = NAN, trace_ms = NAN, compose_ms = NAN;
   uint32_t sweeps = 0;
   double fovea_error = NAN;  // RMSE in the fovea of the saccade being followed, over the reference noise (NaN: none)
   // The same for the timeline picture's saccade (LatencyParams::timeline_saccade; NaN without one),

@@ -170,7 +170,7 @@ TEST(LatencyTimeline, EveryFrameJudgesTheDrawnSaccadesFovea) {
     for (const LatencyFrame& f : loop.timeline) {
       EXPECT_EQ(f.scale, 1.0);
       ASSERT_TRUE(f.fovea_converged >= 0 && f.fovea_converged <= 1) << f.shown_s;
-      EXPECT_TRUE(std::isnan(f.maps_ms) && std::isnan(f.plan_ms) && std::isnan(f.trace_ms));
+      EXPECT_TRUE(std::isnan(f.maps_ms) && std::isnan(f.plan_ms) && std::isnan(f.trace_ms) && std::isnan(f.compose_ms));
       rays += f.rays;
       sweeps += f.sweeps;
       (f.fovea_converged == 1 ? converged : refining) += 1;
@@ -180,7 +180,7 @@ TEST(LatencyTimeline, EveryFrameJudgesTheDrawnSaccadesFovea) {
     EXPECT_GT(converged, 0u);  // (a fovea converged, and a fresh one after each jump)
     EXPECT_GT(refining, 0u);
   }
-  // On the wall clock each frame says what its maps, its planning and its rays took
+  // On the wall clock each frame says what its maps, its planning, its rays and its composing took
   {
     LatencyParams wall = p;
     wall.clock = LoopClock::wall;
@@ -190,8 +190,8 @@ TEST(LatencyTimeline, EveryFrameJudgesTheDrawnSaccadesFovea) {
         bench_latency(scene, "builtin:box", scene.cameras.front(), ComputeDevice::cpu, 1, recordings, wall, [](const std::string&) {});
     size_t traced = 0, swept = 0;
     for (const LatencyFrame& f : timed.recordings.front().loops.front().timeline) {
-      ASSERT_TRUE(f.maps_ms >= 0 && f.plan_ms >= 0 && f.trace_ms >= 0) << f.shown_s;
-      EXPECT_LE(f.maps_ms + f.plan_ms + f.trace_ms, f.cost_ms);
+      ASSERT_TRUE(f.maps_ms >= 0 && f.plan_ms >= 0 && f.trace_ms >= 0 && f.compose_ms > 0) << f.shown_s;
+      EXPECT_LE(f.maps_ms + f.plan_ms + f.trace_ms + f.compose_ms, f.cost_ms);
       traced += f.rays > 0 && f.trace_ms > 0;
       swept += f.sweeps > 0 && f.plan_ms > 0;
     }

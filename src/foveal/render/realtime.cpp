@@ -438,6 +438,23 @@ void RealtimeLoop::update_maps(glm::dvec2 gaze_px, bool predicted) {
   }
   if (boxed) {
     maps_box_ = box;
+    // A pixel may now lack the rays its n(E) asks for only in the box: where none lacked any before,
+    // the estimate of the pixels without rays (a pass over every pixel) is made only where a pixel
+    // of the box now does. (Each drift of a fixation made one, at a converged view for nothing.)
+    if (!unreached_possible_) {
+      std::atomic<bool> lacking{false};
+      tbb::parallel_for(tbb::blocked_range<int>(box.y, box.w, 8), [&](const tbb::blocked_range<int>& r) {
+        for (int y = r.begin(); y != r.end() && !lacking.load(std::memory_order_relaxed); ++y) {
+          const size_t row = static_cast<size_t>(y) * static_cast<size_t>(w);
+          for (size_t i = row + static_cast<size_t>(box.x), e = row + static_cast<size_t>(box.z); i < e; ++i)
+            if (maps_.rays[i] > 0 && total_cast(i) == 0 && gbuffer_.hit(i)) {
+              lacking.store(true, std::memory_order_relaxed);
+              break;
+            }
+        }
+      });
+      unreached_possible_ = lacking;
+    }
     periphery_keys_.stale_box(box, static_cast<size_t>(w));
     ahead_keys_.stale_box(box, static_cast<size_t>(w));
   } else {
@@ -447,7 +464,8 @@ void RealtimeLoop::update_maps(glm::dvec2 gaze_px, bool predicted) {
     maps_full_gaze_ = gaze_px;
     maps_box_ = glm::ivec4(0, 0, w, h);
     ++maps_everywhere_;
-    reached_ = true;  // (n(E) changed everywhere: a pixel may now lack rays it did not need)
+    reached_ = true;             // (n(E) changed everywhere: a pixel may now lack rays it did not need)
+    unreached_possible_ = true;  // (estimate_unreached looks for pixels without rays)
     periphery_keys_.stale_all();
     ahead_keys_.stale_all();
   }
@@ -471,7 +489,6 @@ void RealtimeLoop::collect_fovea(glm::dvec2 gaze_px, bool predicted) {
   // fovea's middle rows in three frames, and converged two frames after the loop without
   // prediction). The centre is where the landing most likely is.
   maps_predicted_ = predicted;
-  unreached_possible_ = true;  // (new maps, a new view: estimate_unreached looks for pixels without rays)
   if (predicted) {
     auto ring = [&](uint32_t i) {
       const double dx = static_cast<double>(i % w) + 0.5 - gaze_px.x, dy = static_cast<double>(i / w) + 0.5 - gaze_px.y;

@@ -1903,6 +1903,43 @@ TEST(RealtimeLoop, TheSweepsBucketsAreComputedAgainWhereverTheyMayHaveChanged) {
   }
 }
 
+// Within a fixation the maps change in a box around the fovea. Where every pixel had the rays its
+// n(E) asks for, the estimate of the pixels without rays (a pass over every pixel) is made only where
+// a pixel of the box now lacks them: not at each drift, but where n(E) reaches 0 inside the box
+// (γ = 12: q^γ < 1/128 at q < 0.67; the box's edge is at q ≈ 0.6), and then the drift moves that edge
+TEST(RealtimeLoop, ADriftMakesAnEstimateOnlyWherePixelsOfItsBoxLackRays) {
+  const std::unique_ptr<FrameRenderer> renderer = make_frame_renderer(box(), ComputeDevice::cpu);
+  const Camera& camera = box().cameras.front();
+  auto estimates_at_drifts = [&](double gamma) {
+    RenderParams params = loop_params(320, 200, 64);
+    params.foveation.gamma = gamma;
+    const double ppd = pixels_per_degree(params.display) * params.width / params.display.res_x;
+    LoopSettings settings = model_clock(4000);
+    settings.rays_ahead = false;  // (else every pixel goes on to n_max, and none lacks rays)
+    RealtimeLoop loop(*renderer, box(), params, settings);
+    glm::dvec2 gaze(160, 100);
+    double t = 0;
+    LoopFrame f;
+    for (int k = 0; k < 300 && (k < 2 || f.rays > 0); ++k) {
+      loop.push_gaze(t += 1.0 / 60, gaze);
+      f = loop.frame(camera);
+    }
+    EXPECT_EQ(f.rays, 0u) << "the view did not converge";
+    int made = 0;
+    for (int k = 0; k < 4; ++k) {  // 0.2° a frame, and back: within kMapsStaleDeg of where they were evaluated everywhere
+      gaze.x += (k < 2 ? 0.2 : -0.2) * ppd;
+      loop.push_gaze(t += 1.0 / 60, gaze);
+      const uint64_t before = loop.estimates_made(), everywhere = loop.maps_everywhere();
+      f = loop.frame(camera);
+      EXPECT_EQ(loop.maps_everywhere(), everywhere) << "γ " << gamma << ", drift " << k << ": the maps everywhere";
+      made += loop.estimates_made() > before ? 1 : 0;
+    }
+    return made;
+  };
+  EXPECT_EQ(estimates_at_drifts(2), 0);   // n(E) > 0 throughout the box: no pixel of it lacks rays
+  EXPECT_GE(estimates_at_drifts(12), 1);  // the edge of n(E) > 0 moves with the drift, within the box
+}
+
 // A frame that traces a new view casts no rays ahead of the gaze: a moving camera's frames are the
 // same with them and without, even where each view converges within its frame (the frame that finds
 // every pixel converged ends its rays there, and the next is another view).
