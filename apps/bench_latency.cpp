@@ -52,6 +52,7 @@ int run_bench_latency(const BenchLatencyOptions& o) {
   p.margin_ms = o.loop.margin_ms;
   p.periphery_share = o.loop.periphery_share.value_or(kDefaultPeripheryShare);
   p.rays_ahead = !o.loop.no_rays_ahead;
+  p.min_scale = o.loop.min_scale.value_or(kDefaultMinScale);
   p.clock = parse_loop_clock(o.clock);
   p.model_rays_per_ms = o.model_rays_per_ms;
   p.model_fixed_ms = o.model_fixed_ms;

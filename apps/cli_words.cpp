@@ -57,6 +57,7 @@ constexpr std::array kOptions = std::to_array<ParameterName>({
     {"model_fixed_ms", "--model-fixed-ms"},
     {"margin_ms", "--margin-ms"},
     {"periphery_share", "--periphery-share"},
+    {"min_scale", "--min-scale"},
     {"threshold_ms", "--threshold-ms"},
     {"chunk_us", "--chunk-us"},
     {"device cuda", "--device cuda"},

@@ -95,9 +95,12 @@ void add_landing_option(CLI::App& command, std::string& landing, const std::stri
 // `needs`: what the options go with, for their help.
 struct LoopOptions {
   std::optional<double> margin_ms, periphery_share;
-  bool no_rays_ahead = false;  // --no-rays-ahead: a converged view casts nothing (LoopSettings::rays_ahead)
-  bool given() const { return margin_ms || periphery_share || no_rays_ahead; }
-  const char* given_name() const { return margin_ms ? "--margin-ms" : periphery_share ? "--periphery-share" : "--no-rays-ahead"; }
+  bool no_rays_ahead = false;       // --no-rays-ahead: a converged view casts nothing (LoopSettings::rays_ahead)
+  std::optional<double> min_scale;  // --min-scale: the smallest size the loop may render at (LoopSettings::min_scale)
+  bool given() const { return margin_ms || periphery_share || no_rays_ahead || min_scale; }
+  const char* given_name() const {
+    return margin_ms ? "--margin-ms" : periphery_share ? "--periphery-share" : no_rays_ahead ? "--no-rays-ahead" : "--min-scale";
+  }
 };
 void add_loop_options(CLI::App& command, LoopOptions& loop, const std::string& needs);
 // The predictor's parameters from --landing's text (the defaults where empty); `predicting`:

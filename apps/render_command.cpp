@@ -140,6 +140,11 @@ void add_loop_options(CLI::App& cmd, LoopOptions& loop, const std::string& needs
                needs +
                    "once every pixel has its n(E), cast nothing more (by default the frames' spare time, up to half of each budget, "
                    "takes every pixel on to n_max, nearest the gaze first, for where the eye lands next: docs/realtime.md)");
+  cmd.add_option("--min-scale", loop.min_scale,
+                 needs +
+                     "the smallest size the loop may render at where its base shading does not fit the budget, a share of the "
+                     "size asked for in (0, 1] (default 0.25; 1: the stimulus keeps its resolution throughout, and such frames "
+                     "come late instead, the loop saying so: docs/realtime.md)");
 }
 
 LandingParams resolve_landing(const std::string& text, bool predicting) {

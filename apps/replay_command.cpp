@@ -67,6 +67,7 @@ ReplaySettings replay_settings(const ReplayOptions& o) {
   settings.margin_ms = o.loop.margin_ms;
   settings.periphery_share = o.loop.periphery_share.value_or(kDefaultPeripheryShare);
   settings.rays_ahead = !o.loop.no_rays_ahead;
+  settings.min_scale = o.loop.min_scale.value_or(kDefaultMinScale);
   for (const auto& [option, path] : {std::pair{"--stats", &o.stats}, std::pair{"--video", &o.video}})
     check_output_beside_folder(option, *path, o.output, [](const std::string& name) {
       return name == "frames.csv" || (name.rfind("frame_", 0) == 0 && lower_extension(name) == ".png");
@@ -165,6 +166,8 @@ nlohmann::json replay_stats_json(const ReplayOptions& o, const ReplaySettings& s
       {"margin_ms", summary.margin_ms ? nlohmann::json(*summary.margin_ms) : nlohmann::json(nullptr)},
       {"periphery_share", summary.budget_ms ? nlohmann::json(summary.periphery_share) : nlohmann::json(nullptr)},
       {"rays_ahead", summary.budget_ms ? nlohmann::json(summary.rays_ahead) : nlohmann::json(nullptr)},
+      {"min_scale", summary.budget_ms ? nlohmann::json(summary.min_scale_allowed) : nlohmann::json(nullptr)},
+      {"resolution_held_note", summary.budget_ms ? nlohmann::json(summary.held_note) : nlohmann::json(nullptr)},
       {"frames_late", summary.budget_ms ? nlohmann::json(summary.late) : nlohmann::json(nullptr)},
       {"resolution_scale_min", summary.budget_ms ? nlohmann::json(summary.min_scale) : nlohmann::json(nullptr)},
       {"resolution_note", summary.budget_ms ? nlohmann::json(summary.scale_note) : nlohmann::json(nullptr)},
@@ -198,6 +201,7 @@ void print_replay(const ReplayOptions& o, const ReplaySettings& settings, const 
                *summary.budget_ms, summary.late, summary.frames);
   if (summary.budget_ms && summary.min_scale < 1)  // frames.csv's scale says which frames
     fmt::print("  size     lowered to {:.0f} % at the least: {}\n", 100 * summary.min_scale, summary.scale_note);
+  if (summary.budget_ms && !summary.held_note.empty()) fmt::print("  size     held: {}\n", summary.held_note);
   if (summary.budget_ms && !summary.gaze_note.empty()) fmt::print("  gaze     {}\n", summary.gaze_note);
   fmt::print("  time     {:.1f} s ({:.0f} ms per rendered frame), {:.1f} M AO rays\n", summary.wall_ms / 1000,
              summary.frames > summary.reused ? summary.render_ms / (summary.frames - summary.reused) : 0.0, summary.ao_rays / 1e6);

@@ -55,6 +55,7 @@ int run_view(const ViewCommandOptions& o) {
   s.margin_ms = o.loop.margin_ms;
   s.periphery_share = o.loop.periphery_share.value_or(kDefaultPeripheryShare);
   s.rays_ahead = !o.loop.no_rays_ahead;
+  s.min_scale = o.loop.min_scale.value_or(kDefaultMinScale);
   if (o.realtime && s.mode != ViewMode::foveated) fail("--realtime: the real-time loop shows the foveated mode (--mode foveated)");
   resolve(s);  // (every setting, whatever the mode: a value out of range is a mistake either way)
   WindowOptions w;

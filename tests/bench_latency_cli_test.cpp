@@ -171,6 +171,7 @@ TEST(BenchLatencyCli, BadOptionsAreOneClearLine) {
   expect_one_line_error(base + " --margin-ms 20", "--margin-ms");
   expect_one_line_error(base + " --periphery-share 0", "--periphery-share: must be in (0, 1]");
   expect_one_line_error(base + " --periphery-share 1.5", "--periphery-share: must be in (0, 1]");
+  expect_one_line_error(base + " --min-scale 0", "--min-scale: must be in (0, 1]");
   expect_one_line_error(base + " --max-rays 0", "--max-rays: bench latency judges the fovea's AO");
   expect_one_line_error(base + " --model-rays-per-ms 100 --model-fixed-ms 1", "--model-rays-per-ms");
   expect_one_line_error("bench latency --scene builtin:box --recording /no/such/recording.asc", "/no/such/recording.asc");

@@ -279,9 +279,12 @@ TEST(GazeCli, RealtimeReplayRunsAtTheDisplaysRefresh) {
   EXPECT_EQ(stats["refresh120"].at("margin_ms").get<double>(), 1.0);  // a quarter of a 4-ms budget
   EXPECT_EQ(stats["refresh60"].at("periphery_share").get<double>(), 1.0);
   EXPECT_TRUE(stats["whole30"].at("margin_ms").is_null());
-  frames("--realtime --margin-ms 3.5 --periphery-share 0.6", "margin");
+  EXPECT_EQ(stats["refresh60"].at("min_scale").get<double>(), 0.25);  // (the loop's default)
+  EXPECT_EQ(stats["refresh60"].at("resolution_held_note").get<std::string>(), "");
+  frames("--realtime --margin-ms 3.5 --periphery-share 0.6 --min-scale 0.5", "margin");
   EXPECT_EQ(stats["margin"].at("margin_ms").get<double>(), 3.5);
   EXPECT_EQ(stats["margin"].at("periphery_share").get<double>(), 0.6);
+  EXPECT_EQ(stats["margin"].at("min_scale").get<double>(), 0.5);
   for (const auto& [bad, needle] : std::vector<std::pair<std::string, std::string>>{
            {"--refresh-hz 60", "--refresh-hz needs --realtime"},
            {"--frame-budget-ms 5", "--frame-budget-ms needs --realtime"},
@@ -291,6 +294,8 @@ TEST(GazeCli, RealtimeReplayRunsAtTheDisplaysRefresh) {
            {"--realtime --refresh-hz 0", "--refresh-hz"},
            {"--margin-ms 3", "--margin-ms needs --realtime"},
            {"--periphery-share 0.5", "--periphery-share needs --realtime"},
+           {"--min-scale 1", "--min-scale needs --realtime"},
+           {"--realtime --min-scale 1.5", "--min-scale: must be in (0, 1]"},
            {"--realtime --margin-ms 20", "--margin-ms: must be in [0, the frame budget 16.6667 ms), got 20"},
            {"--realtime --periphery-share 0", "--periphery-share: must be in (0, 1]"}}) {
     const CliRun r = foveal_test::foveal(base + bad + " -o refresh_bad");

@@ -116,6 +116,8 @@ TEST(ViewCli, NoDisplayAndBadOptionsAreOneClearLine) {
            {"view --gaze no_such_recording.asc", "no_such_recording.asc"},
            {"view --margin-ms 3", "--margin-ms needs --realtime"},
            {"view --periphery-share 0.5", "--periphery-share needs --realtime"},
+           {"view --min-scale 0.5", "--min-scale needs --realtime"},
+           {"view --realtime --min-scale 0", "--min-scale: must be in (0, 1]"},
            {"view --realtime --margin-ms 10", "--margin-ms: must be in [0, the frame budget 10 ms)"},
            {"view --realtime --periphery-share 2", "--periphery-share: must be in (0, 1]"}})
     expect_one_line_error(args, expected);

@@ -58,6 +58,10 @@ def parse_args(argv=None):
     p.add_argument("--periphery-share", type=float, default=1.0,
                    help="the periphery's rays stop once a frame has spent this share of its budget, the fovea's go on to the "
                         "deadline (default 1: the periphery's too; less leaves a busy machine's pauses room; docs/realtime.md)")
+    p.add_argument("--min-scale", type=float, default=0.25,
+                   help="the smallest size the loop may render at where its base shading does not fit the budget, a share of "
+                        "the size in (0, 1] (default 0.25; 1: the stimulus keeps its resolution throughout, and such frames come "
+                        "late instead; docs/realtime.md)")
     p.add_argument("--no-rays-ahead", action="store_true",
                    help="once every pixel has its n(E), render nothing more (by default the spare time of each frame, up to half "
                         "its budget, takes every pixel on to n_max, nearest the gaze first: docs/realtime.md)")
@@ -100,6 +104,8 @@ def check_args(parser, args):
         parser.error(f"--margin-ms: must be 0 or more ms, got {args.margin_ms}")
     if not 0 < args.periphery_share <= 1:
         parser.error(f"--periphery-share: must be in (0, 1], got {args.periphery_share}")
+    if not 0 < args.min_scale <= 1:
+        parser.error(f"--min-scale: must be in (0, 1], got {args.min_scale}")
     if args.refresh_hz is not None and not 1 <= args.refresh_hz <= 1000:
         parser.error(f"--refresh-hz: must be in [1, 1000] Hz, got {args.refresh_hz}")
     for name, value in (("--frames", args.frames), ("--max-rays", args.max_rays), ("--probe-stalls", args.probe_stalls)):
@@ -188,7 +194,8 @@ def main(argv=None) -> int:
         print(f"gaze_contingent: {refresh_note}")
     loop = foveal.Loop(scene, size=(w, h), camera=args.camera, display=display, max_rays=args.max_rays, gamma=args.gamma,
                        refresh_hz=refresh_hz, predict=not args.no_predict, device=args.device, landing=args.landing_params,
-                       margin_ms=args.margin_ms, periphery_share=args.periphery_share, rays_ahead=not args.no_rays_ahead)
+                       margin_ms=args.margin_ms, periphery_share=args.periphery_share, rays_ahead=not args.no_rays_ahead,
+                       min_scale=args.min_scale)
     if loop.note:
         print(f"gaze_contingent: {loop.note}")
     io = launchHubServer(window=win, **tracker_config(args.tracker))
@@ -302,7 +309,7 @@ def main(argv=None) -> int:
     summary = {"flips": len(rows), "size": [w, h], "render_size": list(loop.size), "scene": args.scene, "device": loop.device,
                "refresh_hz": refresh_hz, "refresh_measured": args.refresh_hz is None, "refresh_note": refresh_note,
                "budget_ms": loop.budget_ms, "margin_ms": loop.margin_ms, "periphery_share": loop.periphery_share,
-               "rays_ahead": loop.rays_ahead,
+               "rays_ahead": loop.rays_ahead, "min_scale": loop.min_scale,
                "predict": not args.no_predict,
                "gaze_positions": len({(round(r[0]), round(r[1])) for r in rows}),
                "frames_late": sum(bool(r[5]) for r in rows),

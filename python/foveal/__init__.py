@@ -366,7 +366,7 @@ def bench_latency(recordings: Any, scene: Scene, camera: Any = None, size: Tuple
                   max_rays: int = 400, tolerance: float = 0.35, seed: int = 1, device: str = "cpu", threads: int = 0,
                   progress: bool = False, timeline: Optional[Union[str, "os.PathLike[str]"]] = None,
                   timeline_saccade: int = 0, landing: Optional[Union[dict, str]] = None, periphery_share: Optional[float] = None,
-                  rays_ahead: bool = True) -> dict:
+                  rays_ahead: bool = True, min_scale: Optional[float] = None) -> dict:
     """``foveal bench latency`` from Python: gaze-to-photon latency of the display loops on recorded gaze.
 
     ``recordings``: one or a list of recordings — paths (read as the command line reads them, the
@@ -375,7 +375,8 @@ def bench_latency(recordings: Any, scene: Scene, camera: Any = None, size: Tuple
     ``camera`` a camera name or ``Camera`` (its first). The other arguments are the command line's
     options (docs/realtime.md): the segment (``start_s``, ``duration_s``), the display
     (``refresh_hz``, ``frame_budget_ms``), the tracker's ``latency_ms``, the deadline loops'
-    ``margin_ms`` and ``periphery_share`` (None: the loop's default, 1) and ``rays_ahead`` (``--no-rays-ahead``: False), the ``clock`` (wall or model, with ``model_rays_per_ms`` and
+    ``margin_ms`` and ``periphery_share`` (None: the loop's default, 1), ``rays_ahead`` (``--no-rays-ahead``: False) and
+    ``min_scale`` (None: the loop's default, 0.25), the ``clock`` (wall or model, with ``model_rays_per_ms`` and
     ``model_fixed_ms``), the ``loops`` (whole-frame, deadline, deadline+prediction,
     deadline+oracle), the judged saccades' ``min_amplitude_deg``. ``progress`` prints the
     command line's progress lines; ``timeline`` draws a saccade's timeline (.png or .svg);
@@ -410,4 +411,4 @@ def bench_latency(recordings: Any, scene: Scene, camera: Any = None, size: Tuple
         number(model_fixed_ms, "model_fixed_ms"), list(loops), number(min_amplitude_deg, "min_amplitude_deg"), max_rays,
         number(tolerance, "tolerance"), seed, device, threads, progress, "" if timeline is None else os.fspath(timeline),
         timeline_saccade, landing,  # (a dict or --landing's text; the core names anything else)
-        number(periphery_share, "periphery_share"), _flag(rays_ahead, "rays_ahead")))
+        number(periphery_share, "periphery_share"), _flag(rays_ahead, "rays_ahead"), number(min_scale, "min_scale")))

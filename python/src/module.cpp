@@ -230,7 +230,7 @@ struct PyLoop {
   PyLoop(const nb::object& s, const std::array<int, 2>& size, const nb::object& camera_arg, std::optional<Display> display, int max_rays,
          double gamma, double refresh_hz, std::optional<double> frame_budget_ms, bool predict, const std::string& device_name, int threads_,
          uint64_t seed, const std::string& clock, double tolerance, double ellipse, bool keep_history, const nb::object& landing,
-         double periphery_share, std::optional<double> margin_ms, bool rays_ahead)
+         double periphery_share, std::optional<double> margin_ms, bool rays_ahead, double min_scale)
       : scene(scene_of(s).scene), threads(threads_) {
     if (threads < 0) fail("threads: must be 0 (all cores) or more, got {}", threads);
     if (!(refresh_hz >= 1 && refresh_hz <= 1000)) fail("refresh_hz: must be in [1, 1000] Hz, got {}", refresh_hz);
@@ -249,6 +249,7 @@ struct PyLoop {
     settings.periphery_share = periphery_share;
     settings.margin_ms = margin_ms;
     settings.rays_ahead = rays_ahead;
+    settings.min_scale = min_scale;
     settings.landing = landing_params_of(landing);
     settings.clock = parse_loop_clock(clock);
     if (settings.clock == LoopClock::model) fail("clock: the model clock is bench latency's; a Loop in Python runs on the wall clock");
@@ -623,12 +624,12 @@ NB_MODULE(_core, m) {
                      "is refined first (docs/realtime.md).")
       .def(nb::init<const nb::object&, const std::array<int, 2>&, const nb::object&, std::optional<Display>, int, double, double,
                     std::optional<double>, bool, const std::string&, int, uint64_t, const std::string&, double, double, bool,
-                    const nb::object&, double, std::optional<double>, bool>(),
+                    const nb::object&, double, std::optional<double>, bool, double>(),
            "scene"_a, "size"_a = std::array<int, 2>{840, 525}, "camera"_a = nb::none(), "display"_a = nb::none(), "max_rays"_a = 400,
            "gamma"_a = 2.0, "refresh_hz"_a = 60.0, "frame_budget_ms"_a = nb::none(), "predict"_a = true, "device"_a = "auto",
            "threads"_a = 0, "seed"_a = 1, "clock"_a = "wall", "tolerance"_a = foveal::AoReuseParams{}.tolerance, "ellipse"_a = 1.538,
            "keep_history"_a = true, "landing"_a.none() = nb::none(), "periphery_share"_a = kDefaultPeripheryShare,
-           "margin_ms"_a.none() = nb::none(), "rays_ahead"_a = true,
+           "margin_ms"_a.none() = nb::none(), "rays_ahead"_a = true, "min_scale"_a = kDefaultMinScale,
            "A loop for a view of `scene` (a Scene, or a path or builtin:NAME, loaded then; traced here, once; frame(camera=…) "
            "moves it). `frame_budget_ms` (default: one refresh at "
            "`refresh_hz`) is what each frame() may take; `predict` places the fovea at a saccade's predicted landing while it "
@@ -641,7 +642,9 @@ NB_MODULE(_core, m) {
            "pauses (None: 2 ms, or a quarter of a shorter budget; more after frames that ended late, up to a quarter of the "
            "budget; a budget set later keeps a margin given within half of it); `rays_ahead`: once every pixel has its n(E), "
            "the frames' spare time (up to half of each budget) takes every pixel on to n_max, nearest the gaze first, so that "
-           "where the eye lands next its fovea finds those rays (False: a converged view casts nothing).")
+           "where the eye lands next its fovea finds those rays (False: a converged view casts nothing); `min_scale` the "
+           "smallest size the loop may render at where its base shading does not fit the budget, a share of `size` in (0, 1] "
+           "(1: the stimulus keeps its resolution throughout, and such frames come late instead, `note` saying so).")
       .def("push", &PyLoop::push, "t"_a, "gaze"_a,
            "A tracker sample: its time in seconds (any clock, increasing; None: just after the latest sample) and the gaze "
            "(x, y) in render pixels, or None (or NaN, as many trackers write it) when the tracker lost the eye. Push every sample a fast "
@@ -657,7 +660,8 @@ NB_MODULE(_core, m) {
           "scale", [](const PyLoop& l) { return l.loop->scale(); },
           "Render size / the size asked for (1 unless the base shading did not fit).")
       .def_prop_ro(
-          "note", [](const PyLoop& l) { return l.loop->note(); }, "Why the resolution was lowered ('' if it was not).")
+          "note", [](const PyLoop& l) { return l.loop->note(); },
+          "Why the resolution was lowered, or why it could not be lowered further (min_scale: frames come late); '' if neither.")
       .def_prop_ro(
           "gaze_note", [](const PyLoop& l) { return l.loop->gaze_note(); },
           "What the samples pushed leave the landing predictor ('' if nothing to say): with prediction on, that saccade "
@@ -689,6 +693,9 @@ NB_MODULE(_core, m) {
       .def_prop_ro(
           "periphery_share", [](const PyLoop& l) { return l.loop->settings().periphery_share; },
           "The share of the budget after which a frame casts no more rays for the periphery.")
+      .def_prop_ro(
+          "min_scale", [](const PyLoop& l) { return l.loop->settings().min_scale; },
+          "The smallest size the loop may render at, a share of the size asked for (min_scale).")
       .def_prop_ro(
           "rays_ahead", [](const PyLoop& l) { return l.loop->settings().rays_ahead; },
           "Whether a converged view's spare time takes every pixel on to n_max (rays_ahead).")
@@ -849,7 +856,7 @@ NB_MODULE(_core, m) {
          std::optional<double> model_rays_per_ms, std::optional<double> model_fixed_ms, const std::vector<std::string>& loops,
          double min_amplitude_deg, int max_rays, double tolerance, uint64_t seed, const std::string& device_name, int threads,
          bool progress, const std::string& timeline, int timeline_saccade, const nb::object& landing, std::optional<double> periphery_share,
-         bool rays_ahead) {
+         bool rays_ahead, std::optional<double> min_scale) {
         // `bench latency` (apps/bench_latency.cpp) on recordings foveal.gaze hands over as columns
         const PyScene s = scene_of(scene);
         LatencyParams p;
@@ -864,6 +871,7 @@ NB_MODULE(_core, m) {
         p.margin_ms = margin_ms;
         p.rays_ahead = rays_ahead;
         p.periphery_share = periphery_share.value_or(kDefaultPeripheryShare);
+        p.min_scale = min_scale.value_or(kDefaultMinScale);
         p.clock = parse_loop_clock(clock);
         p.model_rays_per_ms = model_rays_per_ms;
         p.model_fixed_ms = model_fixed_ms;
@@ -915,7 +923,8 @@ NB_MODULE(_core, m) {
       "scene"_a, "recordings"_a, "camera"_a.none(), "size"_a, "display"_a.none(), "start_s"_a, "duration_s"_a, "refresh_hz"_a,
       "frame_budget_ms"_a.none(), "latency_ms"_a.none(), "margin_ms"_a.none(), "clock"_a, "model_rays_per_ms"_a.none(),
       "model_fixed_ms"_a.none(), "loops"_a, "min_amplitude_deg"_a, "max_rays"_a, "tolerance"_a, "seed"_a, "device"_a, "threads"_a,
-      "progress"_a, "timeline"_a, "timeline_saccade"_a, "landing"_a.none(), "periphery_share"_a.none(), "rays_ahead"_a);
+      "progress"_a, "timeline"_a, "timeline_saccade"_a, "landing"_a.none(), "periphery_share"_a.none(), "rays_ahead"_a,
+      "min_scale"_a.none());
   m.def(
       "device_available", [] { return availability().usable; }, "Whether a usable NVIDIA GPU answered.");
   m.def(

@@ -65,6 +65,7 @@ def test_gaze_contingent_follows_the_mouse_gaze_and_logs_latency(tmp_path):
     assert summary["refresh_hz"] == 60 and 0 < summary["budget_ms"] <= 1000 / 60
     # the margin given (within half the budget the script leaves the loop) and share, as the loop took them
     assert summary["margin_ms"] == pytest.approx(min(3, summary["budget_ms"] / 2)) and summary["periphery_share"] == 0.8
+    assert summary["min_scale"] == 0.25  # (the loop's default)
     assert summary["refresh_measured"] is False and summary["refresh_note"] == ""  # (given: nothing to doubt)
     assert 0 < summary["gaze_to_flip_ms_median"] <= summary["gaze_to_flip_ms_p95"]
     assert summary["gaze_to_flip_refreshes_median"] <= 2.0
@@ -146,7 +147,8 @@ def test_gaze_contingent_refuses_bad_options_before_the_session(tmp_path):
              (["--refresh-hz", "0"], "--refresh-hz"), (["--landing", "speed=3"], "--landing"),
              (["--landing", "onset_deg_s=fast"], "--landing"), (["--landing", "skew=9"], "--landing"),
              (["--margin-ms", "-1"], "--margin-ms"), (["--margin-ms", "nan"], "--margin-ms"),
-             (["--periphery-share", "0"], "--periphery-share"), (["--periphery-share", "1.5"], "--periphery-share")]
+             (["--periphery-share", "0"], "--periphery-share"), (["--periphery-share", "1.5"], "--periphery-share"),
+             (["--min-scale", "0"], "--min-scale"), (["--min-scale", "2"], "--min-scale")]
     for args, name in cases:
         result = subprocess.run([sys.executable, str(EXAMPLES / "gaze_contingent.py"), *args], cwd=tmp_path, capture_output=True,
                                 text=True, timeout=60)

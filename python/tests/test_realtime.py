@@ -212,6 +212,8 @@ def test_bad_arguments_are_clear_errors(box):
         foveal.Loop(box, size=(0, 10))
     with pytest.raises(ValueError, match=r"periphery_share: must be in \(0, 1\]"):
         foveal.Loop(box, size=(64, 40), periphery_share=0)
+    with pytest.raises(ValueError, match=r"min_scale: must be in \(0, 1\]"):
+        foveal.Loop(box, size=(64, 40), min_scale=0)
     for bad in (-1.0, 16.7, float("nan")):
         with pytest.raises(ValueError, match=r"margin_ms: must be in \[0, the frame budget 16.6667 ms\)"):
             foveal.Loop(box, size=(64, 40), margin_ms=bad)
@@ -222,7 +224,14 @@ def test_bad_arguments_are_clear_errors(box):
     kept.budget_ms = 16  # … and again as given once the budget allows it
     assert kept.margin_ms == 5.0
     loop = foveal.Loop(box, size=(64, 40), max_rays=8, device="cpu")
-    assert (loop.margin_ms, loop.periphery_share) == (2.0, 1.0)  # the loop's defaults
+    assert (loop.margin_ms, loop.periphery_share, loop.min_scale) == (2.0, 1.0, 0.25)  # the loop's defaults
+    # A stimulus that keeps its resolution (min_scale=1): a budget no base shading fits leaves the
+    # size as asked, its frames late, and the note says why
+    held = foveal.Loop(box, size=(64, 40), max_rays=8, device="cpu", frame_budget_ms=0.001, min_scale=1)
+    frames = [held.frame((32, 20), t=k / 60) for k in range(8)]
+    assert held.min_scale == 1.0 and all(f.image.shape[:2] == (40, 64) and f.late for f in frames)
+    assert "(min_scale): frames come late" in held.note, held.note
+    del frames
     with pytest.raises(ValueError, match="t: must be a finite"):
         loop.push(float("nan"), (1, 2))
     loop.push(1.0, None)  # a lost sample is fine, and so is NaN
@@ -379,6 +388,8 @@ def test_bench_latency_from_python_equals_the_command_lines(cli, box, tmp_path):
         foveal.bench_latency(str(recording), box, size=(168, 105), margin_ms=100)
     with pytest.raises(ValueError, match=r"^periphery_share: must be in \(0, 1\]"):
         foveal.bench_latency(str(recording), box, size=(168, 105), periphery_share=1.5)
+    with pytest.raises(ValueError, match=r"^min_scale: must be in \(0, 1\]"):
+        foveal.bench_latency(str(recording), box, size=(168, 105), min_scale=1.5)
     with pytest.raises(TypeError, match="recordings: a path, a foveal.gaze.Recording or a list of them, got int"):
         foveal.bench_latency(5, box)
 

@@ -344,6 +344,7 @@ LatencyLoop run_deadline(const LatencyRun& run, const Segment& s, const LatencyP
   settings.margin_ms = p.margin_ms;
   settings.periphery_share = p.periphery_share;
   settings.rays_ahead = p.rays_ahead;
+  settings.min_scale = p.min_scale;
   RealtimeLoop rt(*run.renderer, *run.scene, p.render, settings);
   // Samples from a second before the segment: the predictor and the fovea start where the eye is
   size_t next = 0;
@@ -677,6 +678,7 @@ void validate(const LatencyParams& p) {
     loop.budget_ms = frame_budget(p);
     loop.margin_ms = p.margin_ms;
     loop.periphery_share = p.periphery_share;
+    loop.min_scale = p.min_scale;
     validate(loop);
   }
   if (p.loops.empty()) fail("loops: give at least one (whole-frame, deadline, deadline+prediction, deadline+oracle)");
@@ -816,9 +818,10 @@ LatencyReport run_latency_bench(const LatencyRun& run, const std::vector<Recordi
   std::string md = fmt::format(
       "Scene {}, {}x{}, n_max {}, device {}, {:.0f} Hz display (budget {:.1f} ms), {} clock{}.\n\n", run.scene_name, p.render.width,
       p.render.height, p.render.foveation.max_rays, run.device, p.refresh_hz, budget, to_string(p.clock),
-      fmt::format("{}{}",
+      fmt::format("{}{}{}",
                   p.periphery_share < 1 ? fmt::format(", the periphery's rays within {:g} % of each budget", 100 * p.periphery_share) : "",
-                  p.rays_ahead ? "" : ", no rays ahead of the gaze"));
+                  p.rays_ahead ? "" : ", no rays ahead of the gaze",
+                  p.min_scale != kDefaultMinScale ? fmt::format(", the size no lower than {:g} % of it", 100 * p.min_scale) : ""));
   nlohmann::json j;
   j["scene"] = run.scene_name;
   j["device"] = run.device;
@@ -828,6 +831,7 @@ LatencyReport run_latency_bench(const LatencyRun& run, const std::vector<Recordi
   j["clock"] = to_string(p.clock);
   j["periphery_share"] = p.periphery_share;  // the deadline loops' (--periphery-share)
   j["rays_ahead"] = p.rays_ahead;            // the deadline loops' (--no-rays-ahead)
+  j["min_scale"] = p.min_scale;              // the deadline loops' (--min-scale)
   // the least margin the deadline loops keep (--margin-ms, else the default); the wall clock's alone
   j["margin_ms"] = p.clock == LoopClock::wall ? nlohmann::json(loop_margin_ms(budget, p.margin_ms)) : nlohmann::json(nullptr);
   j["landing"] = nlohmann::json::object();  // the prediction loops' landing predictor (--landing)

@@ -51,6 +51,7 @@ struct LatencyParams {
   std::optional<double> margin_ms;                  // the deadline loops' least margin (unset: the loop's default, loop_margin_ms)
   double periphery_share = kDefaultPeripheryShare;  // the deadline loops' periphery: its rays up to this share of the budget
   bool rays_ahead = true;                           // the deadline loops' rays ahead of the gaze (LoopSettings::rays_ahead)
+  double min_scale = kDefaultMinScale;              // the deadline loops' smallest size (LoopSettings::min_scale)
   LandingParams landing;  // the prediction loops' landing predictor (gaze/landing.h; the oracle's detects flights with it)
   // The first recording's judged saccade a timeline picture will draw (the last where there are
   // fewer): each frame also judges its fovea (LatencyFrame::drawn_error). Unset: no picture

@@ -20,6 +20,7 @@ LoopSettings replay_loop_settings(const ReplaySettings& s) {
   l.margin_ms = s.margin_ms;
   l.periphery_share = s.periphery_share;
   l.rays_ahead = s.rays_ahead;
+  l.min_scale = s.min_scale;
   return l;
 }
 
@@ -35,10 +36,11 @@ void validate(const ReplaySettings& s) {
   if (s.budget_ms && !s.realtime) fail("frame_budget_ms: is the real-time loop's (realtime)");
   if (s.budget_ms && !(*s.budget_ms > 0 && *s.budget_ms <= 1000 / s.fps))
     fail("frame_budget_ms: must be in (0, {:g}] ms (a frame at {:g} Hz), got {}", 1000 / s.fps, s.fps, *s.budget_ms);
-  if (!s.realtime && (s.margin_ms || s.periphery_share != kDefaultPeripheryShare || !s.rays_ahead))
+  if (!s.realtime && (s.margin_ms || s.periphery_share != kDefaultPeripheryShare || !s.rays_ahead || s.min_scale != kDefaultMinScale))
     fail("{}: is the real-time loop's (realtime)", s.margin_ms                                   ? "margin_ms"
                                                    : s.periphery_share != kDefaultPeripheryShare ? "periphery_share"
-                                                                                                 : "rays_ahead");
+                                                   : !s.rays_ahead                               ? "rays_ahead"
+                                                                                                 : "min_scale");
   if (s.realtime) validate(replay_loop_settings(s));
   validate(s.fixation);
 }
@@ -98,8 +100,10 @@ class LoopMaker {
     summary.margin_ms = loop_margin_ms(loop_.settings());
     summary.periphery_share = loop_.settings().periphery_share;
     summary.rays_ahead = loop_.settings().rays_ahead;
+    summary.min_scale_allowed = loop_.settings().min_scale;
     summary.min_scale = min_scale_;
     summary.scale_note = scale_note_;
+    summary.held_note = held_note_;
     summary.gaze_note = loop_.gaze_note();
   }
   // The loop's next frame, seen from `view` (the sequence's camera at its time, replay_camera)
@@ -120,6 +124,7 @@ class LoopMaker {
       min_scale_ = info.scale;
       scale_note_ = loop_.note();
     }
+    if (loop_.size_held() && held_note_.empty()) held_note_ = loop_.note();
     if (f.color.width != width_ || f.color.height != height_) f.color = scaled_nearest(f.color, width_, height_);
     frame_.color = std::move(f.color);
     frame_.gaze_px = info.render_gaze;
@@ -133,7 +138,7 @@ class LoopMaker {
   int width_, height_;  // the size asked for
   Frame frame_;
   double min_scale_ = 1;
-  std::string scale_note_;
+  std::string scale_note_, held_note_;
 };
 
 // Walks a recording's frames: for each, the samples up to t_k through the causal fixation filter

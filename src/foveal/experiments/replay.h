@@ -40,7 +40,8 @@ struct ReplaySettings {
   // periphery's rays may run to (LoopSettings' margin_ms and periphery_share; unset: the loop's)
   std::optional<double> margin_ms;
   double periphery_share = kDefaultPeripheryShare;
-  bool rays_ahead = true;  // realtime: LoopSettings::rays_ahead
+  bool rays_ahead = true;               // realtime: LoopSettings::rays_ahead
+  double min_scale = kDefaultMinScale;  // realtime: LoopSettings::min_scale, the smallest size the loop may render at
   // The camera orbits its look point about its up axis at this speed, degrees per second of the
   // sequence (0: still): a moving view, on the renderer's temporal history (params.reuse.temporal)
   // or the real-time loop's kept rays
@@ -82,12 +83,16 @@ struct ReplaySummary {
   std::optional<double> budget_ms, margin_ms;  // (margin_ms: what each frame kept free, as the loop took it)
   double periphery_share = kDefaultPeripheryShare;
   bool rays_ahead = true;
+  double min_scale_allowed = kDefaultMinScale;  // (LoopSettings::min_scale)
   int late = 0;
   // realtime: the smallest render size the loop chose (a scale of the size asked for) and what it
   // said then (RealtimeLoop::note: why it lowered the size; "" where it never did), and what the
   // samples left its predictor (RealtimeLoop::gaze_note at the end; "" where nothing)
   double min_scale = 1;
   std::string scale_note, gaze_note;
+  // realtime: what the loop said where it first held its size at min_scale, its frames late for
+  // their base shading ("" where it never did)
+  std::string held_note;
 };
 
 using ReplaySink = std::function<void(const ReplayFrame&, const Frame&)>;

@@ -759,7 +759,17 @@ void SweepCost::swept(double ms) {
 bool RealtimeLoop::rescale(double fixed_ms, bool in_place) {
   const double target = scale_ * std::sqrt(0.5 * settings_.budget_ms / fixed_ms);
   const double scale = std::clamp(target, settings_.min_scale, 1.0);
-  if (scale > 0.95 * scale_) return false;
+  if (scale > 0.95 * scale_) {
+    // A size the settings do not allow lower (min_scale): the frames come late, and the note says why
+    if (target <= 0.95 * scale_ && !held_note_) {
+      held_note_ = note_;
+      note_ = fmt::format(
+          "the base shading took {:.3g} ms of the {:.3g} ms frame budget at {}x{}, and the size may not go below {:.0f} % of {}x{} "
+          "(min_scale): frames come late",
+          fixed_ms, settings_.budget_ms, params_.width, params_.height, 100 * settings_.min_scale, requested_.width, requested_.height);
+    }
+    return false;
+  }
   const glm::ivec2 size = scaled_size(requested_, scale);
   std::string note =
       fmt::format("the base shading took {:.3g} ms of the {:.3g} ms frame budget at {}x{}: rendering at {}x{} ({:.0f} %) instead", fixed_ms,
@@ -780,6 +790,7 @@ bool RealtimeLoop::rescale(double fixed_ms, bool in_place) {
   else
     set_scale(scale);
   note_ = std::move(note);
+  held_note_.reset();
   return true;
 }
 
@@ -1193,8 +1204,10 @@ void RealtimeLoop::adopt_rebuild(uint64_t& kept_pixels) {
   estimate_cost_.scale(ratio);
   if (r.lowering) {
     note_ = r.why;  // (rescale's; a size lowered for a still view is no size a camera at rest gets back)
+    held_note_.reset();
   } else {
     note_ = size_note(r.why.c_str());
+    held_note_.reset();
     motion_scale_.reset();
   }
   fixed_.clear();
@@ -1258,16 +1271,22 @@ LoopFrame RealtimeLoop::frame(const Camera& camera) {
   const bool wall = settings_.clock == LoopClock::wall;
   // The margin: at least the settings', more where frames have lately ended later than planned
   const double margin = std::max(loop_margin_ms(settings_), slip_ms_);  // (slip_ms_ at most a quarter of the budget)
-  const double deadline = settings_.budget_ms - margin - finish_ms_;
+  double deadline = settings_.budget_ms - margin - finish_ms_;
   const Timer maps_timer;
   update_maps(out.gaze_px, out.predicted);
   out.estimate_deferred = estimate_unreached(wall ? deadline - timer.ms() : std::numeric_limits<double>::infinity());
   out.maps_ms = maps_timer.ms();
+  // A size held at min_scale whose base shading leaves its rays no time: the frame is late anyway,
+  // and its rays get kHeldRaysShare of the budget after it, so that its AO still refines (else no
+  // frame traced a ray, and the image kept the constant ambient term for good)
+  const double model_fixed = settings_.model_fixed_ms * scale_ * scale_;  // the model's fixed cost scales with the pixels
+  const bool held = held_note_.has_value() && (wall ? deadline <= timer.ms() : model_fixed >= settings_.budget_ms);
+  if (held && wall) deadline = timer.ms() + plan_ms_ + kHeldRaysShare * settings_.budget_ms;  // (a round planned, then its rays)
   // AO rays, in rounds, within what the frame may spend on them
   double trace_ms = 0, sweep_ms = 0;
   // The periphery's rays stop at their share of the budget (1: at the deadline): a frame that ends
-  // early is not made late by a pause of the machine's
-  const double periphery_deadline = std::min(deadline, settings_.periphery_share * settings_.budget_ms - finish_ms_);
+  // early is not made late by a pause of the machine's (a held size's share the fovea's rays)
+  const double periphery_deadline = held ? deadline : std::min(deadline, settings_.periphery_share * settings_.budget_ms - finish_ms_);
   // The rays ahead of the gaze stop at their share of it (plan_ahead)
   const double ahead_deadline = std::min(periphery_deadline, kAheadShare * settings_.budget_ms - finish_ms_);
   // A size coming back: half of what is left before the deadline builds it (the rest after the
@@ -1285,10 +1304,10 @@ LoopFrame RealtimeLoop::frame(const Camera& camera) {
   if (wall) rebuild(timer.ms() + 0.5 * (deadline - timer.ms()));
   out.deadline_ms = deadline;
   out.compose_planned_ms = finish_ms_;
-  const double model_fixed = settings_.model_fixed_ms * scale_ * scale_;  // the model's fixed cost scales with the pixels
   auto model_rays = [&](double ms) { return static_cast<uint64_t>(std::max(0.0, (ms - model_fixed) * settings_.model_rays_per_ms)); };
-  uint64_t allowance = wall ? 0 : model_rays(settings_.budget_ms);
-  const uint64_t periphery_allowance = wall ? 0 : model_rays(settings_.periphery_share * settings_.budget_ms);
+  const auto held_rays = static_cast<uint64_t>(kHeldRaysShare * settings_.budget_ms * settings_.model_rays_per_ms);
+  uint64_t allowance = wall ? 0 : held ? held_rays : model_rays(settings_.budget_ms);
+  const uint64_t periphery_allowance = wall ? 0 : held ? allowance : model_rays(settings_.periphery_share * settings_.budget_ms);
   // (A new view's frame casts none: a view starts unconverged, and the frame whose sweep finds every
   // pixel converged ends its rays there, so the rays ahead begin with the next frame of the same
   // view; a moving camera's next view is another)
@@ -1432,7 +1451,12 @@ LoopFrame RealtimeLoop::frame(const Camera& camera) {
     // and four frames at the larger size came late by 0.3–1.8 ms before it was shown
     lower_to_ = rebuild_->scale;
     note_ = std::move(rebuild_->why);
+    held_note_.reset();
     rebuild_.reset();
+  }
+  if (held_note_ && fixed_.size() >= (wall ? FixedPartWindow::kFrames : 1) && fixed_.median_ms() <= 0.6 * settings_.budget_ms) {
+    note_ = std::move(*held_note_);  // (the base shading fits again at the size held)
+    held_note_.reset();
   }
   // A moving camera whose frame ran out of work before its deadline grows towards the size it had
   // before it moved. The first moved view's size comes from an estimate (the first view's cost,
@@ -1448,6 +1472,7 @@ LoopFrame RealtimeLoop::frame(const Camera& camera) {
       const bool back = scale_ == *motion_scale_;
       if (back) motion_scale_.reset();  // nothing left to get back at rest
       note_ = size_note(back ? "the size before the camera moved" : "while the camera moves");
+      held_note_.reset();
       fixed_.clear();
     }
   }
@@ -1504,6 +1529,7 @@ void RealtimeLoop::grow_back(double scale, const char* why) {
   }
   set_scale(scale);
   note_ = size_note(why);
+  held_note_.reset();
   motion_scale_.reset();
   fixed_.clear();
 }

@@ -66,6 +66,7 @@ const char* to_string(LoopClock clock);
 LoopClock parse_loop_clock(const std::string& name);  // throws Error naming --clock
 
 inline constexpr double kDefaultPeripheryShare = 1.0;
+inline constexpr double kDefaultMinScale = 0.25;
 struct LoopSettings {
   double budget_ms = 1000.0 / 60;  // a frame every refresh
   bool predict = false;            // place the fovea at a saccade's predicted landing while it flies
@@ -81,8 +82,10 @@ struct LoopSettings {
   // cost of the periphery's pace (docs/realtime.md). 1: the periphery's too go on to the deadline.
   // Both clocks (the model's: its rays up to the share)
   double periphery_share = kDefaultPeripheryShare;
-  double min_scale = 0.25;  // the smallest resolution scale the loop may choose
-  double slowdown = 1;      // tests only: the tracer this many times slower
+  // The smallest resolution scale the loop may choose (1: the size asked for throughout, whose frames
+  // come late where its base shading does not fit the budget; note() then says so)
+  double min_scale = kDefaultMinScale;
+  double slowdown = 1;  // tests only: the tracer this many times slower
   // Tests only: what an estimate of the pixels without rays is taken to cost on the wall clock,
   // instead of its measured time (RealtimeLoop::frame() leaves one that would pass the rays'
   // deadline to a later frame)
@@ -102,6 +105,9 @@ struct LoopSettings {
 // The share of each frame's budget the rays ahead of the gaze may run to: frames that end early are
 // not made late by the machine's pauses
 inline constexpr double kAheadShare = 0.5;
+// A size held at min_scale whose base shading leaves its rays no time: the share of the budget its
+// frames' rays get after it (they are late anyway)
+inline constexpr double kHeldRaysShare = 0.25;
 // Wall clock: once a frame's rays are to stop, how long it waits for the chunks other threads are
 // tracing (normally 10–40 µs each) before it leaves them behind: only a thread the
 // machine has paused takes longer (AoRayBatch::leave_behind_after_ms)
@@ -294,7 +300,9 @@ class RealtimeLoop {
   const LoopSettings& settings() const { return settings_; }
   // render size / requested size (a still view's size once lowered, though its next frame takes it)
   double scale() const { return lower_to_.value_or(scale_); }
-  const std::string& note() const { return note_; }  // why the resolution was lowered ("" if not)
+  // Why the resolution was lowered, or why it could not be lowered further (min_scale); "" if neither
+  const std::string& note() const { return note_; }
+  bool size_held() const { return held_note_.has_value(); }  // note() says the size is held at min_scale, its frames late
   // With prediction on: what the samples pushed leave the landing predictor ("" if it can follow
   // them in time): they come further apart than a saccade's onset can be seen (under 20 Hz, as the
   // median of the latest intervals), most often times given in milliseconds where seconds are asked
@@ -438,6 +446,7 @@ class RealtimeLoop {
   std::shared_ptr<const std::vector<uint32_t>> traced_pixels_;  // (traced_pixels())
   std::optional<double> lower_to_;                              // a still view's lower size, for the next frame to take (lower_in_place)
   std::string note_;
+  std::optional<std::string> held_note_;  // the note before one saying the size is held at min_scale (rescale)
   LandingPredictor predictor_;
   std::optional<glm::dvec2> measured_px_;
   std::optional<double> last_sample_s_;         // the latest valid sample's time

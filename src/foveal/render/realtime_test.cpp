@@ -568,6 +568,41 @@ TEST(RealtimeLoop, WhereTheBaseShadingCannotFitTheResolutionScalesDownAndSaysSo)
   EXPECT_FALSE(next.late);
 }
 
+// A lab whose stimulus must keep its resolution sets the smallest scale to 1: the loop then keeps
+// the size asked for whatever its base shading costs, its frames come late, and the note says why
+// (and clears once the base shading fits the budget again). Its rays get a quarter of the budget
+// after the base shading, so that its AO still refines. A smallest scale of a half stops there
+TEST(RealtimeLoop, ASizeHeldByMinScaleIsNotLoweredAndTheNoteSaysItsFramesComeLate) {
+  const std::unique_ptr<FrameRenderer> renderer = make_frame_renderer(box(), ComputeDevice::cpu);
+  const Camera& camera = box().cameras.front();
+  LoopSettings settings = model_clock(1000);
+  settings.model_fixed_ms = 40;  // the base shading alone: 40 ms of a 16.7 ms budget
+  settings.min_scale = 1;
+  RealtimeLoop loop(*renderer, box(), loop_params(320, 200, 64), settings);
+  for (int k = 0; k < 5; ++k) {
+    const LoopFrame f = loop.frame(camera);
+    EXPECT_EQ(f.color.width, 320) << "frame " << k;
+    EXPECT_TRUE(f.late) << "frame " << k;
+    // (the first frame's rays: none, the budget's all the base shading's; then a quarter of it)
+    EXPECT_EQ(f.rays, k == 0 ? 0u : static_cast<uint64_t>(kHeldRaysShare * settings.budget_ms * 1000)) << "frame " << k;
+  }
+  EXPECT_EQ(loop.scale(), 1.0);
+  EXPECT_NE(loop.note().find("may not go below 100 % of 320x200 (min_scale): frames come late"), std::string::npos) << loop.note();
+  loop.set_budget_ms(100);  // room for it: the note goes
+  const LoopFrame roomy = loop.frame(camera);
+  EXPECT_FALSE(roomy.late);
+  EXPECT_TRUE(loop.note().empty()) << loop.note();
+
+  settings.min_scale = 0.5;
+  settings.model_fixed_ms = 80;  // sqrt(0.5 · 16.7 / 80) = 0.32 of the size wanted, 20 ms at a half: held there, late
+  RealtimeLoop half(*renderer, box(), loop_params(320, 200, 64), settings);
+  half.frame(camera);
+  EXPECT_EQ(half.scale(), 0.5);
+  for (int k = 0; k < 3; ++k) EXPECT_TRUE(half.frame(camera).late);
+  EXPECT_EQ(half.scale(), 0.5);
+  EXPECT_NE(half.note().find("may not go below 50 %"), std::string::npos) << half.note();
+}
+
 // A still view lowered again soon after its size came back waits 600 frames (10 s at 60 Hz) before
 // it grows again, then twice as long each time, unless the budget grows by a quarter (a view that
 // stayed grown for 600 frames starts afresh): a budget whose

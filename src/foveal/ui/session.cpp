@@ -65,6 +65,7 @@ LoopSettings view_loop_settings(const ViewSettings& s) {
   ls.margin_ms = s.margin_ms;
   ls.periphery_share = s.periphery_share;
   ls.rays_ahead = s.rays_ahead;
+  ls.min_scale = s.min_scale;
   return ls;
 }
 
@@ -80,7 +81,8 @@ nlohmann::json settings_json(const ViewSettings& s) {
                                                    {"predict", s.predict},
                                                    {"margin_ms", loop_margin_ms(s.frame_budget_ms, s.margin_ms)},
                                                    {"periphery_share", s.periphery_share},
-                                                   {"rays_ahead", s.rays_ahead}}
+                                                   {"rays_ahead", s.rays_ahead},
+                                                   {"min_scale", s.min_scale}}
                                   : nlohmann::json(false)},
           {"width", r.width},
           {"height", r.height},
@@ -472,7 +474,7 @@ void ViewSession::realtime_frame() {
                                                 f.kept_pixels > 0 ? fmt::format(": {} px kept their rays", f.kept_pixels) : "")
                         : f.new_view && f.kept_pixels > 0 ? fmt::format(", a new view: {} px kept their rays", f.kept_pixels)
                                                           : "",
-                        f.scale < 1 ? ", " + loop_->note() : "",
+                        f.scale < 1 || loop_->size_held() ? ", " + loop_->note() : "",
                         f.rebuilding ? fmt::format(", building the view at {}x{}", f.rebuild_width, f.rebuild_height) : "",
                         gaze_note.empty() ? "" : "; " + gaze_note, budget_note);
   r.gaze = f.gaze_px / f.scale;  // (the frame's own size: the loop's scale() may be the next frame's)

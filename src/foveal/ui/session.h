@@ -54,7 +54,8 @@ struct ViewSettings {
   // periphery's rays may run to (LoopSettings' margin_ms and periphery_share; unset: the loop's)
   std::optional<double> margin_ms;
   double periphery_share = kDefaultPeripheryShare;
-  bool rays_ahead = true;  // LoopSettings::rays_ahead
+  bool rays_ahead = true;               // LoopSettings::rays_ahead
+  double min_scale = kDefaultMinScale;  // LoopSettings::min_scale: the smallest size the loop may render at
 };
 // The real-time loop's settings for the view (realtime)
 LoopSettings view_loop_settings(const ViewSettings& settings);

@@ -144,6 +144,22 @@ TEST(ViewSession, ALoweredSizeIsNamedOnTheStageLine) {
   EXPECT_NE(lowered.find("frame budget"), std::string::npos) << lowered;
 }
 
+// --realtime --min-scale 1: the size is held, and the stage line says why its frames come late
+TEST(ViewSession, ASizeHeldAtMinScaleIsNamedOnTheStageLine) {
+  ViewSettings s = small_settings(ViewMode::foveated);
+  s.realtime = true;
+  s.frame_budget_ms = 0.01;  // (composing alone takes more)
+  s.min_scale = 1;
+  ViewSession session(box(), box_tracer(), default_camera(box()), s, fixed({50, 40}));
+  std::string held;
+  for (int k = 0; k < 30 && held.empty(); ++k) {
+    session.update(kNone);
+    if (const std::string stage = session.status().stage; stage.find("(min_scale): frames come late") != std::string::npos) held = stage;
+    EXPECT_EQ(session.status().stage.find("a smaller size"), std::string::npos) << k;
+  }
+  EXPECT_FALSE(held.empty()) << session.status().stage;
+}
+
 // --realtime: a budget longer than the display's refresh makes every frame miss refreshes; the
 // stage line says so, where the window knows the refresh
 TEST(ViewSession, ABudgetLongerThanTheRefreshIsNamed) {
