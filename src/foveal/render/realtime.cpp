@@ -95,6 +95,12 @@ void evaluate_maps(const FoveationModel& model, const FoveationParams& f, bool f
   std::fill_n(maps.blend.data() + b, e - b, f.max_rays > 0 ? 1.0f : 0.0f);
 }
 
+// Pixel i sees a surface and asks for rays (n(E) > 0), and has none (`rays`: its rays so far): the
+// estimate of the pixels without rays stands in for its own
+bool unreached_pixel(const GBuffer& g, const FoveationMaps& maps, size_t i, float rays) {
+  return rays == 0 && g.hit(i) && maps.rays[i] > 0;
+}
+
 // The estimate of the pixels without rays (RealtimeLoop::estimate_unreached), the pull of rows
 // [y0, y1) of the pyramid's first level: a pixel is known where it sees a surface and has rays, its
 // value the share of them found open (`cast(i)`, `open(i)`). True where a pixel that sees a surface
@@ -106,10 +112,9 @@ bool pull_unreached(PullPush& p, const GBuffer& g, const FoveationMaps& maps, co
       g.width, g.height,
       [&](size_t i) {
         const float rays = cast(i);
-        const bool hit = g.hit(i);
-        if (rays == 0 && hit && maps.rays[i] > 0 && !unreached.load(std::memory_order_relaxed))
+        if (unreached_pixel(g, maps, i, rays) && !unreached.load(std::memory_order_relaxed))
           unreached.store(true, std::memory_order_relaxed);
-        return std::pair{rays > 0 && hit, rays > 0 ? open(i) / rays : 0.0f};
+        return std::pair{rays > 0 && g.hit(i), rays > 0 ? open(i) / rays : 0.0f};
       },
       y0, y1);
   return unreached;
@@ -447,7 +452,7 @@ void RealtimeLoop::update_maps(glm::dvec2 gaze_px, bool predicted) {
         for (int y = r.begin(); y != r.end() && !lacking.load(std::memory_order_relaxed); ++y) {
           const size_t row = static_cast<size_t>(y) * static_cast<size_t>(w);
           for (size_t i = row + static_cast<size_t>(box.x), e = row + static_cast<size_t>(box.z); i < e; ++i)
-            if (maps_.rays[i] > 0 && total_cast(i) == 0 && gbuffer_.hit(i)) {
+            if (unreached_pixel(gbuffer_, maps_, i, total_cast(i))) {
               lacking.store(true, std::memory_order_relaxed);
               break;
             }
@@ -762,8 +767,7 @@ bool RealtimeLoop::rescale(double fixed_ms, bool in_place) {
   if (scale > 0.95 * scale_) {
     // A size the settings do not allow lower (min_scale): the frames come late, and the note says why
     if (target <= 0.95 * scale_ && !held_note_) {
-      held_note_ = note_;
-      note_ = fmt::format(
+      held_note_ = fmt::format(
           "the base shading took {:.3g} ms of the {:.3g} ms frame budget at {}x{}, and the size may not go below {:.0f} % of {}x{} "
           "(min_scale): frames come late",
           fixed_ms, settings_.budget_ms, params_.width, params_.height, 100 * settings_.min_scale, requested_.width, requested_.height);
@@ -790,7 +794,6 @@ bool RealtimeLoop::rescale(double fixed_ms, bool in_place) {
   else
     set_scale(scale);
   note_ = std::move(note);
-  held_note_.reset();
   return true;
 }
 
@@ -799,6 +802,7 @@ std::string RealtimeLoop::size_note(const char* why) const {
 }
 
 void RealtimeLoop::set_scale(double scale) {
+  held_note_.reset();  // (a size of its own: whether it is held is judged anew)
   rebuild_.reset();
   lower_to_.reset();
   const double pixels_before = static_cast<double>(params_.width) * params_.height;
@@ -853,6 +857,7 @@ std::shared_ptr<const std::vector<uint32_t>> RealtimeLoop::lowered_pixels(std::v
 }
 
 void RealtimeLoop::lower_in_place(uint64_t& kept_pixels) {
+  held_note_.reset();  // (a size of its own: whether it is held is judged anew)
   const double scale = *lower_to_;
   lower_to_.reset();
   rebuild_.reset();
@@ -1141,6 +1146,7 @@ void RealtimeLoop::advance_rebuild(const Timer& frame_timer, double until_ms, in
 }
 
 void RealtimeLoop::adopt_rebuild(uint64_t& kept_pixels) {
+  held_note_.reset();  // (a size of its own: whether it is held is judged anew)
   Rebuild& r = *rebuild_;
   const double pixels_before = static_cast<double>(std::max<size_t>(1, cast_.size()));
   scale_ = r.scale;
@@ -1204,10 +1210,8 @@ void RealtimeLoop::adopt_rebuild(uint64_t& kept_pixels) {
   estimate_cost_.scale(ratio);
   if (r.lowering) {
     note_ = r.why;  // (rescale's; a size lowered for a still view is no size a camera at rest gets back)
-    held_note_.reset();
   } else {
     note_ = size_note(r.why.c_str());
-    held_note_.reset();
     motion_scale_.reset();
   }
   fixed_.clear();
@@ -1451,13 +1455,10 @@ LoopFrame RealtimeLoop::frame(const Camera& camera) {
     // and four frames at the larger size came late by 0.3–1.8 ms before it was shown
     lower_to_ = rebuild_->scale;
     note_ = std::move(rebuild_->why);
-    held_note_.reset();
     rebuild_.reset();
   }
-  if (held_note_ && fixed_.size() >= (wall ? FixedPartWindow::kFrames : 1) && fixed_.median_ms() <= 0.6 * settings_.budget_ms) {
-    note_ = std::move(*held_note_);  // (the base shading fits again at the size held)
-    held_note_.reset();
-  }
+  if (held_note_ && fixed_.size() >= (wall ? FixedPartWindow::kFrames : 1) && fixed_.median_ms() <= 0.6 * settings_.budget_ms)
+    held_note_.reset();  // (the base shading fits again at the size held)
   // A moving camera whose frame ran out of work before its deadline grows towards the size it had
   // before it moved. The first moved view's size comes from an estimate (the first view's cost,
   // which pays the loop's first allocations), and a device whose views are cheap stayed at that
@@ -1472,7 +1473,6 @@ LoopFrame RealtimeLoop::frame(const Camera& camera) {
       const bool back = scale_ == *motion_scale_;
       if (back) motion_scale_.reset();  // nothing left to get back at rest
       note_ = size_note(back ? "the size before the camera moved" : "while the camera moves");
-      held_note_.reset();
       fixed_.clear();
     }
   }
@@ -1529,7 +1529,6 @@ void RealtimeLoop::grow_back(double scale, const char* why) {
   }
   set_scale(scale);
   note_ = size_note(why);
-  held_note_.reset();
   motion_scale_.reset();
   fixed_.clear();
 }

@@ -301,7 +301,7 @@ class RealtimeLoop {
   // render size / requested size (a still view's size once lowered, though its next frame takes it)
   double scale() const { return lower_to_.value_or(scale_); }
   // Why the resolution was lowered, or why it could not be lowered further (min_scale); "" if neither
-  const std::string& note() const { return note_; }
+  const std::string& note() const { return held_note_ ? *held_note_ : note_; }
   bool size_held() const { return held_note_.has_value(); }  // note() says the size is held at min_scale, its frames late
   // With prediction on: what the samples pushed leave the landing predictor ("" if it can follow
   // them in time): they come further apart than a saccade's onset can be seen (under 20 Hz, as the
@@ -446,7 +446,9 @@ class RealtimeLoop {
   std::shared_ptr<const std::vector<uint32_t>> traced_pixels_;  // (traced_pixels())
   std::optional<double> lower_to_;                              // a still view's lower size, for the next frame to take (lower_in_place)
   std::string note_;
-  std::optional<std::string> held_note_;  // the note before one saying the size is held at min_scale (rescale)
+  // The size is held at min_scale, its base shading past 60 % of the budget: why (note() says it in
+  // place of note_ until the base shading fits again or the size changes)
+  std::optional<std::string> held_note_;
   LandingPredictor predictor_;
   std::optional<glm::dvec2> measured_px_;
   std::optional<double> last_sample_s_;         // the latest valid sample's time
