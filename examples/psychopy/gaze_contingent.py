@@ -11,7 +11,7 @@ latency is flip time − sample time and the fovea's refinement is read from the
 
     python examples/psychopy/gaze_contingent.py                      # MouseGaze: the mouse is the eye
     python examples/psychopy/gaze_contingent.py --tracker eyelink.yaml   # any ioHub eye tracker
-    xvfb-run -a python examples/psychopy/gaze_contingent.py --frames 60 --move-mouse --log frames.csv
+    xvfb-run -a python examples/psychopy/gaze_contingent.py --frames 60 --move-mouse --log frames.csv --plot session.png
 
 ``--tracker`` takes an ioHub device configuration (YAML) with one eye-tracker entry, e.g.
 ``eyetracker.hw.sr_research.eyelink.EyeTracker: {name: tracker, ...}``; without it ioHub's
@@ -34,6 +34,7 @@ import time
 import numpy as np
 
 from session_checks import check_display, check_foveal_inputs, refresh_rate
+from session_plot import check_output, draw_session, read_log
 
 
 def parse_args(argv=None):
@@ -72,6 +73,9 @@ def parse_args(argv=None):
                    help="per-flip log (CSV; written as the session runs into LOG.partial, which takes the name LOG at its end: a failed "
                         "session keeps its flips there)")
     p.add_argument("--summary", default=None, help="write the latency summary as JSON")
+    p.add_argument("--plot", default=None, metavar="PICTURE",
+                   help="at the end, draw the session from its log: gaze and fovea, gaze → flip, each frame against its "
+                        "budget, the fovea's state (.png, .svg or .pdf; session_plot.py draws any log later)")
     p.add_argument("--fullscreen", action="store_true", help="full screen (ioHub's mouse wants it for exact positions)")
     p.add_argument("--probe-stalls", type=float, default=0, metavar="SECONDS",
                    help="first measure for this long how often the machine itself pauses a working thread (foveal.stalls, "
@@ -125,9 +129,20 @@ def check_args(parser, args):
             parser.error(f"{name}: {path}: is read-only; it is not replaced (give another name, or make it writable)")
     if args.log is not None and os.path.exists(args.log + ".partial"):  # a failed session's flips: never written over
         parser.error(f"--log: {args.log}.partial holds the flips of a session that failed; move it away first")
-    outputs = [(name, path) for name, path in (("--log", args.log), ("--summary", args.summary)) if path is not None]
-    if len(outputs) == 2 and os.path.abspath(args.log) == os.path.abspath(args.summary):
-        parser.error(f"--log {args.log} and --summary {args.summary}: two outputs into one file; give each its own name")
+    if args.plot is not None:
+        why = check_output(args.plot)
+        if why:
+            parser.error(f"--plot: {why}")
+        try:
+            import matplotlib  # noqa: F401 (drawn after the session: missing then, the picture would be lost)
+        except ImportError:
+            parser.error("--plot: matplotlib is not installed (scripts/python-env.sh installs it)")
+    outputs = [(name, path) for name, path in (("--log", args.log), ("--summary", args.summary), ("--plot", args.plot))
+               if path is not None]
+    for k, (name, path) in enumerate(outputs):
+        for other_name, other in outputs[k + 1:]:
+            if os.path.abspath(path) == os.path.abspath(other):
+                parser.error(f"{name} {path} and {other_name} {other}: two outputs into one file; give each its own name")
     for name, path in outputs:  # never over an input of the session
         for input_name, given in (("--scene", args.scene), ("--tracker", args.tracker)):
             if given and os.path.exists(given) and os.path.exists(path) and os.path.samefile(path, given):
@@ -335,6 +350,9 @@ def main(argv=None) -> int:
     if args.summary:
         with open(args.summary, "w") as f:
             json.dump(summary, f, indent=2)
+    if args.plot and rows:  # (from the log as written: the picture session_plot.py draws of it)
+        draw_session(read_log(args.log), args.plot, refresh_hz, title=f"{args.log}: {len(rows)} flips at {w}x{h}, {refresh_hz:.0f} Hz")
+        print(f"gaze_contingent: the session drawn in {args.plot}")
     return 0
 
 

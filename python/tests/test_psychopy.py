@@ -9,6 +9,7 @@ import subprocess
 import sys
 import time
 
+import numpy as np
 import pytest
 
 REPO = pathlib.Path(__file__).resolve().parents[2]
@@ -32,11 +33,15 @@ def test_gaze_contingent_follows_the_mouse_gaze_and_logs_latency(tmp_path):
     flips = 60
     run_example("gaze_contingent.py", ["--size", "320x200", "--frames", flips, "--device", "cpu", "--fullscreen", "--refresh-hz", 60,
                                        "--move-mouse", "--log", "frames.csv", "--summary", "summary.json", "--probe-stalls", 0.3,
-                                       "--margin-ms", 3, "--periphery-share", 0.8], tmp_path,
+                                       "--margin-ms", 3, "--periphery-share", 0.8, "--plot", "session.png"], tmp_path,
                 screen="320x200")
     rows = list(csv.DictReader(open(tmp_path / "frames.csv")))
     summary = json.loads((tmp_path / "summary.json").read_text())
     assert len(rows) == summary["flips"] == flips
+    # The session drawn from its log at the end (session_plot.py; its own tests below)
+    from PIL import Image
+    with Image.open(tmp_path / "session.png") as picture:
+        assert picture.format == "PNG" and picture.size == (1000, 900)
     assert not (tmp_path / "frames.csv.partial").exists()  # logged as it ran, then given its name
     # ioHub's times are seconds; MouseGaze is read about once a flip, so where that is under 90 Hz
     # the loop says its landings come too late to predict with gain (docs/realtime.md, "Slower trackers")
@@ -148,7 +153,9 @@ def test_gaze_contingent_refuses_bad_options_before_the_session(tmp_path):
              (["--landing", "onset_deg_s=fast"], "--landing"), (["--landing", "skew=9"], "--landing"),
              (["--margin-ms", "-1"], "--margin-ms"), (["--margin-ms", "nan"], "--margin-ms"),
              (["--periphery-share", "0"], "--periphery-share"), (["--periphery-share", "1.5"], "--periphery-share"),
-             (["--min-scale", "0"], "--min-scale"), (["--min-scale", "2"], "--min-scale")]
+             (["--min-scale", "0"], "--min-scale"), (["--min-scale", "2"], "--min-scale"),
+             (["--plot", "session.txt"], "--plot"), (["--plot", str(tmp_path / "missing" / "session.png")], "--plot"),
+             (["--plot", str(tmp_path)], "--plot")]
     for args, name in cases:
         result = subprocess.run([sys.executable, str(EXAMPLES / "gaze_contingent.py"), *args], cwd=tmp_path, capture_output=True,
                                 text=True, timeout=60)
@@ -175,7 +182,8 @@ def test_gaze_contingent_refuses_bad_options_before_the_session(tmp_path):
                         (["--scene", str(tmp_path / "none.obj")], "--scene: "),
                         (["--camera", "nope"], "--camera: scene 'builtin:box' has no camera named 'nope'"),
                         (["--scene", str(scene), "--log", str(scene)], "--log: " + str(scene) + ": is --scene"),
-                        (["--log", "a.csv", "--summary", "./a.csv"], "two outputs into one file")):
+                        (["--log", "a.csv", "--summary", "./a.csv"], "two outputs into one file"),
+                        (["--summary", "s.png", "--plot", "./s.png"], "--summary s.png and --plot ./s.png: two outputs into one file")):
         result = subprocess.run([sys.executable, str(EXAMPLES / "gaze_contingent.py"), *args], cwd=tmp_path, capture_output=True,
                                 text=True, timeout=60)
         assert result.returncode == 2 and words in result.stderr.splitlines()[-1], (args, result.stderr)
@@ -245,3 +253,122 @@ def test_foveation_threshold_refuses_bad_options_before_any_rendering(tmp_path):
         assert result.returncode == 2, (args, result.stderr)
         assert f"error: {name}" in result.stderr.splitlines()[-1] and "Traceback" not in result.stderr, (args, result.stderr)
     assert earlier.read_text() == '{"threshold_gamma": 3}'
+
+
+def _session_plot():
+    pytest.importorskip("matplotlib", reason="matplotlib is not installed (scripts/python-env.sh installs it)")
+    sys.path.insert(0, str(EXAMPLES))
+    try:
+        import session_plot
+    finally:
+        sys.path.remove(str(EXAMPLES))
+    return session_plot
+
+
+def _write_log(path, flips=120, late=(10, 50, 51), predicted=(20, 21, 22, 80, 81), refresh_hz=60.0, header=None):
+    """A log as gaze_contingent.py writes it (its columns, in its order), with known late and predicted flips."""
+    columns = header or ["flip", "gaze_x", "gaze_y", "sample_time_s", "fovea_x", "fovea_y", "predicted", "fovea", "fovea_converged",
+                         "rays", "render_start_s", "render_ms", "library_ms", "late", "flip_time_s", "gaze_to_flip_ms", "budget_ms",
+                         "width", "height", "chunks_left_behind"]
+    latencies = [40.0] + [12.0 + (k * 7) % 11 for k in range(1, flips)]  # (the first flip waits for the tracker)
+    with open(path, "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=columns, extrasaction="ignore")
+        w.writeheader()
+        for k in range(flips):
+            flip_t = 5.0 + k / refresh_hz
+            w.writerow({"flip": k, "gaze_x": 400 + k, "gaze_y": 260 - k / 2, "sample_time_s": flip_t - latencies[k] / 1000,
+                        "fovea_x": 400 + k + (30 if k in predicted else 0), "fovea_y": 260 - k / 2, "predicted": int(k in predicted),
+                        "fovea": "refining", "fovea_converged": min(1.0, k / 100), "rays": 1000, "render_start_s": flip_t - 0.01,
+                        "render_ms": 9.0 + (6.0 if k in late else 0.0), "library_ms": 8.0, "late": int(k in late),
+                        "flip_time_s": flip_t, "gaze_to_flip_ms": latencies[k], "budget_ms": 12.0, "width": 840 if k < 60 else 756,
+                        "height": 525 if k < 60 else 472, "chunks_left_behind": 0})
+    return latencies
+
+
+def test_a_session_log_is_drawn_with_its_figures(tmp_path):
+    session_plot = _session_plot()
+    from PIL import Image
+    log = tmp_path / "frames.csv"
+    latencies = _write_log(log)
+    figures = session_plot.draw_session(session_plot.read_log(str(log)), str(tmp_path / "session.png"))
+    # What the titles state, against the log's own numbers: late and predicted flips, the latency from
+    # the second flip (the summary's rule), read against the refresh the flips came at
+    assert figures["flips"] == 120 and figures["late"] == 3 and figures["predicted"] == 5
+    assert figures["gaze_to_flip_ms_median"] == pytest.approx(float(np.median(latencies[1:])))
+    assert figures["gaze_to_flip_ms_p95"] == pytest.approx(float(np.percentile(latencies[1:], 95)))
+    assert figures["refresh_from"] == "flips" and figures["refresh_hz"] == pytest.approx(60.0)
+    assert figures["gaze_to_flip_refreshes_median"] == pytest.approx(figures["gaze_to_flip_ms_median"] * 60 / 1000)
+    given = session_plot.session_figures(session_plot.read_log(str(log)), refresh_hz=120.0)
+    assert given["refresh_from"] == "given" and given["gaze_to_flip_refreshes_median"] == pytest.approx(
+        figures["gaze_to_flip_ms_median"] * 120 / 1000)
+    with Image.open(tmp_path / "session.png") as picture:
+        assert picture.format == "PNG" and picture.size == (1000, 900)
+        # the late flips' red markers are drawn (matplotlib's tab:red, #d62728), and only where some are late
+        pixels = np.asarray(picture.convert("RGB")).reshape(-1, 3).astype(int)
+        red = np.sum(np.all(np.abs(pixels - [214, 39, 40]) <= 12, axis=1))
+    assert red > 20
+    for ext, magic in ((".svg", b"<svg"), (".pdf", b"%PDF")):
+        session_plot.draw_session(session_plot.read_log(str(log)), str(tmp_path / ("session" + ext)))
+        assert magic in (tmp_path / ("session" + ext)).read_bytes()[:400]
+    _write_log(log, late=())
+    session_plot.draw_session(session_plot.read_log(str(log)), str(tmp_path / "none_late.png"))
+    with Image.open(tmp_path / "none_late.png") as picture:
+        pixels = np.asarray(picture.convert("RGB")).reshape(-1, 3).astype(int)
+        legend_only = np.sum(np.all(np.abs(pixels - [214, 39, 40]) <= 12, axis=1))
+    assert 0 < legend_only and red >= 3 * legend_only  # (three late flips' markers beside the legend's one)
+    assert not list(tmp_path.glob(".session_plot.*"))  # (each written beside, then given its name)
+    umask = os.umask(0)
+    os.umask(umask)
+    assert os.stat(tmp_path / "session.png").st_mode & 0o777 == 0o666 & ~umask  # (a file as any other, not the owner's alone)
+
+
+def test_a_log_that_cannot_be_drawn_is_refused_by_name_and_line(tmp_path):
+    session_plot = _session_plot()
+    log = tmp_path / "frames.csv"
+    _write_log(log)
+    lines = log.read_text().splitlines()
+    cases = {"empty.csv": ("", "the file is empty"),
+             "no_flips.csv": ("flip\n", "no flips logged"),
+             "header_only.csv": (lines[0] + "\n", "no flips logged"),
+             "columns.csv": ("flip,gaze_x\n0,1\n", "line 1: no column 'gaze_y'"),
+             "word.csv": ("\n".join(lines[:4] + [",".join(lines[4].split(",")[:8] + ["fast"] + lines[4].split(",")[9:])] + lines[5:])
+                          + "\n",
+                          "line 5: column 'fovea_converged': 'fast' is no number"),
+             "inf.csv": ("\n".join(lines[:3] + [",".join(["inf"] + lines[3].split(",")[1:])] + lines[4:]) + "\n",
+                         "line 4: column 'flip': 'inf' is not a finite number"),
+             "short.csv": ("\n".join(lines[:2] + ["1,2,3"]) + "\n", "line 3: 3 values where the header names 20")}
+    for name, (text, words) in cases.items():
+        (tmp_path / name).write_text(text)
+        with pytest.raises(session_plot.LogError) as error:
+            session_plot.read_log(str(tmp_path / name))
+        assert str(error.value).startswith(str(tmp_path / name) + ": ") and words in str(error.value), (name, error.value)
+    # The command line: one line naming the file and what is wrong, and no picture
+    script = str(EXAMPLES / "session_plot.py")
+    for args, words in (([str(tmp_path / "word.csv")], "line 5: column 'fovea_converged'"),
+                        ([str(tmp_path / "none.csv")], "none.csv: no such file"),
+                        ([str(log), "-o", str(tmp_path / "s.txt")], "--output: "),
+                        ([str(log), "-o", str(tmp_path / "missing" / "s.png")], "does not exist"),
+                        ([str(log), "--refresh-hz", "0"], "--refresh-hz"),
+                        ([str(log), "-o", str(log)], "--output: ")):
+        result = subprocess.run([sys.executable, script, *args], cwd=tmp_path, capture_output=True, text=True, timeout=120)
+        assert result.returncode == 2 and words in result.stderr.splitlines()[-1], (args, result.stderr)
+        assert "Traceback" not in result.stderr
+    assert not (tmp_path / "word.png").exists() and not (tmp_path / "frames.png").exists()
+    # A log whose name is a picture's is an input: never drawn over
+    picture_log = tmp_path / "frames.png"
+    picture_log.write_text(log.read_text())
+    result = subprocess.run([sys.executable, script, str(picture_log)], cwd=tmp_path, capture_output=True, text=True, timeout=120)
+    assert result.returncode == 2 and "an input; it is never written over" in result.stderr
+    assert picture_log.read_text() == log.read_text()
+    # A read-only picture is kept; a failed session's LOG.partial is drawn, by default beside it
+    locked = tmp_path / "locked.png"
+    locked.write_bytes(b"kept")
+    locked.chmod(0o444)
+    result = subprocess.run([sys.executable, script, str(log), "-o", str(locked)], cwd=tmp_path, capture_output=True, text=True,
+                            timeout=120)
+    assert result.returncode == 2 and "is read-only" in result.stderr and locked.read_bytes() == b"kept"
+    partial = tmp_path / "run.csv.partial"
+    partial.write_text(log.read_text())
+    result = subprocess.run([sys.executable, script, str(partial)], cwd=tmp_path, capture_output=True, text=True, timeout=120)
+    assert result.returncode == 0 and (tmp_path / "run.csv.png").exists(), result.stderr
+    assert "120 flips, 3 late" in result.stdout
