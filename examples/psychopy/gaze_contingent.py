@@ -350,8 +350,14 @@ def main(argv=None) -> int:
     if args.summary:
         with open(args.summary, "w") as f:
             json.dump(summary, f, indent=2)
-    if args.plot and rows:  # (from the log as written: the picture session_plot.py draws of it)
-        draw_session(read_log(args.log), args.plot, refresh_hz, title=f"{args.log}: {len(rows)} flips at {w}x{h}, {refresh_hz:.0f} Hz")
+    if args.plot and not rows:
+        print(f"gaze_contingent: --plot: no flips, so no picture ({args.plot} not written)")
+    elif args.plot:  # (from the log as written: the picture session_plot.py draws of it)
+        try:
+            draw_session(read_log(args.log), args.plot, refresh_hz, title=f"{args.log}: {len(rows)} flips at {w}x{h}, {refresh_hz:.0f} Hz")
+        except (OSError, ValueError) as error:  # (a full disk, say: the log and the summary are written)
+            print(f"gaze_contingent: --plot {args.plot}: {error}; the log {args.log} is kept (session_plot.py draws it)", file=sys.stderr)
+            return 1
         print(f"gaze_contingent: the session drawn in {args.plot}")
     return 0
 
