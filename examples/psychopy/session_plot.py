@@ -32,6 +32,7 @@ import numpy as np
 # The columns drawn (a log of gaze_contingent.py has these and more)
 COLUMNS = ("flip", "gaze_x", "gaze_y", "fovea_x", "fovea_y", "predicted", "fovea_converged", "render_ms", "late", "flip_time_s",
            "gaze_to_flip_ms", "budget_ms", "width")
+POSITIVE = ("budget_ms", "width")  # (a frame's budget and its width are never 0)
 EXTENSIONS = (".png", ".svg", ".pdf")
 
 
@@ -71,6 +72,8 @@ def read_log(path):
                     raise LogError(f"{path}: line {line}: column {name!r}: {row[k]!r} is no number") from None
                 if not math.isfinite(v):
                     raise LogError(f"{path}: line {line}: column {name!r}: {row[k]!r} is not a finite number")
+                if name in POSITIVE and not v > 0:
+                    raise LogError(f"{path}: line {line}: column {name!r}: {row[k]!r} is not above 0")
                 values[name].append(v)
     if not values["flip"]:
         raise LogError(f"{path}: no flips logged")

@@ -336,6 +336,8 @@ def test_a_log_that_cannot_be_drawn_is_refused_by_name_and_line(tmp_path):
                           "line 5: column 'fovea_converged': 'fast' is no number"),
              "inf.csv": ("\n".join(lines[:3] + [",".join(["inf"] + lines[3].split(",")[1:])] + lines[4:]) + "\n",
                          "line 4: column 'flip': 'inf' is not a finite number"),
+             "width.csv": ("\n".join(lines[:6] + [",".join(lines[6].split(",")[:17] + ["0"] + lines[6].split(",")[18:])] + lines[7:])
+                           + "\n", "line 7: column 'width': '0' is not above 0"),
              "short.csv": ("\n".join(lines[:2] + ["1,2,3"]) + "\n", "line 3: 3 values where the header names 20")}
     for name, (text, words) in cases.items():
         (tmp_path / name).write_text(text)
