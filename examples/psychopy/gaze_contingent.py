@@ -33,8 +33,8 @@ import time
 
 import numpy as np
 
-from session_checks import check_display, check_foveal_inputs, refresh_rate
-from session_plot import check_output, draw_session, read_log
+from session_checks import check_display, check_foveal_inputs, check_output, refresh_rate
+from session_plot import EXTENSIONS as PICTURES, draw_session, read_log
 
 
 def parse_args(argv=None):
@@ -115,24 +115,13 @@ def check_args(parser, args):
     for name, value in (("--frames", args.frames), ("--max-rays", args.max_rays), ("--probe-stalls", args.probe_stalls)):
         if not value >= 0:
             parser.error(f"{name}: must be 0 or more, got {value}")
-    for name, path in (("--log", args.log), ("--summary", args.summary)):
-        if path is None:
-            continue
-        folder = os.path.dirname(os.path.abspath(path))
-        if os.path.isdir(path):
-            parser.error(f"{name}: {path} is a folder; give a file name")
-        if not os.path.isdir(folder):
-            parser.error(f"{name}: {path}: the folder {folder} does not exist")
-        if not os.access(folder, os.W_OK):
-            parser.error(f"{name}: {path}: the folder {folder} cannot be written")
-        if os.path.exists(path) and not os.stat(path).st_mode & 0o222:  # (root may write anything: the mode says)
-            parser.error(f"{name}: {path}: is read-only; it is not replaced (give another name, or make it writable)")
+    for name, path, extensions in (("--log", args.log, None), ("--summary", args.summary, None), ("--plot", args.plot, PICTURES)):
+        why = check_output(path, extensions=extensions) if path is not None else ""
+        if why:
+            parser.error(f"{name}: {why}")
     if args.log is not None and os.path.exists(args.log + ".partial"):  # a failed session's flips: never written over
         parser.error(f"--log: {args.log}.partial holds the flips of a session that failed; move it away first")
     if args.plot is not None:
-        why = check_output(args.plot)
-        if why:
-            parser.error(f"--plot: {why}")
         try:
             import matplotlib  # noqa: F401 (drawn after the session: missing then, the picture would be lost)
         except ImportError:

@@ -1,4 +1,4 @@
-"""What both PsychoPy examples check before any rendering or window: foveal's own inputs (the
+"""What the PsychoPy examples check before any rendering or window: foveal's own inputs (the
 scene, its camera, the device, as foveal takes them) and a display to open the window on. Each is
 refused in one line naming its option (keep this file beside the examples: they import it)."""
 import os
@@ -25,6 +25,28 @@ def check_foveal_inputs(parser, scene, camera, device):
     except RuntimeError as error:  # cuda without a usable GPU
         parser.error(f"--device {device}: {str(error).split(': ', 1)[-1]}; give --device auto or cpu")
     return loaded
+
+
+def check_output(path, inputs=(), extensions=None):
+    """Why `path` cannot take an output ('' where it can): its extension (one of `extensions`, where
+    given), a folder of that name, its folder missing or not writable, a read-only file (never
+    replaced, by root either), or one of `inputs` (never written over)."""
+    folder = os.path.dirname(os.path.abspath(path))
+    if extensions and os.path.splitext(path)[1].lower() not in extensions:
+        return f"{path}: the name must end in {', '.join(extensions)}"
+    if os.path.isdir(path):
+        return f"{path} is a folder; give a file name"
+    if not os.path.isdir(folder):
+        return f"{path}: the folder {folder} does not exist"
+    if not os.access(folder, os.W_OK):
+        return f"{path}: the folder {folder} cannot be written"
+    if os.path.exists(path) and not os.stat(path).st_mode & 0o222:  # (root may write anything: the mode says)
+        return f"{path}: is read-only; it is not replaced (give another name, or make it writable)"
+    for given in filter(None, inputs):
+        same = os.path.abspath(given) == os.path.abspath(path)
+        if same or (os.path.exists(given) and os.path.exists(path) and os.path.samefile(given, path)):
+            return f"{path}: is {given}, an input; it is never written over"
+    return ""
 
 
 def check_display(parser):

@@ -29,6 +29,8 @@ import sys
 
 import numpy as np
 
+from session_checks import check_output
+
 # The columns drawn (a log of gaze_contingent.py has these and more)
 COLUMNS = ("flip", "gaze_x", "gaze_y", "fovea_x", "fovea_y", "predicted", "fovea_converged", "render_ms", "late", "flip_time_s",
            "gaze_to_flip_ms", "budget_ms", "width")
@@ -196,27 +198,6 @@ def draw_session(log, path, refresh_hz=None, title=None):
     return figures
 
 
-def check_output(path, inputs=()):
-    """Why `path` cannot take the picture ('' where it can): its extension, its folder, a folder of
-    that name, a read-only file, or one of `inputs` (never written over)."""
-    folder = os.path.dirname(os.path.abspath(path))
-    if os.path.splitext(path)[1].lower() not in EXTENSIONS:
-        return f"{path}: a picture's name ends in {', '.join(EXTENSIONS)}"
-    if os.path.isdir(path):
-        return f"{path} is a folder; give a file name"
-    if not os.path.isdir(folder):
-        return f"{path}: the folder {folder} does not exist"
-    if not os.access(folder, os.W_OK):
-        return f"{path}: the folder {folder} cannot be written"
-    if os.path.exists(path) and not os.stat(path).st_mode & 0o222:
-        return f"{path}: is read-only; it is not replaced (give another name, or make it writable)"
-    for given in filter(None, inputs):
-        same = os.path.abspath(given) == os.path.abspath(path)
-        if same or (os.path.exists(given) and os.path.exists(path) and os.path.samefile(given, path)):
-            return f"{path}: is {given}, an input; it is never written over"
-    return ""
-
-
 def main(argv=None):
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("log", help="a per-flip log of gaze_contingent.py (--log; a failed session's LOG.partial too)")
@@ -228,7 +209,7 @@ def main(argv=None):
     output = args.output or os.path.splitext(args.log)[0] + ".png"
     if args.refresh_hz is not None and not (math.isfinite(args.refresh_hz) and 1 <= args.refresh_hz <= 1000):
         p.error(f"--refresh-hz: must be in [1, 1000] Hz, got {args.refresh_hz}")
-    why = check_output(output, inputs=[args.log])
+    why = check_output(output, inputs=[args.log], extensions=EXTENSIONS)
     if why:
         p.error(f"{'--output' if args.output else 'the picture'}: {why}")
     try:
