@@ -216,6 +216,10 @@ def main(argv=None):
         log = read_log(args.log)
     except FileNotFoundError:
         p.error(f"{args.log}: no such file")
+    except IsADirectoryError:
+        p.error(f"{args.log} is a folder; give a session's log")
+    except OSError as error:
+        p.error(f"{args.log}: {error.strerror or error}")
     except (LogError, UnicodeDecodeError, csv.Error) as error:
         p.error(str(error) if isinstance(error, LogError) else f"{args.log}: not a CSV log ({error})")
     figures = draw_session(log, output, args.refresh_hz, title=args.title or os.path.basename(args.log))

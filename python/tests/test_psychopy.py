@@ -348,6 +348,7 @@ def test_a_log_that_cannot_be_drawn_is_refused_by_name_and_line(tmp_path):
     script = str(EXAMPLES / "session_plot.py")
     for args, words in (([str(tmp_path / "word.csv")], "line 5: column 'fovea_converged'"),
                         ([str(tmp_path / "none.csv")], "none.csv: no such file"),
+                        ([str(tmp_path), "-o", str(tmp_path / "d.png")], "is a folder; give a session's log"),
                         ([str(log), "-o", str(tmp_path / "s.txt")], "--output: "),
                         ([str(log), "-o", str(tmp_path / "missing" / "s.png")], "does not exist"),
                         ([str(log), "--refresh-hz", "0"], "--refresh-hz"),
