@@ -115,8 +115,9 @@ def check_args(parser, args):
     for name, value in (("--frames", args.frames), ("--max-rays", args.max_rays), ("--probe-stalls", args.probe_stalls)):
         if not value >= 0:
             parser.error(f"{name}: must be 0 or more, got {value}")
+    inputs = {f"--scene {args.scene}": args.scene, f"--tracker {args.tracker}": args.tracker}  # (never written over)
     for name, path, extensions in (("--log", args.log, None), ("--summary", args.summary, None), ("--plot", args.plot, PICTURES)):
-        why = check_output(path, extensions=extensions) if path is not None else ""
+        why = check_output(path, inputs, extensions) if path is not None else ""
         if why:
             parser.error(f"{name}: {why}")
     if args.log is not None and os.path.exists(args.log + ".partial"):  # a failed session's flips: never written over
@@ -132,10 +133,6 @@ def check_args(parser, args):
         for other_name, other in outputs[k + 1:]:
             if os.path.abspath(path) == os.path.abspath(other):
                 parser.error(f"{name} {path} and {other_name} {other}: two outputs into one file; give each its own name")
-    for name, path in outputs:  # never over an input of the session
-        for input_name, given in (("--scene", args.scene), ("--tracker", args.tracker)):
-            if given and os.path.exists(given) and os.path.exists(path) and os.path.samefile(path, given):
-                parser.error(f"{name}: {path}: is {input_name} {given}, an input of this session; it is never written over")
     # Before the stall probe and the window: the scene (loaded once: the session takes it), its camera, the device
     args.scene_object = check_foveal_inputs(parser, args.scene, args.camera, args.device)
     check_display(parser)

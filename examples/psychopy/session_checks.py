@@ -27,10 +27,11 @@ def check_foveal_inputs(parser, scene, camera, device):
     return loaded
 
 
-def check_output(path, inputs=(), extensions=None):
+def check_output(path, inputs=None, extensions=None):
     """Why `path` cannot take an output ('' where it can): its extension (one of `extensions`, where
     given), a folder of that name, its folder missing or not writable, a read-only file (never
-    replaced, by root either), or one of `inputs` (never written over)."""
+    replaced, by root either), or one of `inputs` (never written over: {what it is called: its path},
+the path None where not given)."""
     folder = os.path.dirname(os.path.abspath(path))
     if extensions and os.path.splitext(path)[1].lower() not in extensions:
         return f"{path}: the name must end in {', '.join(extensions)}"
@@ -42,10 +43,9 @@ def check_output(path, inputs=(), extensions=None):
         return f"{path}: the folder {folder} cannot be written"
     if os.path.exists(path) and not os.stat(path).st_mode & 0o222:  # (root may write anything: the mode says)
         return f"{path}: is read-only; it is not replaced (give another name, or make it writable)"
-    for given in filter(None, inputs):
-        same = os.path.abspath(given) == os.path.abspath(path)
-        if same or (os.path.exists(given) and os.path.exists(path) and os.path.samefile(given, path)):
-            return f"{path}: is {given}, an input; it is never written over"
+    for name, given in (inputs or {}).items():
+        if given and os.path.exists(given) and os.path.exists(path) and os.path.samefile(given, path):
+            return f"{path}: is {name}, an input; it is never written over"
     return ""
 
 

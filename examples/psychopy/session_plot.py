@@ -209,7 +209,7 @@ def main(argv=None):
     output = args.output or os.path.splitext(args.log)[0] + ".png"
     if args.refresh_hz is not None and not (math.isfinite(args.refresh_hz) and 1 <= args.refresh_hz <= 1000):
         p.error(f"--refresh-hz: must be in [1, 1000] Hz, got {args.refresh_hz}")
-    why = check_output(output, inputs=[args.log], extensions=EXTENSIONS)
+    why = check_output(output, inputs={args.log: args.log}, extensions=EXTENSIONS)
     if why:
         p.error(f"{'--output' if args.output else 'the picture'}: {why}")
     try:
