@@ -801,15 +801,18 @@ std::string RealtimeLoop::size_note(const char* why) const {
   return scale_ < 1 ? fmt::format("rendering at {}x{} ({:.0f} %), {}", params_.width, params_.height, 100 * scale_, why) : "";
 }
 
-void RealtimeLoop::set_scale(double scale) {
+void RealtimeLoop::take_size(double scale, glm::ivec2 size) {
   held_note_.reset();  // (a size of its own: whether it is held is judged anew)
+  scale_ = scale;
+  params_.width = size.x;
+  params_.height = size.y;
+}
+
+void RealtimeLoop::set_scale(double scale) {
   rebuild_.reset();
   lower_to_.reset();
   const double pixels_before = static_cast<double>(params_.width) * params_.height;
-  scale_ = scale;
-  const glm::ivec2 size = scaled_size(requested_, scale);
-  params_.width = size.x;
-  params_.height = size.y;
+  take_size(scale, scaled_size(requested_, scale));
   const double ratio = static_cast<double>(params_.width) * params_.height / pixels_before;  // (as adopt_rebuild)
   plan_ms_ *= ratio;
   sweep_.scale(ratio);
@@ -857,7 +860,6 @@ std::shared_ptr<const std::vector<uint32_t>> RealtimeLoop::lowered_pixels(std::v
 }
 
 void RealtimeLoop::lower_in_place(uint64_t& kept_pixels) {
-  held_note_.reset();  // (a size of its own: whether it is held is judged anew)
   const double scale = *lower_to_;
   lower_to_.reset();
   rebuild_.reset();
@@ -923,9 +925,7 @@ void RealtimeLoop::lower_in_place(uint64_t& kept_pixels) {
   ++views_;
   view_seed_ = scrambled_seed(params_.seed, views_);
   const double ratio = static_cast<double>(n) / static_cast<double>(big_n);  // (as adopt_rebuild)
-  scale_ = scale;
-  params_.width = size.x;
-  params_.height = size.y;
+  take_size(scale, size);
   finish_ms_ *= ratio;
   plan_ms_ *= ratio;
   sweep_.scale(ratio);
@@ -1146,12 +1146,9 @@ void RealtimeLoop::advance_rebuild(const Timer& frame_timer, double until_ms, in
 }
 
 void RealtimeLoop::adopt_rebuild(uint64_t& kept_pixels) {
-  held_note_.reset();  // (a size of its own: whether it is held is judged anew)
   Rebuild& r = *rebuild_;
   const double pixels_before = static_cast<double>(std::max<size_t>(1, cast_.size()));
-  scale_ = r.scale;
-  params_.width = r.width;
-  params_.height = r.height;
+  take_size(r.scale, glm::ivec2(r.width, r.height));
   gbuffer_ = std::move(r.gbuffer);
   ++gbuffer_version_;
   renderer_.prepare_ao_batches(gbuffer_, gbuffer_version_);

@@ -389,6 +389,8 @@ class RealtimeLoop {
   // view at hand at the next frame (set_scale otherwise: the next frame traces its view at that size)
   bool rescale(double fixed_ms, bool in_place = false);
   void set_scale(double scale);
+  // The render size of `scale` (each path to a new size ends here): whether it is held is judged anew
+  void take_size(double scale, glm::ivec2 size);
   // A still view's smaller size, taken from the view at hand without tracing: each smaller pixel is
   // one of the larger pixels nearest it, the one with the most rays — its surface point and shading,
   // its eye ray, and its rays so far, kept as the views before's are. (Traced afresh, the smaller
